@@ -1,0 +1,14 @@
+// Each subcommand of `hdr4d` lives in its own file and only parses options, then calls a
+// library function. Add<Name>Command registers it on the root app.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace hdr4d::cli {
+
+void AddDatasetCommand(CLI::App& app);   // dataset check
+void AddEvalCommand(CLI::App& app);      // eval PRED GT
+void AddSynthLdrCommand(CLI::App& app);  // synth-ldr
+void AddDemoSceneCommand(CLI::App& app); // make-demo-scene
+
+}  // namespace hdr4d::cli

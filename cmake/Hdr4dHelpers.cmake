@@ -1,0 +1,50 @@
+# Small wrappers so every module is built the same way and every test is named <folder>/<name>
+# (`ctest -R core/` runs one module).
+
+# hdr4d_add_library(<folder> SOURCES ... DEPS ...): the library hdr4d_<folder>.
+function(hdr4d_add_library folder)
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
+  set(target hdr4d_${folder})
+  add_library(${target} STATIC ${ARG_SOURCES})
+  target_include_directories(${target} PUBLIC ${PROJECT_SOURCE_DIR})
+  target_link_libraries(${target} PUBLIC ${ARG_DEPS})
+  target_compile_options(${target} PRIVATE ${HDR4D_WARNINGS})
+endfunction()
+
+# hdr4d_add_executable(<name> SOURCES ... DEPS ...)
+function(hdr4d_add_executable name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  target_link_libraries(${name} PRIVATE ${ARG_DEPS})
+  target_compile_options(${name} PRIVATE ${HDR4D_WARNINGS})
+endfunction()
+
+# hdr4d_add_test(<folder> <name> SOURCES ... DEPS ...): a GoogleTest binary whose cases are
+# registered as <folder>/<Suite>.<Case> and run from the repository root (tests/testing.h has
+# the helpers: temp folders, shared data, running the hdr4d binary).
+function(hdr4d_add_test folder name)
+  if(NOT HDR4D_BUILD_TESTS)
+    return()
+  endif()
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
+  set(target ${folder}_${name})
+  add_executable(${target} ${ARG_SOURCES})
+  target_link_libraries(${target} PRIVATE ${ARG_DEPS} hdr4d_testing GTest::gtest GTest::gmock)
+  target_compile_options(${target} PRIVATE ${HDR4D_WARNINGS})
+  add_dependencies(${target} hdr4d)  # end-to-end cases run the CLI
+  gtest_discover_tests(${target}
+    TEST_PREFIX "${folder}/"
+    WORKING_DIRECTORY ${PROJECT_SOURCE_DIR}
+    DISCOVERY_TIMEOUT 60)
+endfunction()
+
+# hdr4d_add_benchmark(<name> SOURCES ... DEPS ...): a Google Benchmark binary.
+function(hdr4d_add_benchmark name)
+  if(NOT HDR4D_BUILD_BENCHMARKS)
+    return()
+  endif()
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
+  add_executable(bench_${name} ${ARG_SOURCES})
+  target_link_libraries(bench_${name} PRIVATE ${ARG_DEPS} benchmark::benchmark_main)
+  target_compile_options(bench_${name} PRIVATE ${HDR4D_WARNINGS})
+endfunction()

@@ -1,0 +1,182 @@
+#include "core/image_io.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
+
+#include "core/error.h"
+#include "tests/testing.h"
+
+namespace hdr4d {
+namespace {
+
+using testing::RandomImage;
+using testing::TempDir;
+
+TEST(ImageIo, ExrFloatRoundTripIsExact) {
+  TempDir dir;
+  Image image = RandomImage(17, 9, 3, 1, -5.0f, 1e6f);
+  image.at(0, 0, 0) = 1e-7f;
+  WriteImage(dir / "a.exr", image, {.format = PixelFormat::kFloat});
+  const Image back = ReadImage(dir / "a.exr");
+  ASSERT_TRUE(back.SameShape(image));
+  EXPECT_EQ(back.encoding(), Encoding::kLinear);
+  for (std::size_t i = 0; i < image.size(); ++i) ASSERT_EQ(back.values()[i], image.values()[i]) << i;
+}
+
+TEST(ImageIo, ExrHalfRoundTripWithinHalfPrecision) {
+  TempDir dir;
+  const Image image = RandomImage(8, 8, 4, 2, 0.0f, 1000.0f);
+  WriteImage(dir / "h.exr", image);  // half by default
+  const Image back = ReadImage(dir / "h.exr");
+  ASSERT_TRUE(back.SameShape(image));
+  for (std::size_t i = 0; i < image.size(); ++i) {
+    EXPECT_NEAR(back.values()[i], image.values()[i], std::abs(image.values()[i]) * 1e-3 + 1e-6);
+  }
+}
+
+TEST(ImageIo, Png8RoundTripIsExactOnCodes) {
+  TempDir dir;
+  Image image(5, 4, 3, Encoding::kSrgb);
+  for (std::size_t i = 0; i < image.size(); ++i) image.values()[i] = static_cast<float>(i * 7 % 256) / 255.0f;
+  WriteImage(dir / "a.png", image);
+  const Image back = ReadImage(dir / "a.png");
+  ASSERT_TRUE(back.SameShape(image));
+  EXPECT_EQ(back.encoding(), Encoding::kSrgb);
+  for (std::size_t i = 0; i < image.size(); ++i) EXPECT_FLOAT_EQ(back.values()[i], image.values()[i]);
+}
+
+TEST(ImageIo, Png16RoundTripIsExactOnCodes) {
+  TempDir dir;
+  Image image(6, 3, 1, Encoding::kSrgb);
+  for (std::size_t i = 0; i < image.size(); ++i) image.values()[i] = static_cast<float>(i * 3001 % 65536) / 65535.0f;
+  WriteImage(dir / "a.png", image, {.format = PixelFormat::kUint16});
+  const Image back = ReadImage(dir / "a.png");
+  ASSERT_TRUE(back.SameShape(image));
+  for (std::size_t i = 0; i < image.size(); ++i) EXPECT_NEAR(back.values()[i], image.values()[i], 1e-7);
+}
+
+TEST(ImageIo, PngClampsOutOfRangeValues) {
+  TempDir dir;
+  Image image(2, 1, 1, Encoding::kSrgb);
+  image.values() = {-0.5f, 7.0f};
+  WriteImage(dir / "c.png", image);
+  const Image back = ReadImage(dir / "c.png");
+  EXPECT_EQ(back.values()[0], 0.0f);
+  EXPECT_EQ(back.values()[1], 1.0f);
+}
+
+TEST(ImageIo, JpegLoadsCloseToWhatWasWritten) {
+  TempDir dir;
+  Image image(32, 32, 3, Encoding::kSrgb, 0.5f);
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) image.at(x, y, 0) = x / 31.0f;
+  WriteImage(dir / "a.jpg", image);
+  const Image back = ReadImage(dir / "a.jpg");
+  ASSERT_TRUE(back.SameShape(image));
+  double err = 0;
+  for (std::size_t i = 0; i < image.size(); ++i) err += std::abs(back.values()[i] - image.values()[i]);
+  EXPECT_LT(err / image.size(), 0.02);
+}
+
+TEST(ImageIo, MissingFileNamesTheFile) {
+  TempDir dir;
+  try {
+    ReadImage(dir / "nope.png");
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("nope.png"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("not found"), std::string::npos);
+  }
+}
+
+TEST(ImageIo, CorruptFileIsAnError) {
+  TempDir dir;
+  testing::WriteTextFile(dir / "bad.png", "this is not a png");
+  EXPECT_THROW(ReadImage(dir / "bad.png"), Error);
+  // A PNG cut in half: the header reads, the pixels do not.
+  const Image image = RandomImage(64, 64, 3, 3, 0, 1, Encoding::kSrgb);
+  WriteImage(dir / "full.png", image);
+  const std::string bytes = testing::ReadTextFile(dir / "full.png");
+  testing::WriteTextFile(dir / "cut.png", bytes.substr(0, bytes.size() / 2));
+  try {
+    ReadImage(dir / "cut.png");
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("cut.png"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ImageIo, NonFinitePixelIsRejectedWithItsPosition) {
+  TempDir dir;
+  Image image(4, 3, 3, Encoding::kLinear, 1.0f);
+  image.at(2, 1, 1) = std::numeric_limits<float>::quiet_NaN();
+  WriteImage(dir / "nan.exr", image, {.format = PixelFormat::kFloat});
+  try {
+    ReadImage(dir / "nan.exr");
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("nan.exr"), std::string::npos) << what;
+    EXPECT_NE(what.find("x=2, y=1"), std::string::npos) << what;
+  }
+  image.at(2, 1, 1) = std::numeric_limits<float>::infinity();
+  WriteImage(dir / "inf.exr", image, {.format = PixelFormat::kFloat});
+  EXPECT_THROW(ReadImage(dir / "inf.exr"), Error);
+  EXPECT_NO_THROW(ReadImage(dir / "inf.exr", {.require_finite = false}));
+}
+
+TEST(ImageIo, UnwritableOutputIsAnErrorAndKeepsTheOldFile) {
+  TempDir dir;
+  const Image first(4, 4, 3, Encoding::kSrgb, 0.25f);
+  WriteImage(dir / "out" / "keep.png", first);
+  std::filesystem::permissions(dir / "out", std::filesystem::perms::owner_read | std::filesystem::perms::owner_exec);
+  if (access((dir / "out").c_str(), W_OK) == 0) GTEST_SKIP() << "running with permissions that ignore read-only folders (root)";
+  EXPECT_THROW(WriteImage(dir / "out" / "keep.png", Image(4, 4, 3, Encoding::kSrgb, 0.75f)), Error);
+  std::filesystem::permissions(dir / "out", std::filesystem::perms::owner_all);
+  EXPECT_FLOAT_EQ(ReadImage(dir / "out" / "keep.png").values()[0], first.values()[0]);
+}
+
+TEST(ImageIo, WriteWhereNoFileCanBeCreatedIsAnError) {
+  // /proc refuses new files even for root, so this runs everywhere.
+  try {
+    WriteImage("/proc/hdr4d_cannot_write/a.exr", Image(2, 2, 3));
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("/proc/hdr4d_cannot_write/a.exr"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ImageIo, WriteToAFileInPlaceOfAFolderIsAnError) {
+  TempDir dir;
+  testing::WriteTextFile(dir / "blocker", "x");
+  try {
+    WriteImage(dir / "blocker" / "a.png", Image(2, 2, 3, Encoding::kSrgb));
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("a.png"), std::string::npos);
+  }
+}
+
+TEST(ImageIo, UnsupportedExtensionAndFormatMismatchAreErrors) {
+  TempDir dir;
+  const Image image(2, 2, 3);
+  EXPECT_THROW(WriteImage(dir / "a.bmpx", image), Error);
+  EXPECT_THROW(WriteImage(dir / "a.png", image, {.format = PixelFormat::kFloat}), Error);
+  EXPECT_THROW(WriteImage(dir / "a.exr", image, {.format = PixelFormat::kUint8}), Error);
+}
+
+TEST(Image, SrgbConversionsInvertEachOther) {
+  for (float v = 0.0f; v <= 1.0f; v += 0.01f) EXPECT_NEAR(SrgbToLinear(LinearToSrgb(v)), v, 1e-6);
+  EXPECT_NEAR(LinearToSrgb(0.18f), 0.4613f, 1e-3);  // middle grey
+  Image linear(1, 1, 4, Encoding::kLinear, 0.18f);
+  const Image encoded = ToSrgb(linear);
+  EXPECT_EQ(encoded.encoding(), Encoding::kSrgb);
+  EXPECT_NEAR(encoded.values()[0], 0.4613f, 1e-3);
+  EXPECT_FLOAT_EQ(encoded.values()[3], 0.18f);  // alpha untouched
+}
+
+}  // namespace
+}  // namespace hdr4d

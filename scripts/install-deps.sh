@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Installs every Debian package hdr4d needs. Idempotent and non-interactive: packages that are
+# already installed are skipped, and `apt-get update` runs at most once per call.
+set -euo pipefail
+
+PACKAGES=(
+  # build
+  cmake ninja-build g++ pkg-config
+  # core: images, maths, parallelism, JSON, CLI, logging
+  libopenimageio-dev libopenexr-dev openimageio-tools libeigen3-dev libtbb-dev
+  nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
+  # tests and benchmarks
+  libgtest-dev libgmock-dev libbenchmark-dev
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#PACKAGES[@]} packages present"
+  exit 0
+fi
+
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+APT_OPTS=(-y -q --no-install-recommends -o DPkg::Lock::Timeout=600)
+export DEBIAN_FRONTEND=noninteractive
+
+echo "install-deps: installing ${missing[*]}"
+$SUDO apt-get -q -o DPkg::Lock::Timeout=600 update
+$SUDO apt-get install "${APT_OPTS[@]}" "${missing[@]}"
+echo "install-deps: done"
