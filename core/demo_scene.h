@@ -1,0 +1,48 @@
+// The built-in demo scene: a small dynamic HDR scene rendered analytically (ray casting, no
+// external assets), written as a dataset in the reference layout with linear EXR ground truth.
+// It is the default input of the README's main command and a known-answer fixture for tests:
+// a ball rolls across a checkered floor, a small hot emitter circles above it (radiance in the
+// thousands, casting a moving shadow), and the sun dims over time, so the radiance spans more
+// than 1e4:1 and the illumination changes with time.
+#pragma once
+
+#include <Eigen/Core>
+#include <filesystem>
+#include <vector>
+
+#include "core/dataset.h"
+#include "core/image.h"
+
+namespace hdr4d {
+
+enum class DemoRig {
+  kMultiView,  // fixed cameras, every exposure at every camera and timestamp
+  kMonocular,  // one camera per timestamp moving around the scene, exposures cycling
+};
+
+struct DemoSceneOptions {
+  int width = 96;
+  int height = 96;
+  int num_timestamps = 6;
+  int num_cameras = 4;  // multi-view: cameras on a ring; the last one is the test camera
+  DemoRig rig = DemoRig::kMultiView;
+  std::vector<double> exposures = {0.125, 2.0, 32.0};  // seconds, as HDR-4D-Syn
+  int samples_per_axis = 2;                            // supersampling per pixel (n x n)
+  void Validate() const;
+};
+
+// Linear radiance seen along a ray at normalised time t in [0,1] (world axes: +Z up).
+Eigen::Vector3d DemoSceneRadiance(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                                  double t);
+// World position of the emitter's centre at time t (for tests of the camera convention).
+Eigen::Vector3d DemoEmitterCenter(double t);
+
+// Renders one HDR view (Encoding::kLinear, RGB).
+Image RenderDemoView(const Camera& camera, double t, int samples_per_axis);
+
+// Renders every view to <root>/hdr/*.exr and writes transforms_{train,test}.json whose frames
+// point at the LDR images <root>/images/*.png that `hdr4d synth-ldr` creates from the HDR.
+// Returns the dataset as written.
+Dataset MakeDemoScene(const DemoSceneOptions& options, const std::filesystem::path& root);
+
+}  // namespace hdr4d
