@@ -1,7 +1,68 @@
+// `hdr4d eval PRED GT [--json] [--out FILE]`: image metrics of predictions against ground truth.
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <memory>
+#include <string>
+
 #include "cli/commands.h"
+#include "core/evaluate.h"
+#include "core/json_util.h"
 
 namespace hdr4d::cli {
 
-void AddEvalCommand(CLI::App& app) {}
+namespace {
+
+struct EvalOptions {
+  std::string pred;
+  std::string gt;
+  bool json = false;
+  std::string out;
+};
+
+constexpr const char* kEvalFooter = R"(
+Matching: PRED and GT are two image files or two folders. In folders, every image in PRED is
+paired with the ground truth of the same file name; failing that, with the one ground truth of
+the same stem and an extension of the same kind (r_001.jpg for r_001.png, r_001.hdr for
+r_001.exr). A prediction without ground truth is an error; ground-truth images without a
+prediction (another split's, in a dataset's image folder) are skipped with a warning;
+non-image files are ignored.
+
+LDR pairs (PNG/JPEG/...; both integer) are scored on the stored sRGB values:
+  psnr               10 log10(1/MSE), MSE over all pixels and RGB channels
+  psnr_channel_mean  PSNR per channel, then the mean (what the 3DGS/4DGS code reports)
+  ssim               11x11 Gaussian window, sigma 1.5, zero padding, per channel (3DGS)
+HDR pairs (EXR/HDR; both float) are scored with:
+  mu_psnr, mu_ssim   HDR-4DGS protocol: prediction / its own max, clamped to [0,1];
+                     ground truth / its own max; mu-law log(1+5000x)/log(5001); PSNR, SSIM
+  mu_*_gt_max        HDR-NeRF protocol: both divided by the ground truth's max
+  pu21_psnr          PU21 (banding_glare) of every RGB value, peak 256 (~100 cd/m^2)
+  pu21_ssim          SSIM on PU21 luminance, C1 = (0.01*256)^2, C2 = (0.03*256)^2
+PU21 scaling: both images are multiplied by 4000 / (max luminance of the ground truth),
+luminance = 0.212656 R + 0.715158 G + 0.072186 B, then clamped to [0.005, 10000] cd/m^2.
+Metrics use the first three channels (alpha is ignored). "mean" is the mean of the
+per-image values. Identical images have PSNR inf, written as null in JSON.)";
+
+}  // namespace
+
+void AddEvalCommand(CLI::App& app) {
+  auto options = std::make_shared<EvalOptions>();
+  CLI::App* sub = app.add_subcommand(
+      "eval", "Score predicted images against ground truth (PSNR, SSIM; mu-law and PU21 for HDR)");
+  sub->add_option("PRED", options->pred, "Predicted image, or a folder of them")->required();
+  sub->add_option("GT", options->gt, "Ground-truth image, or a folder of them")->required();
+  sub->add_flag("--json", options->json, "Print the result as JSON instead of a table");
+  sub->add_option("--out", options->out, "Also write the JSON result to this file");
+  sub->footer(kEvalFooter);
+  sub->callback([options] {
+    const nlohmann::json result = EvaluatePaths(options->pred, options->gt);
+    if (!options->out.empty()) WriteJsonFile(options->out, result);
+    if (options->json) {
+      fmt::print("{}\n", result.dump(1));
+    } else {
+      fmt::print("{}", FormatEvalTable(result));
+    }
+  });
+}
 
 }  // namespace hdr4d::cli

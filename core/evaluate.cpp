@@ -1,0 +1,285 @@
+#include "core/evaluate.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <set>
+#include <system_error>
+#include <utility>
+#include <vector>
+
+#include "core/error.h"
+#include "core/image.h"
+#include "core/image_io.h"
+#include "core/json_util.h"
+#include "core/metrics.h"
+#include "core/parallel.h"
+
+namespace hdr4d {
+namespace fs = std::filesystem;
+
+namespace {
+
+struct PairResult {
+  std::string name;
+  MetricList metrics;
+};
+
+std::string Lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+
+// Files a folder evaluation considers; anything else (JSON, logs, videos) is ignored.
+bool IsImagePath(const fs::path& path) {
+  static const std::set<std::string> kExtensions = {".png", ".jpg",  ".jpeg", ".exr", ".hdr",
+                                                    ".tif", ".tiff", ".bmp",  ".tga", ".webp"};
+  return kExtensions.count(Lower(path.extension().string())) > 0;
+}
+
+const char* KindName(const Image& image) {
+  return image.encoding() == Encoding::kLinear ? "HDR, float" : "LDR, integer";
+}
+
+PairResult EvaluateFiles(const fs::path& pred_path, const fs::path& gt_path) {
+  const Image pred = ReadImage(pred_path);
+  const Image gt = ReadImage(gt_path);
+  // ReadImage marks float formats linear and integer formats display-encoded: that is the kind.
+  if (pred.encoding() != gt.encoding()) {
+    Fail("{} ({}) vs {} ({}): cannot compare an LDR image with an HDR one", pred_path.string(),
+         KindName(pred), gt_path.string(), KindName(gt));
+  }
+  if (pred.width() != gt.width() || pred.height() != gt.height()) {
+    Fail("{} ({}) vs {} ({}): images differ in size", pred_path.string(), pred.ShapeString(),
+         gt_path.string(), gt.ShapeString());
+  }
+  // Metrics use the colour channels only, so RGBA against RGB is fine; grey against RGB is not.
+  const int pred_colour = std::min(pred.channels(), 3);
+  const int gt_colour = std::min(gt.channels(), 3);
+  if (pred_colour != gt_colour) {
+    Fail("{} ({}) vs {} ({}): images differ in colour channels ({} vs {})", pred_path.string(),
+         pred.ShapeString(), gt_path.string(), gt.ShapeString(), pred_colour, gt_colour);
+  }
+  PairResult result;
+  result.name = gt_path.filename().string();
+  try {
+    const Image pred_rgb = pred.Rgb(), gt_rgb = gt.Rgb();
+    result.metrics = gt.encoding() == Encoding::kLinear ? HdrMetrics(pred_rgb, gt_rgb)
+                                                        : LdrMetrics(pred_rgb, gt_rgb);
+  } catch (const Error& e) {
+    Fail("{} vs {}: {}", pred_path.string(), gt_path.string(), e.what());
+  }
+  return result;
+}
+
+nlohmann::json PairJson(const PairResult& pair) {
+  nlohmann::json out = nlohmann::json::object();
+  out["name"] = pair.name;
+  for (const auto& [key, value] : pair.metrics) out[key] = FiniteOrNull(value);
+  return out;
+}
+
+std::vector<fs::path> ListImages(const fs::path& folder) {
+  std::vector<fs::path> images;
+  std::error_code ec;
+  fs::directory_iterator it(folder, ec);
+  if (ec) Fail("{}: cannot list folder: {}", folder.string(), ec.message());
+  for (; it != fs::directory_iterator(); it.increment(ec)) {
+    if (ec) Fail("{}: cannot list folder: {}", folder.string(), ec.message());
+    std::error_code file_ec;
+    if (it->is_regular_file(file_ec) && IsImagePath(it->path())) images.push_back(it->path());
+  }
+  if (ec) Fail("{}: cannot list folder: {}", folder.string(), ec.message());
+  std::sort(images.begin(), images.end(),
+            [](const fs::path& a, const fs::path& b) { return a.filename() < b.filename(); });
+  return images;
+}
+
+std::string JoinFirst(const std::vector<std::string>& names, std::size_t count) {
+  std::string out;
+  for (std::size_t i = 0; i < names.size() && i < count; ++i) out += (i ? ", " : "") + names[i];
+  if (names.size() > count) out += fmt::format(", ... ({} more)", names.size() - count);
+  return out;
+}
+
+// (prediction, ground truth) pairs, driven by the predictions: every prediction must have a
+// ground truth (same file name, or the same stem with an extension of the same kind, LDR or
+// HDR), while ground-truth images without a prediction are skipped with a warning, because a
+// dataset keeps every split's images in one folder and a render covers one split.
+std::vector<std::pair<fs::path, fs::path>> MatchFolders(const fs::path& pred_dir,
+                                                        const fs::path& gt_dir) {
+  const std::vector<fs::path> preds = ListImages(pred_dir);
+  if (preds.empty()) {
+    Fail("{}: no predicted images in this folder (looked for .png, .jpg, .jpeg, .exr, .hdr, "
+         ".tif, .tiff, .bmp, .tga, .webp)",
+         pred_dir.string());
+  }
+  std::map<std::string, fs::path> gt_by_name;
+  std::map<std::string, std::vector<fs::path>> gt_by_stem;
+  for (const fs::path& g : ListImages(gt_dir)) {
+    gt_by_name[g.filename().string()] = g;
+    gt_by_stem[g.stem().string()].push_back(g);
+  }
+
+  std::vector<std::pair<fs::path, fs::path>> pairs;
+  std::vector<std::string> missing;
+  for (const fs::path& pred : preds) {
+    const std::string name = pred.filename().string();
+    if (auto it = gt_by_name.find(name); it != gt_by_name.end()) {
+      pairs.emplace_back(pred, it->second);
+      continue;
+    }
+    std::vector<std::string> same_kind, other_kind;
+    if (auto it = gt_by_stem.find(pred.stem().string()); it != gt_by_stem.end()) {
+      for (const fs::path& g : it->second) {
+        (IsHdrPath(g) == IsHdrPath(pred) ? same_kind : other_kind).push_back(g.filename().string());
+      }
+    }
+    if (same_kind.size() == 1) {
+      pairs.emplace_back(pred, gt_dir / same_kind[0]);
+    } else if (same_kind.size() > 1) {
+      Fail("{}: several ground-truth images match prediction {}: {}", gt_dir.string(), name,
+           JoinFirst(same_kind, 5));
+    } else if (!other_kind.empty()) {
+      missing.push_back(fmt::format("{} (only {} found, which is {})", name,
+                                    JoinFirst(other_kind, 3), IsHdrPath(pred) ? "LDR" : "HDR"));
+    } else {
+      missing.push_back(name);
+    }
+  }
+  if (!missing.empty()) {
+    Fail("{}: no ground truth for {} of {} predicted images from {}: {}", gt_dir.string(),
+         missing.size(), preds.size(), pred_dir.string(), JoinFirst(missing, 5));
+  }
+  const std::size_t unmatched = gt_by_name.size() - pairs.size();
+  if (unmatched > 0) {
+    spdlog::warn("eval: {} of {} ground-truth images in {} have no prediction and are skipped",
+                 unmatched, gt_by_name.size(), gt_dir.string());
+  }
+  std::sort(pairs.begin(), pairs.end(), [](const auto& a, const auto& b) {
+    return a.second.filename() < b.second.filename();
+  });
+  return pairs;
+}
+
+// Display order of the known keys in tables; unknown keys follow in name order.
+const std::vector<std::string>& KnownKeys() {
+  static const std::vector<std::string> keys = {
+      "psnr",           "psnr_channel_mean", "ssim",      "mu_psnr",  "mu_ssim",
+      "mu_psnr_gt_max", "mu_ssim_gt_max",    "pu21_psnr", "pu21_ssim"};
+  return keys;
+}
+
+}  // namespace
+
+nlohmann::json EvaluatePair(const fs::path& pred, const fs::path& gt) {
+  return PairJson(EvaluateFiles(pred, gt));
+}
+
+nlohmann::json EvaluatePaths(const fs::path& pred, const fs::path& gt) {
+  std::error_code ec;
+  for (const fs::path& p : {pred, gt}) {
+    if (!fs::exists(p, ec)) Fail("{}: not found", p.string());
+  }
+  const bool pred_dir = fs::is_directory(pred, ec);
+  const bool gt_dir = fs::is_directory(gt, ec);
+  if (pred_dir != gt_dir) {
+    Fail("{} is a {} but {} is a {}: give two image files or two folders", pred.string(),
+         pred_dir ? "folder" : "file", gt.string(), gt_dir ? "folder" : "file");
+  }
+  std::vector<std::pair<fs::path, fs::path>> jobs;
+  if (gt_dir) {
+    jobs = MatchFolders(pred, gt);
+  } else {
+    jobs.emplace_back(pred, gt);
+  }
+
+  // Each pair writes its own slot; errors are collected too, and the first one in name order is
+  // reported, so the outcome does not depend on scheduling.
+  std::vector<std::optional<PairResult>> results(jobs.size());
+  std::vector<std::string> errors(jobs.size());
+  ParallelFor(static_cast<std::int64_t>(jobs.size()), 1, [&](std::int64_t i) {
+    try {
+      results[i] = EvaluateFiles(jobs[i].first, jobs[i].second);
+    } catch (const std::exception& e) {
+      errors[i] = e.what();
+    }
+  });
+  std::size_t failed = 0;
+  for (const std::string& e : errors) failed += e.empty() ? 0 : 1;
+  for (const std::string& e : errors) {
+    if (e.empty()) continue;
+    if (failed == 1) throw Error(e);
+    Fail("{} (and {} more pairs failed)", e, failed - 1);
+  }
+
+  nlohmann::json out;
+  out["pairs"] = nlohmann::json::array();
+  // Sums in pair order; a +inf value (identical images) makes the sum and the mean +inf, which is
+  // then written as null like the value itself.
+  std::map<std::string, std::pair<double, int>> sums;
+  for (const auto& r : results) {
+    out["pairs"].push_back(PairJson(*r));
+    for (const auto& [key, value] : r->metrics) {
+      auto& [sum, count] = sums[key];
+      sum += value;
+      ++count;
+    }
+  }
+  out["mean"] = nlohmann::json::object();
+  for (const auto& [key, sc] : sums) out["mean"][key] = FiniteOrNull(sc.first / sc.second);
+  return out;
+}
+
+std::string FormatEvalTable(const nlohmann::json& result) {
+  if (!result.is_object() || !result.contains("pairs") || !result["pairs"].is_array()) {
+    Fail("evaluation result has no \"pairs\" list");
+  }
+  const nlohmann::json& pairs = result["pairs"];
+  const nlohmann::json mean = result.value("mean", nlohmann::json::object());
+
+  std::set<std::string> present;
+  std::size_t name_width = 4;  // "mean"
+  for (const auto& pair : pairs) {
+    for (const auto& [key, value] : pair.items()) {
+      if (key != "name") present.insert(key);
+    }
+    name_width = std::max(name_width, pair.value("name", std::string()).size());
+  }
+  std::vector<std::string> columns;
+  for (const std::string& key : KnownKeys()) {
+    if (present.erase(key)) columns.push_back(key);
+  }
+  columns.insert(columns.end(), present.begin(), present.end());
+
+  auto cell = [](const nlohmann::json& row, const std::string& key) -> std::string {
+    if (!row.contains(key)) return "-";
+    const nlohmann::json& v = row[key];
+    if (v.is_null()) return "inf";  // only +inf is written as null (NaN is rejected earlier)
+    if (!v.is_number()) return "?";
+    return fmt::format("{:.4f}", v.get<double>());
+  };
+  auto line = [&](const std::string& name, const nlohmann::json& row) {
+    std::string s = fmt::format("{:<{}}", name, name_width);
+    for (const std::string& key : columns) {
+      s += fmt::format("  {:>{}}", cell(row, key), std::max<std::size_t>(key.size(), 9));
+    }
+    return s + "\n";
+  };
+
+  std::string out = fmt::format("{:<{}}", "name", name_width);
+  for (const std::string& key : columns) {
+    out += fmt::format("  {:>{}}", key, std::max<std::size_t>(key.size(), 9));
+  }
+  out += "\n";
+  for (const auto& pair : pairs) out += line(pair.value("name", std::string("?")), pair);
+  out += line("mean", mean);
+  return out;
+}
+
+}  // namespace hdr4d

@@ -1,0 +1,45 @@
+// `hdr4d eval`: score predicted images against ground truth, file by file or folder by folder
+// (DESIGN §5). The result is one JSON document:
+//
+//   {"pairs": [{"name": <gt file name>, <metric>: <value>, ...}, ...],
+//    "mean":  {<metric>: <value>, ...}}
+//
+// - LDR pairs (both integer formats such as PNG/JPEG, read as display-encoded values) get the
+//   LdrMetrics keys, computed on the stored sRGB values as the reference code does: "psnr",
+//   "psnr_channel_mean", "ssim".
+// - HDR pairs (both float formats: EXR, Radiance .hdr) get the HdrMetrics keys only: "mu_psnr",
+//   "mu_ssim" (own-max normalisation), "mu_psnr_gt_max", "mu_ssim_gt_max", "pu21_psnr",
+//   "pu21_ssim".
+// - Pairs are listed in sorted order of the ground-truth file name. "mean" is the arithmetic mean
+//   of the per-pair values of each key over the pairs that have the key (not a metric of the
+//   pooled error).
+// - Non-finite numbers are written as null (identical images have PSNR +inf). A mean over
+//   values that include +inf is +inf, so it is null too.
+#pragma once
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace hdr4d {
+
+// One pair of image files: {"name": <gt file name>, <metric>: <value or null>, ...}. Throws
+// hdr4d::Error naming both files for a missing/unreadable image, an LDR file paired with an HDR
+// one, different sizes or channel counts, or an HDR image that cannot be normalised.
+nlohmann::json EvaluatePair(const std::filesystem::path& pred, const std::filesystem::path& gt);
+
+// `pred` and `gt` are both image files (one pair) or both folders. Folders: every image in the
+// pred folder (not recursive; non-image files are ignored) is paired with the ground truth of
+// the same file name, or else with the one ground truth of the same stem whose extension is of
+// the same kind (LDR with LDR, EXR/HDR with EXR/HDR). Ground-truth images without a prediction
+// are skipped with a warning (a dataset's image folder holds every split). A prediction without
+// ground truth, an empty pred folder, or a file paired with a folder throws hdr4d::Error naming
+// what is missing. Pairs are evaluated in parallel; the output
+// does not depend on the thread count.
+nlohmann::json EvaluatePaths(const std::filesystem::path& pred, const std::filesystem::path& gt);
+
+// A fixed-width text table of an EvaluatePaths result: a header, one line per pair, a "mean"
+// line. A null (non-finite) value is shown as "inf", a key a pair does not have as "-".
+std::string FormatEvalTable(const nlohmann::json& result);
+
+}  // namespace hdr4d
