@@ -10,5 +10,6 @@ void AddDatasetCommand(CLI::App& app);   // dataset check
 void AddEvalCommand(CLI::App& app);      // eval PRED GT
 void AddSynthLdrCommand(CLI::App& app);  // synth-ldr
 void AddDemoSceneCommand(CLI::App& app); // make-demo-scene
+void AddMergeHdrCommand(CLI::App& app);  // merge-hdr
 
 }  // namespace hdr4d::cli

@@ -1,5 +1,6 @@
 // `hdr4d`: one binary, one subcommand per job. A user mistake ends in one line on stderr and
 // exit code 1 (2 for bad command-line syntax); only a broken invariant aborts.
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
@@ -20,12 +21,15 @@ int main(int argc, char** argv) {
                       : verbosity == 1 ? spdlog::level::info
                                        : spdlog::level::warn);
   });
+  // Logs go to stderr: stdout carries results (tables, --json) that other programs parse.
+  spdlog::set_default_logger(spdlog::stderr_color_mt("hdr4d"));
   spdlog::set_pattern("%^[%l]%$ %v");
 
   hdr4d::cli::AddDatasetCommand(app);
   hdr4d::cli::AddEvalCommand(app);
   hdr4d::cli::AddSynthLdrCommand(app);
   hdr4d::cli::AddDemoSceneCommand(app);
+  hdr4d::cli::AddMergeHdrCommand(app);
 
   try {
     app.parse(argc, argv);

@@ -21,7 +21,12 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 constexpr double kBallRadius = 0.45;
 constexpr double kEmitterRadius = 0.12;
-const Vector3d kEmitterRadiance(4000.0, 3000.0, 2000.0);  // warm and hot: far above 1
+// The bulb's visible radiance stays inside what the 0.125..32 s bracket captures (x = radiance
+// x exposure <= 1 at 0.125 s), so a merge of the bracket can recover every pixel; the light it
+// casts comes from a point source inside it.
+const Vector3d kEmitterRadiance(6.0, 5.0, 3.6);
+const Vector3d kLampIntensity(8.0, 6.5, 4.5);  // irradiance = I cos / (d^2 + kLampSoftening^2)
+constexpr double kLampSoftening = 0.6;  // a lamp of finite size: no blow-up when the ball is close
 const Vector3d kBallAlbedo(0.75, 0.25, 0.15);
 
 // The ball rolls along x and bounces; the emitter circles at height 1.6.
@@ -31,7 +36,7 @@ Vector3d BallCenter(double t) {
 
 // Irradiance from the sun on a surface facing it; it dims to a fifth over the sequence.
 Vector3d SunIrradiance(double t) { return Vector3d(9.4, 8.8, 7.9) * (1.0 - 0.8 * t); }
-const Vector3d kAmbientIrradiance(0.06, 0.08, 0.12);  // faint sky fill: shadows stay above zero
+const Vector3d kAmbientIrradiance(0.02, 0.028, 0.04);  // faint sky fill: shadows stay above zero
 const Vector3d kSunDirection = Vector3d(0.4, -0.3, 1.0).normalized();  // towards the sun
 
 std::optional<double> HitSphere(const Vector3d& o, const Vector3d& d, const Vector3d& c, double r) {
@@ -51,7 +56,7 @@ bool BallBlocks(const Vector3d& p, const Vector3d& dir, double max_dist, double 
 }
 
 // Lambertian radiance albedo / pi x irradiance, with irradiance from the sun (directional),
-// the emitter (a small sphere: radiance x solid angle x cosine) and an ambient fill.
+// the lamp inside the bulb (inverse square) and an ambient fill.
 Vector3d Shade(const Vector3d& p, const Vector3d& n, const Vector3d& albedo, double t) {
   Vector3d irradiance = kAmbientIrradiance;
   const double sun_cos = n.dot(kSunDirection);
@@ -61,8 +66,7 @@ Vector3d Shade(const Vector3d& p, const Vector3d& n, const Vector3d& albedo, dou
   const Vector3d l = to_emitter / dist;
   const double em_cos = n.dot(l);
   if (em_cos > 0 && !BallBlocks(p + 1e-4 * n, l, dist, t)) {
-    const double solid_angle = kPi * kEmitterRadius * kEmitterRadius / std::max(dist * dist, 1e-6);
-    irradiance += kEmitterRadiance * (em_cos * solid_angle);
+    irradiance += kLampIntensity * (em_cos / (dist * dist + kLampSoftening * kLampSoftening));
   }
   return albedo.cwiseProduct(irradiance) / kPi;
 }

@@ -28,8 +28,9 @@ TEST(DemoScene, RadianceSpansAHighDynamicRange) {
     }
   }
   std::sort(luminance.begin(), luminance.end());
-  EXPECT_GT(luminance.back(), 1000.0f);  // the emitter is in view somewhere
-  EXPECT_GT(luminance.front(), 0.0f);    // ambient fill: no pure black
+  EXPECT_GT(luminance.back(), 4.0f);   // the bulb is in view somewhere...
+  EXPECT_LT(luminance.back(), 8.0f);   // ...and within the 0.125 s exposure's range
+  EXPECT_GT(luminance.front(), 0.0f);  // ambient fill: no pure black
   EXPECT_GT(luminance.back() / luminance.front(), 1e4f);
 }
 
@@ -46,13 +47,15 @@ TEST(DemoScene, EmitterProjectsToTheBrightestPixel) {
   for (const Frame* f : dataset.AllFrames()) {
     const auto uvd = f->camera.Project(DemoEmitterCenter(f->time));
     if (!uvd || (*uvd)[0] < 2 || (*uvd)[1] < 2 || (*uvd)[0] > 62 || (*uvd)[1] > 62) continue;
+    // Centroid of the bulb's pixels (it is a disk of constant radiance, brighter than anything).
     const Image hdr = ReadImage(*f->hdr_path);
-    int best_x = 0, best_y = 0;
+    double sx = 0, sy = 0, n = 0;
     for (int y = 0; y < hdr.height(); ++y)
       for (int x = 0; x < hdr.width(); ++x)
-        if (hdr.at(x, y, 0) > hdr.at(best_x, best_y, 0)) best_x = x, best_y = y;
-    EXPECT_NEAR(best_x + 0.5, (*uvd)[0], 1.5) << f->file_path;
-    EXPECT_NEAR(best_y + 0.5, (*uvd)[1], 1.5) << f->file_path;
+        if (hdr.at(x, y, 0) > 5.9f) sx += x + 0.5, sy += y + 0.5, n += 1;
+    if (n == 0) continue;  // hidden behind the ball
+    EXPECT_NEAR(sx / n, (*uvd)[0], 0.5) << f->file_path;
+    EXPECT_NEAR(sy / n, (*uvd)[1], 0.5) << f->file_path;
     ++checked;
   }
   EXPECT_GT(checked, 0);

@@ -19,7 +19,7 @@ nlohmann::json ReadJsonFile(const fs::path& path) {
   buffer << file.rdbuf();
   try {
     return nlohmann::json::parse(buffer.str());
-  } catch (const nlohmann::json::parse_error& e) {
+  } catch (const nlohmann::json::exception& e) {  // syntax, or a number out of range
     Fail("{}: invalid JSON: {}", path.string(), e.what());
   }
 }

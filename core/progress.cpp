@@ -59,10 +59,13 @@ void Progress::Draw(bool final_line) {
                  std::string(kWidth - filled, ' ').c_str(), counter.c_str(), status_.c_str());
     if (final_line) std::fputc('\n', stderr);
   } else {
-    // A log gets a line every 10%, and the last one.
+    // A log gets a line each time another tenth is done, and a final one unless the last line
+    // already showed the same count.
     const int bucket = percent / 10;
-    if (!final_line && bucket == last_logged_percent_) return;
-    last_logged_percent_ = bucket;
+    if (!final_line && bucket == last_logged_bucket_) return;
+    if (final_line && done_ == last_logged_done_) return;
+    last_logged_bucket_ = bucket;
+    last_logged_done_ = done_;
     std::fprintf(stderr, "%s %s\n", counter.c_str(), status_.c_str());
   }
   std::fflush(stderr);

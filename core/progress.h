@@ -32,7 +32,8 @@ class Progress {
   bool enabled_;
   bool tty_;
   bool finished_ = false;
-  int last_logged_percent_ = -1;
+  int last_logged_bucket_ = -1;
+  std::int64_t last_logged_done_ = -1;
   std::string status_;
   std::chrono::steady_clock::time_point start_;
   std::chrono::steady_clock::time_point last_draw_;

@@ -1,0 +1,328 @@
+#include "core/evaluate.h"
+
+#include <fmt/format.h>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <string>
+
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/metrics.h"
+#include "core/parallel.h"
+#include "tests/testing.h"
+
+namespace hdr4d {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+using ::testing::Not;
+using testing::RandomImage;
+using testing::RunHdr4d;
+using testing::TempDir;
+
+const std::set<std::string> kLdrKeys = {"name", "psnr", "psnr_channel_mean", "ssim"};
+const std::set<std::string> kHdrKeys = {"name",           "mu_psnr",   "mu_ssim",  "mu_psnr_gt_max",
+                                        "mu_ssim_gt_max", "pu21_psnr", "pu21_ssim"};
+
+template <typename Fn>
+std::string ErrorOf(Fn fn) {
+  try {
+    fn();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+std::set<std::string> KeysOf(const nlohmann::json& object) {
+  std::set<std::string> keys;
+  for (const auto& [k, v] : object.items()) keys.insert(k);
+  return keys;
+}
+
+void WriteLdr(const fs::path& path, int w, int h, unsigned seed) {
+  WriteImage(path, RandomImage(w, h, 3, seed, 0.0f, 1.0f, Encoding::kSrgb));
+}
+
+void WriteHdr(const fs::path& path, int w, int h, unsigned seed, float hi = 4.0f) {
+  WriteImage(path, RandomImage(w, h, 3, seed, 0.0f, hi), {.format = PixelFormat::kFloat});
+}
+
+// A gt folder with a.png, b.png, an extra image (another split's, skipped) and a non-image file;
+// predictions for a and b.
+struct LdrFolders {
+  TempDir dir;
+  fs::path pred = dir / "pred";
+  fs::path gt = dir / "gt";
+  LdrFolders() {
+    WriteLdr(gt / "b.png", 16, 12, 1);
+    WriteLdr(gt / "a.png", 16, 12, 2);
+    testing::WriteTextFile(gt / "notes.txt", "not an image");
+    WriteLdr(pred / "a.png", 16, 12, 3);
+    WriteLdr(pred / "b.png", 16, 12, 4);
+    WriteLdr(gt / "extra.png", 16, 12, 5);
+  }
+};
+
+TEST(EvaluateTest, FoldersMatchByNameInSortedOrder) {
+  LdrFolders f;
+  const nlohmann::json result = EvaluatePaths(f.pred, f.gt);
+  EXPECT_EQ(KeysOf(result), (std::set<std::string>{"pairs", "mean"}));
+  ASSERT_EQ(result["pairs"].size(), 2u);
+  EXPECT_EQ(result["pairs"][0]["name"], "a.png");
+  EXPECT_EQ(result["pairs"][1]["name"], "b.png");
+  for (const auto& pair : result["pairs"]) EXPECT_EQ(KeysOf(pair), kLdrKeys);
+
+  // The values are LdrMetrics of the images as stored, and mean = mean of the pairs.
+  const std::string names[] = {"a.png", "b.png"};
+  for (int i = 0; i < 2; ++i) {
+    const MetricList m = LdrMetrics(ReadImage(f.pred / names[i]), ReadImage(f.gt / names[i]));
+    for (const auto& [key, value] : m)
+      EXPECT_DOUBLE_EQ(result["pairs"][i][key].get<double>(), value);
+  }
+  for (const std::string key : {"psnr", "psnr_channel_mean", "ssim"}) {
+    const double mean =
+        (result["pairs"][0][key].get<double>() + result["pairs"][1][key].get<double>()) / 2;
+    EXPECT_DOUBLE_EQ(result["mean"][key].get<double>(), mean) << key;
+  }
+  EXPECT_EQ(KeysOf(result["mean"]), (std::set<std::string>{"psnr", "psnr_channel_mean", "ssim"}));
+}
+
+TEST(EvaluateTest, HdrPairsGetHdrKeysOnly) {
+  TempDir dir;
+  WriteHdr(dir / "gt" / "x.exr", 12, 10, 6);
+  WriteHdr(dir / "pred" / "x.exr", 12, 10, 7, 8.0f);
+  const nlohmann::json result = EvaluatePaths(dir / "pred", dir / "gt");
+  ASSERT_EQ(result["pairs"].size(), 1u);
+  EXPECT_EQ(KeysOf(result["pairs"][0]), kHdrKeys);
+  const MetricList m =
+      HdrMetrics(ReadImage(dir / "pred" / "x.exr"), ReadImage(dir / "gt" / "x.exr"));
+  for (const auto& [key, value] : m) {
+    EXPECT_DOUBLE_EQ(result["pairs"][0][key].get<double>(), value) << key;
+    EXPECT_DOUBLE_EQ(result["mean"][key].get<double>(), value) << key;
+  }
+}
+
+TEST(EvaluateTest, MixedFolderMeansEachKeyOverItsPairs) {
+  TempDir dir;
+  WriteLdr(dir / "gt" / "a.png", 8, 8, 8);
+  WriteLdr(dir / "pred" / "a.png", 8, 8, 9);
+  WriteHdr(dir / "gt" / "h.exr", 8, 8, 10);
+  WriteHdr(dir / "pred" / "h.exr", 8, 8, 11);
+  const nlohmann::json result = EvaluatePaths(dir / "pred", dir / "gt");
+  ASSERT_EQ(result["pairs"].size(), 2u);
+  EXPECT_EQ(KeysOf(result["pairs"][0]), kLdrKeys);
+  EXPECT_EQ(KeysOf(result["pairs"][1]), kHdrKeys);
+  EXPECT_EQ(result["mean"]["psnr"], result["pairs"][0]["psnr"]);
+  EXPECT_EQ(result["mean"]["pu21_psnr"], result["pairs"][1]["pu21_psnr"]);
+  EXPECT_EQ(KeysOf(result["mean"]).size(), kLdrKeys.size() + kHdrKeys.size() - 2);
+
+  const std::string table = FormatEvalTable(result);
+  EXPECT_THAT(table, HasSubstr("pu21_psnr"));
+  EXPECT_THAT(table, HasSubstr(" - "));  // the LDR pair has no HDR keys and vice versa
+}
+
+TEST(EvaluateTest, IdenticalImagesWriteNullAndParse) {
+  TempDir dir;
+  WriteLdr(dir / "gt" / "a.png", 10, 10, 12);
+  fs::create_directories(dir / "pred");
+  fs::copy_file(dir / "gt" / "a.png", dir / "pred" / "a.png");
+  WriteLdr(dir / "gt" / "b.png", 10, 10, 13);
+  WriteLdr(dir / "pred" / "b.png", 10, 10, 14);
+  const nlohmann::json result = EvaluatePaths(dir / "pred", dir / "gt");
+  EXPECT_TRUE(result["pairs"][0]["psnr"].is_null());
+  EXPECT_TRUE(result["pairs"][0]["psnr_channel_mean"].is_null());
+  EXPECT_NEAR(result["pairs"][0]["ssim"].get<double>(), 1.0, 1e-12);
+  EXPECT_TRUE(result["pairs"][1]["psnr"].is_number());
+  EXPECT_TRUE(result["mean"]["psnr"].is_null());  // the mean of inf and a number is inf
+  EXPECT_TRUE(result["mean"]["ssim"].is_number());
+  const std::string text = result.dump();
+  EXPECT_THAT(text, Not(HasSubstr("inf")));
+  EXPECT_EQ(nlohmann::json::parse(text), result);
+
+  const std::string table = FormatEvalTable(result);
+  EXPECT_THAT(table, HasSubstr("inf"));
+  EXPECT_THAT(table, HasSubstr("\nmean "));
+  EXPECT_EQ(std::count(table.begin(), table.end(), '\n'), 4);  // header, 2 pairs, mean
+}
+
+TEST(EvaluateTest, TableShowsValuesWithFourDecimals) {
+  nlohmann::json result = {{"pairs", {{{"name", "x.png"}, {"psnr", 31.123456}, {"ssim", 0.9}}}},
+                           {"mean", {{"psnr", 31.123456}, {"ssim", 0.9}}}};
+  const std::string table = FormatEvalTable(result);
+  EXPECT_THAT(table, HasSubstr("31.1235"));
+  EXPECT_THAT(table, HasSubstr("0.9000"));
+  EXPECT_LT(table.find("psnr"), table.find("ssim"));
+  EXPECT_THAT(ErrorOf([] { FormatEvalTable(nlohmann::json::object()); }), HasSubstr("pairs"));
+}
+
+TEST(EvaluateTest, AcceptsSameStemOfTheSameKind) {
+  TempDir dir;
+  WriteLdr(dir / "gt" / "r_000.png", 8, 6, 15);
+  WriteLdr(dir / "pred" / "r_000.jpg", 8, 6, 16);
+  const nlohmann::json result = EvaluatePaths(dir / "pred", dir / "gt");
+  ASSERT_EQ(result["pairs"].size(), 1u);
+  EXPECT_EQ(result["pairs"][0]["name"], "r_000.png");
+  EXPECT_EQ(KeysOf(result["pairs"][0]), kLdrKeys);
+}
+
+TEST(EvaluateTest, AmbiguousStemIsAnError) {
+  TempDir dir;
+  WriteLdr(dir / "pred" / "r_000.png", 8, 6, 17);
+  WriteLdr(dir / "gt" / "r_000.jpg", 8, 6, 18);
+  WriteLdr(dir / "gt" / "r_000.jpeg", 8, 6, 19);
+  const std::string error = ErrorOf([&] { EvaluatePaths(dir / "pred", dir / "gt"); });
+  EXPECT_THAT(error, HasSubstr("several ground-truth images match prediction r_000.png"));
+  EXPECT_THAT(error, HasSubstr("r_000.jpeg"));
+}
+
+TEST(EvaluateTest, PredictionWithoutGroundTruthNamesTheFile) {
+  LdrFolders f;
+  WriteLdr(f.pred / "c.png", 16, 12, 20);
+  WriteLdr(f.pred / "d.png", 16, 12, 21);
+  WriteHdr(f.gt / "d.exr", 16, 12, 22);  // same stem, other kind: not a match
+  const std::string error = ErrorOf([&] { EvaluatePaths(f.pred, f.gt); });
+  EXPECT_THAT(error, HasSubstr("no ground truth for 2 of 4 predicted images"));
+  EXPECT_THAT(error, HasSubstr("c.png"));
+  EXPECT_THAT(error, HasSubstr("d.png (only d.exr found, which is HDR)"));
+  EXPECT_THAT(error, HasSubstr(f.gt.string()));
+}
+
+TEST(EvaluateTest, ListsOnlyTheFirstUnmatchedNames) {
+  TempDir dir;
+  for (int i = 0; i < 8; ++i) WriteLdr(dir / "pred" / fmt::format("m{}.png", i), 4, 4, i);
+  fs::create_directories(dir / "gt");
+  const std::string error = ErrorOf([&] { EvaluatePaths(dir / "pred", dir / "gt"); });
+  EXPECT_THAT(error, HasSubstr("no ground truth for 8 of 8"));
+  EXPECT_THAT(error, HasSubstr("m4.png, ... (3 more)"));
+  EXPECT_THAT(error, Not(HasSubstr("m7.png")));
+}
+
+TEST(EvaluateTest, EmptyPredictionFolderIsAnError) {
+  TempDir dir;
+  testing::WriteTextFile(dir / "pred" / "readme.txt", "x");
+  WriteLdr(dir / "gt" / "a.png", 4, 4, 1);
+  EXPECT_THAT(ErrorOf([&] { EvaluatePaths(dir / "pred", dir / "gt"); }),
+              HasSubstr("no predicted images"));
+}
+
+TEST(EvaluateTest, MixedLdrHdrPairNamesBothFiles) {
+  TempDir dir;
+  WriteHdr(dir / "pred.exr", 8, 8, 23);
+  WriteLdr(dir / "gt.png", 8, 8, 24);
+  const std::string error = ErrorOf([&] { EvaluatePaths(dir / "pred.exr", dir / "gt.png"); });
+  EXPECT_THAT(error, HasSubstr((dir / "pred.exr").string()));
+  EXPECT_THAT(error, HasSubstr((dir / "gt.png").string()));
+  EXPECT_THAT(error, HasSubstr("LDR image with an HDR one"));
+}
+
+TEST(EvaluateTest, SizeMismatchNamesFilesAndShapes) {
+  TempDir dir;
+  WriteLdr(dir / "pred.png", 5, 3, 25);
+  WriteLdr(dir / "gt.png", 4, 3, 26);
+  const std::string error = ErrorOf([&] { EvaluatePair(dir / "pred.png", dir / "gt.png"); });
+  EXPECT_THAT(error, HasSubstr((dir / "pred.png").string() + " (5x3x3)"));
+  EXPECT_THAT(error, HasSubstr((dir / "gt.png").string() + " (4x3x3)"));
+  EXPECT_THAT(error, HasSubstr("differ in size"));
+}
+
+TEST(EvaluateTest, ChannelMismatchIsAnErrorButAlphaIsIgnored) {
+  TempDir dir;
+  WriteImage(dir / "grey.png", RandomImage(4, 4, 1, 27, 0, 1, Encoding::kSrgb));
+  WriteImage(dir / "rgba.png", RandomImage(4, 4, 4, 28, 0, 1, Encoding::kSrgb));
+  WriteLdr(dir / "rgb.png", 4, 4, 29);
+  EXPECT_THAT(ErrorOf([&] { EvaluatePair(dir / "grey.png", dir / "rgb.png"); }),
+              HasSubstr("colour channels (1 vs 3)"));
+  const nlohmann::json pair = EvaluatePair(dir / "rgba.png", dir / "rgb.png");
+  EXPECT_EQ(pair["name"], "rgb.png");
+  EXPECT_EQ(KeysOf(pair), kLdrKeys);
+}
+
+TEST(EvaluateTest, BlackHdrGroundTruthNamesTheFiles) {
+  TempDir dir;
+  WriteImage(dir / "gt.exr", Image(6, 6, 3), {.format = PixelFormat::kFloat});
+  WriteHdr(dir / "pred.exr", 6, 6, 30);
+  const std::string error = ErrorOf([&] { EvaluatePair(dir / "pred.exr", dir / "gt.exr"); });
+  EXPECT_THAT(error, HasSubstr((dir / "gt.exr").string()));
+  EXPECT_THAT(error, HasSubstr("all black"));
+}
+
+TEST(EvaluateTest, BadPathsAreErrors) {
+  TempDir dir;
+  WriteLdr(dir / "a.png", 4, 4, 31);
+  fs::create_directories(dir / "folder");
+  EXPECT_THAT(ErrorOf([&] { EvaluatePaths(dir / "nope.png", dir / "a.png"); }),
+              HasSubstr((dir / "nope.png").string() + ": not found"));
+  EXPECT_THAT(ErrorOf([&] { EvaluatePaths(dir / "a.png", dir / "folder"); }),
+              HasSubstr("give two image files or two folders"));
+  EXPECT_THAT(ErrorOf([&] { EvaluatePair(dir / "a.png", dir / "missing.png"); }),
+              HasSubstr("missing.png"));
+}
+
+TEST(EvaluateTest, FirstFailingPairInNameOrderIsReported) {
+  TempDir dir;
+  for (const std::string name : {"a.png", "b.png", "c.png"}) WriteLdr(dir / "gt" / name, 4, 4, 32);
+  WriteLdr(dir / "pred" / "a.png", 4, 4, 33);
+  WriteLdr(dir / "pred" / "b.png", 5, 4, 34);
+  WriteLdr(dir / "pred" / "c.png", 6, 4, 35);
+  const std::string error = ErrorOf([&] { EvaluatePaths(dir / "pred", dir / "gt"); });
+  EXPECT_THAT(error, HasSubstr("b.png (5x4x3)"));
+  EXPECT_THAT(error, HasSubstr("(and 1 more pairs failed)"));
+}
+
+TEST(EvaluateTest, SameResultAtAnyThreadCount) {
+  LdrFolders f;
+  const nlohmann::json parallel = EvaluatePaths(f.pred, f.gt);
+  ThreadLimit one(1);
+  EXPECT_EQ(EvaluatePaths(f.pred, f.gt), parallel);
+}
+
+// ---- The CLI ---------------------------------------------------------------------------------
+
+TEST(EvalCommandTest, JsonOutputParsesAndMatchesTheLibrary) {
+  LdrFolders f;
+  const auto r = RunHdr4d("eval '" + f.pred.string() + "' '" + f.gt.string() + "' --json --out '" +
+                          (f.dir / "out" / "eval.json").string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json printed = nlohmann::json::parse(r.out);
+  const nlohmann::json expected = EvaluatePaths(f.pred, f.gt);
+  EXPECT_EQ(printed, expected);
+  EXPECT_EQ(nlohmann::json::parse(testing::ReadTextFile(f.dir / "out" / "eval.json")), expected);
+}
+
+TEST(EvalCommandTest, TableByDefault) {
+  LdrFolders f;
+  const auto r =
+      RunHdr4d("eval '" + (f.pred / "a.png").string() + "' '" + (f.gt / "a.png").string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("psnr_channel_mean"));
+  EXPECT_THAT(r.out, HasSubstr("\nmean "));
+}
+
+TEST(EvalCommandTest, MissingPathFailsWithOneLine) {
+  TempDir dir;
+  WriteLdr(dir / "gt.png", 4, 4, 36);
+  const std::string missing = (dir / "missing.png").string();
+  const auto r = RunHdr4d("eval '" + missing + "' '" + (dir / "gt.png").string() + "' --json");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.err, HasSubstr(missing));
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_TRUE(r.out.empty());
+}
+
+TEST(EvalCommandTest, HelpExplainsTheProtocol) {
+  const auto r = RunHdr4d("eval --help");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_THAT(r.out, HasSubstr("4000"));
+  EXPECT_THAT(r.out, HasSubstr("own max"));
+  EXPECT_THAT(r.out, HasSubstr("same file name"));
+}
+
+}  // namespace
+}  // namespace hdr4d
