@@ -10,6 +10,8 @@
 
 #include "cli/commands.h"
 #include "core/dataset.h"
+#include "core/image_io.h"
+#include "core/preview.h"
 #include "core/json_util.h"
 #include "core/scene_profile.h"
 
@@ -144,6 +146,28 @@ int RunCheck(const CheckArgs& args) {
 
 }  // namespace
 
+namespace {
+
+struct PreviewArgs {
+  std::string dir;
+  std::string out;
+  PreviewOptions options;
+};
+
+void RunPreview(const PreviewArgs& args) {
+  const Dataset dataset = LoadDataset(args.dir, {.image_check = ImageCheck::kHeaders, .require_test = false});
+  const Preview preview = MakeDatasetPreview(dataset, args.options);
+  WriteImage(args.out, preview.sheet);
+  fmt::print("preview: {} ({} rows x {} timestamps)\n", args.out, preview.row_labels.size(),
+             preview.column_times.size());
+  for (std::size_t r = 0; r < preview.row_labels.size(); ++r) fmt::print("  row {}: {}\n", r + 1, preview.row_labels[r]);
+  std::string times;
+  for (double t : preview.column_times) times += fmt::format("{}{:.3g}", times.empty() ? "" : ", ", t);
+  fmt::print("  columns: t = {}\n", times);
+}
+
+}  // namespace
+
 void AddDatasetCommand(CLI::App& app) {
   CLI::App* dataset =
       app.add_subcommand("dataset", "Inspect scenes in the dataset format (DESIGN §3)");
@@ -156,7 +180,7 @@ void AddDatasetCommand(CLI::App& app) {
     throw CLI::RuntimeError(static_cast<int>(CLI::ExitCodes::RequiredError));
   });
 
-  auto args = std::make_shared<CheckArgs>();
+  auto args = std::make_shared<CheckArgs>();  // dataset check
   CLI::App* check =
       dataset->add_subcommand("check", "Report every problem of a scene, then summarise it");
   check->footer(
@@ -179,6 +203,18 @@ void AddDatasetCommand(CLI::App& app) {
     const int code = RunCheck(*args);
     if (code != 0) throw CLI::RuntimeError(code);
   });
+
+  auto preview_args = std::make_shared<PreviewArgs>();
+  CLI::App* preview = dataset->add_subcommand(
+      "preview", "Write a contact sheet of one camera over time: a row per exposure, then the HDR truth");
+  preview->add_option("DIR", preview_args->dir, "Scene folder")->required();
+  preview->add_option("--out,-o", preview_args->out, "Output image (.png)")->required();
+  preview->add_option("--split", preview_args->options.split, "train, test or val")->capture_default_str();
+  preview->add_option("--camera", preview_args->options.camera_id, "camera_id to show (-1: the split's first)")
+      ->capture_default_str();
+  preview->add_option("--columns", preview_args->options.max_columns, "Timestamps shown, evenly sampled")
+      ->capture_default_str();
+  preview->callback([preview_args] { RunPreview(*preview_args); });
 }
 
 }  // namespace hdr4d::cli

@@ -20,6 +20,11 @@ TEST(Cli, HelpListsEverySubcommand) {
     EXPECT_NE(r.out.find(name), std::string::npos) << name;
     EXPECT_EQ(RunHdr4d(std::string(name) + " --help").exit_code, 0) << name;
   }
+  const auto dataset = RunHdr4d("dataset --help");
+  for (const char* name : {"check", "preview"}) {
+    EXPECT_NE(dataset.out.find(name), std::string::npos) << name;
+    EXPECT_EQ(RunHdr4d(std::string("dataset ") + name + " --help").exit_code, 0) << name;
+  }
 }
 
 TEST(Cli, NoSubcommandIsAUsageError) {
@@ -71,6 +76,9 @@ TEST(Cli, DemoPipelineEndToEnd) {
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
   const auto check = nlohmann::json::parse(r.out);
   EXPECT_TRUE(check["ok"].get<bool>());
+  r = RunHdr4d("dataset preview " + scene + " --out " + (dir / "preview.png").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(dir / "preview.png"));
   r = RunHdr4d("merge-hdr --data " + scene + " --out " + (dir / "merged").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   r = RunHdr4d("eval " + (dir / "merged").string() + " " + scene + "/hdr --json");
