@@ -6,10 +6,10 @@
 
 namespace hdr4d::cli {
 
-void AddDatasetCommand(CLI::App& app);   // dataset check
-void AddEvalCommand(CLI::App& app);      // eval PRED GT
-void AddSynthLdrCommand(CLI::App& app);  // synth-ldr
-void AddDemoSceneCommand(CLI::App& app); // make-demo-scene
-void AddMergeHdrCommand(CLI::App& app);  // merge-hdr
+void AddDatasetCommand(CLI::App& app);    // dataset check
+void AddEvalCommand(CLI::App& app);       // eval PRED GT
+void AddSynthLdrCommand(CLI::App& app);   // synth-ldr
+void AddDemoSceneCommand(CLI::App& app);  // make-demo-scene
+void AddMergeHdrCommand(CLI::App& app);   // merge-hdr
 
 }  // namespace hdr4d::cli

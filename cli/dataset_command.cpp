@@ -11,8 +11,8 @@
 #include "cli/commands.h"
 #include "core/dataset.h"
 #include "core/image_io.h"
-#include "core/preview.h"
 #include "core/json_util.h"
+#include "core/preview.h"
 #include "core/scene_profile.h"
 
 namespace hdr4d::cli {
@@ -155,14 +155,17 @@ struct PreviewArgs {
 };
 
 void RunPreview(const PreviewArgs& args) {
-  const Dataset dataset = LoadDataset(args.dir, {.image_check = ImageCheck::kHeaders, .require_test = false});
+  const Dataset dataset =
+      LoadDataset(args.dir, {.image_check = ImageCheck::kHeaders, .require_test = false});
   const Preview preview = MakeDatasetPreview(dataset, args.options);
   WriteImage(args.out, preview.sheet);
   fmt::print("preview: {} ({} rows x {} timestamps)\n", args.out, preview.row_labels.size(),
              preview.column_times.size());
-  for (std::size_t r = 0; r < preview.row_labels.size(); ++r) fmt::print("  row {}: {}\n", r + 1, preview.row_labels[r]);
+  for (std::size_t r = 0; r < preview.row_labels.size(); ++r)
+    fmt::print("  row {}: {}\n", r + 1, preview.row_labels[r]);
   std::string times;
-  for (double t : preview.column_times) times += fmt::format("{}{:.3g}", times.empty() ? "" : ", ", t);
+  for (double t : preview.column_times)
+    times += fmt::format("{}{:.3g}", times.empty() ? "" : ", ", t);
   fmt::print("  columns: t = {}\n", times);
 }
 
@@ -206,13 +209,19 @@ void AddDatasetCommand(CLI::App& app) {
 
   auto preview_args = std::make_shared<PreviewArgs>();
   CLI::App* preview = dataset->add_subcommand(
-      "preview", "Write a contact sheet of one camera over time: a row per exposure, then the HDR truth");
+      "preview",
+      "Write a contact sheet of one camera over time: a row per exposure, then the HDR truth");
   preview->add_option("DIR", preview_args->dir, "Scene folder")->required();
   preview->add_option("--out,-o", preview_args->out, "Output image (.png)")->required();
-  preview->add_option("--split", preview_args->options.split, "train, test or val")->capture_default_str();
-  preview->add_option("--camera", preview_args->options.camera_id, "camera_id to show (-1: the split's first)")
+  preview->add_option("--split", preview_args->options.split, "train, test or val")
       ->capture_default_str();
-  preview->add_option("--columns", preview_args->options.max_columns, "Timestamps shown, evenly sampled")
+  preview
+      ->add_option("--camera", preview_args->options.camera_id,
+                   "camera_id to show (-1: the split's first)")
+      ->capture_default_str();
+  preview
+      ->add_option("--columns", preview_args->options.max_columns,
+                   "Timestamps shown, evenly sampled")
       ->capture_default_str();
   preview->callback([preview_args] { RunPreview(*preview_args); });
 }

@@ -17,21 +17,31 @@ void AddDemoSceneCommand(CLI::App& app) {
       "radiance over 1e4:1) to linear EXR ground truth and write its dataset JSON. Then run "
       "`hdr4d synth-ldr --data DIR` to create the multi-exposure LDR images.");
   cmd->add_option("--out,-o", *out, "Output folder")->required();
-  cmd->add_option("--size", options->width, "Image width and height in pixels")->capture_default_str();
-  cmd->add_option("--timestamps", options->num_timestamps, "Number of timestamps")->capture_default_str();
-  cmd->add_option("--cameras", options->num_cameras, "Multi-view: number of fixed cameras (the last is held out for test)")
+  cmd->add_option("--size", options->width, "Image width and height in pixels")
       ->capture_default_str();
-  cmd->add_option("--rig", *rig, "multiview (every exposure at every camera and time) or monocular (one moving camera, exposures cycling)")
+  cmd->add_option("--timestamps", options->num_timestamps, "Number of timestamps")
+      ->capture_default_str();
+  cmd->add_option("--cameras", options->num_cameras,
+                  "Multi-view: number of fixed cameras (the last is held out for test)")
+      ->capture_default_str();
+  cmd->add_option("--rig", *rig,
+                  "multiview (every exposure at every camera and time) or monocular (one moving "
+                  "camera, exposures cycling)")
       ->check(CLI::IsMember({"multiview", "monocular"}))
       ->capture_default_str();
-  cmd->add_option("--exposures", options->exposures, "Exposure times in seconds")->delimiter(',')->capture_default_str();
-  cmd->add_option("--spp", options->samples_per_axis, "Supersampling: N x N rays per pixel")->capture_default_str();
+  cmd->add_option("--exposures", options->exposures, "Exposure times in seconds")
+      ->delimiter(',')
+      ->capture_default_str();
+  cmd->add_option("--spp", options->samples_per_axis, "Supersampling: N x N rays per pixel")
+      ->capture_default_str();
   cmd->callback([options, out, rig] {
     options->height = options->width;
     options->rig = *rig == "monocular" ? DemoRig::kMonocular : DemoRig::kMultiView;
     const Dataset dataset = MakeDemoScene(*options, *out);
-    fmt::print("make-demo-scene: {} train and {} test frames in {} (HDR in hdr/, LDR to come in images/)\n",
-               dataset.train.size(), dataset.test.size(), *out);
+    fmt::print(
+        "make-demo-scene: {} train and {} test frames in {} (HDR in hdr/, LDR to come in "
+        "images/)\n",
+        dataset.train.size(), dataset.test.size(), *out);
   });
 }
 

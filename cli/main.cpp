@@ -17,7 +17,7 @@ int main(int argc, char** argv) {
   int verbosity = 0;
   app.add_flag("-v,--verbose", verbosity, "More log output (repeat for debug)");
   app.parse_complete_callback([&] {
-    spdlog::set_level(verbosity >= 2 ? spdlog::level::debug
+    spdlog::set_level(verbosity >= 2   ? spdlog::level::debug
                       : verbosity == 1 ? spdlog::level::info
                                        : spdlog::level::warn);
   });

@@ -17,7 +17,8 @@ void AddMergeHdrCommand(CLI::App& app) {
       "the frames' exr_file_path, so `hdr4d eval OUT SCENE/hdr` scores them.");
   cmd->add_option("--data", *data, "Dataset folder")->required();
   cmd->add_option("--out,-o", *out, "Output folder for the merged EXR images")->required();
-  cmd->add_option("--crf", options->crf, "Camera response (default: the one in DATA/synthesis.json)");
+  cmd->add_option("--crf", options->crf,
+                  "Camera response (default: the one in DATA/synthesis.json)");
   cmd->add_option("--split", options->split, "train, test, val or all")->capture_default_str();
   cmd->callback([options, data, out] {
     const int n = MergeDatasetExposures(*data, *out, *options);

@@ -33,14 +33,18 @@ struct SynthLdrArgs {
 void Run(const SynthLdrArgs& a) {
   SensorNoise noise{.full_well = a.full_well, .read_sigma = a.read_sigma, .seed = a.seed};
   if (!a.data.empty()) {
-    if (!a.input.empty() || !a.output.empty()) Fail("synth-ldr: give either --data DIR or IN --out OUT, not both");
-    DatasetSynthesisOptions options{.crf = a.crf, .noise = noise, .bits = a.bits, .overwrite = !a.keep_existing};
+    if (!a.input.empty() || !a.output.empty())
+      Fail("synth-ldr: give either --data DIR or IN --out OUT, not both");
+    DatasetSynthesisOptions options{
+        .crf = a.crf, .noise = noise, .bits = a.bits, .overwrite = !a.keep_existing};
     const int n = SynthesizeDatasetLdr(a.data, options);
-    fmt::print("synth-ldr: wrote {} LDR images in {} (camera response {}, settings in synthesis.json)\n",
-               n, a.data, a.crf);
+    fmt::print(
+        "synth-ldr: wrote {} LDR images in {} (camera response {}, settings in synthesis.json)\n",
+        n, a.data, a.crf);
     return;
   }
-  if (a.input.empty() || a.output.empty()) Fail("synth-ldr: give IN and --out OUT, or --data DIR (see --help)");
+  if (a.input.empty() || a.output.empty())
+    Fail("synth-ldr: give IN and --out OUT, or --data DIR (see --help)");
   LdrSynthesisOptions options{.exposure = a.exposure, .noise = noise, .bits = a.bits};
   options.Validate();
   const auto crf = ParseCrf(a.crf);
@@ -53,7 +57,8 @@ void Run(const SynthLdrArgs& a) {
   if (a.bits == 16) format = PixelFormat::kUint16;
   if (a.bits == 0) format = PixelFormat::kFloat;
   WriteImage(a.output, ldr, {.format = format});
-  fmt::print("synth-ldr: {} -> {} (exposure {} s, {})\n", a.input, a.output, a.exposure, crf->Spec());
+  fmt::print("synth-ldr: {} -> {} (exposure {} s, {})\n", a.input, a.output, a.exposure,
+             crf->Spec());
 }
 
 }  // namespace
@@ -65,7 +70,8 @@ void AddSynthLdrCommand(CLI::App& app) {
       "Synthesise LDR images from linear HDR: radiance x exposure time (+ sensor noise) -> camera "
       "response -> clip -> quantise.\n"
       "  One image:   hdr4d synth-ldr IN.exr --exposure 2 --out OUT.png\n"
-      "  A dataset:   hdr4d synth-ldr --data SCENE   (every frame's file_path from its exr_file_path "
+      "  A dataset:   hdr4d synth-ldr --data SCENE   (every frame's file_path from its "
+      "exr_file_path "
       "at its own `exposures` value)");
   cmd->add_option("input", args->input, "Linear HDR image (EXR) for single-image mode");
   cmd->add_option("--out,-o", args->output, "Output LDR image (.png, .jpg; .exr with --bits 0)");
@@ -80,7 +86,8 @@ void AddSynthLdrCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--read-noise", args->read_sigma, "Read noise std in units of full scale")
       ->capture_default_str();
-  cmd->add_option("--seed", args->seed, "Noise seed (same seed, same bytes)")->capture_default_str();
+  cmd->add_option("--seed", args->seed, "Noise seed (same seed, same bytes)")
+      ->capture_default_str();
   cmd->add_option("--bits", args->bits, "Quantisation: 8, 16, or 0 for float output")
       ->capture_default_str();
   cmd->add_flag("--keep-existing", args->keep_existing, "Dataset mode: skip LDR images that exist");

@@ -16,20 +16,11 @@
 namespace hdr4d {
 namespace {
 
+using hdr4d::testing::ErrorOf;
+
 using ::testing::HasSubstr;
 using testing::TempDir;
 using testing::WriteTextFile;
-
-// The error message of `fn`, or "" if it did not throw hdr4d::Error.
-template <typename Fn>
-std::string ErrorOf(Fn&& fn) {
-  try {
-    fn();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
-}
 
 // Exposures 0, 1e-12 .. 1e3 (log-spaced), 1e-9, and a fine linear grid over [0, 2].
 std::vector<double> DenseGrid() {

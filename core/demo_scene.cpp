@@ -31,7 +31,8 @@ const Vector3d kBallAlbedo(0.75, 0.25, 0.15);
 
 // The ball rolls along x and bounces; the emitter circles at height 1.6.
 Vector3d BallCenter(double t) {
-  return {-1.0 + 2.0 * t, 0.3 * std::sin(2 * kPi * t), kBallRadius + 0.35 * std::abs(std::sin(3 * kPi * t))};
+  return {-1.0 + 2.0 * t, 0.3 * std::sin(2 * kPi * t),
+          kBallRadius + 0.35 * std::abs(std::sin(3 * kPi * t))};
 }
 
 // Irradiance from the sun on a surface facing it; it dims to a fifth over the sequence.
@@ -60,7 +61,8 @@ bool BallBlocks(const Vector3d& p, const Vector3d& dir, double max_dist, double 
 Vector3d Shade(const Vector3d& p, const Vector3d& n, const Vector3d& albedo, double t) {
   Vector3d irradiance = kAmbientIrradiance;
   const double sun_cos = n.dot(kSunDirection);
-  if (sun_cos > 0 && !BallBlocks(p + 1e-4 * n, kSunDirection, 1e9, t)) irradiance += SunIrradiance(t) * sun_cos;
+  if (sun_cos > 0 && !BallBlocks(p + 1e-4 * n, kSunDirection, 1e9, t))
+    irradiance += SunIrradiance(t) * sun_cos;
   const Vector3d to_emitter = DemoEmitterCenter(t) - p;
   const double dist = to_emitter.norm();
   const Vector3d l = to_emitter / dist;
@@ -91,18 +93,23 @@ Vector3d DemoSceneRadiance(const Vector3d& o, const Vector3d& d, double t) {
     if (s > 1e-6 && s < best) best = s, what = 1;
   }
   if (auto s = HitSphere(o, d, BallCenter(t), kBallRadius); s && *s < best) best = *s, what = 2;
-  if (auto s = HitSphere(o, d, DemoEmitterCenter(t), kEmitterRadius); s && *s < best) best = *s, what = 3;
+  if (auto s = HitSphere(o, d, DemoEmitterCenter(t), kEmitterRadius); s && *s < best)
+    best = *s, what = 3;
   const Vector3d p = o + best * d;
   switch (what) {
     case 1: {
       if (std::max(std::abs(p.x()), std::abs(p.y())) > 4.0) return Sky(d, t);  // finite floor
-      const bool dark = (static_cast<int>(std::floor(p.x() * 2)) + static_cast<int>(std::floor(p.y() * 2))) & 1;
+      const bool dark =
+          (static_cast<int>(std::floor(p.x() * 2)) + static_cast<int>(std::floor(p.y() * 2))) & 1;
       const Vector3d albedo = dark ? Vector3d(0.04, 0.04, 0.05) : Vector3d(0.8, 0.78, 0.7);
       return Shade(p, Vector3d::UnitZ(), albedo, t);
     }
-    case 2: return Shade(p, (p - BallCenter(t)).normalized(), kBallAlbedo, t);
-    case 3: return kEmitterRadiance;
-    default: return Sky(d, t);
+    case 2:
+      return Shade(p, (p - BallCenter(t)).normalized(), kBallAlbedo, t);
+    case 3:
+      return kEmitterRadiance;
+    default:
+      return Sky(d, t);
   }
 }
 
@@ -132,34 +139,24 @@ Image RenderDemoView(const Camera& camera, double t, int samples_per_axis) {
 }
 
 void DemoSceneOptions::Validate() const {
-  if (width < 8 || height < 8 || width > 4096 || height > 4096) Fail("demo scene: size {}x{} must be within 8..4096", width, height);
+  if (width < 8 || height < 8 || width > 4096 || height > 4096)
+    Fail("demo scene: size {}x{} must be within 8..4096", width, height);
   if (num_timestamps < 1) Fail("demo scene: need at least one timestamp, got {}", num_timestamps);
-  if (rig == DemoRig::kMultiView && num_cameras < 2) Fail("demo scene: a multi-view rig needs at least 2 cameras (one is the test camera), got {}", num_cameras);
+  if (rig == DemoRig::kMultiView && num_cameras < 2)
+    Fail("demo scene: a multi-view rig needs at least 2 cameras (one is the test camera), got {}",
+         num_cameras);
   if (exposures.empty()) Fail("demo scene: no exposures given");
   for (double e : exposures) {
-    if (!(e > 0) || !std::isfinite(e)) Fail("demo scene: exposure {} s must be positive and finite", e);
+    if (!(e > 0) || !std::isfinite(e))
+      Fail("demo scene: exposure {} s must be positive and finite", e);
   }
-  if (samples_per_axis < 1 || samples_per_axis > 16) Fail("demo scene: samples per axis {} must be within 1..16", samples_per_axis);
+  if (samples_per_axis < 1 || samples_per_axis > 16)
+    Fail("demo scene: samples per axis {} must be within 1..16", samples_per_axis);
 }
 
 namespace {
 
-// A camera at `eye` looking at `target` with +Z up, as a Blender/OpenGL camera-to-world matrix.
-Eigen::Matrix4d LookAtGl(const Vector3d& eye, const Vector3d& target) {
-  const Vector3d back = (eye - target).normalized();  // camera +Z points away from the view
-  const Vector3d right = Vector3d::UnitZ().cross(back).normalized();
-  const Vector3d up = back.cross(right);
-  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
-  m.block<3, 1>(0, 0) = right;
-  m.block<3, 1>(0, 1) = up;
-  m.block<3, 1>(0, 2) = back;
-  m.block<3, 1>(0, 3) = eye;
-  return m;
-}
-
-Vector3d RingPosition(double angle) {
-  return {4.2 * std::cos(angle), 4.2 * std::sin(angle), 2.4};
-}
+Vector3d RingPosition(double angle) { return {4.2 * std::cos(angle), 4.2 * std::sin(angle), 2.4}; }
 
 }  // namespace
 
@@ -170,7 +167,8 @@ Dataset MakeDemoScene(const DemoSceneOptions& options, const fs::path& root) {
   dataset.root = root;
   dataset.layout = "hdr4d";
   dataset.camera_angle_x = kFovX;
-  const PinholeIntrinsics intrinsics = PinholeIntrinsics::FromFovX(kFovX, options.width, options.height);
+  const PinholeIntrinsics intrinsics =
+      PinholeIntrinsics::FromFovX(kFovX, options.width, options.height);
   const int num_t = options.num_timestamps;
   const int num_e = static_cast<int>(options.exposures.size());
   const Vector3d target(0, 0, 0.5);
@@ -187,7 +185,9 @@ Dataset MakeDemoScene(const DemoSceneOptions& options, const fs::path& root) {
     for (int c = 0; c < options.num_cameras; ++c) {
       const double angle = 2 * kPi * (c + 0.5) / options.num_cameras;
       const Split split = c == options.num_cameras - 1 ? Split::kTest : Split::kTrain;
-      for (int i = 0; i < num_t; ++i) views.push_back({split, c, i, LookAtGl(RingPosition(angle), target)});
+      for (int i = 0; i < num_t; ++i)
+        views.push_back(
+            {split, c, i, LookAtWorldFromCamGl(RingPosition(angle), target, Vector3d::UnitZ())});
     }
   } else {
     // The camera sweeps half a circle; every 4th frame is held out for test (the last one when
@@ -196,7 +196,8 @@ Dataset MakeDemoScene(const DemoSceneOptions& options, const fs::path& root) {
       const double angle = kPi * (0.1 + 0.9 * i / std::max(1, num_t - 1));
       const bool test = num_t > 1 && (i % 4 == 3 || (num_t < 4 && i == num_t - 1));
       const Split split = test ? Split::kTest : Split::kTrain;
-      views.push_back({split, 0, i, LookAtGl(RingPosition(angle), target)});
+      views.push_back(
+          {split, 0, i, LookAtWorldFromCamGl(RingPosition(angle), target, Vector3d::UnitZ())});
     }
   }
 

@@ -33,7 +33,8 @@ struct DemoSceneOptions {
 };
 
 // Linear radiance seen along a ray at normalised time t in [0,1] (world axes: +Z up).
-Eigen::Vector3d DemoSceneRadiance(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+Eigen::Vector3d DemoSceneRadiance(const Eigen::Vector3d& origin,
+                                  const Eigen::Vector3d& direction,
                                   double t);
 // World position of the emitter's centre at time t (for tests of the camera convention).
 Eigen::Vector3d DemoEmitterCenter(double t);

@@ -87,8 +87,9 @@ TEST(DemoScene, LayoutMatchesTheRig) {
 }
 
 TEST(DemoScene, SceneChangesOverTime) {
-  const Camera camera{PinholeIntrinsics::FromFovX(0.8, 32, 32),
-                      (Eigen::Matrix4d() << 1, 0, 0, 0, 0, 0, -1, -4, 0, 1, 0, 1, 0, 0, 0, 1).finished()};
+  const Camera camera{
+      PinholeIntrinsics::FromFovX(0.8, 32, 32),
+      (Eigen::Matrix4d() << 1, 0, 0, 0, 0, 0, -1, -4, 0, 1, 0, 1, 0, 0, 0, 1).finished()};
   const Image a = RenderDemoView(camera, 0.0, 1), b = RenderDemoView(camera, 1.0, 1);
   double diff = 0;
   for (std::size_t i = 0; i < a.size(); ++i) diff += std::abs(a.values()[i] - b.values()[i]);

@@ -32,5 +32,4 @@ template <typename... Args>
 }  // namespace hdr4d
 
 // Invariant check, active in every build type: a failure is a bug, not a user mistake.
-#define HDR4D_CHECK(cond) \
-  ((cond) ? (void)0 : ::hdr4d::CheckFailed(#cond, __FILE__, __LINE__))
+#define HDR4D_CHECK(cond) ((cond) ? (void)0 : ::hdr4d::CheckFailed(#cond, __FILE__, __LINE__))

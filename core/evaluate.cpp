@@ -115,9 +115,10 @@ std::vector<std::pair<fs::path, fs::path>> MatchFolders(const fs::path& pred_dir
                                                         const fs::path& gt_dir) {
   const std::vector<fs::path> preds = ListImages(pred_dir);
   if (preds.empty()) {
-    Fail("{}: no predicted images in this folder (looked for .png, .jpg, .jpeg, .exr, .hdr, "
-         ".tif, .tiff, .bmp, .tga, .webp)",
-         pred_dir.string());
+    Fail(
+        "{}: no predicted images in this folder (looked for .png, .jpg, .jpeg, .exr, .hdr, "
+        ".tif, .tiff, .bmp, .tga, .webp)",
+        pred_dir.string());
   }
   std::map<std::string, fs::path> gt_by_name;
   std::map<std::string, std::vector<fs::path>> gt_by_stem;
@@ -161,9 +162,8 @@ std::vector<std::pair<fs::path, fs::path>> MatchFolders(const fs::path& pred_dir
     spdlog::warn("eval: {} of {} ground-truth images in {} have no prediction and are skipped",
                  unmatched, gt_by_name.size(), gt_dir.string());
   }
-  std::sort(pairs.begin(), pairs.end(), [](const auto& a, const auto& b) {
-    return a.second.filename() < b.second.filename();
-  });
+  std::sort(pairs.begin(), pairs.end(),
+            [](const auto& a, const auto& b) { return a.second.filename() < b.second.filename(); });
   return pairs;
 }
 

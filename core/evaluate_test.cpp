@@ -19,6 +19,8 @@
 namespace hdr4d {
 namespace {
 
+using hdr4d::testing::ErrorOf;
+
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 using ::testing::Not;
@@ -29,16 +31,6 @@ using testing::TempDir;
 const std::set<std::string> kLdrKeys = {"name", "psnr", "psnr_channel_mean", "ssim"};
 const std::set<std::string> kHdrKeys = {"name",           "mu_psnr",   "mu_ssim",  "mu_psnr_gt_max",
                                         "mu_ssim_gt_max", "pu21_psnr", "pu21_ssim"};
-
-template <typename Fn>
-std::string ErrorOf(Fn fn) {
-  try {
-    fn();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
-}
 
 std::set<std::string> KeysOf(const nlohmann::json& object) {
   std::set<std::string> keys;

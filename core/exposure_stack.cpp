@@ -50,12 +50,16 @@ void DatasetSynthesisOptions::Validate() const {
 int SynthesizeDatasetLdr(const fs::path& root, const DatasetSynthesisOptions& options) {
   options.Validate();
   const std::unique_ptr<Crf> crf = ParseCrf(options.crf);
-  const Dataset dataset = LoadDataset(root, {.image_check = ImageCheck::kNone, .require_test = false});
+  const Dataset dataset =
+      LoadDataset(root, {.image_check = ImageCheck::kNone, .require_test = false});
   std::vector<const Frame*> frames = dataset.AllFrames();
   for (const Frame* f : frames) {
     if (!f->hdr_path) {
-      Fail("{}: frame {} ({}) has no exr_file_path: LDR synthesis needs HDR ground truth for every frame",
-           (root / fmt::format("transforms_{}.json", SplitName(f->split))).string(), f->index, f->file_path);
+      Fail(
+          "{}: frame {} ({}) has no exr_file_path: LDR synthesis needs HDR ground truth for every "
+          "frame",
+          (root / fmt::format("transforms_{}.json", SplitName(f->split))).string(), f->index,
+          f->file_path);
     }
   }
   if (frames.empty()) Fail("{}: the dataset has no frames", root.string());
@@ -79,7 +83,9 @@ int SynthesizeDatasetLdr(const fs::path& root, const DatasetSynthesisOptions& op
       ldr.exposure = f->exposure;
       ldr.bits = options.bits;
       ldr.noise = options.noise;
-      ldr.noise.seed = MixSeed(options.noise.seed ^ MixSeed(static_cast<std::uint64_t>(f->split) << 32 | static_cast<std::uint32_t>(f->index)));
+      ldr.noise.seed =
+          MixSeed(options.noise.seed ^ MixSeed(static_cast<std::uint64_t>(f->split) << 32 |
+                                               static_cast<std::uint32_t>(f->index)));
       WriteImage(f->image_path, SynthesizeLdr(hdr.Rgb(), *crf, ldr),
                  {.format = options.bits == 16 ? PixelFormat::kUint16 : PixelFormat::kUint8});
       ++written[g];
@@ -92,7 +98,10 @@ int SynthesizeDatasetLdr(const fs::path& root, const DatasetSynthesisOptions& op
       {"crf", crf->ToJson()},
       {"crf_spec", crf->Spec()},
       {"bits", options.bits},
-      {"noise", {{"full_well", options.noise.full_well}, {"read_sigma", options.noise.read_sigma}, {"seed", options.noise.seed}}},
+      {"noise",
+       {{"full_well", options.noise.full_well},
+        {"read_sigma", options.noise.read_sigma},
+        {"seed", options.noise.seed}}},
       {"frames", frames.size()},
   };
   WriteJsonFile(root / kManifestName, manifest);
@@ -117,22 +126,26 @@ int MergeDatasetExposures(const fs::path& root, const fs::path& out, const Merge
       Fail("{}: not found, so the camera response is unknown; pass --crf", manifest.string());
     }
     const nlohmann::json j = ReadJsonFile(manifest);
-    if (!j.contains("crf_spec") || !j["crf_spec"].is_string()) Fail("{}: key 'crf_spec' missing or not a string", manifest.string());
+    if (!j.contains("crf_spec") || !j["crf_spec"].is_string())
+      Fail("{}: key 'crf_spec' missing or not a string", manifest.string());
     crf_spec = j["crf_spec"].get<std::string>();
   }
   const std::unique_ptr<Crf> crf = ParseCrf(crf_spec);
   if (!crf->Invertible()) Fail("merge-hdr: the camera response '{}' is not invertible", crf_spec);
-  const Dataset dataset = LoadDataset(root, {.image_check = ImageCheck::kHeaders, .require_test = false});
+  const Dataset dataset =
+      LoadDataset(root, {.image_check = ImageCheck::kHeaders, .require_test = false});
 
   std::map<fs::path, std::vector<const Frame*>> by_hdr;
   for (const Frame* f : FramesOfSplit(dataset, options.split)) {
     if (f->hdr_path) by_hdr[*f->hdr_path].push_back(f);
   }
-  if (by_hdr.empty()) Fail("{}: no {} frame has an exr_file_path to merge towards", root.string(), options.split);
+  if (by_hdr.empty())
+    Fail("{}: no {} frame has an exr_file_path to merge towards", root.string(), options.split);
   std::set<std::string> names;
   for (const auto& [hdr, frames] : by_hdr) {
     if (!names.insert(hdr.filename().string()).second) {
-      Fail("{}: two HDR files share the name {}; merged outputs would overwrite each other", root.string(), hdr.filename().string());
+      Fail("{}: two HDR files share the name {}; merged outputs would overwrite each other",
+           root.string(), hdr.filename().string());
     }
   }
   std::vector<std::pair<fs::path, std::vector<const Frame*>>> groups(by_hdr.begin(), by_hdr.end());

@@ -15,7 +15,7 @@ struct DatasetSynthesisOptions {
   std::string crf = "filmic";  // ParseCrf spec
   SensorNoise noise;           // seed is mixed with each frame's split and index
   int bits = 8;
-  bool overwrite = true;       // false: keep LDR images that already exist
+  bool overwrite = true;  // false: keep LDR images that already exist
   void Validate() const;
 };
 
@@ -32,7 +32,8 @@ struct MergeOptions {
 
 // Merges, for each HDR ground-truth file of the split, the LDR frames that reference it (one view
 // at one time, several exposures) into <out>/<same file name>.exr. Returns the number written.
-int MergeDatasetExposures(const std::filesystem::path& root, const std::filesystem::path& out,
+int MergeDatasetExposures(const std::filesystem::path& root,
+                          const std::filesystem::path& out,
                           const MergeOptions& options);
 
 }  // namespace hdr4d

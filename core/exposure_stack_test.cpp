@@ -48,7 +48,8 @@ TEST(ExposureStack, SynthesisWritesEveryFrameBrighterWithExposure) {
 TEST(ExposureStack, SameSeedSameBytes) {
   testing::TempDir dir;
   const Dataset dataset = SmallScene(dir.path());
-  DatasetSynthesisOptions options{.crf = "filmic", .noise = {.full_well = 1000, .read_sigma = 0.01, .seed = 7}};
+  DatasetSynthesisOptions options{.crf = "filmic",
+                                  .noise = {.full_well = 1000, .read_sigma = 0.01, .seed = 7}};
   SynthesizeDatasetLdr(dir.path(), options);
   const std::string first = testing::ReadTextFile(dataset.train[0].image_path);
   SynthesizeDatasetLdr(dir.path(), options);
@@ -85,7 +86,8 @@ TEST(ExposureStack, ErrorsNameTheProblem) {
     EXPECT_NE(std::string(e.what()).find("synthesis.json"), std::string::npos) << e.what();
   }
   EXPECT_THROW(SynthesizeDatasetLdr(dir.path(), {.crf = "gamma:-2"}), Error);
-  EXPECT_THROW(MergeDatasetExposures(dir.path(), dir / "m", {.crf = "srgb", .split = "everything"}), Error);
+  EXPECT_THROW(MergeDatasetExposures(dir.path(), dir / "m", {.crf = "srgb", .split = "everything"}),
+               Error);
   // A frame without HDR ground truth cannot be synthesised.
   nlohmann::json j = ReadJsonFile(dir / "transforms_train.json");
   j["frames"][0].erase("exr_file_path");

@@ -19,7 +19,11 @@ const char* EncodingName(Encoding encoding);
 class Image {
  public:
   Image() = default;
-  Image(int width, int height, int channels, Encoding encoding = Encoding::kLinear, float fill = 0.0f);
+  Image(int width,
+        int height,
+        int channels,
+        Encoding encoding = Encoding::kLinear,
+        float fill = 0.0f);
 
   int width() const { return width_; }
   int height() const { return height_; }

@@ -51,11 +51,13 @@ Image ReadImage(const fs::path& path, const ImageReadOptions& options) {
   auto in = OpenInput(path);
   const OIIO::ImageSpec& spec = in->spec();
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) {
-    Fail("{}: image has no pixels ({}x{}x{})", path.string(), spec.width, spec.height, spec.nchannels);
+    Fail("{}: image has no pixels ({}x{}x{})", path.string(), spec.width, spec.height,
+         spec.nchannels);
   }
   // Integer formats are display-encoded values; float formats hold linear radiance.
   const bool is_float = spec.format.is_floating_point();
-  Image image(spec.width, spec.height, spec.nchannels, is_float ? Encoding::kLinear : Encoding::kSrgb);
+  Image image(spec.width, spec.height, spec.nchannels,
+              is_float ? Encoding::kLinear : Encoding::kSrgb);
   // OIIO converts integer pixels to float in [0,1] (value / max code).
   if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.data())) {
     std::string why = in->geterror();
@@ -68,7 +70,8 @@ Image ReadImage(const fs::path& path, const ImageReadOptions& options) {
     if (bad >= 0) {
       const long pixel = bad / image.channels();
       Fail("{}: non-finite pixel value ({}) at x={}, y={}, channel {}", path.string(),
-           image.values()[bad], pixel % image.width(), pixel / image.width(), bad % image.channels());
+           image.values()[bad], pixel % image.width(), pixel / image.width(),
+           bad % image.channels());
     }
   }
   return image;
@@ -83,14 +86,25 @@ void WriteImage(const fs::path& path, const Image& image, const ImageWriteOption
   }
   OIIO::TypeDesc type = OIIO::TypeDesc::UINT8;
   switch (options.format) {
-    case PixelFormat::kAuto: type = exr ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::UINT8; break;
-    case PixelFormat::kUint8: type = OIIO::TypeDesc::UINT8; break;
-    case PixelFormat::kUint16: type = OIIO::TypeDesc::UINT16; break;
-    case PixelFormat::kHalf: type = OIIO::TypeDesc::HALF; break;
-    case PixelFormat::kFloat: type = OIIO::TypeDesc::FLOAT; break;
+    case PixelFormat::kAuto:
+      type = exr ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::UINT8;
+      break;
+    case PixelFormat::kUint8:
+      type = OIIO::TypeDesc::UINT8;
+      break;
+    case PixelFormat::kUint16:
+      type = OIIO::TypeDesc::UINT16;
+      break;
+    case PixelFormat::kHalf:
+      type = OIIO::TypeDesc::HALF;
+      break;
+    case PixelFormat::kFloat:
+      type = OIIO::TypeDesc::FLOAT;
+      break;
   }
   if (exr && !type.is_floating_point()) Fail("{}: EXR is written as half or float", path.string());
-  if (!exr && type.is_floating_point()) Fail("{}: {} stores integers; use .exr for float pixels", path.string(), ext);
+  if (!exr && type.is_floating_point())
+    Fail("{}: {} stores integers; use .exr for float pixels", path.string(), ext);
   if (jpeg && type != OIIO::TypeDesc::UINT8) Fail("{}: JPEG is 8 bit only", path.string());
   if (jpeg && image.channels() != 1 && image.channels() != 3) {
     Fail("{}: JPEG needs 1 or 3 channels, image has {}", path.string(), image.channels());
@@ -99,10 +113,13 @@ void WriteImage(const fs::path& path, const Image& image, const ImageWriteOption
   std::error_code ec;
   if (path.has_parent_path()) {
     fs::create_directories(path.parent_path(), ec);
-    if (ec) Fail("{}: cannot create folder {}: {}", path.string(), path.parent_path().string(), ec.message());
+    if (ec)
+      Fail("{}: cannot create folder {}: {}", path.string(), path.parent_path().string(),
+           ec.message());
   }
 
-  // Integer formats: clamp to [0,1] explicitly so NaN and out-of-range values have one defined result.
+  // Integer formats: clamp to [0,1] explicitly so NaN and out-of-range values have one defined
+  // result.
   const float* pixels = image.data();
   std::vector<float> clamped;
   if (!exr) {
@@ -112,11 +129,13 @@ void WriteImage(const fs::path& path, const Image& image, const ImageWriteOption
   }
 
   // Write beside the target and rename, so a failure never leaves a half-written file.
-  const fs::path tmp = path.parent_path() / (path.filename().string() + ".tmp" + std::to_string(getpid()) + ext);
+  const fs::path tmp =
+      path.parent_path() / (path.filename().string() + ".tmp" + std::to_string(getpid()) + ext);
   OIIO::ImageSpec spec(image.width(), image.height(), image.channels(), type);
   if (jpeg) spec.attribute("Compression", "jpeg:" + std::to_string(options.jpeg_quality));
   if (exr) spec.attribute("compression", "zip");
-  if (!exr) spec.attribute("oiio:ColorSpace", image.encoding() == Encoding::kSrgb ? "sRGB" : "Linear");
+  if (!exr)
+    spec.attribute("oiio:ColorSpace", image.encoding() == Encoding::kSrgb ? "sRGB" : "Linear");
   auto out = OIIO::ImageOutput::create(tmp.string());
   if (!out) Fail("{}: no writer for this format: {}", path.string(), OIIO::geterror());
   if (!out->open(tmp.string(), spec)) {

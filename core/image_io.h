@@ -11,11 +11,11 @@
 namespace hdr4d {
 
 enum class PixelFormat {
-  kAuto,     // EXR: half; PNG/JPEG: 8 bit
-  kUint8,    // PNG, JPEG
-  kUint16,   // PNG
-  kHalf,     // EXR
-  kFloat,    // EXR
+  kAuto,    // EXR: half; PNG/JPEG: 8 bit
+  kUint8,   // PNG, JPEG
+  kUint16,  // PNG
+  kHalf,    // EXR
+  kFloat,   // EXR
 };
 
 struct ImageReadOptions {
@@ -48,7 +48,8 @@ ImageSpecInfo ReadImageSpec(const std::filesystem::path& path);
 // encoding (ToSrgb before writing a linear image to PNG, or write the linear values on
 // purpose); values are clamped to [0,1] and rounded. EXR keeps values exactly (float) or
 // to half precision. Creates missing parent folders. Throws hdr4d::Error naming the file.
-void WriteImage(const std::filesystem::path& path, const Image& image,
+void WriteImage(const std::filesystem::path& path,
+                const Image& image,
                 const ImageWriteOptions& options = {});
 
 }  // namespace hdr4d

@@ -1,10 +1,10 @@
 #include "core/image_io.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
-#include <unistd.h>
 
 #include "core/error.h"
 #include "tests/testing.h"
@@ -23,7 +23,8 @@ TEST(ImageIo, ExrFloatRoundTripIsExact) {
   const Image back = ReadImage(dir / "a.exr");
   ASSERT_TRUE(back.SameShape(image));
   EXPECT_EQ(back.encoding(), Encoding::kLinear);
-  for (std::size_t i = 0; i < image.size(); ++i) ASSERT_EQ(back.values()[i], image.values()[i]) << i;
+  for (std::size_t i = 0; i < image.size(); ++i)
+    ASSERT_EQ(back.values()[i], image.values()[i]) << i;
 }
 
 TEST(ImageIo, ExrHalfRoundTripWithinHalfPrecision) {
@@ -40,22 +41,26 @@ TEST(ImageIo, ExrHalfRoundTripWithinHalfPrecision) {
 TEST(ImageIo, Png8RoundTripIsExactOnCodes) {
   TempDir dir;
   Image image(5, 4, 3, Encoding::kSrgb);
-  for (std::size_t i = 0; i < image.size(); ++i) image.values()[i] = static_cast<float>(i * 7 % 256) / 255.0f;
+  for (std::size_t i = 0; i < image.size(); ++i)
+    image.values()[i] = static_cast<float>(i * 7 % 256) / 255.0f;
   WriteImage(dir / "a.png", image);
   const Image back = ReadImage(dir / "a.png");
   ASSERT_TRUE(back.SameShape(image));
   EXPECT_EQ(back.encoding(), Encoding::kSrgb);
-  for (std::size_t i = 0; i < image.size(); ++i) EXPECT_FLOAT_EQ(back.values()[i], image.values()[i]);
+  for (std::size_t i = 0; i < image.size(); ++i)
+    EXPECT_FLOAT_EQ(back.values()[i], image.values()[i]);
 }
 
 TEST(ImageIo, Png16RoundTripIsExactOnCodes) {
   TempDir dir;
   Image image(6, 3, 1, Encoding::kSrgb);
-  for (std::size_t i = 0; i < image.size(); ++i) image.values()[i] = static_cast<float>(i * 3001 % 65536) / 65535.0f;
+  for (std::size_t i = 0; i < image.size(); ++i)
+    image.values()[i] = static_cast<float>(i * 3001 % 65536) / 65535.0f;
   WriteImage(dir / "a.png", image, {.format = PixelFormat::kUint16});
   const Image back = ReadImage(dir / "a.png");
   ASSERT_TRUE(back.SameShape(image));
-  for (std::size_t i = 0; i < image.size(); ++i) EXPECT_NEAR(back.values()[i], image.values()[i], 1e-7);
+  for (std::size_t i = 0; i < image.size(); ++i)
+    EXPECT_NEAR(back.values()[i], image.values()[i], 1e-7);
 }
 
 TEST(ImageIo, PngClampsOutOfRangeValues) {
@@ -77,7 +82,8 @@ TEST(ImageIo, JpegLoadsCloseToWhatWasWritten) {
   const Image back = ReadImage(dir / "a.jpg");
   ASSERT_TRUE(back.SameShape(image));
   double err = 0;
-  for (std::size_t i = 0; i < image.size(); ++i) err += std::abs(back.values()[i] - image.values()[i]);
+  for (std::size_t i = 0; i < image.size(); ++i)
+    err += std::abs(back.values()[i] - image.values()[i]);
   EXPECT_LT(err / image.size(), 0.02);
 }
 
@@ -132,8 +138,10 @@ TEST(ImageIo, UnwritableOutputIsAnErrorAndKeepsTheOldFile) {
   TempDir dir;
   const Image first(4, 4, 3, Encoding::kSrgb, 0.25f);
   WriteImage(dir / "out" / "keep.png", first);
-  std::filesystem::permissions(dir / "out", std::filesystem::perms::owner_read | std::filesystem::perms::owner_exec);
-  if (access((dir / "out").c_str(), W_OK) == 0) GTEST_SKIP() << "running with permissions that ignore read-only folders (root)";
+  std::filesystem::permissions(
+      dir / "out", std::filesystem::perms::owner_read | std::filesystem::perms::owner_exec);
+  if (access((dir / "out").c_str(), W_OK) == 0)
+    GTEST_SKIP() << "running with permissions that ignore read-only folders (root)";
   EXPECT_THROW(WriteImage(dir / "out" / "keep.png", Image(4, 4, 3, Encoding::kSrgb, 0.75f)), Error);
   std::filesystem::permissions(dir / "out", std::filesystem::perms::owner_all);
   EXPECT_FLOAT_EQ(ReadImage(dir / "out" / "keep.png").values()[0], first.values()[0]);
@@ -145,7 +153,8 @@ TEST(ImageIo, WriteWhereNoFileCanBeCreatedIsAnError) {
     WriteImage("/proc/hdr4d_cannot_write/a.exr", Image(2, 2, 3));
     FAIL() << "expected an error";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("/proc/hdr4d_cannot_write/a.exr"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("/proc/hdr4d_cannot_write/a.exr"), std::string::npos)
+        << e.what();
   }
 }
 

@@ -2,10 +2,9 @@
 // PSNR of +inf (identical images) is written as null, never as `inf`.
 #pragma once
 
-#include <nlohmann/json.hpp>
-
 #include <cmath>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <string>
 
 namespace hdr4d {

@@ -18,17 +18,9 @@
 namespace hdr4d {
 namespace {
 
-using ::testing::HasSubstr;
+using hdr4d::testing::ErrorOf;
 
-template <typename Fn>
-std::string ErrorOf(Fn&& fn) {
-  try {
-    fn();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
-}
+using ::testing::HasSubstr;
 
 Image Flat(int w, int h, int c, float value) { return Image(w, h, c, Encoding::kLinear, value); }
 

@@ -16,6 +16,8 @@
 namespace hdr4d {
 namespace {
 
+using hdr4d::testing::ErrorOf;
+
 using ::testing::HasSubstr;
 using testing::RandomImage;
 
@@ -26,17 +28,6 @@ Image FromValues(int width, int height, int channels, const std::vector<float>& 
   HDR4D_CHECK(values.size() == image.size());
   image.values() = values;
   return image;
-}
-
-// The error message of `fn`, or "" when it does not throw hdr4d::Error.
-template <typename Fn>
-std::string ErrorOf(Fn fn) {
-  try {
-    fn();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
 }
 
 // ---- An obviously-correct SSIM: the full 11x11 window at every pixel, zero outside. ----------

@@ -27,7 +27,8 @@ int MaxThreads() {
       tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
 }
 
-void ParallelForChunks(std::int64_t n, std::int64_t grain,
+void ParallelForChunks(std::int64_t n,
+                       std::int64_t grain,
                        const std::function<void(std::int64_t, std::int64_t)>& fn) {
   if (n <= 0) return;
   grain = std::max<std::int64_t>(grain, 1);
@@ -41,7 +42,8 @@ void ParallelForChunks(std::int64_t n, std::int64_t grain,
   tbb::parallel_for(
       tbb::blocked_range<std::int64_t>(0, chunks, 1),
       [&](const tbb::blocked_range<std::int64_t>& r) {
-        for (std::int64_t c = r.begin(); c < r.end(); ++c) fn(c * grain, std::min(n, (c + 1) * grain));
+        for (std::int64_t c = r.begin(); c < r.end(); ++c)
+          fn(c * grain, std::min(n, (c + 1) * grain));
       },
       tbb::simple_partitioner());
 }

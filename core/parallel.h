@@ -28,7 +28,8 @@ int MaxThreads();
 
 // Calls fn(begin, end) on disjoint chunks [begin, end) covering [0, n), each at most `grain`
 // long, possibly in parallel. Exceptions thrown by fn propagate to the caller.
-void ParallelForChunks(std::int64_t n, std::int64_t grain,
+void ParallelForChunks(std::int64_t n,
+                       std::int64_t grain,
                        const std::function<void(std::int64_t, std::int64_t)>& fn);
 
 // Calls fn(i) for every i in [0, n).

@@ -50,13 +50,9 @@ void Put(std::string& s, T v) {
   s.append(bytes, sizeof(T));
 }
 
-std::string ErrorOf(const std::filesystem::path& path) {
-  try {
-    ReadPly(path);
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
+// The error ReadPly gives for `path`, or "" when it reads the file.
+std::string PlyError(const std::filesystem::path& path) {
+  return testing::ErrorOf([&] { ReadPly(path); });
 }
 
 TEST(Ply, BinaryRoundTripWithColorsAndTimes) {
@@ -186,7 +182,7 @@ TEST(Ply, TruncatedBinaryDataNamesTheFile) {
   std::string text = testing::ReadTextFile(dir / "t.ply");
   text.resize(text.size() - 5);
   WriteTextFile(dir / "t.ply", text);
-  const std::string error = ErrorOf(dir / "t.ply");
+  const std::string error = PlyError(dir / "t.ply");
   EXPECT_NE(error.find((dir / "t.ply").string()), std::string::npos) << error;
   EXPECT_NE(error.find("truncated"), std::string::npos) << error;
   EXPECT_NE(error.find("declares 7 vertices, the file holds 6"), std::string::npos) << error;
@@ -197,7 +193,7 @@ TEST(Ply, TruncatedAsciiData) {
   WriteTextFile(dir / "t.ply",
                 "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
                 "property float z\nend_header\n1 2 3\n4 5 6\n7 8\n");
-  const std::string error = ErrorOf(dir / "t.ply");
+  const std::string error = PlyError(dir / "t.ply");
   EXPECT_NE(error.find("truncated"), std::string::npos) << error;
   EXPECT_NE(error.find("holds 2"), std::string::npos) << error;
 }
@@ -209,7 +205,7 @@ TEST(Ply, TruncatedElementBeforeVertex) {
       "element vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
   Put<double>(s, 1.0);
   WriteTextFile(dir / "t.ply", s);
-  EXPECT_NE(ErrorOf(dir / "t.ply").find("truncated PLY data in element 'extra'"),
+  EXPECT_NE(PlyError(dir / "t.ply").find("truncated PLY data in element 'extra'"),
             std::string::npos);
 }
 
@@ -218,14 +214,15 @@ TEST(Ply, NanCoordinateIsAnError) {
   WriteTextFile(dir / "n.ply",
                 "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
                 "property float z\nend_header\n1 2 3\n4 nan 6\n");
-  const std::string error = ErrorOf(dir / "n.ply");
+  const std::string error = PlyError(dir / "n.ply");
   EXPECT_NE(error.find((dir / "n.ply").string()), std::string::npos) << error;
   EXPECT_NE(error.find("vertex 1 has a non-finite coordinate"), std::string::npos) << error;
 
   PointCloud cloud = SampleCloud(false, false);
   cloud.positions[4].y() = std::nanf("");
   WritePly(dir / "b.ply", cloud);
-  EXPECT_NE(ErrorOf(dir / "b.ply").find("vertex 4 has a non-finite coordinate"), std::string::npos);
+  EXPECT_NE(PlyError(dir / "b.ply").find("vertex 4 has a non-finite coordinate"),
+            std::string::npos);
 }
 
 TEST(Ply, NonFiniteTimeIsAnError) {
@@ -233,12 +230,12 @@ TEST(Ply, NonFiniteTimeIsAnError) {
   PointCloud cloud = SampleCloud(false, true);
   cloud.times[2] = INFINITY;
   WritePly(dir / "t.ply", cloud);
-  EXPECT_NE(ErrorOf(dir / "t.ply").find("vertex 2 has a non-finite time"), std::string::npos);
+  EXPECT_NE(PlyError(dir / "t.ply").find("vertex 2 has a non-finite time"), std::string::npos);
 }
 
 TEST(Ply, MissingFile) {
   TempDir dir;
-  const std::string error = ErrorOf(dir / "none.ply");
+  const std::string error = PlyError(dir / "none.ply");
   EXPECT_NE(error.find((dir / "none.ply").string() + ": file not found"), std::string::npos)
       << error;
 }
@@ -278,7 +275,7 @@ TEST(Ply, BadHeaders) {
   TempDir dir;
   for (const BadHeaderCase& c : cases) {
     WriteTextFile(dir / "h.ply", c.text);
-    const std::string error = ErrorOf(dir / "h.ply");
+    const std::string error = PlyError(dir / "h.ply");
     EXPECT_NE(error.find((dir / "h.ply").string()), std::string::npos) << c.text;
     EXPECT_NE(error.find(c.expected), std::string::npos) << c.text << " -> " << error;
   }

@@ -47,7 +47,8 @@ Image TileImages(const std::vector<std::vector<Image>>& rows, int padding, float
 
 Image DisplayHdr(const Image& hdr) {
   const float max_value = hdr.MaxValue();
-  if (!(max_value > 0) || !std::isfinite(max_value)) Fail("HDR display: the image has no positive finite maximum");
+  if (!(max_value > 0) || !std::isfinite(max_value))
+    Fail("HDR display: the image has no positive finite maximum");
   Image scaled = hdr.Rgb();
   for (float& v : scaled.values()) v = std::max(v, 0.0f) / max_value;
   Image shown = MuLaw(scaled);
@@ -56,15 +57,19 @@ Image DisplayHdr(const Image& hdr) {
 }
 
 void PreviewOptions::Validate() const {
-  if (split != "train" && split != "test" && split != "val") Fail("preview: unknown split '{}' (use train, test or val)", split);
+  if (split != "train" && split != "test" && split != "val")
+    Fail("preview: unknown split '{}' (use train, test or val)", split);
   if (max_columns < 1) Fail("preview: --columns must be at least 1, got {}", max_columns);
 }
 
 Preview MakeDatasetPreview(const Dataset& dataset, const PreviewOptions& options) {
   options.Validate();
-  const Split split = options.split == "train" ? Split::kTrain : options.split == "test" ? Split::kTest : Split::kVal;
+  const Split split = options.split == "train"  ? Split::kTrain
+                      : options.split == "test" ? Split::kTest
+                                                : Split::kVal;
   const std::vector<Frame>& frames = dataset.FramesOf(split);
-  if (frames.empty()) Fail("{}: the {} split has no frames to preview", dataset.root.string(), options.split);
+  if (frames.empty())
+    Fail("{}: the {} split has no frames to preview", dataset.root.string(), options.split);
   int camera = options.camera_id;
   if (camera < 0) camera = frames.front().camera_id;  // -1 when the dataset has no camera ids
   // time -> exposure -> frame, for the chosen camera.
@@ -75,7 +80,8 @@ Preview MakeDatasetPreview(const Dataset& dataset, const PreviewOptions& options
     by_time[f.time].emplace(f.exposure, &f);
     exposure_rows.emplace(f.exposure, 0);
   }
-  if (by_time.empty()) Fail("{}: no {} frame has camera_id {}", dataset.root.string(), options.split, camera);
+  if (by_time.empty())
+    Fail("{}: no {} frame has camera_id {}", dataset.root.string(), options.split, camera);
   int row = 0;
   for (auto& [exposure, index] : exposure_rows) index = row++;
 
@@ -85,21 +91,27 @@ Preview MakeDatasetPreview(const Dataset& dataset, const PreviewOptions& options
   std::vector<double> columns;
   const int n = std::min<int>(options.max_columns, static_cast<int>(times.size()));
   for (int c = 0; c < n; ++c) {
-    const std::size_t i = n == 1 ? 0 : static_cast<std::size_t>(std::lround(c * (times.size() - 1.0) / (n - 1)));
+    const std::size_t i =
+        n == 1 ? 0 : static_cast<std::size_t>(std::lround(c * (times.size() - 1.0) / (n - 1)));
     columns.push_back(times[i]);
   }
 
   Preview preview;
   preview.column_times = columns;
-  const bool any_hdr = std::any_of(frames.begin(), frames.end(), [&](const Frame& f) { return f.camera_id == camera && f.hdr_path; });
-  std::vector<std::vector<Image>> grid(exposure_rows.size() + (any_hdr ? 1 : 0), std::vector<Image>(columns.size()));
+  const bool any_hdr = std::any_of(frames.begin(), frames.end(), [&](const Frame& f) {
+    return f.camera_id == camera && f.hdr_path;
+  });
+  std::vector<std::vector<Image>> grid(exposure_rows.size() + (any_hdr ? 1 : 0),
+                                       std::vector<Image>(columns.size()));
   for (std::size_t c = 0; c < columns.size(); ++c) {
     for (const auto& [exposure, frame] : by_time[columns[c]]) {
       grid[exposure_rows[exposure]][c] = ReadImage(frame->image_path).Rgb();
-      if (any_hdr && frame->hdr_path && grid.back()[c].empty()) grid.back()[c] = DisplayHdr(ReadImage(*frame->hdr_path));
+      if (any_hdr && frame->hdr_path && grid.back()[c].empty())
+        grid.back()[c] = DisplayHdr(ReadImage(*frame->hdr_path));
     }
   }
-  for (const auto& [exposure, index] : exposure_rows) preview.row_labels.push_back(fmt::format("LDR at {} s", exposure));
+  for (const auto& [exposure, index] : exposure_rows)
+    preview.row_labels.push_back(fmt::format("LDR at {} s", exposure));
   if (any_hdr) preview.row_labels.push_back("HDR ground truth, mu-law of x / max");
   preview.sheet = TileImages(grid);
   return preview;

@@ -13,7 +13,9 @@ namespace hdr4d {
 
 // Lays equally sized images out in a grid (rows may be shorter; missing cells stay background).
 // All images must have the same size; 1-channel images are shown grey. Output: RGB, kSrgb.
-Image TileImages(const std::vector<std::vector<Image>>& rows, int padding = 2, float background = 0.1f);
+Image TileImages(const std::vector<std::vector<Image>>& rows,
+                 int padding = 2,
+                 float background = 0.1f);
 
 // An HDR image for display: divided by its maximum, mu-law (mu = 5000), as the HDR metrics see it.
 Image DisplayHdr(const Image& hdr);

@@ -44,7 +44,8 @@ TEST(Preview, DatasetSheetHasARowPerExposurePlusHdr) {
   options.samples_per_axis = 1;
   const Dataset dataset = MakeDemoScene(options, dir.path());
   SynthesizeDatasetLdr(dir.path(), {});
-  const Preview preview = MakeDatasetPreview(LoadDataset(dir.path()), {.split = "test", .max_columns = 3});
+  const Preview preview =
+      MakeDatasetPreview(LoadDataset(dir.path()), {.split = "test", .max_columns = 3});
   ASSERT_EQ(preview.row_labels.size(), 4u);  // 3 exposures + HDR
   ASSERT_EQ(preview.column_times.size(), 3u);
   EXPECT_DOUBLE_EQ(preview.column_times.front(), 0.0);

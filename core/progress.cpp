@@ -47,8 +47,8 @@ void Progress::Draw(bool final_line) {
   const double elapsed = std::chrono::duration<double>(now - start_).count();
   const int percent = static_cast<int>(100 * done_ / total_);
   const double rate = elapsed > 0 ? done_ / elapsed : 0.0;
-  const std::string counter = fmt::format("{} {}/{} ({}%) {:.1f}/s {:.1f}s", label_, done_, total_,
-                                          percent, rate, elapsed);
+  const std::string counter =
+      fmt::format("{} {}/{} ({}%) {:.1f}/s {:.1f}s", label_, done_, total_, percent, rate, elapsed);
   if (tty_) {
     // Redraw at most 10 times a second.
     if (!final_line && now - last_draw_ < std::chrono::milliseconds(100) && done_ < total_) return;

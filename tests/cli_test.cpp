@@ -1,8 +1,8 @@
 // End-to-end: the hdr4d binary as a user runs it, including its failures.
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <nlohmann/json.hpp>
 
 #include "tests/testing.h"
 
@@ -11,7 +11,9 @@ namespace {
 namespace fs = std::filesystem;
 using testing::RunHdr4d;
 
-int LineCount(const std::string& s) { return static_cast<int>(std::count(s.begin(), s.end(), '\n')); }
+int LineCount(const std::string& s) {
+  return static_cast<int>(std::count(s.begin(), s.end(), '\n'));
+}
 
 TEST(Cli, HelpListsEverySubcommand) {
   const auto r = RunHdr4d("--help");
@@ -52,13 +54,18 @@ TEST(Cli, UserMistakesEndInOneLineAndExitOne) {
 
 TEST(Cli, SingleImageSynthesisWritesAnLdrImage) {
   testing::TempDir dir;
-  ASSERT_EQ(RunHdr4d("make-demo-scene --out " + (dir / "s").string() + " --size 16 --timestamps 1 --cameras 2 --spp 1").exit_code, 0);
+  ASSERT_EQ(RunHdr4d("make-demo-scene --out " + (dir / "s").string() +
+                     " --size 16 --timestamps 1 --cameras 2 --spp 1")
+                .exit_code,
+            0);
   const fs::path exr = dir / "s" / "hdr" / "cam00_t000.exr";
-  const auto r = RunHdr4d("synth-ldr " + exr.string() + " --exposure 2 --crf srgb --out " + (dir / "a.png").string());
+  const auto r = RunHdr4d("synth-ldr " + exr.string() + " --exposure 2 --crf srgb --out " +
+                          (dir / "a.png").string());
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(fs::exists(dir / "a.png"));
   // Zero exposure is refused with a message that says so.
-  const auto bad = RunHdr4d("synth-ldr " + exr.string() + " --exposure 0 --out " + (dir / "b.png").string());
+  const auto bad =
+      RunHdr4d("synth-ldr " + exr.string() + " --exposure 0 --out " + (dir / "b.png").string());
   EXPECT_EQ(bad.exit_code, 1);
   EXPECT_NE(bad.err.find("exposure"), std::string::npos) << bad.err;
   EXPECT_FALSE(fs::exists(dir / "b.png"));
@@ -68,9 +75,11 @@ TEST(Cli, SingleImageSynthesisWritesAnLdrImage) {
 TEST(Cli, DemoPipelineEndToEnd) {
   testing::TempDir dir;
   const std::string scene = (dir / "scene").string();
-  auto r = RunHdr4d("make-demo-scene --out " + scene + " --size 32 --timestamps 3 --cameras 3 --spp 1");
+  auto r =
+      RunHdr4d("make-demo-scene --out " + scene + " --size 32 --timestamps 3 --cameras 3 --spp 1");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  r = RunHdr4d("synth-ldr --data " + scene + " --crf filmic --full-well 20000 --read-noise 0.002 --seed 1");
+  r = RunHdr4d("synth-ldr --data " + scene +
+               " --crf filmic --full-well 20000 --read-noise 0.002 --seed 1");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   r = RunHdr4d("dataset check " + scene + " --full --json");
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;

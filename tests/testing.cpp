@@ -28,7 +28,8 @@ TempDir::~TempDir() {
 fs::path SourceDir() { return fs::path(HDR4D_SOURCE_DIR); }
 
 std::optional<fs::path> SharedData(const std::string& name) {
-  for (const fs::path& root : {SourceDir() / ".." / "shared" / "data", SourceDir() / "shared" / "data"}) {
+  for (const fs::path& root :
+       {SourceDir() / ".." / "shared" / "data", SourceDir() / "shared" / "data"}) {
     if (fs::exists(root / name)) return fs::canonical(root / name);
   }
   return std::nullopt;
@@ -51,8 +52,8 @@ CommandResult RunHdr4d(const std::string& args) {
   return result;
 }
 
-Image RandomImage(int width, int height, int channels, unsigned seed, float lo, float hi,
-                  Encoding encoding) {
+Image RandomImage(
+    int width, int height, int channels, unsigned seed, float lo, float hi, Encoding encoding) {
   Image image(width, height, channels, encoding);
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> dist(lo, hi);

@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 
+#include "core/error.h"
 #include "core/image.h"
 
 namespace hdr4d::testing {
@@ -39,10 +40,26 @@ struct CommandResult {
 CommandResult RunHdr4d(const std::string& args);
 
 // An image filled with a deterministic pseudo-random pattern in [lo, hi).
-Image RandomImage(int width, int height, int channels, unsigned seed, float lo = 0.0f,
-                  float hi = 1.0f, Encoding encoding = Encoding::kLinear);
+Image RandomImage(int width,
+                  int height,
+                  int channels,
+                  unsigned seed,
+                  float lo = 0.0f,
+                  float hi = 1.0f,
+                  Encoding encoding = Encoding::kLinear);
 
 void WriteTextFile(const std::filesystem::path& path, const std::string& text);
+
+// The message of the hdr4d::Error that `fn` throws, or "" when it throws none.
+template <typename Fn>
+std::string ErrorOf(Fn&& fn) {
+  try {
+    fn();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
 std::string ReadTextFile(const std::filesystem::path& path);
 
 }  // namespace hdr4d::testing

@@ -59,7 +59,8 @@ BENCHMARK(BM_ReadPng8)->Unit(benchmark::kMillisecond);
 void BM_SynthesizeLdrWithNoise(benchmark::State& state) {
   const Image hdr = RandomHdr(4);
   const auto crf = ParseCrf("filmic");
-  LdrSynthesisOptions options{.exposure = 2.0, .noise = {.full_well = 20000, .read_sigma = 0.002, .seed = 1}};
+  LdrSynthesisOptions options{.exposure = 2.0,
+                              .noise = {.full_well = 20000, .read_sigma = 0.002, .seed = 1}};
   for (auto _ : state) benchmark::DoNotOptimize(SynthesizeLdr(hdr, *crf, options));
   state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(hdr.size()));
 }
@@ -83,7 +84,8 @@ void BM_LoadLegoHeaders(benchmark::State& state) {
     state.SkipWithError("../shared/data/dnerf_lego_tiny not found");
     return;
   }
-  for (auto _ : state) benchmark::DoNotOptimize(LoadDataset(root, {.image_check = ImageCheck::kHeaders}));
+  for (auto _ : state)
+    benchmark::DoNotOptimize(LoadDataset(root, {.image_check = ImageCheck::kHeaders}));
 }
 BENCHMARK(BM_LoadLegoHeaders)->Unit(benchmark::kMillisecond);
 
