@@ -1,8 +1,10 @@
 #include "core/image_io.h"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 
@@ -134,17 +136,35 @@ TEST(ImageIo, NonFinitePixelIsRejectedWithItsPosition) {
   EXPECT_NO_THROW(ReadImage(dir / "inf.exr", {.require_finite = false}));
 }
 
-TEST(ImageIo, UnwritableOutputIsAnErrorAndKeepsTheOldFile) {
+TEST(ImageIo, WriteThatFailsHalfwayKeepsTheOldFile) {
+  // A file-size limit makes the write fail after some bytes (as a full disk would), and works
+  // for root too, unlike a read-only folder.
   TempDir dir;
   const Image first(4, 4, 3, Encoding::kSrgb, 0.25f);
-  WriteImage(dir / "out" / "keep.png", first);
-  std::filesystem::permissions(
-      dir / "out", std::filesystem::perms::owner_read | std::filesystem::perms::owner_exec);
-  if (access((dir / "out").c_str(), W_OK) == 0)
-    GTEST_SKIP() << "running with permissions that ignore read-only folders (root)";
-  EXPECT_THROW(WriteImage(dir / "out" / "keep.png", Image(4, 4, 3, Encoding::kSrgb, 0.75f)), Error);
-  std::filesystem::permissions(dir / "out", std::filesystem::perms::owner_all);
-  EXPECT_FLOAT_EQ(ReadImage(dir / "out" / "keep.png").values()[0], first.values()[0]);
+  WriteImage(dir / "keep.exr", first);
+  const std::string before = testing::ReadTextFile(dir / "keep.exr");
+  rlimit old_limit{};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &old_limit), 0);
+  const auto old_handler = std::signal(SIGXFSZ, SIG_IGN);  // get EFBIG instead of a signal
+  rlimit small = old_limit;
+  small.rlim_cur = 4096;
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
+  std::string error;
+  try {
+    WriteImage(dir / "keep.exr", RandomImage(256, 256, 3, 9, 0, 1),
+               {.format = PixelFormat::kFloat});
+  } catch (const Error& e) {
+    error = e.what();
+  }
+  setrlimit(RLIMIT_FSIZE, &old_limit);
+  std::signal(SIGXFSZ, old_handler);
+  EXPECT_NE(error.find((dir / "keep.exr").string()), std::string::npos) << error;
+  EXPECT_EQ(testing::ReadTextFile(dir / "keep.exr"), before);
+  // No temporary file is left behind.
+  int files = 0;
+  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    ++files;
+  EXPECT_EQ(files, 1);
 }
 
 TEST(ImageIo, WriteWhereNoFileCanBeCreatedIsAnError) {
