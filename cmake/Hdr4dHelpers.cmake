@@ -19,19 +19,21 @@ function(hdr4d_add_executable name)
   target_compile_options(${name} PRIVATE ${HDR4D_WARNINGS})
 endfunction()
 
-# hdr4d_add_test(<folder> <name> SOURCES ... DEPS ...): a GoogleTest binary whose cases are
+# hdr4d_add_test(<folder> <name> [NEEDS_CLI] SOURCES ... DEPS ...): a GoogleTest binary whose cases are
 # registered as <folder>/<Suite>.<Case> and run from the repository root (tests/testing.h has
 # the helpers: temp folders, shared data, running the hdr4d binary).
 function(hdr4d_add_test folder name)
   if(NOT HDR4D_BUILD_TESTS)
     return()
   endif()
-  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
+  cmake_parse_arguments(ARG "NEEDS_CLI" "" "SOURCES;DEPS" ${ARGN})
   set(target ${folder}_${name})
   add_executable(${target} ${ARG_SOURCES})
   target_link_libraries(${target} PRIVATE ${ARG_DEPS} hdr4d_testing GTest::gtest GTest::gmock)
   target_compile_options(${target} PRIVATE ${HDR4D_WARNINGS})
-  add_dependencies(${target} hdr4d)  # end-to-end cases run the CLI
+  if(ARG_NEEDS_CLI)
+    add_dependencies(${target} hdr4d)  # its cases run the hdr4d binary
+  endif()
   gtest_discover_tests(${target}
     TEST_PREFIX "${folder}/"
     WORKING_DIRECTORY ${PROJECT_SOURCE_DIR}
