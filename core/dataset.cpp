@@ -280,7 +280,8 @@ void ParseSplitFile(const fs::path& root,
                     SplitFile& file,
                     const json& doc,
                     const Reader& r,
-                    const ExposureTable* hdrnerf) {
+                    const ExposureTable* hdrnerf,
+                    bool time_optional = false) {
   if (!doc.is_object()) {
     r.Problem(-1, "", "expected a JSON object at the top level, got " + Describe(doc));
     return;
@@ -342,7 +343,7 @@ void ParseSplitFile(const fs::path& root,
           f.time_raw = *t;
         }
       }
-    } else if (hdrnerf == nullptr) {
+    } else if (hdrnerf == nullptr && !time_optional) {
       r.Problem(index, "time", "missing (every frame needs a time)");
     }
 
@@ -456,6 +457,79 @@ void CheckImages(std::vector<PendingFrame*>& frames,
 
 std::string SizeString(int w, int h) { return fmt::format("{}x{}", w, h); }
 
+// nerfstudio's single transforms.json: only undistorted pinhole cameras can be rendered.
+void CheckNerfstudioCameraModel(const json& doc, const Reader& r) {
+  const auto it = doc.find("camera_model");
+  if (it == doc.end()) return;
+  if (!it->is_string()) {
+    r.Problem(-1, "camera_model", "expected a string, got " + Describe(*it));
+    return;
+  }
+  const std::string model = it->get<std::string>();
+  if (model == "PINHOLE" || model == "SIMPLE_PINHOLE") return;
+  if (model == "OPENCV") {
+    for (const char* key : {"k1", "k2", "k3", "k4", "p1", "p2"}) {
+      const auto k = doc.find(key);
+      if (k != doc.end() && (!k->is_number() || k->get<double>() != 0.0)) {
+        r.Problem(-1, key,
+                  "lens distortion is not supported (hdr4d renders pinhole cameras); undistort "
+                  "the images first");
+        return;
+      }
+    }
+    return;
+  }
+  r.Problem(-1, "camera_model",
+            fmt::format("'{}' is not supported (hdr4d renders pinhole cameras); use PINHOLE or "
+                        "undistort the images first",
+                        model));
+}
+
+// Splits nerfstudio's one file: test_filenames / val_filenames when given, else every 8th
+// frame (index % 8 == 0) is held out for test, the convention of the 3DGS evaluation.
+void SplitNerfstudio(const fs::path& root, const json& doc, const Reader& r,
+                     std::array<SplitFile, 3>& files) {
+  std::map<fs::path, Split> listed;
+  bool any_list = false;
+  for (const auto& [key, split] : {std::pair{"test_filenames", Split::kTest},
+                                   std::pair{"val_filenames", Split::kVal},
+                                   std::pair{"train_filenames", Split::kTrain}}) {
+    const auto it = doc.find(key);
+    if (it == doc.end()) continue;
+    any_list = true;
+    if (!it->is_array()) {
+      r.Problem(-1, key, "expected a list of file paths, got " + Describe(*it));
+      continue;
+    }
+    for (const json& name : *it) {
+      if (!name.is_string()) {
+        r.Problem(-1, key, "expected file path strings, got " + Describe(name));
+        continue;
+      }
+      listed.emplace(ResolveImagePath(root, name.get<std::string>()), split);
+    }
+  }
+  std::vector<PendingFrame> all = std::move(files[0].frames);
+  files[0].frames.clear();
+  for (PendingFrame& p : all) {
+    Split split = Split::kTrain;
+    if (any_list) {
+      const auto it = listed.find(p.frame.image_path);
+      if (it != listed.end()) split = it->second;
+    } else if (p.frame.index % 8 == 0) {
+      split = Split::kTest;
+    }
+    p.frame.split = split;
+    files[static_cast<int>(split)].frames.push_back(std::move(p));
+  }
+  for (int s = 1; s < 3; ++s) {
+    files[s].camera_angle_x = files[0].camera_angle_x;
+    files[s].near = files[0].near;
+    files[s].far = files[0].far;
+    files[s].parsed = true;
+  }
+}
+
 }  // namespace
 
 DatasetReport CheckDataset(const fs::path& root, const DatasetLoadOptions& options) {
@@ -475,7 +549,9 @@ DatasetReport CheckDataset(const fs::path& root, const DatasetLoadOptions& optio
   }
 
   const fs::path train_path = root / "transforms_train.json";
-  if (!fs::exists(train_path, ec)) {
+  const fs::path nerfstudio_path = root / "transforms.json";
+  const bool nerfstudio = !fs::exists(train_path, ec) && fs::exists(nerfstudio_path, ec);
+  if (!fs::exists(train_path, ec) && !nerfstudio) {
     if (fs::is_directory(root / "sparse", ec)) {
       sink.Add(kRankRoot, root, -1, "",
                "a COLMAP layout (sparse/ without transforms_train.json, as in HDR-GS) is not "
@@ -491,13 +567,18 @@ DatasetReport CheckDataset(const fs::path& root, const DatasetLoadOptions& optio
     return report;
   }
 
-  const bool hdrnerf = fs::exists(root / "exposure_train.json", ec);
+  const bool hdrnerf = !nerfstudio && fs::exists(root / "exposure_train.json", ec);
+  std::optional<fs::path> nerfstudio_ply;  // its `ply_file_path`
   std::array<SplitFile, 3> files;
   const Split splits[3] = {Split::kTrain, Split::kTest, Split::kVal};
   for (int s = 0; s < 3; ++s) {
     SplitFile& file = files[s];
     file.split = splits[s];
     file.path = root / fmt::format("transforms_{}.json", SplitName(file.split));
+    if (nerfstudio) {
+      if (s > 0) continue;  // one file holds every split
+      file.path = nerfstudio_path;
+    }
     const Reader r(sink, SplitRank(file.split, false), file.path);
     if (!fs::exists(file.path, ec)) {
       if (file.split == Split::kTest && options.require_test) r.Problem(-1, "", "file not found");
@@ -525,7 +606,12 @@ DatasetReport CheckDataset(const fs::path& root, const DatasetLoadOptions& optio
       }
       if (!table) continue;
     }
-    ParseSplitFile(root, file, doc, r, table ? &*table : nullptr);
+    ParseSplitFile(root, file, doc, r, table ? &*table : nullptr, nerfstudio);
+    if (nerfstudio && file.parsed) {
+      CheckNerfstudioCameraModel(doc, r);
+      SplitNerfstudio(root, doc, r, files);
+      if (const auto ply = r.String(doc, -1, "ply_file_path")) nerfstudio_ply = root / *ply;
+    }
   }
   if (!files[0].parsed) {
     report.problems = sink.Sorted();
@@ -730,10 +816,13 @@ DatasetReport CheckDataset(const fs::path& root, const DatasetLoadOptions& optio
                                         [](const Frame& f) { return f.exposure_given; }) ||
                             std::any_of(dataset.val.begin(), dataset.val.end(),
                                         [](const Frame& f) { return f.exposure_given; });
-  dataset.layout = hdrnerf ? "hdrnerf" : any_exposure ? "hdr4d" : "dnerf";
+  dataset.layout = nerfstudio ? "nerfstudio" : hdrnerf ? "hdrnerf" : any_exposure ? "hdr4d" : "dnerf";
 
-  const fs::path ply_path = root / "point3d.ply";
-  if (fs::exists(ply_path, ec)) {
+  const fs::path ply_path = nerfstudio_ply.value_or(root / "point3d.ply");
+  if (nerfstudio_ply && !fs::exists(ply_path, ec)) {
+    sink.Add(SplitRank(Split::kTrain, false), nerfstudio_path, -1, "ply_file_path",
+             ply_path.string() + " not found");
+  } else if (fs::exists(ply_path, ec)) {
     dataset.point_cloud_path = ply_path;
     try {
       report.point_cloud_points = static_cast<std::int64_t>(ReadPly(ply_path).size());

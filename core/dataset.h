@@ -23,6 +23,11 @@
 //   own maximum, which misaligns train and test when their maxima differ; kPerFileReference
 //   reproduces it on request.
 //
+// nerfstudio: a single transforms.json (when there is no transforms_train.json), intrinsics
+//   fl_x, fl_y, cx, cy, w, h, `ply_file_path` for the initial points, `time` optional (0), only
+//   pinhole cameras (camera_model PINHOLE/SIMPLE_PINHOLE, or OPENCV without distortion). Splits
+//   from test_filenames / val_filenames when given, else every 8th frame (index % 8 == 0) is
+//   held out for test. Read as layout "nerfstudio"; problems name transforms.json.
 // Other layouts: HDR-NeRF synthetic (static; exposure_{train,test}.json maps
 //   "<file_path>_<k>.png" to an exposure; each view becomes one frame per exposure, time 0) is
 //   read as layout "hdrnerf". HDR-GS's COLMAP layout (sparse/ without transforms JSON) and the
@@ -63,7 +68,7 @@ struct Frame {
 
 struct Dataset {
   std::filesystem::path root;
-  std::string layout;  // "hdr4d" (reference layout), "dnerf" (no exposures anywhere), "hdrnerf"
+  std::string layout;  // "hdr4d" (reference layout), "dnerf" (no exposures), "hdrnerf", "nerfstudio"
   std::vector<Frame> train, test, val;
   double camera_angle_x = 0;  // train file's value (or implied by its fl_x when absent)
   std::optional<double> near, far;

@@ -1064,3 +1064,78 @@ TEST(DatasetCli, HelpAndMissingSubcommand) {
 
 }  // namespace
 }  // namespace hdr4d
+
+// ---- nerfstudio's single transforms.json ----------------------------------------------------
+
+namespace hdr4d {
+namespace {
+
+// n frames with PNGs, intrinsics at the top level, no time keys.
+json NerfstudioDoc(const fs::path& root, int n) {
+  json doc = {{"fl_x", 10.0}, {"fl_y", 11.0}, {"cx", 4.0}, {"cy", 3.0}, {"w", 8}, {"h", 6},
+              {"camera_model", "OPENCV"}, {"k1", 0.0}, {"k2", 0.0}, {"p1", 0.0}, {"p2", 0.0},
+              {"frames", json::array()}};
+  for (int i = 0; i < n; ++i) {
+    const std::string name = "images/frame_" + std::to_string(i) + ".png";
+    WriteImage(root / name, RandomImage(8, 6, 3, 100 + i, 0, 1, Encoding::kSrgb));
+    doc["frames"].push_back({{"file_path", name}, {"transform_matrix", Rows(PoseOnRing(i))}});
+  }
+  return doc;
+}
+
+TEST(Nerfstudio, EveryEighthFrameIsHeldOutForTest) {
+  TempDir dir;
+  WriteJsonFile(dir / "transforms.json", NerfstudioDoc(dir.path(), 17));
+  const Dataset d = LoadDataset(dir.path());
+  EXPECT_EQ(d.layout, "nerfstudio");
+  ASSERT_EQ(d.test.size(), 3u);  // frames 0, 8, 16
+  EXPECT_EQ(d.test[1].index, 8);
+  EXPECT_EQ(d.train.size(), 14u);
+  EXPECT_DOUBLE_EQ(d.train[0].camera.intrinsics.fy, 11.0);
+  EXPECT_DOUBLE_EQ(d.train[0].camera.intrinsics.cx, 4.0);
+  EXPECT_DOUBLE_EQ(d.train[0].time, 0.0);  // no time key: a static capture
+}
+
+TEST(Nerfstudio, ExplicitSplitListsAndPlyFilePath) {
+  TempDir dir;
+  json doc = NerfstudioDoc(dir.path(), 5);
+  doc["test_filenames"] = {"images/frame_3.png"};
+  doc["val_filenames"] = {"images/frame_4.png"};
+  PointCloud cloud;
+  cloud.positions = {Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(1, 2, 3)};
+  WritePly(dir / "sparse_pc.ply", cloud);
+  doc["ply_file_path"] = "sparse_pc.ply";
+  WriteJsonFile(dir / "transforms.json", doc);
+  const DatasetReport report = CheckDataset(dir.path());
+  ASSERT_TRUE(report.problems.empty()) << AllProblems(report);
+  const Dataset& d = *report.dataset;
+  ASSERT_EQ(d.test.size(), 1u);
+  EXPECT_EQ(d.test[0].index, 3);
+  ASSERT_EQ(d.val.size(), 1u);
+  EXPECT_EQ(d.train.size(), 3u);
+  ASSERT_TRUE(d.point_cloud_path.has_value());
+  EXPECT_EQ(d.point_cloud_path->filename(), "sparse_pc.ply");
+  EXPECT_EQ(report.point_cloud_points, 2);
+}
+
+TEST(Nerfstudio, DistortionAndMissingPlyAreProblems) {
+  TempDir dir;
+  json doc = NerfstudioDoc(dir.path(), 3);
+  doc["k1"] = 0.1;
+  doc["ply_file_path"] = "nope.ply";
+  WriteJsonFile(dir / "transforms.json", doc);
+  const DatasetReport report = CheckDataset(dir.path());
+  ASSERT_EQ(report.problems.size(), 2u) << AllProblems(report);
+  EXPECT_PROBLEM(report, "transforms.json", -1, "k1", "distortion");
+  EXPECT_PROBLEM(report, "transforms.json", -1, "ply_file_path", "not found");
+  doc["k1"] = 0.0;
+  doc["camera_model"] = "OPENCV_FISHEYE";
+  doc.erase("ply_file_path");
+  WriteJsonFile(dir / "transforms.json", doc);
+  const DatasetReport fisheye = CheckDataset(dir.path());
+  ASSERT_EQ(fisheye.problems.size(), 1u) << AllProblems(fisheye);
+  EXPECT_PROBLEM(fisheye, "transforms.json", -1, "camera_model", "not supported");
+}
+
+}  // namespace
+}  // namespace hdr4d
