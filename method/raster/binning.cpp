@@ -1,0 +1,273 @@
+#include "method/raster/binning.h"
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <climits>
+#include <cmath>
+#include <cstdint>
+#include <utility>
+
+#include "core/error.h"
+#include "core/parallel.h"
+#include "method/constants.h"
+
+namespace hdr4d::method {
+namespace {
+
+// Maps a float to an unsigned key with the same order (negative values flipped entirely, positive
+// ones get the sign bit), so depths sort as integers.
+std::uint32_t DepthKey(float depth) {
+  const auto bits = std::bit_cast<std::uint32_t>(depth);
+  return (bits & 0x80000000u) ? ~bits : (bits | 0x80000000u);
+}
+
+// Stable LSD radix sort of (key, id) pairs by key, three passes of 11/11/10 bits; a pass whose
+// digit is the same for every key is skipped (common for the high bits of depths in one range).
+void RadixSortByKey(std::vector<std::uint32_t>& keys,
+                    std::vector<std::int32_t>& ids,
+                    std::vector<std::uint32_t>& keys_tmp,
+                    std::vector<std::int32_t>& ids_tmp) {
+  const std::size_t n = keys.size();
+  constexpr int kPasses = 3;
+  constexpr std::array<int, kPasses> kShift = {0, 11, 22};
+  constexpr int kBuckets = 2048;
+  std::array<std::array<std::uint32_t, kBuckets>, kPasses> hist{};
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint32_t k = keys[i];
+    for (int p = 0; p < kPasses; ++p) ++hist[p][(k >> kShift[p]) & (kBuckets - 1)];
+  }
+  keys_tmp.resize(n);
+  ids_tmp.resize(n);
+  for (int p = 0; p < kPasses; ++p) {
+    auto& h = hist[p];
+    if (n == 0 || h[(keys[0] >> kShift[p]) & (kBuckets - 1)] == n) continue;
+    std::uint32_t sum = 0;
+    for (auto& c : h) {
+      const std::uint32_t count = c;
+      c = sum;
+      sum += count;
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint32_t pos = h[(keys[i] >> kShift[p]) & (kBuckets - 1)]++;
+      keys_tmp[pos] = keys[i];
+      ids_tmp[pos] = ids[i];
+    }
+    keys.swap(keys_tmp);
+    ids.swap(ids_tmp);
+  }
+}
+
+}  // namespace
+
+int TileCount(int pixels) { return (pixels + kTileSize - 1) / kTileSize; }
+
+template <typename T>
+TileRect GaussianTileRect(T mean_x, T mean_y, int radius, int tiles_x, int tiles_y) {
+  TileRect rect;
+  if (radius <= 0 || !std::isfinite(mean_x) || !std::isfinite(mean_y)) return rect;
+  const T r = static_cast<T>(radius);
+  const T size = static_cast<T>(kTileSize);
+  // floor / ceil by truncation after clamping to [-1, n + 1], so far-away means cannot overflow
+  // the int conversion (and no libm call: the x86-64 baseline has no rounding instruction).
+  const auto clamped = [](T v, int n) {
+    return std::min(std::max(v, T(-1)), static_cast<T>(n + 1));
+  };
+  const auto lo = [&](T m, int n) {
+    const T v = clamped((m - r) / size, n);
+    int i = static_cast<int>(v);
+    i -= v < static_cast<T>(i);  // floor
+    return std::min(std::max(i, 0), n);
+  };
+  const auto hi = [&](T m, int n) {
+    const T v = clamped((m + r) / size, n);
+    int i = static_cast<int>(v);
+    i += v > static_cast<T>(i);  // ceil
+    return std::min(std::max(i, 0), n);
+  };
+  rect.x0 = lo(mean_x, tiles_x);
+  rect.x1 = hi(mean_x, tiles_x);
+  rect.y0 = lo(mean_y, tiles_y);
+  rect.y1 = hi(mean_y, tiles_y);
+  return rect;
+}
+
+template <typename T>
+void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, RasterState* state) {
+  HDR4D_CHECK(state != nullptr);
+  HDR4D_CHECK(settings.width > 0 && settings.height > 0);
+  HDR4D_CHECK(splats.Validate().empty());
+  HDR4D_CHECK(splats.size() < static_cast<std::size_t>(INT_MAX));
+  RasterState& s = *state;
+  const int n = static_cast<int>(splats.size());
+  s.width = settings.width;
+  s.height = settings.height;
+  s.tiles_x = TileCount(settings.width);
+  s.tiles_y = TileCount(settings.height);
+  s.num_gaussians = n;
+  s.packed_ready = false;
+  const int tiles_x = s.tiles_x;
+  const int tiles_y = s.tiles_y;
+  const int num_tiles = s.num_tiles();
+  const T* mean = splats.mean2d.data();
+  const int* radius = splats.radius.data();
+
+  // 1. Each Gaussian's tile rectangle, then the visible ones in index order with their depth
+  //    keys, both in parallel over fixed chunks (so the order does not depend on threads).
+  // Chunks large enough that a thread wake-up (tens of microseconds) pays for itself.
+  constexpr int kChunk = 32768;
+  const int n_chunks = (n + kChunk - 1) / kChunk;
+  s.rects.resize(4 * static_cast<std::size_t>(n));
+  s.chunk_visible.assign(static_cast<std::size_t>(n_chunks) + 1, 0);
+  std::int32_t* rects = s.rects.data();
+  ParallelForChunks(n, kChunk, [&](std::int64_t begin, std::int64_t end) {
+    int count = 0;
+    for (std::int64_t g = begin; g < end; ++g) {
+      const TileRect r =
+          GaussianTileRect<T>(mean[2 * g], mean[2 * g + 1], radius[g], tiles_x, tiles_y);
+      const bool empty = r.empty();
+      rects[4 * g] = r.x0;
+      rects[4 * g + 1] = r.y0;
+      rects[4 * g + 2] = empty ? r.x0 : r.x1;  // an empty rectangle has area 0
+      rects[4 * g + 3] = empty ? r.y0 : r.y1;
+      count += !empty;
+    }
+    s.chunk_visible[begin / kChunk + 1] = count;
+  });
+  for (int c = 0; c < n_chunks; ++c) s.chunk_visible[c + 1] += s.chunk_visible[c];
+  const int visible = s.chunk_visible[n_chunks];
+  s.sort_keys.resize(visible);
+  s.depth_order.resize(visible);
+  ParallelForChunks(n, kChunk, [&](std::int64_t begin, std::int64_t end) {
+    int v = s.chunk_visible[begin / kChunk];
+    for (std::int64_t g = begin; g < end; ++g) {
+      if (rects[4 * g + 2] == rects[4 * g]) continue;
+      s.sort_keys[v] = DepthKey(static_cast<float>(splats.depth[g]));
+      s.depth_order[v] = static_cast<std::int32_t>(g);
+      ++v;
+    }
+  });
+
+  // 2. Front-to-back order of the visible Gaussians (ties by id: the sort is stable).
+  RadixSortByKey(s.sort_keys, s.depth_order, s.sort_keys_tmp, s.sort_ids_tmp);
+
+  // 3. Their rectangles in that order (one gather with independent loads, so the passes below
+  //    stream instead of waiting on a random access per Gaussian) and the offsets of their
+  //    entries (entry_ranges, in depth order).
+  s.sorted_rects.resize(4 * static_cast<std::size_t>(visible));
+  std::int32_t* sorted = s.sorted_rects.data();
+  const std::int32_t* order = s.depth_order.data();
+  ParallelFor(visible, kChunk, [&](std::int64_t i) {
+    const std::int32_t* r = rects + 4 * static_cast<std::size_t>(order[i]);
+    for (int k = 0; k < 4; ++k) sorted[4 * i + k] = r[k];
+  });
+  s.entry_ranges.resize(static_cast<std::size_t>(visible) + 1);
+  std::int64_t total = 0;
+  for (int i = 0; i < visible; ++i) {
+    s.entry_ranges[i] = static_cast<std::int32_t>(total);
+    total += static_cast<std::int64_t>(sorted[4 * i + 2] - sorted[4 * i]) *
+             (sorted[4 * i + 3] - sorted[4 * i + 1]);
+    HDR4D_CHECK(total < INT_MAX);
+  }
+  s.entry_ranges[visible] = static_cast<std::int32_t>(total);
+
+  // 4. Counting sort by tile, keeping depth order. The depth-ordered list is cut into chunks
+  //    counted and scattered in parallel; within a tile, chunk c's entries follow chunk c - 1's,
+  //    so the result is the same for any number of chunks. Most Gaussians cover at most 2 x 2
+  //    tiles; for those both passes run without data-dependent branches (a loop of 1..4
+  //    iterations mispredicts), adding 0 or writing to a spare slot at index `total` for the
+  //    tiles a smaller rectangle lacks.
+  const int chunks = std::clamp(MaxThreads(), 1, std::max(1, visible / (kChunk / 2)));
+  const int chunk_size = visible == 0 ? 1 : (visible + chunks - 1) / chunks;
+  // Per chunk: num_tiles counters + 3 spare counters (see the scatter).
+  const int counters = num_tiles + 3;
+  s.chunk_offsets.assign(static_cast<std::size_t>(chunks) * counters, 0);
+  const auto chunk_bounds = [&](std::int64_t c) {
+    return std::pair<int, int>(static_cast<int>(c) * chunk_size,
+                               std::min(visible, static_cast<int>(c + 1) * chunk_size));
+  };
+  ParallelFor(chunks, 1, [&](std::int64_t c) {
+    std::int32_t* counts = s.chunk_offsets.data() + c * counters;
+    const auto [begin, end] = chunk_bounds(c);
+    for (int i = begin; i < end; ++i) {
+      const std::int32_t* rect = sorted + 4 * static_cast<std::size_t>(i);
+      const int w = rect[2] - rect[0];
+      const int h = rect[3] - rect[1];
+      const int t = rect[1] * tiles_x + rect[0];
+      if (w <= 2 && h <= 2) {
+        const int dx = w > 1, dy = h > 1;
+        counts[t] += 1;
+        counts[t + dx] += dx;
+        counts[t + dy * tiles_x] += dy;
+        counts[t + dx + dy * tiles_x] += dx & dy;
+        continue;
+      }
+      for (int ty = 0; ty < h; ++ty)
+        for (int tx = 0; tx < w; ++tx) ++counts[t + ty * tiles_x + tx];
+    }
+  });
+  s.tile_ranges.resize(static_cast<std::size_t>(num_tiles) + 1);
+  std::int32_t running = 0;
+  for (int t = 0; t < num_tiles; ++t) {
+    s.tile_ranges[t] = running;
+    for (int c = 0; c < chunks; ++c) {
+      std::int32_t& slot = s.chunk_offsets[static_cast<std::size_t>(c) * counters + t];
+      const std::int32_t count = slot;
+      slot = running;
+      running += count;
+    }
+  }
+  s.tile_ranges[num_tiles] = running;
+  HDR4D_CHECK(running == total);
+  s.point_list.resize(total + 1);  // + the spare slot
+  s.point_entries.resize(total + 1);
+  std::int32_t* points = s.point_list.data();
+  std::int32_t* entries = s.point_entries.data();
+  const std::int32_t spare = static_cast<std::int32_t>(total);
+  ParallelFor(chunks, 1, [&](std::int64_t c) {
+    std::int32_t* next = s.chunk_offsets.data() + c * counters;
+    const auto [begin, end] = chunk_bounds(c);
+    for (int i = begin; i < end; ++i) {
+      const int g = order[i];
+      const std::int32_t* rect = sorted + 4 * static_cast<std::size_t>(i);
+      const int w = rect[2] - rect[0];
+      const int h = rect[3] - rect[1];
+      const int t = rect[1] * tiles_x + rect[0];
+      std::int32_t* own = entries + s.entry_ranges[i];  // this Gaussian's tiles, row-major
+      if (w <= 2 && h <= 2) {
+        // A missing tile uses its own spare counter (num_tiles + 0..2), so it neither waits on
+        // nor delays the counter of a real tile; its entry goes to the spare slot.
+        const int dx = w > 1, dy = h > 1;
+        const auto put = [&](int tile, int k, int valid, int spare_counter) {
+          const int counter = valid ? tile : num_tiles + spare_counter;
+          const std::int32_t pos = valid ? next[counter] : spare;
+          next[counter] += valid;
+          points[pos] = g;
+          (valid ? own[k] : entries[spare]) = pos;
+        };
+        put(t, 0, 1, 0);
+        put(t + dx, 1, dx, 0);
+        put(t + dy * tiles_x, w, dy, 1);
+        put(t + dx + dy * tiles_x, w + 1, dx & dy, 2);
+        continue;
+      }
+      int k = 0;
+      for (int ty = 0; ty < h; ++ty) {
+        for (int tx = 0; tx < w; ++tx) {
+          const std::int32_t pos = next[t + ty * tiles_x + tx]++;
+          points[pos] = g;
+          own[k++] = pos;
+        }
+      }
+    }
+  });
+  s.point_list.resize(total);
+  s.point_entries.resize(total);
+}
+
+template TileRect GaussianTileRect<float>(float, float, int, int, int);
+template TileRect GaussianTileRect<double>(double, double, int, int, int);
+template void BinSplats<float>(const SplatBuffersT<float>&, const RasterSettings&, RasterState*);
+template void BinSplats<double>(const SplatBuffersT<double>&, const RasterSettings&, RasterState*);
+
+}  // namespace hdr4d::method

@@ -1,0 +1,43 @@
+// Binning of projected Gaussians to 16x16 pixel tiles (DESIGN §4, §6), the first half of the
+// 3DGS tile rasteriser: every Gaussian is listed in each tile its screen rectangle covers, and
+// each tile's list is ordered front to back.
+//
+// Tile rectangle. 3DGS's getRect takes the mean in pixel-centre coordinates (pixel x centred at
+// x) and covers tiles floor((m - r) / 16) .. ceil((m + r) / 16) (exclusive), clamped to the grid.
+// We apply the same formula to corner-origin coordinates (pixel x centred at x + 0.5): tile k
+// spans [16k, 16k + 16), and the Gaussian covers exactly the tiles whose span meets the open
+// interval (m - r, m + r) on both axes. So every tile holding a pixel centre within r of the mean
+// (per axis) is covered, and no tile without one: when m + r == 16k the first centre of tile k,
+// 16k + 0.5, is already outside. A Gaussian with radius <= 0, a non-finite mean or an empty
+// clipped rectangle is not listed at all (its cost is one test).
+//
+// Order. Entries are sorted by (tile, depth, Gaussian id): the visible Gaussians are first
+// radix-sorted by depth (stable, so equal depths keep id order; depths compare by the total order
+// of floats), then distributed to tiles with a counting sort that keeps that order. This equals
+// sorting the 3DGS (tile | depth) keys with ties broken by id, with one sort of N keys instead of
+// one of N x tiles keys. The result does not depend on the thread count.
+#pragma once
+
+#include "method/raster/splats.h"
+
+namespace hdr4d::method {
+
+// Tiles [x0, x1) x [y0, y1) covered by a Gaussian (see above); empty when x0 >= x1 or y0 >= y1.
+struct TileRect {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  bool empty() const { return x0 >= x1 || y0 >= y1; }
+  int area() const { return empty() ? 0 : (x1 - x0) * (y1 - y0); }
+};
+template <typename T>
+TileRect GaussianTileRect(T mean_x, T mean_y, int radius, int tiles_x, int tiles_y);
+
+// Number of tiles along an image side of `pixels` pixels.
+int TileCount(int pixels);
+
+// Fills the binning part of `state` (sizes, tile_ranges, point_list, depth_order, entry_ranges,
+// point_entries) for `splats` on a settings.width x settings.height image. Inconsistent buffers or
+// a non-positive image size are caller bugs (checked). Instantiated for float and double.
+template <typename T>
+void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, RasterState* state);
+
+}  // namespace hdr4d::method

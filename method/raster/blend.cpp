@@ -1,0 +1,460 @@
+// The scalar reference blend (a per-pixel port of the 3DGS CUDA kernels, templated on the
+// scalar type), the backend dispatch, and the deterministic gradient reduction shared by both
+// backends. The vectorised kernels are in blend_simd.cpp.
+#include "method/raster/blend.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <vector>
+
+#include "core/error.h"
+#include "core/parallel.h"
+#include "method/constants.h"
+#include "method/raster/binning.h"
+
+namespace hdr4d::method {
+namespace {
+
+using internal::SlotStride;
+
+// A few values per pixel or per Gaussian, on the stack unless the channel count is unusual.
+template <typename T>
+class SmallBuffer {
+ public:
+  explicit SmallBuffer(int n) {
+    if (n > static_cast<int>(stack_.size())) heap_.resize(n);
+    data_ = heap_.empty() ? stack_.data() : heap_.data();
+  }
+  T& operator[](int i) { return data_[i]; }
+  T* data() { return data_; }
+
+ private:
+  std::array<T, 32> stack_{};
+  std::vector<T> heap_;
+  T* data_;
+};
+
+struct TileBounds {
+  int x0, y0, x1, y1;  // pixels [x0, x1) x [y0, y1) inside the image
+};
+TileBounds BoundsOf(const RasterState& bins, int tile) {
+  const int tx = tile % bins.tiles_x;
+  const int ty = tile / bins.tiles_x;
+  TileBounds b;
+  b.x0 = tx * kTileSize;
+  b.y0 = ty * kTileSize;
+  b.x1 = std::min(bins.width, b.x0 + kTileSize);
+  b.y1 = std::min(bins.height, b.y0 + kTileSize);
+  return b;
+}
+
+void CheckBinned(const RasterState& bins, std::size_t n) {
+  HDR4D_CHECK(bins.width > 0 && bins.height > 0);
+  HDR4D_CHECK(bins.num_gaussians == static_cast<int>(n));
+  HDR4D_CHECK(static_cast<int>(bins.tile_ranges.size()) == bins.num_tiles() + 1);
+  HDR4D_CHECK(bins.entry_ranges.size() == bins.depth_order.size() + 1);
+}
+
+template <typename T>
+void ForwardTileReference(const SplatBuffersT<T>& splats,
+                          const RasterState& bins,
+                          const T* background,
+                          T* image,
+                          T* final_T,
+                          std::int32_t* n_contrib,
+                          int tile) {
+  const int channels = splats.channels;
+  const TileBounds b = BoundsOf(bins, tile);
+  const int start = bins.tile_ranges[tile];
+  const int end = bins.tile_ranges[tile + 1];
+  const T* mean = splats.mean2d.data();
+  const T* conic = splats.conic.data();
+  const T* opacity = splats.opacity.data();
+  const T* features = splats.features.data();
+  SmallBuffer<T> color(channels);
+  for (int y = b.y0; y < b.y1; ++y) {
+    for (int x = b.x0; x < b.x1; ++x) {
+      const T px = static_cast<T>(x) + T(0.5);
+      const T py = static_cast<T>(y) + T(0.5);
+      for (int c = 0; c < channels; ++c) color[c] = T(0);
+      T transmittance = T(1);
+      int contributor = 0;
+      int last = 0;
+      for (int idx = start; idx < end; ++idx) {
+        ++contributor;
+        const int g = bins.point_list[idx];
+        const T dx = mean[2 * g] - px;
+        const T dy = mean[2 * g + 1] - py;
+        const T* q = conic + 3 * g;
+        const T power = T(-0.5) * (q[0] * dx * dx + q[2] * dy * dy) - q[1] * dx * dy;
+        if (power > T(0)) continue;
+        const T alpha = std::min(T(kMaxAlpha), opacity[g] * std::exp(power));
+        if (alpha < T(kMinAlpha)) continue;
+        const T test_T = transmittance * (T(1) - alpha);
+        if (test_T < T(kMinTransmittance)) break;  // done; this Gaussian does not contribute
+        const T* f = features + static_cast<std::size_t>(g) * channels;
+        for (int c = 0; c < channels; ++c) color[c] += f[c] * alpha * transmittance;
+        transmittance = test_T;
+        last = contributor;
+      }
+      const std::size_t pix = static_cast<std::size_t>(y) * bins.width + x;
+      final_T[pix] = transmittance;
+      n_contrib[pix] = last;
+      for (int c = 0; c < channels; ++c)
+        image[pix * channels + c] = color[c] + transmittance * background[c];
+    }
+  }
+}
+
+// One tile of the reference backward: fills the tile's entry slots (overwritten) and, when
+// tile_bg is non-null, its channels partial sums of dL/dbackground.
+template <typename T>
+void BackwardTileReference(const SplatBuffersT<T>& splats,
+                           const RasterState& bins,
+                           const T* background,
+                           const T* final_T,
+                           const std::int32_t* n_contrib,
+                           const T* dL_dimage,
+                           const T* dL_dfinal_T,
+                           T* slots,
+                           T* tile_bg,
+                           int tile) {
+  const int channels = splats.channels;
+  const int stride = SlotStride(channels);
+  const TileBounds b = BoundsOf(bins, tile);
+  const int start = bins.tile_ranges[tile];
+  const int end = bins.tile_ranges[tile + 1];
+  std::fill(slots + static_cast<std::size_t>(start) * stride,
+            slots + static_cast<std::size_t>(end) * stride, T(0));
+  if (tile_bg != nullptr) std::fill(tile_bg, tile_bg + channels, T(0));
+  const T* mean = splats.mean2d.data();
+  const T* conic = splats.conic.data();
+  const T* opacity = splats.opacity.data();
+  const T* features = splats.features.data();
+  SmallBuffer<T> accum(channels);
+  SmallBuffer<T> last_color(channels);
+  for (int y = b.y0; y < b.y1; ++y) {
+    for (int x = b.x0; x < b.x1; ++x) {
+      const std::size_t pix = static_cast<std::size_t>(y) * bins.width + x;
+      const T px = static_cast<T>(x) + T(0.5);
+      const T py = static_cast<T>(y) + T(0.5);
+      const T* dpix = dL_dimage + pix * channels;
+      const T T_final = final_T[pix];
+      // Everything the final transmittance multiplies: the background and its own gradient.
+      T dL_dT_final = dL_dfinal_T != nullptr ? dL_dfinal_T[pix] : T(0);
+      for (int c = 0; c < channels; ++c) {
+        dL_dT_final += background[c] * dpix[c];
+        if (tile_bg != nullptr) tile_bg[c] += T_final * dpix[c];
+        accum[c] = T(0);
+        last_color[c] = T(0);
+      }
+      T transmittance = T_final;
+      T last_alpha = T(0);
+      for (int idx = start + n_contrib[pix] - 1; idx >= start; --idx) {
+        const int g = bins.point_list[idx];
+        const T dx = mean[2 * g] - px;
+        const T dy = mean[2 * g + 1] - py;
+        const T* q = conic + 3 * g;
+        const T power = T(-0.5) * (q[0] * dx * dx + q[2] * dy * dy) - q[1] * dx * dy;
+        if (power > T(0)) continue;
+        const T G = std::exp(power);
+        const T alpha = std::min(T(kMaxAlpha), opacity[g] * G);
+        if (alpha < T(kMinAlpha)) continue;
+        transmittance = transmittance / (T(1) - alpha);
+        const T dchannel_dcolor = alpha * transmittance;
+        const T* f = features + static_cast<std::size_t>(g) * channels;
+        T* slot = slots + static_cast<std::size_t>(idx) * stride;
+        T dL_dalpha = T(0);
+        for (int c = 0; c < channels; ++c) {
+          accum[c] = last_alpha * last_color[c] + (T(1) - last_alpha) * accum[c];
+          last_color[c] = f[c];
+          dL_dalpha += (f[c] - accum[c]) * dpix[c];
+          slot[internal::kSlotFeatures + c] += dchannel_dcolor * dpix[c];
+        }
+        dL_dalpha *= transmittance;
+        last_alpha = alpha;
+        dL_dalpha += (-T_final / (T(1) - alpha)) * dL_dT_final;
+        const T dL_dG = opacity[g] * dL_dalpha;
+        const T gdx = G * dx;
+        const T gdy = G * dy;
+        slot[internal::kSlotMean] += dL_dG * (-gdx * q[0] - gdy * q[1]);
+        slot[internal::kSlotMean + 1] += dL_dG * (-gdy * q[2] - gdx * q[1]);
+        slot[internal::kSlotConic] += T(-0.5) * gdx * dx * dL_dG;
+        slot[internal::kSlotConic + 1] += -gdx * dy * dL_dG;
+        slot[internal::kSlotConic + 2] += T(-0.5) * gdy * dy * dL_dG;
+        slot[internal::kSlotOpacity] += G * dL_dalpha;
+      }
+    }
+  }
+}
+
+template <typename T>
+void PrepareGradients(std::size_t n, int channels, SplatGradientsT<T>* grads) {
+  HDR4D_CHECK(grads != nullptr);
+  const auto prepare = [](std::vector<T>& v, std::size_t size) {
+    if (v.empty()) v.assign(size, T(0));
+    HDR4D_CHECK(v.size() == size);
+  };
+  prepare(grads->mean2d, 2 * n);
+  prepare(grads->conic, 3 * n);
+  prepare(grads->opacity, n);
+  prepare(grads->features, n * static_cast<std::size_t>(channels));
+}
+
+// Sums every listed Gaussian's entry slots in ascending tile order into `grads` (+=), and the
+// per-tile background partials in tile order into dL_dbackground (+=).
+template <typename T>
+void ReduceGradients(const RasterState& bins,
+                     int channels,
+                     const T* slots,
+                     const T* tile_bg,
+                     SplatGradientsT<T>* grads,
+                     T* dL_dbackground) {
+  const int stride = SlotStride(channels);
+  const std::int64_t visible = static_cast<std::int64_t>(bins.depth_order.size());
+  ParallelForChunks(visible, 2048, [&](std::int64_t begin, std::int64_t end) {
+    SmallBuffer<T> sum(stride);
+    for (std::int64_t i = begin; i < end; ++i) {
+      const std::int64_t g = bins.depth_order[i];
+      const int k0 = bins.entry_ranges[i];
+      const int k1 = bins.entry_ranges[i + 1];
+      for (int s = 0; s < stride; ++s) sum[s] = T(0);
+      for (int k = k0; k < k1; ++k) {
+        const T* slot = slots + static_cast<std::size_t>(bins.point_entries[k]) * stride;
+        for (int s = 0; s < stride; ++s) sum[s] += slot[s];
+      }
+      grads->mean2d[2 * g] += sum[internal::kSlotMean];
+      grads->mean2d[2 * g + 1] += sum[internal::kSlotMean + 1];
+      for (int i = 0; i < 3; ++i) grads->conic[3 * g + i] += sum[internal::kSlotConic + i];
+      grads->opacity[g] += sum[internal::kSlotOpacity];
+      T* gf = grads->features.data() + g * channels;
+      for (int c = 0; c < channels; ++c) gf[c] += sum[internal::kSlotFeatures + c];
+    }
+  });
+  if (dL_dbackground != nullptr) {
+    for (int c = 0; c < channels; ++c) {
+      T sum = T(0);
+      for (int t = 0; t < bins.num_tiles(); ++t)
+        sum += tile_bg[static_cast<std::size_t>(t) * channels + c];
+      dL_dbackground[c] += sum;
+    }
+  }
+}
+
+template <typename T>
+void BackwardReferenceWithScratch(const SplatBuffersT<T>& splats,
+                                  const RasterState& bins,
+                                  const T* background,
+                                  const T* final_T,
+                                  const std::int32_t* n_contrib,
+                                  const T* dL_dimage,
+                                  const T* dL_dfinal_T,
+                                  SplatGradientsT<T>* grads,
+                                  T* dL_dbackground,
+                                  std::vector<T>& slots,
+                                  std::vector<T>& tile_bg) {
+  const int channels = splats.channels;
+  slots.resize(bins.num_entries() * SlotStride(channels));
+  tile_bg.resize(static_cast<std::size_t>(bins.num_tiles()) * channels);
+  T* bg_partials = dL_dbackground != nullptr ? tile_bg.data() : nullptr;
+  ParallelFor(bins.num_tiles(), 1, [&](std::int64_t tile) {
+    BackwardTileReference(splats, bins, background, final_T, n_contrib, dL_dimage, dL_dfinal_T,
+                          slots.data(), bg_partials ? bg_partials + tile * channels : nullptr,
+                          static_cast<int>(tile));
+  });
+  ReduceGradients(bins, channels, slots.data(), bg_partials, grads, dL_dbackground);
+}
+
+// The settings' background, or zeros, without allocating in a steady state.
+const float* BackgroundOf(const RasterSettings& settings, int channels) {
+  if (!settings.background.empty()) {
+    HDR4D_CHECK(static_cast<int>(settings.background.size()) == channels);
+    return settings.background.data();
+  }
+  thread_local std::vector<float> zeros;
+  zeros.assign(channels, 0.0f);
+  return zeros.data();
+}
+
+internal::TileJob MakeJob(const SplatBuffers& splats,
+                          const RasterSettings& settings,
+                          RasterState* state) {
+  internal::TileJob job;
+  job.mean2d = splats.mean2d.data();
+  job.conic = splats.conic.data();
+  job.opacity = splats.opacity.data();
+  job.features = splats.features.data();
+  job.channels = splats.channels;
+  job.background = BackgroundOf(settings, splats.channels);
+  job.tile_ranges = state->tile_ranges.data();
+  job.point_list = state->point_list.data();
+  job.width = state->width;
+  job.height = state->height;
+  job.tiles_x = state->tiles_x;
+  job.final_T = state->final_transmittance.data();
+  job.n_contrib = state->n_contrib.data();
+  job.depth_order = state->depth_order.data();
+  return job;
+}
+
+// The SIMD kernels' per-Gaussian records, for the Gaussians listed in some tile (in parallel).
+void PackSplats(internal::TileJob& job, RasterState* state) {
+  state->packed_splats.resize(static_cast<std::size_t>(state->num_gaussians) *
+                              internal::PackedStride(job.channels));
+  job.packed = state->packed_splats.data();
+  ParallelForChunks(
+      static_cast<std::int64_t>(state->depth_order.size()), 4096,
+      [&](std::int64_t begin, std::int64_t end) { internal::PackSplatsSimd(job, begin, end); });
+  state->packed_ready = true;
+}
+
+void CheckCall(const SplatBuffers& splats, const RasterSettings& settings, const RasterState& s) {
+  HDR4D_CHECK(splats.Validate().empty());
+  HDR4D_CHECK(s.width == settings.width && s.height == settings.height);
+  CheckBinned(s, splats.size());
+}
+
+}  // namespace
+
+template <typename T>
+void BlendForwardReference(const SplatBuffersT<T>& splats,
+                           const RasterState& bins,
+                           const T* background,
+                           T* image,
+                           T* final_T,
+                           std::int32_t* n_contrib) {
+  HDR4D_CHECK(splats.Validate().empty());
+  CheckBinned(bins, splats.size());
+  HDR4D_CHECK(image != nullptr && final_T != nullptr && n_contrib != nullptr);
+  std::vector<T> zeros;
+  if (background == nullptr) {
+    zeros.assign(splats.channels, T(0));
+    background = zeros.data();
+  }
+  ParallelFor(bins.num_tiles(), 1, [&](std::int64_t tile) {
+    ForwardTileReference(splats, bins, background, image, final_T, n_contrib,
+                         static_cast<int>(tile));
+  });
+}
+
+template <typename T>
+void BlendBackwardReference(const SplatBuffersT<T>& splats,
+                            const RasterState& bins,
+                            const T* background,
+                            const T* final_T,
+                            const std::int32_t* n_contrib,
+                            const T* dL_dimage,
+                            const T* dL_dfinal_T,
+                            SplatGradientsT<T>* grads,
+                            T* dL_dbackground) {
+  HDR4D_CHECK(splats.Validate().empty());
+  CheckBinned(bins, splats.size());
+  HDR4D_CHECK(final_T != nullptr && n_contrib != nullptr && dL_dimage != nullptr);
+  PrepareGradients(splats.size(), splats.channels, grads);
+  std::vector<T> zeros;
+  if (background == nullptr) {
+    zeros.assign(splats.channels, T(0));
+    background = zeros.data();
+  }
+  std::vector<T> slots;
+  std::vector<T> tile_bg;
+  BackwardReferenceWithScratch(splats, bins, background, final_T, n_contrib, dL_dimage, dL_dfinal_T,
+                               grads, dL_dbackground, slots, tile_bg);
+}
+
+void BlendForward(const SplatBuffers& splats,
+                  const RasterSettings& settings,
+                  RasterState* state,
+                  float* image) {
+  HDR4D_CHECK(state != nullptr && image != nullptr);
+  CheckCall(splats, settings, *state);
+  const std::size_t pixels = static_cast<std::size_t>(state->width) * state->height;
+  state->final_transmittance.resize(pixels);
+  state->n_contrib.resize(pixels);
+  if (settings.backend == RasterBackend::kScalar) {
+    state->packed_ready = false;  // a later kSimd backward must pack these splats
+    BlendForwardReference<float>(splats, *state, BackgroundOf(settings, splats.channels), image,
+                                 state->final_transmittance.data(), state->n_contrib.data());
+    return;
+  }
+  internal::TileJob job = MakeJob(splats, settings, state);
+  job.image = image;
+  PackSplats(job, state);
+  ParallelFor(state->num_tiles(), 1,
+              [&](std::int64_t tile) { internal::ForwardTileSimd(job, static_cast<int>(tile)); });
+}
+
+void RasterizeForward(const SplatBuffers& splats,
+                      const RasterSettings& settings,
+                      RasterState* state,
+                      float* image) {
+  BinSplats(splats, settings, state);
+  BlendForward(splats, settings, state, image);
+}
+
+void BlendBackward(const SplatBuffers& splats,
+                   const RasterSettings& settings,
+                   RasterState* state,
+                   const float* dL_dimage,
+                   const float* dL_dfinal_T,
+                   SplatGradients* grads,
+                   float* dL_dbackground) {
+  HDR4D_CHECK(state != nullptr && dL_dimage != nullptr);
+  CheckCall(splats, settings, *state);
+  const std::size_t pixels = static_cast<std::size_t>(state->width) * state->height;
+  HDR4D_CHECK(state->final_transmittance.size() == pixels && state->n_contrib.size() == pixels);
+  PrepareGradients(splats.size(), splats.channels, grads);
+  const float* background = BackgroundOf(settings, splats.channels);
+  if (settings.backend == RasterBackend::kScalar) {
+    BackwardReferenceWithScratch<float>(splats, *state, background,
+                                        state->final_transmittance.data(), state->n_contrib.data(),
+                                        dL_dimage, dL_dfinal_T, grads, dL_dbackground,
+                                        state->entry_gradients, state->tile_background_grad);
+    return;
+  }
+  const int channels = splats.channels;
+  state->entry_gradients.resize(state->num_entries() * SlotStride(channels));
+  state->tile_background_grad.resize(static_cast<std::size_t>(state->num_tiles()) * channels);
+  internal::TileJob job = MakeJob(splats, settings, state);
+  job.dL_dimage = dL_dimage;
+  job.dL_dfinal_T = dL_dfinal_T;
+  job.entry_gradients = state->entry_gradients.data();
+  job.tile_background_grad =
+      dL_dbackground != nullptr ? state->tile_background_grad.data() : nullptr;
+  if (!state->packed_ready) PackSplats(job, state);
+  job.packed = state->packed_splats.data();
+  ParallelFor(state->num_tiles(), 1,
+              [&](std::int64_t tile) { internal::BackwardTileSimd(job, static_cast<int>(tile)); });
+  ReduceGradients<float>(*state, channels, state->entry_gradients.data(), job.tile_background_grad,
+                         grads, dL_dbackground);
+}
+
+template void BlendForwardReference<float>(
+    const SplatBuffersT<float>&, const RasterState&, const float*, float*, float*, std::int32_t*);
+template void BlendForwardReference<double>(const SplatBuffersT<double>&,
+                                            const RasterState&,
+                                            const double*,
+                                            double*,
+                                            double*,
+                                            std::int32_t*);
+template void BlendBackwardReference<float>(const SplatBuffersT<float>&,
+                                            const RasterState&,
+                                            const float*,
+                                            const float*,
+                                            const std::int32_t*,
+                                            const float*,
+                                            const float*,
+                                            SplatGradientsT<float>*,
+                                            float*);
+template void BlendBackwardReference<double>(const SplatBuffersT<double>&,
+                                             const RasterState&,
+                                             const double*,
+                                             const double*,
+                                             const std::int32_t*,
+                                             const double*,
+                                             const double*,
+                                             SplatGradientsT<double>*,
+                                             double*);
+
+}  // namespace hdr4d::method

@@ -1,0 +1,670 @@
+// The fast blend kernels (blend.h, backend kSimd): one 16x16 tile at a time, its pixels as
+// Highway float vectors of at most 16 lanes (so a vector never straddles two tile rows; AVX-512
+// takes a whole row). Compiled for every x86 target Highway 1.0.3 builds here (scalar, SSSE3,
+// SSE4, AVX2, AVX-512) and chosen at run time with HWY_DYNAMIC_DISPATCH.
+//
+// Per frame, every listed Gaussian's kernel record (conic terms, opacity, log-space alpha
+// threshold, reach extents, features) is packed once (PackSplats); per tile the records of its
+// list are copied into a contiguous array and their reach box is turned into tile rows/columns.
+// The reach box bounds the pixels where alpha can reach kMinAlpha; it only prunes work, the
+// per-lane tests of the 3DGS rules still decide, so pruning never changes a result.
+//
+// Forward: pixel vectors go in pairs (a vector and the one below it: two independent T chains,
+// the T -> test_T -> T recurrence being latency-bound), each pair walking only the Gaussians whose
+// reach box covers its two rows (selected with Compress), T, colour and n_contrib in registers,
+// and stopping when all its pixels are done.
+// Backward: for each Gaussian back to front, the pixel vectors of its reach rows that still list
+// it (n_contrib per vector bounds the loop), with T and the "behind" colour per pixel in
+// L1-resident planes and the Gaussian's gradient summed across the tile in registers; one
+// horizontal reduction per Gaussian and tile (a shared transpose network with AVX-512) goes to
+// its entry slot.
+//
+// The channel count is a template parameter for 1, 3, 4 and 6 channels (accumulators in
+// registers) and a run-time value otherwise (accumulators in L1).
+//
+// Measured on the 2-core AVX-512 (Zen) machine, 200x200, 20k splats, ~35 contributors per pixel,
+// 3 channels, one thread: forward 3.0 ms, backward 5.2 ms (benchmark/runtime/raster_benchmark).
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "method/raster/blend_simd.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+// Must come after foreach_target.h.
+#include <hwy/aligned_allocator.h>
+#include <hwy/highway.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include "core/error.h"
+#include "method/constants.h"
+#include "method/raster/blend.h"
+
+HWY_BEFORE_NAMESPACE();
+namespace hdr4d::method::internal {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+using D = hn::CappedTag<float, kTileSize>;
+using DI = hn::RebindToSigned<D>;
+using V = hn::Vec<D>;
+using VI = hn::Vec<DI>;
+using M = hn::Mask<D>;
+
+constexpr int kTilePixels = kTileSize * kTileSize;
+
+// Record of one Gaussian gathered per tile (array of structures, read by broadcasts).
+constexpr int kRecMeanX = 0;
+constexpr int kRecMeanY = 1;
+constexpr int kRecHalfNegA = 2;  // -a / 2
+constexpr int kRecNegB = 3;      // -b
+constexpr int kRecHalfNegC = 4;  // -c / 2
+constexpr int kRecOpacity = 5;
+constexpr int kRecLogThreshold = 6;  // power below this cannot reach kMinAlpha
+constexpr int kRecNegA = 7;
+constexpr int kRecNegC = 8;
+// Tile rows and columns (0..15, inclusive) of pixel centres the Gaussian can reach; row0 > row1
+// when it reaches none.
+constexpr int kRecRow0 = 9;
+constexpr int kRecRow1 = 10;
+constexpr int kRecCol0 = 11;
+constexpr int kRecCol1 = 12;
+constexpr int kRecFeatures = kPackedFields;
+static_assert(kRecCol1 + 1 == kRecFeatures);
+
+// Pixel centre offsets within a tile, in vector order (row-major).
+struct PixelOffsets {
+  alignas(64) float x[kTilePixels];
+  alignas(64) float y[kTilePixels];
+  constexpr PixelOffsets() : x(), y() {
+    for (int p = 0; p < kTilePixels; ++p) {
+      x[p] = static_cast<float>(p % kTileSize) + 0.5f;
+      y[p] = static_cast<float>(p / kTileSize) + 0.5f;
+    }
+  }
+};
+constexpr PixelOffsets kOffsets;
+
+// Aligned per-thread working memory that only grows.
+template <typename T>
+class Scratch {
+ public:
+  T* Get(std::size_t n) {
+    if (n > capacity_) {
+      capacity_ = std::max(n, 2 * capacity_);
+      data_ = hwy::AllocateAligned<T>(capacity_);
+    }
+    return data_.get();
+  }
+
+ private:
+  hwy::AlignedFreeUniquePtr<T[]> data_;
+  std::size_t capacity_ = 0;
+};
+
+// exp(x) for x in [-87, 0] (clamped), relative error <= 1e-6 (see FastExp in blend.h).
+HWY_INLINE V FastExpV(D d, V x) {
+  const DI di;
+  x = hn::Min(hn::Max(x, hn::Set(d, -87.0f)), hn::Zero(d));
+  const V n = hn::Round(hn::Mul(x, hn::Set(d, 1.44269504088896341f)));
+  V r = hn::MulAdd(n, hn::Set(d, -0.693145751953125f), x);  // exact: few bits in ln2_hi
+  r = hn::MulAdd(n, hn::Set(d, -1.428606765330187e-6f), r);
+  V p = hn::Set(d, 1.0f / 720.0f);
+  p = hn::MulAdd(p, r, hn::Set(d, 1.0f / 120.0f));
+  p = hn::MulAdd(p, r, hn::Set(d, 1.0f / 24.0f));
+  p = hn::MulAdd(p, r, hn::Set(d, 1.0f / 6.0f));
+  p = hn::MulAdd(p, r, hn::Set(d, 0.5f));
+  p = hn::MulAdd(p, r, hn::Set(d, 1.0f));
+  p = hn::MulAdd(p, r, hn::Set(d, 1.0f));
+  const VI bits = hn::ShiftLeft<23>(hn::Add(hn::ConvertTo(di, n), hn::Set(di, 127)));
+  return hn::Mul(p, hn::BitCast(d, bits));
+}
+
+// Packs the per-Gaussian part of the records of job.depth_order[begin, end) into job.packed
+// (stride kRecFeatures + channels), once per frame. The reach box bounds the ellipse
+// power >= log threshold: for a positive definite conic Q, max |dy| over d^T Q d <= 2t is
+// sqrt(2t a / det Q) (and sqrt(2t c / det Q) for dx), widened by 1e-4 relative + 1e-3 px, far
+// beyond the float error of `power` and of the row arithmetic below; the exact per-lane tests
+// still decide. In the packed form the row/column slots hold the half extents (x, y) and a
+// kind: 0 reaches nothing, 1 the box, 2 everywhere (a conic that is not positive definite).
+void PackSplats(const TileJob& job, std::int64_t begin, std::int64_t end) {
+  const int channels = job.channels;
+  const int stride = kRecFeatures + channels;
+  for (std::int64_t i = begin; i < end; ++i) {
+    const std::int64_t g = job.depth_order[i];
+    const float* q = job.conic + 3 * g;
+    const float o = job.opacity[g];
+    float* r = job.packed + g * stride;
+    r[kRecMeanX] = job.mean2d[2 * g];
+    r[kRecMeanY] = job.mean2d[2 * g + 1];
+    r[kRecHalfNegA] = -0.5f * q[0];
+    r[kRecNegB] = -q[1];
+    r[kRecHalfNegC] = -0.5f * q[2];
+    r[kRecOpacity] = o;
+    const float threshold =
+        o > 0.0f ? std::log(kMinAlpha / o) - 1e-4f : std::numeric_limits<float>::infinity();
+    r[kRecLogThreshold] = threshold;
+    r[kRecNegA] = -q[0];
+    r[kRecNegC] = -q[2];
+    r[kRecRow0] = r[kRecRow1] = r[kRecCol0] = 0.0f;  // reaches nothing
+    if (threshold <= 0.0f) {
+      const double a = q[0], b = q[1], c = q[2];
+      const double det = a * c - b * b;
+      if (a > 0 && c > 0 && det > 0 && std::isfinite(det)) {
+        const double t2 = -2.0 * static_cast<double>(threshold);
+        r[kRecRow0] = static_cast<float>(std::sqrt(t2 * c / det) * (1 + 1e-4) + 1e-3);
+        r[kRecRow1] = static_cast<float>(std::sqrt(t2 * a / det) * (1 + 1e-4) + 1e-3);
+        r[kRecCol0] = 1.0f;
+      } else {
+        r[kRecCol0] = 2.0f;
+      }
+    }
+    const float* f = job.features + g * channels;
+    for (int c = 0; c < channels; ++c) r[kRecFeatures + c] = f[c];
+  }
+}
+
+// Inclusive range of tile rows (or columns) whose pixel centres lie within `extent` of `mean`;
+// `origin` is the tile's first pixel. Empty (lo > hi) when none.
+HWY_INLINE void CentreRange(float mean, float extent, int origin, float* lo, float* hi) {
+  // One-lane vector ops: min/max without branches (std::clamp compiles to branches).
+  const hn::CappedTag<float, 1> d1;
+  const auto centre = hn::Set(d1, mean - static_cast<float>(origin) - 0.5f);
+  const auto e = hn::Set(d1, extent);
+  *lo = hn::GetLane(hn::Min(hn::Max(hn::Ceil(hn::Sub(centre, e)), hn::Zero(d1)),
+                            hn::Set(d1, static_cast<float>(kTileSize))));
+  *hi = hn::GetLane(hn::Min(hn::Max(hn::Floor(hn::Add(centre, e)), hn::Set(d1, -1.0f)),
+                            hn::Set(d1, static_cast<float>(kTileSize - 1))));
+}
+
+// Copies the packed records of tile entries [start, start + count) into `rec` and replaces the
+// reach extents with the tile rows and columns they cover.
+void GatherRecords(const TileJob& job, int tile, int start, int count, float* rec) {
+  const int stride = kRecFeatures + job.channels;
+  const int x0 = (tile % job.tiles_x) * kTileSize;
+  const int y0 = (tile / job.tiles_x) * kTileSize;
+  for (int j = 0; j < count; ++j) {
+    const int g = job.point_list[start + j];
+    float* r = rec + static_cast<std::size_t>(j) * stride;
+    std::copy_n(job.packed + static_cast<std::size_t>(g) * stride, stride, r);
+    const float kind = r[kRecCol0];
+    const float ex = r[kRecRow0];
+    const float ey = r[kRecRow1];
+    if (kind == 1.0f) {
+      CentreRange(r[kRecMeanX], ex, x0, &r[kRecCol0], &r[kRecCol1]);
+      CentreRange(r[kRecMeanY], ey, y0, &r[kRecRow0], &r[kRecRow1]);
+      if (r[kRecCol0] > r[kRecCol1]) r[kRecRow1] = -1.0f;  // no column: nothing
+    } else {
+      r[kRecRow0] = r[kRecCol0] = 0.0f;
+      r[kRecRow1] = r[kRecCol1] = kind == 2.0f ? static_cast<float>(kTileSize - 1) : -1.0f;
+    }
+  }
+}
+
+// power = -0.5 (a dx^2 + c dy^2) - b dx dy, as dx (-a/2 dx - b dy) + (-c/2 dy) dy.
+HWY_INLINE V Power(const float* r, V dx, V dy) {
+  const D d;
+  const V q = hn::MulAdd(hn::Set(d, r[kRecHalfNegA]), dx, hn::Mul(hn::Set(d, r[kRecNegB]), dy));
+  return hn::MulAdd(dx, q, hn::Mul(hn::Mul(hn::Set(d, r[kRecHalfNegC]), dy), dy));
+}
+
+// out[k] = sum of the lanes of acc[k], k < kCount, in a fixed order. With AVX-512, groups of 8
+// accumulators share one transpose-and-add network (23 instructions per group instead of ~9 per
+// accumulator with SumOfLanes): block shuffles halve 16 lanes to 8, then to 4 per 128-bit block,
+// then 64-bit and 32-bit interleaves finish within blocks.
+template <int kCount>
+HWY_INLINE void ReduceLanes(const V* acc, float* out) {
+  const D d;
+#if HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL
+  static_assert(hn::MaxLanes(D()) == 16);
+  for (int base = 0; base < kCount; base += 8) {
+    __m512 v[8];
+    for (int k = 0; k < 8; ++k) v[k] = base + k < kCount ? acc[base + k].raw : _mm512_setzero_ps();
+    __m512 s[4], t[2];
+    for (int k = 0; k < 4; ++k)  // blocks [a0+a2, a1+a3, b0+b2, b1+b3]
+      s[k] = _mm512_add_ps(_mm512_shuffle_f32x4(v[2 * k], v[2 * k + 1], _MM_SHUFFLE(1, 0, 1, 0)),
+                           _mm512_shuffle_f32x4(v[2 * k], v[2 * k + 1], _MM_SHUFFLE(3, 2, 3, 2)));
+    for (int k = 0; k < 2; ++k)  // block i holds accumulator 4k + i (4 partials)
+      t[k] = _mm512_add_ps(_mm512_shuffle_f32x4(s[2 * k], s[2 * k + 1], _MM_SHUFFLE(2, 0, 2, 0)),
+                           _mm512_shuffle_f32x4(s[2 * k], s[2 * k + 1], _MM_SHUFFLE(3, 1, 3, 1)));
+    const __m512d t0 = _mm512_castps_pd(t[0]);
+    const __m512d t1 = _mm512_castps_pd(t[1]);
+    // Per block [x0+x2, x1+x3, y0+y2, y1+y3] (x: accumulator i, y: accumulator 4 + i).
+    const __m512 u = _mm512_add_ps(_mm512_castpd_ps(_mm512_unpacklo_pd(t0, t1)),
+                                   _mm512_castpd_ps(_mm512_unpackhi_pd(t0, t1)));
+    const __m512 w = _mm512_add_ps(u, _mm512_permute_ps(u, _MM_SHUFFLE(2, 3, 0, 1)));
+    HWY_ALIGN float lanes[16];
+    _mm512_store_ps(lanes, w);
+    for (int i = 0; i < 4; ++i) {
+      if (base + i < kCount) out[base + i] = lanes[4 * i];
+      if (base + 4 + i < kCount) out[base + 4 + i] = lanes[4 * i + 2];
+    }
+  }
+#else
+  for (int k = 0; k < kCount; ++k) out[k] = hn::GetLane(hn::SumOfLanes(d, acc[k]));
+#endif
+}
+
+// Blend state of one pixel vector in the forward.
+template <int kC>
+struct PixelState {
+  V T;
+  VI last;  // n_contrib
+  M done;
+  V acc[kC > 0 ? kC : 1];
+  float* acc_mem;  // the colour, for a run-time channel count
+};
+
+// One Gaussian (record r, list position j) blended into one pixel vector; the 3DGS rules.
+template <int kC>
+HWY_INLINE M BlendStep(const float* r, int j, int channels, V px, V py, PixelState<kC>& st) {
+  const D d;
+  const DI di;
+  const V dx = hn::Sub(hn::Set(d, r[kRecMeanX]), px);
+  const V dy = hn::Sub(hn::Set(d, r[kRecMeanY]), py);
+  const V power = Power(r, dx, dy);
+  const M reach = hn::AndNot(st.done, hn::Ge(power, hn::Set(d, r[kRecLogThreshold])));
+  const V alpha =
+      hn::Min(hn::Set(d, kMaxAlpha), hn::Mul(hn::Set(d, r[kRecOpacity]), FastExpV(d, power)));
+  const M active =
+      hn::And(reach, hn::And(hn::Le(power, hn::Zero(d)), hn::Ge(alpha, hn::Set(d, kMinAlpha))));
+  const V test_T = hn::Mul(st.T, hn::Sub(hn::Set(d, 1.0f), alpha));
+  const M stop = hn::And(active, hn::Lt(test_T, hn::Set(d, kMinTransmittance)));
+  const M contrib = hn::AndNot(stop, active);
+  const V w = hn::IfThenElseZero(contrib, hn::Mul(alpha, st.T));
+  if constexpr (kC > 0) {
+    for (int c = 0; c < kC; ++c)
+      st.acc[c] = hn::MulAdd(w, hn::Set(d, r[kRecFeatures + c]), st.acc[c]);
+  } else {
+    const std::size_t lanes = hn::Lanes(d);
+    for (int c = 0; c < channels; ++c) {
+      float* a = st.acc_mem + c * lanes;
+      hn::Store(hn::MulAdd(w, hn::Set(d, r[kRecFeatures + c]), hn::Load(d, a)), d, a);
+    }
+  }
+  st.T = hn::IfThenElse(contrib, test_T, st.T);
+  st.last = hn::IfThenElse(hn::RebindMask(di, contrib), hn::Set(di, j + 1), st.last);
+  st.done = hn::Or(st.done, stop);
+  return stop;
+}
+
+// Forward of one tile. Pixel vectors are processed in pairs, a vector and the one below it,
+// whose blend chains are independent (the T -> test_T -> T recurrence is latency-bound), each
+// pair walking the list of Gaussians whose reach box covers its two rows.
+template <int kC>
+void ForwardTileImpl(const TileJob& job, int tile) {
+  const D d;
+  const DI di;
+  const int lanes = static_cast<int>(hn::Lanes(d));
+  const int channels = kC > 0 ? kC : job.channels;
+  const int stride = kRecFeatures + channels;
+  const int x0 = (tile % job.tiles_x) * kTileSize;
+  const int y0 = (tile / job.tiles_x) * kTileSize;
+  const int start = job.tile_ranges[tile];
+  const int count = job.tile_ranges[tile + 1] - start;
+  const int vectors_per_row = kTileSize / lanes;
+
+  thread_local Scratch<float> rec_scratch;
+  thread_local Scratch<float> acc_scratch;  // run-time channel count only
+  thread_local Scratch<std::int32_t> list_scratch;
+  float* rec = rec_scratch.Get(static_cast<std::size_t>(count) * stride + 1);
+  GatherRecords(job, tile, start, count, rec);
+  float* acc_mem =
+      kC > 0 ? nullptr : acc_scratch.Get(2 * static_cast<std::size_t>(channels) * lanes);
+
+  // Per pair of tile rows, the Gaussians (in depth order) whose reach box covers either row,
+  // selected 1 vector of Gaussians at a time with Compress.
+  constexpr int kRowPairs = kTileSize / 2;
+  const int padded = (count + lanes - 1) / lanes * lanes;
+  std::int32_t* rows =
+      list_scratch.Get(static_cast<std::size_t>(kRowPairs + 2) * padded + 2 * lanes);
+  std::int32_t* row0 = rows;
+  std::int32_t* row1 = rows + padded;
+  std::int32_t* lists = rows + 2 * padded;  // kRowPairs lists of `padded` (+ lanes slack)
+  for (int j = 0; j < padded; ++j) {
+    const float* r = rec + static_cast<std::size_t>(j) * stride;
+    row0[j] = j < count ? static_cast<std::int32_t>(r[kRecRow0]) : kTileSize;
+    row1[j] = j < count ? static_cast<std::int32_t>(r[kRecRow1]) : -1;
+  }
+  int list_length[kRowPairs];
+  for (int p = 0; p < kRowPairs; ++p) {
+    std::int32_t* out = lists + p * padded;
+    const VI below_first = hn::Set(di, 2 * p - 1);
+    const VI after_last = hn::Set(di, 2 * p + 2);
+    int n = 0;
+    for (int j = 0; j < padded; j += lanes) {
+      // row0 <= 2p + 1 and row1 >= 2p (1.0.3 has no integer <=).
+      const auto m = hn::And(hn::Lt(hn::Load(di, row0 + j), after_last),
+                             hn::Gt(hn::Load(di, row1 + j), below_first));
+      hn::StoreU(hn::Compress(hn::Iota(di, j), m), di, out + n);
+      n += static_cast<int>(hn::CountTrue(di, m));
+    }
+    list_length[p] = n;
+  }
+
+  const V width = hn::Set(d, static_cast<float>(job.width - x0));
+  const V height = hn::Set(d, static_cast<float>(job.height - y0));
+  const V x_base = hn::Set(d, static_cast<float>(x0));
+  const V y_base = hn::Set(d, static_cast<float>(y0));
+  HWY_ALIGN float out_T[kTileSize];
+  HWY_ALIGN std::int32_t out_n[kTileSize];
+  HWY_ALIGN float out_c[(kC > 0 ? kC : 1) * kTileSize];
+
+  const auto write = [&](int v, PixelState<kC>& st) {
+    float* out_color = kC > 0 ? out_c : st.acc_mem;
+    for (int c = 0; c < channels; ++c) {
+      const V bg = hn::Set(d, job.background[c]);
+      if constexpr (kC > 0) {
+        hn::Store(hn::MulAdd(st.T, bg, st.acc[c]), d, out_color + c * lanes);
+      } else {
+        float* a = st.acc_mem + c * lanes;
+        hn::Store(hn::MulAdd(st.T, bg, hn::Load(d, a)), d, a);
+      }
+    }
+    hn::Store(st.T, d, out_T);
+    hn::Store(st.last, di, out_n);
+    const int y = y0 + v * lanes / kTileSize;
+    const int xs = x0 + v * lanes % kTileSize;
+    if (y >= job.height) return;
+    const int n_valid = std::min(lanes, job.width - xs);
+    const std::size_t row_start = static_cast<std::size_t>(y) * job.width;
+    for (int i = 0; i < n_valid; ++i) {
+      const std::size_t pix = row_start + xs + i;
+      job.final_T[pix] = out_T[i];
+      job.n_contrib[pix] = out_n[i];
+      float* px_out = job.image + pix * channels;
+      for (int c = 0; c < channels; ++c) px_out[c] = out_color[c * lanes + i];
+    }
+  };
+
+  for (int pair = 0; pair < kRowPairs; ++pair) {
+    if (y0 + 2 * pair >= job.height) break;
+    const std::int32_t* list = lists + pair * padded;
+    for (int segment = 0; segment < vectors_per_row; ++segment) {
+      const int va = 2 * pair * vectors_per_row + segment;
+      const int vb = va + vectors_per_row;
+      const V pxa = hn::Load(d, kOffsets.x + va * lanes);
+      const V pya = hn::Load(d, kOffsets.y + va * lanes);
+      const V pyb = hn::Load(d, kOffsets.y + vb * lanes);
+      const M valid_x = hn::Lt(pxa, width);
+      if (hn::AllFalse(d, valid_x)) continue;
+      const V px = hn::Add(pxa, x_base);
+      const V py_a = hn::Add(pya, y_base);
+      const V py_b = hn::Add(pyb, y_base);
+      PixelState<kC> a, b;
+      a.T = b.T = hn::Set(d, 1.0f);
+      a.last = b.last = hn::Zero(di);
+      a.done = hn::Not(hn::And(valid_x, hn::Lt(pya, height)));
+      b.done = hn::Not(hn::And(valid_x, hn::Lt(pyb, height)));
+      if constexpr (kC > 0) {
+        for (int c = 0; c < kC; ++c) a.acc[c] = b.acc[c] = hn::Zero(d);
+        a.acc_mem = b.acc_mem = nullptr;
+      } else {
+        a.acc_mem = acc_mem;
+        b.acc_mem = acc_mem + static_cast<std::size_t>(channels) * lanes;
+        for (int c = 0; c < 2 * channels; ++c) hn::Store(hn::Zero(d), d, acc_mem + c * lanes);
+      }
+      const float col0 = static_cast<float>(segment * lanes);
+      const float col1 = col0 + static_cast<float>(lanes - 1);
+      for (int i = 0; i < list_length[pair]; ++i) {
+        const int j = list[i];
+        const float* r = rec + static_cast<std::size_t>(j) * stride;
+        if (vectors_per_row > 1 && (r[kRecCol1] < col0 || r[kRecCol0] > col1)) continue;
+        const M stop_a = BlendStep<kC>(r, j, channels, px, py_a, a);
+        const M stop_b = BlendStep<kC>(r, j, channels, px, py_b, b);
+        if (!hn::AllFalse(d, hn::Or(stop_a, stop_b)) && hn::AllTrue(d, hn::And(a.done, b.done)))
+          break;
+      }
+      write(va, a);
+      write(vb, b);
+    }
+  }
+}
+
+template <int kC>
+void BackwardTileImpl(const TileJob& job, int tile) {
+  const D d;
+  const DI di;
+  const int lanes = static_cast<int>(hn::Lanes(d));
+  const int channels = kC > 0 ? kC : job.channels;
+  const int stride = kRecFeatures + channels;
+  const int slot_stride = SlotStride(channels);
+  const int x0 = (tile % job.tiles_x) * kTileSize;
+  const int y0 = (tile / job.tiles_x) * kTileSize;
+  const int start = job.tile_ranges[tile];
+  const int count = job.tile_ranges[tile + 1] - start;
+  const int num_vectors = kTilePixels / lanes;
+
+  // Per-pixel planes: T, behind colour (channels), dL/dimage (channels), T_final g_T, n_contrib.
+  thread_local Scratch<float> plane_scratch;
+  thread_local Scratch<float> rec_scratch;
+  float* planes = plane_scratch.Get(static_cast<std::size_t>(kTilePixels) * (3 + 2 * channels) +
+                                    static_cast<std::size_t>(channels) * lanes);
+  float* T_plane = planes;
+  float* behind = T_plane + kTilePixels;
+  float* dpix = behind + static_cast<std::size_t>(kTilePixels) * channels;
+  float* tfb = dpix + static_cast<std::size_t>(kTilePixels) * channels;
+  auto* nc_plane = reinterpret_cast<std::int32_t*>(tfb + kTilePixels);
+  float* gf_mem = tfb + 2 * kTilePixels;  // feature gradients, run-time channel count only
+  HWY_ALIGN std::int32_t vector_max[kTilePixels];
+
+  float* tile_bg = job.tile_background_grad != nullptr
+                       ? job.tile_background_grad + static_cast<std::size_t>(tile) * channels
+                       : nullptr;
+  if (tile_bg != nullptr) std::fill(tile_bg, tile_bg + channels, 0.0f);
+  int tile_max = 0;
+  for (int v = 0; v < num_vectors; ++v) {
+    int vmax = 0;
+    for (int i = 0; i < lanes; ++i) {
+      const int p = v * lanes + i;
+      const int x = x0 + p % kTileSize;
+      const int y = y0 + p / kTileSize;
+      if (x >= job.width || y >= job.height) {
+        T_plane[p] = 1.0f;
+        tfb[p] = 0.0f;
+        nc_plane[p] = 0;
+        for (int c = 0; c < channels; ++c) {
+          behind[c * kTilePixels + p] = 0.0f;
+          dpix[c * kTilePixels + p] = 0.0f;
+        }
+        continue;
+      }
+      const std::size_t pix = static_cast<std::size_t>(y) * job.width + x;
+      const float T_final = job.final_T[pix];
+      const float* dL = job.dL_dimage + pix * channels;
+      float g_T = job.dL_dfinal_T != nullptr ? job.dL_dfinal_T[pix] : 0.0f;
+      for (int c = 0; c < channels; ++c) {
+        g_T += job.background[c] * dL[c];
+        if (tile_bg != nullptr) tile_bg[c] += T_final * dL[c];
+        behind[c * kTilePixels + p] = 0.0f;
+        dpix[c * kTilePixels + p] = dL[c];
+      }
+      T_plane[p] = T_final;
+      tfb[p] = T_final * g_T;
+      nc_plane[p] = job.n_contrib[pix];
+      vmax = std::max(vmax, job.n_contrib[pix]);
+    }
+    vector_max[v] = vmax;
+    tile_max = std::max(tile_max, vmax);
+  }
+  HDR4D_CHECK(tile_max <= count);
+
+  float* slots = job.entry_gradients + static_cast<std::size_t>(start) * slot_stride;
+  std::fill(slots + static_cast<std::size_t>(tile_max) * slot_stride,
+            slots + static_cast<std::size_t>(count) * slot_stride, 0.0f);
+  float* rec = rec_scratch.Get(static_cast<std::size_t>(tile_max) * stride + 1);
+  GatherRecords(job, tile, start, tile_max, rec);
+
+  const V one = hn::Set(d, 1.0f);
+  const V max_alpha = hn::Set(d, kMaxAlpha);
+  const V min_alpha = hn::Set(d, kMinAlpha);
+  const V neg_half = hn::Set(d, -0.5f);
+  const V x_base = hn::Set(d, static_cast<float>(x0));
+  const V y_base = hn::Set(d, static_cast<float>(y0));
+  constexpr int kGradCount = kSlotFeatures + (kC > 0 ? kC : 0);
+
+  for (int j = tile_max - 1; j >= 0; --j) {
+    const float* r = rec + static_cast<std::size_t>(j) * stride;
+    const VI jv = hn::Set(di, j);
+    const V mean_x = hn::Set(d, r[kRecMeanX]);
+    const V mean_y = hn::Set(d, r[kRecMeanY]);
+    const V threshold = hn::Set(d, r[kRecLogThreshold]);
+    const V opacity = hn::Set(d, r[kRecOpacity]);
+    const V neg_a = hn::Set(d, r[kRecNegA]);
+    const V neg_b = hn::Set(d, r[kRecNegB]);
+    const V neg_c = hn::Set(d, r[kRecNegC]);
+    V grad[kGradCount];
+    for (int k = 0; k < kGradCount; ++k) grad[k] = hn::Zero(d);
+    if constexpr (kC == 0) {
+      for (int c = 0; c < channels; ++c) hn::Store(hn::Zero(d), d, gf_mem + c * lanes);
+    }
+    bool any = false;
+    // Only the pixel vectors of the rows (and, for narrow vectors, columns) it can reach.
+    const int vectors_per_row = kTileSize / lanes;
+    const int v_end = (static_cast<int>(r[kRecRow1]) + 1) * vectors_per_row;
+    for (int vi = static_cast<int>(r[kRecRow0]) * vectors_per_row; vi < v_end; ++vi) {
+      if (vector_max[vi] <= j) continue;
+      const int off = vi * lanes;
+      if (vectors_per_row > 1) {
+        const float col0 = static_cast<float>(off % kTileSize);
+        if (r[kRecCol1] < col0 || r[kRecCol0] > col0 + static_cast<float>(lanes - 1)) continue;
+      }
+      const V dx = hn::Sub(mean_x, hn::Add(hn::Load(d, kOffsets.x + off), x_base));
+      const V dy = hn::Sub(mean_y, hn::Add(hn::Load(d, kOffsets.y + off), y_base));
+      const V power = Power(r, dx, dy);
+      const M listed = hn::RebindMask(d, hn::Lt(jv, hn::Load(di, nc_plane + off)));
+      const M reach = hn::And(listed, hn::Ge(power, threshold));
+      if (hn::AllFalse(d, reach)) continue;
+      const V G = FastExpV(d, power);
+      const V alpha = hn::Min(max_alpha, hn::Mul(opacity, G));
+      const M m = hn::And(reach, hn::And(hn::Le(power, hn::Zero(d)), hn::Ge(alpha, min_alpha)));
+      if (hn::AllFalse(d, m)) continue;
+      any = true;
+      const V inv = hn::Div(one, hn::Sub(one, alpha));
+      const V T_old = hn::Load(d, T_plane + off);
+      const V T = hn::Mul(T_old, inv);  // transmittance in front of this Gaussian
+      hn::Store(hn::IfThenElse(m, T, T_old), d, T_plane + off);
+      const V w = hn::IfThenElseZero(m, hn::Mul(alpha, T));
+      V dL_dalpha = hn::Zero(d);
+      for (int c = 0; c < channels; ++c) {
+        float* bp = behind + c * kTilePixels + off;
+        const V b = hn::Load(d, bp);
+        const V dp = hn::Load(d, dpix + c * kTilePixels + off);
+        const V diff = hn::Sub(hn::Set(d, r[kRecFeatures + c]), b);
+        dL_dalpha = hn::MulAdd(diff, dp, dL_dalpha);
+        if constexpr (kC > 0) {
+          grad[kSlotFeatures + c] = hn::MulAdd(w, dp, grad[kSlotFeatures + c]);
+        } else {
+          float* gp = gf_mem + c * lanes;
+          hn::Store(hn::MulAdd(w, dp, hn::Load(d, gp)), d, gp);
+        }
+        // behind = alpha f + (1 - alpha) behind, for the Gaussians in front of this one.
+        hn::Store(hn::IfThenElse(m, hn::MulAdd(alpha, diff, b), b), d, bp);
+      }
+      dL_dalpha =
+          hn::IfThenElseZero(m, hn::NegMulAdd(hn::Load(d, tfb + off), inv, hn::Mul(dL_dalpha, T)));
+      grad[kSlotOpacity] = hn::MulAdd(G, dL_dalpha, grad[kSlotOpacity]);
+      const V dL_dG = hn::Mul(opacity, dL_dalpha);
+      const V gdx = hn::Mul(G, dx);
+      const V gdy = hn::Mul(G, dy);
+      grad[kSlotMean] =
+          hn::MulAdd(dL_dG, hn::MulAdd(neg_a, gdx, hn::Mul(neg_b, gdy)), grad[kSlotMean]);
+      grad[kSlotMean + 1] =
+          hn::MulAdd(dL_dG, hn::MulAdd(neg_c, gdy, hn::Mul(neg_b, gdx)), grad[kSlotMean + 1]);
+      const V gx = hn::Mul(dL_dG, gdx);
+      const V gy = hn::Mul(dL_dG, gdy);
+      grad[kSlotConic] = hn::MulAdd(gx, hn::Mul(neg_half, dx), grad[kSlotConic]);
+      grad[kSlotConic + 1] = hn::NegMulAdd(gx, dy, grad[kSlotConic + 1]);
+      grad[kSlotConic + 2] = hn::MulAdd(gy, hn::Mul(neg_half, dy), grad[kSlotConic + 2]);
+    }
+    float* slot = slots + static_cast<std::size_t>(j) * slot_stride;
+    if (!any) {
+      std::fill(slot, slot + slot_stride, 0.0f);
+      continue;
+    }
+    ReduceLanes<kGradCount>(grad, slot);
+    if constexpr (kC == 0) {
+      for (int c = 0; c < channels; ++c)
+        slot[kSlotFeatures + c] = hn::GetLane(hn::SumOfLanes(d, hn::Load(d, gf_mem + c * lanes)));
+    }
+  }
+}
+
+void ForwardTile(const TileJob& job, int tile) {
+  switch (job.channels) {
+    case 1:
+      return ForwardTileImpl<1>(job, tile);
+    case 3:
+      return ForwardTileImpl<3>(job, tile);
+    case 4:
+      return ForwardTileImpl<4>(job, tile);
+    case 6:
+      return ForwardTileImpl<6>(job, tile);
+    default:
+      return ForwardTileImpl<0>(job, tile);
+  }
+}
+
+void BackwardTile(const TileJob& job, int tile) {
+  switch (job.channels) {
+    case 1:
+      return BackwardTileImpl<1>(job, tile);
+    case 3:
+      return BackwardTileImpl<3>(job, tile);
+    case 4:
+      return BackwardTileImpl<4>(job, tile);
+    case 6:
+      return BackwardTileImpl<6>(job, tile);
+    default:
+      return BackwardTileImpl<0>(job, tile);
+  }
+}
+
+void PackTiles(const TileJob& job, std::int64_t begin, std::int64_t end) {
+  PackSplats(job, begin, end);
+}
+
+void FastExpArray(const float* x, float* out, std::size_t n) {
+  const D d;
+  const std::size_t lanes = hn::Lanes(d);
+  std::size_t i = 0;
+  for (; i + lanes <= n; i += lanes) hn::StoreU(FastExpV(d, hn::LoadU(d, x + i)), d, out + i);
+  if (i < n) {
+    HWY_ALIGN float in_buf[kTileSize] = {};
+    HWY_ALIGN float out_buf[kTileSize];
+    std::copy(x + i, x + n, in_buf);
+    hn::Store(FastExpV(d, hn::Load(d, in_buf)), d, out_buf);
+    std::copy(out_buf, out_buf + (n - i), out + i);
+  }
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace hdr4d::method::internal
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace hdr4d::method {
+namespace internal {
+
+HWY_EXPORT(ForwardTile);
+HWY_EXPORT(BackwardTile);
+HWY_EXPORT(FastExpArray);
+HWY_EXPORT(PackTiles);
+
+void ForwardTileSimd(const TileJob& job, int tile) { HWY_DYNAMIC_DISPATCH(ForwardTile)(job, tile); }
+void BackwardTileSimd(const TileJob& job, int tile) {
+  HWY_DYNAMIC_DISPATCH(BackwardTile)(job, tile);
+}
+void PackSplatsSimd(const TileJob& job, std::int64_t begin, std::int64_t end) {
+  HWY_DYNAMIC_DISPATCH(PackTiles)(job, begin, end);
+}
+void FastExpSimd(const float* x, float* out, std::size_t n) {
+  HWY_DYNAMIC_DISPATCH(FastExpArray)(x, out, n);
+}
+
+}  // namespace internal
+
+void FastExp(const float* x, float* out, std::size_t n) { internal::FastExpSimd(x, out, n); }
+
+}  // namespace hdr4d::method
+#endif  // HWY_ONCE
