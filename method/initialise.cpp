@@ -153,10 +153,9 @@ GaussianModel InitialiseGaussians(const std::optional<PointCloud>& cloud, const 
   // Sigma_tt = T / 5, i.e. a temporal standard deviation of sqrt(T / 5).
   const float log_scale_t = 0.5f * std::log(options.time_duration / 5.0f);
   const float logit = std::log(options.initial_opacity / (1.0f - options.initial_opacity));
-  const int k = model.basis.coefficients();
   for (std::size_t i = 0; i < n; ++i) {
-    for (int a = 0; a < 3; ++a) model.means[i * 4 + a] = positions[i][a];
-    model.means[i * 4 + 3] = options.temporal ? times[i] : 0.0f;
+    for (int a = 0; a < 3; ++a) model.xyz[i * 3 + a] = positions[i][a];
+    model.t[i] = options.temporal ? times[i] : 0.0f;
     const float log_scale = 0.5f * std::log(dist2[i]);  // log sqrt(mean squared distance)
     for (int a = 0; a < 3; ++a) model.log_scales[i * 4 + a] = log_scale;
     model.log_scales[i * 4 + 3] = log_scale_t;
@@ -165,7 +164,7 @@ GaussianModel InitialiseGaussians(const std::optional<PointCloud>& cloud, const 
     for (int c = 0; c < options.channels; ++c) {
       float rgb = colors.size() == n ? colors[i][std::min(c, 2)] : 0.5f;
       float target = options.color_mode == ColorMode::kLogHdr ? std::log(std::max(rgb, 1e-4f)) : rgb;
-      model.color[(i * k + 0) * options.channels + c] = (target - kColorOffset) / kShC0;
+      model.color_dc[i * options.channels + c] = (target - kColorOffset) / kShC0;
     }
   }
   return model;

@@ -37,19 +37,19 @@ TEST(Initialise, RandomCloudFollowsTheReference) {
   EXPECT_EQ(m.Validate(), "");
   for (std::size_t i = 0; i < m.size(); ++i) {
     for (int a = 0; a < 3; ++a) {
-      ASSERT_LE(std::abs(m.means[i * 4 + a]), 1.3f);
+      ASSERT_LE(std::abs(m.xyz[i * 3 + a]), 1.3f);
     }
-    ASSERT_GE(m.means[i * 4 + 3], -0.1f);
-    ASSERT_LE(m.means[i * 4 + 3], 1.1f);
+    ASSERT_GE(m.t[i], -0.1f);
+    ASSERT_LE(m.t[i], 1.1f);
     ASSERT_NEAR(std::exp(2 * m.log_scales[i * 4 + 3]), 0.2f, 1e-6);  // Sigma_tt = T / 5
     ASSERT_NEAR(1 / (1 + std::exp(-m.opacity_logit[i])), 0.1f, 1e-6);
     ASSERT_EQ(m.rot_left[i * 4], 1.0f);
     ASSERT_EQ(m.rot_right[i * 4 + 1], 0.0f);
     // Grey: colour = C0 * dc + 0.5 = 0.5.
-    ASSERT_NEAR(kShC0 * m.color[i * m.basis.coefficients() * 3] + kColorOffset, 0.5f, 1e-6);
+    ASSERT_NEAR(kShC0 * m.color_dc[i * 3] + kColorOffset, 0.5f, 1e-6);
   }
   // Same seed, same model.
-  EXPECT_EQ(InitialiseGaussians(std::nullopt, options).means, m.means);
+  EXPECT_EQ(InitialiseGaussians(std::nullopt, options).xyz, m.xyz);
 }
 
 TEST(Initialise, PointCloudColoursAndTimesAreUsed) {
@@ -62,10 +62,9 @@ TEST(Initialise, PointCloudColoursAndTimesAreUsed) {
   InitOptions options;
   const GaussianModel m = InitialiseGaussians(cloud, options);
   ASSERT_EQ(m.size(), 10u);
-  EXPECT_FLOAT_EQ(m.means[3 * 4 + 3], 0.15f);
-  const int k = m.basis.coefficients();
-  EXPECT_NEAR(kShC0 * m.color[(2 * k) * 3 + 0] + kColorOffset, 0.9f, 1e-6);
-  EXPECT_NEAR(kShC0 * m.color[(2 * k) * 3 + 2] + kColorOffset, 0.1f, 1e-6);
+  EXPECT_FLOAT_EQ(m.t[3], 0.15f);
+  EXPECT_NEAR(kShC0 * m.color_dc[2 * 3 + 0] + kColorOffset, 0.9f, 1e-6);
+  EXPECT_NEAR(kShC0 * m.color_dc[2 * 3 + 2] + kColorOffset, 0.1f, 1e-6);
   // Points on a line 0.1 apart: interior points' 3 nearest are at 0.1, 0.1, 0.2.
   EXPECT_NEAR(std::exp(2 * m.log_scales[5 * 4]), (0.01f + 0.01f + 0.04f) / 3, 1e-6);
 }
@@ -78,7 +77,8 @@ TEST(Initialise, StaticModeHasNoTimeAxis) {
   EXPECT_FALSE(m.temporal);
   EXPECT_EQ(m.basis.max_time_degree, 0);
   EXPECT_EQ(m.basis.coefficients(), 16);
-  EXPECT_EQ(m.means[3], 0.0f);
+  EXPECT_EQ(m.t[0], 0.0f);
+  EXPECT_EQ(m.rest_stride(), 15u * 3);
 }
 
 TEST(Initialise, BadOptionsAreErrors) {

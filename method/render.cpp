@@ -1,0 +1,313 @@
+#include "method/render.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.h"
+#include "core/parallel.h"
+#include "method/constants.h"
+#include "method/raster/binning.h"
+#include "method/raster/blend.h"
+#include "method/rotation4d.h"
+#include "method/sh4d.h"
+#include "method/slice.h"
+
+namespace hdr4d::method {
+namespace {
+
+constexpr std::int64_t kGaussianGrain = 1024;
+
+template <typename T>
+Vec4<T> Row4(const std::vector<T>& v, std::size_t i) {
+  return Vec4<T>(v[i * 4], v[i * 4 + 1], v[i * 4 + 2], v[i * 4 + 3]);
+}
+
+template <typename T>
+T Sigmoid(T x) {
+  return T(1) / (T(1) + std::exp(-x));
+}
+
+// The 3D Gaussian a 4D one (or a 3D one in static mode) presents at `time`.
+template <typename T>
+struct Conditional {
+  Vec3<T> mean;
+  Mat3<T> cov;
+  T marginal = T(1);
+  // Kept for the backward.
+  Mat4<T> rotation4, sigma4;
+  Mat3<T> rotation3;
+};
+
+template <typename T>
+Vec4<T> Mean4(const GaussianModelT<T>& model, std::size_t i) {
+  return Vec4<T>(model.xyz[i * 3], model.xyz[i * 3 + 1], model.xyz[i * 3 + 2], model.t[i]);
+}
+
+template <typename T>
+Conditional<T> ConditionAt(const GaussianModelT<T>& model, std::size_t i, T time) {
+  Conditional<T> c;
+  const Vec4<T> mean4 = Mean4(model, i);
+  const Vec4<T> log_scales = Row4(model.log_scales, i);
+  if (model.temporal) {
+    c.rotation4 = Rotation4D(Row4(model.rot_left, i), Row4(model.rot_right, i));
+    c.sigma4 = Covariance4D(c.rotation4, log_scales);
+    const Slice<T> slice = SliceAtTime(mean4, c.sigma4, time);
+    c.mean = slice.mean;
+    c.cov = slice.cov;
+    c.marginal = slice.marginal;
+  } else {
+    c.rotation3 = Rotation3D(Row4(model.rot_left, i));
+    c.cov = Covariance3D(c.rotation3, Vec3<T>(log_scales.template head<3>()));
+    c.mean = mean4.template head<3>();
+  }
+  return c;
+}
+
+template <typename T>
+int TimeDegree(const GaussianModelT<T>& model, const RenderOptions& options) {
+  return model.temporal ? std::min(options.time_degree, model.basis.max_time_degree) : 0;
+}
+
+constexpr int kMaxChannels = 8;
+
+template <typename T>
+void CheckInputs(const GaussianModelT<T>& model, const RenderOptions& options) {
+  HDR4D_CHECK(model.Validate().empty());
+  HDR4D_CHECK(model.channels <= kMaxChannels);
+  HDR4D_CHECK(options.sh_degree >= 0 && options.sh_degree <= model.basis.max_sh_degree);
+  HDR4D_CHECK(options.time_degree >= 0);
+  HDR4D_CHECK(options.background.empty() ||
+              static_cast<int>(options.background.size()) == model.channels);
+}
+
+RasterSettings SettingsFor(const Camera& camera, const RenderOptions& options, int channels) {
+  RasterSettings settings;
+  settings.width = camera.intrinsics.width;
+  settings.height = camera.intrinsics.height;
+  settings.background = options.background.empty() ? std::vector<float>(channels, 0.0f) : options.background;
+  settings.backend = options.backend;
+  return settings;
+}
+
+}  // namespace
+
+template <typename T>
+void PreprocessForward(const GaussianModelT<T>& model,
+                       const ViewParams<T>& view,
+                       T time,
+                       const RenderOptions& options,
+                       FrameStateT<T>* state) {
+  CheckInputs(model, options);
+  const std::size_t n = model.size();
+  const int channels = model.channels;
+  SplatBuffersT<T>& s = state->splats;
+  s.channels = channels;
+  s.Resize(n);
+  state->clamped.assign(n * channels, 0);
+  const Vec3<T> center = view.Center();
+  const int time_degree = TimeDegree(model, options);
+  const std::size_t stride = model.rest_stride();
+  const int num_coefficients = model.basis.coefficients();
+  const T duration = static_cast<T>(options.time_duration);
+  std::vector<std::int64_t> visible_per_chunk((n + kGaussianGrain - 1) / kGaussianGrain, 0);
+  ParallelForChunks(static_cast<std::int64_t>(n), kGaussianGrain, [&](std::int64_t b, std::int64_t e) {
+    std::int64_t visible = 0;
+    for (std::int64_t g = b; g < e; ++g) {
+      const std::size_t i = static_cast<std::size_t>(g);
+      s.radius[i] = 0;
+      const Conditional<T> c = ConditionAt(model, i, time);
+      if (model.temporal && !TemporallyVisible(c.marginal)) continue;  // culled: costs nothing
+      const Splat2D<T> splat = ProjectEwa(c.mean, c.cov, view);
+      if (!splat.visible) continue;
+      s.mean2d[2 * i] = splat.mean.x();
+      s.mean2d[2 * i + 1] = splat.mean.y();
+      for (int k = 0; k < 3; ++k) s.conic[3 * i + k] = splat.conic[k];
+      s.depth[i] = splat.depth;
+      s.radius[i] = splat.radius;
+      s.opacity[i] = Sigmoid(model.opacity_logit[i]) * c.marginal;
+      // Colour is linear in the coefficients: weights . (DC, rest) + 0.5.
+      T w[kMaxColorCoefficients];
+      EvalColorBasisWeights(Vec3<T>(c.mean - center), model.t[i] - time, duration, model.basis,
+                            options.sh_degree, time_degree, w);
+      T* color = &s.features[i * channels];
+      const T* dc = &model.color_dc[i * channels];
+      const T* rest = &model.color_rest[i * stride];
+      for (int ch = 0; ch < channels; ++ch) color[ch] = static_cast<T>(kColorOffset) + w[0] * dc[ch];
+      for (int k = 1; k < num_coefficients; ++k) {
+        if (w[k] == T(0)) continue;  // inactive degrees
+        const T* ck = rest + (k - 1) * channels;
+        for (int ch = 0; ch < channels; ++ch) color[ch] += w[k] * ck[ch];
+      }
+      if (model.color_mode == ColorMode::kLdr) {
+        for (int ch = 0; ch < channels; ++ch) {
+          if (color[ch] < T(0)) {
+            color[ch] = T(0);
+            state->clamped[i * channels + ch] = 1;
+          }
+        }
+      }
+      ++visible;
+    }
+    visible_per_chunk[b / kGaussianGrain] = visible;
+  });
+  state->num_visible = 0;
+  for (std::int64_t v : visible_per_chunk) state->num_visible += static_cast<std::size_t>(v);
+}
+
+template <typename T>
+void PreprocessBackward(const GaussianModelT<T>& model,
+                        const ViewParams<T>& view,
+                        T time,
+                        const RenderOptions& options,
+                        const FrameStateT<T>& state,
+                        GaussianGradientsT<T>* grads) {
+  const std::size_t n = model.size();
+  HDR4D_CHECK(grads->size() == n && grads->color_rest.size() == model.color_rest.size());
+  const int channels = model.channels;
+  const SplatBuffersT<T>& s = state.splats;
+  const SplatGradientsT<T>& sg = state.splat_grads;
+  HDR4D_CHECK(sg.opacity.size() == n);
+  const Vec3<T> center = view.Center();
+  const int time_degree = TimeDegree(model, options);
+  const std::size_t stride = model.rest_stride();
+  const int num_coefficients = model.basis.coefficients();
+  const T duration = static_cast<T>(options.time_duration);
+  ParallelFor(static_cast<std::int64_t>(n), kGaussianGrain, [&](std::int64_t g) {
+    const std::size_t i = static_cast<std::size_t>(g);
+    if (s.radius[i] <= 0) return;
+    const Conditional<T> c = ConditionAt(model, i, time);
+
+    // Colour: the view direction and dt are detached, as in the reference.
+    T dcolor[kMaxChannels];
+    for (int ch = 0; ch < channels; ++ch) {
+      dcolor[ch] = state.clamped[i * channels + ch] ? T(0) : sg.features[i * channels + ch];
+    }
+    T w[kMaxColorCoefficients];
+    EvalColorBasisWeights(Vec3<T>(c.mean - center), model.t[i] - time, duration, model.basis,
+                          options.sh_degree, time_degree, w);
+    T* gdc = &grads->color_dc[i * channels];
+    T* grest = &grads->color_rest[i * stride];
+    for (int ch = 0; ch < channels; ++ch) gdc[ch] += w[0] * dcolor[ch];
+    for (int k = 1; k < num_coefficients; ++k) {
+      if (w[k] == T(0)) continue;
+      for (int ch = 0; ch < channels; ++ch) grest[(k - 1) * channels + ch] += w[k] * dcolor[ch];
+    }
+
+    // Opacity = sigmoid(logit) x marginal.
+    const T sig = Sigmoid(model.opacity_logit[i]);
+    grads->opacity_logit[i] += sg.opacity[i] * c.marginal * sig * (T(1) - sig);
+    const T dmarginal = sg.opacity[i] * sig;
+
+    Vec3<T> dmean3;
+    Mat3<T> dcov3;
+    ProjectEwaBackward(c.mean, c.cov, view, Vec2<T>(sg.mean2d[2 * i], sg.mean2d[2 * i + 1]),
+                       Vec3<T>(sg.conic[3 * i], sg.conic[3 * i + 1], sg.conic[3 * i + 2]), &dmean3,
+                       &dcov3);
+    const Vec4<T> log_scales = Row4(model.log_scales, i);
+    if (model.temporal) {
+      Vec4<T> dmean4;
+      Mat4<T> dsigma;
+      SliceAtTimeBackward(Mean4(model, i), c.sigma4, time, dmean3, dcov3, dmarginal, &dmean4, &dsigma);
+      Mat4<T> drot;
+      Vec4<T> dlog_scales;
+      Covariance4DBackward(c.rotation4, log_scales, dsigma, &drot, &dlog_scales);
+      Vec4<T> dql, dqr;
+      Rotation4DBackward(Row4(model.rot_left, i), Row4(model.rot_right, i), drot, &dql, &dqr);
+      for (int k = 0; k < 3; ++k) grads->xyz[i * 3 + k] += dmean4[k];
+      grads->t[i] += dmean4[3];
+      for (int k = 0; k < 4; ++k) {
+        grads->log_scales[i * 4 + k] += dlog_scales[k];
+        grads->rot_left[i * 4 + k] += dql[k];
+        grads->rot_right[i * 4 + k] += dqr[k];
+      }
+    } else {
+      Mat3<T> drot;
+      Vec3<T> dlog_scales;
+      Covariance3DBackward(c.rotation3, Vec3<T>(log_scales.template head<3>()), dcov3, &drot, &dlog_scales);
+      Vec4<T> dq;
+      Rotation3DBackward(Row4(model.rot_left, i), drot, &dq);
+      for (int k = 0; k < 3; ++k) {
+        grads->xyz[i * 3 + k] += dmean3[k];
+        grads->log_scales[i * 4 + k] += dlog_scales[k];
+      }
+      for (int k = 0; k < 4; ++k) grads->rot_left[i * 4 + k] += dq[k];
+    }
+  });
+}
+
+void RenderForward(const GaussianModel& model,
+                   const Camera& camera,
+                   float time,
+                   const RenderOptions& options,
+                   FrameState* state,
+                   float* image) {
+  const ViewParams<float> view = ViewParams<float>::FromCamera(camera);
+  PreprocessForward(model, view, time, options, state);
+  RasterizeForward(state->splats, SettingsFor(camera, options, model.channels), &state->raster, image);
+}
+
+void RenderBackward(const GaussianModel& model,
+                    const Camera& camera,
+                    float time,
+                    const RenderOptions& options,
+                    FrameState* state,
+                    const float* dL_dimage,
+                    GaussianGradients* grads) {
+  state->splat_grads.SetZero(model.size(), model.channels);
+  BlendBackward(state->splats, SettingsFor(camera, options, model.channels), &state->raster,
+                dL_dimage, nullptr, &state->splat_grads, nullptr);
+  PreprocessBackward(model, ViewParams<float>::FromCamera(camera), time, options, *state, grads);
+}
+
+template <typename T>
+void RenderForwardReference(const GaussianModelT<T>& model,
+                            const Camera& camera,
+                            T time,
+                            const RenderOptions& options,
+                            FrameStateT<T>* state,
+                            T* image) {
+  const ViewParams<T> view = ViewParams<T>::FromCamera(camera);
+  PreprocessForward(model, view, time, options, state);
+  const RasterSettings settings = SettingsFor(camera, options, model.channels);
+  BinSplats(state->splats, settings, &state->raster);
+  const std::vector<T> background(settings.background.begin(), settings.background.end());
+  const std::size_t pixels = static_cast<std::size_t>(settings.width) * settings.height;
+  state->final_T.resize(pixels);
+  state->n_contrib.resize(pixels);
+  BlendForwardReference(state->splats, state->raster, background.data(), image, state->final_T.data(),
+                        state->n_contrib.data());
+}
+
+template <typename T>
+void RenderBackwardReference(const GaussianModelT<T>& model,
+                             const Camera& camera,
+                             T time,
+                             const RenderOptions& options,
+                             FrameStateT<T>* state,
+                             const T* dL_dimage,
+                             GaussianGradientsT<T>* grads) {
+  const RasterSettings settings = SettingsFor(camera, options, model.channels);
+  const std::vector<T> background(settings.background.begin(), settings.background.end());
+  state->splat_grads.SetZero(model.size(), model.channels);
+  BlendBackwardReference(state->splats, state->raster, background.data(), state->final_T.data(),
+                         state->n_contrib.data(), dL_dimage, static_cast<const T*>(nullptr),
+                         &state->splat_grads, static_cast<T*>(nullptr));
+  PreprocessBackward(model, ViewParams<T>::FromCamera(camera), time, options, *state, grads);
+}
+
+#define HDR4D_INSTANTIATE_RENDER(T)                                                              \
+  template void PreprocessForward(const GaussianModelT<T>&, const ViewParams<T>&, T,              \
+                                  const RenderOptions&, FrameStateT<T>*);                         \
+  template void PreprocessBackward(const GaussianModelT<T>&, const ViewParams<T>&, T,             \
+                                   const RenderOptions&, const FrameStateT<T>&,                   \
+                                   GaussianGradientsT<T>*);                                       \
+  template void RenderForwardReference(const GaussianModelT<T>&, const Camera&, T,                \
+                                       const RenderOptions&, FrameStateT<T>*, T*);                \
+  template void RenderBackwardReference(const GaussianModelT<T>&, const Camera&, T,               \
+                                        const RenderOptions&, FrameStateT<T>*, const T*,          \
+                                        GaussianGradientsT<T>*);
+HDR4D_INSTANTIATE_RENDER(float)
+HDR4D_INSTANTIATE_RENDER(double)
+#undef HDR4D_INSTANTIATE_RENDER
+
+}  // namespace hdr4d::method

@@ -1,0 +1,95 @@
+// One frame of 4D Gaussian Splatting, forward and backward (DESIGN §4, §6): the preprocess per
+// Gaussian (4D rotation and covariance, slice at time t, temporal cull, EWA projection,
+// opacity x marginal, SH x time colour) and the tile rasteriser (method/raster/), and back.
+//
+// What costs nothing: a Gaussian whose marginal p(t) <= 0.05, one behind the near plane or
+// outside the image gets radius 0 in the preprocess and is never binned, blended or
+// back-propagated; an empty tile is never blended.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/camera.h"
+#include "method/gaussian_model.h"
+#include "method/projection.h"
+#include "method/raster/splats.h"
+
+namespace hdr4d::method {
+
+struct RenderOptions {
+  int sh_degree = 3;            // active spatial SH degree (grows during training)
+  int time_degree = 2;          // active temporal degree (0 in 3D mode)
+  float time_duration = 1.0f;   // T of the cosine time basis
+  std::vector<float> background;  // one value per channel (empty: zeros)
+  RasterBackend backend = RasterBackend::kSimd;
+};
+
+// Buffers of one frame, reused from frame to frame (they only grow).
+template <typename T>
+struct FrameStateT {
+  SplatBuffersT<T> splats;
+  SplatGradientsT<T> splat_grads;
+  RasterState raster;
+  std::vector<std::uint8_t> clamped;  // N x channels: LDR colour clamped at 0 (no gradient)
+  std::size_t num_visible = 0;        // Gaussians with radius > 0 after the preprocess
+  // Reference (scalar, any T) path only: the forward's outputs the backward needs.
+  std::vector<T> final_T;
+  std::vector<std::int32_t> n_contrib;
+};
+using FrameState = FrameStateT<float>;
+
+// Per-Gaussian preprocess into state->splats (parallel over Gaussians).
+template <typename T>
+void PreprocessForward(const GaussianModelT<T>& model,
+                       const ViewParams<T>& view,
+                       T time,
+                       const RenderOptions& options,
+                       FrameStateT<T>* state);
+
+// Backward of the preprocess: from state->splat_grads into `grads` (accumulates; `grads` must
+// have the model's shape, e.g. from ZerosLike). Deterministic: each Gaussian owns its rows.
+template <typename T>
+void PreprocessBackward(const GaussianModelT<T>& model,
+                        const ViewParams<T>& view,
+                        T time,
+                        const RenderOptions& options,
+                        const FrameStateT<T>& state,
+                        GaussianGradientsT<T>* grads);
+
+// The production path (float; SIMD or scalar blending by options.backend). image: H x W x
+// channels, interleaved.
+void RenderForward(const GaussianModel& model,
+                   const Camera& camera,
+                   float time,
+                   const RenderOptions& options,
+                   FrameState* state,
+                   float* image);
+// dL_dimage: H x W x channels. Accumulates into `grads`.
+void RenderBackward(const GaussianModel& model,
+                    const Camera& camera,
+                    float time,
+                    const RenderOptions& options,
+                    FrameState* state,
+                    const float* dL_dimage,
+                    GaussianGradients* grads);
+
+// The same in any floating type with the scalar reference blend (float and double are
+// instantiated): what the whole-render finite-difference test runs in double.
+template <typename T>
+void RenderForwardReference(const GaussianModelT<T>& model,
+                            const Camera& camera,
+                            T time,
+                            const RenderOptions& options,
+                            FrameStateT<T>* state,
+                            T* image);
+template <typename T>
+void RenderBackwardReference(const GaussianModelT<T>& model,
+                             const Camera& camera,
+                             T time,
+                             const RenderOptions& options,
+                             FrameStateT<T>* state,
+                             const T* dL_dimage,
+                             GaussianGradientsT<T>* grads);
+
+}  // namespace hdr4d::method
