@@ -11,5 +11,9 @@ void AddEvalCommand(CLI::App& app);       // eval PRED GT
 void AddSynthLdrCommand(CLI::App& app);   // synth-ldr
 void AddDemoSceneCommand(CLI::App& app);  // make-demo-scene
 void AddMergeHdrCommand(CLI::App& app);   // merge-hdr
+void AddTrainCommand(CLI::App& app);      // train
+void AddRenderCommand(CLI::App& app);     // render
+void AddGaussianSceneCommand(CLI::App& app);  // make-gaussian-scene
+void AddExportPlyCommand(CLI::App& app);       // export-ply
 
 }  // namespace hdr4d::cli

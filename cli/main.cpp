@@ -30,6 +30,10 @@ int main(int argc, char** argv) {
   hdr4d::cli::AddSynthLdrCommand(app);
   hdr4d::cli::AddDemoSceneCommand(app);
   hdr4d::cli::AddMergeHdrCommand(app);
+  hdr4d::cli::AddGaussianSceneCommand(app);
+  hdr4d::cli::AddTrainCommand(app);
+  hdr4d::cli::AddRenderCommand(app);
+  hdr4d::cli::AddExportPlyCommand(app);
 
   try {
     app.parse(argc, argv);

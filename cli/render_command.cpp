@@ -1,0 +1,29 @@
+// hdr4d render: images of a trained run.
+#include <fmt/format.h>
+
+#include "cli/commands.h"
+#include "method/render_run.h"
+
+namespace hdr4d::cli {
+
+void AddRenderCommand(CLI::App& app) {
+  auto options = std::make_shared<method::RenderRunOptions>();
+  auto run = std::make_shared<std::string>();
+  auto out = std::make_shared<std::string>();
+  CLI::App* cmd = app.add_subcommand(
+      "render",
+      "Render a trained run's views of a split. Each image is named like its ground truth, so "
+      "`hdr4d eval OUT <scene image folder>` scores them.");
+  cmd->add_option("--run", *run, "Run folder (from hdr4d train)")->required();
+  cmd->add_option("--out", *out, "Output folder (default RUN/renders/<split>)");
+  cmd->add_option("--split", options->split, "train, test or val")->capture_default_str();
+  cmd->add_option("--threads", options->threads, "Threads (0 = all cores)")->capture_default_str();
+  cmd->callback([options, run, out] {
+    options->run = *run;
+    options->out = *out;
+    const int n = method::RenderRun(*options);
+    fmt::print("render: wrote {} images\n", n);
+  });
+}
+
+}  // namespace hdr4d::cli

@@ -1,0 +1,29 @@
+// Training checkpoints: the model, the optimiser state and whatever the trainer needs to
+// continue exactly where it stopped (iteration, random state, densification statistics). One
+// binary file: a magic word and version, a JSON header with the metadata and buffer sizes,
+// then the raw little-endian float buffers and the Adam state. Written to a temporary file and
+// renamed, so an interrupted save never replaces the last good checkpoint.
+#pragma once
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "method/adam.h"
+#include "method/gaussian_model.h"
+
+namespace hdr4d::method {
+
+struct Checkpoint {
+  GaussianModel model;
+  nlohmann::json trainer;                       // iteration, rng state, schedule state, ...
+  std::vector<std::vector<float>> extra_floats;  // e.g. densification statistics
+  std::string adam_state;                        // Adam::Save bytes
+};
+
+void SaveCheckpoint(const std::filesystem::path& path, const Checkpoint& checkpoint);
+// Throws hdr4d::Error naming the file for a missing, truncated, corrupt or foreign file.
+Checkpoint LoadCheckpoint(const std::filesystem::path& path);
+
+}  // namespace hdr4d::method

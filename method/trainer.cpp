@@ -1,0 +1,302 @@
+#include "method/trainer.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <random>
+#include <sstream>
+
+#include "core/dataset.h"
+#include "core/error.h"
+#include "core/json_util.h"
+#include "core/metrics.h"
+#include "core/parallel.h"
+#include "core/ply.h"
+#include "core/progress.h"
+#include "core/scene_profile.h"
+#include "method/adam.h"
+#include "method/checkpoint.h"
+#include "method/densify.h"
+#include "method/loss.h"
+#include "method/render.h"
+#include "method/train_views.h"
+
+namespace hdr4d::method {
+namespace fs = std::filesystem;
+
+std::string TrainOptions::Validate() const {
+  if (data.empty()) return "data: no scene folder given";
+  if (out.empty()) return "out: no run folder given";
+  if (threads < 0) return "threads: must be >= 0";
+  if (test_every < 0 || checkpoint_every < 0) return "test_every / checkpoint_every: must be >= 0";
+  if (!(background >= 0 && background <= 1)) return "background: must be within [0, 1]";
+  if (std::string p = optimization.Validate(); !p.empty()) return p;
+  return "";
+}
+
+nlohmann::json TrainOptions::ToJson() const {
+  const OptimizationOptions& o = optimization;
+  return {
+      {"data", fs::absolute(data).string()},
+      {"seed", seed},
+      {"threads", threads},
+      {"test_every", test_every},
+      {"checkpoint_every", checkpoint_every},
+      {"background", background},
+      {"init", {{"num_random_points", init.num_random_points}, {"random_half_extent", init.random_half_extent},
+                {"initial_opacity", init.initial_opacity}}},
+      {"optimization",
+       {{"iterations", o.iterations}, {"position_lr_init", o.position_lr_init},
+        {"position_lr_final", o.position_lr_final}, {"position_lr_max_steps", o.position_lr_max_steps},
+        {"t_lr_init", o.t_lr_init}, {"f_dc_lr", o.f_dc_lr}, {"f_rest_lr", o.f_rest_lr},
+        {"opacity_lr", o.opacity_lr}, {"scaling_lr", o.scaling_lr}, {"rotation_lr", o.rotation_lr},
+        {"adam_eps", o.adam_eps}, {"lambda_dssim", o.lambda_dssim}, {"densify_from", o.densify_from},
+        {"densify_until", o.densify_until}, {"densification_interval", o.densification_interval},
+        {"densify_grad_threshold", o.densify_grad_threshold}, {"percent_dense", o.percent_dense},
+        {"opacity_reset_interval", o.opacity_reset_interval}, {"prune_opacity", o.prune_opacity},
+        {"sh_increase_interval", o.sh_increase_interval}}},
+  };
+}
+
+namespace {
+
+constexpr const char* kCheckpointName = "checkpoint.bin";
+
+// NeRF++ normalisation: 1.1 x the largest distance of a training camera from their centroid.
+double SceneExtent(const std::vector<TrainView>& views) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const TrainView& v : views) mean += v.camera.Center();
+  mean /= static_cast<double>(views.size());
+  double radius = 0;
+  for (const TrainView& v : views) radius = std::max(radius, (v.camera.Center() - mean).norm());
+  return 1.1 * std::max(radius, 1e-3);  // one camera: a tiny extent instead of zero
+}
+
+// Active colour degrees at an iteration: spatial 0 -> 3 every interval, then temporal 0 -> 2.
+std::pair<int, int> ColorDegrees(int iteration, const GaussianModel& model, int interval) {
+  const int steps = iteration / interval;
+  const int sh = std::min(model.basis.max_sh_degree, steps);
+  const int time = model.temporal ? std::clamp(steps - model.basis.max_sh_degree, 0, model.basis.max_time_degree) : 0;
+  return {sh, time};
+}
+
+Image ToImage(const std::vector<float>& values, int width, int height) {
+  Image image(width, height, 3, Encoding::kSrgb);
+  for (std::size_t i = 0; i < values.size(); ++i) image.values()[i] = std::clamp(values[i], 0.0f, 1.0f);
+  return image;
+}
+
+// Means of the LDR metrics over the views (PSNR as the mean of per-view values, as 3DGS).
+nlohmann::json Evaluate(const GaussianModel& model, const std::vector<TrainView>& views,
+                        const RenderOptions& options, FrameState* state) {
+  nlohmann::json mean = nlohmann::json::object();
+  if (views.empty()) return mean;
+  std::map<std::string, double> sums;
+  std::vector<float> image, gt;
+  for (const TrainView& v : views) {
+    image.resize(static_cast<std::size_t>(v.width()) * v.height() * 3);
+    RenderForward(model, v.camera, v.time, options, state, image.data());
+    v.ToFloat(&gt);
+    for (const auto& [key, value] : LdrMetrics(ToImage(image, v.width(), v.height()), ToImage(gt, v.width(), v.height()))) {
+      sums[key] += value;
+    }
+  }
+  for (const auto& [key, sum] : sums) mean[key] = FiniteOrNull(sum / views.size());
+  return mean;
+}
+
+// Training state beyond the model and optimiser, for exact resumption.
+struct LoopState {
+  int iteration = 0;
+  std::mt19937_64 rng;
+  std::vector<std::uint32_t> order;  // current epoch's view order
+  std::size_t next = 0;              // position in `order`
+  std::vector<double> loss_curve;
+  double train_seconds = 0;
+
+  std::uint32_t NextView(std::size_t num_views) {
+    if (next >= order.size()) {
+      order.resize(num_views);
+      std::iota(order.begin(), order.end(), 0u);
+      std::shuffle(order.begin(), order.end(), rng);
+      next = 0;
+    }
+    return order[next++];
+  }
+
+  nlohmann::json ToJson() const {
+    std::ostringstream rng_state;
+    rng_state << rng;
+    return {{"iteration", iteration}, {"rng", rng_state.str()}, {"order", order},
+            {"next", next}, {"loss_curve", loss_curve}, {"train_seconds", train_seconds}};
+  }
+  void FromJson(const nlohmann::json& j) {
+    iteration = j.at("iteration").get<int>();
+    std::istringstream rng_state(j.at("rng").get<std::string>());
+    rng_state >> rng;
+    order = j.at("order").get<std::vector<std::uint32_t>>();
+    next = j.at("next").get<std::size_t>();
+    loss_curve = j.at("loss_curve").get<std::vector<double>>();
+    train_seconds = j.at("train_seconds").get<double>();
+  }
+};
+
+}  // namespace
+
+TrainSummary Train(const TrainOptions& options) {
+  if (std::string problem = options.Validate(); !problem.empty()) Fail("train: {}", problem);
+  const ThreadLimit thread_limit(options.threads);
+  const OptimizationOptions& opt = options.optimization;
+
+  const Dataset dataset = LoadDataset(options.data, {.image_check = ImageCheck::kHeaders});
+  const SceneProfile profile = ProfileScene(dataset);
+  const float background[3] = {options.background, options.background, options.background};
+  const std::vector<TrainView> train_views = LoadViews(dataset, Split::kTrain, background);
+  const std::vector<TrainView> test_views = LoadViews(dataset, Split::kTest, background);
+  const double extent = SceneExtent(train_views);
+  spdlog::info("train: {} train / {} test views, extent {:.3f}, {}", train_views.size(),
+               test_views.size(), extent, profile.dynamic ? "dynamic" : "static (no time axis)");
+
+  std::error_code ec;
+  fs::create_directories(options.out, ec);
+  if (ec) Fail("{}: cannot create the run folder: {}", options.out.string(), ec.message());
+  const fs::path checkpoint_path = options.out / kCheckpointName;
+
+  GaussianModel model;
+  Adam adam(AdamOptions{.eps = opt.adam_eps});
+  DensifyStats stats;
+  LoopState loop;
+  loop.rng.seed(options.seed);
+  if (options.resume) {
+    Checkpoint c = LoadCheckpoint(checkpoint_path);
+    model = std::move(c.model);
+    std::istringstream adam_state(c.adam_state);
+    adam.Load(adam_state, checkpoint_path.string());
+    loop.FromJson(c.trainer);
+    if (c.extra_floats.size() != 3) Fail("{}: checkpoint has no densification statistics", checkpoint_path.string());
+    stats.grad_accum = std::move(c.extra_floats[0]);
+    stats.denom = std::move(c.extra_floats[1]);
+    stats.max_radii = std::move(c.extra_floats[2]);
+    spdlog::info("train: resuming {} at iteration {}", checkpoint_path.string(), loop.iteration);
+  } else {
+    InitOptions init = options.init;
+    init.seed = options.seed;
+    init.temporal = profile.dynamic;  // a static scene trains without the time axis
+    std::optional<PointCloud> cloud;
+    if (dataset.point_cloud_path) cloud = ReadPly(*dataset.point_cloud_path);
+    model = InitialiseGaussians(cloud, init);
+    stats.Reset(model.size());
+  }
+  GaussianGradients grads;
+  grads.ZerosLike(model);
+  if (options.resume) {
+    BindModelGroups(model, grads, &adam);
+  } else {
+    AddModelGroups(model, grads, LearningRatesAt(opt, extent, 0), &adam);
+  }
+  nlohmann::json config = options.ToJson();
+  config["scene_extent"] = extent;
+  config["profile"] = profile.ToJson();
+  WriteJsonFile(options.out / "config.json", config);
+
+  RenderOptions render;
+  render.background.assign(model.channels, options.background);
+  FrameState state;
+  std::vector<float> image, gt, dL_dimage;
+  const std::string last_good = checkpoint_path.string();
+
+  auto save = [&]() {
+    Checkpoint c;
+    c.model = model;
+    c.trainer = loop.ToJson();
+    c.extra_floats = {stats.grad_accum, stats.denom, stats.max_radii};
+    std::ostringstream adam_state;
+    adam.Save(adam_state);
+    c.adam_state = adam_state.str();
+    SaveCheckpoint(checkpoint_path, c);
+  };
+
+  Progress progress("train", opt.iterations - loop.iteration, options.progress);
+  const auto start = std::chrono::steady_clock::now();
+  const double seconds_before = loop.train_seconds;
+  while (loop.iteration < opt.iterations) {
+    const int it = ++loop.iteration;
+    SetModelLearningRates(LearningRatesAt(opt, extent, it), &adam);
+    std::tie(render.sh_degree, render.time_degree) = ColorDegrees(it, model, opt.sh_increase_interval);
+
+    const TrainView& view = train_views[loop.NextView(train_views.size())];
+    const std::size_t values = static_cast<std::size_t>(view.width()) * view.height() * 3;
+    image.resize(values);
+    dL_dimage.resize(values);
+    RenderForward(model, view.camera, view.time, render, &state, image.data());
+    view.ToFloat(&gt);
+    const LossResult loss = PhotometricLoss(image.data(), gt.data(), view.width(), view.height(), 3,
+                                            static_cast<float>(opt.lambda_dssim), dL_dimage.data());
+    if (!std::isfinite(loss.value)) {
+      Fail("train: iteration {}: the loss is {} (view {}); stopped, the last good checkpoint is {}", it,
+           loss.value, view.name, last_good);
+    }
+    grads.ZerosLike(model);
+    RenderBackward(model, view.camera, view.time, render, &state, dL_dimage.data(), &grads);
+    if (const std::string bad = adam.FirstNonFiniteGradient(); !bad.empty()) {
+      Fail("train: iteration {}: non-finite gradient in parameter group '{}'; stopped, the last good "
+           "checkpoint is {}",
+           it, bad, last_good);
+    }
+    if (it < opt.densify_until) AccumulateStats(state.splat_grads.mean2d, state.splats.radius, view.width(), view.height(), &stats);
+    loop.loss_curve.push_back(loss.value);
+
+    // As in the reference, densification replaces every parameter tensor, so no optimiser step
+    // happens on that iteration; an opacity reset replaces only the opacity.
+    const bool densify = it < opt.densify_until && it > opt.densify_from && it % opt.densification_interval == 0;
+    const bool reset_opacity = it < opt.densify_until && it % opt.opacity_reset_interval == 0;
+    if (densify) {
+      DensifyAndPrune(&model, &grads, &adam, &stats, DensifyParamsAt(opt, extent, it), &loop.rng);
+    } else {
+      for (const std::string& group : adam.GroupNames()) {
+        if (!(reset_opacity && group == kGroupOpacity)) adam.StepGroup(group);
+      }
+    }
+    if (reset_opacity) ResetOpacity(&model, &adam);
+
+    double squared = 0;
+    for (std::size_t i = 0; i < values; ++i) {
+      const double d = std::clamp(image[i], 0.0f, 1.0f) - gt[i];
+      squared += d * d;
+    }
+    const double psnr = -10.0 * std::log10(std::max(squared / values, 1e-20));
+    progress.Advance(1, fmt::format("loss {:.4f} psnr {:.2f} N {}", loss.value, psnr, model.size()));
+    if (options.test_every > 0 && it % options.test_every == 0 && it < opt.iterations) {
+      const nlohmann::json m = Evaluate(model, test_views, render, &state);
+      spdlog::info("train: iteration {}: test {}", it, m.dump());
+    }
+    if (options.checkpoint_every > 0 && it % options.checkpoint_every == 0) {
+      loop.train_seconds = seconds_before + std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      save();
+    }
+  }
+  progress.Finish();
+  loop.train_seconds = seconds_before + std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  save();
+
+  TrainSummary summary;
+  summary.test_metrics = Evaluate(model, test_views, render, &state);
+  summary.train_seconds = loop.train_seconds;
+  summary.iterations = loop.iteration;
+  summary.gaussians = model.size();
+  summary.loss_curve = loop.loss_curve;
+  nlohmann::json results = {{"test", summary.test_metrics},
+                            {"train_seconds", summary.train_seconds},
+                            {"iterations", summary.iterations},
+                            {"gaussians", summary.gaussians},
+                            {"test_views", test_views.size()},
+                            {"final_loss", loop.loss_curve.empty() ? nlohmann::json(nullptr) : FiniteOrNull(loop.loss_curve.back())}};
+  WriteJsonFile(options.out / "results.json", results);
+  return summary;
+}
+
+}  // namespace hdr4d::method

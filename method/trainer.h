@@ -1,0 +1,43 @@
+// `hdr4d train`: 4D Gaussian Splatting from a dataset (DESIGN §4): initialisation, the training
+// loop (render, L1 + D-SSIM, backward, Adam with the reference's schedules, densification),
+// periodic test evaluation, checkpoints that resume exactly, and RUN/results.json.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "method/initialise.h"
+#include "method/lr_schedule.h"
+
+namespace hdr4d::method {
+
+struct TrainOptions {
+  std::filesystem::path data;  // scene folder
+  std::filesystem::path out;   // run folder
+  OptimizationOptions optimization;
+  InitOptions init;            // seed, random point count, ...
+  std::uint64_t seed = 0;
+  int threads = 0;             // 0 = all cores
+  int test_every = 0;          // evaluate the test split every N iterations (0 = only at the end)
+  int checkpoint_every = 0;    // save RUN/checkpoint.bin every N iterations (0 = only at the end)
+  bool resume = false;         // continue from RUN/checkpoint.bin
+  bool progress = true;
+  float background = 0.0f;     // grey level behind the scene (the reference trains on black)
+  std::string Validate() const;
+  nlohmann::json ToJson() const;
+};
+
+struct TrainSummary {
+  nlohmann::json test_metrics;  // keys of `hdr4d eval` (means over the test views)
+  double train_seconds = 0;
+  int iterations = 0;
+  std::size_t gaussians = 0;
+  std::vector<double> loss_curve;  // per iteration
+};
+
+// Runs (or resumes) training; writes RUN/config.json, RUN/checkpoint.bin, RUN/results.json.
+TrainSummary Train(const TrainOptions& options);
+
+}  // namespace hdr4d::method
