@@ -24,6 +24,8 @@ void AddTrainCommand(CLI::App& app) {
                   "Initial random points when the scene has no point3d.ply")->capture_default_str();
   cmd->add_option("--densify-until", options->optimization.densify_until, "Last densification iteration")
       ->capture_default_str();
+  cmd->add_option("--densify-grad-threshold", options->optimization.densify_grad_threshold,
+                  "Clone/split when the mean NDC screen gradient reaches this")->capture_default_str();
   cmd->add_option("--position-lr-steps", options->optimization.position_lr_max_steps,
                   "Iterations over which the position learning rate decays")->capture_default_str();
   cmd->add_option("--test-every", options->test_every, "Evaluate the test split every N iterations (0: at the end)")

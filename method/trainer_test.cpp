@@ -96,3 +96,32 @@ TEST(Trainer, BadInputsAreErrors) {
 
 }  // namespace
 }  // namespace hdr4d::method
+
+namespace hdr4d::method {
+namespace {
+
+// The proof of correctness of the engine: a known moving 4D Gaussian scene (64x64, 9 train and
+// 3 held-out cameras, 8 timestamps) is recovered from 5000 random points. 30 dB on held-out
+// cameras means errors of about 3% of the range per pixel; the trained model typically reaches
+// 31.3 dB here in ~6 s on two cores (BENCHMARKS.md).
+TEST(Trainer, RecoversAKnownSceneAbove30Db) {
+  hdr4d::testing::TempDir dir;
+  GaussianSceneOptions scene;
+  scene.size = 64;
+  MakeGaussianScene(scene, dir / "scene");
+  TrainOptions o;
+  o.data = dir / "scene";
+  o.out = dir / "run";
+  o.progress = false;
+  o.init.num_random_points = 5000;
+  o.optimization.iterations = 3000;
+  o.optimization.densify_until = 2000;
+  o.optimization.position_lr_max_steps = 3000;
+  o.optimization.densify_grad_threshold = 1e-3;
+  const TrainSummary s = Train(o);
+  EXPECT_GT(s.test_metrics["psnr"].get<double>(), 30.0) << s.test_metrics.dump();
+  EXPECT_GT(s.test_metrics["ssim"].get<double>(), 0.9) << s.test_metrics.dump();
+}
+
+}  // namespace
+}  // namespace hdr4d::method
