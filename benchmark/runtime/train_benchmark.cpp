@@ -1,0 +1,98 @@
+// Whole-pipeline speed of the 4DGS engine: one frame's preprocess, forward render, backward,
+// the loss, the Adam step and a full training iteration, on random 4D Gaussians filling the view
+// (Gaussian size chosen so that about 35 contribute per pixel at 200x200 with 20k, as the
+// target in BENCHMARKS.md assumes). Args: image size, Gaussians (thousands).
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <random>
+
+#include "core/parallel.h"
+#include "method/adam.h"
+#include "method/densify.h"
+#include "method/loss.h"
+#include "method/render.h"
+
+namespace hdr4d::method {
+namespace {
+
+struct Scene {
+  GaussianModel model;
+  Camera camera;
+  RenderOptions options;
+};
+
+Scene MakeScene(int size, int thousands) {
+  Scene s;
+  const int n = thousands * 1000;
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<float> u(-1, 1);
+  s.model.Resize(n);
+  // Scale so the projected footprints overlap about 35 deep at 200x200 / 20k.
+  const float scale = 0.019f * std::sqrt(20000.0f / n);
+  for (int i = 0; i < n; ++i) {
+    for (int a = 0; a < 3; ++a) s.model.xyz[i * 3 + a] = u(rng);
+    s.model.t[i] = 0.5f + 0.3f * u(rng);
+    for (int a = 0; a < 3; ++a) s.model.log_scales[i * 4 + a] = std::log(scale * (1.0f + 0.5f * u(rng)));
+    s.model.log_scales[i * 4 + 3] = std::log(0.5f);
+    for (int a = 0; a < 4; ++a) s.model.rot_left[i * 4 + a] = u(rng);
+    s.model.opacity_logit[i] = u(rng);
+    for (int c = 0; c < 3; ++c) s.model.color_dc[i * 3 + c] = u(rng);
+    for (std::size_t k = 0; k < s.model.rest_stride(); ++k) s.model.color_rest[i * s.model.rest_stride() + k] = 0.05f * u(rng);
+  }
+  s.camera = Camera{PinholeIntrinsics::FromFovX(0.9, size, size),
+                    LookAtWorldFromCamGl({0, -3.2, 0}, {0, 0, 0}, Eigen::Vector3d::UnitZ())};
+  s.options.background = {0, 0, 0};
+  return s;
+}
+
+void BM_RenderForward(benchmark::State& state) {
+  const int size = static_cast<int>(state.range(0));
+  Scene s = MakeScene(size, static_cast<int>(state.range(1)));
+  FrameState frame;
+  std::vector<float> image(static_cast<std::size_t>(size) * size * 3);
+  for (auto _ : state) RenderForward(s.model, s.camera, 0.5f, s.options, &frame, image.data());
+  state.counters["visible"] = static_cast<double>(frame.num_visible);
+  state.counters["entries"] = static_cast<double>(frame.raster.num_entries());
+  // n_contrib: 1 + list position of a pixel's last contributor (an upper bound on blends).
+  double walked = 0;
+  for (int v : frame.raster.n_contrib) walked += v;
+  state.counters["walked_per_px"] = walked / frame.raster.n_contrib.size();
+}
+BENCHMARK(BM_RenderForward)->Args({200, 20})->Args({800, 100})->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_RenderBackward(benchmark::State& state) {
+  const int size = static_cast<int>(state.range(0));
+  Scene s = MakeScene(size, static_cast<int>(state.range(1)));
+  FrameState frame;
+  std::vector<float> image(static_cast<std::size_t>(size) * size * 3), dL(image.size(), 1e-3f);
+  RenderForward(s.model, s.camera, 0.5f, s.options, &frame, image.data());
+  GaussianGradients grads;
+  grads.ZerosLike(s.model);
+  for (auto _ : state) RenderBackward(s.model, s.camera, 0.5f, s.options, &frame, dL.data(), &grads);
+}
+BENCHMARK(BM_RenderBackward)->Args({200, 20})->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Forward + loss + backward + gradient zeroing + finite check + Adam step: one iteration.
+void BM_TrainingIteration(benchmark::State& state) {
+  const int size = static_cast<int>(state.range(0));
+  Scene s = MakeScene(size, static_cast<int>(state.range(1)));
+  FrameState frame;
+  std::vector<float> image(static_cast<std::size_t>(size) * size * 3), gt(image.size(), 0.3f), dL(image.size());
+  GaussianGradients grads;
+  grads.ZerosLike(s.model);
+  Adam adam;
+  AddModelGroups(s.model, grads, LearningRatesAt(OptimizationOptions{}, 4.0, 1), &adam);
+  for (auto _ : state) {
+    RenderForward(s.model, s.camera, 0.5f, s.options, &frame, image.data());
+    PhotometricLoss(image.data(), gt.data(), size, size, 3, 0.2f, dL.data());
+    grads.ZerosLike(s.model);
+    RenderBackward(s.model, s.camera, 0.5f, s.options, &frame, dL.data(), &grads);
+    benchmark::DoNotOptimize(adam.FirstNonFiniteGradient());
+    adam.Step();
+  }
+}
+BENCHMARK(BM_TrainingIteration)->Args({200, 20})->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
+}  // namespace hdr4d::method
