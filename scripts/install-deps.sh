@@ -13,6 +13,8 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   # method: SIMD kernels with runtime dispatch
   libhwy-dev
+  # hdr4d render --video encodes MP4 with ffmpeg
+  ffmpeg
 )
 
 missing=()

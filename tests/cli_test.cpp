@@ -18,7 +18,8 @@ int LineCount(const std::string& s) {
 TEST(Cli, HelpListsEverySubcommand) {
   const auto r = RunHdr4d("--help");
   EXPECT_EQ(r.exit_code, 0);
-  for (const char* name : {"dataset", "eval", "synth-ldr", "make-demo-scene", "merge-hdr"}) {
+  for (const char* name : {"dataset", "eval", "synth-ldr", "make-demo-scene", "merge-hdr",
+                           "make-gaussian-scene", "train", "render", "export-ply"}) {
     EXPECT_NE(r.out.find(name), std::string::npos) << name;
     EXPECT_EQ(RunHdr4d(std::string(name) + " --help").exit_code, 0) << name;
   }
@@ -96,6 +97,43 @@ TEST(Cli, DemoPipelineEndToEnd) {
   ASSERT_EQ(eval["pairs"].size(), 3u);  // one test camera x 3 timestamps
   EXPECT_GT(eval["mean"]["pu21_psnr"].get<double>(), 30.0) << r.out;
   EXPECT_GT(eval["mean"]["mu_psnr"].get<double>(), 25.0) << r.out;
+}
+
+// Train -> render (a split, one time, a video) -> eval -> export-ply, and resume.
+TEST(Cli, TrainRenderEvalExport) {
+  testing::TempDir dir;
+  const std::string scene = (dir / "scene").string(), run = (dir / "run").string();
+  auto r = RunHdr4d("make-gaussian-scene --out " + scene + " --size 24 --gaussians 10 --cameras 4 --timestamps 3");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = RunHdr4d("train --data " + scene + " --out " + run + " --iterations 20 --random-points 300 --seed 2");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto results = nlohmann::json::parse(testing::ReadTextFile(dir / "run" / "results.json"));
+  EXPECT_EQ(results["iterations"], 20);
+  EXPECT_TRUE(results["test"].contains("psnr"));
+  r = RunHdr4d("train --data " + scene + " --out " + run + " --iterations 30 --random-points 300 --seed 2 --resume");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = RunHdr4d("render --run " + run + " --split test");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(dir / "run" / "renders" / "test" / "cam03_t001.png"));
+  r = RunHdr4d("eval " + run + "/renders/test " + scene + "/images --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["pairs"].size(), 3u);
+  r = RunHdr4d("render --run " + run + " --time 0.3 --camera 1");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(dir / "run" / "renders" / "time" / "test_cam001_t0.3000.png"));
+  r = RunHdr4d("render --run " + run + " --video 3");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(dir / "run" / "video" / "frame_0002.png"));
+  r = RunHdr4d("export-ply --run " + run + " --time 0.5 --out " + (dir / "slice.ply").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(testing::ReadTextFile(dir / "slice.ply").rfind("ply\nformat binary_little_endian", 0), 0u);
+  // User mistakes: one line, exit 1.
+  for (const std::string& bad : {"render --run " + run + " --time 2", "render --run " + run + " --time 0.5 --camera 99",
+                                 "render --run " + (dir / "nope").string(), "train --data " + scene + " --out " + (dir / "r2").string() + " --resume"}) {
+    r = RunHdr4d(bad);
+    EXPECT_EQ(r.exit_code, 1) << bad << "\n" << r.err;
+    EXPECT_EQ(LineCount(r.err), 1) << bad << "\n" << r.err;
+  }
 }
 
 }  // namespace
