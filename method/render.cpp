@@ -71,6 +71,19 @@ int TimeDegree(const GaussianModelT<T>& model, const RenderOptions& options) {
 constexpr int kMaxChannels = 8;
 
 template <typename T>
+void ZeroRows(GaussianGradientsT<T>* g, std::size_t i) {
+  std::fill_n(&g->xyz[i * 3], 3, T(0));
+  g->t[i] = T(0);
+  std::fill_n(&g->log_scales[i * 4], 4, T(0));
+  std::fill_n(&g->rot_left[i * 4], 4, T(0));
+  std::fill_n(&g->rot_right[i * 4], 4, T(0));
+  g->opacity_logit[i] = T(0);
+  std::fill_n(&g->color_dc[i * g->channels], g->channels, T(0));
+  const std::size_t rest = g->rest_stride();
+  std::fill_n(&g->color_rest[i * rest], rest, T(0));
+}
+
+template <typename T>
 void CheckInputs(const GaussianModelT<T>& model, const RenderOptions& options) {
   HDR4D_CHECK(model.Validate().empty());
   HDR4D_CHECK(model.channels <= kMaxChannels);
@@ -174,6 +187,9 @@ void PreprocessBackward(const GaussianModelT<T>& model,
   const T duration = static_cast<T>(options.time_duration);
   ParallelFor(static_cast<std::int64_t>(n), kGaussianGrain, [&](std::int64_t g) {
     const std::size_t i = static_cast<std::size_t>(g);
+    // Every row is written here (zeros for a culled Gaussian), so the caller needs no separate
+    // pass that clears 160 floats per Gaussian before each backward.
+    ZeroRows(grads, i);
     if (s.radius[i] <= 0) return;
     const Conditional<T> c = ConditionAt(model, i, time);
 

@@ -47,8 +47,9 @@ void PreprocessForward(const GaussianModelT<T>& model,
                        const RenderOptions& options,
                        FrameStateT<T>* state);
 
-// Backward of the preprocess: from state->splat_grads into `grads` (accumulates; `grads` must
-// have the model's shape, e.g. from ZerosLike). Deterministic: each Gaussian owns its rows.
+// Backward of the preprocess: from state->splat_grads into `grads`, which must have the model's
+// shape (e.g. from ZerosLike). Every Gaussian's rows are overwritten (zeros for a culled one):
+// one frame's gradient, not a sum over calls. Deterministic: each Gaussian owns its rows.
 template <typename T>
 void PreprocessBackward(const GaussianModelT<T>& model,
                         const ViewParams<T>& view,
@@ -65,7 +66,7 @@ void RenderForward(const GaussianModel& model,
                    const RenderOptions& options,
                    FrameState* state,
                    float* image);
-// dL_dimage: H x W x channels. Accumulates into `grads`.
+// dL_dimage: H x W x channels. Overwrites `grads` (see PreprocessBackward).
 void RenderBackward(const GaussianModel& model,
                     const Camera& camera,
                     float time,

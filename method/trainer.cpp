@@ -240,7 +240,6 @@ TrainSummary Train(const TrainOptions& options) {
       Fail("train: iteration {}: the loss is {} (view {}); stopped, the last good checkpoint is {}", it,
            loss.value, view.name, last_good);
     }
-    grads.ZerosLike(model);
     RenderBackward(model, view.camera, view.time, render, &state, dL_dimage.data(), &grads);
     if (const std::string bad = adam.FirstNonFiniteGradient(); !bad.empty()) {
       Fail("train: iteration {}: non-finite gradient in parameter group '{}'; stopped, the last good "
