@@ -78,7 +78,10 @@ void BM_TrainingIteration(benchmark::State& state) {
   const int size = static_cast<int>(state.range(0));
   Scene s = MakeScene(size, static_cast<int>(state.range(1)));
   FrameState frame;
-  std::vector<float> image(static_cast<std::size_t>(size) * size * 3), gt(image.size(), 0.3f), dL(image.size());
+  const std::size_t values = static_cast<std::size_t>(size) * size * 3;
+  std::vector<float> image(values);
+  std::vector<float> gt(values, 0.3f);
+  std::vector<float> dL(values);
   GaussianGradients grads;
   grads.ZerosLike(s.model);
   Adam adam;
