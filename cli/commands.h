@@ -6,14 +6,14 @@
 
 namespace hdr4d::cli {
 
-void AddDatasetCommand(CLI::App& app);    // dataset check
-void AddEvalCommand(CLI::App& app);       // eval PRED GT
-void AddSynthLdrCommand(CLI::App& app);   // synth-ldr
-void AddDemoSceneCommand(CLI::App& app);  // make-demo-scene
-void AddMergeHdrCommand(CLI::App& app);   // merge-hdr
-void AddTrainCommand(CLI::App& app);      // train
-void AddRenderCommand(CLI::App& app);     // render
+void AddDatasetCommand(CLI::App& app);        // dataset check
+void AddEvalCommand(CLI::App& app);           // eval PRED GT
+void AddSynthLdrCommand(CLI::App& app);       // synth-ldr
+void AddDemoSceneCommand(CLI::App& app);      // make-demo-scene
+void AddMergeHdrCommand(CLI::App& app);       // merge-hdr
+void AddTrainCommand(CLI::App& app);          // train
+void AddRenderCommand(CLI::App& app);         // render
 void AddGaussianSceneCommand(CLI::App& app);  // make-gaussian-scene
-void AddExportPlyCommand(CLI::App& app);       // export-ply
+void AddExportPlyCommand(CLI::App& app);      // export-ply
 
 }  // namespace hdr4d::cli

@@ -13,16 +13,20 @@ void AddGaussianSceneCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "make-gaussian-scene",
       "Render a known scene of moving, turning 4D Gaussians from a ring of cameras over time to "
-      "a dataset (every 4th camera held out for test): the ground truth `hdr4d train` must recover.");
+      "a dataset (every 4th camera held out for test): the ground truth `hdr4d train` must "
+      "recover.");
   cmd->add_option("--out,-o", *out, "Output folder")->required();
   cmd->add_option("--size", options->size, "Image width and height")->capture_default_str();
-  cmd->add_option("--gaussians", options->num_gaussians, "Number of Gaussians")->capture_default_str();
+  cmd->add_option("--gaussians", options->num_gaussians, "Number of Gaussians")
+      ->capture_default_str();
   cmd->add_option("--cameras", options->num_cameras, "Cameras on the ring")->capture_default_str();
-  cmd->add_option("--timestamps", options->num_timestamps, "Timestamps in [0,1]")->capture_default_str();
+  cmd->add_option("--timestamps", options->num_timestamps, "Timestamps in [0,1]")
+      ->capture_default_str();
   cmd->add_option("--seed", options->seed, "Random seed of the scene")->capture_default_str();
   cmd->callback([options, out] {
     const Dataset d = method::MakeGaussianScene(*options, *out);
-    fmt::print("make-gaussian-scene: {} train and {} test frames in {}\n", d.train.size(), d.test.size(), *out);
+    fmt::print("make-gaussian-scene: {} train and {} test frames in {}\n", d.train.size(),
+               d.test.size(), *out);
   });
 }
 

@@ -19,12 +19,14 @@ void AddRenderCommand(CLI::App& app) {
   cmd->add_option("--split", options->split, "train, test or val")->capture_default_str();
   cmd->add_option("--threads", options->threads, "Threads (0 = all cores)")->capture_default_str();
   auto time = std::make_shared<float>(0.0f);
-  CLI::Option* time_option =
-      cmd->add_option("--time", *time, "Render one view at this normalised time in [0,1] (with --camera)");
-  cmd->add_option("--camera", options->camera_index, "With --time: the camera of this frame of the split")
+  CLI::Option* time_option = cmd->add_option(
+      "--time", *time, "Render one view at this normalised time in [0,1] (with --camera)");
+  cmd->add_option("--camera", options->camera_index,
+                  "With --time: the camera of this frame of the split")
       ->capture_default_str();
-  cmd->add_option("--video", options->video_frames,
-                  "Render N frames orbiting the scene while time runs 0..1 (PNG sequence; MP4 with ffmpeg)");
+  cmd->add_option(
+      "--video", options->video_frames,
+      "Render N frames orbiting the scene while time runs 0..1 (PNG sequence; MP4 with ffmpeg)");
   cmd->add_option("--fps", options->fps, "Video frame rate")->capture_default_str();
   cmd->callback([options, run, out, time, time_option] {
     if (time_option->count() > 0) options->time = *time;

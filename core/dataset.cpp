@@ -487,13 +487,15 @@ void CheckNerfstudioCameraModel(const json& doc, const Reader& r) {
 
 // Splits nerfstudio's one file: test_filenames / val_filenames when given, else every 8th
 // frame (index % 8 == 0) is held out for test, the convention of the 3DGS evaluation.
-void SplitNerfstudio(const fs::path& root, const json& doc, const Reader& r,
+void SplitNerfstudio(const fs::path& root,
+                     const json& doc,
+                     const Reader& r,
                      std::array<SplitFile, 3>& files) {
   std::map<fs::path, Split> listed;
   bool any_list = false;
-  for (const auto& [key, split] : {std::pair{"test_filenames", Split::kTest},
-                                   std::pair{"val_filenames", Split::kVal},
-                                   std::pair{"train_filenames", Split::kTrain}}) {
+  for (const auto& [key, split] :
+       {std::pair{"test_filenames", Split::kTest}, std::pair{"val_filenames", Split::kVal},
+        std::pair{"train_filenames", Split::kTrain}}) {
     const auto it = doc.find(key);
     if (it == doc.end()) continue;
     any_list = true;
@@ -816,7 +818,10 @@ DatasetReport CheckDataset(const fs::path& root, const DatasetLoadOptions& optio
                                         [](const Frame& f) { return f.exposure_given; }) ||
                             std::any_of(dataset.val.begin(), dataset.val.end(),
                                         [](const Frame& f) { return f.exposure_given; });
-  dataset.layout = nerfstudio ? "nerfstudio" : hdrnerf ? "hdrnerf" : any_exposure ? "hdr4d" : "dnerf";
+  dataset.layout = nerfstudio     ? "nerfstudio"
+                   : hdrnerf      ? "hdrnerf"
+                   : any_exposure ? "hdr4d"
+                                  : "dnerf";
 
   const fs::path ply_path = nerfstudio_ply.value_or(root / "point3d.ply");
   if (nerfstudio_ply && !fs::exists(ply_path, ec)) {

@@ -68,7 +68,8 @@ struct Frame {
 
 struct Dataset {
   std::filesystem::path root;
-  std::string layout;  // "hdr4d" (reference layout), "dnerf" (no exposures), "hdrnerf", "nerfstudio"
+  std::string
+      layout;  // "hdr4d" (reference layout), "dnerf" (no exposures), "hdrnerf", "nerfstudio"
   std::vector<Frame> train, test, val;
   double camera_angle_x = 0;  // train file's value (or implied by its fl_x when absent)
   std::optional<double> near, far;

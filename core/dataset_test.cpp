@@ -1072,8 +1072,17 @@ namespace {
 
 // n frames with PNGs, intrinsics at the top level, no time keys.
 json NerfstudioDoc(const fs::path& root, int n) {
-  json doc = {{"fl_x", 10.0}, {"fl_y", 11.0}, {"cx", 4.0}, {"cy", 3.0}, {"w", 8}, {"h", 6},
-              {"camera_model", "OPENCV"}, {"k1", 0.0}, {"k2", 0.0}, {"p1", 0.0}, {"p2", 0.0},
+  json doc = {{"fl_x", 10.0},
+              {"fl_y", 11.0},
+              {"cx", 4.0},
+              {"cy", 3.0},
+              {"w", 8},
+              {"h", 6},
+              {"camera_model", "OPENCV"},
+              {"k1", 0.0},
+              {"k2", 0.0},
+              {"p1", 0.0},
+              {"p2", 0.0},
               {"frames", json::array()}};
   for (int i = 0; i < n; ++i) {
     const std::string name = "images/frame_" + std::to_string(i) + ".png";

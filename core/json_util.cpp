@@ -24,7 +24,7 @@ nlohmann::json ReadJsonFile(const fs::path& path) {
   }
 }
 
-void WriteTextFileAtomic(const fs::path& path, const std::string& text) {
+void WriteFileAtomic(const fs::path& path, const std::function<void(std::ostream&)>& write) {
   std::error_code ec;
   if (path.has_parent_path()) {
     fs::create_directories(path.parent_path(), ec);
@@ -34,7 +34,13 @@ void WriteTextFileAtomic(const fs::path& path, const std::string& text) {
   {
     std::ofstream file(tmp, std::ios::binary | std::ios::trunc);
     if (!file) Fail("{}: cannot open for writing", path.string());
-    file << text;
+    try {
+      write(file);
+    } catch (...) {
+      file.close();
+      fs::remove(tmp, ec);
+      throw;
+    }
     file.flush();
     if (!file) {
       file.close();
@@ -47,6 +53,10 @@ void WriteTextFileAtomic(const fs::path& path, const std::string& text) {
     fs::remove(tmp, ec);
     Fail("{}: cannot move the written file into place: {}", path.string(), ec.message());
   }
+}
+
+void WriteTextFileAtomic(const fs::path& path, const std::string& text) {
+  WriteFileAtomic(path, [&](std::ostream& out) { out << text; });
 }
 
 void WriteJsonFile(const fs::path& path, const nlohmann::json& value) {

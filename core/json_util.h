@@ -4,7 +4,9 @@
 
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <nlohmann/json.hpp>
+#include <ostream>
 #include <string>
 
 namespace hdr4d {
@@ -21,5 +23,11 @@ void WriteJsonFile(const std::filesystem::path& path, const nlohmann::json& valu
 
 // Writes text the same way.
 void WriteTextFileAtomic(const std::filesystem::path& path, const std::string& text);
+
+// Creates the parent folders, lets `write` fill a temporary file next to `path` (binary mode),
+// then renames it into place; on any failure the temporary file is removed, `path` keeps what it
+// had, and hdr4d::Error names `path`. Every writer of results and checkpoints goes through it.
+void WriteFileAtomic(const std::filesystem::path& path,
+                     const std::function<void(std::ostream&)>& write);
 
 }  // namespace hdr4d

@@ -1,12 +1,11 @@
 #include "method/checkpoint.h"
 
-#include <unistd.h>
-
 #include <cstring>
 #include <fstream>
 #include <sstream>
 
 #include "core/error.h"
+#include "core/json_util.h"
 
 namespace hdr4d::method {
 namespace fs = std::filesystem;
@@ -16,24 +15,32 @@ namespace {
 constexpr char kMagic[8] = {'H', 'D', 'R', '4', 'D', 'C', 'K', 'P'};
 constexpr std::uint32_t kVersion = 1;
 
-void WriteU64(std::ostream& out, std::uint64_t v) { out.write(reinterpret_cast<const char*>(&v), 8); }
+void WriteU64(std::ostream& out, std::uint64_t v) {
+  out.write(reinterpret_cast<const char*>(&v), 8);
+}
 
 std::uint64_t ReadU64(std::istream& in, const fs::path& path, const char* what) {
   std::uint64_t v = 0;
-  if (!in.read(reinterpret_cast<char*>(&v), 8)) Fail("{}: truncated checkpoint (while reading {})", path.string(), what);
+  if (!in.read(reinterpret_cast<char*>(&v), 8))
+    Fail("{}: truncated checkpoint (while reading {})", path.string(), what);
   return v;
 }
 
 void WriteFloats(std::ostream& out, const std::vector<float>& v) {
   WriteU64(out, v.size());
-  out.write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(float)));
+  out.write(reinterpret_cast<const char*>(v.data()),
+            static_cast<std::streamsize>(v.size() * sizeof(float)));
 }
 
-std::vector<float> ReadFloats(std::istream& in, const fs::path& path, const char* what, std::uint64_t limit) {
+std::vector<float> ReadFloats(std::istream& in,
+                              const fs::path& path,
+                              const char* what,
+                              std::uint64_t limit) {
   const std::uint64_t n = ReadU64(in, path, what);
   if (n > limit) Fail("{}: corrupt checkpoint ({} claims {} values)", path.string(), what, n);
   std::vector<float> v(n);
-  if (!in.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(n * sizeof(float)))) {
+  if (!in.read(reinterpret_cast<char*>(v.data()),
+               static_cast<std::streamsize>(n * sizeof(float)))) {
     Fail("{}: truncated checkpoint (while reading {})", path.string(), what);
   }
   return v;
@@ -66,12 +73,7 @@ void SaveCheckpoint(const fs::path& path, const Checkpoint& c) {
       {"gaussians", c.model.size()},
       {"trainer", c.trainer},
   };
-  std::error_code ec;
-  if (path.has_parent_path()) fs::create_directories(path.parent_path(), ec);
-  const fs::path tmp = path.string() + ".tmp" + std::to_string(getpid());
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) Fail("{}: cannot open for writing", path.string());
+  WriteFileAtomic(path, [&](std::ostream& out) {
     out.write(kMagic, sizeof(kMagic));
     const std::string text = header.dump();
     WriteU64(out, text.size());
@@ -81,18 +83,7 @@ void SaveCheckpoint(const fs::path& path, const Checkpoint& c) {
     for (const auto& v : c.extra_floats) WriteFloats(out, v);
     WriteU64(out, c.adam_state.size());
     out.write(c.adam_state.data(), static_cast<std::streamsize>(c.adam_state.size()));
-    out.flush();
-    if (!out) {
-      out.close();
-      fs::remove(tmp, ec);
-      Fail("{}: write failed (disk full?)", path.string());
-    }
-  }
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    Fail("{}: cannot move the checkpoint into place: {}", path.string(), ec.message());
-  }
+  });
 }
 
 Checkpoint LoadCheckpoint(const fs::path& path) {
@@ -102,11 +93,13 @@ Checkpoint LoadCheckpoint(const fs::path& path) {
   if (!in) Fail("{}: cannot open for reading", path.string());
   const std::uint64_t file_size = fs::file_size(path, ec);
   char magic[8] = {};
-  if (!in.read(magic, 8) || std::memcmp(magic, kMagic, 8) != 0) Fail("{}: not an hdr4d checkpoint", path.string());
+  if (!in.read(magic, 8) || std::memcmp(magic, kMagic, 8) != 0)
+    Fail("{}: not an hdr4d checkpoint", path.string());
   const std::uint64_t header_size = ReadU64(in, path, "the header size");
   if (header_size > file_size) Fail("{}: corrupt checkpoint header", path.string());
   std::string text(header_size, '\0');
-  if (!in.read(text.data(), static_cast<std::streamsize>(header_size))) Fail("{}: truncated checkpoint header", path.string());
+  if (!in.read(text.data(), static_cast<std::streamsize>(header_size)))
+    Fail("{}: truncated checkpoint header", path.string());
   nlohmann::json header;
   try {
     header = nlohmann::json::parse(text);
@@ -120,7 +113,8 @@ Checkpoint LoadCheckpoint(const fs::path& path) {
            header.at("version").get<std::uint32_t>(), kVersion);
     }
     c.model.temporal = header.at("temporal").get<bool>();
-    c.model.color_mode = header.at("color_mode").get<std::string>() == "ldr" ? ColorMode::kLdr : ColorMode::kLogHdr;
+    c.model.color_mode =
+        header.at("color_mode").get<std::string>() == "ldr" ? ColorMode::kLdr : ColorMode::kLogHdr;
     c.model.basis.max_sh_degree = header.at("max_sh_degree").get<int>();
     c.model.basis.max_time_degree = header.at("max_time_degree").get<int>();
     c.model.channels = header.at("channels").get<int>();
@@ -129,10 +123,13 @@ Checkpoint LoadCheckpoint(const fs::path& path) {
     Fail("{}: checkpoint header is missing a key: {}", path.string(), e.what());
   }
   const std::uint64_t limit = file_size / sizeof(float);
-  ForEachBuffer(c.model, [&](const char* name, std::vector<float>& v) { v = ReadFloats(in, path, name, limit); });
+  ForEachBuffer(c.model, [&](const char* name, std::vector<float>& v) {
+    v = ReadFloats(in, path, name, limit);
+  });
   const std::uint64_t extras = ReadU64(in, path, "the extra buffer count");
   if (extras > 64) Fail("{}: corrupt checkpoint ({} extra buffers)", path.string(), extras);
-  for (std::uint64_t i = 0; i < extras; ++i) c.extra_floats.push_back(ReadFloats(in, path, "an extra buffer", limit));
+  for (std::uint64_t i = 0; i < extras; ++i)
+    c.extra_floats.push_back(ReadFloats(in, path, "an extra buffer", limit));
   const std::uint64_t adam_size = ReadU64(in, path, "the optimiser state size");
   if (adam_size > file_size) Fail("{}: corrupt checkpoint (optimiser state size)", path.string());
   c.adam_state.resize(adam_size);

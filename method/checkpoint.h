@@ -17,7 +17,7 @@ namespace hdr4d::method {
 
 struct Checkpoint {
   GaussianModel model;
-  nlohmann::json trainer;                       // iteration, rng state, schedule state, ...
+  nlohmann::json trainer;                        // iteration, rng state, schedule state, ...
   std::vector<std::vector<float>> extra_floats;  // e.g. densification statistics
   std::string adam_state;                        // Adam::Save bytes
 };

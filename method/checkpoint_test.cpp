@@ -48,9 +48,11 @@ TEST(Checkpoint, RoundTripIsExact) {
 
 TEST(Checkpoint, BadFilesAreErrorsNamingTheFile) {
   TempDir dir;
-  EXPECT_NE(ErrorOf([&] { LoadCheckpoint(dir / "none.bin"); }).find("not found"), std::string::npos);
+  EXPECT_NE(ErrorOf([&] { LoadCheckpoint(dir / "none.bin"); }).find("not found"),
+            std::string::npos);
   testing::WriteTextFile(dir / "foreign.bin", "PK\x03\x04 something else entirely");
-  EXPECT_NE(ErrorOf([&] { LoadCheckpoint(dir / "foreign.bin"); }).find("not an hdr4d checkpoint"), std::string::npos);
+  EXPECT_NE(ErrorOf([&] { LoadCheckpoint(dir / "foreign.bin"); }).find("not an hdr4d checkpoint"),
+            std::string::npos);
   SaveCheckpoint(dir / "ck.bin", Sample());
   const std::string bytes = testing::ReadTextFile(dir / "ck.bin");
   // Every truncation is reported, never a crash or a half-filled model.

@@ -1,7 +1,6 @@
 #include "method/export_ply.h"
 
 #include <fmt/format.h>
-#include <unistd.h>
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
@@ -10,20 +9,27 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/json_util.h"
 #include "method/rotation4d.h"
 #include "method/slice.h"
 
 namespace hdr4d::method {
 namespace fs = std::filesystem;
 
-std::size_t ExportSlicePly(const GaussianModel& model, float time, float time_duration,
+std::size_t ExportSlicePly(const GaussianModel& model,
+                           float time,
+                           float time_duration,
                            const fs::path& path) {
   if (model.color_mode != ColorMode::kLdr) {
-    Fail("{}: this model has log-HDR colours; a 3DGS viewer expects display colours (export an LDR model)", path.string());
+    Fail(
+        "{}: this model has log-HDR colours; a 3DGS viewer expects display colours (export an LDR "
+        "model)",
+        path.string());
   }
   if (!(time_duration > 0)) Fail("export-ply: time duration must be positive");
   const int channels = model.channels;
-  if (channels != 3) Fail("{}: 3DGS .ply holds RGB; this model has {} channels", path.string(), channels);
+  if (channels != 3)
+    Fail("{}: 3DGS .ply holds RGB; this model has {} channels", path.string(), channels);
   const int functions = model.basis.sh_functions();  // per time block
   const int rest_per_channel = functions - 1;
   const int time_blocks = model.temporal ? model.basis.max_time_degree + 1 : 1;
@@ -36,12 +42,16 @@ std::size_t ExportSlicePly(const GaussianModel& model, float time, float time_du
     Vec3<double> mean(model.xyz[i * 3], model.xyz[i * 3 + 1], model.xyz[i * 3 + 2]);
     Mat3<double> cov;
     double marginal = 1.0;
-    const Vec4<double> ls(model.log_scales[i * 4], model.log_scales[i * 4 + 1], model.log_scales[i * 4 + 2], model.log_scales[i * 4 + 3]);
-    const Vec4<double> ql(model.rot_left[i * 4], model.rot_left[i * 4 + 1], model.rot_left[i * 4 + 2], model.rot_left[i * 4 + 3]);
+    const Vec4<double> ls(model.log_scales[i * 4], model.log_scales[i * 4 + 1],
+                          model.log_scales[i * 4 + 2], model.log_scales[i * 4 + 3]);
+    const Vec4<double> ql(model.rot_left[i * 4], model.rot_left[i * 4 + 1],
+                          model.rot_left[i * 4 + 2], model.rot_left[i * 4 + 3]);
     if (model.temporal) {
-      const Vec4<double> qr(model.rot_right[i * 4], model.rot_right[i * 4 + 1], model.rot_right[i * 4 + 2], model.rot_right[i * 4 + 3]);
-      const Slice<double> s = SliceAtTime(Vec4<double>(mean.x(), mean.y(), mean.z(), model.t[i]),
-                                          Covariance4D(Rotation4D(ql, qr), ls), static_cast<double>(time));
+      const Vec4<double> qr(model.rot_right[i * 4], model.rot_right[i * 4 + 1],
+                            model.rot_right[i * 4 + 2], model.rot_right[i * 4 + 3]);
+      const Slice<double> s =
+          SliceAtTime(Vec4<double>(mean.x(), mean.y(), mean.z(), model.t[i]),
+                      Covariance4D(Rotation4D(ql, qr), ls), static_cast<double>(time));
       if (!TemporallyVisible(s.marginal)) continue;
       mean = s.mean;
       cov = s.cov;
@@ -57,12 +67,14 @@ std::size_t ExportSlicePly(const GaussianModel& model, float time, float time_du
     // Temporal cosine weights at this time fold the time blocks into plain SH coefficients.
     double weight[3] = {1, 0, 0};
     const double dt = model.t[i] - time;
-    for (int n = 1; n < time_blocks; ++n) weight[n] = std::cos(2 * std::numbers::pi * n * dt / time_duration);
+    for (int n = 1; n < time_blocks; ++n)
+      weight[n] = std::cos(2 * std::numbers::pi * n * dt / time_duration);
     auto coefficient = [&](int lm, int c) {
       double v = 0;
       for (int n = 0; n < time_blocks; ++n) {
         const int k = lm + functions * n;
-        v += weight[n] * (k == 0 ? model.color_dc[i * 3 + c] : model.color_rest[i * model.rest_stride() + (k - 1) * 3 + c]);
+        v += weight[n] * (k == 0 ? model.color_dc[i * 3 + c]
+                                 : model.color_rest[i * model.rest_stride() + (k - 1) * 3 + c]);
       }
       return static_cast<float>(v);
     };
@@ -74,9 +86,11 @@ std::size_t ExportSlicePly(const GaussianModel& model, float time, float time_du
     for (int c = 0; c < 3; ++c) {
       for (int lm = 1; lm < functions; ++lm) row.values[j++] = coefficient(lm, c);
     }
-    const double opacity = std::clamp(marginal / (1.0 + std::exp(-static_cast<double>(model.opacity_logit[i]))), 1e-7, 1 - 1e-7);
+    const double opacity = std::clamp(
+        marginal / (1.0 + std::exp(-static_cast<double>(model.opacity_logit[i]))), 1e-7, 1 - 1e-7);
     row.values[j++] = static_cast<float>(std::log(opacity / (1 - opacity)));
-    for (int a = 0; a < 3; ++a) row.values[j++] = static_cast<float>(0.5 * std::log(std::max(eig.eigenvalues()[a], 1e-20)));
+    for (int a = 0; a < 3; ++a)
+      row.values[j++] = static_cast<float>(0.5 * std::log(std::max(eig.eigenvalues()[a], 1e-20)));
     row.values[j++] = static_cast<float>(q.w());
     row.values[j++] = static_cast<float>(q.x());
     row.values[j++] = static_cast<float>(q.y());
@@ -85,33 +99,22 @@ std::size_t ExportSlicePly(const GaussianModel& model, float time, float time_du
     rows.push_back(row);
   }
 
-  std::string header = fmt::format("ply\nformat binary_little_endian 1.0\nelement vertex {}\n", rows.size());
-  for (const char* name : {"x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2"}) header += fmt::format("property float {}\n", name);
-  for (int k = 0; k < 3 * rest_per_channel; ++k) header += fmt::format("property float f_rest_{}\n", k);
+  std::string header =
+      fmt::format("ply\nformat binary_little_endian 1.0\nelement vertex {}\n", rows.size());
+  for (const char* name : {"x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2"})
+    header += fmt::format("property float {}\n", name);
+  for (int k = 0; k < 3 * rest_per_channel; ++k)
+    header += fmt::format("property float f_rest_{}\n", k);
   header += "property float opacity\n";
-  for (const char* name : {"scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"}) header += fmt::format("property float {}\n", name);
+  for (const char* name : {"scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"})
+    header += fmt::format("property float {}\n", name);
   header += "end_header\n";
 
-  std::error_code ec;
-  if (path.has_parent_path()) fs::create_directories(path.parent_path(), ec);
-  const fs::path tmp = path.string() + ".tmp" + std::to_string(getpid());
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) Fail("{}: cannot open for writing", path.string());
+  WriteFileAtomic(path, [&](std::ostream& out) {
     out << header;
-    for (const Row& r : rows) out.write(reinterpret_cast<const char*>(r.values), num_values * sizeof(float));
-    out.flush();
-    if (!out) {
-      out.close();
-      fs::remove(tmp, ec);
-      Fail("{}: write failed (disk full?)", path.string());
-    }
-  }
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    Fail("{}: cannot move the file into place: {}", path.string(), ec.message());
-  }
+    for (const Row& r : rows)
+      out.write(reinterpret_cast<const char*>(r.values), num_values * sizeof(float));
+  });
   return rows.size();
 }
 

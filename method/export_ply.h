@@ -13,7 +13,9 @@ namespace hdr4d::method {
 // Writes the Gaussians visible at `time` (marginal > 0.05); the temporal basis is folded into
 // the SH coefficients at that time and the marginal into the opacity. Returns how many were
 // written. A log-HDR model is refused (viewers expect display colours).
-std::size_t ExportSlicePly(const GaussianModel& model, float time, float time_duration,
+std::size_t ExportSlicePly(const GaussianModel& model,
+                           float time,
+                           float time_duration,
                            const std::filesystem::path& path);
 
 }  // namespace hdr4d::method

@@ -60,7 +60,7 @@ TEST(ExportPly, SliceHasThe3dgsLayoutAndValues) {
   EXPECT_EQ(ply.properties[54], "opacity");
   EXPECT_EQ(ply.properties[61], "rot_3");
   EXPECT_FLOAT_EQ(ply.values[0], 0.1f);
-  EXPECT_FLOAT_EQ(ply.values[6], 1.0f);  // DC unchanged (time blocks beyond 0 are zero)
+  EXPECT_FLOAT_EQ(ply.values[6], 1.0f);     // DC unchanged (time blocks beyond 0 are zero)
   EXPECT_NEAR(ply.values[54], 0.0f, 1e-6);  // marginal 1 at its own time: logit(0.5) = 0
   // Scales are the axis-aligned ones (identity rotations), in some order.
   std::vector<float> scales = {ply.values[55], ply.values[56], ply.values[57]};

@@ -92,8 +92,8 @@ struct GaussianModelT {
     }
     if (channels < 1) return "a model needs at least one colour channel";
     if (xyz.size() != n * 3 || t.size() != n || log_scales.size() != n * 4 ||
-        rot_left.size() != n * 4 || rot_right.size() != n * 4 ||
-        color_dc.size() != n * channels || color_rest.size() != n * rest_stride()) {
+        rot_left.size() != n * 4 || rot_right.size() != n * 4 || color_dc.size() != n * channels ||
+        color_rest.size() != n * rest_stride()) {
       return "Gaussian buffers disagree in size with " + std::to_string(n) + " opacities";
     }
     return "";

@@ -49,7 +49,8 @@ GaussianModel MakeGaussianSceneModel(const GaussianSceneOptions& options) {
 Dataset MakeGaussianScene(const GaussianSceneOptions& options, const fs::path& root) {
   const GaussianModel model = MakeGaussianSceneModel(options);
   constexpr double kFovX = 0.7;
-  const PinholeIntrinsics intrinsics = PinholeIntrinsics::FromFovX(kFovX, options.size, options.size);
+  const PinholeIntrinsics intrinsics =
+      PinholeIntrinsics::FromFovX(kFovX, options.size, options.size);
   Dataset dataset;
   dataset.root = root;
   dataset.layout = "dnerf";
@@ -63,14 +64,17 @@ Dataset MakeGaussianScene(const GaussianSceneOptions& options, const fs::path& r
   std::vector<float> values(static_cast<std::size_t>(options.size) * options.size * 3);
   for (int c = 0; c < options.num_cameras; ++c) {
     const double angle = 2 * std::numbers::pi * c / options.num_cameras;
-    const Eigen::Vector3d eye(4.0 * std::cos(angle), 4.0 * std::sin(angle), 1.2 + 0.6 * std::sin(3 * angle));
-    const Camera camera{intrinsics, LookAtWorldFromCamGl(eye, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ())};
+    const Eigen::Vector3d eye(4.0 * std::cos(angle), 4.0 * std::sin(angle),
+                              1.2 + 0.6 * std::sin(3 * angle));
+    const Camera camera{
+        intrinsics, LookAtWorldFromCamGl(eye, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ())};
     const bool test = c % 4 == 3;
     for (int k = 0; k < options.num_timestamps; ++k) {
       const double t = static_cast<double>(k) / (options.num_timestamps - 1);
       RenderForward(model, camera, static_cast<float>(t), render, &state, values.data());
       Image image(options.size, options.size, 3, Encoding::kSrgb);
-      for (std::size_t i = 0; i < values.size(); ++i) image.values()[i] = std::clamp(values[i], 0.0f, 1.0f);
+      for (std::size_t i = 0; i < values.size(); ++i)
+        image.values()[i] = std::clamp(values[i], 0.0f, 1.0f);
       Frame frame;
       frame.split = test ? Split::kTest : Split::kTrain;
       frame.file_path = fmt::format("images/cam{:02d}_t{:03d}.png", c, k);

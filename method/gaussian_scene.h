@@ -13,9 +13,9 @@
 namespace hdr4d::method {
 
 struct GaussianSceneOptions {
-  int size = 64;            // image width and height
+  int size = 64;  // image width and height
   int num_gaussians = 60;
-  int num_cameras = 12;     // on a ring; every 4th is a test camera
+  int num_cameras = 12;  // on a ring; every 4th is a test camera
   int num_timestamps = 8;
   std::uint64_t seed = 1;
   void Validate() const;

@@ -13,11 +13,16 @@
 namespace hdr4d::method {
 
 void InitOptions::Validate() const {
-  if (num_random_points < 4) Fail("initialisation: need at least 4 random points, got {}", num_random_points);
-  if (!(random_half_extent > 0)) Fail("initialisation: random extent must be positive, got {}", random_half_extent);
-  if (!(time_max >= time_min)) Fail("initialisation: time range [{}, {}] is empty", time_min, time_max);
-  if (!(time_duration > 0)) Fail("initialisation: time duration must be positive, got {}", time_duration);
-  if (!(initial_opacity > 0 && initial_opacity < 1)) Fail("initialisation: opacity {} must be in (0, 1)", initial_opacity);
+  if (num_random_points < 4)
+    Fail("initialisation: need at least 4 random points, got {}", num_random_points);
+  if (!(random_half_extent > 0))
+    Fail("initialisation: random extent must be positive, got {}", random_half_extent);
+  if (!(time_max >= time_min))
+    Fail("initialisation: time range [{}, {}] is empty", time_min, time_max);
+  if (!(time_duration > 0))
+    Fail("initialisation: time duration must be positive, got {}", time_duration);
+  if (!(initial_opacity > 0 && initial_opacity < 1))
+    Fail("initialisation: opacity {} must be in (0, 1)", initial_opacity);
   if (channels < 1) Fail("initialisation: need at least one colour channel");
 }
 
@@ -28,7 +33,8 @@ namespace {
 // uniform grid would need huge numbers of cells.
 class KdTree {
  public:
-  explicit KdTree(const std::vector<Eigen::Vector3f>& points) : points_(points), order_(points.size()) {
+  explicit KdTree(const std::vector<Eigen::Vector3f>& points)
+      : points_(points), order_(points.size()) {
     for (std::size_t i = 0; i < order_.size(); ++i) order_[i] = static_cast<std::uint32_t>(i);
     nodes_.reserve(2 * points.size() / kLeafSize + 2);
     Build(0, order_.size());
@@ -56,12 +62,14 @@ class KdTree {
     nodes_.push_back({static_cast<std::uint32_t>(begin), static_cast<std::uint32_t>(end)});
     if (end - begin <= kLeafSize) return id;
     Eigen::Vector3f lo = points_[order_[begin]], hi = lo;
-    for (std::size_t i = begin; i < end; ++i) lo = lo.cwiseMin(points_[order_[i]]), hi = hi.cwiseMax(points_[order_[i]]);
+    for (std::size_t i = begin; i < end; ++i)
+      lo = lo.cwiseMin(points_[order_[i]]), hi = hi.cwiseMax(points_[order_[i]]);
     int axis = 0;
     (hi - lo).maxCoeff(&axis);
     const std::size_t mid = (begin + end) / 2;
-    std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
-                     [&](std::uint32_t a, std::uint32_t b) { return points_[a][axis] < points_[b][axis]; });
+    std::nth_element(
+        order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
+        [&](std::uint32_t a, std::uint32_t b) { return points_[a][axis] < points_[b][axis]; });
     const float split = points_[order_[mid]][axis];
     const std::uint32_t left = Build(begin, mid);
     const std::uint32_t right = Build(mid, end);
@@ -120,7 +128,8 @@ std::vector<float> MeanSquaredDistanceToThreeNearest(const std::vector<Eigen::Ve
   return result;
 }
 
-GaussianModel InitialiseGaussians(const std::optional<PointCloud>& cloud, const InitOptions& options) {
+GaussianModel InitialiseGaussians(const std::optional<PointCloud>& cloud,
+                                  const InitOptions& options) {
   options.Validate();
   std::mt19937_64 rng(options.seed);
   std::vector<Eigen::Vector3f> positions;
@@ -131,7 +140,8 @@ GaussianModel InitialiseGaussians(const std::optional<PointCloud>& cloud, const 
     colors = cloud->colors;
     times = cloud->times;
   } else {
-    std::uniform_real_distribution<float> u(-options.random_half_extent, options.random_half_extent);
+    std::uniform_real_distribution<float> u(-options.random_half_extent,
+                                            options.random_half_extent);
     positions.resize(options.num_random_points);
     for (auto& p : positions) p = Eigen::Vector3f(u(rng), u(rng), u(rng));
   }
@@ -163,7 +173,8 @@ GaussianModel InitialiseGaussians(const std::optional<PointCloud>& cloud, const 
     // DC coefficient from the point colour: colour = C0 * dc + 0.5 (grey without colours).
     for (int c = 0; c < options.channels; ++c) {
       float rgb = colors.size() == n ? colors[i][std::min(c, 2)] : 0.5f;
-      float target = options.color_mode == ColorMode::kLogHdr ? std::log(std::max(rgb, 1e-4f)) : rgb;
+      float target =
+          options.color_mode == ColorMode::kLogHdr ? std::log(std::max(rgb, 1e-4f)) : rgb;
       model.color_dc[i * options.channels + c] = (target - kColorOffset) / kShC0;
     }
   }

@@ -16,7 +16,7 @@ TEST(Initialise, NearestNeighbourDistancesMatchBruteForce) {
   std::uniform_real_distribution<float> u(-1, 1);
   std::vector<Eigen::Vector3f> points(700);
   for (auto& p : points) p = {u(rng), u(rng), 0.2f * u(rng)};  // flat cloud: uneven cells
-  points.push_back(points[5]);  // a duplicate: distance 0, floored
+  points.push_back(points[5]);                                 // a duplicate: distance 0, floored
   const std::vector<float> fast = MeanSquaredDistanceToThreeNearest(points);
   for (std::size_t i = 0; i < points.size(); ++i) {
     std::vector<float> d;

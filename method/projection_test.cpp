@@ -10,6 +10,7 @@
 #include "core/camera.h"
 #include "method/rotation4d.h"
 #include "method/slice.h"
+#include "tests/finite_difference.h"
 
 namespace hdr4d::method {
 namespace {
@@ -24,29 +25,11 @@ constexpr double kFdStep = 1e-6;
 constexpr double kFdTolerance = 1e-6;
 
 Vec NumericGradient(const std::function<double(const Vec&)>& f, const Vec& x, double h = kFdStep) {
-  Vec g(x.size());
-  for (int i = 0; i < x.size(); ++i) {
-    Vec xp = x, xm = x;
-    xp(i) += h;
-    xm(i) -= h;
-    g(i) = (f(xp) - f(xm)) / (2 * h);
-  }
-  return g;
-}
-
-double GradientError(const Vec& analytic, const Vec& numeric) {
-  return (analytic - numeric).cwiseAbs().maxCoeff() /
-         std::max(numeric.cwiseAbs().maxCoeff(), 1e-12);
+  return hdr4d::testing::NumericGradient(f, x, h);
 }
 
 void ExpectGradientsMatch(const Vec& analytic, const Vec& numeric) {
-  EXPECT_LT(GradientError(analytic, numeric), kFdTolerance)
-      << "analytic " << analytic.transpose() << "\nnumeric  " << numeric.transpose();
-  Vec wrong = analytic;  // the same check must reject a sign slip in the largest component
-  int i;
-  wrong.cwiseAbs().maxCoeff(&i);
-  wrong(i) = -wrong(i);
-  EXPECT_GT(GradientError(wrong, numeric), 100 * kFdTolerance);
+  hdr4d::testing::ExpectGradientsMatch(analytic, numeric, kFdTolerance);
 }
 
 Vec4<double> RandomQuaternion(std::mt19937& rng) {

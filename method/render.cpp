@@ -97,7 +97,8 @@ RasterSettings SettingsFor(const Camera& camera, const RenderOptions& options, i
   RasterSettings settings;
   settings.width = camera.intrinsics.width;
   settings.height = camera.intrinsics.height;
-  settings.background = options.background.empty() ? std::vector<float>(channels, 0.0f) : options.background;
+  settings.background =
+      options.background.empty() ? std::vector<float>(channels, 0.0f) : options.background;
   settings.backend = options.backend;
   return settings;
 }
@@ -123,46 +124,49 @@ void PreprocessForward(const GaussianModelT<T>& model,
   const int num_coefficients = model.basis.coefficients();
   const T duration = static_cast<T>(options.time_duration);
   std::vector<std::int64_t> visible_per_chunk((n + kGaussianGrain - 1) / kGaussianGrain, 0);
-  ParallelForChunks(static_cast<std::int64_t>(n), kGaussianGrain, [&](std::int64_t b, std::int64_t e) {
-    std::int64_t visible = 0;
-    for (std::int64_t g = b; g < e; ++g) {
-      const std::size_t i = static_cast<std::size_t>(g);
-      s.radius[i] = 0;
-      const Conditional<T> c = ConditionAt(model, i, time);
-      if (model.temporal && !TemporallyVisible(c.marginal)) continue;  // culled: costs nothing
-      const Splat2D<T> splat = ProjectEwa(c.mean, c.cov, view);
-      if (!splat.visible) continue;
-      s.mean2d[2 * i] = splat.mean.x();
-      s.mean2d[2 * i + 1] = splat.mean.y();
-      for (int k = 0; k < 3; ++k) s.conic[3 * i + k] = splat.conic[k];
-      s.depth[i] = splat.depth;
-      s.radius[i] = splat.radius;
-      s.opacity[i] = Sigmoid(model.opacity_logit[i]) * c.marginal;
-      // Colour is linear in the coefficients: weights . (DC, rest) + 0.5.
-      T w[kMaxColorCoefficients];
-      EvalColorBasisWeights(Vec3<T>(c.mean - center), model.t[i] - time, duration, model.basis,
-                            options.sh_degree, time_degree, w);
-      T* color = &s.features[i * channels];
-      const T* dc = &model.color_dc[i * channels];
-      const T* rest = &model.color_rest[i * stride];
-      for (int ch = 0; ch < channels; ++ch) color[ch] = static_cast<T>(kColorOffset) + w[0] * dc[ch];
-      for (int k = 1; k < num_coefficients; ++k) {
-        if (w[k] == T(0)) continue;  // inactive degrees
-        const T* ck = rest + (k - 1) * channels;
-        for (int ch = 0; ch < channels; ++ch) color[ch] += w[k] * ck[ch];
-      }
-      if (model.color_mode == ColorMode::kLdr) {
-        for (int ch = 0; ch < channels; ++ch) {
-          if (color[ch] < T(0)) {
-            color[ch] = T(0);
-            state->clamped[i * channels + ch] = 1;
-          }
-        }
-      }
-      ++visible;
-    }
-    visible_per_chunk[b / kGaussianGrain] = visible;
-  });
+  ParallelForChunks(static_cast<std::int64_t>(n), kGaussianGrain,
+                    [&](std::int64_t b, std::int64_t e) {
+                      std::int64_t visible = 0;
+                      for (std::int64_t g = b; g < e; ++g) {
+                        const std::size_t i = static_cast<std::size_t>(g);
+                        s.radius[i] = 0;
+                        const Conditional<T> c = ConditionAt(model, i, time);
+                        if (model.temporal && !TemporallyVisible(c.marginal))
+                          continue;  // culled: costs nothing
+                        const Splat2D<T> splat = ProjectEwa(c.mean, c.cov, view);
+                        if (!splat.visible) continue;
+                        s.mean2d[2 * i] = splat.mean.x();
+                        s.mean2d[2 * i + 1] = splat.mean.y();
+                        for (int k = 0; k < 3; ++k) s.conic[3 * i + k] = splat.conic[k];
+                        s.depth[i] = splat.depth;
+                        s.radius[i] = splat.radius;
+                        s.opacity[i] = Sigmoid(model.opacity_logit[i]) * c.marginal;
+                        // Colour is linear in the coefficients: weights . (DC, rest) + 0.5.
+                        T w[kMaxColorCoefficients];
+                        EvalColorBasisWeights(Vec3<T>(c.mean - center), model.t[i] - time, duration,
+                                              model.basis, options.sh_degree, time_degree, w);
+                        T* color = &s.features[i * channels];
+                        const T* dc = &model.color_dc[i * channels];
+                        const T* rest = &model.color_rest[i * stride];
+                        for (int ch = 0; ch < channels; ++ch)
+                          color[ch] = static_cast<T>(kColorOffset) + w[0] * dc[ch];
+                        for (int k = 1; k < num_coefficients; ++k) {
+                          if (w[k] == T(0)) continue;  // inactive degrees
+                          const T* ck = rest + (k - 1) * channels;
+                          for (int ch = 0; ch < channels; ++ch) color[ch] += w[k] * ck[ch];
+                        }
+                        if (model.color_mode == ColorMode::kLdr) {
+                          for (int ch = 0; ch < channels; ++ch) {
+                            if (color[ch] < T(0)) {
+                              color[ch] = T(0);
+                              state->clamped[i * channels + ch] = 1;
+                            }
+                          }
+                        }
+                        ++visible;
+                      }
+                      visible_per_chunk[b / kGaussianGrain] = visible;
+                    });
   state->num_visible = 0;
   for (std::int64_t v : visible_per_chunk) state->num_visible += static_cast<std::size_t>(v);
 }
@@ -223,7 +227,8 @@ void PreprocessBackward(const GaussianModelT<T>& model,
     if (model.temporal) {
       Vec4<T> dmean4;
       Mat4<T> dsigma;
-      SliceAtTimeBackward(Mean4(model, i), c.sigma4, time, dmean3, dcov3, dmarginal, &dmean4, &dsigma);
+      SliceAtTimeBackward(Mean4(model, i), c.sigma4, time, dmean3, dcov3, dmarginal, &dmean4,
+                          &dsigma);
       Mat4<T> drot;
       Vec4<T> dlog_scales;
       Covariance4DBackward(c.rotation4, log_scales, dsigma, &drot, &dlog_scales);
@@ -239,7 +244,8 @@ void PreprocessBackward(const GaussianModelT<T>& model,
     } else {
       Mat3<T> drot;
       Vec3<T> dlog_scales;
-      Covariance3DBackward(c.rotation3, Vec3<T>(log_scales.template head<3>()), dcov3, &drot, &dlog_scales);
+      Covariance3DBackward(c.rotation3, Vec3<T>(log_scales.template head<3>()), dcov3, &drot,
+                           &dlog_scales);
       Vec4<T> dq;
       Rotation3DBackward(Row4(model.rot_left, i), drot, &dq);
       for (int k = 0; k < 3; ++k) {
@@ -259,7 +265,8 @@ void RenderForward(const GaussianModel& model,
                    float* image) {
   const ViewParams<float> view = ViewParams<float>::FromCamera(camera);
   PreprocessForward(model, view, time, options, state);
-  RasterizeForward(state->splats, SettingsFor(camera, options, model.channels), &state->raster, image);
+  RasterizeForward(state->splats, SettingsFor(camera, options, model.channels), &state->raster,
+                   image);
 }
 
 void RenderBackward(const GaussianModel& model,
@@ -290,8 +297,8 @@ void RenderForwardReference(const GaussianModelT<T>& model,
   const std::size_t pixels = static_cast<std::size_t>(settings.width) * settings.height;
   state->final_T.resize(pixels);
   state->n_contrib.resize(pixels);
-  BlendForwardReference(state->splats, state->raster, background.data(), image, state->final_T.data(),
-                        state->n_contrib.data());
+  BlendForwardReference(state->splats, state->raster, background.data(), image,
+                        state->final_T.data(), state->n_contrib.data());
 }
 
 template <typename T>
@@ -311,16 +318,16 @@ void RenderBackwardReference(const GaussianModelT<T>& model,
   PreprocessBackward(model, ViewParams<T>::FromCamera(camera), time, options, *state, grads);
 }
 
-#define HDR4D_INSTANTIATE_RENDER(T)                                                              \
-  template void PreprocessForward(const GaussianModelT<T>&, const ViewParams<T>&, T,              \
-                                  const RenderOptions&, FrameStateT<T>*);                         \
-  template void PreprocessBackward(const GaussianModelT<T>&, const ViewParams<T>&, T,             \
-                                   const RenderOptions&, const FrameStateT<T>&,                   \
-                                   GaussianGradientsT<T>*);                                       \
-  template void RenderForwardReference(const GaussianModelT<T>&, const Camera&, T,                \
-                                       const RenderOptions&, FrameStateT<T>*, T*);                \
-  template void RenderBackwardReference(const GaussianModelT<T>&, const Camera&, T,               \
-                                        const RenderOptions&, FrameStateT<T>*, const T*,          \
+#define HDR4D_INSTANTIATE_RENDER(T)                                                      \
+  template void PreprocessForward(const GaussianModelT<T>&, const ViewParams<T>&, T,     \
+                                  const RenderOptions&, FrameStateT<T>*);                \
+  template void PreprocessBackward(const GaussianModelT<T>&, const ViewParams<T>&, T,    \
+                                   const RenderOptions&, const FrameStateT<T>&,          \
+                                   GaussianGradientsT<T>*);                              \
+  template void RenderForwardReference(const GaussianModelT<T>&, const Camera&, T,       \
+                                       const RenderOptions&, FrameStateT<T>*, T*);       \
+  template void RenderBackwardReference(const GaussianModelT<T>&, const Camera&, T,      \
+                                        const RenderOptions&, FrameStateT<T>*, const T*, \
                                         GaussianGradientsT<T>*);
 HDR4D_INSTANTIATE_RENDER(float)
 HDR4D_INSTANTIATE_RENDER(double)

@@ -18,9 +18,9 @@
 namespace hdr4d::method {
 
 struct RenderOptions {
-  int sh_degree = 3;            // active spatial SH degree (grows during training)
-  int time_degree = 2;          // active temporal degree (0 in 3D mode)
-  float time_duration = 1.0f;   // T of the cosine time basis
+  int sh_degree = 3;              // active spatial SH degree (grows during training)
+  int time_degree = 2;            // active temporal degree (0 in 3D mode)
+  float time_duration = 1.0f;     // T of the cosine time basis
   std::vector<float> background;  // one value per channel (empty: zeros)
   RasterBackend backend = RasterBackend::kSimd;
 };

@@ -27,7 +27,8 @@ namespace {
 
 Image ToDisplay(const std::vector<float>& values, int w, int h, int channels) {
   Image image(w, h, channels, Encoding::kSrgb);
-  for (std::size_t i = 0; i < values.size(); ++i) image.values()[i] = std::clamp(values[i], 0.0f, 1.0f);
+  for (std::size_t i = 0; i < values.size(); ++i)
+    image.values()[i] = std::clamp(values[i], 0.0f, 1.0f);
   return image;
 }
 
@@ -42,7 +43,8 @@ std::vector<Camera> OrbitCameras(const std::vector<Camera>& train, int frames) {
   Eigen::Vector3d b = Eigen::Vector3d::Zero();
   Eigen::Vector3d up = Eigen::Vector3d::Zero();
   for (const Camera& c : train) {
-    const Eigen::Vector3d d = -c.world_from_cam_gl.block<3, 1>(0, 2).normalized();  // GL looks down -Z
+    const Eigen::Vector3d d =
+        -c.world_from_cam_gl.block<3, 1>(0, 2).normalized();  // GL looks down -Z
     const Eigen::Matrix3d p = Eigen::Matrix3d::Identity() - d * d.transpose();
     a += p;
     b += p * c.Center();
@@ -67,11 +69,15 @@ int RenderRun(const RenderRunOptions& options) {
   if (!config.contains("data") || !config["data"].is_string()) {
     Fail("{}: key 'data' (the scene folder) missing", (options.run / "config.json").string());
   }
-  const Split split = options.split == "train" ? Split::kTrain
-                      : options.split == "test" ? Split::kTest
-                      : options.split == "val"  ? Split::kVal
-                                                : (Fail("render: unknown split '{}' (use train, test or val)", options.split), Split::kTest);
-  const Dataset dataset = LoadDataset(config["data"].get<std::string>(), {.image_check = ImageCheck::kNone, .require_test = false});
+  const Split split =
+      options.split == "train"  ? Split::kTrain
+      : options.split == "test" ? Split::kTest
+      : options.split == "val"
+          ? Split::kVal
+          : (Fail("render: unknown split '{}' (use train, test or val)", options.split),
+             Split::kTest);
+  const Dataset dataset = LoadDataset(config["data"].get<std::string>(),
+                                      {.image_check = ImageCheck::kNone, .require_test = false});
   const GaussianModel model = LoadRunModel(options.run);
   const fs::path out = options.out.empty() ? options.run / "renders" / options.split : options.out;
   RenderOptions render;
@@ -94,9 +100,11 @@ int RenderRun(const RenderRunOptions& options) {
       Fail("render: --camera {} is not a frame of the {} split (0..{})", options.camera_index,
            options.split, frames.size() - 1);
     }
-    if (!(*options.time >= 0 && *options.time <= 1)) Fail("render: --time {} is outside [0, 1]", *options.time);
+    if (!(*options.time >= 0 && *options.time <= 1))
+      Fail("render: --time {} is outside [0, 1]", *options.time);
     const fs::path dir = options.out.empty() ? options.run / "renders" / "time" : options.out;
-    const fs::path path = dir / fmt::format("{}_cam{:03d}_t{:.4f}.png", options.split, options.camera_index, *options.time);
+    const fs::path path = dir / fmt::format("{}_cam{:03d}_t{:.4f}.png", options.split,
+                                            options.camera_index, *options.time);
     render_to(frames[options.camera_index].camera, *options.time, path);
     fmt::print("render: {}\n", path.string());
     return 1;
@@ -109,7 +117,8 @@ int RenderRun(const RenderRunOptions& options) {
     const fs::path dir = options.out.empty() ? options.run / "video" : options.out;
     Progress progress("render video", options.video_frames);
     for (int k = 0; k < options.video_frames; ++k) {
-      const float time = options.video_frames > 1 ? static_cast<float>(k) / (options.video_frames - 1) : 0.0f;
+      const float time =
+          options.video_frames > 1 ? static_cast<float>(k) / (options.video_frames - 1) : 0.0f;
       render_to(path[k], time, dir / fmt::format("frame_{:04d}.png", k));
       progress.Advance();
     }
@@ -120,10 +129,12 @@ int RenderRun(const RenderRunOptions& options) {
           "ffmpeg -loglevel error -y -framerate {} -i '{}/frame_%04d.png' -vf "
           "'pad=ceil(iw/2)*2:ceil(ih/2)*2' -pix_fmt yuv420p -c:v libx264 '{}'",
           options.fps, dir.string(), mp4.string());
-      if (std::system(command.c_str()) != 0) Fail("{}: ffmpeg failed to encode the frames in {}", mp4.string(), dir.string());
+      if (std::system(command.c_str()) != 0)
+        Fail("{}: ffmpeg failed to encode the frames in {}", mp4.string(), dir.string());
       fmt::print("render: {} frames and {}\n", options.video_frames, mp4.string());
     } else {
-      fmt::print("render: {} frames in {} (install ffmpeg for an MP4)\n", options.video_frames, dir.string());
+      fmt::print("render: {} frames in {} (install ffmpeg for an MP4)\n", options.video_frames,
+                 dir.string());
     }
     return options.video_frames;
   }

@@ -9,7 +9,6 @@
 #include <vector>
 
 #include "core/camera.h"
-
 #include "method/gaussian_model.h"
 
 namespace hdr4d::method {

@@ -20,7 +20,9 @@ Camera TestCamera(int width = 24, int height = 20) {
 template <typename T>
 GaussianModelT<T> RandomScene(int n, bool temporal, unsigned seed) {
   std::mt19937 rng(seed);
-  auto u = [&](double lo, double hi) { return static_cast<T>(std::uniform_real_distribution<double>(lo, hi)(rng)); };
+  auto u = [&](double lo, double hi) {
+    return static_cast<T>(std::uniform_real_distribution<double>(lo, hi)(rng));
+  };
   GaussianModelT<T> m;
   m.temporal = temporal;
   if (!temporal) m.basis.max_time_degree = 0;
@@ -90,8 +92,8 @@ void CheckWholeRenderGradient(bool temporal, unsigned seed, bool full_color_basi
   const double h = 1e-6;
   int checked = 0, mismatched = 0, nonzero = 0;
   double max_abs = 0;
-  auto check_field = [&](std::vector<double>& param, const std::vector<double>& grad, const char* name,
-                         int width, int used) {
+  auto check_field = [&](std::vector<double>& param, const std::vector<double>& grad,
+                         const char* name, int width, int used) {
     for (std::size_t i = 0; i < param.size(); ++i) {
       if (static_cast<int>(i % width) >= used) continue;  // components the mode ignores
       const double saved = param[i];
@@ -157,7 +159,8 @@ TEST(Render, FastPathMatchesTheReference) {
   g_ref.ZerosLike(model);
   RenderBackward(model, camera, 0.5f, options, &fast_state, dL.data(), &g_fast);
   RenderBackwardReference(model, camera, 0.5f, options, &ref_state, dL.data(), &g_ref);
-  auto expect_close = [](const std::vector<float>& a, const std::vector<float>& b, const char* name) {
+  auto expect_close = [](const std::vector<float>& a, const std::vector<float>& b,
+                         const char* name) {
     ASSERT_EQ(a.size(), b.size());
     for (std::size_t i = 0; i < a.size(); ++i) {
       ASSERT_NEAR(a[i], b[i], 1e-3 + 1e-3 * std::abs(b[i])) << name << "[" << i << "]";
@@ -178,11 +181,14 @@ TEST(Render, TemporallyDistantGaussiansAreCulled) {
   model.log_scales[1 * 4 + 3] = std::log(0.05f);
   model.rot_left.assign(12, 0.0f);
   model.rot_right.assign(12, 0.0f);
-  for (int i = 0; i < 3; ++i) model.rot_left[i * 4] = model.rot_right[i * 4] = 1.0f;  // no space-time mixing
+  for (int i = 0; i < 3; ++i)
+    model.rot_left[i * 4] = model.rot_right[i * 4] = 1.0f;  // no space-time mixing
   FrameState state;
-  PreprocessForward(model, ViewParams<float>::FromCamera(TestCamera()), 0.0f, Options(true), &state);
+  PreprocessForward(model, ViewParams<float>::FromCamera(TestCamera()), 0.0f, Options(true),
+                    &state);
   EXPECT_EQ(state.splats.radius[1], 0);
-  PreprocessForward(model, ViewParams<float>::FromCamera(TestCamera()), 0.5f, Options(true), &state);
+  PreprocessForward(model, ViewParams<float>::FromCamera(TestCamera()), 0.5f, Options(true),
+                    &state);
   EXPECT_GT(state.splats.radius[1], 0);
   // The marginal multiplies the opacity: at its own time the Gaussian has its full opacity.
   EXPECT_NEAR(state.splats.opacity[1], 1 / (1 + std::exp(-model.opacity_logit[1])), 1e-6);

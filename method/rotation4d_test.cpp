@@ -8,6 +8,8 @@
 #include <functional>
 #include <random>
 
+#include "tests/finite_difference.h"
+
 namespace hdr4d::method {
 namespace {
 
@@ -19,32 +21,12 @@ using Vec = Eigen::VectorXd;
 constexpr double kFdStep = 1e-5;
 constexpr double kFdTolerance = 1e-6;
 
-Vec NumericGradient(const std::function<double(const Vec&)>& f, const Vec& x) {
-  Vec g(x.size());
-  for (int i = 0; i < x.size(); ++i) {
-    Vec xp = x, xm = x;
-    xp(i) += kFdStep;
-    xm(i) -= kFdStep;
-    g(i) = (f(xp) - f(xm)) / (2 * kFdStep);
-  }
-  return g;
+Vec NumericGradient(const std::function<double(const Vec&)>& f, const Vec& x, double h = kFdStep) {
+  return hdr4d::testing::NumericGradient(f, x, h);
 }
 
-// Largest component error relative to the numeric gradient's largest component.
-double GradientError(const Vec& analytic, const Vec& numeric) {
-  return (analytic - numeric).cwiseAbs().maxCoeff() /
-         std::max(numeric.cwiseAbs().maxCoeff(), 1e-12);
-}
-
-// Asserts agreement, and that the same check would reject a sign slip in the largest component.
 void ExpectGradientsMatch(const Vec& analytic, const Vec& numeric) {
-  EXPECT_LT(GradientError(analytic, numeric), kFdTolerance)
-      << "analytic " << analytic.transpose() << "\nnumeric  " << numeric.transpose();
-  Vec wrong = analytic;
-  int i;
-  wrong.cwiseAbs().maxCoeff(&i);
-  wrong(i) = -wrong(i);
-  EXPECT_GT(GradientError(wrong, numeric), 100 * kFdTolerance);
+  hdr4d::testing::ExpectGradientsMatch(analytic, numeric, kFdTolerance);
 }
 
 Vec4<double> RandomQuaternion(std::mt19937& rng, double scale) {

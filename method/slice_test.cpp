@@ -8,6 +8,7 @@
 #include <random>
 
 #include "method/rotation4d.h"
+#include "tests/finite_difference.h"
 
 namespace hdr4d::method {
 namespace {
@@ -20,30 +21,12 @@ using Vec = Eigen::VectorXd;
 constexpr double kFdStep = 1e-5;
 constexpr double kFdTolerance = 1e-6;
 
-Vec NumericGradient(const std::function<double(const Vec&)>& f, const Vec& x) {
-  Vec g(x.size());
-  for (int i = 0; i < x.size(); ++i) {
-    Vec xp = x, xm = x;
-    xp(i) += kFdStep;
-    xm(i) -= kFdStep;
-    g(i) = (f(xp) - f(xm)) / (2 * kFdStep);
-  }
-  return g;
-}
-
-double GradientError(const Vec& analytic, const Vec& numeric) {
-  return (analytic - numeric).cwiseAbs().maxCoeff() /
-         std::max(numeric.cwiseAbs().maxCoeff(), 1e-12);
+Vec NumericGradient(const std::function<double(const Vec&)>& f, const Vec& x, double h = kFdStep) {
+  return hdr4d::testing::NumericGradient(f, x, h);
 }
 
 void ExpectGradientsMatch(const Vec& analytic, const Vec& numeric) {
-  EXPECT_LT(GradientError(analytic, numeric), kFdTolerance)
-      << "analytic " << analytic.transpose() << "\nnumeric  " << numeric.transpose();
-  Vec wrong = analytic;  // the same check must reject a sign slip in the largest component
-  int i;
-  wrong.cwiseAbs().maxCoeff(&i);
-  wrong(i) = -wrong(i);
-  EXPECT_GT(GradientError(wrong, numeric), 100 * kFdTolerance);
+  hdr4d::testing::ExpectGradientsMatch(analytic, numeric, kFdTolerance);
 }
 
 template <typename T>

@@ -21,14 +21,17 @@ std::vector<TrainView> LoadViews(const Dataset& dataset, Split split, const floa
     const Frame& f = frames[i];
     const Image image = ReadImage(f.image_path);
     if (image.encoding() != Encoding::kSrgb) {
-      Fail("{}: training targets are LDR images (PNG/JPEG); this one is linear HDR", f.image_path.string());
+      Fail("{}: training targets are LDR images (PNG/JPEG); this one is linear HDR",
+           f.image_path.string());
     }
-    if (image.width() != f.camera.intrinsics.width || image.height() != f.camera.intrinsics.height) {
+    if (image.width() != f.camera.intrinsics.width ||
+        image.height() != f.camera.intrinsics.height) {
       Fail("{}: image is {}x{} but the camera says {}x{}", f.image_path.string(), image.width(),
            image.height(), f.camera.intrinsics.width, f.camera.intrinsics.height);
     }
     if (image.channels() < 3 && image.channels() != 1) {
-      Fail("{}: expected RGB, RGBA or grey, got {} channels", f.image_path.string(), image.channels());
+      Fail("{}: expected RGB, RGBA or grey, got {} channels", f.image_path.string(),
+           image.channels());
     }
     TrainView& v = views[i];
     v.camera = f.camera;
@@ -42,7 +45,8 @@ std::vector<TrainView> LoadViews(const Dataset& dataset, Split split, const floa
       const float alpha = c == 4 ? px[3] : 1.0f;
       for (int k = 0; k < 3; ++k) {
         const float value = (c == 1 ? px[0] : px[k]) * alpha + background[k] * (1.0f - alpha);
-        v.rgb[p * 3 + k] = static_cast<std::uint8_t>(std::lround(std::clamp(value, 0.0f, 1.0f) * 255.0f));
+        v.rgb[p * 3 + k] =
+            static_cast<std::uint8_t>(std::lround(std::clamp(value, 0.0f, 1.0f) * 255.0f));
       }
     }
   });

@@ -16,7 +16,7 @@ struct TrainView {
   Camera camera;
   float time = 0;
   double exposure = 1;
-  std::string name;            // the image's file name (renders are written under it)
+  std::string name;               // the image's file name (renders are written under it)
   std::vector<std::uint8_t> rgb;  // H x W x 3, display-encoded as stored
   int width() const { return camera.intrinsics.width; }
   int height() const { return camera.intrinsics.height; }

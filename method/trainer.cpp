@@ -47,17 +47,30 @@ nlohmann::json TrainOptions::ToJson() const {
       {"test_every", test_every},
       {"checkpoint_every", checkpoint_every},
       {"background", background},
-      {"init", {{"num_random_points", init.num_random_points}, {"random_half_extent", init.random_half_extent},
-                {"initial_opacity", init.initial_opacity}}},
+      {"init",
+       {{"num_random_points", init.num_random_points},
+        {"random_half_extent", init.random_half_extent},
+        {"initial_opacity", init.initial_opacity}}},
       {"optimization",
-       {{"iterations", o.iterations}, {"position_lr_init", o.position_lr_init},
-        {"position_lr_final", o.position_lr_final}, {"position_lr_max_steps", o.position_lr_max_steps},
-        {"t_lr_init", o.t_lr_init}, {"f_dc_lr", o.f_dc_lr}, {"f_rest_lr", o.f_rest_lr},
-        {"opacity_lr", o.opacity_lr}, {"scaling_lr", o.scaling_lr}, {"rotation_lr", o.rotation_lr},
-        {"adam_eps", o.adam_eps}, {"lambda_dssim", o.lambda_dssim}, {"densify_from", o.densify_from},
-        {"densify_until", o.densify_until}, {"densification_interval", o.densification_interval},
-        {"densify_grad_threshold", o.densify_grad_threshold}, {"percent_dense", o.percent_dense},
-        {"opacity_reset_interval", o.opacity_reset_interval}, {"prune_opacity", o.prune_opacity},
+       {{"iterations", o.iterations},
+        {"position_lr_init", o.position_lr_init},
+        {"position_lr_final", o.position_lr_final},
+        {"position_lr_max_steps", o.position_lr_max_steps},
+        {"t_lr_init", o.t_lr_init},
+        {"f_dc_lr", o.f_dc_lr},
+        {"f_rest_lr", o.f_rest_lr},
+        {"opacity_lr", o.opacity_lr},
+        {"scaling_lr", o.scaling_lr},
+        {"rotation_lr", o.rotation_lr},
+        {"adam_eps", o.adam_eps},
+        {"lambda_dssim", o.lambda_dssim},
+        {"densify_from", o.densify_from},
+        {"densify_until", o.densify_until},
+        {"densification_interval", o.densification_interval},
+        {"densify_grad_threshold", o.densify_grad_threshold},
+        {"percent_dense", o.percent_dense},
+        {"opacity_reset_interval", o.opacity_reset_interval},
+        {"prune_opacity", o.prune_opacity},
         {"sh_increase_interval", o.sh_increase_interval}}},
   };
 }
@@ -80,19 +93,24 @@ double SceneExtent(const std::vector<TrainView>& views) {
 std::pair<int, int> ColorDegrees(int iteration, const GaussianModel& model, int interval) {
   const int steps = iteration / interval;
   const int sh = std::min(model.basis.max_sh_degree, steps);
-  const int time = model.temporal ? std::clamp(steps - model.basis.max_sh_degree, 0, model.basis.max_time_degree) : 0;
+  const int time =
+      model.temporal ? std::clamp(steps - model.basis.max_sh_degree, 0, model.basis.max_time_degree)
+                     : 0;
   return {sh, time};
 }
 
 Image ToImage(const std::vector<float>& values, int width, int height) {
   Image image(width, height, 3, Encoding::kSrgb);
-  for (std::size_t i = 0; i < values.size(); ++i) image.values()[i] = std::clamp(values[i], 0.0f, 1.0f);
+  for (std::size_t i = 0; i < values.size(); ++i)
+    image.values()[i] = std::clamp(values[i], 0.0f, 1.0f);
   return image;
 }
 
 // Means of the LDR metrics over the views (PSNR as the mean of per-view values, as 3DGS).
-nlohmann::json Evaluate(const GaussianModel& model, const std::vector<TrainView>& views,
-                        const RenderOptions& options, FrameState* state) {
+nlohmann::json Evaluate(const GaussianModel& model,
+                        const std::vector<TrainView>& views,
+                        const RenderOptions& options,
+                        FrameState* state) {
   nlohmann::json mean = nlohmann::json::object();
   if (views.empty()) return mean;
   std::map<std::string, double> sums;
@@ -101,7 +119,8 @@ nlohmann::json Evaluate(const GaussianModel& model, const std::vector<TrainView>
     image.resize(static_cast<std::size_t>(v.width()) * v.height() * 3);
     RenderForward(model, v.camera, v.time, options, state, image.data());
     v.ToFloat(&gt);
-    for (const auto& [key, value] : LdrMetrics(ToImage(image, v.width(), v.height()), ToImage(gt, v.width(), v.height()))) {
+    for (const auto& [key, value] :
+         LdrMetrics(ToImage(image, v.width(), v.height()), ToImage(gt, v.width(), v.height()))) {
       sums[key] += value;
     }
   }
@@ -131,8 +150,8 @@ struct LoopState {
   nlohmann::json ToJson() const {
     std::ostringstream rng_state;
     rng_state << rng;
-    return {{"iteration", iteration}, {"rng", rng_state.str()}, {"order", order},
-            {"next", next}, {"loss_curve", loss_curve}, {"train_seconds", train_seconds}};
+    return {{"iteration", iteration}, {"rng", rng_state.str()},   {"order", order},
+            {"next", next},           {"loss_curve", loss_curve}, {"train_seconds", train_seconds}};
   }
   void FromJson(const nlohmann::json& j) {
     iteration = j.at("iteration").get<int>();
@@ -177,7 +196,8 @@ TrainSummary Train(const TrainOptions& options) {
     std::istringstream adam_state(c.adam_state);
     adam.Load(adam_state, checkpoint_path.string());
     loop.FromJson(c.trainer);
-    if (c.extra_floats.size() != 3) Fail("{}: checkpoint has no densification statistics", checkpoint_path.string());
+    if (c.extra_floats.size() != 3)
+      Fail("{}: checkpoint has no densification statistics", checkpoint_path.string());
     stats.grad_accum = std::move(c.extra_floats[0]);
     stats.denom = std::move(c.extra_floats[1]);
     stats.max_radii = std::move(c.extra_floats[2]);
@@ -226,7 +246,8 @@ TrainSummary Train(const TrainOptions& options) {
   while (loop.iteration < opt.iterations) {
     const int it = ++loop.iteration;
     SetModelLearningRates(LearningRatesAt(opt, extent, it), &adam);
-    std::tie(render.sh_degree, render.time_degree) = ColorDegrees(it, model, opt.sh_increase_interval);
+    std::tie(render.sh_degree, render.time_degree) =
+        ColorDegrees(it, model, opt.sh_increase_interval);
 
     const TrainView& view = train_views[loop.NextView(train_views.size())];
     const std::size_t values = static_cast<std::size_t>(view.width()) * view.height() * 3;
@@ -237,21 +258,26 @@ TrainSummary Train(const TrainOptions& options) {
     const LossResult loss = PhotometricLoss(image.data(), gt.data(), view.width(), view.height(), 3,
                                             static_cast<float>(opt.lambda_dssim), dL_dimage.data());
     if (!std::isfinite(loss.value)) {
-      Fail("train: iteration {}: the loss is {} (view {}); stopped, the last good checkpoint is {}", it,
-           loss.value, view.name, last_good);
+      Fail("train: iteration {}: the loss is {} (view {}); stopped, the last good checkpoint is {}",
+           it, loss.value, view.name, last_good);
     }
     RenderBackward(model, view.camera, view.time, render, &state, dL_dimage.data(), &grads);
     if (const std::string bad = adam.FirstNonFiniteGradient(); !bad.empty()) {
-      Fail("train: iteration {}: non-finite gradient in parameter group '{}'; stopped, the last good "
-           "checkpoint is {}",
-           it, bad, last_good);
+      Fail(
+          "train: iteration {}: non-finite gradient in parameter group '{}'; stopped, the last "
+          "good "
+          "checkpoint is {}",
+          it, bad, last_good);
     }
-    if (it < opt.densify_until) AccumulateStats(state.splat_grads.mean2d, state.splats.radius, view.width(), view.height(), &stats);
+    if (it < opt.densify_until)
+      AccumulateStats(state.splat_grads.mean2d, state.splats.radius, view.width(), view.height(),
+                      &stats);
     loop.loss_curve.push_back(loss.value);
 
     // As in the reference, densification replaces every parameter tensor, so no optimiser step
     // happens on that iteration; an opacity reset replaces only the opacity.
-    const bool densify = it < opt.densify_until && it > opt.densify_from && it % opt.densification_interval == 0;
+    const bool densify =
+        it < opt.densify_until && it > opt.densify_from && it % opt.densification_interval == 0;
     const bool reset_opacity = it < opt.densify_until && it % opt.opacity_reset_interval == 0;
     if (densify) {
       DensifyAndPrune(&model, &grads, &adam, &stats, DensifyParamsAt(opt, extent, it), &loop.rng);
@@ -268,18 +294,23 @@ TrainSummary Train(const TrainOptions& options) {
       squared += d * d;
     }
     const double psnr = -10.0 * std::log10(std::max(squared / values, 1e-20));
-    progress.Advance(1, fmt::format("loss {:.4f} psnr {:.2f} N {}", loss.value, psnr, model.size()));
+    progress.Advance(1,
+                     fmt::format("loss {:.4f} psnr {:.2f} N {}", loss.value, psnr, model.size()));
     if (options.test_every > 0 && it % options.test_every == 0 && it < opt.iterations) {
       const nlohmann::json m = Evaluate(model, test_views, render, &state);
       spdlog::info("train: iteration {}: test {}", it, m.dump());
     }
     if (options.checkpoint_every > 0 && it % options.checkpoint_every == 0) {
-      loop.train_seconds = seconds_before + std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      loop.train_seconds =
+          seconds_before +
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       save();
     }
   }
   progress.Finish();
-  loop.train_seconds = seconds_before + std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  loop.train_seconds =
+      seconds_before +
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   save();
 
   TrainSummary summary;
@@ -288,12 +319,14 @@ TrainSummary Train(const TrainOptions& options) {
   summary.iterations = loop.iteration;
   summary.gaussians = model.size();
   summary.loss_curve = loop.loss_curve;
-  nlohmann::json results = {{"test", summary.test_metrics},
-                            {"train_seconds", summary.train_seconds},
-                            {"iterations", summary.iterations},
-                            {"gaussians", summary.gaussians},
-                            {"test_views", test_views.size()},
-                            {"final_loss", loop.loss_curve.empty() ? nlohmann::json(nullptr) : FiniteOrNull(loop.loss_curve.back())}};
+  nlohmann::json results = {
+      {"test", summary.test_metrics},
+      {"train_seconds", summary.train_seconds},
+      {"iterations", summary.iterations},
+      {"gaussians", summary.gaussians},
+      {"test_views", test_views.size()},
+      {"final_loss",
+       loop.loss_curve.empty() ? nlohmann::json(nullptr) : FiniteOrNull(loop.loss_curve.back())}};
   WriteJsonFile(options.out / "results.json", results);
   return summary;
 }

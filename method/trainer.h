@@ -17,14 +17,14 @@ struct TrainOptions {
   std::filesystem::path data;  // scene folder
   std::filesystem::path out;   // run folder
   OptimizationOptions optimization;
-  InitOptions init;            // seed, random point count, ...
+  InitOptions init;  // seed, random point count, ...
   std::uint64_t seed = 0;
-  int threads = 0;             // 0 = all cores
-  int test_every = 0;          // evaluate the test split every N iterations (0 = only at the end)
-  int checkpoint_every = 0;    // save RUN/checkpoint.bin every N iterations (0 = only at the end)
-  bool resume = false;         // continue from RUN/checkpoint.bin
+  int threads = 0;           // 0 = all cores
+  int test_every = 0;        // evaluate the test split every N iterations (0 = only at the end)
+  int checkpoint_every = 0;  // save RUN/checkpoint.bin every N iterations (0 = only at the end)
+  bool resume = false;       // continue from RUN/checkpoint.bin
   bool progress = true;
-  float background = 0.0f;     // grey level behind the scene (the reference trains on black)
+  float background = 0.0f;  // grey level behind the scene (the reference trains on black)
   std::string Validate() const;
   nlohmann::json ToJson() const;
 };

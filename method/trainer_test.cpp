@@ -54,7 +54,8 @@ TEST(Trainer, SameSeedSameRun) {
             testing::ReadTextFile(dir / "b" / "checkpoint.bin").size());
   // results.json has the metric keys of `hdr4d eval`.
   const nlohmann::json results = ReadJsonFile(dir / "a" / "results.json");
-  for (const char* key : {"psnr", "psnr_channel_mean", "ssim"}) EXPECT_TRUE(results["test"].contains(key)) << key;
+  for (const char* key : {"psnr", "psnr_channel_mean", "ssim"})
+    EXPECT_TRUE(results["test"].contains(key)) << key;
   EXPECT_EQ(results["iterations"], 60);
   EXPECT_TRUE(fs::exists(dir / "a" / "config.json"));
 }
@@ -77,7 +78,8 @@ TEST(Trainer, LossDecreasesOnTheKnownScene) {
   MakeScene(dir / "scene");
   const TrainSummary s = Train(SmallRun(dir / "scene", dir / "run", 60));
   double first = 0, last = 0;
-  for (int i = 0; i < 10; ++i) first += s.loss_curve[i], last += s.loss_curve[s.loss_curve.size() - 1 - i];
+  for (int i = 0; i < 10; ++i)
+    first += s.loss_curve[i], last += s.loss_curve[s.loss_curve.size() - 1 - i];
   EXPECT_LT(last, 0.8 * first);
 }
 

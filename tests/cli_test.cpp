@@ -103,14 +103,17 @@ TEST(Cli, DemoPipelineEndToEnd) {
 TEST(Cli, TrainRenderEvalExport) {
   testing::TempDir dir;
   const std::string scene = (dir / "scene").string(), run = (dir / "run").string();
-  auto r = RunHdr4d("make-gaussian-scene --out " + scene + " --size 24 --gaussians 10 --cameras 4 --timestamps 3");
+  auto r = RunHdr4d("make-gaussian-scene --out " + scene +
+                    " --size 24 --gaussians 10 --cameras 4 --timestamps 3");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  r = RunHdr4d("train --data " + scene + " --out " + run + " --iterations 20 --random-points 300 --seed 2");
+  r = RunHdr4d("train --data " + scene + " --out " + run +
+               " --iterations 20 --random-points 300 --seed 2");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto results = nlohmann::json::parse(testing::ReadTextFile(dir / "run" / "results.json"));
   EXPECT_EQ(results["iterations"], 20);
   EXPECT_TRUE(results["test"].contains("psnr"));
-  r = RunHdr4d("train --data " + scene + " --out " + run + " --iterations 30 --random-points 300 --seed 2 --resume");
+  r = RunHdr4d("train --data " + scene + " --out " + run +
+               " --iterations 30 --random-points 300 --seed 2 --resume");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   r = RunHdr4d("render --run " + run + " --split test");
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -126,10 +129,13 @@ TEST(Cli, TrainRenderEvalExport) {
   EXPECT_TRUE(fs::exists(dir / "run" / "video" / "frame_0002.png"));
   r = RunHdr4d("export-ply --run " + run + " --time 0.5 --out " + (dir / "slice.ply").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(testing::ReadTextFile(dir / "slice.ply").rfind("ply\nformat binary_little_endian", 0), 0u);
+  EXPECT_EQ(testing::ReadTextFile(dir / "slice.ply").rfind("ply\nformat binary_little_endian", 0),
+            0u);
   // User mistakes: one line, exit 1.
-  for (const std::string& bad : {"render --run " + run + " --time 2", "render --run " + run + " --time 0.5 --camera 99",
-                                 "render --run " + (dir / "nope").string(), "train --data " + scene + " --out " + (dir / "r2").string() + " --resume"}) {
+  for (const std::string& bad :
+       {"render --run " + run + " --time 2", "render --run " + run + " --time 0.5 --camera 99",
+        "render --run " + (dir / "nope").string(),
+        "train --data " + scene + " --out " + (dir / "r2").string() + " --resume"}) {
     r = RunHdr4d(bad);
     EXPECT_EQ(r.exit_code, 1) << bad << "\n" << r.err;
     EXPECT_EQ(LineCount(r.err), 1) << bad << "\n" << r.err;

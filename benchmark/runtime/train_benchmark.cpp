@@ -33,12 +33,14 @@ Scene MakeScene(int size, int thousands) {
   for (int i = 0; i < n; ++i) {
     for (int a = 0; a < 3; ++a) s.model.xyz[i * 3 + a] = u(rng);
     s.model.t[i] = 0.5f + 0.3f * u(rng);
-    for (int a = 0; a < 3; ++a) s.model.log_scales[i * 4 + a] = std::log(scale * (1.0f + 0.5f * u(rng)));
+    for (int a = 0; a < 3; ++a)
+      s.model.log_scales[i * 4 + a] = std::log(scale * (1.0f + 0.5f * u(rng)));
     s.model.log_scales[i * 4 + 3] = std::log(0.5f);
     for (int a = 0; a < 4; ++a) s.model.rot_left[i * 4 + a] = u(rng);
     s.model.opacity_logit[i] = u(rng);
     for (int c = 0; c < 3; ++c) s.model.color_dc[i * 3 + c] = u(rng);
-    for (std::size_t k = 0; k < s.model.rest_stride(); ++k) s.model.color_rest[i * s.model.rest_stride() + k] = 0.05f * u(rng);
+    for (std::size_t k = 0; k < s.model.rest_stride(); ++k)
+      s.model.color_rest[i * s.model.rest_stride() + k] = 0.05f * u(rng);
   }
   s.camera = Camera{PinholeIntrinsics::FromFovX(0.9, size, size),
                     LookAtWorldFromCamGl({0, -3.2, 0}, {0, 0, 0}, Eigen::Vector3d::UnitZ())};
@@ -59,7 +61,11 @@ void BM_RenderForward(benchmark::State& state) {
   for (int v : frame.raster.n_contrib) walked += v;
   state.counters["walked_per_px"] = walked / frame.raster.n_contrib.size();
 }
-BENCHMARK(BM_RenderForward)->Args({200, 20})->Args({800, 100})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RenderForward)
+    ->Args({200, 20})
+    ->Args({800, 100})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 void BM_RenderBackward(benchmark::State& state) {
   const int size = static_cast<int>(state.range(0));
@@ -69,7 +75,8 @@ void BM_RenderBackward(benchmark::State& state) {
   RenderForward(s.model, s.camera, 0.5f, s.options, &frame, image.data());
   GaussianGradients grads;
   grads.ZerosLike(s.model);
-  for (auto _ : state) RenderBackward(s.model, s.camera, 0.5f, s.options, &frame, dL.data(), &grads);
+  for (auto _ : state)
+    RenderBackward(s.model, s.camera, 0.5f, s.options, &frame, dL.data(), &grads);
 }
 BENCHMARK(BM_RenderBackward)->Args({200, 20})->Unit(benchmark::kMillisecond)->UseRealTime();
 
@@ -117,7 +124,9 @@ void BM_SkipCost(benchmark::State& state) {
     const std::size_t n = s.model.size();
     Scene extra = MakeScene(200, 80);
     for (float& t : extra.model.t) t += 5.0f;  // far from t = 0.5 in time
-    auto append = [](std::vector<float>& a, const std::vector<float>& b) { a.insert(a.end(), b.begin(), b.end()); };
+    auto append = [](std::vector<float>& a, const std::vector<float>& b) {
+      a.insert(a.end(), b.begin(), b.end());
+    };
     append(s.model.xyz, extra.model.xyz);
     append(s.model.t, extra.model.t);
     append(s.model.log_scales, extra.model.log_scales);
