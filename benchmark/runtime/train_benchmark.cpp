@@ -154,3 +154,33 @@ BENCHMARK(BM_SkipCost)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->U
 
 }  // namespace
 }  // namespace hdr4d::method
+
+namespace hdr4d::method {
+namespace {
+
+// Slice + project + colour of every Gaussian (the preprocess), forward and backward.
+void BM_Preprocess(benchmark::State& state) {
+  const bool backward = state.range(2) != 0;
+  Scene s = MakeScene(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  FrameState frame;
+  const ViewParams<float> view = ViewParams<float>::FromCamera(s.camera);
+  PreprocessForward(s.model, view, 0.5f, s.options, &frame);
+  frame.splat_grads.SetZero(s.model.size(), s.model.channels);
+  std::fill(frame.splat_grads.mean2d.begin(), frame.splat_grads.mean2d.end(), 1e-3f);
+  GaussianGradients grads;
+  grads.ZerosLike(s.model);
+  for (auto _ : state) {
+    if (backward) {
+      PreprocessBackward(s.model, view, 0.5f, s.options, frame, &grads);
+    } else {
+      PreprocessForward(s.model, view, 0.5f, s.options, &frame);
+    }
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(s.model.size()));
+}
+BENCHMARK(BM_Preprocess)
+    ->Args({200, 20, 0})->Args({200, 20, 1})->Args({800, 100, 0})->Args({800, 100, 1})
+    ->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
+}  // namespace hdr4d::method
