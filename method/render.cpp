@@ -27,25 +27,14 @@ T Sigmoid(T x) {
   return T(1) / (T(1) + std::exp(-x));
 }
 
-// The 3D Gaussian a 4D one (or a 3D one in static mode) presents at `time`.
-template <typename T>
-struct Conditional {
-  Vec3<T> mean;
-  Mat3<T> cov;
-  T marginal = T(1);
-  // Kept for the backward.
-  Mat4<T> rotation4, sigma4;
-  Mat3<T> rotation3;
-};
-
 template <typename T>
 Vec4<T> Mean4(const GaussianModelT<T>& model, std::size_t i) {
   return Vec4<T>(model.xyz[i * 3], model.xyz[i * 3 + 1], model.xyz[i * 3 + 2], model.t[i]);
 }
 
 template <typename T>
-Conditional<T> ConditionAt(const GaussianModelT<T>& model, std::size_t i, T time) {
-  Conditional<T> c;
+ConditionalGaussian<T> ConditionAt(const GaussianModelT<T>& model, std::size_t i, T time) {
+  ConditionalGaussian<T> c;
   const Vec4<T> mean4 = Mean4(model, i);
   const Vec4<T> log_scales = Row4(model.log_scales, i);
   if (model.temporal) {
@@ -118,6 +107,7 @@ void PreprocessForward(const GaussianModelT<T>& model,
   s.channels = channels;
   s.Resize(n);
   state->clamped.assign(n * channels, 0);
+  state->conditionals.resize(n);  // written for visible Gaussians only
   const Vec3<T> center = view.Center();
   const int time_degree = TimeDegree(model, options);
   const std::size_t stride = model.rest_stride();
@@ -130,7 +120,7 @@ void PreprocessForward(const GaussianModelT<T>& model,
                       for (std::int64_t g = b; g < e; ++g) {
                         const std::size_t i = static_cast<std::size_t>(g);
                         s.radius[i] = 0;
-                        const Conditional<T> c = ConditionAt(model, i, time);
+                        const ConditionalGaussian<T> c = ConditionAt(model, i, time);
                         if (model.temporal && !TemporallyVisible(c.marginal))
                           continue;  // culled: costs nothing
                         const Splat2D<T> splat = ProjectEwa(c.mean, c.cov, view);
@@ -141,6 +131,7 @@ void PreprocessForward(const GaussianModelT<T>& model,
                         s.depth[i] = splat.depth;
                         s.radius[i] = splat.radius;
                         s.opacity[i] = Sigmoid(model.opacity_logit[i]) * c.marginal;
+                        state->conditionals[i] = c;  // the backward reuses it
                         // Colour is linear in the coefficients: weights . (DC, rest) + 0.5.
                         T w[kMaxColorCoefficients];
                         EvalColorBasisWeights(Vec3<T>(c.mean - center), model.t[i] - time, duration,
@@ -183,7 +174,7 @@ void PreprocessBackward(const GaussianModelT<T>& model,
   const int channels = model.channels;
   const SplatBuffersT<T>& s = state.splats;
   const SplatGradientsT<T>& sg = state.splat_grads;
-  HDR4D_CHECK(sg.opacity.size() == n);
+  HDR4D_CHECK(sg.opacity.size() == n && state.conditionals.size() == n);
   const Vec3<T> center = view.Center();
   const int time_degree = TimeDegree(model, options);
   const std::size_t stride = model.rest_stride();
@@ -195,7 +186,7 @@ void PreprocessBackward(const GaussianModelT<T>& model,
     // pass that clears 160 floats per Gaussian before each backward.
     ZeroRows(grads, i);
     if (s.radius[i] <= 0) return;
-    const Conditional<T> c = ConditionAt(model, i, time);
+    const ConditionalGaussian<T>& c = state.conditionals[i];
 
     // Colour: the view direction and dt are detached, as in the reference.
     T dcolor[kMaxChannels];

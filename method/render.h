@@ -14,6 +14,7 @@
 #include "method/gaussian_model.h"
 #include "method/projection.h"
 #include "method/raster/splats.h"
+#include "method/rotation4d.h"
 
 namespace hdr4d::method {
 
@@ -25,6 +26,17 @@ struct RenderOptions {
   RasterBackend backend = RasterBackend::kSimd;
 };
 
+// The 3D Gaussian a 4D one (or a 3D one in static mode) presents at the frame's time, with the
+// intermediate matrices the backward needs (kept by the forward instead of recomputed).
+template <typename T>
+struct ConditionalGaussian {
+  Vec3<T> mean;
+  Mat3<T> cov;
+  T marginal = T(1);
+  Mat4<T> rotation4, sigma4;  // 4D mode
+  Mat3<T> rotation3;          // 3D mode
+};
+
 // Buffers of one frame, reused from frame to frame (they only grow).
 template <typename T>
 struct FrameStateT {
@@ -32,6 +44,7 @@ struct FrameStateT {
   SplatGradientsT<T> splat_grads;
   RasterState raster;
   std::vector<std::uint8_t> clamped;  // N x channels: LDR colour clamped at 0 (no gradient)
+  std::vector<ConditionalGaussian<T>> conditionals;  // N: valid where splats.radius > 0
   std::size_t num_visible = 0;        // Gaussians with radius > 0 after the preprocess
   // Reference (scalar, any T) path only: the forward's outputs the backward needs.
   std::vector<T> final_T;

@@ -78,6 +78,23 @@ TEST(Trainer, ResumeContinuesExactly) {
   EXPECT_EQ(resumed.gaussians, straight.gaussians);
 }
 
+TEST(Trainer, StaticSceneTrainsWithoutTheTimeAxis) {
+  TempDir dir;
+  MakeScene(dir / "scene");
+  for (const char* split : {"transforms_train.json", "transforms_test.json"}) {
+    nlohmann::json j = ReadJsonFile(dir / "scene" / split);
+    for (auto& frame : j["frames"]) frame["time"] = 0.0;  // one instant: a static capture
+    WriteJsonFile(dir / "scene" / split, j);
+  }
+  const TrainSummary s = Train(SmallRun(dir / "scene", dir / "run", 20));
+  const Checkpoint c = LoadCheckpoint(dir / "run" / "checkpoint.bin");
+  EXPECT_FALSE(c.model.temporal);
+  EXPECT_EQ(c.model.basis.max_time_degree, 0);
+  EXPECT_EQ(c.model.rest_stride(), 15u * 3);  // 16 SH coefficients, no time blocks
+  EXPECT_FALSE(ReadJsonFile(dir / "run" / "config.json")["profile"]["dynamic"].get<bool>());
+  EXPECT_EQ(s.iterations, 20);
+}
+
 TEST(Trainer, LossDecreasesOnTheKnownScene) {
   TempDir dir;
   MakeScene(dir / "scene");
