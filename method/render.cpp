@@ -59,14 +59,17 @@ int TimeDegree(const GaussianModelT<T>& model, const RenderOptions& options) {
 
 constexpr int kMaxChannels = 8;
 
+// Clears Gaussian i's gradient rows; the colour rows only when asked (a visible Gaussian's
+// colour rows are overwritten in full by the backward).
 template <typename T>
-void ZeroRows(GaussianGradientsT<T>* g, std::size_t i) {
+void ZeroRows(GaussianGradientsT<T>* g, std::size_t i, bool colour) {
   std::fill_n(&g->xyz[i * 3], 3, T(0));
   g->t[i] = T(0);
   std::fill_n(&g->log_scales[i * 4], 4, T(0));
   std::fill_n(&g->rot_left[i * 4], 4, T(0));
   std::fill_n(&g->rot_right[i * 4], 4, T(0));
   g->opacity_logit[i] = T(0);
+  if (!colour) return;
   std::fill_n(&g->color_dc[i * g->channels], g->channels, T(0));
   const std::size_t rest = g->rest_stride();
   std::fill_n(&g->color_rest[i * rest], rest, T(0));
@@ -184,8 +187,9 @@ void PreprocessBackward(const GaussianModelT<T>& model,
     const std::size_t i = static_cast<std::size_t>(g);
     // Every row is written here (zeros for a culled Gaussian), so the caller needs no separate
     // pass that clears 160 floats per Gaussian before each backward.
-    ZeroRows(grads, i);
-    if (s.radius[i] <= 0) return;
+    const bool visible = s.radius[i] > 0;
+    ZeroRows(grads, i, !visible);
+    if (!visible) return;
     const ConditionalGaussian<T>& c = state.conditionals[i];
 
     // Colour: the view direction and dt are detached, as in the reference.
@@ -198,10 +202,10 @@ void PreprocessBackward(const GaussianModelT<T>& model,
                           options.sh_degree, time_degree, w);
     T* gdc = &grads->color_dc[i * channels];
     T* grest = &grads->color_rest[i * stride];
-    for (int ch = 0; ch < channels; ++ch) gdc[ch] += w[0] * dcolor[ch];
+    // Written, not accumulated: every colour row in one pass (w is 0 for inactive degrees).
+    for (int ch = 0; ch < channels; ++ch) gdc[ch] = w[0] * dcolor[ch];
     for (int k = 1; k < num_coefficients; ++k) {
-      if (w[k] == T(0)) continue;
-      for (int ch = 0; ch < channels; ++ch) grest[(k - 1) * channels + ch] += w[k] * dcolor[ch];
+      for (int ch = 0; ch < channels; ++ch) grest[(k - 1) * channels + ch] = w[k] * dcolor[ch];
     }
 
     // Opacity = sigmoid(logit) x marginal.
