@@ -213,16 +213,28 @@ void ReduceGradients(const RasterState& bins,
                      T* dL_dbackground) {
   const int stride = SlotStride(channels);
   const std::int64_t visible = static_cast<std::int64_t>(bins.depth_order.size());
-  ParallelForChunks(visible, 2048, [&](std::int64_t begin, std::int64_t end) {
-    SmallBuffer<T> sum(stride);
+  // The slots are read in an order unrelated to their layout (tile-major): prefetch the slots of
+  // the Gaussian kAhead places on, and let a compile-time stride unroll the common case.
+  const auto reduce = [&]<int kStride>(std::int64_t begin, std::int64_t end) {
+    const int n = kStride > 0 ? kStride : stride;
+    constexpr int kAhead = 6;
+    const std::int64_t visible_end = visible;
+    SmallBuffer<T> sum(n);
     for (std::int64_t i = begin; i < end; ++i) {
+      if (i + kAhead < visible_end) {
+        for (int k = bins.entry_ranges[i + kAhead]; k < bins.entry_ranges[i + kAhead + 1]; ++k) {
+          const T* ahead = slots + static_cast<std::size_t>(bins.point_entries[k]) * n;
+          __builtin_prefetch(ahead);
+          __builtin_prefetch(ahead + n - 1);
+        }
+      }
       const std::int64_t g = bins.depth_order[i];
       const int k0 = bins.entry_ranges[i];
       const int k1 = bins.entry_ranges[i + 1];
-      for (int s = 0; s < stride; ++s) sum[s] = T(0);
+      for (int s = 0; s < n; ++s) sum[s] = T(0);
       for (int k = k0; k < k1; ++k) {
-        const T* slot = slots + static_cast<std::size_t>(bins.point_entries[k]) * stride;
-        for (int s = 0; s < stride; ++s) sum[s] += slot[s];
+        const T* slot = slots + static_cast<std::size_t>(bins.point_entries[k]) * n;
+        for (int s = 0; s < n; ++s) sum[s] += slot[s];
       }
       grads->mean2d[2 * g] += sum[internal::kSlotMean];
       grads->mean2d[2 * g + 1] += sum[internal::kSlotMean + 1];
@@ -230,6 +242,16 @@ void ReduceGradients(const RasterState& bins,
       grads->opacity[g] += sum[internal::kSlotOpacity];
       T* gf = grads->features.data() + g * channels;
       for (int c = 0; c < channels; ++c) gf[c] += sum[internal::kSlotFeatures + c];
+    }
+  };
+  ParallelForChunks(visible, 2048, [&](std::int64_t begin, std::int64_t end) {
+    switch (stride) {
+      case internal::kSlotFeatures + 3:
+        return reduce.template operator()<internal::kSlotFeatures + 3>(begin, end);
+      case internal::kSlotFeatures + 6:
+        return reduce.template operator()<internal::kSlotFeatures + 6>(begin, end);
+      default:
+        return reduce.template operator()<0>(begin, end);
     }
   });
   if (dL_dbackground != nullptr) {
@@ -299,10 +321,15 @@ internal::TileJob MakeJob(const SplatBuffers& splats,
 }
 
 // The SIMD kernels' per-Gaussian records, for the Gaussians listed in some tile (in parallel).
+// packed_splats holds the per-Gaussian records, then the forward's per-entry records, then a
+// marker that is 1 once the forward has written the latter for the current packing.
 void PackSplats(internal::TileJob& job, RasterState* state) {
-  state->packed_splats.resize(static_cast<std::size_t>(state->num_gaussians) *
-                              internal::PackedStride(job.channels));
+  const std::size_t stride = internal::PackedStride(job.channels);
+  const std::size_t per_gaussian = static_cast<std::size_t>(state->num_gaussians) * stride;
+  state->packed_splats.resize(per_gaussian + state->num_entries() * stride + 1);
+  state->packed_splats.back() = 0.0f;
   job.packed = state->packed_splats.data();
+  job.tile_records = job.packed + per_gaussian;
   ParallelForChunks(
       static_cast<std::int64_t>(state->depth_order.size()), 4096,
       [&](std::int64_t begin, std::int64_t end) { internal::PackSplatsSimd(job, begin, end); });
@@ -383,6 +410,7 @@ void BlendForward(const SplatBuffers& splats,
   PackSplats(job, state);
   ParallelFor(state->num_tiles(), 1,
               [&](std::int64_t tile) { internal::ForwardTileSimd(job, static_cast<int>(tile)); });
+  state->packed_splats.back() = 1.0f;  // the per-entry records are there for the backward
 }
 
 void RasterizeForward(const SplatBuffers& splats,
@@ -424,6 +452,9 @@ void BlendBackward(const SplatBuffers& splats,
       dL_dbackground != nullptr ? state->tile_background_grad.data() : nullptr;
   if (!state->packed_ready) PackSplats(job, state);
   job.packed = state->packed_splats.data();
+  job.tile_records = job.packed + static_cast<std::size_t>(state->num_gaussians) *
+                                      internal::PackedStride(channels);
+  job.tile_records_ready = state->packed_splats.back() == 1.0f;
   ParallelFor(state->num_tiles(), 1,
               [&](std::int64_t tile) { internal::BackwardTileSimd(job, static_cast<int>(tile)); });
   ReduceGradients<float>(*state, channels, state->entry_gradients.data(), job.tile_background_grad,

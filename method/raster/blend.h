@@ -135,6 +135,11 @@ struct TileJob {
   // written by PackSplatsSimd for the Gaussians listed in some tile (depth_order).
   float* packed = nullptr;
   const std::int32_t* depth_order = nullptr;
+  // Per-entry records (PackedStride(channels) per point_list entry, reach turned into tile
+  // rows/columns): written by the forward, read by the backward when non-null and
+  // tile_records_ready (else the backward gathers its own).
+  float* tile_records = nullptr;
+  bool tile_records_ready = false;
 };
 inline constexpr int kPackedFields = 13;
 inline int PackedStride(int channels) { return kPackedFields + channels; }

@@ -9,6 +9,11 @@
 // The reach box bounds the pixels where alpha can reach kMinAlpha; it only prunes work, the
 // per-lane tests of the 3DGS rules still decide, so pruning never changes a result.
 //
+// The forward gathers each tile's records into the state (after the per-Gaussian records), so
+// the backward of the same frame reads them instead of gathering again; while building its row
+// lists the forward also drops, per row, the Gaussians whose power cannot reach the log
+// threshold within the tile's columns (exact maximum on the row, with a rounding margin) and
+// narrows the stored rows to those, which the backward then walks.
 // Forward: pixel vectors go in pairs (a vector and the one below it: two independent T chains,
 // the T -> test_T -> T recurrence being latency-bound), each pair walking only the Gaussians whose
 // reach box covers its two rows (selected with Compress), T, colour and n_contrib in registers,
@@ -23,7 +28,7 @@
 // registers) and a run-time value otherwise (accumulators in L1).
 //
 // Measured on the 2-core AVX-512 (Zen) machine, 200x200, 20k splats, ~35 contributors per pixel,
-// 3 channels, one thread: forward 3.0 ms, backward 5.2 ms (benchmark/runtime/raster_benchmark).
+// 3 channels, one thread: forward 2.7 ms, backward 4.2 ms (benchmark/runtime/raster_benchmark).
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "method/raster/blend_simd.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
@@ -125,8 +130,9 @@ HWY_INLINE V FastExpV(D d, V x) {
 // power >= log threshold: for a positive definite conic Q, max |dy| over d^T Q d <= 2t is
 // sqrt(2t a / det Q) (and sqrt(2t c / det Q) for dx), widened by 1e-4 relative + 1e-3 px, far
 // beyond the float error of `power` and of the row arithmetic below; the exact per-lane tests
-// still decide. In the packed form the row/column slots hold the half extents (x, y) and a
-// kind: 0 reaches nothing, 1 the box, 2 everywhere (a conic that is not positive definite).
+// still decide. In the packed form the row/column slots hold the box as absolute pixel indices
+// (inclusive; empty when it reaches nothing, unbounded for a conic that is not positive
+// definite), so that a tile only shifts and clamps them.
 void PackSplats(const TileJob& job, std::int64_t begin, std::int64_t end) {
   const int channels = job.channels;
   const int stride = kRecFeatures + channels;
@@ -146,58 +152,79 @@ void PackSplats(const TileJob& job, std::int64_t begin, std::int64_t end) {
     r[kRecLogThreshold] = threshold;
     r[kRecNegA] = -q[0];
     r[kRecNegC] = -q[2];
-    r[kRecRow0] = r[kRecRow1] = r[kRecCol0] = 0.0f;  // reaches nothing
+    constexpr double kInf = std::numeric_limits<double>::infinity();
+    double lo_x = kInf, hi_x = -kInf, lo_y = kInf, hi_y = -kInf;  // reaches nothing
     if (threshold <= 0.0f) {
       const double a = q[0], b = q[1], c = q[2];
       const double det = a * c - b * b;
       if (a > 0 && c > 0 && det > 0 && std::isfinite(det)) {
         const double t2 = -2.0 * static_cast<double>(threshold);
-        r[kRecRow0] = static_cast<float>(std::sqrt(t2 * c / det) * (1 + 1e-4) + 1e-3);
-        r[kRecRow1] = static_cast<float>(std::sqrt(t2 * a / det) * (1 + 1e-4) + 1e-3);
-        r[kRecCol0] = 1.0f;
+        const double ex = std::sqrt(t2 * c / det) * (1 + 1e-4) + 1e-3;
+        const double ey = std::sqrt(t2 * a / det) * (1 + 1e-4) + 1e-3;
+        // Pixel index i has its centre at i + 0.5.
+        const double cx = static_cast<double>(r[kRecMeanX]) - 0.5;
+        const double cy = static_cast<double>(r[kRecMeanY]) - 0.5;
+        lo_x = std::ceil(cx - ex);
+        hi_x = std::floor(cx + ex);
+        lo_y = std::ceil(cy - ey);
+        hi_y = std::floor(cy + ey);
       } else {
-        r[kRecCol0] = 2.0f;
+        lo_x = lo_y = -kInf;  // everywhere
+        hi_x = hi_y = kInf;
       }
     }
+    // Whole numbers, clamped to +-2^23 so that the float is exact (images are far smaller).
+    const auto store = [](double v) {
+      return static_cast<float>(std::min(std::max(v, -8388608.0), 8388608.0));
+    };
+    r[kRecRow0] = store(lo_y);
+    r[kRecRow1] = store(hi_y);
+    r[kRecCol0] = store(lo_x);
+    r[kRecCol1] = store(hi_x);
     const float* f = job.features + g * channels;
     for (int c = 0; c < channels; ++c) r[kRecFeatures + c] = f[c];
   }
 }
 
-// Inclusive range of tile rows (or columns) whose pixel centres lie within `extent` of `mean`;
-// `origin` is the tile's first pixel. Empty (lo > hi) when none.
-HWY_INLINE void CentreRange(float mean, float extent, int origin, float* lo, float* hi) {
-  // One-lane vector ops: min/max without branches (std::clamp compiles to branches).
-  const hn::CappedTag<float, 1> d1;
-  const auto centre = hn::Set(d1, mean - static_cast<float>(origin) - 0.5f);
-  const auto e = hn::Set(d1, extent);
-  *lo = hn::GetLane(hn::Min(hn::Max(hn::Ceil(hn::Sub(centre, e)), hn::Zero(d1)),
-                            hn::Set(d1, static_cast<float>(kTileSize))));
-  *hi = hn::GetLane(hn::Min(hn::Max(hn::Floor(hn::Add(centre, e)), hn::Set(d1, -1.0f)),
-                            hn::Set(d1, static_cast<float>(kTileSize - 1))));
-}
-
 // Copies the packed records of tile entries [start, start + count) into `rec` and replaces the
 // reach extents with the tile rows and columns they cover.
+template <int kC>
 void GatherRecords(const TileJob& job, int tile, int start, int count, float* rec) {
-  const int stride = kRecFeatures + job.channels;
+  const int stride = kRecFeatures + (kC > 0 ? kC : job.channels);
   const int x0 = (tile % job.tiles_x) * kTileSize;
   const int y0 = (tile / job.tiles_x) * kTileSize;
+  const float fx0 = static_cast<float>(x0);
+  const float fy0 = static_cast<float>(y0);
+  const D d;
+  const int lanes = static_cast<int>(hn::Lanes(d));
+  // The loads miss the cache (records in Gaussian order, entries in depth order): prefetch.
+  constexpr int kAhead = 8;
   for (int j = 0; j < count; ++j) {
+    if (j + kAhead < count) {
+      const float* ahead =
+          job.packed + static_cast<std::size_t>(job.point_list[start + j + kAhead]) * stride;
+      __builtin_prefetch(ahead);
+      __builtin_prefetch(ahead + stride - 1);
+    }
     const int g = job.point_list[start + j];
     float* r = rec + static_cast<std::size_t>(j) * stride;
-    std::copy_n(job.packed + static_cast<std::size_t>(g) * stride, stride, r);
-    const float kind = r[kRecCol0];
-    const float ex = r[kRecRow0];
-    const float ey = r[kRecRow1];
-    if (kind == 1.0f) {
-      CentreRange(r[kRecMeanX], ex, x0, &r[kRecCol0], &r[kRecCol1]);
-      CentreRange(r[kRecMeanY], ey, y0, &r[kRecRow0], &r[kRecRow1]);
-      if (r[kRecCol0] > r[kRecCol1]) r[kRecRow1] = -1.0f;  // no column: nothing
-    } else {
-      r[kRecRow0] = r[kRecCol0] = 0.0f;
-      r[kRecRow1] = r[kRecCol1] = kind == 2.0f ? static_cast<float>(kTileSize - 1) : -1.0f;
-    }
+    const float* src = job.packed + static_cast<std::size_t>(g) * stride;
+    int k = 0;
+    for (; k + lanes <= stride; k += lanes) hn::StoreU(hn::LoadU(d, src + k), d, r + k);
+    for (; k < stride; ++k) r[k] = src[k];
+    // The packed bounds are absolute pixel indices: shift to the tile and clamp (whole numbers
+    // below 2^24, so exact). One-lane vector min/max: no branches (ternaries compile to some).
+    const auto clamp = [](float v, float lo, float hi) {
+      const hn::CappedTag<float, 1> d1;
+      return hn::GetLane(hn::Min(hn::Max(hn::Set(d1, v), hn::Set(d1, lo)), hn::Set(d1, hi)));
+    };
+    const float last = static_cast<float>(kTileSize - 1);
+    const float size = static_cast<float>(kTileSize);
+    r[kRecRow0] = clamp(src[kRecRow0] - fy0, 0.0f, size);
+    r[kRecRow1] = clamp(src[kRecRow1] - fy0, -1.0f, last);
+    r[kRecCol0] = clamp(src[kRecCol0] - fx0, 0.0f, size);
+    r[kRecCol1] = clamp(src[kRecCol1] - fx0, -1.0f, last);
+    if (r[kRecCol0] > r[kRecCol1]) r[kRecRow1] = -1.0f;  // no column: nothing
   }
 }
 
@@ -307,8 +334,12 @@ void ForwardTileImpl(const TileJob& job, int tile) {
   thread_local Scratch<float> rec_scratch;
   thread_local Scratch<float> acc_scratch;  // run-time channel count only
   thread_local Scratch<std::int32_t> list_scratch;
-  float* rec = rec_scratch.Get(static_cast<std::size_t>(count) * stride + 1);
-  GatherRecords(job, tile, start, count, rec);
+  thread_local Scratch<std::int32_t> list_scratch2;
+  // Into the state's per-entry records when there are some, so the backward can reuse them.
+  float* rec = job.tile_records != nullptr
+                   ? job.tile_records + static_cast<std::size_t>(start) * stride
+                   : rec_scratch.Get(static_cast<std::size_t>(count) * stride + 1);
+  GatherRecords<kC>(job, tile, start, count, rec);
   float* acc_mem =
       kC > 0 ? nullptr : acc_scratch.Get(2 * static_cast<std::size_t>(channels) * lanes);
 
@@ -321,25 +352,106 @@ void ForwardTileImpl(const TileJob& job, int tile) {
   std::int32_t* row0 = rows;
   std::int32_t* row1 = rows + padded;
   std::int32_t* lists = rows + 2 * padded;  // kRowPairs lists of `padded` (+ lanes slack)
+  // Structure-of-arrays copies of what the row test below needs.
+  thread_local Scratch<float> soa_scratch;
+  float* soa = soa_scratch.Get(static_cast<std::size_t>(7) * padded);
+  float* s_mx = soa;  // mean x, mean y
+  float* s_my = s_mx + padded;
+  float* s_ha = s_my + padded;  // -a/2, -b, -c/2
+  float* s_nb = s_ha + padded;
+  float* s_hc = s_nb + padded;
+  float* s_k = s_hc + padded;  // -b / a: the dx maximising power on a row is k dy
+  float* s_thr = s_k + padded;  // log threshold; -inf: never pruned
   for (int j = 0; j < padded; ++j) {
     const float* r = rec + static_cast<std::size_t>(j) * stride;
     row0[j] = j < count ? static_cast<std::int32_t>(r[kRecRow0]) : kTileSize;
     row1[j] = j < count ? static_cast<std::int32_t>(r[kRecRow1]) : -1;
+    // Only when a > 0 (power concave in dx on a row) and the reach box is not the whole tile
+    // because of an indefinite conic; otherwise all zeros, which the test never prunes.
+    const bool exact = j < count && r[kRecHalfNegA] < 0.0f && std::isfinite(r[kRecHalfNegA]) &&
+                       std::isfinite(r[kRecNegB]) && std::isfinite(r[kRecHalfNegC]);
+    s_mx[j] = exact ? r[kRecMeanX] : 0.0f;
+    s_my[j] = exact ? r[kRecMeanY] : 0.0f;
+    s_ha[j] = exact ? r[kRecHalfNegA] : 0.0f;
+    s_nb[j] = exact ? r[kRecNegB] : 0.0f;
+    s_hc[j] = exact ? r[kRecHalfNegC] : 0.0f;
+    s_k[j] = exact ? r[kRecNegB] / r[kRecNegA] * -1.0f : 0.0f;
+    s_thr[j] = exact && std::isfinite(s_k[j]) ? r[kRecLogThreshold]
+                                              : -std::numeric_limits<float>::infinity();
   }
+  // Per pair of rows, also drop the Gaussians whose power stays below the log threshold on both
+  // rows within the tile's columns: on row y the maximum of power over dx in [lo, hi] is at
+  // clamp(k dy, lo, hi). lo and hi and dy are computed exactly as the kernel computes the lanes'
+  // dx and dy, so every lane's (dx, dy) lies in the range tested; the margin covers the rounding
+  // of both power evaluations (a few ulps of the sum of the absolute terms). The pruned
+  // Gaussians reach no pixel of the pair, so the result is unchanged.
+  const V px_first = hn::Set(d, static_cast<float>(x0) + 0.5f);
+  const V px_last = hn::Set(d, static_cast<float>(x0) + static_cast<float>(kTileSize) - 0.5f);
+  const auto row_reaches = [&](int j, int row) {
+    const V mx = hn::Load(d, s_mx + j);
+    const V lo = hn::Sub(mx, px_last);
+    const V hi = hn::Sub(mx, px_first);
+    const V dy = hn::Sub(hn::Load(d, s_my + j),
+                         hn::Set(d, static_cast<float>(row) + 0.5f + static_cast<float>(y0)));
+    const V ha = hn::Load(d, s_ha + j);
+    const V nb = hn::Load(d, s_nb + j);
+    const V hc = hn::Load(d, s_hc + j);
+    const V dx = hn::Min(hn::Max(hn::Mul(hn::Load(d, s_k + j), dy), lo), hi);
+    const V power = hn::MulAdd(dx, hn::MulAdd(ha, dx, hn::Mul(nb, dy)), hn::Mul(hn::Mul(hc, dy), dy));
+    const V m = hn::Max(hn::Abs(lo), hn::Abs(hi));
+    const V ady = hn::Abs(dy);
+    const V size = hn::MulAdd(hn::Abs(ha), hn::Mul(m, m),
+                              hn::MulAdd(hn::Abs(nb), hn::Mul(m, ady),
+                                         hn::Mul(hn::Abs(hc), hn::Mul(ady, ady))));
+    const V margin = hn::MulAdd(size, hn::Set(d, 1e-5f), hn::Set(d, 1e-4f));
+    // Not (power + margin < threshold): NaNs keep the Gaussian.
+    return hn::Not(hn::Lt(hn::Add(power, margin), hn::Load(d, s_thr + j)));
+  };
+  // The first and last row each Gaussian reaches by both tests, for the backward.
+  std::int32_t* tight = list_scratch2.Get(2 * static_cast<std::size_t>(padded));
+  std::int32_t* tight_lo = tight;
+  std::int32_t* tight_hi = tight + padded;
+  for (int j = 0; j < padded; j += lanes) {
+    hn::Store(hn::Set(di, kTileSize), di, tight_lo + j);
+    hn::Store(hn::Set(di, -1), di, tight_hi + j);
+  }
+  // Iota once (Highway 1.0.3 builds it through memory: a store-forwarding stall per call).
+  const VI iota = hn::Iota(di, 0);
   int list_length[kRowPairs];
   for (int p = 0; p < kRowPairs; ++p) {
     std::int32_t* out = lists + p * padded;
-    const VI below_first = hn::Set(di, 2 * p - 1);
-    const VI after_last = hn::Set(di, 2 * p + 2);
+    const int ra = 2 * p, rb = 2 * p + 1;
+    const VI row_a = hn::Set(di, ra), row_b = hn::Set(di, rb);
     int n = 0;
     for (int j = 0; j < padded; j += lanes) {
-      // row0 <= 2p + 1 and row1 >= 2p (1.0.3 has no integer <=).
-      const auto m = hn::And(hn::Lt(hn::Load(di, row0 + j), after_last),
-                             hn::Gt(hn::Load(di, row1 + j), below_first));
-      hn::StoreU(hn::Compress(hn::Iota(di, j), m), di, out + n);
+      // row0 <= row <= row1 (1.0.3 has no integer <=).
+      const VI r0 = hn::Load(di, row0 + j);
+      const VI r1 = hn::Load(di, row1 + j);
+      auto in_a = hn::And(hn::Lt(r0, hn::Set(di, ra + 1)), hn::Gt(r1, hn::Set(di, ra - 1)));
+      auto in_b = hn::And(hn::Lt(r0, hn::Set(di, rb + 1)), hn::Gt(r1, hn::Set(di, rb - 1)));
+      if (hn::AllFalse(di, hn::Or(in_a, in_b))) continue;
+      in_a = hn::And(in_a, hn::RebindMask(di, row_reaches(j, ra)));
+      in_b = hn::And(in_b, hn::RebindMask(di, row_reaches(j, rb)));
+      const auto m = hn::Or(in_a, in_b);
+      hn::StoreU(hn::Compress(hn::Add(iota, hn::Set(di, j)), m), di, out + n);
       n += static_cast<int>(hn::CountTrue(di, m));
+      const VI lo = hn::Load(di, tight_lo + j);
+      hn::Store(hn::Min(lo, hn::IfThenElse(in_a, row_a, hn::IfThenElse(in_b, row_b, lo))), di,
+                tight_lo + j);
+      const VI hi = hn::Load(di, tight_hi + j);
+      hn::Store(hn::Max(hi, hn::IfThenElse(in_b, row_b, hn::IfThenElse(in_a, row_a, hi))), di,
+                tight_hi + j);
     }
     list_length[p] = n;
+  }
+  // When the records stay in the state for the backward, narrow their rows (the forward below
+  // reads only the columns). Rows cut here hold no pixel the Gaussian reaches.
+  if (job.tile_records != nullptr) {
+    for (int j = 0; j < count; ++j) {
+      float* r = rec + static_cast<std::size_t>(j) * stride;
+      r[kRecRow0] = static_cast<float>(tight_lo[j]);
+      r[kRecRow1] = static_cast<float>(tight_hi[j]);
+    }
   }
 
   const V width = hn::Set(d, static_cast<float>(job.width - x0));
@@ -492,8 +604,14 @@ void BackwardTileImpl(const TileJob& job, int tile) {
   float* slots = job.entry_gradients + static_cast<std::size_t>(start) * slot_stride;
   std::fill(slots + static_cast<std::size_t>(tile_max) * slot_stride,
             slots + static_cast<std::size_t>(count) * slot_stride, 0.0f);
-  float* rec = rec_scratch.Get(static_cast<std::size_t>(tile_max) * stride + 1);
-  GatherRecords(job, tile, start, tile_max, rec);
+  const float* rec;
+  if (job.tile_records_ready) {
+    rec = job.tile_records + static_cast<std::size_t>(start) * stride;
+  } else {
+    float* own = rec_scratch.Get(static_cast<std::size_t>(tile_max) * stride + 1);
+    GatherRecords<kC>(job, tile, start, tile_max, own);
+    rec = own;
+  }
 
   const V one = hn::Set(d, 1.0f);
   const V max_alpha = hn::Set(d, kMaxAlpha);
@@ -538,7 +656,7 @@ void BackwardTileImpl(const TileJob& job, int tile) {
       const V G = FastExpV(d, power);
       const V alpha = hn::Min(max_alpha, hn::Mul(opacity, G));
       const M m = hn::And(reach, hn::And(hn::Le(power, hn::Zero(d)), hn::Ge(alpha, min_alpha)));
-      if (hn::AllFalse(d, m)) continue;
+      // (no early exit when m is empty: rare once reach holds, and masked below)
       any = true;
       const V inv = hn::Div(one, hn::Sub(one, alpha));
       const V T_old = hn::Load(d, T_plane + off);
