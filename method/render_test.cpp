@@ -215,5 +215,74 @@ TEST(Render, LdrColourIsClampedAtZeroWithoutGradient) {
   EXPECT_GT(grads.color_dc[1], 0.0f);
 }
 
+// The preprocess alone (slice, cull, project, opacity x marginal, colour): a loss on every
+// splat buffer, gradients to every model parameter against central differences in double.
+// Degree-0 colour for the geometry (the view direction and dt are detached by design).
+TEST(Render, PreprocessBackwardMatchesFiniteDifferences) {
+  for (bool temporal : {true, false}) {
+    GaussianModelT<double> model = RandomScene<double>(6, temporal, 31);
+    RenderOptions options = Options(temporal);
+    options.sh_degree = options.time_degree = 0;
+    const ViewParams<double> view = ViewParams<double>::FromCamera(TestCamera());
+    const double time = 0.5;
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(-1, 1);
+    FrameStateT<double> state;
+    PreprocessForward(model, view, time, options, &state);
+    ASSERT_GT(state.num_visible, 3u);
+    // Random weights on every splat value; the loss is their weighted sum.
+    SplatBuffersT<double> w = state.splats;
+    for (auto* v : {&w.mean2d, &w.conic, &w.opacity, &w.features})
+      for (double& x : *v) x = u(rng);
+    auto loss = [&](const GaussianModelT<double>& m) {
+      FrameStateT<double> s;
+      PreprocessForward(m, view, time, options, &s);
+      double total = 0;
+      for (std::size_t i = 0; i < m.size(); ++i) {
+        if (s.splats.radius[i] != state.splats.radius[i]) ADD_FAILURE() << "visibility changed";
+        if (s.splats.radius[i] <= 0) continue;
+        for (int k = 0; k < 2; ++k) total += w.mean2d[2 * i + k] * s.splats.mean2d[2 * i + k];
+        for (int k = 0; k < 3; ++k) total += w.conic[3 * i + k] * s.splats.conic[3 * i + k];
+        total += w.opacity[i] * s.splats.opacity[i];
+        for (int k = 0; k < 3; ++k) total += w.features[3 * i + k] * s.splats.features[3 * i + k];
+      }
+      return total;
+    };
+    state.splat_grads.SetZero(model.size(), 3);
+    for (std::size_t i = 0; i < model.size(); ++i) {
+      if (state.splats.radius[i] <= 0) continue;
+      for (int k = 0; k < 2; ++k) state.splat_grads.mean2d[2 * i + k] = w.mean2d[2 * i + k];
+      for (int k = 0; k < 3; ++k) state.splat_grads.conic[3 * i + k] = w.conic[3 * i + k];
+      state.splat_grads.opacity[i] = w.opacity[i];
+      for (int k = 0; k < 3; ++k) state.splat_grads.features[3 * i + k] = w.features[3 * i + k];
+    }
+    GaussianGradientsT<double> grads;
+    grads.ZerosLike(model);
+    PreprocessBackward(model, view, time, options, state, &grads);
+    const double h = 1e-6;
+    int checked = 0;
+    for (auto [param, grad] :
+         {std::pair{&model.xyz, &grads.xyz}, std::pair{&model.log_scales, &grads.log_scales},
+          std::pair{&model.rot_left, &grads.rot_left},
+          std::pair{&model.opacity_logit, &grads.opacity_logit},
+          std::pair{&model.color_dc, &grads.color_dc}, std::pair{&model.t, &grads.t},
+          std::pair{&model.rot_right, &grads.rot_right}}) {
+      for (std::size_t i = 0; i < param->size(); ++i) {
+        const double saved = (*param)[i];
+        (*param)[i] = saved + h;
+        const double plus = loss(model);
+        (*param)[i] = saved - h;
+        const double minus = loss(model);
+        (*param)[i] = saved;
+        const double fd = (plus - minus) / (2 * h);
+        ASSERT_NEAR((*grad)[i], fd, 1e-5 + 1e-5 * std::abs(fd))
+            << "temporal " << temporal << " entry " << i;
+        ++checked;
+      }
+    }
+    EXPECT_GT(checked, 100);
+  }
+}
+
 }  // namespace
 }  // namespace hdr4d::method

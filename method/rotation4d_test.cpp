@@ -274,5 +274,46 @@ TEST(Covariance4D, ChainedWithRotationMatchesFiniteDifferences) {
   }
 }
 
+// The two building blocks every rotation/covariance backward uses, checked on their own.
+TEST(RotationDetail, NormalizeQuaternionBackwardMatchesFiniteDifferences) {
+  std::mt19937 rng(21);
+  std::normal_distribution<double> n01;
+  for (int trial = 0; trial < 5; ++trial) {
+    Vec4<double> q, w;
+    for (int k = 0; k < 4; ++k) q[k] = n01(rng), w[k] = n01(rng);
+    auto f = [&](const Vec& x) { return w.dot(detail::NormalizeQuaternion(Vec4<double>(x))); };
+    const Vec4<double> analytic = detail::NormalizeQuaternionBackward(q, w);
+    ExpectGradientsMatch(Vec(analytic), NumericGradient(f, Vec(q)));
+  }
+}
+
+TEST(RotationDetail, CovarianceFromRotationBackwardMatchesFiniteDifferences) {
+  std::mt19937 rng(22);
+  std::normal_distribution<double> n01;
+  for (int trial = 0; trial < 4; ++trial) {
+    Eigen::Matrix<double, 3, 3> R, G;
+    Eigen::Matrix<double, 3, 1> s;
+    for (int k = 0; k < 9; ++k) R(k) = n01(rng), G(k) = n01(rng);  // any R: the formula is general
+    for (int k = 0; k < 3; ++k) s[k] = 0.3 * n01(rng);
+    auto loss = [&](const Eigen::Matrix<double, 3, 3>& r, const Eigen::Matrix<double, 3, 1>& ls) {
+      return (G.array() * detail::CovarianceFromRotation<double, 3>(r, ls).array()).sum();
+    };
+    Eigen::Matrix<double, 3, 3> dR;
+    Eigen::Matrix<double, 3, 1> ds;
+    detail::CovarianceFromRotationBackward<double, 3>(R, s, G, &dR, &ds);
+    Vec x(12), analytic(12);
+    for (int k = 0; k < 9; ++k) x[k] = R(k), analytic[k] = dR(k);
+    for (int k = 0; k < 3; ++k) x[9 + k] = s[k], analytic[9 + k] = ds[k];
+    auto f = [&](const Vec& v) {
+      Eigen::Matrix<double, 3, 3> r;
+      Eigen::Matrix<double, 3, 1> ls;
+      for (int k = 0; k < 9; ++k) r(k) = v[k];
+      for (int k = 0; k < 3; ++k) ls[k] = v[9 + k];
+      return loss(r, ls);
+    };
+    ExpectGradientsMatch(analytic, NumericGradient(f, x));
+  }
+}
+
 }  // namespace
 }  // namespace hdr4d::method
