@@ -13,7 +13,7 @@ void AddDemoSceneCommand(CLI::App& app) {
   auto rig = std::make_shared<std::string>("multiview");
   CLI::App* cmd = app.add_subcommand(
       "make-demo-scene",
-      "Render the built-in dynamic HDR scene (a rolling ball, a hot moving emitter, a dimming sun; "
+      "Render the built-in dynamic HDR scene (a rolling ball, a glowing bulb whose lamp casts a moving shadow, a dimming sun; "
       "radiance over 1e4:1) to linear EXR ground truth and write its dataset JSON. Then run "
       "`hdr4d synth-ldr --data DIR` to create the multi-exposure LDR images.");
   cmd->add_option("--out,-o", *out, "Output folder")->required();
