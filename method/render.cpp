@@ -59,6 +59,21 @@ int TimeDegree(const GaussianModelT<T>& model, const RenderOptions& options) {
 
 constexpr int kMaxChannels = 8;
 
+// The radius the tiles are binned with: the 3-sigma screen radius, tightened to where
+// opacity x G can still reach the blending threshold 1/255 (G = exp(-d^2 / (2 lambda)) along the
+// widest axis), so tiles the splat cannot touch get no entry. Pixels outside it have
+// alpha < 1/255 and are skipped by the blend anyway: images and gradients are unchanged.
+template <typename T>
+int BinningRadius(const Splat2D<T>& splat, T opacity) {
+  const T reach = opacity * T(255);
+  if (!(reach > T(1))) return 0;  // can never reach 1/255 anywhere
+  const T mid = T(0.5) * (splat.cov2d[0] + splat.cov2d[2]);
+  const T det = splat.cov2d[0] * splat.cov2d[2] - splat.cov2d[1] * splat.cov2d[1];
+  const T lambda = mid + std::sqrt(std::max(T(0.1), mid * mid - det));
+  const T r = std::sqrt(T(2) * std::log(reach) * lambda);
+  return std::min(splat.radius, static_cast<int>(std::ceil(r)) + 1);  // +1: rounding margin
+}
+
 // Clears Gaussian i's gradient rows; the colour rows only when asked (a visible Gaussian's
 // colour rows are overwritten in full by the backward).
 template <typename T>
@@ -111,6 +126,7 @@ void PreprocessForward(const GaussianModelT<T>& model,
   s.Resize(n);
   state->clamped.assign(n * channels, 0);
   state->conditionals.resize(n);  // written for visible Gaussians only
+  state->screen_radius.assign(n, 0);
   const Vec3<T> center = view.Center();
   const int time_degree = TimeDegree(model, options);
   const std::size_t stride = model.rest_stride();
@@ -132,8 +148,9 @@ void PreprocessForward(const GaussianModelT<T>& model,
                         s.mean2d[2 * i + 1] = splat.mean.y();
                         for (int k = 0; k < 3; ++k) s.conic[3 * i + k] = splat.conic[k];
                         s.depth[i] = splat.depth;
-                        s.radius[i] = splat.radius;
                         s.opacity[i] = Sigmoid(model.opacity_logit[i]) * c.marginal;
+                        state->screen_radius[i] = splat.radius;
+                        s.radius[i] = BinningRadius(splat, s.opacity[i]);
                         state->conditionals[i] = c;  // the backward reuses it
                         // Colour is linear in the coefficients: weights . (DC, rest) + 0.5.
                         T w[kMaxColorCoefficients];

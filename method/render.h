@@ -45,6 +45,9 @@ struct FrameStateT {
   RasterState raster;
   std::vector<std::uint8_t> clamped;  // N x channels: LDR colour clamped at 0 (no gradient)
   std::vector<ConditionalGaussian<T>> conditionals;  // N: valid where splats.radius > 0
+  // N: the reference's 3-sigma screen radius (0 = culled), what densification statistics use;
+  // splats.radius is the tighter radius the tiles are binned with (see render.cpp).
+  std::vector<int> screen_radius;
   std::size_t num_visible = 0;        // Gaussians with radius > 0 after the preprocess
   // Reference (scalar, any T) path only: the forward's outputs the backward needs.
   std::vector<T> final_T;

@@ -270,7 +270,7 @@ TrainSummary Train(const TrainOptions& options) {
           it, bad, last_good);
     }
     if (it < opt.densify_until)
-      AccumulateStats(state.splat_grads.mean2d, state.splats.radius, view.width(), view.height(),
+      AccumulateStats(state.splat_grads.mean2d, state.screen_radius, view.width(), view.height(),
                       &stats);
     loop.loss_curve.push_back(loss.value);
 
