@@ -37,6 +37,13 @@ const char* SplitName(Split split) {
   return "?";
 }
 
+Split ParseSplit(const std::string& name, const char* what) {
+  for (Split split : {Split::kTrain, Split::kTest, Split::kVal}) {
+    if (name == SplitName(split)) return split;
+  }
+  Fail("{}: unknown split '{}' (use train, test or val)", what, name);
+}
+
 std::vector<const Frame*> Dataset::AllFrames() const {
   std::vector<const Frame*> frames;
   frames.reserve(NumFrames());

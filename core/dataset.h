@@ -46,6 +46,8 @@ namespace hdr4d {
 
 enum class Split { kTrain, kTest, kVal };
 const char* SplitName(Split split);  // "train", "test", "val"
+// The split called `name`; throws hdr4d::Error naming `what` (the command) for an unknown name.
+Split ParseSplit(const std::string& name, const char* what);
 
 enum class TimeNormalisation {
   kGlobal,            // divide by the largest time over train, test and val together (if > 1)

@@ -67,6 +67,13 @@ Image Convert(const Image& image, Encoding target, float (*fn)(float)) {
 Image ToLinear(const Image& image) { return Convert(image, Encoding::kLinear, SrgbToLinear); }
 Image ToSrgb(const Image& image) { return Convert(image, Encoding::kSrgb, LinearToSrgb); }
 
+Image DisplayImageFromBuffer(const float* values, int width, int height, int channels) {
+  Image image(width, height, channels, Encoding::kSrgb);
+  for (std::size_t i = 0; i < image.size(); ++i)
+    image.values()[i] = std::clamp(values[i], 0.0f, 1.0f);
+  return image;
+}
+
 long FirstNonFinite(const Image& image) {
   const auto& v = image.values();
   for (std::size_t i = 0; i < v.size(); ++i) {

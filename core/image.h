@@ -70,6 +70,10 @@ float LinearToSrgb(float linear);
 Image ToLinear(const Image& image);
 Image ToSrgb(const Image& image);
 
+// A rendered buffer (H x W x channels floats) as a display image: values clamped to [0,1],
+// tagged as display-encoded (what LDR renders are written and scored as).
+Image DisplayImageFromBuffer(const float* values, int width, int height, int channels);
+
 // Index of the first NaN or Inf value, or -1 when all are finite.
 long FirstNonFinite(const Image& image);
 

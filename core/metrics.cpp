@@ -83,19 +83,6 @@ double Mse(const T* a, const T* b, int width, int height, int channels) {
   return sum / (static_cast<double>(width) * height * channels);
 }
 
-// The 1-D Gaussian of the SSIM window, normalised to sum 1.
-std::array<double, kSsimWindow> GaussianKernel() {
-  std::array<double, kSsimWindow> g{};
-  double sum = 0.0;
-  for (int k = 0; k < kSsimWindow; ++k) {
-    const double d = k - kSsimWindow / 2;
-    g[k] = std::exp(-d * d / (2.0 * kSsimSigma * kSsimSigma));
-    sum += g[k];
-  }
-  for (double& v : g) v /= sum;
-  return g;
-}
-
 // Windowed SSIM on interleaved images. Zero padding makes the 2-D window sum separable exactly:
 // a horizontal pass over the five per-pixel products (a, b, a^2, b^2, ab) of every needed row,
 // then a vertical pass, both skipping the zeros outside the image. Rows are processed in
@@ -105,7 +92,7 @@ std::array<double, kSsimWindow> GaussianKernel() {
 template <typename T>
 double SsimCore(
     const T* a, const T* b, int width, int height, int channels, double c1, double c2, float* map) {
-  static const std::array<double, kSsimWindow> g = GaussianKernel();
+  static const std::array<double, kSsimWindow> g = SsimGaussianKernel();
   constexpr int kRadius = kSsimWindow / 2;
   constexpr int kQuantities = 5;  // a, b, a^2, b^2, ab
   const std::size_t row_len = static_cast<std::size_t>(width) * channels;
@@ -299,6 +286,18 @@ double Pu21ScaleOfRgb(const Image& gt_rgb) {
 }
 
 }  // namespace
+
+std::array<double, kSsimWindow> SsimGaussianKernel() {
+  std::array<double, kSsimWindow> g{};
+  double sum = 0.0;
+  for (int k = 0; k < kSsimWindow; ++k) {
+    const double d = k - kSsimWindow / 2;
+    g[k] = std::exp(-d * d / (2.0 * kSsimSigma * kSsimSigma));
+    sum += g[k];
+  }
+  for (double& v : g) v /= sum;
+  return g;
+}
 
 // ---- PSNR ------------------------------------------------------------------------------------
 

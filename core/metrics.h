@@ -13,6 +13,7 @@
 //   the luminance).
 #pragma once
 
+#include <array>
 #include <string>
 #include <utility>
 #include <vector>
@@ -41,6 +42,9 @@ inline constexpr double kSsimC1 = 0.01 * 0.01;
 inline constexpr double kSsimC2 = 0.03 * 0.03;
 inline constexpr int kSsimWindow = 11;     // taps of the Gaussian window
 inline constexpr double kSsimSigma = 1.5;  // its standard deviation in pixels
+
+// The 1-D Gaussian of the SSIM window, normalised to sum 1 (the training loss uses it too).
+std::array<double, kSsimWindow> SsimGaussianKernel();
 
 // SSIM as in the 3DGS reference: an 11x11 Gaussian window (sigma 1.5, the 1-D kernel normalised
 // to sum 1, applied separably), "same"-size maps with zero padding (windows at the border count

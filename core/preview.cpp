@@ -57,16 +57,13 @@ Image DisplayHdr(const Image& hdr) {
 }
 
 void PreviewOptions::Validate() const {
-  if (split != "train" && split != "test" && split != "val")
-    Fail("preview: unknown split '{}' (use train, test or val)", split);
+  ParseSplit(split, "preview");
   if (max_columns < 1) Fail("preview: --columns must be at least 1, got {}", max_columns);
 }
 
 Preview MakeDatasetPreview(const Dataset& dataset, const PreviewOptions& options) {
   options.Validate();
-  const Split split = options.split == "train"  ? Split::kTrain
-                      : options.split == "test" ? Split::kTest
-                                                : Split::kVal;
+  const Split split = ParseSplit(options.split, "preview");
   const std::vector<Frame>& frames = dataset.FramesOf(split);
   if (frames.empty())
     Fail("{}: the {} split has no frames to preview", dataset.root.string(), options.split);

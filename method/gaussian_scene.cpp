@@ -72,9 +72,7 @@ Dataset MakeGaussianScene(const GaussianSceneOptions& options, const fs::path& r
     for (int k = 0; k < options.num_timestamps; ++k) {
       const double t = static_cast<double>(k) / (options.num_timestamps - 1);
       RenderForward(model, camera, static_cast<float>(t), render, &state, values.data());
-      Image image(options.size, options.size, 3, Encoding::kSrgb);
-      for (std::size_t i = 0; i < values.size(); ++i)
-        image.values()[i] = std::clamp(values[i], 0.0f, 1.0f);
+      const Image image = DisplayImageFromBuffer(values.data(), options.size, options.size, 3);
       Frame frame;
       frame.split = test ? Split::kTest : Split::kTrain;
       frame.file_path = fmt::format("images/cam{:02d}_t{:03d}.png", c, k);

@@ -31,20 +31,13 @@ namespace hdr4d::method::loss_internal {
 
 constexpr int kRadius = kSsimWindow / 2;
 
-// The normalised 1-D Gaussian of the SSIM window, as in core/metrics.cpp (which keeps its copy
-// private), rounded once to T.
+// The SSIM window of core/metrics.h, rounded once to T.
 template <typename T>
 const std::array<T, kSsimWindow>& Window() {
   static const std::array<T, kSsimWindow> window = [] {
-    std::array<double, kSsimWindow> g{};
-    double sum = 0.0;
-    for (int k = 0; k < kSsimWindow; ++k) {
-      const double d = k - kRadius;
-      g[k] = std::exp(-d * d / (2.0 * kSsimSigma * kSsimSigma));
-      sum += g[k];
-    }
+    const std::array<double, kSsimWindow> g = SsimGaussianKernel();
     std::array<T, kSsimWindow> out{};
-    for (int k = 0; k < kSsimWindow; ++k) out[k] = static_cast<T>(g[k] / sum);
+    for (int k = 0; k < kSsimWindow; ++k) out[k] = static_cast<T>(g[k]);
     return out;
   }();
   return window;

@@ -25,13 +25,6 @@ GaussianModel LoadRunModel(const fs::path& run) {
 
 namespace {
 
-Image ToDisplay(const std::vector<float>& values, int w, int h, int channels) {
-  Image image(w, h, channels, Encoding::kSrgb);
-  for (std::size_t i = 0; i < values.size(); ++i)
-    image.values()[i] = std::clamp(values[i], 0.0f, 1.0f);
-  return image;
-}
-
 bool HaveFfmpeg() { return std::system("command -v ffmpeg >/dev/null 2>&1") == 0; }
 
 }  // namespace
@@ -69,13 +62,7 @@ int RenderRun(const RenderRunOptions& options) {
   if (!config.contains("data") || !config["data"].is_string()) {
     Fail("{}: key 'data' (the scene folder) missing", (options.run / "config.json").string());
   }
-  const Split split =
-      options.split == "train"  ? Split::kTrain
-      : options.split == "test" ? Split::kTest
-      : options.split == "val"
-          ? Split::kVal
-          : (Fail("render: unknown split '{}' (use train, test or val)", options.split),
-             Split::kTest);
+  const Split split = ParseSplit(options.split, "render");
   const Dataset dataset = LoadDataset(config["data"].get<std::string>(),
                                       {.image_check = ImageCheck::kNone, .require_test = false});
   const GaussianModel model = LoadRunModel(options.run);
@@ -92,7 +79,7 @@ int RenderRun(const RenderRunOptions& options) {
     const int w = camera.intrinsics.width, h = camera.intrinsics.height;
     values.resize(static_cast<std::size_t>(w) * h * model.channels);
     RenderForward(model, camera, time, render, &state, values.data());
-    WriteImage(path, ToDisplay(values, w, h, model.channels));
+    WriteImage(path, DisplayImageFromBuffer(values.data(), w, h, model.channels));
   };
 
   if (options.time) {

@@ -99,13 +99,6 @@ std::pair<int, int> ColorDegrees(int iteration, const GaussianModel& model, int 
   return {sh, time};
 }
 
-Image ToImage(const std::vector<float>& values, int width, int height) {
-  Image image(width, height, 3, Encoding::kSrgb);
-  for (std::size_t i = 0; i < values.size(); ++i)
-    image.values()[i] = std::clamp(values[i], 0.0f, 1.0f);
-  return image;
-}
-
 // Means of the LDR metrics over the views (PSNR as the mean of per-view values, as 3DGS).
 nlohmann::json Evaluate(const GaussianModel& model,
                         const std::vector<TrainView>& views,
@@ -120,7 +113,8 @@ nlohmann::json Evaluate(const GaussianModel& model,
     RenderForward(model, v.camera, v.time, options, state, image.data());
     v.ToFloat(&gt);
     for (const auto& [key, value] :
-         LdrMetrics(ToImage(image, v.width(), v.height()), ToImage(gt, v.width(), v.height()))) {
+         LdrMetrics(DisplayImageFromBuffer(image.data(), v.width(), v.height(), 3),
+                    DisplayImageFromBuffer(gt.data(), v.width(), v.height(), 3))) {
       sums[key] += value;
     }
   }
