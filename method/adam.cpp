@@ -100,6 +100,28 @@ void AdamKernel(float* HWY_RESTRICT p,
   }
 }
 
+// True when no value has an all-ones exponent (NaN or infinity). Sixteen lanes at a time, with
+// one early exit per 1024 values (the baseline build's loop was 4 lanes wide).
+bool FiniteKernel(const float* HWY_RESTRICT values, std::size_t n) {
+  const hn::ScalableTag<std::uint32_t> du;
+  const std::size_t lanes = hn::Lanes(du);
+  const auto exponent = hn::Set(du, 0x7f800000u);
+  const auto* bits = reinterpret_cast<const std::uint32_t*>(values);
+  auto bad = hn::Zero(du);
+  std::size_t i = 0;
+  for (; i + lanes <= n; i += lanes) {
+    bad = hn::Or(bad,
+                 hn::VecFromMask(du, hn::Eq(hn::And(hn::LoadU(du, bits + i), exponent), exponent)));
+    if ((i & 1023) == 0 && !hn::AllTrue(du, hn::Eq(bad, hn::Zero(du)))) return false;
+  }
+  if (i < n) {
+    const auto mask = hn::FirstN(du, n - i);
+    const auto tail = hn::MaskedLoad(mask, du, bits + i);
+    bad = hn::Or(bad, hn::VecFromMask(du, hn::Eq(hn::And(tail, exponent), exponent)));
+  }
+  return hn::AllTrue(du, hn::Eq(bad, hn::Zero(du)));
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace hdr4d::method
 HWY_AFTER_NAMESPACE();
@@ -187,19 +209,16 @@ class Reader {
   std::uint64_t hash_ = kFnvOffset;
 };
 
-bool ChunkFinite(const float* values, std::size_t size) {
-  std::uint32_t bad = 0;
-  for (std::size_t i = 0; i < size; ++i) {
-    std::uint32_t bits;
-    std::memcpy(&bits, values + i, sizeof(bits));
-    bad |= static_cast<std::uint32_t>((bits & 0x7f800000u) == 0x7f800000u);  // exponent all ones
-  }
-  return bad == 0;
-}
-
 }  // namespace
 
 HWY_EXPORT(AdamKernel);
+HWY_EXPORT(FiniteKernel);
+
+namespace {
+bool ChunkFinite(const float* values, std::size_t size) {
+  return HWY_DYNAMIC_DISPATCH(FiniteKernel)(values, size);
+}
+}  // namespace
 
 // ---- AdamOptions
 // ---------------------------------------------------------------------------------

@@ -107,10 +107,10 @@ class Scratch {
   std::size_t capacity_ = 0;
 };
 
-// exp(x) for x in [-87, 0] (clamped), relative error <= 1e-6 (see FastExp in blend.h).
-HWY_INLINE V FastExpV(D d, V x) {
+// exp(x) for x in [-87, 0] without the clamp: outside that range the result is garbage (maybe
+// inf or NaN), so only for callers that mask such lanes out of every result (the forward blend).
+HWY_INLINE V FastExpUnclampedV(D d, V x) {
   const DI di;
-  x = hn::Min(hn::Max(x, hn::Set(d, -87.0f)), hn::Zero(d));
   const V n = hn::Round(hn::Mul(x, hn::Set(d, 1.44269504088896341f)));
   V r = hn::MulAdd(n, hn::Set(d, -0.693145751953125f), x);  // exact: few bits in ln2_hi
   r = hn::MulAdd(n, hn::Set(d, -1.428606765330187e-6f), r);
@@ -123,6 +123,11 @@ HWY_INLINE V FastExpV(D d, V x) {
   p = hn::MulAdd(p, r, hn::Set(d, 1.0f));
   const VI bits = hn::ShiftLeft<23>(hn::Add(hn::ConvertTo(di, n), hn::Set(di, 127)));
   return hn::Mul(p, hn::BitCast(d, bits));
+}
+
+// exp(x) for x in [-87, 0] (clamped), relative error <= 1e-6 (see FastExp in blend.h).
+HWY_INLINE V FastExpV(D d, V x) {
+  return FastExpUnclampedV(d, hn::Min(hn::Max(x, hn::Set(d, -87.0f)), hn::Zero(d)));
 }
 
 // Packs the per-Gaussian part of the records of job.depth_order[begin, end) into job.packed
@@ -291,8 +296,10 @@ HWY_INLINE M BlendStep(const float* r, int j, int channels, V px, V py, PixelSta
   const V dy = hn::Sub(hn::Set(d, r[kRecMeanY]), py);
   const V power = Power(r, dx, dy);
   const M reach = hn::AndNot(st.done, hn::Ge(power, hn::Set(d, r[kRecLogThreshold])));
-  const V alpha =
-      hn::Min(hn::Set(d, kMaxAlpha), hn::Mul(hn::Set(d, r[kRecOpacity]), FastExpV(d, power)));
+  // Lanes with power outside [threshold, 0] (threshold >= -87 for any opacity <= e^82) never
+  // contribute: their alpha reaches only masks and an IfThenElseZero, so the clamps can go.
+  const V alpha = hn::Min(hn::Set(d, kMaxAlpha),
+                          hn::Mul(hn::Set(d, r[kRecOpacity]), FastExpUnclampedV(d, power)));
   const M active =
       hn::And(reach, hn::And(hn::Le(power, hn::Zero(d)), hn::Ge(alpha, hn::Set(d, kMinAlpha))));
   const V test_T = hn::Mul(st.T, hn::Sub(hn::Set(d, 1.0f), alpha));
@@ -360,7 +367,7 @@ void ForwardTileImpl(const TileJob& job, int tile) {
   float* s_ha = s_my + padded;  // -a/2, -b, -c/2
   float* s_nb = s_ha + padded;
   float* s_hc = s_nb + padded;
-  float* s_k = s_hc + padded;  // -b / a: the dx maximising power on a row is k dy
+  float* s_k = s_hc + padded;   // -b / a: the dx maximising power on a row is k dy
   float* s_thr = s_k + padded;  // log threshold; -inf: never pruned
   for (int j = 0; j < padded; ++j) {
     const float* r = rec + static_cast<std::size_t>(j) * stride;
@@ -397,12 +404,13 @@ void ForwardTileImpl(const TileJob& job, int tile) {
     const V nb = hn::Load(d, s_nb + j);
     const V hc = hn::Load(d, s_hc + j);
     const V dx = hn::Min(hn::Max(hn::Mul(hn::Load(d, s_k + j), dy), lo), hi);
-    const V power = hn::MulAdd(dx, hn::MulAdd(ha, dx, hn::Mul(nb, dy)), hn::Mul(hn::Mul(hc, dy), dy));
+    const V power =
+        hn::MulAdd(dx, hn::MulAdd(ha, dx, hn::Mul(nb, dy)), hn::Mul(hn::Mul(hc, dy), dy));
     const V m = hn::Max(hn::Abs(lo), hn::Abs(hi));
     const V ady = hn::Abs(dy);
-    const V size = hn::MulAdd(hn::Abs(ha), hn::Mul(m, m),
-                              hn::MulAdd(hn::Abs(nb), hn::Mul(m, ady),
-                                         hn::Mul(hn::Abs(hc), hn::Mul(ady, ady))));
+    const V size = hn::MulAdd(
+        hn::Abs(ha), hn::Mul(m, m),
+        hn::MulAdd(hn::Abs(nb), hn::Mul(m, ady), hn::Mul(hn::Abs(hc), hn::Mul(ady, ady))));
     const V margin = hn::MulAdd(size, hn::Set(d, 1e-5f), hn::Set(d, 1e-4f));
     // Not (power + margin < threshold): NaNs keep the Gaussian.
     return hn::Not(hn::Lt(hn::Add(power, margin), hn::Load(d, s_thr + j)));
