@@ -15,5 +15,6 @@ void AddTrainCommand(CLI::App& app);          // train
 void AddRenderCommand(CLI::App& app);         // render
 void AddGaussianSceneCommand(CLI::App& app);  // make-gaussian-scene
 void AddExportPlyCommand(CLI::App& app);      // export-ply
+void AddToneCurvesCommand(CLI::App& app);     // tone-curves
 
 }  // namespace hdr4d::cli

@@ -1,9 +1,12 @@
 // hdr4d export-ply: a run's slice at time t as a standard 3DGS .ply for any viewer.
 #include <fmt/format.h>
 
+#include "baselines/tone_mapper_factory.h"
 #include "cli/commands.h"
+#include "core/error.h"
 #include "method/export_ply.h"
 #include "method/render_run.h"
+#include "method/tonemap/radiance_bank.h"
 
 namespace hdr4d::cli {
 
@@ -18,9 +21,19 @@ void AddExportPlyCommand(CLI::App& app) {
   cmd->add_option("--run", *run, "Run folder (from hdr4d train)")->required();
   cmd->add_option("--time,-t", *time, "Normalised time in [0,1]")->capture_default_str();
   cmd->add_option("--out,-o", *out, "Output .ply (default RUN/slice_t<t>.ply)");
-  cmd->callback([run, out, time] {
+  auto exposure = std::make_shared<double>(0.0);
+  cmd->add_option("--exposure", *exposure,
+                  "HDR models: display colours at this exposure in seconds (default: the median "
+                  "training exposure)");
+  cmd->callback([run, out, time, exposure] {
     const std::string path = out->empty() ? fmt::format("{}/slice_t{:.3f}.ply", *run, *time) : *out;
-    const std::size_t n = method::ExportSlicePly(method::LoadRunModel(*run), *time, 1.0f, path);
+    method::LoadedRun loaded = method::LoadRun(*run, baselines::MakeToneMapper);
+    if (!(*time >= 0 && *time <= 1)) Fail("export-ply: --time {} is outside [0, 1]", *time);
+    const double e = *exposure > 0 ? *exposure : method::MedianExposure(loaded.dataset);
+    const method::ExportDisplay display{loaded.tone_mapper.get(),
+                                        {method::RadianceBank::TimeIndex(*time, loaded.num_times),
+                                         -1, static_cast<float>(std::log(e))}};
+    const std::size_t n = method::ExportSlicePly(loaded.model, *time, 1.0f, path, &display);
     fmt::print("export-ply: {} Gaussians at t = {} -> {}\n", n, *time, path);
   });
 }

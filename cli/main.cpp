@@ -34,6 +34,7 @@ int main(int argc, char** argv) {
   hdr4d::cli::AddTrainCommand(app);
   hdr4d::cli::AddRenderCommand(app);
   hdr4d::cli::AddExportPlyCommand(app);
+  hdr4d::cli::AddToneCurvesCommand(app);
 
   try {
     app.parse(argc, argv);

@@ -1,6 +1,7 @@
 // hdr4d render: images of a trained run.
 #include <fmt/format.h>
 
+#include "baselines/tone_mapper_factory.h"
 #include "cli/commands.h"
 #include "method/render_run.h"
 
@@ -12,8 +13,9 @@ void AddRenderCommand(CLI::App& app) {
   auto out = std::make_shared<std::string>();
   CLI::App* cmd = app.add_subcommand(
       "render",
-      "Render a trained run's views of a split. Each image is named like its ground truth, so "
-      "`hdr4d eval OUT <scene image folder>` scores them.");
+      "Render a trained run's views of a split: the LDR image (PNG, at each view's exposure or "
+      "--exposure) and, for HDR models, the linear HDR image (EXR). Each is named like its ground "
+      "truth (file_path, exr_file_path), so `hdr4d eval OUT <scene image folder>` scores them.");
   cmd->add_option("--run", *run, "Run folder (from hdr4d train)")->required();
   cmd->add_option("--out", *out, "Output folder (default RUN/renders/<split>)");
   cmd->add_option("--split", options->split, "train, test or val")->capture_default_str();
@@ -28,8 +30,18 @@ void AddRenderCommand(CLI::App& app) {
       "--video", options->video_frames,
       "Render N frames orbiting the scene while time runs 0..1 (PNG sequence; MP4 with ffmpeg)");
   cmd->add_option("--fps", options->fps, "Video frame rate")->capture_default_str();
-  cmd->callback([options, run, out, time, time_option] {
+  auto exposure = std::make_shared<double>(1.0);
+  CLI::Option* exposure_option = cmd->add_option(
+      "--exposure", *exposure,
+      "LDR renders at this exposure in seconds (default: each view's own; the median training "
+      "exposure for --video)");
+  auto no_hdr = std::make_shared<bool>(false);
+  cmd->add_flag("--no-hdr", *no_hdr, "Do not write the HDR (EXR) renders");
+  cmd->callback([options, run, out, time, time_option, exposure, exposure_option, no_hdr] {
     if (time_option->count() > 0) options->time = *time;
+    if (exposure_option->count() > 0) options->exposure = *exposure;
+    options->write_hdr = !*no_hdr;
+    options->tone_mapper_factory = baselines::MakeToneMapper;
     options->run = *run;
     options->out = *out;
     const int n = method::RenderRun(*options);

@@ -6,10 +6,12 @@
 #include <cmath>
 #include <numbers>
 #include <optional>
+#include <random>
 
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/parallel.h"
+#include "core/ply.h"
 #include "core/progress.h"
 
 namespace hdr4d {
@@ -154,6 +156,46 @@ void DemoSceneOptions::Validate() const {
     Fail("demo scene: samples per axis {} must be within 1..16", samples_per_axis);
 }
 
+PointCloud DemoScenePointCloud(int count, std::uint64_t seed) {
+  HDR4D_CHECK(count >= 10);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  PointCloud cloud;
+  // Colours in [0,1] for initialisation: radiance r shown as r / (1 + r).
+  auto add = [&](const Vector3d& p, const Vector3d& radiance, double t) {
+    cloud.positions.push_back(p.cast<float>());
+    const Vector3d c = radiance.cwiseQuotient(radiance + Vector3d::Ones());
+    cloud.colors.push_back(c.cast<float>());
+    cloud.times.push_back(static_cast<float>(t));
+  };
+  const Vector3d above(0, 0, 6);
+  // Half the points on the floor, a quarter on the sky dome (radius 9, seen from the ring of
+  // cameras), the rest on the moving ball and bulb at random times.
+  for (int i = 0; i < count / 2; ++i) {
+    const Vector3d p(-4.0 + 8.0 * u(rng), -4.0 + 8.0 * u(rng), 0.0);
+    const double t = u(rng);
+    add(p, DemoSceneRadiance(above + Vector3d(p.x(), p.y(), 0), Vector3d(0, 0, -1), t), t);
+  }
+  for (int i = 0; i < count / 4; ++i) {
+    const double a = 2 * kPi * u(rng), z = 0.1 + 0.9 * u(rng);
+    const Vector3d d(std::sqrt(1 - z * z) * std::cos(a), std::sqrt(1 - z * z) * std::sin(a), z);
+    const double t = u(rng);
+    add(9.0 * d, Sky(d, t), t);
+  }
+  for (int i = static_cast<int>(cloud.size()); i < count; ++i) {
+    const double t = u(rng);
+    const double a = 2 * kPi * u(rng), z = 2 * u(rng) - 1;
+    const Vector3d n(std::sqrt(1 - z * z) * std::cos(a), std::sqrt(1 - z * z) * std::sin(a), z);
+    if (i % 5 == 0) {
+      add(DemoEmitterCenter(t) + kEmitterRadius * n, kEmitterRadiance, t);
+    } else {
+      const Vector3d p = BallCenter(t) + kBallRadius * n;
+      add(p, Shade(p, n, kBallAlbedo, t), t);
+    }
+  }
+  return cloud;
+}
+
 namespace {
 
 Vector3d RingPosition(double angle) { return {4.2 * std::cos(angle), 4.2 * std::sin(angle), 2.4}; }
@@ -237,6 +279,9 @@ Dataset MakeDemoScene(const DemoSceneOptions& options, const fs::path& root) {
   }
   progress.Finish();
   dataset.time_max_raw = 1.0;
+  // Initial points for training, as Blender-made scenes ship: surfaces sampled over time.
+  WritePly(root / "point3d.ply", DemoScenePointCloud(6000, 1));
+  dataset.point_cloud_path = root / "point3d.ply";
   WriteDataset(dataset, root);
   return dataset;
 }

@@ -13,6 +13,7 @@
 
 #include "core/dataset.h"
 #include "core/image.h"
+#include "core/ply.h"
 
 namespace hdr4d {
 
@@ -39,11 +40,17 @@ Eigen::Vector3d DemoSceneRadiance(const Eigen::Vector3d& origin,
 // World position of the emitter's centre at time t (for tests of the camera convention).
 Eigen::Vector3d DemoEmitterCenter(double t);
 
+// Points on the scene's surfaces (floor, sky dome, ball and bulb at random times in [0,1], with
+// a `time` each) and their colours r / (1 + r) of the radiance r: the point3d.ply that
+// MakeDemoScene writes for initialisation.
+PointCloud DemoScenePointCloud(int count, std::uint64_t seed);
+
 // Renders one HDR view (Encoding::kLinear, RGB).
 Image RenderDemoView(const Camera& camera, double t, int samples_per_axis);
 
 // Renders every view to <root>/hdr/*.exr and writes transforms_{train,test}.json whose frames
-// point at the LDR images <root>/images/*.png that `hdr4d synth-ldr` creates from the HDR.
+// point at the LDR images <root>/images/*.png that `hdr4d synth-ldr` creates from the HDR, and
+// <root>/point3d.ply (DemoScenePointCloud).
 // Returns the dataset as written.
 Dataset MakeDemoScene(const DemoSceneOptions& options, const std::filesystem::path& root);
 

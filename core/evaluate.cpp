@@ -111,7 +111,9 @@ std::string JoinFirst(const std::vector<std::string>& names, std::size_t count) 
 // (prediction, ground truth) pairs, driven by the predictions: every prediction must have a
 // ground truth (same file name, or the same stem with an extension of the same kind, LDR or
 // HDR), while ground-truth images without a prediction are skipped with a warning, because a
-// dataset keeps every split's images in one folder and a render covers one split.
+// dataset keeps every split's images in one folder and a render covers one split. Predictions
+// of a kind the ground-truth folder has none of are skipped with a warning too: a render folder
+// holds LDR and HDR images side by side, and the dataset keeps them in separate folders.
 std::vector<std::pair<fs::path, fs::path>> MatchFolders(const fs::path& pred_dir,
                                                         const fs::path& gt_dir) {
   const std::vector<fs::path> preds = ListImages(pred_dir);
@@ -123,15 +125,22 @@ std::vector<std::pair<fs::path, fs::path>> MatchFolders(const fs::path& pred_dir
   }
   std::map<std::string, fs::path> gt_by_name;
   std::map<std::string, std::vector<fs::path>> gt_by_stem;
+  bool gt_has[2] = {false, false};  // [is HDR]
   for (const fs::path& g : ListImages(gt_dir)) {
     gt_by_name[g.filename().string()] = g;
     gt_by_stem[g.stem().string()].push_back(g);
+    gt_has[IsHdrPath(g)] = true;
   }
+  std::size_t other_kind_skipped = 0;
 
   std::vector<std::pair<fs::path, fs::path>> pairs;
   std::vector<std::string> missing;
   for (const fs::path& pred : preds) {
     const std::string name = pred.filename().string();
+    if (!gt_has[IsHdrPath(pred)] && gt_has[!IsHdrPath(pred)]) {
+      ++other_kind_skipped;
+      continue;
+    }
     if (auto it = gt_by_name.find(name); it != gt_by_name.end()) {
       pairs.emplace_back(pred, it->second);
       continue;
@@ -157,6 +166,15 @@ std::vector<std::pair<fs::path, fs::path>> MatchFolders(const fs::path& pred_dir
   if (!missing.empty()) {
     Fail("{}: no ground truth for {} of {} predicted images from {}: {}", gt_dir.string(),
          missing.size(), preds.size(), pred_dir.string(), JoinFirst(missing, 5));
+  }
+  if (pairs.empty()) {
+    Fail("{}: holds only {} images, and none of the predictions in {} is of that kind",
+         gt_dir.string(), gt_has[1] ? "HDR" : "LDR", pred_dir.string());
+  }
+  if (other_kind_skipped > 0) {
+    spdlog::warn("eval: {} predicted images in {} are {} and {} has none of that kind: skipped",
+                 other_kind_skipped, pred_dir.string(), gt_has[1] ? "LDR" : "HDR",
+                 gt_dir.string());
   }
   const std::size_t unmatched = gt_by_name.size() - pairs.size();
   if (unmatched > 0) {

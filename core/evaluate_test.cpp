@@ -186,6 +186,25 @@ TEST(EvaluateTest, PredictionWithoutGroundTruthNamesTheFile) {
   EXPECT_THAT(error, HasSubstr(f.gt.string()));
 }
 
+TEST(EvaluateTest, RenderFolderWithBothKindsScoresAgainstEachGroundTruthFolder) {
+  TempDir dir;
+  // A render folder holds r.png and r.exr; the dataset keeps images/ and hdr/ apart.
+  WriteLdr(dir / "pred" / "r.png", 8, 6, 1);
+  WriteHdr(dir / "pred" / "r.exr", 8, 6, 2);
+  WriteLdr(dir / "images" / "r.png", 8, 6, 3);
+  WriteHdr(dir / "hdr" / "r.exr", 8, 6, 4);
+  const nlohmann::json ldr = EvaluatePaths(dir / "pred", dir / "images");
+  EXPECT_EQ(ldr["pairs"].size(), 1u);
+  EXPECT_TRUE(ldr["mean"].contains("psnr"));
+  const nlohmann::json hdr = EvaluatePaths(dir / "pred", dir / "hdr");
+  EXPECT_EQ(hdr["pairs"].size(), 1u);
+  EXPECT_TRUE(hdr["mean"].contains("mu_psnr"));
+  // Nothing of the ground truth's kind among the predictions: an error, not an empty score.
+  fs::remove(dir / "pred" / "r.exr");
+  EXPECT_THAT(ErrorOf([&] { EvaluatePaths(dir / "pred", dir / "hdr"); }),
+              HasSubstr("holds only HDR images"));
+}
+
 TEST(EvaluateTest, ListsOnlyTheFirstUnmatchedNames) {
   TempDir dir;
   for (int i = 0; i < 8; ++i) WriteLdr(dir / "pred" / fmt::format("m{}.png", i), 4, 4, i);

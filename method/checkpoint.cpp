@@ -13,7 +13,8 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr char kMagic[8] = {'H', 'D', 'R', '4', 'D', 'C', 'K', 'P'};
-constexpr std::uint32_t kVersion = 1;
+// Version 2 adds the tone mapper's state after the optimiser's; version 1 files still load.
+constexpr std::uint32_t kVersion = 2;
 
 void WriteU64(std::ostream& out, std::uint64_t v) {
   out.write(reinterpret_cast<const char*>(&v), 8);
@@ -83,6 +84,9 @@ void SaveCheckpoint(const fs::path& path, const Checkpoint& c) {
     for (const auto& v : c.extra_floats) WriteFloats(out, v);
     WriteU64(out, c.adam_state.size());
     out.write(c.adam_state.data(), static_cast<std::streamsize>(c.adam_state.size()));
+    WriteU64(out, c.tone_mapper_state.size());
+    out.write(c.tone_mapper_state.data(),
+              static_cast<std::streamsize>(c.tone_mapper_state.size()));
   });
 }
 
@@ -107,8 +111,10 @@ Checkpoint LoadCheckpoint(const fs::path& path) {
     Fail("{}: corrupt checkpoint header: {}", path.string(), e.what());
   }
   Checkpoint c;
+  std::uint32_t version = 0;
   try {
-    if (header.at("version").get<std::uint32_t>() != kVersion) {
+    version = header.at("version").get<std::uint32_t>();
+    if (version != kVersion && version != 1) {
       Fail("{}: checkpoint version {} is not supported (this build reads {})", path.string(),
            header.at("version").get<std::uint32_t>(), kVersion);
     }
@@ -135,6 +141,14 @@ Checkpoint LoadCheckpoint(const fs::path& path) {
   c.adam_state.resize(adam_size);
   if (!in.read(c.adam_state.data(), static_cast<std::streamsize>(adam_size))) {
     Fail("{}: truncated checkpoint (while reading the optimiser state)", path.string());
+  }
+  if (version >= 2) {
+    const std::uint64_t tm_size = ReadU64(in, path, "the tone mapper state size");
+    if (tm_size > file_size) Fail("{}: corrupt checkpoint (tone mapper state size)", path.string());
+    c.tone_mapper_state.resize(tm_size);
+    if (!in.read(c.tone_mapper_state.data(), static_cast<std::streamsize>(tm_size))) {
+      Fail("{}: truncated checkpoint (while reading the tone mapper state)", path.string());
+    }
   }
   if (const std::string problem = c.model.Validate(); !problem.empty()) {
     Fail("{}: inconsistent checkpoint: {}", path.string(), problem);

@@ -20,6 +20,7 @@ struct Checkpoint {
   nlohmann::json trainer;                        // iteration, rng state, schedule state, ...
   std::vector<std::vector<float>> extra_floats;  // e.g. densification statistics
   std::string adam_state;                        // Adam::Save bytes
+  std::string tone_mapper_state;                 // ToneMapper::Save bytes ("" = none)
 };
 
 void SaveCheckpoint(const std::filesystem::path& path, const Checkpoint& checkpoint);

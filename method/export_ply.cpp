@@ -3,13 +3,16 @@
 #include <fmt/format.h>
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <numbers>
 #include <vector>
 
 #include "core/error.h"
+#include "core/image.h"
 #include "core/json_util.h"
+#include "method/constants.h"
 #include "method/rotation4d.h"
 #include "method/slice.h"
 
@@ -19,12 +22,20 @@ namespace fs = std::filesystem;
 std::size_t ExportSlicePly(const GaussianModel& model,
                            float time,
                            float time_duration,
-                           const fs::path& path) {
-  if (model.color_mode != ColorMode::kLdr) {
+                           const fs::path& path,
+                           const ExportDisplay* display) {
+  const bool hdr = model.color_mode != ColorMode::kLdr;
+  if (hdr && !display) {
     Fail(
-        "{}: this model has log-HDR colours; a 3DGS viewer expects display colours (export an LDR "
-        "model)",
+        "{}: this model has log-HDR colours; a 3DGS viewer expects display colours (give the "
+        "tone mapping to export with)",
         path.string());
+  }
+  if (hdr && display->tone_mapper && !display->tone_mapper->pointwise()) {
+    Fail(
+        "{}: the '{}' tone mapper works on whole images, not on Gaussians; cannot export "
+        "display colours with it",
+        path.string(), display->tone_mapper->config().kind);
   }
   if (!(time_duration > 0)) Fail("export-ply: time duration must be positive");
   const int channels = model.channels;
@@ -84,7 +95,7 @@ std::size_t ExportSlicePly(const GaussianModel& model,
     for (int a = 0; a < 3; ++a) row.values[j++] = 0.0f;  // normals (unused by viewers)
     for (int c = 0; c < 3; ++c) row.values[j++] = coefficient(0, c);
     for (int c = 0; c < 3; ++c) {
-      for (int lm = 1; lm < functions; ++lm) row.values[j++] = coefficient(lm, c);
+      for (int lm = 1; lm < functions; ++lm) row.values[j++] = hdr ? 0.0f : coefficient(lm, c);
     }
     const double opacity = std::clamp(
         marginal / (1.0 + std::exp(-static_cast<double>(model.opacity_logit[i]))), 1e-7, 1 - 1e-7);
@@ -97,6 +108,25 @@ std::size_t ExportSlicePly(const GaussianModel& model,
     row.values[j++] = static_cast<float>(q.z());
     HDR4D_CHECK(j == num_values);
     rows.push_back(row);
+  }
+
+  if (hdr && !rows.empty()) {
+    // DC coefficient -> log-HDR colour -> display colour -> DC coefficient of that colour.
+    const std::size_t n = rows.size();
+    std::vector<float> log_hdr(n * 3), ldr(n * 3);
+    for (std::size_t r = 0; r < n; ++r)
+      for (int c = 0; c < 3; ++c) log_hdr[r * 3 + c] = kShC0 * rows[r].values[6 + c] + kColorOffset;
+    if (display->tone_mapper) {
+      display->tone_mapper->BeginFrame(display->frame);
+      display->tone_mapper->Map(log_hdr.data(), n, ldr.data());
+    } else {
+      const float exposure = std::exp(display->frame.log_exposure);
+      for (std::size_t k = 0; k < ldr.size(); ++k)
+        ldr[k] =
+            LinearToSrgb(std::clamp(std::exp(std::min(log_hdr[k], 30.0f)) * exposure, 0.0f, 1.0f));
+    }
+    for (std::size_t r = 0; r < n; ++r)
+      for (int c = 0; c < 3; ++c) rows[r].values[6 + c] = (ldr[r * 3 + c] - kColorOffset) / kShC0;
   }
 
   std::string header =

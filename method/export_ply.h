@@ -7,15 +7,27 @@
 #include <filesystem>
 
 #include "method/gaussian_model.h"
+#include "method/tonemap/tone_mapper.h"
 
 namespace hdr4d::method {
 
+// How a log-HDR model's colours become the display colours viewers expect: each Gaussian's
+// view-independent log-HDR colour (the DC term at the slice time) through the run's tone mapper
+// at `frame` (its exposure and time), or, without a tone mapper, exp(c) x exposure encoded as
+// sRGB. The view-dependent SH terms of a log-HDR model do not survive a nonlinear map and are
+// written as zeros.
+struct ExportDisplay {
+  ToneMapper* tone_mapper = nullptr;  // pointwise; null: exposure + sRGB
+  ToneFrame frame;
+};
+
 // Writes the Gaussians visible at `time` (marginal > 0.05); the temporal basis is folded into
 // the SH coefficients at that time and the marginal into the opacity. Returns how many were
-// written. A log-HDR model is refused (viewers expect display colours).
+// written. A log-HDR model needs `display`.
 std::size_t ExportSlicePly(const GaussianModel& model,
                            float time,
                            float time_duration,
-                           const std::filesystem::path& path);
+                           const std::filesystem::path& path,
+                           const ExportDisplay* display = nullptr);
 
 }  // namespace hdr4d::method

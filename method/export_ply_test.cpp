@@ -72,11 +72,19 @@ TEST(ExportPly, SliceHasThe3dgsLayoutAndValues) {
   EXPECT_FLOAT_EQ(Read(dir / "b.ply").values[0], 1.0f);
 }
 
-TEST(ExportPly, LogHdrModelsAreRefused) {
+TEST(ExportPly, LogHdrModelsNeedADisplayMapping) {
   testing::TempDir dir;
   GaussianModel m = TwoGaussians();
   m.color_mode = ColorMode::kLogHdr;
   EXPECT_THROW(ExportSlicePly(m, 0.5f, 1.0f, dir / "a.ply"), Error);
+  // Without a tone mapper: exp(c) x exposure as sRGB, written back as the DC coefficient.
+  m.color_dc.assign(m.color_dc.size(), 0.0f);  // c = 0.5 -> radiance e^0.5
+  const ExportDisplay display{nullptr, {0, -1, std::log(0.25f)}};
+  ASSERT_EQ(ExportSlicePly(m, 0.5f, 1.0f, dir / "b.ply", &display), 1u);
+  const Ply p = Read(dir / "b.ply");
+  const float expected = LinearToSrgb(std::exp(0.5f) * 0.25f);
+  EXPECT_NEAR(p.values[6] * kShC0 + kColorOffset, expected, 1e-5f);
+  EXPECT_EQ(p.values[9], 0.0f);  // view-dependent terms do not survive the map
 }
 
 }  // namespace

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <type_traits>
 
 #include "core/error.h"
 #include "core/parallel.h"
@@ -90,14 +92,131 @@ void ZeroRows(GaussianGradientsT<T>* g, std::size_t i, bool colour) {
   std::fill_n(&g->color_rest[i * rest], rest, T(0));
 }
 
+// colour[c] = kColorOffset + sum over the active coefficients k of w[k] coef_k[c] (coefficient 0
+// from dc, k >= 1 from rest at (k - 1) * channels). The inactive ones have w = 0.
+template <typename T>
+void ColorFromWeights(const T* w,
+                      const T* dc,
+                      const T* rest,
+                      int channels,
+                      int functions,
+                      int active,
+                      int time_degree,
+                      T* color) {
+  for (int ch = 0; ch < channels; ++ch) color[ch] = static_cast<T>(kColorOffset) + w[0] * dc[ch];
+  for (int n = 0; n <= time_degree; ++n) {
+    for (int lm = n == 0 ? 1 : 0; lm < active; ++lm) {
+      const int k = n * functions + lm;
+      const T* ck = rest + (k - 1) * channels;
+      for (int ch = 0; ch < channels; ++ch) color[ch] += w[k] * ck[ch];
+    }
+  }
+}
+
+// Three channels in float, the common case: a coefficient's 3 values as one 4-lane vector (the
+// 4th lane is the next coefficient's and ignored), in 4 independent accumulators. The scalar loop
+// above kept the colour in memory (it may alias) and was a third of the whole preprocess.
+using Float4 = float __attribute__((vector_size(16)));
+inline Float4 Load4(const float* p) {
+  Float4 v;
+  std::memcpy(&v, p, sizeof(v));
+  return v;
+}
+inline Float4 Load3(const float* p) { return Float4{p[0], p[1], p[2], 0.0f}; }
+
+inline void ColorFromWeights3(const float* w,
+                              const float* dc,
+                              const float* rest,
+                              int functions,
+                              int active,
+                              int time_degree,
+                              int coefficients,
+                              float* color) {
+  Float4 acc0 = Load3(dc) * w[0], acc1 = {}, acc2 = {}, acc3 = {};
+  const auto term = [&](int k) {
+    // The last coefficient of the row has no 4th float after it.
+    const float* ck = rest + (k - 1) * 3;
+    return (k + 1 < coefficients ? Load4(ck) : Load3(ck)) * w[k];
+  };
+  for (int n = 0; n <= time_degree; ++n) {
+    const int end = n * functions + active;
+    int k = n * functions + (n == 0 ? 1 : 0);
+    for (; k + 4 <= end; k += 4) {
+      acc0 += term(k);
+      acc1 += term(k + 1);
+      acc2 += term(k + 2);
+      acc3 += term(k + 3);
+    }
+    for (; k < end; ++k) acc1 += term(k);
+  }
+  const Float4 sum = (acc0 + acc1) + (acc2 + acc3);
+  for (int ch = 0; ch < 3; ++ch) color[ch] = static_cast<float>(kColorOffset) + sum[ch];
+}
+
+template <typename T>
+void Color(const T* w,
+           const T* dc,
+           const T* rest,
+           int channels,
+           const ColorBasis& basis,
+           int sh_degree,
+           int time_degree,
+           T* color) {
+  const int functions = basis.sh_functions();
+  const int active = (sh_degree + 1) * (sh_degree + 1);
+  if constexpr (std::is_same_v<T, float>) {
+    if (channels == 3) {
+      return ColorFromWeights3(w, dc, rest, functions, active, time_degree, basis.coefficients(),
+                               color);
+    }
+  }
+  ColorFromWeights(w, dc, rest, channels, functions, active, time_degree, color);
+}
+
+// The colour rows' gradient, written for every coefficient (w = 0 for the inactive ones).
+template <typename T>
+void ColorGradRows(const T* w, const T* dcolor, int channels, int coefficients, T* gdc, T* grest) {
+  if constexpr (std::is_same_v<T, float>) {
+    if (channels == 3) {
+      const Float4 d = Load3(dcolor);
+      for (int ch = 0; ch < 3; ++ch) gdc[ch] = w[0] * dcolor[ch];
+      // Overlapping 4-float stores, each 4th lane overwritten by the next; the last row of 3
+      // is stored alone (it ends the Gaussian's row).
+      int k = 1;
+      for (; k + 1 < coefficients; ++k) {
+        const Float4 g = d * w[k];
+        std::memcpy(grest + (k - 1) * 3, &g, sizeof(g));
+      }
+      if (k < coefficients) {
+        for (int ch = 0; ch < 3; ++ch) grest[(k - 1) * 3 + ch] = w[k] * dcolor[ch];
+      }
+      return;
+    }
+  }
+  for (int ch = 0; ch < channels; ++ch) gdc[ch] = w[0] * dcolor[ch];
+  for (int k = 1; k < coefficients; ++k) {
+    for (int ch = 0; ch < channels; ++ch) grest[(k - 1) * channels + ch] = w[k] * dcolor[ch];
+  }
+}
+
+constexpr int kColorAhead = 8;
+template <typename T>
+void PrefetchRow(const T* row, std::size_t count) {
+  const char* p = reinterpret_cast<const char*>(row);
+  for (std::size_t b = 0; b < count * sizeof(T); b += 64) __builtin_prefetch(p + b);
+}
+
 template <typename T>
 void CheckInputs(const GaussianModelT<T>& model, const RenderOptions& options) {
   HDR4D_CHECK(model.Validate().empty());
   HDR4D_CHECK(model.channels <= kMaxChannels);
   HDR4D_CHECK(options.sh_degree >= 0 && options.sh_degree <= model.basis.max_sh_degree);
   HDR4D_CHECK(options.time_degree >= 0);
+  const int features =
+      options.color_stage ? options.color_stage->feature_channels() : model.channels;
+  HDR4D_CHECK(features <= kMaxChannels);
   HDR4D_CHECK(options.background.empty() ||
-              static_cast<int>(options.background.size()) == model.channels);
+              static_cast<int>(options.background.size()) == features);
 }
 
 RasterSettings SettingsFor(const Camera& camera, const RenderOptions& options, int channels) {
@@ -122,15 +241,18 @@ void PreprocessForward(const GaussianModelT<T>& model,
   const std::size_t n = model.size();
   const int channels = model.channels;
   SplatBuffersT<T>& s = state->splats;
-  s.channels = channels;
+  ColorStage* const stage = options.color_stage;
+  HDR4D_CHECK(stage == nullptr ||
+              (std::is_same_v<T, float> && model.color_mode == ColorMode::kLogHdr));
+  s.channels = stage ? stage->feature_channels() : channels;
   s.Resize(n);
+  if (stage) state->colors.resize(n * channels);
   state->clamped.assign(n * channels, 0);
   state->conditionals.resize(n);  // written for visible Gaussians only
   state->screen_radius.assign(n, 0);
   const Vec3<T> center = view.Center();
   const int time_degree = TimeDegree(model, options);
   const std::size_t stride = model.rest_stride();
-  const int num_coefficients = model.basis.coefficients();
   const T duration = static_cast<T>(options.time_duration);
   std::vector<std::int64_t> visible_per_chunk((n + kGaussianGrain - 1) / kGaussianGrain, 0);
   ParallelForChunks(static_cast<std::int64_t>(n), kGaussianGrain,
@@ -138,6 +260,10 @@ void PreprocessForward(const GaussianModelT<T>& model,
                       std::int64_t visible = 0;
                       for (std::int64_t g = b; g < e; ++g) {
                         const std::size_t i = static_cast<std::size_t>(g);
+                        // The colour rows stream from memory (the optimiser's sweep evicts them):
+                        // fetch a few Gaussians ahead.
+                        if (stride > 0 && g + kColorAhead < e)
+                          PrefetchRow(&model.color_rest[(i + kColorAhead) * stride], stride);
                         s.radius[i] = 0;
                         const ConditionalGaussian<T> c = ConditionAt(model, i, time);
                         if (model.temporal && !TemporallyVisible(c.marginal))
@@ -156,16 +282,9 @@ void PreprocessForward(const GaussianModelT<T>& model,
                         T w[kMaxColorCoefficients];
                         EvalColorBasisWeights(Vec3<T>(c.mean - center), model.t[i] - time, duration,
                                               model.basis, options.sh_degree, time_degree, w);
-                        T* color = &s.features[i * channels];
-                        const T* dc = &model.color_dc[i * channels];
-                        const T* rest = &model.color_rest[i * stride];
-                        for (int ch = 0; ch < channels; ++ch)
-                          color[ch] = static_cast<T>(kColorOffset) + w[0] * dc[ch];
-                        for (int k = 1; k < num_coefficients; ++k) {
-                          if (w[k] == T(0)) continue;  // inactive degrees
-                          const T* ck = rest + (k - 1) * channels;
-                          for (int ch = 0; ch < channels; ++ch) color[ch] += w[k] * ck[ch];
-                        }
+                        T* color = stage ? &state->colors[i * channels] : &s.features[i * channels];
+                        Color(w, &model.color_dc[i * channels], &model.color_rest[i * stride],
+                              channels, model.basis, options.sh_degree, time_degree, color);
                         if (model.color_mode == ColorMode::kLdr) {
                           for (int ch = 0; ch < channels; ++ch) {
                             if (color[ch] < T(0)) {
@@ -180,6 +299,16 @@ void PreprocessForward(const GaussianModelT<T>& model,
                     });
   state->num_visible = 0;
   for (std::int64_t v : visible_per_chunk) state->num_visible += static_cast<std::size_t>(v);
+  if (stage) {
+    state->visible.clear();
+    state->visible.reserve(state->num_visible);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (s.radius[i] > 0) state->visible.push_back(static_cast<std::uint32_t>(i));
+    }
+    if constexpr (std::is_same_v<T, float>) {
+      stage->Forward(state->colors.data(), channels, state->visible, s.features.data());
+    }
+  }
 }
 
 template <typename T>
@@ -211,8 +340,10 @@ void PreprocessBackward(const GaussianModelT<T>& model,
 
     // Colour: the view direction and dt are detached, as in the reference.
     T dcolor[kMaxChannels];
+    const T* dfeatures =
+        options.color_stage ? &state.color_grads[i * channels] : &sg.features[i * channels];
     for (int ch = 0; ch < channels; ++ch) {
-      dcolor[ch] = state.clamped[i * channels + ch] ? T(0) : sg.features[i * channels + ch];
+      dcolor[ch] = state.clamped[i * channels + ch] ? T(0) : dfeatures[ch];
     }
     T w[kMaxColorCoefficients];
     EvalColorBasisWeights(Vec3<T>(c.mean - center), model.t[i] - time, duration, model.basis,
@@ -220,10 +351,7 @@ void PreprocessBackward(const GaussianModelT<T>& model,
     T* gdc = &grads->color_dc[i * channels];
     T* grest = &grads->color_rest[i * stride];
     // Written, not accumulated: every colour row in one pass (w is 0 for inactive degrees).
-    for (int ch = 0; ch < channels; ++ch) gdc[ch] = w[0] * dcolor[ch];
-    for (int k = 1; k < num_coefficients; ++k) {
-      for (int ch = 0; ch < channels; ++ch) grest[(k - 1) * channels + ch] = w[k] * dcolor[ch];
-    }
+    ColorGradRows(w, dcolor, channels, num_coefficients, gdc, grest);
 
     // Opacity = sigmoid(logit) x marginal.
     const T sig = Sigmoid(model.opacity_logit[i]);
@@ -277,8 +405,8 @@ void RenderForward(const GaussianModel& model,
                    float* image) {
   const ViewParams<float> view = ViewParams<float>::FromCamera(camera);
   PreprocessForward(model, view, time, options, state);
-  RasterizeForward(state->splats, SettingsFor(camera, options, model.channels), &state->raster,
-                   image);
+  RasterizeForward(state->splats, SettingsFor(camera, options, state->splats.channels),
+                   &state->raster, image);
 }
 
 void RenderBackward(const GaussianModel& model,
@@ -288,9 +416,15 @@ void RenderBackward(const GaussianModel& model,
                     FrameState* state,
                     const float* dL_dimage,
                     GaussianGradients* grads) {
-  state->splat_grads.SetZero(model.size(), model.channels);
-  BlendBackward(state->splats, SettingsFor(camera, options, model.channels), &state->raster,
-                dL_dimage, nullptr, &state->splat_grads, nullptr);
+  const int features = state->splats.channels;
+  state->splat_grads.SetZero(model.size(), features);
+  BlendBackward(state->splats, SettingsFor(camera, options, features), &state->raster, dL_dimage,
+                nullptr, &state->splat_grads, nullptr);
+  if (ColorStage* stage = options.color_stage) {
+    state->color_grads.resize(model.size() * model.channels);
+    stage->Backward(state->colors.data(), model.channels, state->visible,
+                    state->splat_grads.features.data(), state->color_grads.data());
+  }
   PreprocessBackward(model, ViewParams<float>::FromCamera(camera), time, options, *state, grads);
 }
 

@@ -18,12 +18,35 @@
 
 namespace hdr4d::method {
 
+// An optional stage between each visible Gaussian's colour (model.channels values: the SH x time
+// value + 0.5, the log-HDR colour in ColorMode::kLogHdr) and the features the rasteriser blends.
+// HDR-4DGS's 3D branch is one: [exp(c), tone-mapped c], six channels in one pass (DESIGN §4).
+// Float production path only (RenderForward / RenderBackward).
+class ColorStage {
+ public:
+  virtual ~ColorStage() = default;
+  virtual int feature_channels() const = 0;
+  // colors: N x color_channels, valid in the rows listed in `visible` (ascending). Writes those
+  // rows of `features` (N x feature_channels).
+  virtual void Forward(const float* colors,
+                       int color_channels,
+                       const std::vector<std::uint32_t>& visible,
+                       float* features) = 0;
+  // From the rows `visible` of dL_dfeatures to the same rows of dL_dcolors (overwritten).
+  virtual void Backward(const float* colors,
+                        int color_channels,
+                        const std::vector<std::uint32_t>& visible,
+                        const float* dL_dfeatures,
+                        float* dL_dcolors) = 0;
+};
+
 struct RenderOptions {
   int sh_degree = 3;              // active spatial SH degree (grows during training)
   int time_degree = 2;            // active temporal degree (0 in 3D mode)
   float time_duration = 1.0f;     // T of the cosine time basis
   std::vector<float> background;  // one value per channel (empty: zeros)
   RasterBackend backend = RasterBackend::kSimd;
+  ColorStage* color_stage = nullptr;  // null: the colours are the features
 };
 
 // The 3D Gaussian a 4D one (or a 3D one in static mode) presents at the frame's time, with the
@@ -48,7 +71,10 @@ struct FrameStateT {
   // N: the reference's 3-sigma screen radius (0 = culled), what densification statistics use;
   // splats.radius is the tighter radius the tiles are binned with (see render.cpp).
   std::vector<int> screen_radius;
-  std::size_t num_visible = 0;        // Gaussians with radius > 0 after the preprocess
+  std::size_t num_visible = 0;  // Gaussians with radius > 0 after the preprocess
+  // With a colour stage only: the colours before it, their gradients, the visible rows.
+  std::vector<T> colors, color_grads;
+  std::vector<std::uint32_t> visible;
   // Reference (scalar, any T) path only: the forward's outputs the backward needs.
   std::vector<T> final_T;
   std::vector<std::int32_t> n_contrib;

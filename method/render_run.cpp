@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <numbers>
+#include <sstream>
 
 #include "core/dataset.h"
 #include "core/error.h"
@@ -15,12 +16,61 @@
 #include "core/progress.h"
 #include "method/checkpoint.h"
 #include "method/render.h"
+#include "method/tonemap/radiance_bank.h"
+#include "method/view_render.h"
 
 namespace hdr4d::method {
 namespace fs = std::filesystem;
 
 GaussianModel LoadRunModel(const fs::path& run) {
   return LoadCheckpoint(run / "checkpoint.bin").model;
+}
+
+LoadedRun LoadRun(const fs::path& run, const ToneMapperFactory& factory) {
+  LoadedRun r;
+  const fs::path config_path = run / "config.json";
+  r.config = ReadJsonFile(config_path);
+  if (!r.config.contains("data") || !r.config["data"].is_string())
+    Fail("{}: key 'data' (the scene folder) missing", config_path.string());
+  r.dataset = LoadDataset(r.config["data"].get<std::string>(),
+                          {.image_check = ImageCheck::kNone, .require_test = false});
+  const fs::path checkpoint_path = run / "checkpoint.bin";
+  Checkpoint c = LoadCheckpoint(checkpoint_path);
+  r.model = std::move(c.model);
+  r.background = r.config.value("background", 0.0f);
+  r.num_times = r.config.value("num_times", 1);
+  if (!r.config.contains("resolved")) {  // runs of plain 4DGS from before HDR training existed
+    r.resolved.hdr_colors = r.model.color_mode == ColorMode::kLogHdr;
+    return r;
+  }
+  try {
+    const nlohmann::json& j = r.config.at("resolved");
+    r.resolved.hdr_colors = j.at("hdr_colors").get<bool>();
+    r.resolved.ldr_gaussian = j.at("ldr_gaussian").get<bool>();
+    r.resolved.ldr_pixel = j.at("ldr_pixel").get<bool>();
+    r.resolved.hdr = j.at("hdr").get<bool>();
+    r.resolved.final_ldr_from_pixels = j.at("final_ldr_from_pixels").get<bool>();
+  } catch (const nlohmann::json::exception& e) {
+    Fail("{}: bad 'resolved' settings: {}", config_path.string(), e.what());
+  }
+  if (r.config.contains("tone_mapper")) {
+    if (!factory) Fail("{}: the run has a tone mapper but no factory was given", run.string());
+    r.tone_mapper =
+        factory(ToneMapperConfig::FromJson(r.config["tone_mapper"], config_path.string()));
+    if (c.tone_mapper_state.empty())
+      Fail("{}: checkpoint has no tone mapper state", checkpoint_path.string());
+    std::istringstream state(c.tone_mapper_state);
+    r.tone_mapper->Load(state, checkpoint_path.string());
+  }
+  return r;
+}
+
+double MedianExposure(const Dataset& dataset) {
+  std::vector<double> e;
+  for (const Frame& f : dataset.train) e.push_back(f.exposure);
+  if (e.empty()) return 1.0;
+  std::nth_element(e.begin(), e.begin() + e.size() / 2, e.end());
+  return e[e.size() / 2];
 }
 
 namespace {
@@ -58,28 +108,41 @@ std::vector<Camera> OrbitCameras(const std::vector<Camera>& train, int frames) {
 
 int RenderRun(const RenderRunOptions& options) {
   const ThreadLimit limit(options.threads);
-  const nlohmann::json config = ReadJsonFile(options.run / "config.json");
-  if (!config.contains("data") || !config["data"].is_string()) {
-    Fail("{}: key 'data' (the scene folder) missing", (options.run / "config.json").string());
-  }
+  if (options.exposure && !(*options.exposure > 0 && std::isfinite(*options.exposure)))
+    Fail("render: --exposure {} must be a positive number of seconds", *options.exposure);
   const Split split = ParseSplit(options.split, "render");
-  const Dataset dataset = LoadDataset(config["data"].get<std::string>(),
-                                      {.image_check = ImageCheck::kNone, .require_test = false});
-  const GaussianModel model = LoadRunModel(options.run);
+  LoadedRun run = LoadRun(options.run, options.tone_mapper_factory);
+  const Dataset& dataset = run.dataset;
+  const GaussianModel& model = run.model;
   const fs::path out = options.out.empty() ? options.run / "renders" / options.split : options.out;
   RenderOptions render;
   render.sh_degree = model.basis.max_sh_degree;
   render.time_degree = model.temporal ? model.basis.max_time_degree : 0;
-  render.background.assign(model.channels, config.value("background", 0.0f));
+  ViewRenderer renderer(model, run.tone_mapper.get(), run.resolved, render, run.background);
   const std::vector<Frame>& frames = dataset.FramesOf(split);
   if (frames.empty()) Fail("{}: the {} split has no frames", dataset.root.string(), options.split);
-  FrameState state;
-  std::vector<float> values;
-  auto render_to = [&](const Camera& camera, float time, const fs::path& path) {
+  const double default_exposure = options.exposure.value_or(MedianExposure(dataset));
+  std::vector<float> ldr, hdr;
+  // Renders one view; writes the LDR image to ldr_path and the HDR one to hdr_path (each when
+  // the model has that output and the path is not empty). Returns the number of files written.
+  auto render_to = [&](const Camera& camera, float time, double exposure, const fs::path& ldr_path,
+                       const fs::path& hdr_path) {
     const int w = camera.intrinsics.width, h = camera.intrinsics.height;
-    values.resize(static_cast<std::size_t>(w) * h * model.channels);
-    RenderForward(model, camera, time, render, &state, values.data());
-    WriteImage(path, DisplayImageFromBuffer(values.data(), w, h, model.channels));
+    const ToneFrame frame{RadianceBank::TimeIndex(time, run.num_times), -1,
+                          static_cast<float>(std::log(exposure))};
+    renderer.Render(camera, time, frame, &ldr, options.write_hdr ? &hdr : nullptr);
+    int written = 0;
+    if (!ldr.empty() && !ldr_path.empty()) {
+      WriteImage(ldr_path, DisplayImageFromBuffer(ldr.data(), w, h, 3));
+      ++written;
+    }
+    if (options.write_hdr && !hdr.empty() && !hdr_path.empty()) {
+      Image image(w, h, 3, Encoding::kLinear);
+      std::copy(hdr.begin(), hdr.end(), image.data());
+      WriteImage(hdr_path, image);
+      ++written;
+    }
+    return written;
   };
 
   if (options.time) {
@@ -90,14 +153,20 @@ int RenderRun(const RenderRunOptions& options) {
     if (!(*options.time >= 0 && *options.time <= 1))
       Fail("render: --time {} is outside [0, 1]", *options.time);
     const fs::path dir = options.out.empty() ? options.run / "renders" / "time" : options.out;
-    const fs::path path = dir / fmt::format("{}_cam{:03d}_t{:.4f}.png", options.split,
-                                            options.camera_index, *options.time);
-    render_to(frames[options.camera_index].camera, *options.time, path);
-    fmt::print("render: {}\n", path.string());
-    return 1;
+    const std::string stem =
+        fmt::format("{}_cam{:03d}_t{:.4f}", options.split, options.camera_index, *options.time);
+    const Frame& f = frames[options.camera_index];
+    const int written = render_to(f.camera, *options.time, options.exposure.value_or(f.exposure),
+                                  dir / (stem + ".png"), dir / (stem + ".exr"));
+    fmt::print("render: {} ({} file{})\n", (dir / stem).string(), written, written == 1 ? "" : "s");
+    return written;
   }
 
   if (options.video_frames > 0) {
+    if (!renderer.has_ldr()) {
+      Fail("render: --video writes LDR frames, and this run ({}) has no LDR output",
+           run.config.value("hdr", nlohmann::json::object()).value("method", "?"));
+    }
     std::vector<Camera> train_cameras;
     for (const Frame& f : dataset.train) train_cameras.push_back(f.camera);
     const std::vector<Camera> path = OrbitCameras(train_cameras, options.video_frames);
@@ -106,7 +175,7 @@ int RenderRun(const RenderRunOptions& options) {
     for (int k = 0; k < options.video_frames; ++k) {
       const float time =
           options.video_frames > 1 ? static_cast<float>(k) / (options.video_frames - 1) : 0.0f;
-      render_to(path[k], time, dir / fmt::format("frame_{:04d}.png", k));
+      render_to(path[k], time, default_exposure, dir / fmt::format("frame_{:04d}.png", k), {});
       progress.Advance();
     }
     progress.Finish();
@@ -127,15 +196,20 @@ int RenderRun(const RenderRunOptions& options) {
   }
 
   Progress progress("render", static_cast<std::int64_t>(frames.size()));
+  int written = 0;
   for (const Frame& f : frames) {
-    // Named like the ground truth so `hdr4d eval` pairs them.
+    // Named like the ground truth so `hdr4d eval` pairs them: the LDR render as the frame's
+    // image, the HDR render as its EXR (or the image's stem + .exr when it has none).
     fs::path name = f.image_path.filename();
     if (name.extension() != ".png") name += ".png";
-    render_to(f.camera, static_cast<float>(f.time), out / name);
+    fs::path hdr_name = f.hdr_path ? f.hdr_path->filename() : f.image_path.stem();
+    if (hdr_name.extension() != ".exr") hdr_name += ".exr";
+    written += render_to(f.camera, static_cast<float>(f.time),
+                         options.exposure.value_or(f.exposure), out / name, out / hdr_name);
     progress.Advance();
   }
   progress.Finish();
-  return static_cast<int>(frames.size());
+  return written;
 }
 
 }  // namespace hdr4d::method

@@ -1,15 +1,21 @@
 // Rendering a trained run (`hdr4d render`): the run's checkpoint and configuration give the
-// model and the scene; each view of a split is rendered and written under its ground truth's
-// file name, so `hdr4d eval OUT <scene>/<image folder>` compares them directly.
+// model, its tone mapper and the scene; each view of a split is rendered and written under its
+// ground truth's file names (the LDR render as its file_path, the HDR render as its
+// exr_file_path), so `hdr4d eval OUT <scene>/<image folder>` compares them directly.
 #pragma once
 
 #include <filesystem>
+#include <memory>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "core/camera.h"
+#include "core/dataset.h"
 #include "method/gaussian_model.h"
+#include "method/hdr_training.h"
+#include "method/tonemap/tone_mapper.h"
 
 namespace hdr4d::method {
 
@@ -25,6 +31,11 @@ struct RenderRunOptions {
   // from 0 to 1, written as a PNG sequence and, when ffmpeg is installed, an MP4.
   int video_frames = 0;
   int fps = 24;
+  // LDR renders at this exposure (seconds) instead of each frame's own (--time and the video
+  // default to the median training exposure).
+  std::optional<double> exposure;
+  bool write_hdr = true;  // also the linear HDR render as EXR, for models with HDR colours
+  ToneMapperFactory tone_mapper_factory;  // rebuilds the run's tone mapper (cli: baselines')
 };
 
 // Returns the number of images written.
@@ -37,5 +48,21 @@ std::vector<Camera> OrbitCameras(const std::vector<Camera>& train_cameras, int f
 
 // The model of a run's checkpoint (RUN/checkpoint.bin).
 GaussianModel LoadRunModel(const std::filesystem::path& run);
+
+// Everything a trained run needs to render: its configuration, scene, model and tone mapper.
+struct LoadedRun {
+  nlohmann::json config;
+  Dataset dataset;
+  GaussianModel model;
+  std::unique_ptr<ToneMapper> tone_mapper;  // null for methods without one
+  ResolvedHdrTraining resolved;
+  int num_times = 1;
+  float background = 0;
+};
+// The median training exposure: a middle exposure of the bracket for views that have none.
+double MedianExposure(const Dataset& dataset);
+
+// Throws hdr4d::Error naming the file when the run is incomplete or inconsistent.
+LoadedRun LoadRun(const std::filesystem::path& run, const ToneMapperFactory& factory);
 
 }  // namespace hdr4d::method

@@ -1,10 +1,12 @@
 #include "method/train_views.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/parallel.h"
+#include "method/hdr_loss.h"
 
 namespace hdr4d::method {
 
@@ -14,7 +16,49 @@ void TrainView::ToFloat(std::vector<float>* out) const {
   for (std::size_t i = 0; i < rgb.size(); ++i) (*out)[i] = rgb[i] * kScale;
 }
 
-std::vector<TrainView> LoadViews(const Dataset& dataset, Split split, const float background[3]) {
+void TrainView::HdrMuToFloat(std::vector<float>* out) const {
+  HDR4D_CHECK(!hdr_mu.empty());
+  out->resize(hdr_mu.size());
+  constexpr float kScale = 1.0f / 65535.0f;
+  for (std::size_t i = 0; i < hdr_mu.size(); ++i) (*out)[i] = hdr_mu[i] * kScale;
+}
+
+namespace {
+
+// mu(gt / max gt) of the training loss, 16 bits per value.
+std::vector<std::uint16_t> LoadHdrMuTarget(const std::filesystem::path& path,
+                                           int width,
+                                           int height) {
+  const Image hdr = ReadImage(path);  // rejects NaN / Inf with the pixel
+  if (hdr.encoding() != Encoding::kLinear)
+    Fail("{}: HDR ground truth must be linear (EXR/HDR)", path.string());
+  if (hdr.width() != width || hdr.height() != height) {
+    Fail("{}: HDR ground truth is {}x{} but the LDR image is {}x{}", path.string(), hdr.width(),
+         hdr.height(), width, height);
+  }
+  if (hdr.channels() < 3)
+    Fail("{}: HDR ground truth needs RGB, got {} channels", path.string(), hdr.channels());
+  const int c = hdr.channels();
+  float max_value = 0;
+  for (std::size_t p = 0; p < hdr.num_pixels(); ++p)
+    for (int k = 0; k < 3; ++k) max_value = std::max(max_value, hdr.data()[p * c + k]);
+  if (!(max_value > 0)) Fail("{}: HDR ground truth has no positive value", path.string());
+  std::vector<std::uint16_t> mu(hdr.num_pixels() * 3);
+  for (std::size_t p = 0; p < hdr.num_pixels(); ++p) {
+    for (int k = 0; k < 3; ++k) {
+      const float v = MuLawEncode(hdr.data()[p * c + k] / max_value);
+      mu[p * 3 + k] = static_cast<std::uint16_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 65535.0f));
+    }
+  }
+  return mu;
+}
+
+}  // namespace
+
+std::vector<TrainView> LoadViews(const Dataset& dataset,
+                                 Split split,
+                                 const float background[3],
+                                 bool load_hdr) {
   const std::vector<Frame>& frames = dataset.FramesOf(split);
   std::vector<TrainView> views(frames.size());
   ParallelFor(static_cast<std::int64_t>(frames.size()), 1, [&](std::int64_t i) {
@@ -38,6 +82,9 @@ std::vector<TrainView> LoadViews(const Dataset& dataset, Split split, const floa
     v.time = static_cast<float>(f.time);
     v.exposure = f.exposure;
     v.name = f.image_path.filename().string();
+    v.image_index = static_cast<int>(i);
+    v.hdr_path = f.hdr_path;
+    if (load_hdr && f.hdr_path) v.hdr_mu = LoadHdrMuTarget(*f.hdr_path, v.width(), v.height());
     v.rgb.resize(image.num_pixels() * 3);
     const int c = image.channels();
     for (std::size_t p = 0; p < image.num_pixels(); ++p) {

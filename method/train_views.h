@@ -4,6 +4,8 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -15,17 +17,31 @@ namespace hdr4d::method {
 struct TrainView {
   Camera camera;
   float time = 0;
+  int time_index = 0;   // radiance-bank row of `time` (set by the trainer)
+  int image_index = 0;  // position in its split
   double exposure = 1;
   std::string name;               // the image's file name (renders are written under it)
   std::vector<std::uint8_t> rgb;  // H x W x 3, display-encoded as stored
+  // HDR ground truth, when the frame has one: its file (renders are written under its name) and,
+  // when loaded for training, mu(gt / max gt) of the loss in 16 bits (quantisation 1.5e-5).
+  std::optional<std::filesystem::path> hdr_path;
+  std::vector<std::uint16_t> hdr_mu;
+  bool has_hdr() const { return hdr_path.has_value(); }
   int width() const { return camera.intrinsics.width; }
   int height() const { return camera.intrinsics.height; }
   // The image as floats in [0,1] (H x W x 3) into `out` (resized).
   void ToFloat(std::vector<float>* out) const;
+  // The HDR target mu(gt / max gt) as floats (H x W x 3); requires loaded hdr_mu.
+  void HdrMuToFloat(std::vector<float>* out) const;
 };
 
 // Reads the frames of `split`: RGB, or RGBA composited over `background` (the reference
-// composites D-NeRF's RGBA onto black). Integer images are required (the LDR targets).
-std::vector<TrainView> LoadViews(const Dataset& dataset, Split split, const float background[3]);
+// composites D-NeRF's RGBA onto black). Integer images are required (the LDR targets). With
+// load_hdr, frames with an exr_file_path also get their mu-law HDR target (the file must be
+// linear, the size of the LDR image, finite, with a positive maximum).
+std::vector<TrainView> LoadViews(const Dataset& dataset,
+                                 Split split,
+                                 const float background[3],
+                                 bool load_hdr = false);
 
 }  // namespace hdr4d::method

@@ -6,12 +6,15 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <numeric>
 #include <random>
+#include <set>
 #include <sstream>
 
 #include "core/dataset.h"
 #include "core/error.h"
+#include "core/image_io.h"
 #include "core/json_util.h"
 #include "core/metrics.h"
 #include "core/parallel.h"
@@ -21,9 +24,13 @@
 #include "method/adam.h"
 #include "method/checkpoint.h"
 #include "method/densify.h"
+#include "method/hdr_color_stage.h"
+#include "method/hdr_loss.h"
 #include "method/loss.h"
 #include "method/render.h"
+#include "method/tonemap/radiance_bank.h"
 #include "method/train_views.h"
+#include "method/view_render.h"
 
 namespace hdr4d::method {
 namespace fs = std::filesystem;
@@ -35,6 +42,8 @@ std::string TrainOptions::Validate() const {
   if (test_every < 0 || checkpoint_every < 0) return "test_every / checkpoint_every: must be >= 0";
   if (!(background >= 0 && background <= 1)) return "background: must be within [0, 1]";
   if (std::string p = optimization.Validate(); !p.empty()) return p;
+  if (std::string p = hdr.Validate(); !p.empty()) return p;
+  if (hdr.tone_mapper && !tone_mapper_factory) return "hdr: a tone mapper needs a factory";
   return "";
 }
 
@@ -47,6 +56,7 @@ nlohmann::json TrainOptions::ToJson() const {
       {"test_every", test_every},
       {"checkpoint_every", checkpoint_every},
       {"background", background},
+      {"hdr", hdr.ToJson()},
       {"init",
        {{"num_random_points", init.num_random_points},
         {"random_half_extent", init.random_half_extent},
@@ -99,26 +109,34 @@ std::pair<int, int> ColorDegrees(int iteration, const GaussianModel& model, int 
   return {sh, time};
 }
 
-// Means of the LDR metrics over the views (PSNR as the mean of per-view values, as 3DGS).
-nlohmann::json Evaluate(const GaussianModel& model,
-                        const std::vector<TrainView>& views,
-                        const RenderOptions& options,
-                        FrameState* state) {
+// Means over the views of the LDR metrics of the final LDR render and, where a view has HDR
+// ground truth, of the HDR metrics of the HDR render (PSNR as the mean of per-view values, 3DGS).
+nlohmann::json Evaluate(ViewRenderer* renderer, const std::vector<TrainView>& views) {
   nlohmann::json mean = nlohmann::json::object();
   if (views.empty()) return mean;
-  std::map<std::string, double> sums;
-  std::vector<float> image, gt;
+  std::map<std::string, std::pair<double, int>> sums;
+  std::vector<float> ldr, hdr, gt;
   for (const TrainView& v : views) {
-    image.resize(static_cast<std::size_t>(v.width()) * v.height() * 3);
-    RenderForward(model, v.camera, v.time, options, state, image.data());
-    v.ToFloat(&gt);
-    for (const auto& [key, value] :
-         LdrMetrics(DisplayImageFromBuffer(image.data(), v.width(), v.height(), 3),
-                    DisplayImageFromBuffer(gt.data(), v.width(), v.height(), 3))) {
-      sums[key] += value;
+    const ToneFrame frame{v.time_index, -1, static_cast<float>(std::log(v.exposure))};
+    renderer->Render(v.camera, v.time, frame, &ldr, &hdr);
+    auto add = [&](const MetricList& metrics) {
+      for (const auto& [key, value] : metrics) {
+        sums[key].first += value;
+        sums[key].second += 1;
+      }
+    };
+    if (!ldr.empty()) {
+      v.ToFloat(&gt);
+      add(LdrMetrics(DisplayImageFromBuffer(ldr.data(), v.width(), v.height(), 3),
+                     DisplayImageFromBuffer(gt.data(), v.width(), v.height(), 3)));
+    }
+    if (!hdr.empty() && v.hdr_path) {
+      Image prediction(v.width(), v.height(), 3, Encoding::kLinear);
+      std::copy(hdr.begin(), hdr.end(), prediction.data());
+      add(HdrMetrics(prediction, ReadImage(*v.hdr_path)));
     }
   }
-  for (const auto& [key, sum] : sums) mean[key] = FiniteOrNull(sum / views.size());
+  for (const auto& [key, sum] : sums) mean[key] = FiniteOrNull(sum.first / sum.second);
   return mean;
 }
 
@@ -160,6 +178,12 @@ struct LoopState {
 
 }  // namespace
 
+int DistinctTimes(const Dataset& dataset) {
+  std::set<double> times;
+  for (const Frame* f : dataset.AllFrames()) times.insert(f->time);
+  return std::max<int>(1, static_cast<int>(times.size()));
+}
+
 TrainSummary Train(const TrainOptions& options) {
   if (std::string problem = options.Validate(); !problem.empty()) Fail("train: {}", problem);
   const ThreadLimit thread_limit(options.threads);
@@ -167,12 +191,34 @@ TrainSummary Train(const TrainOptions& options) {
 
   const Dataset dataset = LoadDataset(options.data, {.image_check = ImageCheck::kHeaders});
   const SceneProfile profile = ProfileScene(dataset);
+  const HdrTrainingOptions& hdr_options = options.hdr;
+  const bool hdr_colors = hdr_options.color_mode == ColorMode::kLogHdr;
   const float background[3] = {options.background, options.background, options.background};
-  const std::vector<TrainView> train_views = LoadViews(dataset, Split::kTrain, background);
-  const std::vector<TrainView> test_views = LoadViews(dataset, Split::kTest, background);
+  std::vector<TrainView> train_views =
+      LoadViews(dataset, Split::kTrain, background, /*load_hdr=*/hdr_colors);
+  std::vector<TrainView> test_views = LoadViews(dataset, Split::kTest, background);
+  const int num_times = DistinctTimes(dataset);
+  for (auto* views : {&train_views, &test_views}) {
+    for (TrainView& v : *views) v.time_index = RadianceBank::TimeIndex(v.time, num_times);
+  }
+  const bool train_hdr = std::any_of(train_views.begin(), train_views.end(),
+                                     [](const TrainView& v) { return !v.hdr_mu.empty(); });
   const double extent = SceneExtent(train_views);
-  spdlog::info("train: {} train / {} test views, extent {:.3f}, {}", train_views.size(),
-               test_views.size(), extent, profile.dynamic ? "dynamic" : "static (no time axis)");
+  const bool temporal = profile.dynamic && !hdr_options.force_static;
+  spdlog::info("train: {} train / {} test views, extent {:.3f}, {}, method {}", train_views.size(),
+               test_views.size(), extent, temporal ? "dynamic" : "static (no time axis)",
+               hdr_options.method);
+
+  std::unique_ptr<ToneMapper> tone_mapper;
+  if (hdr_options.tone_mapper) {
+    ToneMapperConfig tc = *hdr_options.tone_mapper;
+    tc.num_times = num_times;
+    tc.num_images = static_cast<int>(train_views.size());
+    tc.seed = options.seed;
+    tone_mapper = options.tone_mapper_factory(tc);
+  }
+  const ResolvedHdrTraining resolved =
+      ResolveHdrTraining(hdr_options, train_hdr, !tone_mapper || tone_mapper->pointwise());
 
   std::error_code ec;
   fs::create_directories(options.out, ec);
@@ -195,11 +241,22 @@ TrainSummary Train(const TrainOptions& options) {
     stats.grad_accum = std::move(c.extra_floats[0]);
     stats.denom = std::move(c.extra_floats[1]);
     stats.max_radii = std::move(c.extra_floats[2]);
+    if (model.color_mode != hdr_options.color_mode) {
+      Fail("{}: the checkpoint's colour model does not match method '{}'", checkpoint_path.string(),
+           hdr_options.method);
+    }
+    if (tone_mapper) {
+      if (c.tone_mapper_state.empty())
+        Fail("{}: checkpoint has no tone mapper state", checkpoint_path.string());
+      std::istringstream tm_state(c.tone_mapper_state);
+      tone_mapper->Load(tm_state, checkpoint_path.string());
+    }
     spdlog::info("train: resuming {} at iteration {}", checkpoint_path.string(), loop.iteration);
   } else {
     InitOptions init = options.init;
     init.seed = options.seed;
-    init.temporal = profile.dynamic;  // a static scene trains without the time axis
+    init.temporal = temporal;  // a static scene trains without the time axis
+    init.color_mode = hdr_options.color_mode;
     std::optional<PointCloud> cloud;
     if (dataset.point_cloud_path) cloud = ReadPly(*dataset.point_cloud_path);
     model = InitialiseGaussians(cloud, init);
@@ -207,20 +264,50 @@ TrainSummary Train(const TrainOptions& options) {
   }
   GaussianGradients grads;
   grads.ZerosLike(model);
+  const bool tone_mapper_group = tone_mapper && !tone_mapper->params().empty();
   if (options.resume) {
     BindModelGroups(model, grads, &adam);
+    if (tone_mapper_group) {
+      adam.SetBuffers(kGroupToneMapper, tone_mapper->params().data(), tone_mapper->grads().data(),
+                      tone_mapper->params().size());
+    }
   } else {
     AddModelGroups(model, grads, LearningRatesAt(opt, extent, 0), &adam);
+    if (tone_mapper_group) {
+      adam.AddGroup({.name = kGroupToneMapper,
+                     .params = tone_mapper->params().data(),
+                     .grads = tone_mapper->grads().data(),
+                     .size = tone_mapper->params().size(),
+                     .lr = tone_mapper->learning_rate()});
+    }
   }
   nlohmann::json config = options.ToJson();
   config["scene_extent"] = extent;
   config["profile"] = profile.ToJson();
+  config["num_times"] = num_times;
+  config["resolved"] = resolved.ToJson();
+  if (tone_mapper) config["tone_mapper"] = tone_mapper->config().ToJson();
   WriteJsonFile(options.out / "config.json", config);
 
   RenderOptions render;
-  render.background.assign(model.channels, options.background);
+  std::optional<HdrColorStage> stage;
+  if (resolved.hdr_colors) {
+    stage.emplace(tone_mapper.get(), resolved.ldr_gaussian);
+    render.color_stage = &*stage;
+    render.background.assign(stage->feature_channels(), 0.0f);
+    for (int c = 3; c < stage->feature_channels(); ++c) render.background[c] = options.background;
+  } else {
+    render.background.assign(model.channels, options.background);
+  }
+  const int raster_channels = static_cast<int>(render.background.size());
+  const SupervisionTerms terms{.ldr_gaussian = resolved.ldr_gaussian,
+                               .ldr_pixel = resolved.ldr_pixel,
+                               .hdr = resolved.hdr,
+                               .hdr_weight = hdr_options.hdr_weight,
+                               .lambda_dssim = static_cast<float>(opt.lambda_dssim)};
   FrameState state;
-  std::vector<float> image, gt, dL_dimage;
+  HdrLossScratch scratch;
+  std::vector<float> image, gt, hdr_mu, dL_dimage, final_ldr;
   const std::string last_good = checkpoint_path.string();
 
   auto save = [&]() {
@@ -231,7 +318,18 @@ TrainSummary Train(const TrainOptions& options) {
     std::ostringstream adam_state;
     adam.Save(adam_state);
     c.adam_state = adam_state.str();
+    if (tone_mapper) {
+      std::ostringstream tm_state;
+      tone_mapper->Save(tm_state);
+      c.tone_mapper_state = tm_state.str();
+    }
     SaveCheckpoint(checkpoint_path, c);
+  };
+  auto evaluate = [&]() {
+    RenderOptions base = render;
+    base.color_stage = nullptr;
+    ViewRenderer renderer(model, tone_mapper.get(), resolved, base, options.background);
+    return Evaluate(&renderer, test_views);
   };
 
   Progress progress("train", opt.iterations - loop.iteration, options.progress);
@@ -244,29 +342,59 @@ TrainSummary Train(const TrainOptions& options) {
         ColorDegrees(it, model, opt.sh_increase_interval);
 
     const TrainView& view = train_views[loop.NextView(train_views.size())];
-    const std::size_t values = static_cast<std::size_t>(view.width()) * view.height() * 3;
-    image.resize(values);
-    dL_dimage.resize(values);
-    RenderForward(model, view.camera, view.time, render, &state, image.data());
+    const std::size_t pixels = static_cast<std::size_t>(view.width()) * view.height();
+    image.resize(pixels * raster_channels);
+    dL_dimage.resize(pixels * raster_channels);
     view.ToFloat(&gt);
-    const LossResult loss = PhotometricLoss(image.data(), gt.data(), view.width(), view.height(), 3,
-                                            static_cast<float>(opt.lambda_dssim), dL_dimage.data());
-    if (!std::isfinite(loss.value)) {
+    double loss_value = 0;
+    const float* ldr_out = nullptr;  // the final LDR image of this view, for the PSNR shown
+    if (!resolved.hdr_colors) {
+      RenderForward(model, view.camera, view.time, render, &state, image.data());
+      loss_value = PhotometricLoss(image.data(), gt.data(), view.width(), view.height(), 3,
+                                   static_cast<float>(opt.lambda_dssim), dL_dimage.data())
+                       .value;
+      ldr_out = image.data();
+    } else {
+      if (tone_mapper) tone_mapper->ZeroGrad();
+      stage->SetFrame(
+          {view.time_index, view.image_index, static_cast<float>(std::log(view.exposure))},
+          /*observe_bank=*/true);
+      RenderForward(model, view.camera, view.time, render, &state, image.data());
+      const float* mu = nullptr;
+      if (!view.hdr_mu.empty()) {
+        view.HdrMuToFloat(&hdr_mu);
+        mu = hdr_mu.data();
+      }
+      const bool want_pixels = resolved.final_ldr_from_pixels && tone_mapper;
+      loss_value = HdrFrameLoss(image.data(), raster_channels, view.width(), view.height(),
+                                gt.data(), mu, tone_mapper.get(), terms, &scratch, dL_dimage.data(),
+                                want_pixels ? &final_ldr : nullptr)
+                       .total;
+      if (want_pixels) {
+        ldr_out = final_ldr.data();
+      } else if (raster_channels == 6) {
+        final_ldr.resize(pixels * 3);
+        for (std::size_t p = 0; p < pixels; ++p)
+          for (int c = 0; c < 3; ++c) final_ldr[p * 3 + c] = image[p * 6 + 3 + c];
+        ldr_out = final_ldr.data();
+      }
+    }
+    if (!std::isfinite(loss_value)) {
       Fail("train: iteration {}: the loss is {} (view {}); stopped, the last good checkpoint is {}",
-           it, loss.value, view.name, last_good);
+           it, loss_value, view.name, last_good);
     }
     RenderBackward(model, view.camera, view.time, render, &state, dL_dimage.data(), &grads);
+    if (tone_mapper) tone_mapper->EndFrameBackward();
     if (const std::string bad = adam.FirstNonFiniteGradient(); !bad.empty()) {
       Fail(
           "train: iteration {}: non-finite gradient in parameter group '{}'; stopped, the last "
-          "good "
-          "checkpoint is {}",
+          "good checkpoint is {}",
           it, bad, last_good);
     }
     if (it < opt.densify_until)
       AccumulateStats(state.splat_grads.mean2d, state.screen_radius, view.width(), view.height(),
                       &stats);
-    loop.loss_curve.push_back(loss.value);
+    loop.loss_curve.push_back(loss_value);
 
     // As in the reference, densification replaces every parameter tensor, so no optimiser step
     // happens on that iteration; an opacity reset replaces only the opacity.
@@ -275,6 +403,9 @@ TrainSummary Train(const TrainOptions& options) {
     const bool reset_opacity = it < opt.densify_until && it % opt.opacity_reset_interval == 0;
     if (densify) {
       DensifyAndPrune(&model, &grads, &adam, &stats, DensifyParamsAt(opt, extent, it), &loop.rng);
+      // The reference's optimiser step after densification skips the replaced tensors (they
+      // have no gradient) but still moves the tone mapper, which densification leaves alone.
+      if (tone_mapper_group) adam.StepGroup(kGroupToneMapper);
     } else {
       for (const std::string& group : adam.GroupNames()) {
         if (!(reset_opacity && group == kGroupOpacity)) adam.StepGroup(group);
@@ -282,16 +413,19 @@ TrainSummary Train(const TrainOptions& options) {
     }
     if (reset_opacity) ResetOpacity(&model, &adam);
 
-    double squared = 0;
-    for (std::size_t i = 0; i < values; ++i) {
-      const double d = std::clamp(image[i], 0.0f, 1.0f) - gt[i];
-      squared += d * d;
+    std::string shown = fmt::format("loss {:.4f}", loss_value);
+    if (ldr_out) {
+      double squared = 0;
+      for (std::size_t i = 0; i < pixels * 3; ++i) {
+        const double d = std::clamp(ldr_out[i], 0.0f, 1.0f) - gt[i];
+        squared += d * d;
+      }
+      shown +=
+          fmt::format(" psnr {:.2f}", -10.0 * std::log10(std::max(squared / (pixels * 3), 1e-20)));
     }
-    const double psnr = -10.0 * std::log10(std::max(squared / values, 1e-20));
-    progress.Advance(1,
-                     fmt::format("loss {:.4f} psnr {:.2f} N {}", loss.value, psnr, model.size()));
+    progress.Advance(1, fmt::format("{} N {}", shown, model.size()));
     if (options.test_every > 0 && it % options.test_every == 0 && it < opt.iterations) {
-      const nlohmann::json m = Evaluate(model, test_views, render, &state);
+      const nlohmann::json m = evaluate();
       spdlog::info("train: iteration {}: test {}", it, m.dump());
     }
     if (options.checkpoint_every > 0 && it % options.checkpoint_every == 0) {
@@ -308,12 +442,13 @@ TrainSummary Train(const TrainOptions& options) {
   save();
 
   TrainSummary summary;
-  summary.test_metrics = Evaluate(model, test_views, render, &state);
+  summary.test_metrics = evaluate();
   summary.train_seconds = loop.train_seconds;
   summary.iterations = loop.iteration;
   summary.gaussians = model.size();
   summary.loss_curve = loop.loss_curve;
   nlohmann::json results = {
+      {"method", hdr_options.method},
       {"test", summary.test_metrics},
       {"train_seconds", summary.train_seconds},
       {"iterations", summary.iterations},

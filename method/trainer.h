@@ -8,6 +8,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "core/dataset.h"
+#include "method/hdr_training.h"
 #include "method/initialise.h"
 #include "method/lr_schedule.h"
 
@@ -25,12 +27,16 @@ struct TrainOptions {
   bool resume = false;       // continue from RUN/checkpoint.bin
   bool progress = true;
   float background = 0.0f;  // grey level behind the scene (the reference trains on black)
+  HdrTrainingOptions hdr;   // colour mode, tone mapper, supervision branches (plain 4DGS default)
+  // Builds hdr.tone_mapper (method/ cannot see baselines/: the CLI passes
+  // baselines::MakeToneMapper). Required when hdr.tone_mapper is set.
+  ToneMapperFactory tone_mapper_factory;
   std::string Validate() const;
   nlohmann::json ToJson() const;
 };
 
 struct TrainSummary {
-  nlohmann::json test_metrics;  // keys of `hdr4d eval` (means over the test views)
+  nlohmann::json test_metrics;  // keys of `hdr4d eval` (means over the test views), LDR and HDR
   double train_seconds = 0;
   int iterations = 0;
   std::size_t gaussians = 0;
@@ -39,5 +45,11 @@ struct TrainSummary {
 
 // Runs (or resumes) training; writes RUN/config.json, RUN/checkpoint.bin, RUN/results.json.
 TrainSummary Train(const TrainOptions& options);
+
+// The radiance-bank size of a scene: the number of distinct normalised timestamps over all its
+// frames (the reference's len(set(times))).
+int DistinctTimes(const Dataset& dataset);
+
+inline constexpr const char* kGroupToneMapper = "tone_mapper";
 
 }  // namespace hdr4d::method
