@@ -33,7 +33,7 @@ echo "== 7. render its held-out camera (LDR PNG + HDR EXR), score both, plot the
 "$HDR4D" tone-curves --run "$OUT/hdr_run"
 echo "== 8. train 4D Gaussian Splatting on a known moving Gaussian scene (96x96, 12 cameras x 8 times)"
 "$HDR4D" make-gaussian-scene --out "$OUT/gaussians" --size 96
-"$HDR4D" train --data "$OUT/gaussians" --out "$OUT/run" --iterations 3000 --random-points 5000 \
+"$HDR4D" train --data "$OUT/gaussians" --out "$OUT/run" --method 4dgs --iterations 3000 --random-points 5000 \
   --densify-until 2000 --position-lr-steps 3000 --densify-grad-threshold 1e-3
 echo "== 9. render the held-out cameras, score them, export a time slice for any 3DGS viewer"
 "$HDR4D" render --run "$OUT/run" --split test

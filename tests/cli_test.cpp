@@ -142,5 +142,63 @@ TEST(Cli, TrainRenderEvalExport) {
   }
 }
 
+// HDR-4DGS and its baselines from the command line on a small multi-exposure HDR scene: LDR and
+// HDR renders that `hdr4d eval` pairs with images/ and hdr/, tone curves, and flag mistakes.
+TEST(Cli, HdrMethodsRenderToneCurvesAndFlagErrors) {
+  testing::TempDir dir;
+  const std::string scene = (dir / "scene").string(), run = (dir / "run").string();
+  auto r = RunHdr4d("make-demo-scene --out " + scene + " --size 16 --timestamps 2 --cameras 3");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = RunHdr4d("synth-ldr --data " + scene + " --seed 1");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = RunHdr4d("train --data " + scene + " --out " + run +
+               " --iterations 15 --supervision ldr --context-learner transformer");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto results = nlohmann::json::parse(testing::ReadTextFile(dir / "run" / "results.json"));
+  EXPECT_EQ(results["method"], "hdr4dgs");
+  EXPECT_TRUE(results["test"].contains("mu_psnr")) << results.dump();
+  EXPECT_TRUE(results["test"].contains("psnr")) << results.dump();
+  r = RunHdr4d("render --run " + run + " --split test --exposure 2");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(dir / "run" / "renders" / "test" / "cam02_t001_e1.png"));
+  EXPECT_TRUE(fs::exists(dir / "run" / "renders" / "test" / "cam02_t001.exr"));
+  r = RunHdr4d("eval " + run + "/renders/test " + scene + "/hdr --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["pairs"].size(), 2u);  // 1 test camera x 2 times
+  r = RunHdr4d("tone-curves --run " + run + " --times 0,1 --samples 32");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* f : {"tone_curves.csv", "tone_curves.png", "tone_curves.svg"})
+    EXPECT_TRUE(fs::exists(dir / "run" / "tone_curves" / f)) << f;
+  EXPECT_EQ(LineCount(testing::ReadTextFile(dir / "run" / "tone_curves" / "tone_curves.csv")), 33);
+  r = RunHdr4d("export-ply --run " + run + " --time 0.5 --out " + (dir / "hdr.ply").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const std::string& method : {"4dgs-hdr", "hdr-gs"}) {
+    r = RunHdr4d("train --data " + scene + " --out " + (dir / method).string() +
+                 " --iterations 5 --method " + method);
+    EXPECT_EQ(r.exit_code, 0) << method << "\n" << r.err;
+  }
+  r = RunHdr4d("train --data " + scene + " --out " + (dir / "durand").string() +
+               " --iterations 5 --tone-mapper durand --supervision ldr");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  r = RunHdr4d("tone-curves --run " + (dir / "durand").string());
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("whole images"), std::string::npos) << r.err;
+  // Mistakes: one line naming the problem, exit 1.
+  for (const std::string& bad :
+       {"train --data " + scene + " --out " + (dir / "x").string() + " --method 3dgs",
+        "train --data " + scene + " --out " + (dir / "x").string() + " --tone-mapper aces",
+        "train --data " + scene + " --out " + (dir / "x").string() +
+            " --method 4dgs --tone-mapper mlp",
+        "train --data " + scene + " --out " + (dir / "x").string() + " --supervision hdr-ish",
+        "train --data " + scene + " --out " + (dir / "x").string() +
+            " --tone-mapper durand --no-pixel-branch",
+        "render --run " + run + " --exposure 0", "tone-curves --run " + run + " --times 1.5",
+        "tone-curves --run " + (dir / "4dgs-hdr").string()}) {
+    r = RunHdr4d(bad);
+    EXPECT_EQ(r.exit_code, 1) << bad << "\n" << r.err;
+    EXPECT_EQ(LineCount(r.err), 1) << bad << "\n" << r.err;
+  }
+}
+
 }  // namespace
 }  // namespace hdr4d
