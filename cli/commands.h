@@ -16,5 +16,6 @@ void AddRenderCommand(CLI::App& app);         // render
 void AddGaussianSceneCommand(CLI::App& app);  // make-gaussian-scene
 void AddExportPlyCommand(CLI::App& app);      // export-ply
 void AddToneCurvesCommand(CLI::App& app);     // tone-curves
+void AddDatagenCommand(CLI::App& app);        // datagen
 
 }  // namespace hdr4d::cli

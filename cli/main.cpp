@@ -35,6 +35,7 @@ int main(int argc, char** argv) {
   hdr4d::cli::AddRenderCommand(app);
   hdr4d::cli::AddExportPlyCommand(app);
   hdr4d::cli::AddToneCurvesCommand(app);
+  hdr4d::cli::AddDatagenCommand(app);
 
   try {
     app.parse(argc, argv);

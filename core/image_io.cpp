@@ -134,6 +134,9 @@ void WriteImage(const fs::path& path, const Image& image, const ImageWriteOption
   OIIO::ImageSpec spec(image.width(), image.height(), image.channels(), type);
   if (jpeg) spec.attribute("Compression", "jpeg:" + std::to_string(options.jpeg_quality));
   if (exr) spec.attribute("compression", "zip");
+  // No capture date in the header: OpenImageIO would stamp the current time, and equal images
+  // written at different times would differ byte for byte (reproducible datasets need them equal).
+  spec.attribute("DateTime", "");
   if (!exr)
     spec.attribute("oiio:ColorSpace", image.encoding() == Encoding::kSrgb ? "sRGB" : "Linear");
   auto out = OIIO::ImageOutput::create(tmp.string());

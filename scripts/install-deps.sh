@@ -15,6 +15,8 @@ PACKAGES=(
   libhwy-dev
   # hdr4d render --video encodes MP4 with ffmpeg
   ffmpeg
+  # hdr4d datagen renders its scenes with Blender (bpy scripts in datagen/blender)
+  blender python3-numpy
 )
 
 missing=()

@@ -1,0 +1,40 @@
+// Turning Blender's output into a dataset (DESIGN §3): the EXRs checked and rewritten without
+// Cycles' timing metadata, one Frame per render and exposure, point3d.ply from the t = 0 surface
+// samples.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <vector>
+
+#include "core/dataset.h"
+#include "core/image.h"
+#include "datagen/dynamic_range.h"
+#include "datagen/scene_presets.h"
+
+namespace hdr4d::datagen {
+
+// Reads every planned EXR in `staging` (a missing or corrupt one, or a wrong size, is an error
+// naming the scene, the frame and the file) and rewrites it as float EXR with core's WriteImage
+// (no render times or dates in the header, so equal renders give equal bytes). Returns
+// the luminance histogram of all frames.
+LuminanceHistogram NormaliseExrs(const ScenePreset& preset,
+                                 const std::vector<PlannedRender>& renders,
+                                 const std::filesystem::path& staging);
+
+// The dataset of the renders: per render and exposure a frame with its LDR file_path (images/,
+// written later by the LDR synthesis), exr_file_path, time, exposure, camera_id,
+// exposure_index, and the camera Blender reported in `info` (render_info.json).
+Dataset BuildDataset(const ScenePreset& preset,
+                     const std::vector<PlannedRender>& renders,
+                     const nlohmann::json& info,
+                     const std::filesystem::path& staging);
+
+// point3d.ply (with time = 0) from the script's surface samples, which are then removed.
+// Returns the number of points.
+std::int64_t WritePointCloud(const ScenePreset& preset,
+                             const nlohmann::json& info,
+                             const std::filesystem::path& staging);
+
+}  // namespace hdr4d::datagen

@@ -1,0 +1,70 @@
+// `hdr4d datagen`: renders a procedural scene with Blender (Cycles on the CPU, linear float EXR),
+// then makes the dataset around it: multi-exposure LDR images through core's LDR synthesis
+// (exposure, camera response, sensor noise, 8 bits), transforms_{train,test}.json in the layout
+// of DESIGN §3, point3d.ply sampled from the surfaces at t = 0, and manifest.json (versions,
+// preset, seed, render settings, dynamic range, SHA-256 of every file).
+//
+// Output of one scene, OUT/<scene>/:
+//   hdr/camCC_tTTTT.exr            one linear render per camera and timestamp
+//   images/camCC_tTTTT_eK.png      LDR at exposure index K (0.125, 2, 32 s)
+//   transforms_train.json, transforms_test.json, point3d.ply, synthesis.json
+//   render_plan.json               what Blender was asked to render (rerunnable by hand)
+//   render_info.json               what Blender reports (version, camera matrices, markers)
+//   manifest.json, blender.log
+// The scene is built in OUT/<scene>.partial and moved into place only when complete, so a
+// failed run keeps the previous dataset; the partial folder keeps blender.log for diagnosis.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/ldr_synthesis.h"
+#include "datagen/dynamic_range.h"
+
+namespace hdr4d::datagen {
+
+struct DatagenOptions {
+  std::string scene = "all";  // a scene name (AllScenes) or "all"
+  std::string preset = "mini";
+  std::filesystem::path out;
+  std::uint64_t seed = 0;
+  std::string blender;      // empty: $HDR4D_BLENDER, then blender on PATH
+  std::string scripts_dir;  // empty: $HDR4D_DATAGEN_DIR, then the source tree's datagen/blender
+  int threads = 0;          // Cycles threads; 0 = every core (the pixels do not depend on it)
+  int samples = 0;          // Cycles samples per pixel; 0 = the preset's
+  // LDR synthesis, as the demo and HDR-4D-Syn-style data: a filmic response, shot and read
+  // noise, 8 bits. The noise seed is the scene seed.
+  std::string crf = "filmic";
+  double full_well = 20000;
+  double read_sigma = 0.002;
+  bool show_progress = true;
+  // Throws hdr4d::Error for an unknown scene or preset, an empty output folder, negative
+  // threads or samples, or bad LDR settings.
+  void Validate() const;
+};
+
+struct SceneResult {
+  std::string scene;
+  std::filesystem::path root;  // OUT/<scene>
+  int renders = 0;
+  int ldr_images = 0;
+  double blender_seconds = 0;  // Blender's wall time: start-up, scene building, every render
+  double total_seconds = 0;
+  DynamicRange range;
+};
+
+// Renders one scene (not "all") into options.out / scene. Throws hdr4d::Error naming the scene,
+// the frame and the file for a missing Blender, a failing script (non-zero exit), a missing or
+// corrupt EXR, an output folder that cannot be written or that holds something other than a
+// previous datagen run.
+SceneResult GenerateScene(const DatagenOptions& options, const std::string& scene);
+
+// Every scene options.scene names ("all" = the eight HDR-4D-Syn-style scenes), in order;
+// on_done (optional) hears of each scene as soon as it is finished.
+std::vector<SceneResult> Generate(const DatagenOptions& options,
+                                  const std::function<void(const SceneResult&)>& on_done = {});
+
+}  // namespace hdr4d::datagen
