@@ -28,6 +28,7 @@ struct SynthLdrArgs {
   std::uint64_t seed = 0;
   int bits = 8;
   bool keep_existing = false;
+  double gain_drift = 0;
 };
 
 void Run(const SynthLdrArgs& a) {
@@ -36,7 +37,11 @@ void Run(const SynthLdrArgs& a) {
     if (!a.input.empty() || !a.output.empty())
       Fail("synth-ldr: give either --data DIR or IN --out OUT, not both");
     DatasetSynthesisOptions options{
-        .crf = a.crf, .noise = noise, .bits = a.bits, .overwrite = !a.keep_existing};
+        .crf = a.crf,
+        .noise = noise,
+        .bits = a.bits,
+        .overwrite = !a.keep_existing,
+        .gain_drift = a.gain_drift};
     const int n = SynthesizeDatasetLdr(a.data, options);
     fmt::print(
         "synth-ldr: wrote {} LDR images in {} (camera response {}, settings in synthesis.json)\n",
@@ -91,6 +96,10 @@ void AddSynthLdrCommand(CLI::App& app) {
   cmd->add_option("--bits", args->bits, "Quantisation: 8, 16, or 0 for float output")
       ->capture_default_str();
   cmd->add_flag("--keep-existing", args->keep_existing, "Dataset mode: skip LDR images that exist");
+  cmd->add_option("--gain-drift", args->gain_drift,
+                  "Dataset mode: a hidden camera gain exp(D (t - 0.5)) over normalised time t "
+                  "(auto-exposure-like; the JSON keeps the nominal exposures)")
+      ->capture_default_str();
   cmd->callback([args] { Run(*args); });
 }
 

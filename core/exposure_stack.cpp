@@ -1,5 +1,7 @@
 #include "core/exposure_stack.h"
 
+#include <cmath>
+
 #include <fmt/format.h>
 
 #include <map>
@@ -45,6 +47,8 @@ void DatasetSynthesisOptions::Validate() const {
   probe.bits = bits;
   probe.Validate();
   if (bits == 0) Fail("synth-ldr: a dataset's LDR images are integer PNGs; use 8 or 16 bits");
+  if (!std::isfinite(gain_drift) || std::abs(gain_drift) > 20)
+    Fail("synth-ldr: gain drift {} must be finite and within [-20, 20]", gain_drift);
 }
 
 int SynthesizeDatasetLdr(const fs::path& root, const DatasetSynthesisOptions& options) {
@@ -80,7 +84,7 @@ int SynthesizeDatasetLdr(const fs::path& root, const DatasetSynthesisOptions& op
         continue;
       }
       LdrSynthesisOptions ldr;
-      ldr.exposure = f->exposure;
+      ldr.exposure = f->exposure * std::exp(options.gain_drift * (f->time - 0.5));
       ldr.bits = options.bits;
       ldr.noise = options.noise;
       ldr.noise.seed =
@@ -98,6 +102,7 @@ int SynthesizeDatasetLdr(const fs::path& root, const DatasetSynthesisOptions& op
       {"crf", crf->ToJson()},
       {"crf_spec", crf->Spec()},
       {"bits", options.bits},
+      {"gain_drift", options.gain_drift},
       {"noise",
        {{"full_well", options.noise.full_well},
         {"read_sigma", options.noise.read_sigma},

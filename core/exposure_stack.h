@@ -16,6 +16,11 @@ struct DatasetSynthesisOptions {
   SensorNoise noise;           // seed is mixed with each frame's split and index
   int bits = 8;
   bool overwrite = true;  // false: keep LDR images that already exist
+  // A hidden in-camera gain that changes over time, as auto-exposure compensation or in-camera
+  // tone adjustments do: frame at normalised time t is exposed at exposure x
+  // exp(gain_drift (t - 0.5)) while its JSON keeps the nominal exposure. 0 = a fixed response.
+  // The case a dynamic tone mapper exists for; merge-hdr assumes 0.
+  double gain_drift = 0.0;
   void Validate() const;
 };
 

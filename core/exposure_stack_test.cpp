@@ -45,6 +45,29 @@ TEST(ExposureStack, SynthesisWritesEveryFrameBrighterWithExposure) {
   EXPECT_TRUE(CheckDataset(dir.path(), {.image_check = ImageCheck::kFull}).problems.empty());
 }
 
+TEST(ExposureStack, GainDriftBrightensLateFramesAndDarkensEarlyOnes) {
+  testing::TempDir dir;
+  const Dataset dataset = SmallScene(dir.path());
+  auto mean_of = [](const fs::path& path) {
+    const Image ldr = ReadImage(path);
+    double mean = 0;
+    for (float v : ldr.values()) mean += v;
+    return mean / ldr.size();
+  };
+  SynthesizeDatasetLdr(dir.path(), {.crf = "gamma:2.2"});
+  std::vector<double> fixed;
+  for (const Frame& f : dataset.train) fixed.push_back(mean_of(f.image_path));
+  SynthesizeDatasetLdr(dir.path(), {.crf = "gamma:2.2", .gain_drift = 2.0});
+  for (std::size_t i = 0; i < dataset.train.size(); ++i) {
+    const Frame& f = dataset.train[i];
+    const double drifted = mean_of(f.image_path);
+    if (f.time > 0.5) EXPECT_GT(drifted, fixed[i]) << f.file_path;  // gain e^(+1)
+    if (f.time < 0.5) EXPECT_LT(drifted, fixed[i]) << f.file_path;  // gain e^(-1)
+  }
+  EXPECT_EQ(ReadJsonFile(dir / "synthesis.json")["gain_drift"], 2.0);
+  EXPECT_THROW(SynthesizeDatasetLdr(dir.path(), {.gain_drift = 1e9}), Error);
+}
+
 TEST(ExposureStack, SameSeedSameBytes) {
   testing::TempDir dir;
   const Dataset dataset = SmallScene(dir.path());
