@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "core/parallel.h"
 #include "method/constants.h"
+#include "method/preprocess_simd.h"
 #include "method/raster/binning.h"
 #include "method/raster/blend.h"
 #include "method/rotation4d.h"
@@ -229,6 +230,52 @@ RasterSettings SettingsFor(const Camera& camera, const RenderOptions& options, i
   return settings;
 }
 
+// The float 4D path vectorised over Gaussians (preprocess_simd.h) with the SIMD blend backend;
+// the scalar backend, double and 3D mode keep the generic per-Gaussian code.
+template <typename T>
+bool UseSimdPreprocess(const GaussianModelT<T>& model, const RenderOptions& options) {
+  return std::is_same_v<T, float> && model.temporal && options.backend == RasterBackend::kSimd;
+}
+
+internal::PreprocessSimdJob MakePreprocessJob(const GaussianModel& model,
+                                              const ViewParams<float>& view,
+                                              float time,
+                                              const RenderOptions& options) {
+  internal::PreprocessSimdJob job;
+  job.xyz = model.xyz.data();
+  job.t = model.t.data();
+  job.log_scales = model.log_scales.data();
+  job.rot_left = model.rot_left.data();
+  job.rot_right = model.rot_right.data();
+  job.opacity_logit = model.opacity_logit.data();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) job.rotation[3 * r + c] = view.rotation(r, c);
+    job.translation[r] = view.translation[r];
+  }
+  job.fx = view.fx;
+  job.fy = view.fy;
+  job.cx = view.cx;
+  job.cy = view.cy;
+  job.lim_x = kFrustumTanMargin * view.TanFovX();
+  job.lim_y = kFrustumTanMargin * view.TanFovY();
+  const Vec3<float> center = view.Center();
+  for (int k = 0; k < 3; ++k) job.center[k] = center[k];
+  job.time = time;
+  job.duration = options.time_duration;
+  job.sh_degree = options.sh_degree;
+  job.time_degree = TimeDegree(model, options);
+  job.functions = model.basis.sh_functions();
+  job.coefficients = model.basis.coefficients();
+  detail::CheckColorDegrees(model.basis, job.sh_degree, job.time_degree);
+  HDR4D_CHECK(job.time_degree == 0 || job.duration > 0.0f);
+  return job;
+}
+
+// One lane's weights out of a batch's [k][lane] block.
+inline void LaneWeights(const float* batch, int lane, int coefficients, float* w) {
+  for (int k = 0; k < coefficients; ++k) w[k] = batch[k * internal::kPreprocessBatch + lane];
+}
+
 }  // namespace
 
 template <typename T>
@@ -255,48 +302,94 @@ void PreprocessForward(const GaussianModelT<T>& model,
   const std::size_t stride = model.rest_stride();
   const T duration = static_cast<T>(options.time_duration);
   std::vector<std::int64_t> visible_per_chunk((n + kGaussianGrain - 1) / kGaussianGrain, 0);
-  ParallelForChunks(static_cast<std::int64_t>(n), kGaussianGrain,
-                    [&](std::int64_t b, std::int64_t e) {
-                      std::int64_t visible = 0;
-                      for (std::int64_t g = b; g < e; ++g) {
-                        const std::size_t i = static_cast<std::size_t>(g);
-                        // The colour rows stream from memory (the optimiser's sweep evicts them):
-                        // fetch a few Gaussians ahead.
-                        if (stride > 0 && g + kColorAhead < e)
-                          PrefetchRow(&model.color_rest[(i + kColorAhead) * stride], stride);
-                        s.radius[i] = 0;
-                        const ConditionalGaussian<T> c = ConditionAt(model, i, time);
-                        if (model.temporal && !TemporallyVisible(c.marginal))
-                          continue;  // culled: costs nothing
-                        const Splat2D<T> splat = ProjectEwa(c.mean, c.cov, view);
-                        if (!splat.visible) continue;
-                        s.mean2d[2 * i] = splat.mean.x();
-                        s.mean2d[2 * i + 1] = splat.mean.y();
-                        for (int k = 0; k < 3; ++k) s.conic[3 * i + k] = splat.conic[k];
-                        s.depth[i] = splat.depth;
-                        s.opacity[i] = Sigmoid(model.opacity_logit[i]) * c.marginal;
-                        state->screen_radius[i] = splat.radius;
-                        s.radius[i] = BinningRadius(splat, s.opacity[i]);
-                        state->conditionals[i] = c;  // the backward reuses it
-                        // Colour is linear in the coefficients: weights . (DC, rest) + 0.5.
-                        T w[kMaxColorCoefficients];
-                        EvalColorBasisWeights(Vec3<T>(c.mean - center), model.t[i] - time, duration,
-                                              model.basis, options.sh_degree, time_degree, w);
-                        T* color = stage ? &state->colors[i * channels] : &s.features[i * channels];
-                        Color(w, &model.color_dc[i * channels], &model.color_rest[i * stride],
-                              channels, model.basis, options.sh_degree, time_degree, color);
-                        if (model.color_mode == ColorMode::kLdr) {
-                          for (int ch = 0; ch < channels; ++ch) {
-                            if (color[ch] < T(0)) {
-                              color[ch] = T(0);
-                              state->clamped[i * channels + ch] = 1;
-                            }
-                          }
-                        }
-                        ++visible;
-                      }
-                      visible_per_chunk[b / kGaussianGrain] = visible;
-                    });
+  if constexpr (std::is_same_v<T, float>) {
+    if (UseSimdPreprocess(model, options)) {
+      internal::PreprocessSimdJob job = MakePreprocessJob(model, view, time, options);
+      job.mean2d = s.mean2d.data();
+      job.conic = s.conic.data();
+      job.depth = s.depth.data();
+      job.opacity = s.opacity.data();
+      job.radius = s.radius.data();
+      job.screen_radius = state->screen_radius.data();
+      const int coefficients = job.coefficients;
+      ParallelForChunks(
+          static_cast<std::int64_t>(n), kGaussianGrain, [&](std::int64_t b, std::int64_t e) {
+            alignas(64) float batch_w[kMaxColorCoefficients * internal::kPreprocessBatch];
+            float w[kMaxColorCoefficients];
+            std::int64_t visible = 0;
+            for (std::int64_t g0 = b; g0 < e; g0 += internal::kPreprocessBatch) {
+              const int count =
+                  static_cast<int>(std::min<std::int64_t>(internal::kPreprocessBatch, e - g0));
+              internal::PreprocessForwardSimd(job, g0, count, batch_w);
+              for (int l = 0; l < count; ++l) {
+                const std::size_t i = static_cast<std::size_t>(g0 + l);
+                // The colour rows stream from memory (the optimiser's sweep evicts them).
+                if (stride > 0 && g0 + l + kColorAhead < e)
+                  PrefetchRow(&model.color_rest[(i + kColorAhead) * stride], stride);
+                if (state->screen_radius[i] == 0) continue;
+                LaneWeights(batch_w, l, coefficients, w);
+                float* color = stage ? &state->colors[i * channels] : &s.features[i * channels];
+                Color(w, &model.color_dc[i * channels], &model.color_rest[i * stride], channels,
+                      model.basis, options.sh_degree, time_degree, color);
+                if (model.color_mode == ColorMode::kLdr) {
+                  for (int ch = 0; ch < channels; ++ch) {
+                    if (color[ch] < 0.0f) {
+                      color[ch] = 0.0f;
+                      state->clamped[i * channels + ch] = 1;
+                    }
+                  }
+                }
+                ++visible;
+              }
+            }
+            visible_per_chunk[b / kGaussianGrain] = visible;
+          });
+    }
+  }
+  if (!UseSimdPreprocess(model, options)) {
+    ParallelForChunks(
+        static_cast<std::int64_t>(n), kGaussianGrain, [&](std::int64_t b, std::int64_t e) {
+          std::int64_t visible = 0;
+          for (std::int64_t g = b; g < e; ++g) {
+            const std::size_t i = static_cast<std::size_t>(g);
+            // The colour rows stream from memory (the optimiser's sweep evicts them):
+            // fetch a few Gaussians ahead.
+            if (stride > 0 && g + kColorAhead < e)
+              PrefetchRow(&model.color_rest[(i + kColorAhead) * stride], stride);
+            s.radius[i] = 0;
+            const ConditionalGaussian<T> c = ConditionAt(model, i, time);
+            if (model.temporal && !TemporallyVisible(c.marginal))
+              continue;  // culled: costs nothing
+            const Splat2D<T> splat = ProjectEwa(c.mean, c.cov, view);
+            if (!splat.visible) continue;
+            s.mean2d[2 * i] = splat.mean.x();
+            s.mean2d[2 * i + 1] = splat.mean.y();
+            for (int k = 0; k < 3; ++k) s.conic[3 * i + k] = splat.conic[k];
+            s.depth[i] = splat.depth;
+            s.opacity[i] = Sigmoid(model.opacity_logit[i]) * c.marginal;
+            state->screen_radius[i] = splat.radius;
+            s.radius[i] = BinningRadius(splat, s.opacity[i]);
+            state->conditionals[i] = c;  // the backward reuses it
+            // Colour is linear in the coefficients: weights . (DC, rest) + 0.5.
+            T w[kMaxColorCoefficients];
+            EvalColorBasisWeights(Vec3<T>(c.mean - center), model.t[i] - time, duration,
+                                  model.basis, options.sh_degree, time_degree, w);
+            T* color = stage ? &state->colors[i * channels] : &s.features[i * channels];
+            Color(w, &model.color_dc[i * channels], &model.color_rest[i * stride], channels,
+                  model.basis, options.sh_degree, time_degree, color);
+            if (model.color_mode == ColorMode::kLdr) {
+              for (int ch = 0; ch < channels; ++ch) {
+                if (color[ch] < T(0)) {
+                  color[ch] = T(0);
+                  state->clamped[i * channels + ch] = 1;
+                }
+              }
+            }
+            ++visible;
+          }
+          visible_per_chunk[b / kGaussianGrain] = visible;
+        });
+  }
   state->num_visible = 0;
   for (std::int64_t v : visible_per_chunk) state->num_visible += static_cast<std::size_t>(v);
   if (stage) {
@@ -329,6 +422,49 @@ void PreprocessBackward(const GaussianModelT<T>& model,
   const std::size_t stride = model.rest_stride();
   const int num_coefficients = model.basis.coefficients();
   const T duration = static_cast<T>(options.time_duration);
+  if constexpr (std::is_same_v<T, float>) {
+    if (UseSimdPreprocess(model, options)) {
+      internal::PreprocessSimdJob job = MakePreprocessJob(model, view, time, options);
+      job.radius_in = s.radius.data();
+      job.g_mean2d = sg.mean2d.data();
+      job.g_conic = sg.conic.data();
+      job.g_opacity = sg.opacity.data();
+      job.d_xyz = grads->xyz.data();
+      job.d_t = grads->t.data();
+      job.d_log_scales = grads->log_scales.data();
+      job.d_rot_left = grads->rot_left.data();
+      job.d_rot_right = grads->rot_right.data();
+      job.d_opacity_logit = grads->opacity_logit.data();
+      ParallelForChunks(
+          static_cast<std::int64_t>(n), kGaussianGrain, [&](std::int64_t b, std::int64_t e) {
+            alignas(64) float batch_w[kMaxColorCoefficients * internal::kPreprocessBatch];
+            float w[kMaxColorCoefficients];
+            for (std::int64_t g0 = b; g0 < e; g0 += internal::kPreprocessBatch) {
+              const int count =
+                  static_cast<int>(std::min<std::int64_t>(internal::kPreprocessBatch, e - g0));
+              internal::PreprocessBackwardSimd(job, g0, count, batch_w);
+              for (int l = 0; l < count; ++l) {
+                const std::size_t i = static_cast<std::size_t>(g0 + l);
+                float* gdc = &grads->color_dc[i * channels];
+                float* grest = &grads->color_rest[i * stride];
+                if (s.radius[i] <= 0) {
+                  std::fill_n(gdc, channels, 0.0f);
+                  std::fill_n(grest, stride, 0.0f);
+                  continue;
+                }
+                float dcolor[kMaxChannels];
+                const float* dfeatures = options.color_stage ? &state.color_grads[i * channels]
+                                                             : &sg.features[i * channels];
+                for (int ch = 0; ch < channels; ++ch)
+                  dcolor[ch] = state.clamped[i * channels + ch] ? 0.0f : dfeatures[ch];
+                LaneWeights(batch_w, l, num_coefficients, w);
+                ColorGradRows(w, dcolor, channels, num_coefficients, gdc, grest);
+              }
+            }
+          });
+      return;
+    }
+  }
   ParallelFor(static_cast<std::int64_t>(n), kGaussianGrain, [&](std::int64_t g) {
     const std::size_t i = static_cast<std::size_t>(g);
     // Every row is written here (zeros for a culled Gaussian), so the caller needs no separate

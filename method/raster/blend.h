@@ -33,7 +33,8 @@
 //   for each Gaussian (back to front) the pixel vectors it reaches, per-pixel state in L1,
 //   gradients summed over the tile in registers. The forward packs per-Gaussian records into the
 //   state; the backward reuses them (so it must get the same splats, as it must anyway).
-//   Differences from kScalar: the exp below (relative error <= 1e-6 on [-87, 0], FastExp), fused
+//   Differences from kScalar: the exp below (relative error <= 1e-6 on [-87, 0], FastExp; the
+//   kernels take the same polynomial as exp2 of the power in log2 units), fused
 //   multiply-adds, 1/(1 - alpha) multiplied instead of divided, and the behind colour updated
 //   eagerly (same expression); images agree to ~3e-7 and gradients to ~7e-7 of each field's
 //   largest value (blend_test.cpp bounds both at 1e-5). A pixel whose alpha or test_T lies

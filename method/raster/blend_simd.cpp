@@ -61,11 +61,13 @@ constexpr int kTilePixels = kTileSize * kTileSize;
 // Record of one Gaussian gathered per tile (array of structures, read by broadcasts).
 constexpr int kRecMeanX = 0;
 constexpr int kRecMeanY = 1;
-constexpr int kRecHalfNegA = 2;  // -a / 2
-constexpr int kRecNegB = 3;      // -b
-constexpr int kRecHalfNegC = 4;  // -c / 2
+// The exponent terms and the threshold are in log2 units (times log2(e)), so the kernels take
+// exp2 of the power directly: two operations fewer per Gaussian and pixel vector.
+constexpr int kRecHalfNegA = 2;  // -a / 2 log2(e)
+constexpr int kRecNegB = 3;      // -b log2(e)
+constexpr int kRecHalfNegC = 4;  // -c / 2 log2(e)
 constexpr int kRecOpacity = 5;
-constexpr int kRecLogThreshold = 6;  // power below this cannot reach kMinAlpha
+constexpr int kRecLogThreshold = 6;  // log2 power below this cannot reach kMinAlpha
 constexpr int kRecNegA = 7;
 constexpr int kRecNegC = 8;
 // Tile rows and columns (0..15, inclusive) of pixel centres the Gaussian can reach; row0 > row1
@@ -130,6 +132,33 @@ HWY_INLINE V FastExpV(D d, V x) {
   return FastExpUnclampedV(d, hn::Min(hn::Max(x, hn::Set(d, -87.0f)), hn::Zero(d)));
 }
 
+constexpr float kLog2E = 1.44269504088896341f;
+constexpr float kLn2 = 0.693147180559945309f;
+
+// 2^x for x in [-125.5, 0] without the clamp (the same caveat as FastExpUnclampedV):
+// x = n + r, |r| <= 1/2 exact, 2^r = e^(r ln2) by the same degree-6 Taylor polynomial
+// (truncation 1.2e-7 relative), 2^n in the exponent bits.
+HWY_INLINE V FastExp2UnclampedV(D d, V x) {
+  const DI di;
+  const V n = hn::Round(x);
+  const V r = hn::Sub(x, n);
+  constexpr double l = 0.693147180559945309;
+  V p = hn::Set(d, static_cast<float>(l * l * l * l * l * l / 720.0));
+  p = hn::MulAdd(p, r, hn::Set(d, static_cast<float>(l * l * l * l * l / 120.0)));
+  p = hn::MulAdd(p, r, hn::Set(d, static_cast<float>(l * l * l * l / 24.0)));
+  p = hn::MulAdd(p, r, hn::Set(d, static_cast<float>(l * l * l / 6.0)));
+  p = hn::MulAdd(p, r, hn::Set(d, static_cast<float>(l * l / 2.0)));
+  p = hn::MulAdd(p, r, hn::Set(d, static_cast<float>(l)));
+  p = hn::MulAdd(p, r, hn::Set(d, 1.0f));
+  const VI bits = hn::ShiftLeft<23>(hn::Add(hn::ConvertTo(di, n), hn::Set(di, 127)));
+  return hn::Mul(p, hn::BitCast(d, bits));
+}
+
+// 2^x clamped to [-125.5, 0] (exp of [-87, 0]).
+HWY_INLINE V FastExp2V(D d, V x) {
+  return FastExp2UnclampedV(d, hn::Min(hn::Max(x, hn::Set(d, -125.5f)), hn::Zero(d)));
+}
+
 // Packs the per-Gaussian part of the records of job.depth_order[begin, end) into job.packed
 // (stride kRecFeatures + channels), once per frame. The reach box bounds the ellipse
 // power >= log threshold: for a positive definite conic Q, max |dy| over d^T Q d <= 2t is
@@ -148,13 +177,13 @@ void PackSplats(const TileJob& job, std::int64_t begin, std::int64_t end) {
     float* r = job.packed + g * stride;
     r[kRecMeanX] = job.mean2d[2 * g];
     r[kRecMeanY] = job.mean2d[2 * g + 1];
-    r[kRecHalfNegA] = -0.5f * q[0];
-    r[kRecNegB] = -q[1];
-    r[kRecHalfNegC] = -0.5f * q[2];
+    r[kRecHalfNegA] = -0.5f * q[0] * kLog2E;
+    r[kRecNegB] = -q[1] * kLog2E;
+    r[kRecHalfNegC] = -0.5f * q[2] * kLog2E;
     r[kRecOpacity] = o;
     const float threshold =
         o > 0.0f ? std::log(kMinAlpha / o) - 1e-4f : std::numeric_limits<float>::infinity();
-    r[kRecLogThreshold] = threshold;
+    r[kRecLogThreshold] = threshold * kLog2E;
     r[kRecNegA] = -q[0];
     r[kRecNegC] = -q[2];
     constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -233,7 +262,8 @@ void GatherRecords(const TileJob& job, int tile, int start, int count, float* re
   }
 }
 
-// power = -0.5 (a dx^2 + c dy^2) - b dx dy, as dx (-a/2 dx - b dy) + (-c/2 dy) dy.
+// power = -0.5 (a dx^2 + c dy^2) - b dx dy (times log2(e), from the record), as
+// dx (-a/2 dx - b dy) + (-c/2 dy) dy.
 HWY_INLINE V Power(const float* r, V dx, V dy) {
   const D d;
   const V q = hn::MulAdd(hn::Set(d, r[kRecHalfNegA]), dx, hn::Mul(hn::Set(d, r[kRecNegB]), dy));
@@ -296,10 +326,11 @@ HWY_INLINE M BlendStep(const float* r, int j, int channels, V px, V py, PixelSta
   const V dy = hn::Sub(hn::Set(d, r[kRecMeanY]), py);
   const V power = Power(r, dx, dy);
   const M reach = hn::AndNot(st.done, hn::Ge(power, hn::Set(d, r[kRecLogThreshold])));
-  // Lanes with power outside [threshold, 0] (threshold >= -87 for any opacity <= e^82) never
-  // contribute: their alpha reaches only masks and an IfThenElseZero, so the clamps can go.
+  // Lanes with power outside [threshold, 0] (threshold >= -125.5 in log2 units for any
+  // opacity <= e^82) never contribute: their alpha reaches only masks and an IfThenElseZero, so
+  // the clamps can go.
   const V alpha = hn::Min(hn::Set(d, kMaxAlpha),
-                          hn::Mul(hn::Set(d, r[kRecOpacity]), FastExpUnclampedV(d, power)));
+                          hn::Mul(hn::Set(d, r[kRecOpacity]), FastExp2UnclampedV(d, power)));
   const M active =
       hn::And(reach, hn::And(hn::Le(power, hn::Zero(d)), hn::Ge(alpha, hn::Set(d, kMinAlpha))));
   const V test_T = hn::Mul(st.T, hn::Sub(hn::Set(d, 1.0f), alpha));
@@ -382,7 +413,7 @@ void ForwardTileImpl(const TileJob& job, int tile) {
     s_ha[j] = exact ? r[kRecHalfNegA] : 0.0f;
     s_nb[j] = exact ? r[kRecNegB] : 0.0f;
     s_hc[j] = exact ? r[kRecHalfNegC] : 0.0f;
-    s_k[j] = exact ? r[kRecNegB] / r[kRecNegA] * -1.0f : 0.0f;
+    s_k[j] = exact ? r[kRecNegB] * kLn2 / r[kRecNegA] * -1.0f : 0.0f;
     s_thr[j] = exact && std::isfinite(s_k[j]) ? r[kRecLogThreshold]
                                               : -std::numeric_limits<float>::infinity();
   }
@@ -637,7 +668,7 @@ void BackwardTileImpl(const TileJob& job, int tile) {
     const V threshold = hn::Set(d, r[kRecLogThreshold]);
     const V opacity = hn::Set(d, r[kRecOpacity]);
     const V neg_a = hn::Set(d, r[kRecNegA]);
-    const V neg_b = hn::Set(d, r[kRecNegB]);
+    const V neg_b = hn::Set(d, r[kRecNegB] * kLn2);  // the natural -b
     const V neg_c = hn::Set(d, r[kRecNegC]);
     V grad[kGradCount];
     for (int k = 0; k < kGradCount; ++k) grad[k] = hn::Zero(d);
@@ -661,7 +692,7 @@ void BackwardTileImpl(const TileJob& job, int tile) {
       const M listed = hn::RebindMask(d, hn::Lt(jv, hn::Load(di, nc_plane + off)));
       const M reach = hn::And(listed, hn::Ge(power, threshold));
       if (hn::AllFalse(d, reach)) continue;
-      const V G = FastExpV(d, power);
+      const V G = FastExp2V(d, power);
       const V alpha = hn::Min(max_alpha, hn::Mul(opacity, G));
       const M m = hn::And(reach, hn::And(hn::Le(power, hn::Zero(d)), hn::Ge(alpha, min_alpha)));
       // (no early exit when m is empty: rare once reach holds, and masked below)
