@@ -15,8 +15,9 @@ PACKAGES=(
   libhwy-dev
   # hdr4d render --video encodes MP4 with ffmpeg
   ffmpeg
-  # hdr4d datagen renders its scenes with Blender (bpy scripts in datagen/blender)
-  blender python3-numpy
+  # hdr4d datagen renders its scenes with Blender (bpy scripts in datagen/blender; they use
+  # only bpy and Python's standard library)
+  blender
 )
 
 missing=()
