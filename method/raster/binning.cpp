@@ -221,8 +221,10 @@ void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, R
   HDR4D_CHECK(running == total);
   s.point_list.resize(total + 1);  // + the spare slot
   s.point_entries.resize(total + 1);
+  s.entry_slots.resize(total + 1);
   std::int32_t* points = s.point_list.data();
   std::int32_t* entries = s.point_entries.data();
+  std::int32_t* slots_of = s.entry_slots.data();
   const std::int32_t spare = static_cast<std::int32_t>(total);
   ParallelFor(chunks, 1, [&](std::int64_t c) {
     std::int32_t* next = s.chunk_offsets.data() + c * counters;
@@ -244,6 +246,7 @@ void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, R
           next[counter] += valid;
           points[pos] = g;
           (valid ? own[k] : entries[spare]) = pos;
+          slots_of[pos] = valid ? s.entry_ranges[i] + k : spare;
         };
         put(t, 0, 1, 0);
         put(t + dx, 1, dx, 0);
@@ -256,6 +259,7 @@ void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, R
         for (int tx = 0; tx < w; ++tx) {
           const std::int32_t pos = next[t + ty * tiles_x + tx]++;
           points[pos] = g;
+          slots_of[pos] = s.entry_ranges[i] + k;
           own[k++] = pos;
         }
       }
@@ -263,6 +267,7 @@ void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, R
   });
   s.point_list.resize(total);
   s.point_entries.resize(total);
+  s.entry_slots.resize(total);
 }
 
 template TileRect GaussianTileRect<float>(float, float, int, int, int);

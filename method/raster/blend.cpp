@@ -203,14 +203,17 @@ void PrepareGradients(std::size_t n, int channels, SplatGradientsT<T>* grads) {
 }
 
 // Sums every listed Gaussian's entry slots in ascending tile order into `grads` (+=), and the
-// per-tile background partials in tile order into dL_dbackground (+=).
+// per-tile background partials in tile order into dL_dbackground (+=). The slots are indexed by
+// point_list entry, or, when `streamed`, already in per-Gaussian order (RasterState::entry_slots):
+// the same values summed in the same order, read contiguously.
 template <typename T>
 void ReduceGradients(const RasterState& bins,
                      int channels,
                      const T* slots,
                      const T* tile_bg,
                      SplatGradientsT<T>* grads,
-                     T* dL_dbackground) {
+                     T* dL_dbackground,
+                     bool streamed = false) {
   const int stride = SlotStride(channels);
   const std::int64_t visible = static_cast<std::int64_t>(bins.depth_order.size());
   // The slots are read in an order unrelated to their layout (tile-major): prefetch the slots of
@@ -221,7 +224,7 @@ void ReduceGradients(const RasterState& bins,
     const std::int64_t visible_end = visible;
     SmallBuffer<T> sum(n);
     for (std::int64_t i = begin; i < end; ++i) {
-      if (i + kAhead < visible_end) {
+      if (!streamed && i + kAhead < visible_end) {
         for (int k = bins.entry_ranges[i + kAhead]; k < bins.entry_ranges[i + kAhead + 1]; ++k) {
           const T* ahead = slots + static_cast<std::size_t>(bins.point_entries[k]) * n;
           __builtin_prefetch(ahead);
@@ -233,7 +236,8 @@ void ReduceGradients(const RasterState& bins,
       const int k1 = bins.entry_ranges[i + 1];
       for (int s = 0; s < n; ++s) sum[s] = T(0);
       for (int k = k0; k < k1; ++k) {
-        const T* slot = slots + static_cast<std::size_t>(bins.point_entries[k]) * n;
+        const std::size_t at = streamed ? static_cast<std::size_t>(k) : bins.point_entries[k];
+        const T* slot = slots + at * n;
         for (int s = 0; s < n; ++s) sum[s] += slot[s];
       }
       grads->mean2d[2 * g] += sum[internal::kSlotMean];
@@ -448,6 +452,7 @@ void BlendBackward(const SplatBuffers& splats,
   job.dL_dimage = dL_dimage;
   job.dL_dfinal_T = dL_dfinal_T;
   job.entry_gradients = state->entry_gradients.data();
+  job.entry_slots = state->entry_slots.data();
   job.tile_background_grad =
       dL_dbackground != nullptr ? state->tile_background_grad.data() : nullptr;
   if (!state->packed_ready) PackSplats(job, state);
@@ -458,7 +463,7 @@ void BlendBackward(const SplatBuffers& splats,
   ParallelFor(state->num_tiles(), 1,
               [&](std::int64_t tile) { internal::BackwardTileSimd(job, static_cast<int>(tile)); });
   ReduceGradients<float>(*state, channels, state->entry_gradients.data(), job.tile_background_grad,
-                         grads, dL_dbackground);
+                         grads, dL_dbackground, /*streamed=*/true);
 }
 
 template void BlendForwardReference<float>(

@@ -129,9 +129,10 @@ struct TileJob {
   std::int32_t* n_contrib = nullptr;
   // Backward.
   const float* dL_dimage = nullptr;
-  const float* dL_dfinal_T = nullptr;     // nullable
-  float* entry_gradients = nullptr;       // SlotStride(channels) per entry
-  float* tile_background_grad = nullptr;  // channels per tile; nullable
+  const float* dL_dfinal_T = nullptr;         // nullable
+  float* entry_gradients = nullptr;           // SlotStride(channels) per entry
+  const std::int32_t* entry_slots = nullptr;  // where each entry's slot goes (RasterState)
+  float* tile_background_grad = nullptr;      // channels per tile; nullable
   // Per-Gaussian records of the SIMD kernels (PackedStride(channels) floats per Gaussian),
   // written by PackSplatsSimd for the Gaussians listed in some tile (depth_order).
   float* packed = nullptr;

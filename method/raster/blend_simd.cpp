@@ -35,6 +35,8 @@
 // Must come after foreach_target.h.
 #include <hwy/aligned_allocator.h>
 #include <hwy/highway.h>
+// Must come after highway.h.
+#include <hwy/contrib/math/math-inl.h>
 
 #include <algorithm>
 #include <cmath>
@@ -160,63 +162,90 @@ HWY_INLINE V FastExp2V(D d, V x) {
 }
 
 // Packs the per-Gaussian part of the records of job.depth_order[begin, end) into job.packed
-// (stride kRecFeatures + channels), once per frame. The reach box bounds the ellipse
-// power >= log threshold: for a positive definite conic Q, max |dy| over d^T Q d <= 2t is
-// sqrt(2t a / det Q) (and sqrt(2t c / det Q) for dx), widened by 1e-4 relative + 1e-3 px, far
-// beyond the float error of `power` and of the row arithmetic below; the exact per-lane tests
-// still decide. In the packed form the row/column slots hold the box as absolute pixel indices
-// (inclusive; empty when it reaches nothing, unbounded for a conic that is not positive
-// definite), so that a tile only shifts and clamps them.
+// (stride kRecFeatures + channels), once per frame, one vector of Gaussians at a time. The reach
+// box bounds the ellipse power >= log threshold: for a positive definite conic Q, max |dy| over
+// d^T Q d <= 2t is sqrt(2t a / det Q) (and sqrt(2t c / det Q) for dx), widened by 1e-4 relative
+// + 1e-3 px + one ulp of the mean, far beyond the float error of `power`, of this float
+// evaluation (det by the difference-of-products FMA trick, accurate to 2 ulp) and of the row
+// arithmetic below; the exact per-lane tests still decide, and the log threshold itself only
+// prunes (alpha >= kMinAlpha decides). In the packed form the row/column slots hold the box as
+// absolute pixel indices (inclusive; empty when it reaches nothing, unbounded for a conic that is
+// not positive definite), so that a tile only shifts and clamps them.
 void PackSplats(const TileJob& job, std::int64_t begin, std::int64_t end) {
+  const D d;
+  const DI di;
+  const int lanes = static_cast<int>(hn::Lanes(d));
   const int channels = job.channels;
   const int stride = kRecFeatures + channels;
-  for (std::int64_t i = begin; i < end; ++i) {
-    const std::int64_t g = job.depth_order[i];
-    const float* q = job.conic + 3 * g;
-    const float o = job.opacity[g];
-    float* r = job.packed + g * stride;
-    r[kRecMeanX] = job.mean2d[2 * g];
-    r[kRecMeanY] = job.mean2d[2 * g + 1];
-    r[kRecHalfNegA] = -0.5f * q[0] * kLog2E;
-    r[kRecNegB] = -q[1] * kLog2E;
-    r[kRecHalfNegC] = -0.5f * q[2] * kLog2E;
-    r[kRecOpacity] = o;
-    const float threshold =
-        o > 0.0f ? std::log(kMinAlpha / o) - 1e-4f : std::numeric_limits<float>::infinity();
-    r[kRecLogThreshold] = threshold * kLog2E;
-    r[kRecNegA] = -q[0];
-    r[kRecNegC] = -q[2];
-    constexpr double kInf = std::numeric_limits<double>::infinity();
-    double lo_x = kInf, hi_x = -kInf, lo_y = kInf, hi_y = -kInf;  // reaches nothing
-    if (threshold <= 0.0f) {
-      const double a = q[0], b = q[1], c = q[2];
-      const double det = a * c - b * b;
-      if (a > 0 && c > 0 && det > 0 && std::isfinite(det)) {
-        const double t2 = -2.0 * static_cast<double>(threshold);
-        const double ex = std::sqrt(t2 * c / det) * (1 + 1e-4) + 1e-3;
-        const double ey = std::sqrt(t2 * a / det) * (1 + 1e-4) + 1e-3;
-        // Pixel index i has its centre at i + 0.5.
-        const double cx = static_cast<double>(r[kRecMeanX]) - 0.5;
-        const double cy = static_cast<double>(r[kRecMeanY]) - 0.5;
-        lo_x = std::ceil(cx - ex);
-        hi_x = std::floor(cx + ex);
-        lo_y = std::ceil(cy - ey);
-        hi_y = std::floor(cy + ey);
-      } else {
-        lo_x = lo_y = -kInf;  // everywhere
-        hi_x = hi_y = kInf;
-      }
-    }
-    // Whole numbers, clamped to +-2^23 so that the float is exact (images are far smaller).
-    const auto store = [](double v) {
-      return static_cast<float>(std::min(std::max(v, -8388608.0), 8388608.0));
+  const V inf = hn::Set(d, std::numeric_limits<float>::infinity());
+  const V zero = hn::Zero(d);
+  const V log2e = hn::Set(d, kLog2E);
+  const V neg_half_log2e = hn::Set(d, -0.5f * kLog2E);
+  const V bound = hn::Set(d, 8388608.0f);  // +-2^23: whole floats stay exact
+  HWY_ALIGN std::int32_t ids[kTileSize];
+  HWY_ALIGN float fields[kRecFeatures * kTileSize];
+  for (std::int64_t i = begin; i < end; i += lanes) {
+    const int n = static_cast<int>(std::min<std::int64_t>(lanes, end - i));
+    for (int k = 0; k < lanes; ++k) ids[k] = job.depth_order[i + (k < n ? k : 0)];
+    const VI g = hn::Load(di, ids);
+    const VI g2 = hn::Add(g, g);
+    const VI g3 = hn::Add(g2, g);
+    const V mx = hn::GatherIndex(d, job.mean2d, g2);
+    const V my = hn::GatherIndex(d, job.mean2d + 1, g2);
+    const V a = hn::GatherIndex(d, job.conic, g3);
+    const V b = hn::GatherIndex(d, job.conic + 1, g3);
+    const V c = hn::GatherIndex(d, job.conic + 2, g3);
+    const V o = hn::GatherIndex(d, job.opacity, g);
+    const M positive = hn::Gt(o, zero);
+    const V log_t = hn::Sub(hn::Log(d, hn::Div(hn::Set(d, kMinAlpha), o)), hn::Set(d, 1e-4f));
+    const V threshold = hn::IfThenElse(positive, log_t, inf);
+    // det = a c - b b: w - b b is exact by FMA, so det rounds once more at most.
+    const V w = hn::Mul(b, b);
+    const V det = hn::Add(hn::MulSub(a, c, w), hn::NegMulAdd(b, b, w));
+    const M pd = hn::And(hn::And(hn::Gt(a, zero), hn::Gt(c, zero)),
+                         hn::And(hn::Gt(det, zero), hn::Lt(det, inf)));
+    const V t2 = hn::Mul(hn::Set(d, -2.0f), threshold);
+    const V cx = hn::Sub(mx, hn::Set(d, 0.5f));  // pixel index i has its centre at i + 0.5
+    const V cy = hn::Sub(my, hn::Set(d, 0.5f));
+    const V rel = hn::Set(d, 1.0f + 1e-4f);
+    const V ulp = hn::Set(d, 1.2e-7f);
+    const V ex =
+        hn::MulAdd(hn::Abs(cx), ulp,
+                   hn::MulAdd(hn::Sqrt(hn::Div(hn::Mul(t2, c), det)), rel, hn::Set(d, 1e-3f)));
+    const V ey =
+        hn::MulAdd(hn::Abs(cy), ulp,
+                   hn::MulAdd(hn::Sqrt(hn::Div(hn::Mul(t2, a), det)), rel, hn::Set(d, 1e-3f)));
+    // Reaches nothing (threshold > 0), everywhere (not positive definite) or the box.
+    const M reaches = hn::Le(threshold, zero);
+    const auto lo = [&](V centre, V extent) {
+      const V box = hn::IfThenElse(pd, hn::Ceil(hn::Sub(centre, extent)), hn::Neg(inf));
+      return hn::Min(hn::Max(hn::IfThenElse(reaches, box, inf), hn::Neg(bound)), bound);
     };
-    r[kRecRow0] = store(lo_y);
-    r[kRecRow1] = store(hi_y);
-    r[kRecCol0] = store(lo_x);
-    r[kRecCol1] = store(hi_x);
-    const float* f = job.features + g * channels;
-    for (int c = 0; c < channels; ++c) r[kRecFeatures + c] = f[c];
+    const auto hi = [&](V centre, V extent) {
+      const V box = hn::IfThenElse(pd, hn::Floor(hn::Add(centre, extent)), inf);
+      return hn::Min(hn::Max(hn::IfThenElse(reaches, box, hn::Neg(inf)), hn::Neg(bound)), bound);
+    };
+    const auto put = [&](int field, V v) { hn::Store(v, d, fields + field * lanes); };
+    put(kRecMeanX, mx);
+    put(kRecMeanY, my);
+    put(kRecHalfNegA, hn::Mul(neg_half_log2e, a));
+    put(kRecNegB, hn::Mul(hn::Neg(b), log2e));
+    put(kRecHalfNegC, hn::Mul(neg_half_log2e, c));
+    put(kRecOpacity, o);
+    put(kRecLogThreshold, hn::Mul(threshold, log2e));
+    put(kRecNegA, hn::Neg(a));
+    put(kRecNegC, hn::Neg(c));
+    put(kRecRow0, lo(cy, ey));
+    put(kRecRow1, hi(cy, ey));
+    put(kRecCol0, lo(cx, ex));
+    put(kRecCol1, hi(cx, ex));
+    for (int k = 0; k < n; ++k) {
+      const std::size_t id = static_cast<std::size_t>(ids[k]);
+      float* r = job.packed + id * stride;
+      for (int f = 0; f < kRecFeatures; ++f) r[f] = fields[f * lanes + k];
+      const float* feat = job.features + id * channels;
+      for (int ch = 0; ch < channels; ++ch) r[kRecFeatures + ch] = feat[ch];
+    }
   }
 }
 
@@ -640,9 +669,12 @@ void BackwardTileImpl(const TileJob& job, int tile) {
   }
   HDR4D_CHECK(tile_max <= count);
 
-  float* slots = job.entry_gradients + static_cast<std::size_t>(start) * slot_stride;
-  std::fill(slots + static_cast<std::size_t>(tile_max) * slot_stride,
-            slots + static_cast<std::size_t>(count) * slot_stride, 0.0f);
+  // Entry start + j writes its slot at entry_slots[start + j] (per-Gaussian order).
+  const std::int32_t* slot_index = job.entry_slots + start;
+  const auto slot_of = [&](int j) {
+    return job.entry_gradients + static_cast<std::size_t>(slot_index[j]) * slot_stride;
+  };
+  for (int j = tile_max; j < count; ++j) std::fill_n(slot_of(j), slot_stride, 0.0f);
   const float* rec;
   if (job.tile_records_ready) {
     rec = job.tile_records + static_cast<std::size_t>(start) * stride;
@@ -734,7 +766,7 @@ void BackwardTileImpl(const TileJob& job, int tile) {
       grad[kSlotConic + 1] = hn::NegMulAdd(gx, dy, grad[kSlotConic + 1]);
       grad[kSlotConic + 2] = hn::MulAdd(gy, hn::Mul(neg_half, dy), grad[kSlotConic + 2]);
     }
-    float* slot = slots + static_cast<std::size_t>(j) * slot_stride;
+    float* slot = slot_of(j);
     if (!any) {
       std::fill(slot, slot + slot_stride, 0.0f);
       continue;

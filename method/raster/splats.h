@@ -114,6 +114,10 @@ struct RasterState {
   // backward sums per-entry gradients in this fixed order, so it is deterministic.
   std::vector<std::int32_t> entry_ranges;   // depth_order.size() + 1
   std::vector<std::int32_t> point_entries;  // same length as point_list
+  // The inverse of point_entries: entry e of point_list is point_entries[entry_slots[e]]. The
+  // SIMD backward writes entry e's gradient slot at position entry_slots[e], so that the
+  // reduction reads each Gaussian's slots contiguously (same order, same sums).
+  std::vector<std::int32_t> entry_slots;  // same length as point_list
 
   // --- Written by BlendForward (blend.h). ---
   std::vector<float> final_transmittance;  // H x W: T after the last contributing Gaussian
