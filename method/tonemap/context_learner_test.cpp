@@ -137,7 +137,9 @@ TEST(ContextLearner, ContextDependsOnEveryRow) {
   }
 }
 
-// Back-propagation through time against central differences, every kind, L = 1, 5 and 20.
+// Back-propagation through time against central differences, every kind, L = 1, 5 and 20: the
+// public backward dispatches to RecurrentBackward (gru, rnn, lstm) and TransformerBackward
+// (whose LayerNormBackward runs twice), so this checks each of them in double.
 TEST(ContextLearner, GradientsMatchFiniteDifferences) {
   for (ContextKind k : kKinds) {
     for (int length : {1, 5, 20}) {

@@ -143,6 +143,8 @@ std::vector<std::size_t> AllIndices(std::size_t n) {
   return v;
 }
 
+// The whole chain in double, tabulated and direct: the direct case checks
+// DtmCore::DirectValueBackward, the tabulated one the scalar table backward.
 TEST(DynamicToneMapperChain, GradientsMatchFiniteDifferencesEveryLearner) {
   for (ContextKind kind :
        {ContextKind::kGru, ContextKind::kRnn, ContextKind::kLstm, ContextKind::kTransformer}) {
@@ -354,7 +356,9 @@ TEST(DynamicToneMapper, TabulatedAgreesWithDirect) {
   EXPECT_LT(diff, 0.02 * norm);
 }
 
-// The float SIMD loop of the tabulated path against the scalar loop (same maths, another exp).
+// The float SIMD loop of the tabulated path (internal::ToneTableBackward and its forward) against
+// the scalar loop, whose gradients the finite-difference tests above check (same maths, another
+// exp).
 TEST(DynamicToneMapperChain, SimdMatchesScalar) {
   DtmShape shape;  // the defaults: GRU, 64 hidden, 1024 nodes
   DtmCore<float> simd(shape), scalar(shape);
