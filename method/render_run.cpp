@@ -22,10 +22,6 @@
 namespace hdr4d::method {
 namespace fs = std::filesystem;
 
-GaussianModel LoadRunModel(const fs::path& run) {
-  return LoadCheckpoint(run / "checkpoint.bin").model;
-}
-
 LoadedRun LoadRun(const fs::path& run, const ToneMapperFactory& factory) {
   LoadedRun r;
   const fs::path config_path = run / "config.json";

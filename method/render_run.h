@@ -46,9 +46,6 @@ int RenderRun(const RenderRunOptions& options);
 // starting at the first training camera. Frame k of n is at angle 2 pi k / n.
 std::vector<Camera> OrbitCameras(const std::vector<Camera>& train_cameras, int frames);
 
-// The model of a run's checkpoint (RUN/checkpoint.bin).
-GaussianModel LoadRunModel(const std::filesystem::path& run);
-
 // Everything a trained run needs to render: its configuration, scene, model and tone mapper.
 struct LoadedRun {
   nlohmann::json config;
