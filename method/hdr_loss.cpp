@@ -12,8 +12,9 @@ namespace {
 
 constexpr std::int64_t kGrain = 8192;
 
-// Channels [first, first + 3) of an interleaved H x W x channels buffer into a 3-channel one.
-void Extract(
+}  // namespace
+
+void ExtractChannels(
     const float* src, int channels, int first, std::size_t pixels, std::vector<float>* dst) {
   dst->resize(pixels * 3);
   ParallelFor(static_cast<std::int64_t>(pixels), kGrain, [&](std::int64_t p) {
@@ -21,7 +22,10 @@ void Extract(
   });
 }
 
-}  // namespace
+void PixelLogImage(const std::vector<float>& hdr, std::vector<float>* x) {
+  x->resize(hdr.size());
+  for (std::size_t i = 0; i < hdr.size(); ++i) (*x)[i] = PixelLog(hdr[i]);
+}
 
 FrameLoss HdrFrameLoss(const float* raster,
                        int channels,
@@ -32,8 +36,7 @@ FrameLoss HdrFrameLoss(const float* raster,
                        ToneMapper* tone_mapper,
                        const SupervisionTerms& terms,
                        HdrLossScratch* s,
-                       float* dL_draster,
-                       std::vector<float>* pixel_ldr) {
+                       float* dL_draster) {
   HDR4D_CHECK(channels == 3 || channels == 6);
   HDR4D_CHECK(!terms.ldr_gaussian || channels == 6);
   HDR4D_CHECK(!terms.ldr_pixel || tone_mapper != nullptr);
@@ -41,12 +44,12 @@ FrameLoss HdrFrameLoss(const float* raster,
   const std::size_t values = pixels * 3;
   std::fill(dL_draster, dL_draster + pixels * channels, 0.0f);
   FrameLoss loss;
-  Extract(raster, channels, 0, pixels, &s->hdr);
+  ExtractChannels(raster, channels, 0, pixels, &s->hdr);
   s->grad.resize(values);
 
   // 3D branch: the tone-mapped Gaussians, clamped to [0,1] as the reference does.
   if (terms.ldr_gaussian) {
-    Extract(raster, channels, 3, pixels, &s->ldr);
+    ExtractChannels(raster, channels, 3, pixels, &s->ldr);
     for (float& v : s->ldr) v = std::clamp(v, 0.0f, 1.0f);
     loss.ldr_gaussian =
         PhotometricLoss(s->ldr.data(), ldr_gt, width, height, 3, terms.lambda_dssim, s->grad.data())
@@ -62,8 +65,7 @@ FrameLoss HdrFrameLoss(const float* raster,
 
   // 2D branch: the same tone curves per pixel on the HDR raster.
   if (terms.ldr_pixel) {
-    s->x.resize(values);
-    for (std::size_t i = 0; i < values; ++i) s->x[i] = PixelLog(s->hdr[i]);
+    PixelLogImage(s->hdr, &s->x);
     s->pixel_ldr.resize(values);
     tone_mapper->MapImage(s->x.data(), width, height, s->pixel_ldr.data());
     loss.ldr_pixel = PhotometricLoss(s->pixel_ldr.data(), ldr_gt, width, height, 3,
@@ -76,12 +78,6 @@ FrameLoss HdrFrameLoss(const float* raster,
         dL_draster[p * channels + c] += PixelLogBackward(s->hdr[p * 3 + c], s->dx[p * 3 + c]);
       }
     });
-    if (pixel_ldr) *pixel_ldr = s->pixel_ldr;
-  } else if (pixel_ldr && tone_mapper) {
-    s->x.resize(values);
-    for (std::size_t i = 0; i < values; ++i) s->x[i] = PixelLog(s->hdr[i]);
-    pixel_ldr->resize(values);
-    tone_mapper->MapImage(s->x.data(), width, height, pixel_ldr->data());
   }
 
   // HDR term on the mu-law of the raw HDR raster.

@@ -43,6 +43,12 @@ inline T PixelLogBackward(T hdr, T dL_dy) {
   return hdr > T(0) ? dL_dy / (hdr + T(kPixelLogEpsilon)) : T(0);
 }
 
+// Channels [first, first + 3) of an interleaved H x W x channels buffer as a 3-channel one.
+void ExtractChannels(
+    const float* src, int channels, int first, std::size_t pixels, std::vector<float>* dst);
+// The 2D branch's input for every value of a 3-channel HDR image: PixelLog of each.
+void PixelLogImage(const std::vector<float>& hdr, std::vector<float>* x);
+
 struct SupervisionTerms {
   bool ldr_gaussian = true;  // L(clamp(LDR_3D), gt): needs a 6-channel raster
   bool ldr_pixel = true;     // the 2D branch: needs a tone mapper
@@ -55,7 +61,8 @@ struct FrameLoss {
   double total = 0, ldr_gaussian = 0, ldr_pixel = 0, hdr = 0;
 };
 
-// Working buffers, reused from view to view.
+// Working buffers, reused from view to view. After HdrFrameLoss, `ldr` holds the clamped 3D
+// branch (when that term ran) and `pixel_ldr` the 2D branch (when it ran).
 struct HdrLossScratch {
   std::vector<float> hdr, ldr, grad, target, x, pixel_ldr, dpixel, dx;
 };
@@ -63,7 +70,7 @@ struct HdrLossScratch {
 // The loss of one view and dL/draster (same layout as `raster`, overwritten). ldr_gt: H x W x 3
 // in [0,1]; hdr_mu_gt: mu(gt_hdr / max gt_hdr), H x W x 3, or null when the view has no HDR
 // ground truth. The tone mapper must have begun this view's frame (HdrColorStage does); its
-// parameter gradients are added to. `pixel_ldr` (optional) receives the 2D branch's image.
+// parameter gradients are added to.
 FrameLoss HdrFrameLoss(const float* raster,
                        int channels,
                        int width,
@@ -73,7 +80,6 @@ FrameLoss HdrFrameLoss(const float* raster,
                        ToneMapper* tone_mapper,
                        const SupervisionTerms& terms,
                        HdrLossScratch* scratch,
-                       float* dL_draster,
-                       std::vector<float>* pixel_ldr = nullptr);
+                       float* dL_draster);
 
 }  // namespace hdr4d::method

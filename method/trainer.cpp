@@ -307,7 +307,7 @@ TrainSummary Train(const TrainOptions& options) {
                                .lambda_dssim = static_cast<float>(opt.lambda_dssim)};
   FrameState state;
   HdrLossScratch scratch;
-  std::vector<float> image, gt, hdr_mu, dL_dimage, final_ldr;
+  std::vector<float> image, gt, hdr_mu, dL_dimage;
   const std::string last_good = checkpoint_path.string();
 
   auto save = [&]() {
@@ -365,18 +365,15 @@ TrainSummary Train(const TrainOptions& options) {
         view.HdrMuToFloat(&hdr_mu);
         mu = hdr_mu.data();
       }
-      const bool want_pixels = resolved.final_ldr_from_pixels && tone_mapper;
       loss_value = HdrFrameLoss(image.data(), raster_channels, view.width(), view.height(),
-                                gt.data(), mu, tone_mapper.get(), terms, &scratch, dL_dimage.data(),
-                                want_pixels ? &final_ldr : nullptr)
+                                gt.data(), mu, tone_mapper.get(), terms, &scratch, dL_dimage.data())
                        .total;
-      if (want_pixels) {
-        ldr_out = final_ldr.data();
-      } else if (raster_channels == 6) {
-        final_ldr.resize(pixels * 3);
-        for (std::size_t p = 0; p < pixels; ++p)
-          for (int c = 0; c < 3; ++c) final_ldr[p * 3 + c] = image[p * 6 + 3 + c];
-        ldr_out = final_ldr.data();
+      // The loss already made the final LDR image: the 2D branch for whole-image mappers,
+      // else the clamped 3D branch (none under HDR-only supervision).
+      if (resolved.final_ldr_from_pixels && terms.ldr_pixel) {
+        ldr_out = scratch.pixel_ldr.data();
+      } else if (terms.ldr_gaussian) {
+        ldr_out = scratch.ldr.data();
       }
     }
     if (!std::isfinite(loss_value)) {

@@ -48,26 +48,23 @@ void ViewRenderer::Render(const Camera& camera,
   raster_.resize(pixels * channels);
   RenderForward(model_, camera, time, options_, &state_, raster_.data());
   if (hdr) {
-    hdr->resize(pixels * 3);
-    for (std::size_t p = 0; p < pixels; ++p)
-      for (int c = 0; c < 3; ++c) (*hdr)[p * 3 + c] = std::max(raster_[p * channels + c], 0.0f);
+    ExtractChannels(raster_.data(), channels, 0, pixels, hdr);
+    for (float& v : *hdr) v = std::max(v, 0.0f);
   }
   if (!ldr) return;
-  ldr->resize(pixels * 3);
   if (channels == 6) {
-    for (std::size_t p = 0; p < pixels; ++p)
-      for (int c = 0; c < 3; ++c)
-        (*ldr)[p * 3 + c] = std::clamp(raster_[p * channels + 3 + c], 0.0f, 1.0f);
+    ExtractChannels(raster_.data(), channels, 3, pixels, ldr);
   } else if (tone_mapper_) {
-    x_.resize(pixels * 3);
-    for (std::size_t p = 0; p < pixels; ++p)
-      for (int c = 0; c < 3; ++c) x_[p * 3 + c] = PixelLog(raster_[p * channels + c]);
+    ExtractChannels(raster_.data(), channels, 0, pixels, &x_);
+    PixelLogImage(x_, &x_);
+    ldr->resize(pixels * 3);
     tone_mapper_->MapImage(x_.data(), camera.intrinsics.width, camera.intrinsics.height,
                            ldr->data());
-    for (float& v : *ldr) v = std::clamp(v, 0.0f, 1.0f);
   } else {
     ldr->clear();  // HDR colours without a tone mapper (4dgs-hdr): no LDR output
+    return;
   }
+  for (float& v : *ldr) v = std::clamp(v, 0.0f, 1.0f);
 }
 
 }  // namespace hdr4d::method
