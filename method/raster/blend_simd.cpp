@@ -601,6 +601,32 @@ void ForwardTileImpl(const TileJob& job, int tile) {
   }
 }
 
+// The backward sums, per pixel vector, u = G dL/dalpha and its moments in the slot positions
+// below; FinishSlot turns them into the slot's gradients (mean, conic, opacity) in place.
+constexpr int kSumUdx = kSlotMean;
+constexpr int kSumUdy = kSlotMean + 1;
+constexpr int kSumUdxdx = kSlotConic;
+constexpr int kSumUdxdy = kSlotConic + 1;
+constexpr int kSumUdydy = kSlotConic + 2;
+constexpr int kSumU = kSlotOpacity;
+
+// With power = -a dx^2 / 2 - b dx dy - c dy^2 / 2 (natural units), alpha = o G:
+// dL/dopacity = sum u, dL/dmean = o sum u dpower/dmean, dL/dconic = o sum u dpower/dconic.
+HWY_INLINE void FinishSlot(const float* r, float* slot) {
+  const float o = r[kRecOpacity];
+  const float neg_a = r[kRecNegA];
+  const float neg_b = r[kRecNegB] * kLn2;  // the natural -b
+  const float neg_c = r[kRecNegC];
+  const float sx = slot[kSumUdx], sy = slot[kSumUdy];
+  const float sxx = slot[kSumUdxdx], sxy = slot[kSumUdxdy], syy = slot[kSumUdydy];
+  slot[kSlotMean] = o * (neg_a * sx + neg_b * sy);
+  slot[kSlotMean + 1] = o * (neg_c * sy + neg_b * sx);
+  slot[kSlotConic] = -0.5f * o * sxx;
+  slot[kSlotConic + 1] = -o * sxy;
+  slot[kSlotConic + 2] = -0.5f * o * syy;
+  // slot[kSlotOpacity] is sum u already.
+}
+
 template <int kC>
 void BackwardTileImpl(const TileJob& job, int tile) {
   const D d;
@@ -687,9 +713,15 @@ void BackwardTileImpl(const TileJob& job, int tile) {
   const V one = hn::Set(d, 1.0f);
   const V max_alpha = hn::Set(d, kMaxAlpha);
   const V min_alpha = hn::Set(d, kMinAlpha);
-  const V neg_half = hn::Set(d, -0.5f);
+  // Pixel centres of the tile (the same sums as the forward's, so dx and dy are bit-equal).
   const V x_base = hn::Set(d, static_cast<float>(x0));
   const V y_base = hn::Set(d, static_cast<float>(y0));
+  HWY_ALIGN float pixel_x[kTilePixels];
+  HWY_ALIGN float pixel_y[kTilePixels];
+  for (int off = 0; off < kTilePixels; off += lanes) {
+    hn::Store(hn::Add(hn::Load(d, kOffsets.x + off), x_base), d, pixel_x + off);
+    hn::Store(hn::Add(hn::Load(d, kOffsets.y + off), y_base), d, pixel_y + off);
+  }
   constexpr int kGradCount = kSlotFeatures + (kC > 0 ? kC : 0);
 
   for (int j = tile_max - 1; j >= 0; --j) {
@@ -699,9 +731,6 @@ void BackwardTileImpl(const TileJob& job, int tile) {
     const V mean_y = hn::Set(d, r[kRecMeanY]);
     const V threshold = hn::Set(d, r[kRecLogThreshold]);
     const V opacity = hn::Set(d, r[kRecOpacity]);
-    const V neg_a = hn::Set(d, r[kRecNegA]);
-    const V neg_b = hn::Set(d, r[kRecNegB] * kLn2);  // the natural -b
-    const V neg_c = hn::Set(d, r[kRecNegC]);
     V grad[kGradCount];
     for (int k = 0; k < kGradCount; ++k) grad[k] = hn::Zero(d);
     if constexpr (kC == 0) {
@@ -718,13 +747,15 @@ void BackwardTileImpl(const TileJob& job, int tile) {
         const float col0 = static_cast<float>(off % kTileSize);
         if (r[kRecCol1] < col0 || r[kRecCol0] > col0 + static_cast<float>(lanes - 1)) continue;
       }
-      const V dx = hn::Sub(mean_x, hn::Add(hn::Load(d, kOffsets.x + off), x_base));
-      const V dy = hn::Sub(mean_y, hn::Add(hn::Load(d, kOffsets.y + off), y_base));
+      const V dx = hn::Sub(mean_x, hn::Load(d, pixel_x + off));
+      const V dy = hn::Sub(mean_y, hn::Load(d, pixel_y + off));
       const V power = Power(r, dx, dy);
       const M listed = hn::RebindMask(d, hn::Lt(jv, hn::Load(di, nc_plane + off)));
       const M reach = hn::And(listed, hn::Ge(power, threshold));
       if (hn::AllFalse(d, reach)) continue;
-      const V G = FastExp2V(d, power);
+      // Unclamped: lanes outside m may hold garbage (even inf or NaN) in G, alpha and inv; every
+      // use below is masked by m (T, behind, w) or multiplied into u under IfThenElseZero.
+      const V G = FastExp2UnclampedV(d, power);
       const V alpha = hn::Min(max_alpha, hn::Mul(opacity, G));
       const M m = hn::And(reach, hn::And(hn::Le(power, hn::Zero(d)), hn::Ge(alpha, min_alpha)));
       // (no early exit when m is empty: rare once reach holds, and masked below)
@@ -750,21 +781,19 @@ void BackwardTileImpl(const TileJob& job, int tile) {
         // behind = alpha f + (1 - alpha) behind, for the Gaussians in front of this one.
         hn::Store(hn::IfThenElse(m, hn::MulAdd(alpha, diff, b), b), d, bp);
       }
-      dL_dalpha =
-          hn::IfThenElseZero(m, hn::NegMulAdd(hn::Load(d, tfb + off), inv, hn::Mul(dL_dalpha, T)));
-      grad[kSlotOpacity] = hn::MulAdd(G, dL_dalpha, grad[kSlotOpacity]);
-      const V dL_dG = hn::Mul(opacity, dL_dalpha);
-      const V gdx = hn::Mul(G, dx);
-      const V gdy = hn::Mul(G, dy);
-      grad[kSlotMean] =
-          hn::MulAdd(dL_dG, hn::MulAdd(neg_a, gdx, hn::Mul(neg_b, gdy)), grad[kSlotMean]);
-      grad[kSlotMean + 1] =
-          hn::MulAdd(dL_dG, hn::MulAdd(neg_c, gdy, hn::Mul(neg_b, gdx)), grad[kSlotMean + 1]);
-      const V gx = hn::Mul(dL_dG, gdx);
-      const V gy = hn::Mul(dL_dG, gdy);
-      grad[kSlotConic] = hn::MulAdd(gx, hn::Mul(neg_half, dx), grad[kSlotConic]);
-      grad[kSlotConic + 1] = hn::NegMulAdd(gx, dy, grad[kSlotConic + 1]);
-      grad[kSlotConic + 2] = hn::MulAdd(gy, hn::Mul(neg_half, dy), grad[kSlotConic + 2]);
+      // u = G dL/dalpha. The per-Gaussian factors (opacity, the conic terms, -1/2) come out of
+      // the sums over pixels, so per pixel vector only the sums of u, u dx, u dy, u dx^2,
+      // u dx dy and u dy^2 are kept; FinishSlot applies the factors once per Gaussian and tile.
+      const V u = hn::IfThenElseZero(
+          m, hn::Mul(G, hn::NegMulAdd(hn::Load(d, tfb + off), inv, hn::Mul(dL_dalpha, T))));
+      const V udx = hn::Mul(u, dx);
+      const V udy = hn::Mul(u, dy);
+      grad[kSumU] = hn::Add(grad[kSumU], u);
+      grad[kSumUdx] = hn::Add(grad[kSumUdx], udx);
+      grad[kSumUdy] = hn::Add(grad[kSumUdy], udy);
+      grad[kSumUdxdx] = hn::MulAdd(udx, dx, grad[kSumUdxdx]);
+      grad[kSumUdxdy] = hn::MulAdd(udx, dy, grad[kSumUdxdy]);
+      grad[kSumUdydy] = hn::MulAdd(udy, dy, grad[kSumUdydy]);
     }
     float* slot = slot_of(j);
     if (!any) {
@@ -772,6 +801,7 @@ void BackwardTileImpl(const TileJob& job, int tile) {
       continue;
     }
     ReduceLanes<kGradCount>(grad, slot);
+    FinishSlot(r, slot);
     if constexpr (kC == 0) {
       for (int c = 0; c < channels; ++c)
         slot[kSlotFeatures + c] = hn::GetLane(hn::SumOfLanes(d, hn::Load(d, gf_mem + c * lanes)));
