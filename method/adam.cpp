@@ -26,29 +26,15 @@
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
 #include <hwy/highway.h>
 
-#ifndef HDR4D_METHOD_ADAM_COMMON_
-#define HDR4D_METHOD_ADAM_COMMON_
-namespace hdr4d::method::adam_internal {
-// The per-step constants of one group's update.
-struct StepConstants {
-  float w1;  // 1 - beta1
-  float beta2;
-  float w2;          // 1 - beta2
-  float bias2_sqrt;  // sqrt(1 - beta2^step)
-  float eps;
-  float step_size;  // lr / (1 - beta1^step)
-};
-}  // namespace hdr4d::method::adam_internal
-#endif
-
 HWY_BEFORE_NAMESPACE();
 namespace hdr4d::method {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
 // The update of elements [0, n). The last partial vector uses masked loads and stores, so every
-// element goes through the same vector operations wherever it lies.
-void AdamKernel(float* HWY_RESTRICT p,
+// element goes through the same vector operations wherever it lies. A vector whose gradient holds
+// a NaN or an infinity is left as it is; the result says whether there was one.
+bool AdamKernel(float* HWY_RESTRICT p,
                 const float* HWY_RESTRICT g,
                 float* HWY_RESTRICT m,
                 float* HWY_RESTRICT v,
@@ -59,13 +45,15 @@ void AdamKernel(float* HWY_RESTRICT p,
   const auto w1 = hn::Set(d, c.w1);
   const auto beta2 = hn::Set(d, c.beta2);
   const auto w2 = hn::Set(d, c.w2);
-  const auto bias2_sqrt = hn::Set(d, c.bias2_sqrt);
+  const auto inv_bias2_sqrt = hn::Set(d, c.inv_bias2_sqrt);
   const auto eps = hn::Set(d, c.eps);
   const auto neg_step = hn::Set(d, -c.step_size);
   auto update = [&](auto gi, auto mi, auto vi, auto pi, auto store) {
     mi = hn::MulAdd(w1, hn::Sub(gi, mi), mi);                  // m + (1 - beta1)(g - m)
     vi = hn::MulAdd(hn::Mul(w2, gi), gi, hn::Mul(vi, beta2));  // beta2 v + (1 - beta2) g^2
-    const auto denom = hn::Add(hn::Div(hn::Sqrt(vi), bias2_sqrt), eps);
+    // sqrt(v_hat) as sqrt(v) times a per-step constant: one division per value, not two (the
+    // divider is the kernel's bottleneck on AVX-512; the result moves by at most an ulp).
+    const auto denom = hn::MulAdd(hn::Sqrt(vi), inv_bias2_sqrt, eps);
     pi = hn::MulAdd(neg_step, hn::Div(mi, denom), pi);
     store(mi, vi, pi);
   };
@@ -76,12 +64,21 @@ void AdamKernel(float* HWY_RESTRICT p,
     const auto bits = hn::Or(hn::Or(hn::BitCast(du, gi), hn::BitCast(du, mi)), hn::BitCast(du, vi));
     return hn::AllTrue(du, hn::Eq(bits, hn::Zero(du)));
   };
+  const auto exponent = hn::Set(du, 0x7f800000u);
+  auto finite = [&](auto gi) {
+    return hn::AllFalse(du, hn::Eq(hn::And(hn::BitCast(du, gi), exponent), exponent));
+  };
+  bool all_finite = true;
   std::size_t i = 0;
   for (; i + lanes <= n; i += lanes) {
     const auto gi = hn::LoadU(d, g + i);
     const auto mi = hn::LoadU(d, m + i);
     const auto vi = hn::LoadU(d, v + i);
     if (all_zero(gi, mi, vi)) continue;
+    if (!finite(gi)) {
+      all_finite = false;
+      continue;
+    }
     update(gi, mi, vi, hn::LoadU(d, p + i), [&](auto mi, auto vi, auto pi) {
       hn::StoreU(mi, d, m + i);
       hn::StoreU(vi, d, v + i);
@@ -90,14 +87,16 @@ void AdamKernel(float* HWY_RESTRICT p,
   }
   if (i < n) {
     const auto mask = hn::FirstN(d, n - i);
-    update(hn::MaskedLoad(mask, d, g + i), hn::MaskedLoad(mask, d, m + i),
-           hn::MaskedLoad(mask, d, v + i), hn::MaskedLoad(mask, d, p + i),
-           [&](auto mi, auto vi, auto pi) {
+    const auto gi = hn::MaskedLoad(mask, d, g + i);
+    if (!finite(gi)) return false;
+    update(gi, hn::MaskedLoad(mask, d, m + i), hn::MaskedLoad(mask, d, v + i),
+           hn::MaskedLoad(mask, d, p + i), [&](auto mi, auto vi, auto pi) {
              hn::BlendedStore(mi, mask, d, m + i);
              hn::BlendedStore(vi, mask, d, v + i);
              hn::BlendedStore(pi, mask, d, p + i);
            });
   }
+  return all_finite;
 }
 
 // True when no value has an all-ones exponent (NaN or infinity). Sixteen lanes at a time, with
@@ -302,22 +301,27 @@ const std::vector<float>& Adam::SecondMoment(const std::string& name) const { re
 // ---- The update
 // ----------------------------------------------------------------------------------
 
-void Adam::StepState(State& state) {
-  const AdamGroup& g = state.group;
-  HDR4D_CHECK(g.size == state.m.size());
-  HDR4D_CHECK(g.size == 0 || (g.params != nullptr && g.grads != nullptr));
+adam_internal::StepConstants Adam::NextStep(State& state) {
   ++state.step;
-  if (g.size == 0) return;
   const double step = static_cast<double>(state.step);
   const double bias1 = 1.0 - std::pow(options_.beta1, step);
   const double bias2 = 1.0 - std::pow(options_.beta2, step);
   adam_internal::StepConstants c;
-  c.step_size = static_cast<float>(static_cast<double>(g.lr) / bias1);
-  c.bias2_sqrt = static_cast<float>(std::sqrt(bias2));
+  c.step_size = static_cast<float>(static_cast<double>(state.group.lr) / bias1);
+  c.inv_bias2_sqrt = static_cast<float>(1.0 / std::sqrt(bias2));
   c.w1 = static_cast<float>(1.0 - options_.beta1);
   c.beta2 = static_cast<float>(options_.beta2);
   c.w2 = static_cast<float>(1.0 - options_.beta2);
   c.eps = static_cast<float>(options_.eps);
+  return c;
+}
+
+void Adam::StepState(State& state) {
+  const AdamGroup& g = state.group;
+  HDR4D_CHECK(g.size == state.m.size());
+  HDR4D_CHECK(g.size == 0 || (g.params != nullptr && g.grads != nullptr));
+  const adam_internal::StepConstants c = NextStep(state);
+  if (g.size == 0) return;
   float* params = g.params;
   const float* grads = g.grads;
   float* m = state.m.data();
@@ -330,14 +334,60 @@ void Adam::StepState(State& state) {
                     });
 }
 
+AdamRowStep Adam::BeginRowStep(const std::vector<std::string>& names, std::size_t rows) {
+  AdamRowStep step;
+  step.rows_ = rows;
+  step.bad_ = std::make_unique<std::atomic<bool>[]>(names.size());
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    State& s = Find(names[k]);
+    const AdamGroup& g = s.group;
+    HDR4D_CHECK(g.size == s.m.size());
+    HDR4D_CHECK(g.size == 0 || (g.params != nullptr && g.grads != nullptr));
+    HDR4D_CHECK(rows > 0 ? g.size % rows == 0 : g.size == 0);
+    step.parts_.push_back({g.name, g.params, g.grads, s.m.data(), s.v.data(),
+                           rows > 0 ? g.size / rows : 0, NextStep(s)});
+    step.bad_[k] = false;
+  }
+  return step;
+}
+
+void AdamRowStep::StepRows(std::int64_t begin,
+                           std::int64_t end,
+                           std::span<const float* const> grad_rows) {
+  HDR4D_CHECK(begin >= 0 && begin <= end && static_cast<std::size_t>(end) <= rows_);
+  HDR4D_CHECK(grad_rows.empty() || grad_rows.size() == parts_.size());
+  for (std::size_t k = 0; k < parts_.size(); ++k) {
+    const Part& part = parts_[k];
+    const std::size_t first = static_cast<std::size_t>(begin) * part.width;
+    const std::size_t n = static_cast<std::size_t>(end - begin) * part.width;
+    if (n == 0) continue;
+    const float* g =
+        !grad_rows.empty() && grad_rows[k] != nullptr ? grad_rows[k] : part.grads + first;
+    if (!HWY_DYNAMIC_DISPATCH(AdamKernel)(part.params + first, g, part.m + first, part.v + first, n,
+                                          part.constants)) {
+      bad_[k].store(true, std::memory_order_relaxed);
+    }
+  }
+}
+
+std::string AdamRowStep::FirstNonFinite() const {
+  for (std::size_t k = 0; k < parts_.size(); ++k) {
+    if (bad_[k].load()) return parts_[k].name;
+  }
+  return "";
+}
+
 void Adam::Step() {
   for (State& s : groups_) StepState(s);
 }
 
 void Adam::StepGroup(const std::string& name) { StepState(Find(name)); }
 
-std::string Adam::FirstNonFiniteGradient() const {
+std::string Adam::FirstNonFiniteGradient() const { return FirstNonFiniteGradient(GroupNames()); }
+
+std::string Adam::FirstNonFiniteGradient(const std::vector<std::string>& only) const {
   for (const State& s : groups_) {
+    if (std::find(only.begin(), only.end(), s.group.name) == only.end()) continue;
     if (s.group.size > 0 && s.group.grads != nullptr && !AllFinite(s.group.grads, s.group.size)) {
       return s.group.name;
     }

@@ -19,6 +19,7 @@ namespace hdr4d::method {
 namespace {
 
 constexpr std::int64_t kGaussianGrain = 1024;
+constexpr std::int64_t kRowsDoneBlock = 256;
 
 template <typename T>
 Vec4<T> Row4(const std::vector<T>& v, std::size_t i) {
@@ -410,7 +411,8 @@ void PreprocessBackward(const GaussianModelT<T>& model,
                         T time,
                         const RenderOptions& options,
                         const FrameStateT<T>& state,
-                        GaussianGradientsT<T>* grads) {
+                        GaussianGradientsT<T>* grads,
+                        const GradientRowsDoneT<T>& rows_done) {
   const std::size_t n = model.size();
   HDR4D_CHECK(grads->size() == n && grads->color_rest.size() == model.color_rest.size());
   const int channels = model.channels;
@@ -439,14 +441,26 @@ void PreprocessBackward(const GaussianModelT<T>& model,
           static_cast<std::int64_t>(n), kGaussianGrain, [&](std::int64_t b, std::int64_t e) {
             alignas(64) float batch_w[kMaxColorCoefficients * internal::kPreprocessBatch];
             float w[kMaxColorCoefficients];
+            std::int64_t done = b;  // rows before this are handed to rows_done
+            // With rows_done the colour rows (nine tenths of the gradient) go to a per-thread
+            // block that is handed over and reused, so they never travel to memory and back.
+            thread_local std::vector<float> block_dc, block_rest;
+            if (rows_done) {
+              block_dc.resize(
+                  static_cast<std::size_t>(kRowsDoneBlock + internal::kPreprocessBatch) * channels);
+              block_rest.resize(
+                  static_cast<std::size_t>(kRowsDoneBlock + internal::kPreprocessBatch) * stride);
+            }
             for (std::int64_t g0 = b; g0 < e; g0 += internal::kPreprocessBatch) {
               const int count =
                   static_cast<int>(std::min<std::int64_t>(internal::kPreprocessBatch, e - g0));
               internal::PreprocessBackwardSimd(job, g0, count, batch_w);
               for (int l = 0; l < count; ++l) {
                 const std::size_t i = static_cast<std::size_t>(g0 + l);
-                float* gdc = &grads->color_dc[i * channels];
-                float* grest = &grads->color_rest[i * stride];
+                const std::size_t row = rows_done ? i - static_cast<std::size_t>(done) : i;
+                float* gdc = rows_done ? &block_dc[row * channels] : &grads->color_dc[i * channels];
+                float* grest =
+                    rows_done ? &block_rest[row * stride] : &grads->color_rest[i * stride];
                 if (s.radius[i] <= 0) {
                   std::fill_n(gdc, channels, 0.0f);
                   std::fill_n(grest, stride, 0.0f);
@@ -459,6 +473,13 @@ void PreprocessBackward(const GaussianModelT<T>& model,
                   dcolor[ch] = state.clamped[i * channels + ch] ? 0.0f : dfeatures[ch];
                 LaneWeights(batch_w, l, num_coefficients, w);
                 ColorGradRows(w, dcolor, channels, num_coefficients, gdc, grest);
+              }
+              // Blocks of kRowsDoneBlock rows: ~160 KB of gradients at 160 floats a row, still in
+              // L2.
+              const std::int64_t next = g0 + count;
+              if (rows_done && (next - done >= kRowsDoneBlock || next == e)) {
+                rows_done(done, next, GradientRows{block_dc.data(), block_rest.data()});
+                done = next;
               }
             }
           });
@@ -531,6 +552,15 @@ void PreprocessBackward(const GaussianModelT<T>& model,
       for (int k = 0; k < 4; ++k) grads->rot_left[i * 4 + k] += dq[k];
     }
   });
+  if (rows_done) {
+    ParallelForChunks(
+        static_cast<std::int64_t>(n), kGaussianGrain, [&](std::int64_t b, std::int64_t e) {
+          const std::size_t i = static_cast<std::size_t>(b);
+          rows_done(
+              b, e,
+              GradientRowsT<T>{&grads->color_dc[i * channels], &grads->color_rest[i * stride]});
+        });
+  }
 }
 
 void RenderForward(const GaussianModel& model,
@@ -551,7 +581,8 @@ void RenderBackward(const GaussianModel& model,
                     const RenderOptions& options,
                     FrameState* state,
                     const float* dL_dimage,
-                    GaussianGradients* grads) {
+                    GaussianGradients* grads,
+                    const GradientRowsDone& rows_done) {
   const int features = state->splats.channels;
   state->splat_grads.SetZero(model.size(), features);
   BlendBackward(state->splats, SettingsFor(camera, options, features), &state->raster, dL_dimage,
@@ -561,7 +592,8 @@ void RenderBackward(const GaussianModel& model,
     stage->Backward(state->colors.data(), model.channels, state->visible,
                     state->splat_grads.features.data(), state->color_grads.data());
   }
-  PreprocessBackward(model, ViewParams<float>::FromCamera(camera), time, options, *state, grads);
+  PreprocessBackward(model, ViewParams<float>::FromCamera(camera), time, options, *state, grads,
+                     rows_done);
 }
 
 template <typename T>
@@ -605,7 +637,7 @@ void RenderBackwardReference(const GaussianModelT<T>& model,
                                   const RenderOptions&, FrameStateT<T>*);                \
   template void PreprocessBackward(const GaussianModelT<T>&, const ViewParams<T>&, T,    \
                                    const RenderOptions&, const FrameStateT<T>&,          \
-                                   GaussianGradientsT<T>*);                              \
+                                   GaussianGradientsT<T>*, const GradientRowsDoneT<T>&); \
   template void RenderForwardReference(const GaussianModelT<T>&, const Camera&, T,       \
                                        const RenderOptions&, FrameStateT<T>*, T*);       \
   template void RenderBackwardReference(const GaussianModelT<T>&, const Camera&, T,      \

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "core/camera.h"
@@ -89,16 +90,38 @@ void PreprocessForward(const GaussianModelT<T>& model,
                        const RenderOptions& options,
                        FrameStateT<T>* state);
 
+// The colour gradient rows of a block of Gaussians [begin, end): colour_dc and colour_rest of
+// Gaussian begin + r at color_dc + r * channels and color_rest + r * rest_stride.
+template <typename T>
+struct GradientRowsT {
+  const T* color_dc;
+  const T* color_rest;
+};
+using GradientRows = GradientRowsT<float>;
+
+// Called with Gaussian ranges [begin, end) whose gradient rows are final, from worker threads,
+// each Gaussian exactly once per backward: the trainer's optimiser step runs here, on rows still
+// in cache (AdamRowStep). The colour rows are passed (see PreprocessBackward); the other rows
+// are in `grads`.
+template <typename T>
+using GradientRowsDoneT =
+    std::function<void(std::int64_t begin, std::int64_t end, const GradientRowsT<T>& colour)>;
+using GradientRowsDone = GradientRowsDoneT<float>;
+
 // Backward of the preprocess: from state->splat_grads into `grads`, which must have the model's
 // shape (e.g. from ZerosLike). Every Gaussian's rows are overwritten (zeros for a culled one):
 // one frame's gradient, not a sum over calls. Deterministic: each Gaussian owns its rows.
+// With rows_done, the colour rows may instead go only to rows_done (the fast 4D path keeps them
+// in a reused per-thread block, which saves sending ~90% of the gradient to memory and back);
+// grads->color_dc and color_rest are then unspecified.
 template <typename T>
 void PreprocessBackward(const GaussianModelT<T>& model,
                         const ViewParams<T>& view,
                         T time,
                         const RenderOptions& options,
                         const FrameStateT<T>& state,
-                        GaussianGradientsT<T>* grads);
+                        GaussianGradientsT<T>* grads,
+                        const GradientRowsDoneT<T>& rows_done = {});
 
 // The production path (float; SIMD or scalar blending by options.backend). image: H x W x
 // channels, interleaved.
@@ -115,7 +138,8 @@ void RenderBackward(const GaussianModel& model,
                     const RenderOptions& options,
                     FrameState* state,
                     const float* dL_dimage,
-                    GaussianGradients* grads);
+                    GaussianGradients* grads,
+                    const GradientRowsDone& rows_done = {});
 
 // The same in any floating type with the scalar reference blend (float and double are
 // instantiated): what the whole-render finite-difference test runs in double.

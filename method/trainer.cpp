@@ -24,6 +24,7 @@
 #include "method/adam.h"
 #include "method/checkpoint.h"
 #include "method/densify.h"
+#include "method/fused_step.h"
 #include "method/hdr_color_stage.h"
 #include "method/hdr_loss.h"
 #include "method/loss.h"
@@ -380,9 +381,33 @@ TrainSummary Train(const TrainOptions& options) {
       Fail("train: iteration {}: the loss is {} (view {}); stopped, the last good checkpoint is {}",
            it, loss_value, view.name, last_good);
     }
-    RenderBackward(model, view.camera, view.time, render, &state, dL_dimage.data(), &grads);
+    // As in the reference, densification replaces every parameter tensor, so no optimiser step
+    // happens on that iteration; an opacity reset replaces only the opacity.
+    const bool densify =
+        it < opt.densify_until && it > opt.densify_from && it % opt.densification_interval == 0;
+    const bool reset_opacity = it < opt.densify_until && it % opt.opacity_reset_interval == 0;
+    // The model's groups step inside the backward, block by block as their gradient rows are
+    // written (AdamRowStep: the same values as StepGroup after it, without reading 13 MB of
+    // gradients back from memory). A non-finite gradient stops training below; the state in
+    // memory is then dropped and the last checkpoint kept.
+    std::vector<std::string> fused;
+    if (!densify) {
+      for (const char* group : kModelGroups) {
+        if (!(reset_opacity && std::string(group) == kGroupOpacity)) fused.emplace_back(group);
+      }
+    }
+    AdamRowStep row_step = adam.BeginRowStep(fused, model.size());
+    const GradientRowsDone step_rows = StepModelRows(fused, &row_step);
+    RenderBackward(model, view.camera, view.time, render, &state, dL_dimage.data(), &grads,
+                   step_rows);
     if (tone_mapper) tone_mapper->EndFrameBackward();
-    if (const std::string bad = adam.FirstNonFiniteGradient(); !bad.empty()) {
+    std::vector<std::string> unchecked;  // the groups the row step did not see
+    for (const std::string& group : adam.GroupNames()) {
+      if (std::find(fused.begin(), fused.end(), group) == fused.end()) unchecked.push_back(group);
+    }
+    std::string bad = row_step.FirstNonFinite();
+    if (bad.empty()) bad = adam.FirstNonFiniteGradient(unchecked);
+    if (!bad.empty()) {
       Fail(
           "train: iteration {}: non-finite gradient in parameter group '{}'; stopped, the last "
           "good checkpoint is {}",
@@ -393,18 +418,13 @@ TrainSummary Train(const TrainOptions& options) {
                       &stats);
     loop.loss_curve.push_back(loss_value);
 
-    // As in the reference, densification replaces every parameter tensor, so no optimiser step
-    // happens on that iteration; an opacity reset replaces only the opacity.
-    const bool densify =
-        it < opt.densify_until && it > opt.densify_from && it % opt.densification_interval == 0;
-    const bool reset_opacity = it < opt.densify_until && it % opt.opacity_reset_interval == 0;
     if (densify) {
       DensifyAndPrune(&model, &grads, &adam, &stats, DensifyParamsAt(opt, extent, it), &loop.rng);
       // The reference's optimiser step after densification skips the replaced tensors (they
       // have no gradient) but still moves the tone mapper, which densification leaves alone.
       if (tone_mapper_group) adam.StepGroup(kGroupToneMapper);
     } else {
-      for (const std::string& group : adam.GroupNames()) {
+      for (const std::string& group : unchecked) {
         if (!(reset_opacity && group == kGroupOpacity)) adam.StepGroup(group);
       }
     }
