@@ -11,6 +11,7 @@
 #include <string_view>
 
 #include "core/error.h"
+#include "core/json_util.h"
 
 namespace hdr4d {
 namespace {
@@ -404,7 +405,7 @@ namespace {
 double JsonNumber(const nlohmann::json& json, const char* key, double fallback) {
   if (!json.contains(key)) return fallback;
   const nlohmann::json& value = json.at(key);
-  if (!value.is_number()) Fail("CRF JSON: \"{}\" must be a number, got {}", key, value.dump());
+  if (!value.is_number()) Fail("CRF JSON: \"{}\" must be a number, got {}", key, JsonPreview(value));
   return value.get<double>();
 }
 
@@ -415,7 +416,7 @@ std::vector<double> JsonNumbers(const nlohmann::json& json, const char* key) {
   out.reserve(value.size());
   for (std::size_t i = 0; i < value.size(); ++i) {
     if (!value[i].is_number()) {
-      Fail("CRF JSON: \"{}\"[{}] must be a number, got {}", key, i, value[i].dump());
+      Fail("CRF JSON: \"{}\"[{}] must be a number, got {}", key, i, JsonPreview(value[i]));
     }
     out.push_back(value[i].get<double>());
   }
@@ -425,9 +426,9 @@ std::vector<double> JsonNumbers(const nlohmann::json& json, const char* key) {
 }  // namespace
 
 std::unique_ptr<Crf> CrfFromJson(const nlohmann::json& json) {
-  if (!json.is_object()) Fail("CRF JSON: expected an object, got {}", json.dump());
+  if (!json.is_object()) Fail("CRF JSON: expected an object, got {}", JsonPreview(json));
   if (!json.contains("model") || !json.at("model").is_string()) {
-    Fail("CRF JSON: missing string \"model\" ({}) in {}", kSpecHelp, json.dump());
+    Fail("CRF JSON: missing string \"model\" ({}) in {}", kSpecHelp, JsonPreview(json));
   }
   const std::string model = json.at("model").get<std::string>();
   try {

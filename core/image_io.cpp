@@ -1,14 +1,18 @@
 #include "core/image_io.h"
 
 #include <OpenImageIO/imageio.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <fstream>
 #include <string>
 #include <system_error>
 
+#include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/file_access.h"
+#include "core/png_structure.h"
 
 namespace hdr4d {
 namespace fs = std::filesystem;
@@ -21,13 +25,33 @@ std::string Lower(std::string s) {
   return s;
 }
 
-std::unique_ptr<OIIO::ImageInput> OpenInput(const fs::path& path) {
-  std::error_code ec;
-  if (!fs::exists(path, ec)) Fail("{}: file not found", path.string());
-  if (fs::is_directory(path, ec)) Fail("{}: is a folder, expected an image", path.string());
+// OpenImageIO may pile several lines into one error; the first says what went wrong.
+std::string FirstLine(std::string text) {
+  const std::size_t end = text.find('\n');
+  if (end != std::string::npos) text.resize(end);
+  return text;
+}
+
+bool HasPngSignature(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  char magic[4] = {};
+  return in.read(magic, 4) && std::memcmp(magic, "\x89PNG", 4) == 0;
+}
+
+// `whole_file`: the pixels will be decoded, so a PNG is checked up to its last chunk.
+std::unique_ptr<OIIO::ImageInput> OpenInput(const fs::path& path, bool whole_file) {
+  if (std::string problem = InputFileProblem(path); !problem.empty()) {
+    if (ProbePath(path).kind == PathKind::kFolder) problem = "is a folder, expected an image";
+    Fail("{}: {}", path.string(), problem);
+  }
+  // libpng prints a line of its own on stderr for a broken file: such files never reach it.
+  if (HasPngSignature(path)) {
+    if (std::string problem = PngStructureProblem(path, whole_file); !problem.empty())
+      Fail("{}: cannot read image: {}", path.string(), problem);
+  }
   auto in = OIIO::ImageInput::open(path.string());
   if (!in) {
-    std::string why = OIIO::geterror();
+    std::string why = FirstLine(OIIO::geterror());
     if (why.empty()) why = "not a readable image";
     Fail("{}: cannot read image: {}", path.string(), why);
   }
@@ -42,13 +66,13 @@ bool IsHdrPath(const fs::path& path) {
 }
 
 ImageSpecInfo ReadImageSpec(const fs::path& path) {
-  auto in = OpenInput(path);
+  auto in = OpenInput(path, /*whole_file=*/false);
   const OIIO::ImageSpec& spec = in->spec();
-  return {spec.width, spec.height, spec.nchannels};
+  return {spec.width, spec.height, spec.nchannels, spec.format.is_floating_point()};
 }
 
 Image ReadImage(const fs::path& path, const ImageReadOptions& options) {
-  auto in = OpenInput(path);
+  auto in = OpenInput(path, /*whole_file=*/true);
   const OIIO::ImageSpec& spec = in->spec();
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) {
     Fail("{}: image has no pixels ({}x{}x{})", path.string(), spec.width, spec.height,
@@ -60,7 +84,7 @@ Image ReadImage(const fs::path& path, const ImageReadOptions& options) {
               is_float ? Encoding::kLinear : Encoding::kSrgb);
   // OIIO converts integer pixels to float in [0,1] (value / max code).
   if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.data())) {
-    std::string why = in->geterror();
+    std::string why = FirstLine(in->geterror());
     if (why.empty()) why = "truncated or corrupt pixel data";
     Fail("{}: cannot decode image: {}", path.string(), why);
   }
@@ -110,14 +134,6 @@ void WriteImage(const fs::path& path, const Image& image, const ImageWriteOption
     Fail("{}: JPEG needs 1 or 3 channels, image has {}", path.string(), image.channels());
   }
 
-  std::error_code ec;
-  if (path.has_parent_path()) {
-    fs::create_directories(path.parent_path(), ec);
-    if (ec)
-      Fail("{}: cannot create folder {}: {}", path.string(), path.parent_path().string(),
-           ec.message());
-  }
-
   // Integer formats: clamp to [0,1] explicitly so NaN and out-of-range values have one defined
   // result.
   const float* pixels = image.data();
@@ -128,9 +144,6 @@ void WriteImage(const fs::path& path, const Image& image, const ImageWriteOption
     pixels = clamped.data();
   }
 
-  // Write beside the target and rename, so a failure never leaves a half-written file.
-  const fs::path tmp =
-      path.parent_path() / (path.filename().string() + ".tmp" + std::to_string(getpid()) + ext);
   OIIO::ImageSpec spec(image.width(), image.height(), image.channels(), type);
   if (jpeg) spec.attribute("Compression", "jpeg:" + std::to_string(options.jpeg_quality));
   if (exr) spec.attribute("compression", "zip");
@@ -139,23 +152,27 @@ void WriteImage(const fs::path& path, const Image& image, const ImageWriteOption
   spec.attribute("DateTime", "");
   if (!exr)
     spec.attribute("oiio:ColorSpace", image.encoding() == Encoding::kSrgb ? "sRGB" : "Linear");
-  auto out = OIIO::ImageOutput::create(tmp.string());
-  if (!out) Fail("{}: no writer for this format: {}", path.string(), OIIO::geterror());
-  if (!out->open(tmp.string(), spec)) {
-    Fail("{}: cannot open for writing: {}", path.string(), out->geterror());
-  }
-  const bool wrote = out->write_image(OIIO::TypeDesc::FLOAT, pixels);
-  const std::string why = out->geterror();
-  const bool closed = out->close();
-  if (!wrote || !closed) {
-    fs::remove(tmp, ec);
-    Fail("{}: write failed: {}", path.string(), why.empty() ? "unknown I/O error" : why);
-  }
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    Fail("{}: cannot move the written image into place: {}", path.string(), ec.message());
+  // The temporary file has no image extension, so the writer is chosen by the target's.
+  const auto fill = [&](const fs::path& tmp) {
+    auto out = OIIO::ImageOutput::create(path.string());
+    if (!out) Fail("{}: no writer for this format: {}", path.string(), OIIO::geterror());
+    if (!out->open(tmp.string(), spec)) {
+      Fail("{}: cannot open for writing: {}", path.string(), FirstLine(out->geterror()));
+    }
+    const bool wrote = out->write_image(OIIO::TypeDesc::FLOAT, pixels);
+    const std::string why = FirstLine(out->geterror());
+    const bool closed = out->close();
+    if (!wrote || !closed) {
+      Fail("{}: write failed: {}", path.string(), why.empty() ? "unknown I/O error" : why);
+    }
+  };
+  if (options.batch != nullptr) {
+    options.batch->Write(path, fill);
+  } else {
+    WriteFileAtomicAt(path, fill);
   }
 }
+
+void DiscardImageLibraryErrors() { OIIO::geterror(/*clear=*/true); }
 
 }  // namespace hdr4d

@@ -1,6 +1,7 @@
 // Reading and writing images through OpenImageIO: OpenEXR (half or float), PNG (8 or 16 bit),
-// JPEG. Errors name the file and the problem; a write goes to a temporary file first and is
-// renamed into place, so a failed write never leaves a truncated image behind.
+// JPEG. Errors name the file and the problem; writes go through WriteFileAtomic (temporary file,
+// output guard, write-through for links and devices), so a failed write never leaves a
+// truncated image behind.
 #pragma once
 
 #include <filesystem>
@@ -23,9 +24,14 @@ struct ImageReadOptions {
   bool require_finite = true;
 };
 
+class FileBatch;
+
 struct ImageWriteOptions {
   PixelFormat format = PixelFormat::kAuto;
   int jpeg_quality = 95;
+  // Set: the image is one of a set moved into place together by batch->Commit()
+  // (core/atomic_file.h); null: it is moved into place at once.
+  FileBatch* batch = nullptr;
 };
 
 // True for file names whose format stores linear HDR values (.exr, .hdr).
@@ -36,11 +42,12 @@ bool IsHdrPath(const std::filesystem::path& path);
 // Throws hdr4d::Error naming the file for a missing, unreadable, corrupt or non-finite image.
 Image ReadImage(const std::filesystem::path& path, const ImageReadOptions& options = {});
 
-// Only the header: width, height, channels. Throws like ReadImage.
+// Only the header: size, channels, float or integer. Throws like ReadImage.
 struct ImageSpecInfo {
   int width = 0;
   int height = 0;
   int channels = 0;
+  bool linear = false;  // float pixels (EXR/HDR: linear radiance), else integers (display-encoded)
 };
 ImageSpecInfo ReadImageSpec(const std::filesystem::path& path);
 
@@ -51,5 +58,9 @@ ImageSpecInfo ReadImageSpec(const std::filesystem::path& path);
 void WriteImage(const std::filesystem::path& path,
                 const Image& image,
                 const ImageWriteOptions& options = {});
+
+// Fetches and drops the error messages OpenImageIO still holds (it prints unfetched ones when
+// the program exits, which would put them after hdr4d's own error line).
+void DiscardImageLibraryErrors();
 
 }  // namespace hdr4d

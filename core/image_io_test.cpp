@@ -5,10 +5,12 @@
 #include <unistd.h>
 
 #include <csignal>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
 #include "core/error.h"
+#include "core/png_structure.h"
 #include "tests/testing.h"
 
 namespace hdr4d {
@@ -115,6 +117,47 @@ TEST(ImageIo, CorruptFileIsAnError) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("cut.png"), std::string::npos) << e.what();
   }
+}
+
+// Issue 11, case 13: libpng printed "libpng error: ..." and OpenImageIO "PNG library error" on
+// stderr around hdr4d's own line. Broken PNGs are now found by their chunk structure before
+// libpng reads them, so stderr stays silent and the message says what is wrong.
+TEST(ImageIo, BrokenPngsAreReportedWithoutLibraryChatter) {
+  TempDir dir;
+  WriteImage(dir / "full.png", RandomImage(64, 64, 3, 3, 0, 1, Encoding::kSrgb));
+  const std::string bytes = testing::ReadTextFile(dir / "full.png");
+  testing::WriteTextFile(dir / "cut.png", bytes.substr(0, bytes.size() - 20));
+  testing::WriteTextFile(dir / "head.png", bytes.substr(0, 20));
+  std::string flipped = bytes;
+  flipped[bytes.size() / 2] = static_cast<char>(flipped[bytes.size() / 2] ^ 0x40);
+  testing::WriteTextFile(dir / "flip.png", flipped);
+  struct Case {
+    const char* name;
+    const char* problem;
+  };
+  for (const Case& c : {Case{"cut.png", "truncated PNG: it ends inside chunk"},
+                        Case{"head.png", "truncated PNG: it ends inside chunk IHDR"},
+                        Case{"flip.png", "fails its CRC check"}}) {
+    // stderr to a file for the duration of the read.
+    const std::string log = (dir / "stderr.txt").string();
+    std::fflush(stderr);
+    const int saved = dup(2);
+    FILE* f = std::fopen(log.c_str(), "w");
+    dup2(fileno(f), 2);
+    const std::string error = testing::ErrorOf([&] { ReadImage(dir / c.name); });
+    const std::string header_error = testing::ErrorOf([&] { ReadImageSpec(dir / c.name); });
+    std::fflush(stderr);
+    dup2(saved, 2);
+    close(saved);
+    std::fclose(f);
+    EXPECT_NE(error.find(std::string(c.name) + ": cannot read image: "), std::string::npos)
+        << error;
+    EXPECT_NE(error.find(c.problem), std::string::npos) << error;
+    EXPECT_EQ(testing::ReadTextFile(log), "") << c.name;
+    // Reading the header needs only the signature and IHDR.
+    EXPECT_EQ(header_error.empty(), std::string(c.name) != "head.png") << header_error;
+  }
+  EXPECT_EQ(PngStructureProblem(dir / "full.png", true), "");
 }
 
 TEST(ImageIo, NonFinitePixelIsRejectedWithItsPosition) {
