@@ -11,12 +11,16 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <set>
 #include <string_view>
 #include <tuple>
 
+#include "core/dataset_image_rules.h"
 #include "core/error.h"
+#include "core/file_access.h"
 #include "core/image_io.h"
 #include "core/json_util.h"
+#include "core/output_guard.h"
 #include "core/parallel.h"
 #include "core/ply.h"
 #include "core/progress.h"
@@ -126,11 +130,8 @@ std::string WithoutPathPrefix(const std::string& message, const fs::path& path) 
   return message.rfind(prefix, 0) == 0 ? message.substr(prefix.size()) : message;
 }
 
-std::string Describe(const json& value) {
-  std::string text = value.dump();
-  if (text.size() > 40) text = text.substr(0, 37) + "...";
-  return fmt::format("{} {}", value.type_name(), text);
-}
+// A short preview of a bad value for a problem line (never the whole value: it may be huge).
+std::string Describe(const json& value) { return JsonPreview(value, 40); }
 
 // Typed access to one JSON object with every problem recorded against (file, frame, key).
 class Reader {
@@ -421,12 +422,22 @@ struct ImageResult {
   std::string ldr_error, hdr_error;
 };
 
-ImageSpecInfo Inspect(const fs::path& path, ImageCheck check) {
+// Reads one image as deeply as `check` says and applies the rules of its role (LDR file_path or
+// HDR exr_file_path, core/dataset_image_rules.h): what training would refuse is found here.
+ImageSpecInfo Inspect(const fs::path& path, ImageCheck check, bool hdr) {
+  ImageSpecInfo spec;
+  std::string problem;
   if (check == ImageCheck::kFull) {
     const Image image = ReadImage(path);  // rejects NaN/Inf pixels
-    return {image.width(), image.height(), image.channels()};
+    spec = {image.width(), image.height(), image.channels(),
+            image.encoding() == Encoding::kLinear};
+    problem = hdr ? HdrImageProblem(image) : LdrImageProblem(image);
+  } else {
+    spec = ReadImageSpec(path);
+    problem = hdr ? HdrImageHeaderProblem(spec) : LdrImageHeaderProblem(spec);
   }
-  return ReadImageSpec(path);
+  if (!problem.empty()) Fail("{}: {}", path.string(), problem);
+  return spec;
 }
 
 // Smaller scenes check in well under a second: a bar would only be noise.
@@ -445,14 +456,14 @@ void CheckImages(std::vector<PendingFrame*>& frames,
     ImageResult& result = results[i];
     if (!f.image_path.empty()) {
       try {
-        result.ldr = Inspect(f.image_path, options.image_check);
+        result.ldr = Inspect(f.image_path, options.image_check, /*hdr=*/false);
       } catch (const std::exception& e) {
         result.ldr_error = e.what();
       }
     }
     if (f.hdr_path) {
       try {
-        result.hdr = Inspect(*f.hdr_path, options.image_check);
+        result.hdr = Inspect(*f.hdr_path, options.image_check, /*hdr=*/true);
       } catch (const std::exception& e) {
         result.hdr_error = e.what();
       }
@@ -539,20 +550,44 @@ void SplitNerfstudio(const fs::path& root,
   }
 }
 
+// The files a scene is made of and the folders holding its images are inputs of whatever read
+// it: no writer of this process may replace them or add files among the images
+// (core/output_guard.h), so renders never land on or beside ground truth.
+void ProtectScene(const Dataset& dataset, const std::vector<fs::path>& json_files) {
+  const std::string scene = dataset.root.string();
+  const std::string file_role =
+      fmt::format("a file of dataset {} (a command never overwrites its inputs)", scene);
+  const std::string image_role =
+      fmt::format("an image of dataset {} (ground truth is never overwritten)", scene);
+  for (const fs::path& f : json_files) ProtectInputFile(f, file_role);
+  if (dataset.point_cloud_path) ProtectInputFile(*dataset.point_cloud_path, file_role);
+  std::set<fs::path> folders;
+  for (const Frame* f : dataset.AllFrames()) {
+    for (const std::optional<fs::path>& path :
+         {f->image_path.empty() ? std::nullopt : std::optional<fs::path>(f->image_path),
+          f->hdr_path}) {
+      if (!path) continue;
+      ProtectInputFile(*path, image_role);
+      folders.insert(path->parent_path());
+    }
+  }
+  for (const fs::path& folder : folders) {
+    ProtectInputFolder(folder, fmt::format("the images of dataset {} (write outputs elsewhere)",
+                                           scene));
+  }
+}
+
 }  // namespace
 
 DatasetReport CheckDataset(const fs::path& root, const DatasetLoadOptions& options) {
   DatasetReport report;
   ProblemSink sink;
   std::error_code ec;
-  if (!fs::exists(root, ec)) {
-    sink.Add(kRankRoot, root, -1, "", "folder not found");
-    report.problems = sink.Sorted();
-    return report;
-  }
-  if (!fs::is_directory(root, ec)) {
-    sink.Add(kRankRoot, root, -1, "",
-             "not a folder (a dataset is a folder with transforms_*.json)");
+  // "folder not found" only when nothing is there: an unreadable folder says so.
+  if (std::string problem = InputFolderProblem(root); !problem.empty()) {
+    if (ProbePath(root).kind == PathKind::kFile || ProbePath(root).kind == PathKind::kOther)
+      problem = "not a folder (a dataset is a folder with transforms_*.json)";
+    sink.Add(kRankRoot, root, -1, "", problem);
     report.problems = sink.Sorted();
     return report;
   }
@@ -579,6 +614,7 @@ DatasetReport CheckDataset(const fs::path& root, const DatasetLoadOptions& optio
   const bool hdrnerf = !nerfstudio && fs::exists(root / "exposure_train.json", ec);
   std::optional<fs::path> nerfstudio_ply;  // its `ply_file_path`
   std::array<SplitFile, 3> files;
+  std::vector<fs::path> json_files;  // every JSON file of the scene that was read
   const Split splits[3] = {Split::kTrain, Split::kTest, Split::kVal};
   for (int s = 0; s < 3; ++s) {
     SplitFile& file = files[s];
@@ -593,6 +629,7 @@ DatasetReport CheckDataset(const fs::path& root, const DatasetLoadOptions& optio
       if (file.split == Split::kTest && options.require_test) r.Problem(-1, "", "file not found");
       continue;
     }
+    json_files.push_back(file.path);
     json doc;
     try {
       doc = ReadJsonFile(file.path);
@@ -604,6 +641,7 @@ DatasetReport CheckDataset(const fs::path& root, const DatasetLoadOptions& optio
     if (hdrnerf) {
       const fs::path exposure_path = root / fmt::format("exposure_{}.json", SplitName(file.split));
       const Reader er(sink, SplitRank(file.split, true), exposure_path);
+      json_files.push_back(exposure_path);
       try {
         table.emplace(ExposureTable{er, ReadJsonFile(exposure_path)});
         if (!table->values.is_object()) {
@@ -843,6 +881,7 @@ DatasetReport CheckDataset(const fs::path& root, const DatasetLoadOptions& optio
     }
   }
 
+  ProtectScene(dataset, json_files);
   report.dataset = std::move(dataset);
   report.problems = sink.Sorted();
   return report;

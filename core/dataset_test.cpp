@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_util.h"
+#include "core/output_guard.h"
 #include "core/ply.h"
 #include "core/scene_profile.h"
 #include "tests/testing.h"
@@ -456,6 +457,68 @@ TEST(DatasetProblems, NanAndInfPixelsInExrFoundByFullCheck) {
                  "non-finite pixel value (nan) at x=3, y=2");
   EXPECT_PROBLEM(report, "transforms_test.json", 0, "exr_file_path",
                  "non-finite pixel value (inf) at x=5, y=4");
+}
+
+// Issue 11, case 10: `dataset check --full` must find everything training refuses. Negative
+// radiance in an HDR image, and an HDR image (here with a NaN) given as a frame's file_path,
+// used to pass it.
+TEST(DatasetProblems, FullCheckFindsWhatTrainingRefuses) {
+  TempDir dir;
+  Scene scene(dir.path());
+  AddGoodFrames(scene);
+  Image negative = RandomImage(8, 6, 3, 9, 0, 10);
+  negative.at(1, 2, 2) = -0.5f;
+  WriteImage(dir / "hdr/train_1.exr", negative, {.format = PixelFormat::kFloat});
+  Image nan_image = RandomImage(8, 6, 3, 10, 0, 10);
+  nan_image.at(4, 3, 0) = std::numeric_limits<float>::quiet_NaN();
+  WriteImage(dir / "hdr/as_ldr.exr", nan_image, {.format = PixelFormat::kFloat});
+  scene.Frame("test", 1)["file_path"] = "hdr/as_ldr.exr";
+  WriteImage(dir / "hdr/black.exr", Image(8, 6, 3), {.format = PixelFormat::kFloat});
+  scene.Frame("train", 2)["exr_file_path"] = "hdr/black.exr";
+  scene.Write();
+
+  const DatasetReport full = Check(scene, ImageCheck::kFull);
+  EXPECT_EQ(full.problems.size(), 3u) << AllProblems(full);
+  EXPECT_PROBLEM(full, "transforms_train.json", 1, "exr_file_path",
+                 "negative radiance -0.5 at x=1, y=2, channel 2");
+  EXPECT_PROBLEM(full, "transforms_test.json", 1, "file_path", "non-finite pixel value (nan)");
+  EXPECT_PROBLEM(full, "transforms_train.json", 2, "exr_file_path", "has no positive value");
+  // The header says the file_path image is float: found without decoding it.
+  const DatasetReport headers = Check(scene, ImageCheck::kHeaders);
+  EXPECT_EQ(headers.problems.size(), 1u) << AllProblems(headers);
+  EXPECT_PROBLEM(headers, "transforms_test.json", 1, "file_path", "is a linear HDR image");
+  EXPECT_THROW(LoadDataset(dir.path()), Error);  // what train loads with
+}
+
+TEST(DatasetProblems, GroundTruthThatIsNotHdrOrNotRgbIsAProblem) {
+  TempDir dir;
+  Scene scene(dir.path());
+  AddGoodFrames(scene);
+  WriteImage(dir / "hdr/grey.exr", Image(8, 6, 1, Encoding::kLinear, 1.0f));
+  scene.Frame("train", 0)["exr_file_path"] = "hdr/grey.exr";
+  scene.Frame("test", 0)["exr_file_path"] = "images/test_1.png";
+  scene.Write();
+  const DatasetReport report = Check(scene, ImageCheck::kHeaders);
+  EXPECT_PROBLEM(report, "transforms_train.json", 0, "exr_file_path", "HDR ground truth needs RGB");
+  EXPECT_PROBLEM(report, "transforms_test.json", 0, "exr_file_path",
+                 "exr_file_path must be linear HDR radiance");
+}
+
+// Reading a scene inside a command protects it from that command's writers: its files and the
+// folders that hold its images (issue 11, case 1).
+TEST(Dataset, ReadingASceneProtectsItsFilesAndImageFolders) {
+  TempDir dir;
+  Scene scene(dir.path());
+  AddGoodFrames(scene);
+  scene.Write();
+  const InputProtectionScope command;
+  ASSERT_TRUE(Check(scene).ok());
+  for (const fs::path& p : {dir / "images" / "train_0.png", dir / "images" / "new.png",
+                            dir / "hdr" / "test_1.exr", dir / "transforms_test.json"}) {
+    EXPECT_THROW(CheckOutput(p), Error) << p;
+  }
+  EXPECT_NO_THROW(CheckOutput(dir / "results.json"));
+  EXPECT_NO_THROW(CheckOutput(dir / "renders" / "train_0.png"));
 }
 
 TEST(DatasetProblems, MissingTime) {

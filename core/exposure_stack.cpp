@@ -8,10 +8,14 @@
 #include <set>
 #include <vector>
 
+#include "core/atomic_file.h"
 #include "core/dataset.h"
+#include "core/dataset_image_rules.h"
 #include "core/error.h"
+#include "core/file_access.h"
 #include "core/image_io.h"
 #include "core/json_util.h"
+#include "core/output_guard.h"
 #include "core/parallel.h"
 #include "core/progress.h"
 
@@ -68,18 +72,54 @@ int SynthesizeDatasetLdr(const fs::path& root, const DatasetSynthesisOptions& op
   }
   if (frames.empty()) Fail("{}: the dataset has no frames", root.string());
 
-  // Group by HDR file so each EXR is decoded once however many exposures use it.
+  // The LDR images are this command's outputs, the HDR images its inputs: an LDR path that is an
+  // HDR file would destroy ground truth, so it is refused before anything is written.
+  std::map<fs::path, const Frame*> hdr_inputs;
+  for (const Frame* f : frames) hdr_inputs.emplace(fs::weakly_canonical(*f->hdr_path), f);
+  std::vector<fs::path> outputs = {root / kManifestName};
+  for (const Frame* f : frames) {
+    if (const auto it = hdr_inputs.find(fs::weakly_canonical(f->image_path));
+        it != hdr_inputs.end()) {
+      Fail("{}: frame {}: file_path {} is the exr_file_path of {} frame {}: synthesising LDR there "
+           "would overwrite the HDR ground truth",
+           (root / fmt::format("transforms_{}.json", SplitName(f->split))).string(), f->index,
+           f->file_path, SplitName(it->second->split), it->second->index);
+    }
+    outputs.push_back(f->image_path);
+  }
+  // Writing a dataset's LDR images is this command's job: the output guard lets exactly these
+  // files through (core/output_guard.h), nothing else in the dataset's folders.
+  const OutputPermit permit(outputs);
+  // Every HDR image's size against its frames' cameras, from the headers, before any work.
   std::map<fs::path, std::vector<const Frame*>> by_hdr;
   for (const Frame* f : frames) by_hdr[*f->hdr_path].push_back(f);
+  for (const auto& [hdr_path, users] : by_hdr) {
+    const ImageSpecInfo spec = ReadImageSpec(hdr_path);
+    for (const Frame* f : users) {
+      // The LDR image gets the camera's size: an HDR image of another size would make a
+      // dataset whose images disagree with its JSON.
+      const PinholeIntrinsics& k = f->camera.intrinsics;
+      if (spec.width != k.width || spec.height != k.height) {
+        Fail("{}: HDR image is {}x{}, but the camera of frame {} of transforms_{}.json is {}x{}",
+             hdr_path.string(), spec.width, spec.height, f->index, SplitName(f->split), k.width,
+             k.height);
+      }
+    }
+  }
+
+  // Grouped by HDR file so each EXR is decoded once however many exposures use it.
   std::vector<std::pair<fs::path, std::vector<const Frame*>>> groups(by_hdr.begin(), by_hdr.end());
+  // All or nothing: a bad HDR image found halfway leaves the previous LDR images, not a mix.
+  FileBatch batch;
 
   Progress progress("synth-ldr", static_cast<std::int64_t>(frames.size()));
   std::vector<int> written(groups.size(), 0);
   // One group per task; inside SynthesizeLdr the pixels run in parallel too.
   ParallelFor(static_cast<std::int64_t>(groups.size()), 1, [&](std::int64_t g) {
-    const Image hdr = ReadImage(groups[g].first);
+    const fs::path& hdr_path = groups[g].first;
+    const Image hdr = ReadHdrGroundTruth(hdr_path);
     for (const Frame* f : groups[g].second) {
-      if (!options.overwrite && fs::exists(f->image_path)) {
+      if (!options.overwrite && PathExists(f->image_path)) {
         progress.Advance();
         continue;
       }
@@ -90,13 +130,21 @@ int SynthesizeDatasetLdr(const fs::path& root, const DatasetSynthesisOptions& op
       ldr.noise.seed =
           MixSeed(options.noise.seed ^ MixSeed(static_cast<std::uint64_t>(f->split) << 32 |
                                                static_cast<std::uint32_t>(f->index)));
-      WriteImage(f->image_path, SynthesizeLdr(hdr.Rgb(), *crf, ldr),
-                 {.format = options.bits == 16 ? PixelFormat::kUint16 : PixelFormat::kUint8});
+      Image image;
+      try {
+        image = SynthesizeLdr(hdr.Rgb(), *crf, ldr);
+      } catch (const Error& e) {
+        Fail("{}: {}", hdr_path.string(), e.what());
+      }
+      WriteImage(f->image_path, image,
+                 {.format = options.bits == 16 ? PixelFormat::kUint16 : PixelFormat::kUint8,
+                  .batch = &batch});
       ++written[g];
       progress.Advance();
     }
   });
   progress.Finish();
+  batch.Commit();
 
   nlohmann::json manifest = {
       {"crf", crf->ToJson()},
@@ -127,7 +175,7 @@ int MergeDatasetExposures(const fs::path& root, const fs::path& out, const Merge
   std::string crf_spec = options.crf;
   if (crf_spec.empty()) {
     const fs::path manifest = root / kManifestName;
-    if (!fs::exists(manifest)) {
+    if (!PathExists(manifest)) {
       Fail("{}: not found, so the camera response is unknown; pass --crf", manifest.string());
     }
     const nlohmann::json j = ReadJsonFile(manifest);
@@ -146,6 +194,8 @@ int MergeDatasetExposures(const fs::path& root, const fs::path& out, const Merge
   }
   if (by_hdr.empty())
     Fail("{}: no {} frame has an exr_file_path to merge towards", root.string(), options.split);
+  // Before any work: the output folder may not be one of the dataset's image folders.
+  CheckOutputFolder(out);
   std::set<std::string> names;
   for (const auto& [hdr, frames] : by_hdr) {
     if (!names.insert(hdr.filename().string()).second) {
@@ -154,6 +204,7 @@ int MergeDatasetExposures(const fs::path& root, const fs::path& out, const Merge
     }
   }
   std::vector<std::pair<fs::path, std::vector<const Frame*>>> groups(by_hdr.begin(), by_hdr.end());
+  FileBatch batch;  // all merged images or none
   Progress progress("merge-hdr", static_cast<std::int64_t>(groups.size()));
   ParallelFor(static_cast<std::int64_t>(groups.size()), 1, [&](std::int64_t g) {
     std::vector<Image> stack;
@@ -163,10 +214,11 @@ int MergeDatasetExposures(const fs::path& root, const fs::path& out, const Merge
       exposures.push_back(f->exposure);
     }
     WriteImage(out / groups[g].first.filename(), MergeExposures(stack, exposures, *crf),
-               {.format = PixelFormat::kFloat});
+               {.format = PixelFormat::kFloat, .batch = &batch});
     progress.Advance();
   });
   progress.Finish();
+  batch.Commit();
   return static_cast<int>(groups.size());
 }
 

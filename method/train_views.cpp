@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/dataset_image_rules.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/parallel.h"
@@ -29,20 +30,17 @@ namespace {
 std::vector<std::uint16_t> LoadHdrMuTarget(const std::filesystem::path& path,
                                            int width,
                                            int height) {
-  const Image hdr = ReadImage(path);  // rejects NaN / Inf with the pixel
-  if (hdr.encoding() != Encoding::kLinear)
-    Fail("{}: HDR ground truth must be linear (EXR/HDR)", path.string());
+  // The dataset's rules for HDR ground truth (`dataset check` applies the same ones): linear,
+  // RGB, finite, non-negative, some light.
+  const Image hdr = ReadHdrGroundTruth(path);
   if (hdr.width() != width || hdr.height() != height) {
     Fail("{}: HDR ground truth is {}x{} but the LDR image is {}x{}", path.string(), hdr.width(),
          hdr.height(), width, height);
   }
-  if (hdr.channels() < 3)
-    Fail("{}: HDR ground truth needs RGB, got {} channels", path.string(), hdr.channels());
   const int c = hdr.channels();
   float max_value = 0;
   for (std::size_t p = 0; p < hdr.num_pixels(); ++p)
     for (int k = 0; k < 3; ++k) max_value = std::max(max_value, hdr.data()[p * c + k]);
-  if (!(max_value > 0)) Fail("{}: HDR ground truth has no positive value", path.string());
   std::vector<std::uint16_t> mu(hdr.num_pixels() * 3);
   for (std::size_t p = 0; p < hdr.num_pixels(); ++p) {
     for (int k = 0; k < 3; ++k) {
@@ -64,18 +62,12 @@ std::vector<TrainView> LoadViews(const Dataset& dataset,
   ParallelFor(static_cast<std::int64_t>(frames.size()), 1, [&](std::int64_t i) {
     const Frame& f = frames[i];
     const Image image = ReadImage(f.image_path);
-    if (image.encoding() != Encoding::kSrgb) {
-      Fail("{}: training targets are LDR images (PNG/JPEG); this one is linear HDR",
-           f.image_path.string());
-    }
+    if (std::string problem = LdrImageProblem(image); !problem.empty())
+      Fail("{}: {}", f.image_path.string(), problem);
     if (image.width() != f.camera.intrinsics.width ||
         image.height() != f.camera.intrinsics.height) {
       Fail("{}: image is {}x{} but the camera says {}x{}", f.image_path.string(), image.width(),
            image.height(), f.camera.intrinsics.width, f.camera.intrinsics.height);
-    }
-    if (image.channels() < 3 && image.channels() != 1) {
-      Fail("{}: expected RGB, RGBA or grey, got {} channels", f.image_path.string(),
-           image.channels());
     }
     TrainView& v = views[i];
     v.camera = f.camera;
