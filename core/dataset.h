@@ -143,4 +143,8 @@ void WriteDataset(const Dataset& dataset,
                   const std::filesystem::path& root,
                   const DatasetWriteOptions& options = {});
 
+// Moves a dataset's paths (root, images, HDR images, point cloud) from under its root to under
+// `new_root`, after its folder was moved there (a scene built in a staging folder).
+void RebaseDataset(Dataset* dataset, const std::filesystem::path& new_root);
+
 }  // namespace hdr4d

@@ -142,4 +142,19 @@ void WriteDataset(const Dataset& dataset,
   }
 }
 
+void RebaseDataset(Dataset* dataset, const fs::path& new_root) {
+  const fs::path old_root = dataset->root;
+  auto move = [&](fs::path& p) {
+    if (!p.empty()) p = new_root / p.lexically_relative(old_root);
+  };
+  for (std::vector<Frame>* split : {&dataset->train, &dataset->test, &dataset->val}) {
+    for (Frame& f : *split) {
+      move(f.image_path);
+      if (f.hdr_path) move(*f.hdr_path);
+    }
+  }
+  if (dataset->point_cloud_path) move(*dataset->point_cloud_path);
+  dataset->root = new_root;
+}
+
 }  // namespace hdr4d

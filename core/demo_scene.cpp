@@ -13,6 +13,7 @@
 #include "core/parallel.h"
 #include "core/ply.h"
 #include "core/progress.h"
+#include "core/staged_folder.h"
 
 namespace hdr4d {
 namespace fs = std::filesystem;
@@ -202,8 +203,11 @@ Vector3d RingPosition(double angle) { return {4.2 * std::cos(angle), 4.2 * std::
 
 }  // namespace
 
-Dataset MakeDemoScene(const DemoSceneOptions& options, const fs::path& root) {
+Dataset MakeDemoScene(const DemoSceneOptions& options, const fs::path& final_root) {
   options.Validate();
+  // Built beside its place and moved there when complete (core/staged_folder.h).
+  StagedFolder staged(final_root);
+  const fs::path& root = staged.path();
   constexpr double kFovX = 0.8;  // radians
   Dataset dataset;
   dataset.root = root;
@@ -283,6 +287,8 @@ Dataset MakeDemoScene(const DemoSceneOptions& options, const fs::path& root) {
   WritePly(root / "point3d.ply", DemoScenePointCloud(6000, 1));
   dataset.point_cloud_path = root / "point3d.ply";
   WriteDataset(dataset, root);
+  staged.Commit();
+  RebaseDataset(&dataset, final_root);
   return dataset;
 }
 

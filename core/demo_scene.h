@@ -50,7 +50,8 @@ Image RenderDemoView(const Camera& camera, double t, int samples_per_axis);
 
 // Renders every view to <root>/hdr/*.exr and writes transforms_{train,test}.json whose frames
 // point at the LDR images <root>/images/*.png that `hdr4d synth-ldr` creates from the HDR, and
-// <root>/point3d.ply (DemoScenePointCloud).
+// <root>/point3d.ply (DemoScenePointCloud). The scene is built in a staging folder and moved to
+// `root` when complete: `root` must be new or an empty folder (never merged into).
 // Returns the dataset as written.
 Dataset MakeDemoScene(const DemoSceneOptions& options, const std::filesystem::path& root);
 

@@ -8,6 +8,7 @@
 
 #include "core/error.h"
 #include "core/image_io.h"
+#include "core/staged_folder.h"
 #include "method/constants.h"
 #include "method/render.h"
 
@@ -46,8 +47,11 @@ GaussianModel MakeGaussianSceneModel(const GaussianSceneOptions& options) {
   return m;
 }
 
-Dataset MakeGaussianScene(const GaussianSceneOptions& options, const fs::path& root) {
+Dataset MakeGaussianScene(const GaussianSceneOptions& options, const fs::path& final_root) {
   const GaussianModel model = MakeGaussianSceneModel(options);
+  // Built beside its place and moved there when complete (core/staged_folder.h).
+  StagedFolder staged(final_root);
+  const fs::path& root = staged.path();
   constexpr double kFovX = 0.7;
   const PinholeIntrinsics intrinsics =
       PinholeIntrinsics::FromFovX(kFovX, options.size, options.size);
@@ -88,6 +92,8 @@ Dataset MakeGaussianScene(const GaussianSceneOptions& options, const fs::path& r
   }
   dataset.time_max_raw = 1.0;
   WriteDataset(dataset, root);
+  staged.Commit();
+  RebaseDataset(&dataset, final_root);
   return dataset;
 }
 

@@ -24,7 +24,8 @@ struct GaussianSceneOptions {
 // The scene's model (LDR colours, degree-0 colour so every view agrees on a Gaussian's colour).
 GaussianModel MakeGaussianSceneModel(const GaussianSceneOptions& options);
 
-// Renders every camera at every timestamp to <root>/images/*.png and writes the dataset JSON.
+// Renders every camera at every timestamp to <root>/images/*.png and writes the dataset JSON,
+// in a staging folder moved to `root` when complete; `root` must be new or an empty folder.
 Dataset MakeGaussianScene(const GaussianSceneOptions& options, const std::filesystem::path& root);
 
 }  // namespace hdr4d::method
