@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -14,6 +15,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/file_access.h"
 #include "core/image.h"
 #include "core/image_io.h"
 #include "core/json_util.h"
@@ -29,6 +31,7 @@ namespace {
 struct PairResult {
   std::string name;
   MetricList metrics;
+  bool identical = false;  // equal pixel values: every PSNR is +inf
 };
 
 std::string Lower(std::string s) {
@@ -72,6 +75,7 @@ PairResult EvaluateFiles(const fs::path& pred_path, const fs::path& gt_path) {
     const Image pred_rgb = pred.Rgb(), gt_rgb = gt.Rgb();
     result.metrics = gt.encoding() == Encoding::kLinear ? HdrMetrics(pred_rgb, gt_rgb)
                                                         : LdrMetrics(pred_rgb, gt_rgb);
+    result.identical = pred_rgb.values() == gt_rgb.values();
   } catch (const Error& e) {
     Fail("{} vs {}: {}", pred_path.string(), gt_path.string(), e.what());
   }
@@ -203,7 +207,10 @@ nlohmann::json EvaluatePair(const fs::path& pred, const fs::path& gt) {
 nlohmann::json EvaluatePaths(const fs::path& pred, const fs::path& gt) {
   std::error_code ec;
   for (const fs::path& p : {pred, gt}) {
-    if (!fs::exists(p, ec)) Fail("{}: not found", p.string());
+    const PathProbe probe = ProbePath(p);  // "permission denied" is not "not found"
+    if (probe.kind == PathKind::kMissing) Fail("{}: not found", p.string());
+    if (probe.kind == PathKind::kUnknown || !probe.readable)
+      Fail("{}: {}", p.string(), probe.problem);
   }
   const bool pred_dir = fs::is_directory(pred, ec);
   const bool gt_dir = fs::is_directory(gt, ec);
@@ -245,19 +252,24 @@ nlohmann::json EvaluatePaths(const fs::path& pred, const fs::path& gt) {
 
   nlohmann::json out;
   out["pairs"] = nlohmann::json::array();
-  // Sums in pair order; a +inf value (identical images) makes the sum and the mean +inf, which is
-  // then written as null like the value itself.
+  // Sums in pair order over the finite values: one identical pair (PSNR +inf) must not turn every
+  // mean into +inf and hide the others; it is counted in "identical_pairs" instead.
   std::map<std::string, std::pair<double, int>> sums;
+  int identical = 0;
   for (const auto& r : results) {
     out["pairs"].push_back(PairJson(*r));
+    identical += r->identical ? 1 : 0;
     for (const auto& [key, value] : r->metrics) {
       auto& [sum, count] = sums[key];
+      if (!std::isfinite(value)) continue;
       sum += value;
       ++count;
     }
   }
   out["mean"] = nlohmann::json::object();
-  for (const auto& [key, sc] : sums) out["mean"][key] = FiniteOrNull(sc.first / sc.second);
+  for (const auto& [key, sc] : sums)
+    out["mean"][key] = sc.second > 0 ? FiniteOrNull(sc.first / sc.second) : nlohmann::json(nullptr);
+  out["identical_pairs"] = identical;
   return out;
 }
 
@@ -304,6 +316,12 @@ std::string FormatEvalTable(const nlohmann::json& result) {
   out += "\n";
   for (const auto& pair : pairs) out += line(pair.value("name", std::string("?")), pair);
   out += line("mean", mean);
+  const int identical = result.value("identical_pairs", 0);
+  if (identical > 0) {
+    out += fmt::format(
+        "identical: {} of {} pairs (PSNR inf there); the means are over the finite values\n",
+        identical, pairs.size());
+  }
   return out;
 }
 

@@ -2,7 +2,7 @@
 // (DESIGN §5). The result is one JSON document:
 //
 //   {"pairs": [{"name": <gt file name>, <metric>: <value>, ...}, ...],
-//    "mean":  {<metric>: <value>, ...}}
+//    "mean":  {<metric>: <value>, ...}, "identical_pairs": <count>}
 //
 // - LDR pairs (both integer formats such as PNG/JPEG, read as display-encoded values) get the
 //   LdrMetrics keys, computed on the stored sRGB values as the reference code does: "psnr",
@@ -13,8 +13,9 @@
 // - Pairs are listed in sorted order of the ground-truth file name. "mean" is the arithmetic mean
 //   of the per-pair values of each key over the pairs that have the key (not a metric of the
 //   pooled error).
-// - Non-finite numbers are written as null (identical images have PSNR +inf). A mean over
-//   values that include +inf is +inf, so it is null too.
+// - Non-finite numbers are written as null (identical images have PSNR +inf). "mean" is over the
+//   finite values of each key (null when there is none), so one identical pair does not hide
+//   the others; "identical_pairs" counts the pairs whose images are equal.
 #pragma once
 
 #include <filesystem>

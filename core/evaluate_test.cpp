@@ -65,7 +65,8 @@ struct LdrFolders {
 TEST(EvaluateTest, FoldersMatchByNameInSortedOrder) {
   LdrFolders f;
   const nlohmann::json result = EvaluatePaths(f.pred, f.gt);
-  EXPECT_EQ(KeysOf(result), (std::set<std::string>{"pairs", "mean"}));
+  EXPECT_EQ(KeysOf(result), (std::set<std::string>{"pairs", "mean", "identical_pairs"}));
+  EXPECT_EQ(result["identical_pairs"], 0);
   ASSERT_EQ(result["pairs"].size(), 2u);
   EXPECT_EQ(result["pairs"][0]["name"], "a.png");
   EXPECT_EQ(result["pairs"][1]["name"], "b.png");
@@ -120,6 +121,8 @@ TEST(EvaluateTest, MixedFolderMeansEachKeyOverItsPairs) {
   EXPECT_THAT(table, HasSubstr(" - "));  // the LDR pair has no HDR keys and vice versa
 }
 
+// Issue 11, case 11: one identical pair (PSNR +inf) used to make every PSNR mean null (inf in the
+// table), hiding the other pairs' values.
 TEST(EvaluateTest, IdenticalImagesWriteNullAndParse) {
   TempDir dir;
   WriteLdr(dir / "gt" / "a.png", 10, 10, 12);
@@ -132,8 +135,12 @@ TEST(EvaluateTest, IdenticalImagesWriteNullAndParse) {
   EXPECT_TRUE(result["pairs"][0]["psnr_channel_mean"].is_null());
   EXPECT_NEAR(result["pairs"][0]["ssim"].get<double>(), 1.0, 1e-12);
   EXPECT_TRUE(result["pairs"][1]["psnr"].is_number());
-  EXPECT_TRUE(result["mean"]["psnr"].is_null());  // the mean of inf and a number is inf
-  EXPECT_TRUE(result["mean"]["ssim"].is_number());
+  // The mean is over the finite values (here the other pair's), the identical pair is counted.
+  EXPECT_EQ(result["mean"]["psnr"], result["pairs"][1]["psnr"]);
+  EXPECT_EQ(result["mean"]["psnr_channel_mean"], result["pairs"][1]["psnr_channel_mean"]);
+  EXPECT_NEAR(result["mean"]["ssim"].get<double>(),
+              (1.0 + result["pairs"][1]["ssim"].get<double>()) / 2, 1e-12);
+  EXPECT_EQ(result["identical_pairs"], 1);
   const std::string text = result.dump();
   EXPECT_THAT(text, Not(HasSubstr("inf")));
   EXPECT_EQ(nlohmann::json::parse(text), result);
@@ -141,7 +148,13 @@ TEST(EvaluateTest, IdenticalImagesWriteNullAndParse) {
   const std::string table = FormatEvalTable(result);
   EXPECT_THAT(table, HasSubstr("inf"));
   EXPECT_THAT(table, HasSubstr("\nmean "));
-  EXPECT_EQ(std::count(table.begin(), table.end(), '\n'), 4);  // header, 2 pairs, mean
+  EXPECT_THAT(table, HasSubstr("identical: 1 of 2 pairs"));
+  EXPECT_EQ(std::count(table.begin(), table.end(), '\n'), 5);  // header, 2 pairs, mean, count
+
+  // Every pair identical: no finite PSNR to average, so the mean is null, not a made-up number.
+  const nlohmann::json all_same = EvaluatePaths(dir / "gt" / "a.png", dir / "pred" / "a.png");
+  EXPECT_TRUE(all_same["mean"]["psnr"].is_null());
+  EXPECT_EQ(all_same["identical_pairs"], 1);
 }
 
 TEST(EvaluateTest, TableShowsValuesWithFourDecimals) {
