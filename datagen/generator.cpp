@@ -43,7 +43,7 @@ bool IsDatagenOutput(const fs::path& dir) {
   if (!fs::is_regular_file(manifest, ec)) return false;
   try {
     const json j = ReadJsonFile(manifest);
-    return j.is_object() && j.value("generator", "") == kGenerator;
+    return j.is_object() && j.contains("generator") && j["generator"] == kGenerator;
   } catch (const Error&) {
     return false;
   }

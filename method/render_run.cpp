@@ -8,10 +8,12 @@
 #include <numbers>
 #include <sstream>
 
+#include "core/atomic_file.h"
 #include "core/dataset.h"
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_util.h"
+#include "core/output_guard.h"
 #include "core/parallel.h"
 #include "core/progress.h"
 #include "method/checkpoint.h"
@@ -26,29 +28,27 @@ LoadedRun LoadRun(const fs::path& run, const ToneMapperFactory& factory) {
   LoadedRun r;
   const fs::path config_path = run / "config.json";
   r.config = ReadJsonFile(config_path);
-  if (!r.config.contains("data") || !r.config["data"].is_string())
-    Fail("{}: key 'data' (the scene folder) missing", config_path.string());
-  r.dataset = LoadDataset(r.config["data"].get<std::string>(),
+  // Typed reads name the file and the key of a value that is missing or of the wrong type.
+  const JsonField config(r.config, config_path.string());
+  r.dataset = LoadDataset(config["data"].String(),
                           {.image_check = ImageCheck::kNone, .require_test = false});
   const fs::path checkpoint_path = run / "checkpoint.bin";
   Checkpoint c = LoadCheckpoint(checkpoint_path);
   r.model = std::move(c.model);
-  r.background = r.config.value("background", 0.0f);
-  r.num_times = r.config.value("num_times", 1);
-  if (!r.config.contains("resolved")) {  // runs of plain 4DGS from before HDR training existed
+  r.background = static_cast<float>(config.NumberOr("background", 0.0));
+  if (!(r.background >= 0 && r.background <= 1))
+    config["background"].Fail(fmt::format("must be within [0, 1], got {}", r.background));
+  r.num_times = static_cast<int>(config.IntOr("num_times", 1, 1, 10'000'000));
+  if (!config.Has("resolved")) {  // runs of plain 4DGS from before HDR training existed
     r.resolved.hdr_colors = r.model.color_mode == ColorMode::kLogHdr;
     return r;
   }
-  try {
-    const nlohmann::json& j = r.config.at("resolved");
-    r.resolved.hdr_colors = j.at("hdr_colors").get<bool>();
-    r.resolved.ldr_gaussian = j.at("ldr_gaussian").get<bool>();
-    r.resolved.ldr_pixel = j.at("ldr_pixel").get<bool>();
-    r.resolved.hdr = j.at("hdr").get<bool>();
-    r.resolved.final_ldr_from_pixels = j.at("final_ldr_from_pixels").get<bool>();
-  } catch (const nlohmann::json::exception& e) {
-    Fail("{}: bad 'resolved' settings: {}", config_path.string(), e.what());
-  }
+  const JsonField resolved = config["resolved"].Object();
+  r.resolved.hdr_colors = resolved["hdr_colors"].Bool();
+  r.resolved.ldr_gaussian = resolved["ldr_gaussian"].Bool();
+  r.resolved.ldr_pixel = resolved["ldr_pixel"].Bool();
+  r.resolved.hdr = resolved["hdr"].Bool();
+  r.resolved.final_ldr_from_pixels = resolved["final_ldr_from_pixels"].Bool();
   if (r.config.contains("tone_mapper")) {
     if (!factory) Fail("{}: the run has a tone mapper but no factory was given", run.string());
     r.tone_mapper =
@@ -59,6 +59,19 @@ LoadedRun LoadRun(const fs::path& run, const ToneMapperFactory& factory) {
     r.tone_mapper->Load(state, checkpoint_path.string());
   }
   return r;
+}
+
+std::string LoadedRun::MethodName() const {
+  const auto hdr = config.find("hdr");
+  if (hdr == config.end() || !hdr->is_object()) return "?";
+  const auto method = hdr->find("method");
+  return method != hdr->end() && method->is_string() ? method->get<std::string>() : "?";
+}
+
+void ProtectRunInputs(const fs::path& run) {
+  const std::string role = fmt::format("a file of run {} that this command reads", run.string());
+  ProtectInputFile(run / "config.json", role);
+  ProtectInputFile(run / "checkpoint.bin", role);
 }
 
 double MedianExposure(const Dataset& dataset) {
@@ -72,6 +85,13 @@ double MedianExposure(const Dataset& dataset) {
 namespace {
 
 bool HaveFfmpeg() { return std::system("command -v ffmpeg >/dev/null 2>&1") == 0; }
+
+// A path as one shell word, whatever quotes or spaces it holds.
+std::string ShellQuote(const std::string& text) {
+  std::string quoted = "'";
+  for (char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return quoted + "'";
+}
 
 }  // namespace
 
@@ -103,6 +123,12 @@ std::vector<Camera> OrbitCameras(const std::vector<Camera>& train, int frames) {
 }
 
 int RenderRun(const RenderRunOptions& options) {
+  // The CLI checks its flags too; a library caller gets the same refusals.
+  if (options.threads < 0) Fail("render: threads {} must be >= 0", options.threads);
+  if (options.video_frames < 0) Fail("render: video frames {} must be >= 1", options.video_frames);
+  if (options.fps < 1 || options.fps > 1000)
+    Fail("render: fps {} must be within [1, 1000]", options.fps);
+  if (options.camera_index < 0) Fail("render: camera {} must be >= 0", options.camera_index);
   const ThreadLimit limit(options.threads);
   if (options.exposure && !(*options.exposure > 0 && std::isfinite(*options.exposure)))
     Fail("render: --exposure {} must be a positive number of seconds", *options.exposure);
@@ -119,6 +145,9 @@ int RenderRun(const RenderRunOptions& options) {
   if (frames.empty()) Fail("{}: the {} split has no frames", dataset.root.string(), options.split);
   const double default_exposure = options.exposure.value_or(MedianExposure(dataset));
   std::vector<float> ldr, hdr;
+  // A command's renders are moved into place together once all are made: a failure or a kill
+  // halfway never leaves new renders mixed with an earlier run's (core/atomic_file.h).
+  FileBatch batch;
   // Renders one view; writes the LDR image to ldr_path and the HDR one to hdr_path (each when
   // the model has that output and the path is not empty). Returns the number of files written.
   auto render_to = [&](const Camera& camera, float time, double exposure, const fs::path& ldr_path,
@@ -129,13 +158,13 @@ int RenderRun(const RenderRunOptions& options) {
     renderer.Render(camera, time, frame, &ldr, options.write_hdr ? &hdr : nullptr);
     int written = 0;
     if (!ldr.empty() && !ldr_path.empty()) {
-      WriteImage(ldr_path, DisplayImageFromBuffer(ldr.data(), w, h, 3));
+      WriteImage(ldr_path, DisplayImageFromBuffer(ldr.data(), w, h, 3), {.batch = &batch});
       ++written;
     }
     if (options.write_hdr && !hdr.empty() && !hdr_path.empty()) {
       Image image(w, h, 3, Encoding::kLinear);
       std::copy(hdr.begin(), hdr.end(), image.data());
-      WriteImage(hdr_path, image);
+      WriteImage(hdr_path, image, {.batch = &batch});
       ++written;
     }
     return written;
@@ -149,11 +178,13 @@ int RenderRun(const RenderRunOptions& options) {
     if (!(*options.time >= 0 && *options.time <= 1))
       Fail("render: --time {} is outside [0, 1]", *options.time);
     const fs::path dir = options.out.empty() ? options.run / "renders" / "time" : options.out;
+    CheckOutputFolder(dir);
     const std::string stem =
         fmt::format("{}_cam{:03d}_t{:.4f}", options.split, options.camera_index, *options.time);
     const Frame& f = frames[options.camera_index];
     const int written = render_to(f.camera, *options.time, options.exposure.value_or(f.exposure),
                                   dir / (stem + ".png"), dir / (stem + ".exr"));
+    batch.Commit();
     fmt::print("render: {} ({} file{})\n", (dir / stem).string(), written, written == 1 ? "" : "s");
     return written;
   }
@@ -161,12 +192,13 @@ int RenderRun(const RenderRunOptions& options) {
   if (options.video_frames > 0) {
     if (!renderer.has_ldr()) {
       Fail("render: --video writes LDR frames, and this run ({}) has no LDR output",
-           run.config.value("hdr", nlohmann::json::object()).value("method", "?"));
+           run.MethodName());
     }
     std::vector<Camera> train_cameras;
     for (const Frame& f : dataset.train) train_cameras.push_back(f.camera);
     const std::vector<Camera> path = OrbitCameras(train_cameras, options.video_frames);
     const fs::path dir = options.out.empty() ? options.run / "video" : options.out;
+    CheckOutputFolder(dir);
     Progress progress("render video", options.video_frames);
     for (int k = 0; k < options.video_frames; ++k) {
       const float time =
@@ -175,14 +207,20 @@ int RenderRun(const RenderRunOptions& options) {
       progress.Advance();
     }
     progress.Finish();
+    batch.Commit();
     if (HaveFfmpeg()) {
       const fs::path mp4 = dir / "video.mp4";
-      const std::string command = fmt::format(
-          "ffmpeg -loglevel error -y -framerate {} -i '{}/frame_%04d.png' -vf "
-          "'pad=ceil(iw/2)*2:ceil(ih/2)*2' -pix_fmt yuv420p -c:v libx264 '{}'",
-          options.fps, dir.string(), mp4.string());
-      if (std::system(command.c_str()) != 0)
-        Fail("{}: ffmpeg failed to encode the frames in {}", mp4.string(), dir.string());
+      // Through the atomic writer like every output (a killed ffmpeg leaves no half video);
+      // -frames:v: exactly this video's frames, even if a longer earlier one left more.
+      WriteFileAtomicAt(mp4, [&](const fs::path& tmp) {
+        const std::string command = fmt::format(
+            "ffmpeg -loglevel error -y -framerate {} -i {} -frames:v {} -vf "
+            "'pad=ceil(iw/2)*2:ceil(ih/2)*2' -pix_fmt yuv420p -c:v libx264 -f mp4 {}",
+            options.fps, ShellQuote((dir / "frame_%04d.png").string()), options.video_frames,
+            ShellQuote(tmp.string()));
+        if (std::system(command.c_str()) != 0)
+          Fail("{}: ffmpeg failed to encode the frames in {}", mp4.string(), dir.string());
+      });
       fmt::print("render: {} frames and {}\n", options.video_frames, mp4.string());
     } else {
       fmt::print("render: {} frames in {} (install ffmpeg for an MP4)\n", options.video_frames,
@@ -191,6 +229,7 @@ int RenderRun(const RenderRunOptions& options) {
     return options.video_frames;
   }
 
+  CheckOutputFolder(out);  // before the first render: never among the dataset's images
   Progress progress("render", static_cast<std::int64_t>(frames.size()));
   int written = 0;
   for (const Frame& f : frames) {
@@ -205,6 +244,7 @@ int RenderRun(const RenderRunOptions& options) {
     progress.Advance();
   }
   progress.Finish();
+  batch.Commit();
   return written;
 }
 

@@ -55,11 +55,17 @@ struct LoadedRun {
   ResolvedHdrTraining resolved;
   int num_times = 1;
   float background = 0;
+  // The method's name from the configuration, or "?" (for messages).
+  std::string MethodName() const;
 };
 // The median training exposure: a middle exposure of the bracket for views that have none.
 double MedianExposure(const Dataset& dataset);
 
 // Throws hdr4d::Error naming the file when the run is incomplete or inconsistent.
 LoadedRun LoadRun(const std::filesystem::path& run, const ToneMapperFactory& factory);
+
+// For commands that only read a run (render, export-ply, tone-curves): its configuration and
+// checkpoint become protected inputs (core/output_guard.h), so no output of theirs replaces them.
+void ProtectRunInputs(const std::filesystem::path& run);
 
 }  // namespace hdr4d::method

@@ -7,6 +7,7 @@
 
 #include "core/error.h"
 #include "core/json_util.h"
+#include "core/output_guard.h"
 #include "core/plot.h"
 #include "method/render_run.h"
 #include "method/tonemap/radiance_bank.h"
@@ -63,11 +64,12 @@ std::vector<fs::path> WriteToneCurves(const ToneCurvesOptions& options) {
   LoadedRun run = LoadRun(options.run, options.tone_mapper_factory);
   if (!run.tone_mapper) {
     Fail("{}: this run ({}) has no tone mapper", options.run.string(),
-         run.config.value("hdr", nlohmann::json::object()).value("method", "?"));
+         run.MethodName());
   }
   const ToneCurveSamples s = SampleToneCurves(run.tone_mapper.get(), options.times, run.num_times,
                                               options.x_min, options.x_max, options.samples);
   const fs::path out = options.out.empty() ? options.run / "tone_curves" : options.out;
+  CheckOutputFolder(out);
 
   std::ostringstream csv;
   csv << "x";
