@@ -7,6 +7,7 @@
 #include <string>
 
 #include "cli/commands.h"
+#include "cli/flags.h"
 #include "datagen/generator.h"
 #include "datagen/scene_presets.h"
 
@@ -43,31 +44,41 @@ void AddDatagenCommand(CLI::App& app) {
       "  hdr4d datagen --scene all --preset mini --out DATA     (DATA/<scene>/ per scene)\n"
       "  hdr4d datagen --list");
   cmd->add_option("--scene", options->scene, "A scene name (see --list) or all")
+      ->check(Text("a scene name or all"))
       ->capture_default_str();
   cmd->add_option("--preset", options->preset, "ci, mini or paper")
-      ->check(CLI::IsMember(datagen::PresetNames()))
+      ->check(OneOf(datagen::PresetNames()))
       ->capture_default_str();
-  cmd->add_option("--out,-o", *out, "Output folder: one sub-folder per scene");
+  cmd->add_option("--out,-o", *out, "Output folder: one sub-folder per scene")
+      ->check(Text("an output folder"));
   cmd->add_option("--seed", options->seed,
                   "Seed of the render, camera wobble, point sampling and LDR noise (same seed, "
                   "same bytes)")
+      ->check(Seed())
       ->capture_default_str();
   cmd->add_option("--blender", options->blender,
-                  "Blender executable (default: $HDR4D_BLENDER, then blender on PATH)");
+                  "Blender executable (default: $HDR4D_BLENDER, then blender on PATH)")
+      ->check(Text("a Blender executable"));
   cmd->add_option("--scripts-dir", options->scripts_dir,
                   "Folder of the bpy scripts (default: $HDR4D_DATAGEN_DIR, then datagen/blender "
-                  "in the source tree)");
+                  "in the source tree)")
+      ->check(Text("a folder"));
   cmd->add_option("--threads", options->threads, "Cycles threads (0 = every core)")
+      ->check(Integer(0, 4096))
       ->capture_default_str();
   cmd->add_option("--samples", options->samples, "Cycles samples per pixel (0 = the preset's)")
+      ->check(Integer(0, 1'000'000))
       ->capture_default_str();
   cmd->add_option("--crf", options->crf,
                   "Camera response of the LDR images: linear, gamma:G, srgb, filmic[:k,mid]")
+      ->check(Text("a camera response"))
       ->capture_default_str();
   cmd->add_option("--full-well", options->full_well,
                   "Shot noise: photo-electrons at saturation (0 = none)")
+      ->check(Real(0, 1e12))
       ->capture_default_str();
   cmd->add_option("--read-noise", options->read_sigma, "Read noise std in units of full scale")
+      ->check(Real(0, 1))
       ->capture_default_str();
   cmd->add_flag("--list", *list, "List the scenes and presets, render nothing");
   cmd->callback([options, out, list] {

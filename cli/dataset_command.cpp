@@ -9,7 +9,9 @@
 #include <string>
 
 #include "cli/commands.h"
+#include "cli/flags.h"
 #include "core/dataset.h"
+#include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_util.h"
 #include "core/preview.h"
@@ -174,13 +176,11 @@ void RunPreview(const PreviewArgs& args) {
 void AddDatasetCommand(CLI::App& app) {
   CLI::App* dataset =
       app.add_subcommand("dataset", "Inspect scenes in the dataset format (DESIGN §3)");
-  // `hdr4d dataset` alone prints this help (with its subcommands) rather than a bare error.
+  // `hdr4d dataset` alone: one line naming the subcommands, like every other usage mistake.
   dataset->require_subcommand(0, 1);
   dataset->callback([dataset] {
     if (!dataset->get_subcommands().empty()) return;
-    std::fputs(("hdr4d dataset: a subcommand is required\n\n" + dataset->help("hdr4d")).c_str(),
-               stderr);
-    throw CLI::RuntimeError(static_cast<int>(CLI::ExitCodes::RequiredError));
+    Fail("dataset: a subcommand is required: check or preview (see `hdr4d dataset --help`)");
   });
 
   auto args = std::make_shared<CheckArgs>();  // dataset check
@@ -192,7 +192,8 @@ void AddDatasetCommand(CLI::App& app) {
       "cloud and the scene profile (what later stages skip).\nExit code 0 when the scene has no "
       "problem, 1 when it has one (the report is printed either way).");
   check->add_option("DIR", args->dir, "Scene folder (transforms_{train,test}.json at its root)")
-      ->required();
+      ->required()
+      ->check(Text("a scene folder"));
   check->add_flag(
       "--json", args->json,
       "Print the report as JSON: {ok, problems: [...], summary: {...}, profile: {...}}");
@@ -211,17 +212,24 @@ void AddDatasetCommand(CLI::App& app) {
   CLI::App* preview = dataset->add_subcommand(
       "preview",
       "Write a contact sheet of one camera over time: a row per exposure, then the HDR truth");
-  preview->add_option("DIR", preview_args->dir, "Scene folder")->required();
-  preview->add_option("--out,-o", preview_args->out, "Output image (.png)")->required();
+  preview->add_option("DIR", preview_args->dir, "Scene folder")
+      ->required()
+      ->check(Text("a scene folder"));
+  preview->add_option("--out,-o", preview_args->out, "Output image (.png)")
+      ->required()
+      ->check(Text("an output image"));
   preview->add_option("--split", preview_args->options.split, "train, test or val")
+      ->check(OneOf({"train", "test", "val"}))
       ->capture_default_str();
   preview
       ->add_option("--camera", preview_args->options.camera_id,
                    "camera_id to show (-1: the split's first)")
+      ->check(Integer(-1))
       ->capture_default_str();
   preview
       ->add_option("--columns", preview_args->options.max_columns,
                    "Timestamps shown, evenly sampled")
+      ->check(Integer(1, 1000))
       ->capture_default_str();
   preview->callback([preview_args] { RunPreview(*preview_args); });
 }

@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 
 #include "cli/commands.h"
+#include "cli/flags.h"
 #include "core/demo_scene.h"
 #include "core/error.h"
 
@@ -16,23 +17,30 @@ void AddDemoSceneCommand(CLI::App& app) {
       "Render the built-in dynamic HDR scene (a rolling ball, a glowing bulb whose lamp casts a moving shadow, a dimming sun; "
       "radiance over 1e4:1) to linear EXR ground truth and write its dataset JSON. Then run "
       "`hdr4d synth-ldr --data DIR` to create the multi-exposure LDR images.");
-  cmd->add_option("--out,-o", *out, "Output folder")->required();
+  cmd->add_option("--out,-o", *out, "Output folder (new, or empty)")
+      ->required()
+      ->check(Text("an output folder"));
   cmd->add_option("--size", options->width, "Image width and height in pixels")
+      ->check(Integer(8, 4096))
       ->capture_default_str();
   cmd->add_option("--timestamps", options->num_timestamps, "Number of timestamps")
+      ->check(Integer(1, 100000))
       ->capture_default_str();
   cmd->add_option("--cameras", options->num_cameras,
                   "Multi-view: number of fixed cameras (the last is held out for test)")
+      ->check(Integer(1, 10000))
       ->capture_default_str();
   cmd->add_option("--rig", *rig,
                   "multiview (every exposure at every camera and time) or monocular (one moving "
                   "camera, exposures cycling)")
-      ->check(CLI::IsMember({"multiview", "monocular"}))
+      ->check(OneOf({"multiview", "monocular"}))
       ->capture_default_str();
   cmd->add_option("--exposures", options->exposures, "Exposure times in seconds")
       ->delimiter(',')
+      ->check(PositiveReal())
       ->capture_default_str();
   cmd->add_option("--spp", options->samples_per_axis, "Supersampling: N x N rays per pixel")
+      ->check(Integer(1, 16))
       ->capture_default_str();
   cmd->callback([options, out, rig] {
     options->height = options->width;

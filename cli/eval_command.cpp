@@ -6,8 +6,10 @@
 #include <string>
 
 #include "cli/commands.h"
+#include "cli/flags.h"
 #include "core/evaluate.h"
 #include "core/json_util.h"
+#include "core/output_guard.h"
 
 namespace hdr4d::cli {
 
@@ -41,7 +43,8 @@ HDR pairs (EXR/HDR; both float) are scored with:
 PU21 scaling: both images are multiplied by 4000 / (max luminance of the ground truth),
 luminance = 0.212656 R + 0.715158 G + 0.072186 B, then clamped to [0.005, 10000] cd/m^2.
 Metrics use the first three channels (alpha is ignored). "mean" is the mean of the
-per-image values. Identical images have PSNR inf, written as null in JSON.)";
+per-image values that are finite. Identical images have PSNR inf, written as null in JSON and
+left out of the means; "identical_pairs" counts them.)";
 
 }  // namespace
 
@@ -49,12 +52,22 @@ void AddEvalCommand(CLI::App& app) {
   auto options = std::make_shared<EvalOptions>();
   CLI::App* sub = app.add_subcommand(
       "eval", "Score predicted images against ground truth (PSNR, SSIM; mu-law and PU21 for HDR)");
-  sub->add_option("PRED", options->pred, "Predicted image, or a folder of them")->required();
-  sub->add_option("GT", options->gt, "Ground-truth image, or a folder of them")->required();
+  sub->add_option("PRED", options->pred, "Predicted image, or a folder of them")
+      ->required()
+      ->check(Text("an image or a folder"));
+  sub->add_option("GT", options->gt, "Ground-truth image, or a folder of them")
+      ->required()
+      ->check(Text("an image or a folder"));
   sub->add_flag("--json", options->json, "Print the result as JSON instead of a table");
-  sub->add_option("--out", options->out, "Also write the JSON result to this file");
+  sub->add_option("--out", options->out, "Also write the JSON result to this file")
+      ->check(Text("an output file"));
   sub->footer(kEvalFooter);
   sub->callback([options] {
+    // The images scored are inputs: --out may not replace them or land among them, and that is
+    // known before any image is read.
+    ProtectInput(options->pred, "the predictions eval scores");
+    ProtectInput(options->gt, "the ground truth eval scores against");
+    if (!options->out.empty()) CheckOutput(options->out);
     const nlohmann::json result = EvaluatePaths(options->pred, options->gt);
     if (!options->out.empty()) WriteJsonFile(options->out, result);
     if (options->json) {

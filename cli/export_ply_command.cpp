@@ -3,7 +3,9 @@
 
 #include "baselines/tone_mapper_factory.h"
 #include "cli/commands.h"
+#include "cli/flags.h"
 #include "core/error.h"
+#include "core/output_guard.h"
 #include "method/export_ply.h"
 #include "method/render_run.h"
 #include "method/tonemap/radiance_bank.h"
@@ -18,16 +20,24 @@ void AddExportPlyCommand(CLI::App& app) {
       "export-ply",
       "Write the 3D Gaussians a trained 4D model shows at normalised time t as a standard 3DGS "
       ".ply (temporal colour folded into SH, marginal into opacity), for any 3DGS viewer.");
-  cmd->add_option("--run", *run, "Run folder (from hdr4d train)")->required();
-  cmd->add_option("--time,-t", *time, "Normalised time in [0,1]")->capture_default_str();
-  cmd->add_option("--out,-o", *out, "Output .ply (default RUN/slice_t<t>.ply)");
+  cmd->add_option("--run", *run, "Run folder (from hdr4d train)")
+      ->required()
+      ->check(Text("a run folder"));
+  cmd->add_option("--time,-t", *time, "Normalised time in [0,1]")
+      ->check(Real(0, 1))
+      ->capture_default_str();
+  cmd->add_option("--out,-o", *out, "Output .ply (default RUN/slice_t<t>.ply)")
+      ->check(Text("an output .ply file"));
   auto exposure = std::make_shared<double>(0.0);
   cmd->add_option("--exposure", *exposure,
                   "HDR models: display colours at this exposure in seconds (default: the median "
-                  "training exposure)");
+                  "training exposure)")
+      ->check(PositiveReal());
   cmd->callback([run, out, time, exposure] {
     const std::string path = out->empty() ? fmt::format("{}/slice_t{:.3f}.ply", *run, *time) : *out;
+    method::ProtectRunInputs(*run);
     method::LoadedRun loaded = method::LoadRun(*run, baselines::MakeToneMapper);
+    CheckOutput(path);
     if (!(*time >= 0 && *time <= 1)) Fail("export-ply: --time {} is outside [0, 1]", *time);
     const double e = *exposure > 0 ? *exposure : method::MedianExposure(loaded.dataset);
     const method::ExportDisplay display{loaded.tone_mapper.get(),

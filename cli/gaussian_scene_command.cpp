@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include "cli/commands.h"
+#include "cli/flags.h"
 #include "method/gaussian_scene.h"
 
 namespace hdr4d::cli {
@@ -15,14 +16,24 @@ void AddGaussianSceneCommand(CLI::App& app) {
       "Render a known scene of moving, turning 4D Gaussians from a ring of cameras over time to "
       "a dataset (every 4th camera held out for test): the ground truth `hdr4d train` must "
       "recover.");
-  cmd->add_option("--out,-o", *out, "Output folder")->required();
-  cmd->add_option("--size", options->size, "Image width and height")->capture_default_str();
+  cmd->add_option("--out,-o", *out, "Output folder (new, or empty)")
+      ->required()
+      ->check(Text("an output folder"));
+  cmd->add_option("--size", options->size, "Image width and height")
+      ->check(Integer(16, 2048))
+      ->capture_default_str();
   cmd->add_option("--gaussians", options->num_gaussians, "Number of Gaussians")
+      ->check(Integer(1, 10'000'000))
       ->capture_default_str();
-  cmd->add_option("--cameras", options->num_cameras, "Cameras on the ring")->capture_default_str();
+  cmd->add_option("--cameras", options->num_cameras, "Cameras on the ring")
+      ->check(Integer(4, 10000))
+      ->capture_default_str();
   cmd->add_option("--timestamps", options->num_timestamps, "Timestamps in [0,1]")
+      ->check(Integer(2, 100000))
       ->capture_default_str();
-  cmd->add_option("--seed", options->seed, "Random seed of the scene")->capture_default_str();
+  cmd->add_option("--seed", options->seed, "Random seed of the scene")
+      ->check(Seed())
+      ->capture_default_str();
   cmd->callback([options, out] {
     const Dataset d = method::MakeGaussianScene(*options, *out);
     fmt::print("make-gaussian-scene: {} train and {} test frames in {}\n", d.train.size(),

@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 
 #include "cli/commands.h"
+#include "cli/flags.h"
 #include "core/exposure_stack.h"
 
 namespace hdr4d::cli {
@@ -15,11 +16,16 @@ void AddMergeHdrCommand(CLI::App& app) {
       "Merge the LDR frames that share a view and a time (several exposures) into one HDR image "
       "with the known camera response (Debevec-Malik weighted average). Outputs are named like "
       "the frames' exr_file_path, so `hdr4d eval OUT SCENE/hdr` scores them.");
-  cmd->add_option("--data", *data, "Dataset folder")->required();
-  cmd->add_option("--out,-o", *out, "Output folder for the merged EXR images")->required();
+  cmd->add_option("--data", *data, "Dataset folder")->required()->check(Text("a scene folder"));
+  cmd->add_option("--out,-o", *out, "Output folder for the merged EXR images")
+      ->required()
+      ->check(Text("an output folder"));
   cmd->add_option("--crf", options->crf,
-                  "Camera response (default: the one in DATA/synthesis.json)");
-  cmd->add_option("--split", options->split, "train, test, val or all")->capture_default_str();
+                  "Camera response (default: the one in DATA/synthesis.json)")
+      ->check(Text("a camera response"));
+  cmd->add_option("--split", options->split, "train, test, val or all")
+      ->check(OneOf({"train", "test", "val", "all"}))
+      ->capture_default_str();
   cmd->callback([options, data, out] {
     const int n = MergeDatasetExposures(*data, *out, *options);
     fmt::print("merge-hdr: wrote {} HDR images to {}\n", n, *out);

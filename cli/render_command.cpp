@@ -3,6 +3,7 @@
 
 #include "baselines/tone_mapper_factory.h"
 #include "cli/commands.h"
+#include "cli/flags.h"
 #include "method/render_run.h"
 
 namespace hdr4d::cli {
@@ -16,25 +17,43 @@ void AddRenderCommand(CLI::App& app) {
       "Render a trained run's views of a split: the LDR image (PNG, at each view's exposure or "
       "--exposure) and, for HDR models, the linear HDR image (EXR). Each is named like its ground "
       "truth (file_path, exr_file_path), so `hdr4d eval OUT <scene image folder>` scores them.");
-  cmd->add_option("--run", *run, "Run folder (from hdr4d train)")->required();
-  cmd->add_option("--out", *out, "Output folder (default RUN/renders/<split>)");
-  cmd->add_option("--split", options->split, "train, test or val")->capture_default_str();
-  cmd->add_option("--threads", options->threads, "Threads (0 = all cores)")->capture_default_str();
+  cmd->add_option("--run", *run, "Run folder (from hdr4d train)")
+      ->required()
+      ->check(Text("a run folder"));
+  cmd->add_option("--out", *out, "Output folder (default RUN/renders/<split>)")
+      ->check(Text("an output folder"));
+  cmd->add_option("--split", options->split, "train, test or val")
+      ->check(OneOf({"train", "test", "val"}))
+      ->capture_default_str();
+  cmd->add_option("--threads", options->threads, "Threads (0 = all cores)")
+      ->check(Integer(0, 4096))
+      ->capture_default_str();
   auto time = std::make_shared<float>(0.0f);
-  CLI::Option* time_option = cmd->add_option(
-      "--time", *time, "Render one view at this normalised time in [0,1] (with --camera)");
+  CLI::Option* time_option =
+      cmd->add_option("--time", *time,
+                      "Render one view at this normalised time in [0,1] (with --camera)")
+          ->check(Real(0, 1));
   cmd->add_option("--camera", options->camera_index,
                   "With --time: the camera of this frame of the split")
+      ->check(Integer(0))
+      ->needs(time_option)
       ->capture_default_str();
-  cmd->add_option(
-      "--video", options->video_frames,
-      "Render N frames orbiting the scene while time runs 0..1 (PNG sequence; MP4 with ffmpeg)");
-  cmd->add_option("--fps", options->fps, "Video frame rate")->capture_default_str();
+  CLI::Option* video_option =
+      cmd->add_option("--video", options->video_frames,
+                      "Render N frames orbiting the scene while time runs 0..1 (PNG sequence; MP4 "
+                      "with ffmpeg)")
+          ->check(Integer(1, 1'000'000))
+          ->excludes(time_option);
+  cmd->add_option("--fps", options->fps, "Video frame rate")
+      ->check(Integer(1, 1000))
+      ->needs(video_option)
+      ->capture_default_str();
   auto exposure = std::make_shared<double>(1.0);
-  CLI::Option* exposure_option = cmd->add_option(
-      "--exposure", *exposure,
-      "LDR renders at this exposure in seconds (default: each view's own; the median training "
-      "exposure for --video)");
+  CLI::Option* exposure_option =
+      cmd->add_option("--exposure", *exposure,
+                      "LDR renders at this exposure in seconds (default: each view's own; the "
+                      "median training exposure for --video)")
+          ->check(PositiveReal());
   auto no_hdr = std::make_shared<bool>(false);
   cmd->add_flag("--no-hdr", *no_hdr, "Do not write the HDR (EXR) renders");
   cmd->callback([options, run, out, time, time_option, exposure, exposure_option, no_hdr] {
@@ -44,6 +63,7 @@ void AddRenderCommand(CLI::App& app) {
     options->tone_mapper_factory = baselines::MakeToneMapper;
     options->run = *run;
     options->out = *out;
+    method::ProtectRunInputs(*run);
     const int n = method::RenderRun(*options);
     fmt::print("render: wrote {} images\n", n);
   });

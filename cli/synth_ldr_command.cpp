@@ -6,11 +6,13 @@
 #include <iostream>
 
 #include "cli/commands.h"
+#include "cli/flags.h"
 #include "core/crf.h"
 #include "core/error.h"
 #include "core/exposure_stack.h"
 #include "core/image_io.h"
 #include "core/ldr_synthesis.h"
+#include "core/output_guard.h"
 
 namespace hdr4d::cli {
 namespace fs = std::filesystem;
@@ -53,11 +55,19 @@ void Run(const SynthLdrArgs& a) {
   LdrSynthesisOptions options{.exposure = a.exposure, .noise = noise, .bits = a.bits};
   options.Validate();
   const auto crf = ParseCrf(a.crf);
+  // The input is never the output, whatever the spelling (a symlink, a hard link, ./x.exr).
+  ProtectInputFile(a.input, "the input of synth-ldr");
+  CheckOutput(a.output);
   const Image hdr = ReadImage(a.input);
   if (hdr.encoding() != Encoding::kLinear) {
     Fail("{}: expected a linear HDR image (EXR); this one is display-encoded", a.input);
   }
-  const Image ldr = SynthesizeLdr(hdr, *crf, options);
+  Image ldr;
+  try {
+    ldr = SynthesizeLdr(hdr, *crf, options);
+  } catch (const Error& e) {  // a pixel that is not a radiance: say in which file
+    Fail("{}: {}", a.input, e.what());
+  }
   PixelFormat format = PixelFormat::kUint8;
   if (a.bits == 16) format = PixelFormat::kUint16;
   if (a.bits == 0) format = PixelFormat::kFloat;
@@ -78,27 +88,37 @@ void AddSynthLdrCommand(CLI::App& app) {
       "  A dataset:   hdr4d synth-ldr --data SCENE   (every frame's file_path from its "
       "exr_file_path "
       "at its own `exposures` value)");
-  cmd->add_option("input", args->input, "Linear HDR image (EXR) for single-image mode");
-  cmd->add_option("--out,-o", args->output, "Output LDR image (.png, .jpg; .exr with --bits 0)");
-  cmd->add_option("--data", args->data, "Dataset folder: synthesise every frame's LDR image");
+  cmd->add_option("input", args->input, "Linear HDR image (EXR) for single-image mode")
+      ->check(Text("an HDR image"));
+  cmd->add_option("--out,-o", args->output, "Output LDR image (.png, .jpg; .exr with --bits 0)")
+      ->check(Text("an output image"));
+  cmd->add_option("--data", args->data, "Dataset folder: synthesise every frame's LDR image")
+      ->check(Text("a scene folder"));
   cmd->add_option("--exposure,-e", args->exposure, "Exposure time in seconds (single-image mode)")
+      ->check(PositiveReal())
       ->capture_default_str();
   cmd->add_option("--crf", args->crf,
                   "Camera response: linear, gamma:G, srgb, filmic[:contrast,mid], table:FILE.csv")
+      ->check(Text("a camera response"))
       ->capture_default_str();
   cmd->add_option("--full-well", args->full_well,
                   "Shot noise: photo-electrons at saturation (0 = no shot noise)")
+      ->check(Real(0, 1e12))
       ->capture_default_str();
   cmd->add_option("--read-noise", args->read_sigma, "Read noise std in units of full scale")
+      ->check(Real(0, 1))
       ->capture_default_str();
   cmd->add_option("--seed", args->seed, "Noise seed (same seed, same bytes)")
+      ->check(Seed())
       ->capture_default_str();
   cmd->add_option("--bits", args->bits, "Quantisation: 8, 16, or 0 for float output")
+      ->check(OneOf({"0", "8", "16"}))
       ->capture_default_str();
   cmd->add_flag("--keep-existing", args->keep_existing, "Dataset mode: skip LDR images that exist");
   cmd->add_option("--gain-drift", args->gain_drift,
                   "Dataset mode: a hidden camera gain exp(D (t - 0.5)) over normalised time t "
                   "(auto-exposure-like; the JSON keeps the nominal exposures)")
+      ->check(Real(-20, 20))
       ->capture_default_str();
   cmd->callback([args] { Run(*args); });
 }

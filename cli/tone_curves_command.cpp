@@ -3,6 +3,8 @@
 
 #include "baselines/tone_mapper_factory.h"
 #include "cli/commands.h"
+#include "cli/flags.h"
+#include "method/render_run.h"
 #include "method/tone_curves.h"
 
 namespace hdr4d::cli {
@@ -16,20 +18,29 @@ void AddToneCurvesCommand(CLI::App& app) {
       "Write a run's learned tone curves (LDR value against log radiance + log exposure, per "
       "channel, one line per time) as CSV, PNG and SVG: how the Dynamic Tone Mapper adapts to "
       "the scene's radiance over time.");
-  cmd->add_option("--run", *run, "Run folder (from hdr4d train)")->required();
-  cmd->add_option("--out", *out, "Output folder (default RUN/tone_curves)");
+  cmd->add_option("--run", *run, "Run folder (from hdr4d train)")
+      ->required()
+      ->check(Text("a run folder"));
+  cmd->add_option("--out", *out, "Output folder (default RUN/tone_curves)")
+      ->check(Text("an output folder"));
   cmd->add_option("--times", options->times, "Normalised times in [0,1]")
       ->delimiter(',')
+      ->check(Real(0, 1))
       ->capture_default_str();
   cmd->add_option("--x-min", options->x_min, "Smallest log radiance + log exposure")
+      ->check(Real(-1000, 1000))
       ->capture_default_str();
   cmd->add_option("--x-max", options->x_max, "Largest log radiance + log exposure")
+      ->check(Real(-1000, 1000))
       ->capture_default_str();
-  cmd->add_option("--samples", options->samples, "Samples per curve")->capture_default_str();
+  cmd->add_option("--samples", options->samples, "Samples per curve")
+      ->check(Integer(2, 100000))
+      ->capture_default_str();
   cmd->callback([options, run, out] {
     options->run = *run;
     options->out = *out;
     options->tone_mapper_factory = baselines::MakeToneMapper;
+    method::ProtectRunInputs(*run);
     for (const auto& path : method::WriteToneCurves(*options))
       fmt::print("tone-curves: {}\n", path.string());
   });

@@ -5,6 +5,7 @@
 #include "baselines/scene_baselines.h"
 #include "baselines/tone_mapper_factory.h"
 #include "cli/commands.h"
+#include "cli/flags.h"
 #include "core/error.h"
 #include "method/trainer.h"
 
@@ -18,7 +19,7 @@ void AddTrainCommand(CLI::App& app) {
     std::string method = "hdr4dgs";
     std::string tone_mapper, supervision = "auto", context_learner;
     bool no_pixel_branch = false, direct_curves = false;
-    int context_window = 0, context_size = 0;
+    int context_window = 20, context_size = 2;
     float hdr_weight = 0.6f;
   };
   auto flags = std::make_shared<HdrFlags>();
@@ -28,73 +29,97 @@ void AddTrainCommand(CLI::App& app) {
       "baselines on a scene (a static scene trains without the time axis). Writes "
       "RUN/config.json, RUN/checkpoint.bin and RUN/results.json (test metrics with the keys of "
       "`hdr4d eval`, LDR and HDR, training seconds, iterations, Gaussian count).");
-  cmd->add_option("--data", *data, "Scene folder")->required();
-  cmd->add_option("--out", *out, "Run folder")->required();
+  cmd->add_option("--data", *data, "Scene folder")->required()->check(Text("a scene folder"));
+  cmd->add_option("--out", *out, "Run folder")->required()->check(Text("a run folder"));
   cmd->add_option("--iterations", options->optimization.iterations, "Training iterations")
+      ->check(Integer(1))
       ->capture_default_str();
   cmd->add_option("--seed", options->seed, "Random seed (same seed and threads: identical runs)")
+      ->check(Seed())
       ->capture_default_str();
-  cmd->add_option("--threads", options->threads, "Threads (0 = all cores)")->capture_default_str();
+  cmd->add_option("--threads", options->threads, "Threads (0 = all cores)")
+      ->check(Integer(0, 4096))
+      ->capture_default_str();
   cmd->add_option("--random-points", options->init.num_random_points,
                   "Initial random points when the scene has no point3d.ply")
+      ->check(Integer(4, 100'000'000))
       ->capture_default_str();
   cmd->add_option("--densify-until", options->optimization.densify_until,
                   "Last densification iteration")
+      ->check(Integer(0))
       ->capture_default_str();
   cmd->add_option("--densify-grad-threshold", options->optimization.densify_grad_threshold,
                   "Clone/split when the mean NDC screen gradient reaches this")
+      ->check(PositiveReal())
       ->capture_default_str();
   cmd->add_option("--position-lr-steps", options->optimization.position_lr_max_steps,
                   "Iterations over which the position learning rate decays")
+      ->check(Integer(1))
       ->capture_default_str();
   cmd->add_option("--test-every", options->test_every,
                   "Evaluate the test split every N iterations (0: at the end)")
+      ->check(Integer(0))
       ->capture_default_str();
   cmd->add_option("--checkpoint-every", options->checkpoint_every,
                   "Save RUN/checkpoint.bin every N iterations")
+      ->check(Integer(0))
       ->capture_default_str();
   cmd->add_option("--background", options->background, "Background grey level in [0,1]")
+      ->check(Real(0, 1))
       ->capture_default_str();
   cmd->add_flag("--resume", options->resume,
                 "Continue from RUN/checkpoint.bin (exactly as if never stopped)");
   cmd->add_option(
          "--method", flags->method,
          fmt::format("Method of the paper's tables: {}", fmt::join(baselines::MethodNames(), ", ")))
+      ->check(OneOf(baselines::MethodNames()))
       ->capture_default_str();
   cmd->add_option("--tone-mapper", flags->tone_mapper,
                   "Tone mapper (Table 4): dtm, mlp, sigmoid, reinhard or durand (default: the "
-                  "method's)");
+                  "method's)")
+      ->check(OneOf(baselines::ToneMapperKinds()));
   cmd->add_option("--supervision", flags->supervision,
                   "auto (LDR, plus HDR where the scene has HDR ground truth), ldr, hdr or ldr+hdr")
+      ->check(OneOf({"auto", "ldr", "hdr", "ldr+hdr"}))
       ->capture_default_str();
   cmd->add_flag("--no-pixel-branch", flags->no_pixel_branch,
                 "Drop the 2D (per-pixel) tone-mapping branch (Table 5)");
-  cmd->add_option("--context-window", flags->context_window,
-                  "Radiance-bank rows the context learner reads (Table 6; default 20)");
+  // Given or not is told by the option's count, never by a sentinel value that a user could type.
+  CLI::Option* context_window =
+      cmd->add_option("--context-window", flags->context_window,
+                      "Radiance-bank rows the context learner reads (Table 6)")
+          ->check(Integer(1, 4096))
+          ->capture_default_str();
   cmd->add_option("--context-learner", flags->context_learner,
-                  "gru, rnn, lstm or transformer (Table 7; default gru)");
-  cmd->add_option("--context-size", flags->context_size, "Context vector size d (default 2)");
+                  "gru, rnn, lstm or transformer (Table 7; default gru)")
+      ->check(OneOf({"gru", "rnn", "lstm", "transformer"}));
+  CLI::Option* context_size =
+      cmd->add_option("--context-size", flags->context_size, "Context vector size d")
+          ->check(Integer(1, 64))
+          ->capture_default_str();
   cmd->add_flag("--direct-tone-curves", flags->direct_curves,
                 "Evaluate the tone-curve MLP per value instead of the per-frame table");
   cmd->add_option("--hdr-weight", flags->hdr_weight, "Weight of the HDR term (alpha)")
+      ->check(Real(0, 1e6))
       ->capture_default_str();
-  cmd->callback([options, data, out, flags] {
+  cmd->callback([options, data, out, flags, context_window, context_size] {
     options->data = *data;
     options->out = *out;
     method::HdrTrainingOptions& hdr = options->hdr;
     hdr = baselines::MethodPreset(flags->method);
-    const bool tunes_tone_mapper = !flags->tone_mapper.empty() || flags->context_window > 0 ||
-                                   !flags->context_learner.empty() || flags->context_size > 0 ||
+    const bool window_given = context_window->count() > 0, size_given = context_size->count() > 0;
+    const bool tunes_tone_mapper = !flags->tone_mapper.empty() || window_given ||
+                                   !flags->context_learner.empty() || size_given ||
                                    flags->direct_curves;
     if (tunes_tone_mapper && !hdr.tone_mapper) {
       Fail("--method {} has no tone mapper, so tone-mapper options do not apply", flags->method);
     }
     if (hdr.tone_mapper) {
       if (!flags->tone_mapper.empty()) hdr.tone_mapper->kind = flags->tone_mapper;
-      if (flags->context_window > 0) hdr.tone_mapper->context_window = flags->context_window;
+      if (window_given) hdr.tone_mapper->context_window = flags->context_window;
       if (!flags->context_learner.empty())
         hdr.tone_mapper->context_learner = flags->context_learner;
-      if (flags->context_size > 0) hdr.tone_mapper->context_size = flags->context_size;
+      if (size_given) hdr.tone_mapper->context_size = flags->context_size;
       if (flags->direct_curves) hdr.tone_mapper->tabulated = false;
     }
     if (flags->supervision != "auto" || hdr.supervision == method::Supervision::kAuto)

@@ -35,13 +35,18 @@ std::optional<fs::path> SharedData(const std::string& name) {
   return std::nullopt;
 }
 
-CommandResult RunHdr4d(const std::string& args) {
+std::string Hdr4dBinary() { return HDR4D_BINARY_PATH; }
+
+CommandResult RunHdr4d(const std::string& args) { return RunHdr4dWith("", args); }
+
+CommandResult RunHdr4dWith(const std::string& prefix, const std::string& args) {
   static int counter = 0;
   const fs::path dir = fs::temp_directory_path();
   const std::string tag = std::to_string(getpid()) + "_" + std::to_string(counter++);
   const fs::path out = dir / ("hdr4d_cmd_out_" + tag), err = dir / ("hdr4d_cmd_err_" + tag);
-  const std::string command = std::string("'") + HDR4D_BINARY_PATH + "' " + args + " >'" +
-                              out.string() + "' 2>'" + err.string() + "' </dev/null";
+  const std::string command = prefix + (prefix.empty() ? "" : " ") + "'" + HDR4D_BINARY_PATH +
+                              "' " + args + " >'" + out.string() + "' 2>'" + err.string() +
+                              "' </dev/null";
   const int status = std::system(command.c_str());
   CommandResult result;
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);

@@ -31,6 +31,9 @@ std::filesystem::path SourceDir();
 // it call GTEST_SKIP with a reason).
 std::optional<std::filesystem::path> SharedData(const std::string& name);
 
+// The hdr4d binary these tests run.
+std::string Hdr4dBinary();
+
 // Runs `hdr4d <args>` and captures its exit code, stdout and stderr.
 struct CommandResult {
   int exit_code = -1;
@@ -38,6 +41,8 @@ struct CommandResult {
   std::string err;
 };
 CommandResult RunHdr4d(const std::string& args);
+// The same with a command in front (e.g. "setpriv --reuid=65534 ..." to run as another user).
+CommandResult RunHdr4dWith(const std::string& prefix, const std::string& args);
 
 // An image filled with a deterministic pseudo-random pattern in [lo, hi).
 Image RandomImage(int width,

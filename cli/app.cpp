@@ -1,0 +1,124 @@
+#include "cli/app.h"
+
+#include <spdlog/spdlog.h>
+
+#include <cstdio>
+#include <exception>
+#include <new>
+#include <string>
+
+#include "cli/commands.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/output_guard.h"
+
+namespace hdr4d::cli {
+
+namespace {
+
+// One line, however the message was made: library messages may carry newlines.
+void PrintError(const std::string& message) {
+  std::string line;
+  for (char c : message) {
+    if (c == '\n') {
+      if (!line.empty() && line.back() != ' ') line += "; ";
+    } else if (c != '\r') {
+      line += c;
+    }
+  }
+  while (!line.empty() && (line.back() == ' ' || line.back() == ';')) line.pop_back();
+  // Image libraries keep errors of their own and print them at exit unless they are fetched:
+  // fetch them now so that this line stays the last one.
+  DiscardImageLibraryErrors();
+  std::fflush(stdout);
+  std::fprintf(stderr, "hdr4d: error: %s\n", line.c_str());
+  std::fflush(stderr);
+}
+
+// "train", "dataset check": the subcommands being parsed when the error happened.
+std::string CommandPath(const CLI::App& app) {
+  std::string path;
+  const CLI::App* current = &app;
+  for (;;) {
+    const std::vector<CLI::App*> subs = current->get_subcommands();
+    if (subs.empty()) return path;
+    current = subs.front();
+    path += (path.empty() ? "" : " ") + current->get_name();
+  }
+}
+
+std::string LowerFirst(std::string s) {
+  if (!s.empty() && s[0] >= 'A' && s[0] <= 'Z' && !(s.size() > 1 && s[1] >= 'A' && s[1] <= 'Z'))
+    s[0] = static_cast<char>(s[0] - 'A' + 'a');
+  return s;
+}
+
+int ReportParseError(const CLI::App& app, const CLI::ParseError& e) {
+  // --help and --version: CLI11 prints them, exit 0.
+  if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success))
+    return app.exit(e);
+  // Thrown by a command that printed its own report (dataset check): only the exit code.
+  if (dynamic_cast<const CLI::RuntimeError*>(&e) != nullptr) return e.get_exit_code();
+  const std::string command = CommandPath(app);
+  if (command.empty()) {
+    // "hdr4d trian ...": CLI11 says only that a subcommand is required; name the word instead.
+    for (const std::string& word : app.remaining()) {
+      if (!word.empty() && word[0] != '-') {
+        PrintError(fmt::format("'{}' is not a command (see `hdr4d --help` for the list)", word));
+        return 1;
+      }
+    }
+  }
+  PrintError(fmt::format("{}{} (see `hdr4d {}--help`)", command.empty() ? "" : command + ": ",
+                         LowerFirst(e.what()), command.empty() ? "" : command + " "));
+  return 1;
+}
+
+}  // namespace
+
+std::unique_ptr<CLI::App> MakeApp() {
+  auto app = std::make_unique<CLI::App>("hdr4d: HDR dynamic novel view synthesis (HDR-4DGS) toolkit");
+  app->set_version_flag("--version", "hdr4d 0.1.0");
+  app->require_subcommand(1);
+  app->fallthrough(false);
+  auto verbosity = std::make_shared<int>(0);
+  app->add_flag("-v,--verbose", *verbosity, "More log output (repeat for debug)");
+  app->parse_complete_callback([verbosity] {
+    spdlog::set_level(*verbosity >= 2   ? spdlog::level::debug
+                      : *verbosity == 1 ? spdlog::level::info
+                                        : spdlog::level::warn);
+  });
+  AddDatasetCommand(*app);
+  AddEvalCommand(*app);
+  AddSynthLdrCommand(*app);
+  AddDemoSceneCommand(*app);
+  AddMergeHdrCommand(*app);
+  AddGaussianSceneCommand(*app);
+  AddTrainCommand(*app);
+  AddRenderCommand(*app);
+  AddExportPlyCommand(*app);
+  AddToneCurvesCommand(*app);
+  AddDatagenCommand(*app);
+  return app;
+}
+
+int RunApp(CLI::App& app, int argc, char** argv) {
+  // The inputs this command reads are protected from its writers for as long as it runs.
+  const InputProtectionScope protect_inputs;
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return ReportParseError(app, e);
+  } catch (const std::bad_alloc&) {
+    PrintError("out of memory");
+    return 1;
+  } catch (const std::exception& e) {
+    // hdr4d::Error names the file and the problem; other library exceptions that escaped a
+    // check (filesystem, allocation) still end in one line.
+    PrintError(e.what());
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace hdr4d::cli

@@ -1,0 +1,79 @@
+// The command line as built in-process: every flag that takes a value is validated up front.
+#include "cli/app.h"
+
+#include <gtest/gtest.h>
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace hdr4d::cli {
+namespace {
+
+// Each option of each (sub)command that takes a value, as "command --flag".
+void ForEachValueOption(CLI::App* app,
+                        const std::string& path,
+                        const std::function<void(CLI::Option*, const std::string&)>& fn) {
+  for (CLI::Option* option : app->get_options([](CLI::Option*) { return true; })) {
+    if (option->get_expected_max() == 0) continue;  // a flag without a value
+    fn(option, path + " " + option->get_name());
+  }
+  for (CLI::App* sub : app->get_subcommands([](CLI::App*) { return true; }))
+    ForEachValueOption(sub, path + " " + sub->get_name(), fn);
+}
+
+// A new flag added with add_option and no check would accept anything its type converts from
+// (-1 as a seed wraps to 2^64 - 1): this makes that a failing test instead.
+TEST(App, EveryValueFlagHasAValidator) {
+  const auto app = MakeApp();
+  std::vector<std::string> unchecked;
+  int checked = 0;
+  ForEachValueOption(app.get(), "hdr4d", [&](CLI::Option* option, const std::string& name) {
+    try {
+      option->get_validator(0);
+      ++checked;
+    } catch (const CLI::OptionNotFound&) {
+      unchecked.push_back(name);
+    }
+  });
+  std::string list;
+  for (const std::string& name : unchecked) list += "\n  " + name;
+  EXPECT_TRUE(unchecked.empty()) << "value flags without a validator (cli/flags.h):" << list;
+  EXPECT_GT(checked, 60);  // the walk reached every subcommand
+}
+
+TEST(App, BadValuesAreRefusedWhileParsingNamingTheFlag) {
+  struct Case {
+    std::vector<std::string> args;
+    std::string flag;
+  };
+  const std::vector<Case> cases = {
+      {{"train", "--data", "d", "--out", "o", "--seed", "-1"}, "--seed"},
+      {{"train", "--data", "d", "--out", "o", "--seed", "18446744073709551616"}, "--seed"},
+      {{"train", "--data", "d", "--out", "o", "--context-window", "0"}, "--context-window"},
+      {{"train", "--data", "d", "--out", "o", "--context-size", "-1"}, "--context-size"},
+      {{"train", "--data", "d", "--out", "o", "--iterations", "abc"}, "--iterations"},
+      {{"train", "--data", "d", "--out", "o", "--random-points", "0"}, "--random-points"},
+      {{"train", "--data", "d", "--out", "o", "--background", "nan"}, "--background"},
+      {{"render", "--run", "r", "--video", "0"}, "--video"},
+      {{"render", "--run", "r", "--threads", "-2"}, "--threads"},
+      {{"render", "--run", "r", "--video", "3", "--fps", "0"}, "--fps"},
+      {{"tone-curves", "--run", "r", "--times", "a,b"}, "--times"},
+      {{"synth-ldr", "--data", "d", "--bits", "12"}, "--bits"},
+  };
+  for (const Case& c : cases) {
+    const auto app = MakeApp();
+    std::vector<std::string> reversed(c.args.rbegin(), c.args.rend());  // CLI11 parses from the back
+    try {
+      app->parse(reversed);
+      ADD_FAILURE() << c.args[0] << " " << c.flag << ": accepted";
+    } catch (const CLI::ValidationError& e) {
+      EXPECT_NE(std::string(e.what()).find(c.flag), std::string::npos) << e.what();
+    } catch (const std::exception& e) {
+      ADD_FAILURE() << c.flag << ": " << e.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace hdr4d::cli
