@@ -38,6 +38,9 @@ void AddTrainCommand(CLI::App& app) {
   cmd->add_option("--random-points", options->init.num_random_points,
                   "Initial random points when the scene has no point3d.ply")
       ->capture_default_str();
+  cmd->add_option("--densify-from", options->optimization.densify_from,
+                  "First densification iteration")
+      ->capture_default_str();
   cmd->add_option("--densify-until", options->optimization.densify_until,
                   "Last densification iteration")
       ->capture_default_str();
@@ -49,6 +52,9 @@ void AddTrainCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--test-every", options->test_every,
                   "Evaluate the test split every N iterations (0: at the end)")
+      ->capture_default_str();
+  cmd->add_option("--max-seconds", options->max_seconds,
+                  "Stop after this many seconds of training (0 = no limit; a benchmark budget)")
       ->capture_default_str();
   cmd->add_option("--checkpoint-every", options->checkpoint_every,
                   "Save RUN/checkpoint.bin every N iterations")
