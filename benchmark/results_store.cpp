@@ -305,8 +305,7 @@ std::vector<FrameResult> ResultsStore::Frames(const std::string& run_id) const {
   std::vector<FrameResult> frames;
   std::map<std::string, std::size_t> index;
   Statement f = db_.Prepare(
-      "SELECT frame, time, camera_id, exposure FROM frames WHERE run_id = ?1 ORDER BY time, "
-      "camera_id, frame");
+      "SELECT frame, time, camera_id, exposure FROM frames WHERE run_id = ?1 ORDER BY frame");
   f.Bind(1, run_id);
   while (f.Step()) {
     index[f.Text(0)] = frames.size();

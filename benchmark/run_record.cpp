@@ -141,13 +141,15 @@ RunRecord RunRecord::FromJson(const nlohmann::json& j, const std::string& source
     fr.time = Get<double>(f, "time", where);
     fr.camera_id = f.value("camera_id", std::int64_t{-1});
     fr.exposure = f.value("exposure", 0.0);
-    for (const auto& [k, v] : f.value("metrics", nlohmann::json::object()).items())
-      fr.metrics[k] = ToNumber(v, where + " " + fr.frame, k);
-    for (const auto& [k, v] : f.value("stats", nlohmann::json::object()).items())
-      fr.stats[k] = ToNumber(v, where + " " + fr.frame, k);
+    // Named copies: items() of a temporary would outlive it.
+    const nlohmann::json metrics = f.value("metrics", nlohmann::json::object());
+    const nlohmann::json stats = f.value("stats", nlohmann::json::object());
+    for (const auto& [k, v] : metrics.items()) fr.metrics[k] = ToNumber(v, where + " " + fr.frame, k);
+    for (const auto& [k, v] : stats.items()) fr.stats[k] = ToNumber(v, where + " " + fr.frame, k);
     r.frames.push_back(std::move(fr));
   }
-  for (const auto& [name, points] : j.value("series", nlohmann::json::object()).items()) {
+  const nlohmann::json series = j.value("series", nlohmann::json::object());
+  for (const auto& [name, points] : series.items()) {
     Series& s = r.series[name];
     for (const nlohmann::json& p : points) {
       if (!p.is_array() || p.size() != 2) Fail("{}: series '{}': points must be [x, y]", source, name);
