@@ -1,6 +1,7 @@
 #include "benchmark/stress.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <chrono>
 #include <cmath>

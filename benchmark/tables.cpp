@@ -1,6 +1,7 @@
 #include "benchmark/tables.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
@@ -204,17 +205,23 @@ Table Build(const TableSpec& spec, const Suite& suite, const std::vector<RunSumm
   }
   // What the reader needs to know.
   bool any_incomplete = false, has_lpips = false;
+  std::vector<std::string> external;  // rows of methods this suite cannot run
   for (const RowResult& r : t.rows) {
     for (const Cell& c : r.cells) any_incomplete |= c.has_value && !c.complete();
-    if (r.runs == 0) {
-      t.footnotes.push_back(fmt::format(
-          "{}: no runs in the store{}{}.", r.label,
-          suite.FindMethod(r.method) ? "" : " (not a method of this suite: score its renders with "
-                                           "`hdr4d bench submit --method " + r.method + "`)",
-          r.failed ? fmt::format("; {} failed run(s)", r.failed) : ""));
+    if (r.runs == 0 && !suite.FindMethod(r.method)) {
+      external.push_back(r.label);
+    } else if (r.runs == 0) {
+      t.footnotes.push_back(fmt::format("{}: no runs in the store{}.", r.label,
+                                        r.failed ? fmt::format(" ({} failed)", r.failed) : ""));
     } else if (r.failed) {
       t.footnotes.push_back(fmt::format("{}: {} failed run(s) left out.", r.label, r.failed));
     }
+  }
+  if (!external.empty()) {
+    t.footnotes.push_back(fmt::format(
+        "{}: no runs in the store; not methods of this suite: score their renders with `hdr4d "
+        "bench submit --suite {} --method NAME --supervision ldr|hdr|ldr+hdr`.",
+        fmt::format("{}", fmt::join(external, ", ")), suite.name));
   }
   for (const Column& c : t.columns) has_lpips |= !c.computable;
   if (any_incomplete)
