@@ -20,17 +20,18 @@ const char* kLpipsNote =
     "LPIPS: not computed. It needs the LPIPS network weights, which cannot be obtained on these "
     "machines; no substitute is reported.";
 
-std::vector<Column> HdrColumns(HdrProtocol p, bool with_lpips) {
+std::vector<Column> HdrColumns(const TableOptions& o, bool with_lpips) {
   std::string psnr = "mu_psnr", ssim = "mu_ssim";
-  if (p == HdrProtocol::kGtMax) psnr = "mu_psnr_gt_max", ssim = "mu_ssim_gt_max";
-  if (p == HdrProtocol::kPu21) psnr = "pu21_psnr", ssim = "pu21_ssim";
+  if (o.protocol == HdrProtocol::kGtMax) psnr = "mu_psnr_gt_max", ssim = "mu_ssim_gt_max";
+  if (o.protocol == HdrProtocol::kPu21) psnr = "pu21_psnr", ssim = "pu21_ssim";
+  if (!o.hdr_psnr_key.empty()) psnr = o.hdr_psnr_key, ssim = o.hdr_ssim_key;
   std::vector<Column> c = {{psnr, "HDR", "PSNR", 1, 2}, {ssim, "HDR", "SSIM", 1, 3}};
   if (with_lpips) c.push_back({"lpips_hdr", "HDR", "LPIPS", -1, 3, false});
   return c;
 }
 
-std::vector<Column> MainColumns(HdrProtocol p) {
-  std::vector<Column> c = HdrColumns(p, true);
+std::vector<Column> MainColumns(const TableOptions& o) {
+  std::vector<Column> c = HdrColumns(o, true);
   c.push_back({"psnr", "LDR", "PSNR", 1, 2});
   c.push_back({"ssim", "LDR", "SSIM", 1, 3});
   c.push_back({"lpips", "LDR", "LPIPS", -1, 3, false});
@@ -128,7 +129,9 @@ Table Build(const TableSpec& spec, const Suite& suite, const std::vector<RunSumm
   t.seeds = suite.seeds;
   t.budget = options.budget.empty() ? suite.budgets.back().Label() : options.budget;
   t.variant = options.variant.empty() ? suite.variants.front().name : options.variant;
-  t.protocol = HdrProtocolDescription(options.protocol);
+  t.protocol = options.hdr_psnr_key.empty()
+                   ? HdrProtocolDescription(options.protocol)
+                   : "the metric keys " + options.hdr_psnr_key + " and " + options.hdr_ssim_key;
   const Index ix = BuildIndex(runs, t.budget, t.variant);
 
   // values[row][column][(scene, seed)]
@@ -350,9 +353,10 @@ std::vector<RunSummary> SuiteRuns(const ResultsStore& store, const Suite& suite)
 
 Table BuildTable(const TableSpec& spec, const Suite& suite, const std::vector<RunSummary>& runs,
                  const TableOptions& options) {
+  if (options.hdr_psnr_key.empty() != options.hdr_ssim_key.empty())
+    Fail("tables: give both HDR keys (PSNR and SSIM) or neither");
   return Build(spec, suite, runs, options,
-               spec.layout == "main" ? MainColumns(options.protocol)
-                                     : HdrColumns(options.protocol, true));
+               spec.layout == "main" ? MainColumns(options) : HdrColumns(options, true));
 }
 
 Table BuildAllMetricsTable(const TableSpec& spec, const Suite& suite,

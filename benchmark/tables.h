@@ -66,6 +66,9 @@ struct Table {
 
 struct TableOptions {
   HdrProtocol protocol = HdrProtocol::kOwnMax;
+  // Any two metric keys for the HDR PSNR / SSIM columns instead of the protocol's (e.g. metrics
+  // added to `hdr4d eval` later, such as scale-aligned ones); both or neither.
+  std::string hdr_psnr_key, hdr_ssim_key;
   std::string budget;   // "" = the suite's last (largest) budget
   std::string variant;  // "" = the suite's first variant
   double alpha = 0.05;

@@ -132,6 +132,12 @@ TEST(Tables, ProtocolsPickTheirKeysAndNewMetricsAppear) {
   EXPECT_EQ(BuildTable(s.tables[1], s, Runs(), gt).columns[0].key, "mu_psnr_gt_max");
   gt.protocol = HdrProtocol::kPu21;
   EXPECT_EQ(BuildTable(s.tables[1], s, Runs(), gt).columns[1].key, "pu21_ssim");
+  TableOptions aligned;
+  aligned.hdr_psnr_key = "aligned_mu_psnr";
+  aligned.hdr_ssim_key = "mu_ssim";
+  const Table at = BuildTable(s.tables[1], s, Runs(), aligned);
+  EXPECT_EQ(at.columns[0].key, "aligned_mu_psnr");
+  EXPECT_NEAR(at.rows[1].cells[0].mean, 16.0, 1e-12);
   const Table all = BuildAllMetricsTable(s.tables[1], s, Runs(), {});
   std::vector<std::string> keys;
   for (const auto& c : all.columns) keys.push_back(c.key);

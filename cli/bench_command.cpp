@@ -94,6 +94,15 @@ void AddTable(CLI::App& bench) {
       ->capture_default_str();
   cmd->add_option("--budget", a->options.budget, "Budget label (default: the suite's last)");
   cmd->add_option("--variant", a->options.variant, "Variant name (default: the suite's first)");
+  auto hdr_keys = std::make_shared<std::vector<std::string>>();
+  cmd->add_option("--hdr-keys", *hdr_keys,
+                  "Two metric keys (PSNR,SSIM) for the HDR columns instead of --protocol's, e.g. "
+                  "metrics added to hdr4d eval later")
+      ->delimiter(',')
+      ->expected(2);
+  cmd->parse_complete_callback([a, hdr_keys] {
+    if (hdr_keys->size() == 2) a->options.hdr_psnr_key = (*hdr_keys)[0], a->options.hdr_ssim_key = (*hdr_keys)[1];
+  });
   cmd->add_flag("--all-metrics", a->all_metrics, "Also a table of every metric key the runs have");
   cmd->add_flag("--per-scene", a->per_scene, "Also per-scene tables of each quality column");
   cmd->callback([a] {
@@ -177,7 +186,13 @@ void AddReport(CLI::App& bench) {
   cmd->add_option("--protocol", a->protocol, "HDR columns: own_max, gt_max or pu21")->capture_default_str();
   cmd->add_option("--budget", a->options.tables.budget, "Budget label of the tables (default: the suite's last)");
   cmd->add_option("--metric", a->options.pareto_metric, "Quality metric of the time charts")->capture_default_str();
-  cmd->callback([a] {
+  auto hdr_keys = std::make_shared<std::vector<std::string>>();
+  cmd->add_option("--hdr-keys", *hdr_keys, "Two metric keys (PSNR,SSIM) for the tables' HDR columns")
+      ->delimiter(',')
+      ->expected(2);
+  cmd->callback([a, hdr_keys] {
+    if (hdr_keys->size() == 2)
+      a->options.tables.hdr_psnr_key = (*hdr_keys)[0], a->options.tables.hdr_ssim_key = (*hdr_keys)[1];
     const bench::Suite suite = bench::LoadSuite(a->suite);
     a->options.tables.protocol = bench::ParseHdrProtocol(a->protocol);
     const bench::ResultsStore store(a->store, /*create=*/false);
