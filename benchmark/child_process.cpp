@@ -44,10 +44,15 @@ std::string ChildResult::Describe() const {
   return what;
 }
 
-std::filesystem::path SelfExecutable() {
+std::filesystem::path SelfExecutable() { return "/proc/self/exe"; }
+
+std::filesystem::path SelfExecutablePath() {
   std::error_code ec;
-  std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  std::string self = std::filesystem::read_symlink("/proc/self/exe", ec).string();
   if (ec) Fail("cannot find this executable (/proc/self/exe): {}", ec.message());
+  const std::string deleted = " (deleted)";  // the file was replaced since this process started
+  if (self.size() > deleted.size() && self.compare(self.size() - deleted.size(), deleted.size(), deleted) == 0)
+    self.resize(self.size() - deleted.size());
   return self;
 }
 
@@ -82,7 +87,10 @@ ChildResult RunChild(const ChildOptions& options) {
   const int log_fd = open(options.log.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
   if (log_fd < 0) Fail("{}: cannot open the log: {}", options.log.string(), std::strerror(errno));
   const off_t log_start = lseek(log_fd, 0, SEEK_END);
-  const std::string header = "$ " + ShellCommand(options.argv) + "\n";
+  // Logs show the binary's file name, not /proc/self/exe, so a command can be rerun by hand.
+  std::vector<std::string> shown = options.argv;
+  if (shown[0] == SelfExecutable()) shown[0] = SelfExecutablePath().string();
+  const std::string header = "$ " + ShellCommand(shown) + "\n";
   if (write(log_fd, header.data(), header.size()) < 0) {
   }
   // Everything the child needs is built before fork: after it, only async-signal-safe calls.
@@ -100,14 +108,23 @@ ChildResult RunChild(const ChildOptions& options) {
   for (std::string& e : env_storage) envp.push_back(e.data());
   envp.push_back(nullptr);
   const pid_t parent = getpid();
+  // exec failures come back through a close-on-exec pipe: a successful exec closes it empty.
+  int exec_pipe[2];
+  if (pipe2(exec_pipe, O_CLOEXEC) != 0) {
+    close(log_fd);
+    Fail("cannot start {}: pipe failed: {}", options.argv[0], std::strerror(errno));
+  }
 
   const auto start = std::chrono::steady_clock::now();
   const pid_t pid = fork();
   if (pid < 0) {
     close(log_fd);
+    close(exec_pipe[0]);
+    close(exec_pipe[1]);
     Fail("cannot start {}: fork failed: {}", options.argv[0], std::strerror(errno));
   }
   if (pid == 0) {
+    close(exec_pipe[0]);
     prctl(PR_SET_PDEATHSIG, SIGKILL);
     if (getppid() != parent) _exit(127);  // the harness died between fork and prctl
     setpgid(0, 0);
@@ -116,13 +133,25 @@ ChildResult RunChild(const ChildOptions& options) {
     dup2(log_fd, 1);
     dup2(log_fd, 2);
     execve(argv[0], argv.data(), envp.data());
-    const char message[] = "hdr4d: error: cannot execute the child program\n";
-    if (write(2, message, sizeof message - 1) < 0) {
+    const int error = errno;
+    if (write(exec_pipe[1], &error, sizeof error) < 0) {
     }
     _exit(127);
   }
   close(log_fd);
+  close(exec_pipe[1]);
   setpgid(pid, pid);  // also from the parent, so kill(-pid) works at once
+  int exec_error = 0;
+  ssize_t got;
+  do {
+    got = read(exec_pipe[0], &exec_error, sizeof exec_error);
+  } while (got < 0 && errno == EINTR);
+  close(exec_pipe[0]);
+  if (got == static_cast<ssize_t>(sizeof exec_error)) {
+    int status = 0;
+    waitpid(pid, &status, 0);
+    Fail("cannot execute {}: {}", options.argv[0], std::strerror(exec_error));
+  }
 
   ChildResult result;
   int status = 0;

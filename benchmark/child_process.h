@@ -35,11 +35,16 @@ struct ChildResult {
   std::string error_line;  // the last "hdr4d: error:" line of the log (or its last line)
 };
 
-// Throws hdr4d::Error only when the child cannot be started (fork fails, log not writable).
+// Throws hdr4d::Error only when the child cannot be started (fork fails, the program cannot
+// be executed, the log is not writable): a harness problem, not a failed run.
 ChildResult RunChild(const ChildOptions& options);
 
-// This executable (/proc/self/exe): the harness runs its own hdr4d for every step.
+// The harness runs its own binary for every step: "/proc/self/exe", which stays this exact
+// binary even when a rebuild replaces the file (the children then keep the code version the
+// runs were planned with).
 std::filesystem::path SelfExecutable();
+// The file name of this binary, for scripts that run it later (Slurm).
+std::filesystem::path SelfExecutablePath();
 
 // The command as one shell-quoted line (for logs and Slurm scripts).
 std::string ShellQuote(const std::string& arg);

@@ -32,6 +32,14 @@ TEST(ChildProcess, ExitCodesSignalsAndTheErrorLine) {
   EXPECT_NE(log.find("progress"), std::string::npos);
 }
 
+TEST(ChildProcess, AProgramThatCannotRunIsAnErrorNotAResult) {
+  TempDir dir;
+  const std::string e = testing::ErrorOf(
+      [&] { RunChild({.argv = {(dir / "no-such-program").string()}, .log = dir / "log.txt"}); });
+  EXPECT_NE(e.find("cannot execute"), std::string::npos) << e;
+  EXPECT_NE(e.find("no-such-program"), std::string::npos) << e;
+}
+
 TEST(ChildProcess, TimeoutAndCancelStopTheWholeProcessGroup) {
   TempDir dir;
   const ChildResult t = Sh(dir, "sleep 30 & sleep 30; wait", 0.3);

@@ -178,10 +178,14 @@ std::optional<RunRecord> ExecuteRun(const RunSpec& run, const PipelineOptions& o
     if (run.prepared->spec->region) so.region = *run.prepared->spec->region;
     const ScoredRenders scored = ScoreRenders(dataset, renders, so);
     r.frames = scored.frames;
+    auto shown = [](std::vector<std::string> argv) {  // the binary's name, not /proc/self/exe
+      if (!argv.empty() && argv[0] == SelfExecutable()) argv[0] = SelfExecutablePath().string();
+      return argv;
+    };
     r.config = {{"identity", run.identity},
                 {"threads", options.threads},
-                {"train_command", train},
-                {"render_command", render},
+                {"train_command", shown(train)},
+                {"render_command", shown(render)},
                 {"train_config", config},
                 {"scoring",
                  {{"region", scored.region},

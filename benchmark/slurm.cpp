@@ -66,7 +66,7 @@ SlurmPlan WriteSlurmJobs(const Suite& suite, const SlurmOptions& o) {
   }
   fs::create_directories(dir / "results");
   fs::create_directories(dir / "logs");
-  const std::string hdr4d = SelfExecutable().string();
+  const std::string hdr4d = SelfExecutablePath().string();
   nlohmann::json arrays = nlohmann::json::array();
   std::string submit = "#!/bin/bash\n# Submits every job array of this plan (hdr4d bench slurm).\nset -euo pipefail\ncd \"$(dirname \"$0\")\"\n";
   int k = 0;
