@@ -89,6 +89,11 @@ std::string PerSceneMarkdown(const TableSpec& spec, const Suite& suite,
                              const std::vector<RunSummary>& runs, const TableOptions& options,
                              const Column& column);
 
+// Cell and header text shared by the formats.
+std::string SupervisionLabel(const std::string& supervision);  // "LDR", "HDR", "LDR+HDR"
+std::string ArrowOf(const Column& column);                    // "↑", "↓" or ""
+std::string FormatValue(double value, int digits);             // "inf" for infinity
+
 std::string ToMarkdown(const Table& table);
 std::string ToLatex(const Table& table);
 // Tidy: one line per row and column with mean, spread, run counts, best flag and the test.
