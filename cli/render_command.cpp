@@ -54,9 +54,15 @@ void AddRenderCommand(CLI::App& app) {
                       "LDR renders at this exposure in seconds (default: each view's own; the "
                       "median training exposure for --video)")
           ->check(PositiveReal());
+  auto timing = std::make_shared<std::string>();
+  cmd->add_option("--timing", *timing,
+                  "Write each view's render time and the fps after a one-view warm-up to this "
+                  "JSON file (split renders)")
+      ->check(Text("a timing file"));
   auto no_hdr = std::make_shared<bool>(false);
   cmd->add_flag("--no-hdr", *no_hdr, "Do not write the HDR (EXR) renders");
-  cmd->callback([options, run, out, time, time_option, exposure, exposure_option, no_hdr] {
+  cmd->callback([options, run, out, time, time_option, exposure, exposure_option, no_hdr, timing] {
+    options->timing = *timing;
     if (time_option->count() > 0) options->time = *time;
     if (exposure_option->count() > 0) options->exposure = *exposure;
     options->write_hdr = !*no_hdr;

@@ -44,6 +44,10 @@ void AddTrainCommand(CLI::App& app) {
                   "Initial random points when the scene has no point3d.ply")
       ->check(Integer(4, 100'000'000))
       ->capture_default_str();
+  cmd->add_option("--densify-from", options->optimization.densify_from,
+                  "First densification iteration")
+      ->check(Integer(0))
+      ->capture_default_str();
   cmd->add_option("--densify-until", options->optimization.densify_until,
                   "Last densification iteration")
       ->check(Integer(0))
@@ -59,6 +63,10 @@ void AddTrainCommand(CLI::App& app) {
   cmd->add_option("--test-every", options->test_every,
                   "Evaluate the test split every N iterations (0: at the end)")
       ->check(Integer(0))
+      ->capture_default_str();
+  cmd->add_option("--max-seconds", options->max_seconds,
+                  "Stop after this many seconds of training (0 = no limit; a benchmark budget)")
+      ->check(Real(0, 1e9))
       ->capture_default_str();
   cmd->add_option("--checkpoint-every", options->checkpoint_every,
                   "Save RUN/checkpoint.bin every N iterations")

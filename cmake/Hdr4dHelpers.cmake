@@ -19,14 +19,15 @@ function(hdr4d_add_executable name)
   target_compile_options(${name} PRIVATE ${HDR4D_WARNINGS})
 endfunction()
 
-# hdr4d_add_test(<folder> <name> [NEEDS_CLI] SOURCES ... DEPS ...): a GoogleTest binary whose cases are
-# registered as <folder>/<Suite>.<Case> and run from the repository root (tests/testing.h has
-# the helpers: temp folders, shared data, running the hdr4d binary).
+# hdr4d_add_test(<folder> <name> [NEEDS_CLI] SOURCES ... DEPS ... [PROPERTIES ...]): a GoogleTest
+# binary whose cases are registered as <folder>/<Suite>.<Case> and run from the repository root
+# (tests/testing.h has the helpers: temp folders, shared data, running the hdr4d binary).
+# PROPERTIES are CTest properties of every case (e.g. FIXTURES_SETUP / FIXTURES_REQUIRED).
 function(hdr4d_add_test folder name)
   if(NOT HDR4D_BUILD_TESTS)
     return()
   endif()
-  cmake_parse_arguments(ARG "NEEDS_CLI" "" "SOURCES;DEPS" ${ARGN})
+  cmake_parse_arguments(ARG "NEEDS_CLI" "" "SOURCES;DEPS;PROPERTIES" ${ARGN})
   set(target ${folder}_${name})
   add_executable(${target} ${ARG_SOURCES})
   target_link_libraries(${target} PRIVATE ${ARG_DEPS} hdr4d_testing GTest::gtest GTest::gmock)
@@ -37,7 +38,8 @@ function(hdr4d_add_test folder name)
   gtest_discover_tests(${target}
     TEST_PREFIX "${folder}/"
     WORKING_DIRECTORY ${PROJECT_SOURCE_DIR}
-    DISCOVERY_TIMEOUT 60)
+    DISCOVERY_TIMEOUT 60
+    PROPERTIES ${ARG_PROPERTIES})
 endfunction()
 
 # hdr4d_add_benchmark(<name> SOURCES ... DEPS ...): a Google Benchmark binary.

@@ -881,7 +881,7 @@ DatasetReport CheckDataset(const fs::path& root, const DatasetLoadOptions& optio
     }
   }
 
-  ProtectScene(dataset, json_files);
+  if (options.protect_inputs) ProtectScene(dataset, json_files);
   report.dataset = std::move(dataset);
   report.problems = sink.Sorted();
   return report;

@@ -104,6 +104,10 @@ struct DatasetLoadOptions {
   TimeNormalisation time_normalisation = TimeNormalisation::kGlobal;
   bool require_test = true;
   bool show_progress = false;  // a progress bar on stderr while checking (200+ frames) images
+  // A read scene's files and image folders are refused as outputs for the rest of the command
+  // (core/output_guard.h). Off only for harnesses that build corrupt scenes on purpose
+  // (benchmark/stress_kit.cpp).
+  bool protect_inputs = true;
 };
 
 struct DatasetReport {

@@ -13,8 +13,22 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr char kMagic[8] = {'H', 'D', 'R', '4', 'D', 'C', 'K', 'P'};
-// Version 2 adds the tone mapper's state after the optimiser's; version 1 files still load.
-constexpr std::uint32_t kVersion = 2;
+// Version 2 adds the tone mapper's state after the optimiser's; version 3 a trailer with a
+// checksum of every byte before it, so damage inside the float buffers (which no size check
+// can see) is refused instead of rendered. Versions 1 and 2 still load.
+constexpr std::uint32_t kVersion = 3;
+constexpr char kTrailerMagic[8] = {'H', 'D', 'R', '4', 'D', 'S', 'U', 'M'};
+constexpr std::size_t kTrailerSize = 16;
+
+// FNV-1a, 64 bit: enough to detect damage (not tampering), one pass, no dependency.
+std::uint64_t Fnv1a(const char* data, std::size_t size) {
+  std::uint64_t h = 0xcbf29ce484222325ull;
+  for (std::size_t i = 0; i < size; ++i) {
+    h ^= static_cast<unsigned char>(data[i]);
+    h *= 0x100000001b3ull;
+  }
+  return h;
+}
 
 void WriteU64(std::ostream& out, std::uint64_t v) {
   out.write(reinterpret_cast<const char*>(&v), 8);
@@ -74,28 +88,39 @@ void SaveCheckpoint(const fs::path& path, const Checkpoint& c) {
       {"gaussians", c.model.size()},
       {"trainer", c.trainer},
   };
-  WriteFileAtomic(path, [&](std::ostream& out) {
-    out.write(kMagic, sizeof(kMagic));
-    const std::string text = header.dump();
-    WriteU64(out, text.size());
-    out.write(text.data(), static_cast<std::streamsize>(text.size()));
-    ForEachBuffer(c.model, [&](const char*, const std::vector<float>& v) { WriteFloats(out, v); });
-    WriteU64(out, c.extra_floats.size());
-    for (const auto& v : c.extra_floats) WriteFloats(out, v);
-    WriteU64(out, c.adam_state.size());
-    out.write(c.adam_state.data(), static_cast<std::streamsize>(c.adam_state.size()));
-    WriteU64(out, c.tone_mapper_state.size());
-    out.write(c.tone_mapper_state.data(),
-              static_cast<std::streamsize>(c.tone_mapper_state.size()));
+  std::ostringstream out;
+  out.write(kMagic, sizeof(kMagic));
+  const std::string text = header.dump();
+  WriteU64(out, text.size());
+  out.write(text.data(), static_cast<std::streamsize>(text.size()));
+  ForEachBuffer(c.model, [&](const char*, const std::vector<float>& v) { WriteFloats(out, v); });
+  WriteU64(out, c.extra_floats.size());
+  for (const auto& v : c.extra_floats) WriteFloats(out, v);
+  WriteU64(out, c.adam_state.size());
+  out.write(c.adam_state.data(), static_cast<std::streamsize>(c.adam_state.size()));
+  WriteU64(out, c.tone_mapper_state.size());
+  out.write(c.tone_mapper_state.data(), static_cast<std::streamsize>(c.tone_mapper_state.size()));
+  const std::string bytes = out.str();
+  WriteFileAtomic(path, [&](std::ostream& file) {
+    file.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    file.write(kTrailerMagic, sizeof(kTrailerMagic));
+    WriteU64(file, Fnv1a(bytes.data(), bytes.size()));
   });
 }
 
 Checkpoint LoadCheckpoint(const fs::path& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) Fail("{}: checkpoint not found", path.string());
-  std::ifstream in(path, std::ios::binary);
-  if (!in) Fail("{}: cannot open for reading", path.string());
-  const std::uint64_t file_size = fs::file_size(path, ec);
+  std::ifstream file(path, std::ios::binary);
+  if (!file) Fail("{}: cannot open for reading", path.string());
+  std::string bytes;
+  {
+    std::ostringstream all;
+    all << file.rdbuf();
+    bytes = all.str();
+  }
+  std::istringstream in(bytes);
+  const std::uint64_t file_size = bytes.size();
   char magic[8] = {};
   if (!in.read(magic, 8) || std::memcmp(magic, kMagic, 8) != 0)
     Fail("{}: not an hdr4d checkpoint", path.string());
@@ -114,7 +139,7 @@ Checkpoint LoadCheckpoint(const fs::path& path) {
   std::uint32_t version = 0;
   try {
     version = header.at("version").get<std::uint32_t>();
-    if (version != kVersion && version != 1) {
+    if (version < 1 || version > kVersion) {
       Fail("{}: checkpoint version {} is not supported (this build reads {})", path.string(),
            header.at("version").get<std::uint32_t>(), kVersion);
     }
@@ -127,6 +152,17 @@ Checkpoint LoadCheckpoint(const fs::path& path) {
     c.trainer = header.at("trainer");
   } catch (const nlohmann::json::exception& e) {
     Fail("{}: checkpoint header is missing a key: {}", path.string(), e.what());
+  }
+  if (version >= 3) {
+    const std::size_t body = bytes.size() >= kTrailerSize ? bytes.size() - kTrailerSize : 0;
+    std::uint64_t stored = 0;
+    if (body < header_size || std::memcmp(bytes.data() + body, kTrailerMagic, 8) != 0)
+      Fail("{}: truncated checkpoint (its checksum trailer is missing)", path.string());
+    std::memcpy(&stored, bytes.data() + body + 8, 8);
+    if (stored != Fnv1a(bytes.data(), body)) {
+      Fail("{}: corrupt checkpoint (checksum mismatch: the file was damaged after it was written)",
+           path.string());
+    }
   }
   const std::uint64_t limit = file_size / sizeof(float);
   ForEachBuffer(c.model, [&](const char* name, std::vector<float>& v) {

@@ -1,8 +1,9 @@
 // Training checkpoints: the model, the optimiser state and whatever the trainer needs to
 // continue exactly where it stopped (iteration, random state, densification statistics). One
 // binary file: a magic word and version, a JSON header with the metadata and buffer sizes,
-// then the raw little-endian float buffers and the Adam state. Written to a temporary file and
-// renamed, so an interrupted save never replaces the last good checkpoint.
+// then the raw little-endian float buffers and the Adam state, and a trailer with a 64-bit
+// FNV-1a checksum of everything before it (damage anywhere is refused on load). Written to a
+// temporary file and renamed, so an interrupted save never replaces the last good checkpoint.
 #pragma once
 
 #include <filesystem>
@@ -24,7 +25,8 @@ struct Checkpoint {
 };
 
 void SaveCheckpoint(const std::filesystem::path& path, const Checkpoint& checkpoint);
-// Throws hdr4d::Error naming the file for a missing, truncated, corrupt or foreign file.
+// Throws hdr4d::Error naming the file for a missing, truncated, corrupt (checksum mismatch) or
+// foreign file.
 Checkpoint LoadCheckpoint(const std::filesystem::path& path);
 
 }  // namespace hdr4d::method

@@ -63,6 +63,18 @@ TEST(Checkpoint, BadFilesAreErrorsNamingTheFile) {
   }
 }
 
+TEST(Checkpoint, DamagedBytesAreRefusedByTheChecksum) {
+  TempDir dir;
+  SaveCheckpoint(dir / "ck.bin", Sample());
+  std::string bytes = testing::ReadTextFile(dir / "ck.bin");
+  // One bit inside the float buffers: sizes and structure stay valid, only the checksum sees it.
+  bytes[bytes.size() / 2] ^= 0x10;
+  testing::WriteTextFile(dir / "flipped.bin", bytes);
+  const std::string error = ErrorOf([&] { LoadCheckpoint(dir / "flipped.bin"); });
+  EXPECT_NE(error.find("checksum mismatch"), std::string::npos) << error;
+  EXPECT_NE(error.find("flipped.bin"), std::string::npos) << error;
+}
+
 TEST(Checkpoint, FailedSaveKeepsThePreviousCheckpoint) {
   TempDir dir;
   SaveCheckpoint(dir / "ck.bin", Sample());

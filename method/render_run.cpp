@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <chrono>
 #include <cstdlib>
 #include <numbers>
 #include <sstream>
@@ -148,6 +149,7 @@ int RenderRun(const RenderRunOptions& options) {
   // A command's renders are moved into place together once all are made: a failure or a kill
   // halfway never leaves new renders mixed with an earlier run's (core/atomic_file.h).
   FileBatch batch;
+  std::vector<double> render_seconds;  // per view, the Render call alone
   // Renders one view; writes the LDR image to ldr_path and the HDR one to hdr_path (each when
   // the model has that output and the path is not empty). Returns the number of files written.
   auto render_to = [&](const Camera& camera, float time, double exposure, const fs::path& ldr_path,
@@ -155,7 +157,10 @@ int RenderRun(const RenderRunOptions& options) {
     const int w = camera.intrinsics.width, h = camera.intrinsics.height;
     const ToneFrame frame{RadianceBank::TimeIndex(time, run.num_times), -1,
                           static_cast<float>(std::log(exposure))};
+    const auto start = std::chrono::steady_clock::now();
     renderer.Render(camera, time, frame, &ldr, options.write_hdr ? &hdr : nullptr);
+    render_seconds.push_back(
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     int written = 0;
     if (!ldr.empty() && !ldr_path.empty()) {
       WriteImage(ldr_path, DisplayImageFromBuffer(ldr.data(), w, h, 3), {.batch = &batch});
@@ -164,7 +169,9 @@ int RenderRun(const RenderRunOptions& options) {
     if (options.write_hdr && !hdr.empty() && !hdr_path.empty()) {
       Image image(w, h, 3, Encoding::kLinear);
       std::copy(hdr.begin(), hdr.end(), image.data());
-      WriteImage(hdr_path, image, {.batch = &batch});
+      // Float, not half: radiance in physical units passes half's 65504 (the stress suite's
+      // 1e6 scene) and falls below its normal range (1e-6).
+      WriteImage(hdr_path, image, {.format = PixelFormat::kFloat, .batch = &batch});
       ++written;
     }
     return written;
@@ -245,6 +252,18 @@ int RenderRun(const RenderRunOptions& options) {
   }
   progress.Finish();
   batch.Commit();
+  if (!options.timing.empty()) {
+    const std::size_t warmup = render_seconds.size() > 1 ? 1 : 0;
+    double timed = 0;
+    for (std::size_t i = warmup; i < render_seconds.size(); ++i) timed += render_seconds[i];
+    const double fps =
+        timed > 0 ? static_cast<double>(render_seconds.size() - warmup) / timed : 0.0;
+    WriteJsonFile(options.timing, {{"views", render_seconds.size()},
+                                   {"warmup_views", warmup},
+                                   {"threads", MaxThreads()},
+                                   {"fps", FiniteOrNull(fps)},
+                                   {"view_seconds", render_seconds}});
+  }
   return written;
 }
 

@@ -35,6 +35,10 @@ struct RenderRunOptions {
   // default to the median training exposure).
   std::optional<double> exposure;
   bool write_hdr = true;  // also the linear HDR render as EXR, for models with HDR colours
+  // Split renders only: when set, a JSON file with each view's render time (slicing, tone
+  // mapping, rasterisation; not the file writes) and the frames per second over every view but
+  // the first (the warm-up; with one view, that view).
+  std::filesystem::path timing;
   ToneMapperFactory tone_mapper_factory;  // rebuilds the run's tone mapper (cli: baselines')
 };
 

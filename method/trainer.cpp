@@ -41,6 +41,7 @@ std::string TrainOptions::Validate() const {
   if (out.empty()) return "out: no run folder given";
   if (threads < 0) return "threads: must be >= 0";
   if (test_every < 0 || checkpoint_every < 0) return "test_every / checkpoint_every: must be >= 0";
+  if (!(max_seconds >= 0 && std::isfinite(max_seconds))) return "max_seconds: must be >= 0";
   if (!(background >= 0 && background <= 1)) return "background: must be within [0, 1]";
   if (std::string p = optimization.Validate(); !p.empty()) return p;
   if (std::string p = hdr.Validate(); !p.empty()) return p;
@@ -56,6 +57,7 @@ nlohmann::json TrainOptions::ToJson() const {
       {"threads", threads},
       {"test_every", test_every},
       {"checkpoint_every", checkpoint_every},
+      {"max_seconds", max_seconds},
       {"background", background},
       {"hdr", hdr.ToJson()},
       {"init",
@@ -148,6 +150,8 @@ struct LoopState {
   std::vector<std::uint32_t> order;  // current epoch's view order
   std::size_t next = 0;              // position in `order`
   std::vector<double> loss_curve;
+  std::vector<double> psnr_curve;  // training-view PSNR of the final LDR image, per iteration
+  nlohmann::json test_curve = nlohmann::json::array();  // {"iteration": i, <metric>: ...}
   double train_seconds = 0;
 
   std::uint32_t NextView(std::size_t num_views) {
@@ -163,8 +167,14 @@ struct LoopState {
   nlohmann::json ToJson() const {
     std::ostringstream rng_state;
     rng_state << rng;
-    return {{"iteration", iteration}, {"rng", rng_state.str()},   {"order", order},
-            {"next", next},           {"loss_curve", loss_curve}, {"train_seconds", train_seconds}};
+    return {{"iteration", iteration},
+            {"rng", rng_state.str()},
+            {"order", order},
+            {"next", next},
+            {"loss_curve", loss_curve},
+            {"psnr_curve", psnr_curve},
+            {"test_curve", test_curve},
+            {"train_seconds", train_seconds}};
   }
   void FromJson(const nlohmann::json& j) {
     iteration = j.at("iteration").get<int>();
@@ -173,9 +183,35 @@ struct LoopState {
     order = j.at("order").get<std::vector<std::uint32_t>>();
     next = j.at("next").get<std::size_t>();
     loss_curve = j.at("loss_curve").get<std::vector<double>>();
+    // Checkpoints from before the curves were kept resume with empty ones.
+    psnr_curve = j.value("psnr_curve", std::vector<double>{});
+    test_curve = j.value("test_curve", nlohmann::json::array());
     train_seconds = j.at("train_seconds").get<double>();
   }
 };
+
+// Means over at most `blocks` equal runs of consecutive iterations, so results.json stays small
+// at any length: {"iteration": last iteration of each block, <name>: mean, ...}.
+nlohmann::json CurveBlocks(const std::vector<double>& loss, const std::vector<double>& psnr,
+                           int blocks) {
+  nlohmann::json curve = {{"iteration", nlohmann::json::array()},
+                          {"loss", nlohmann::json::array()},
+                          {"train_psnr", nlohmann::json::array()}};
+  const std::size_t n = loss.size();
+  const std::size_t size = std::max<std::size_t>(1, (n + blocks - 1) / blocks);
+  for (std::size_t b = 0; b < n; b += size) {
+    const std::size_t e = std::min(n, b + size);
+    double l = 0, p = 0;
+    for (std::size_t i = b; i < e; ++i) l += loss[i];
+    curve["iteration"].push_back(e);
+    curve["loss"].push_back(FiniteOrNull(l / (e - b)));
+    if (psnr.size() == n) {
+      for (std::size_t i = b; i < e; ++i) p += psnr[i];
+      curve["train_psnr"].push_back(FiniteOrNull(p / (e - b)));
+    }
+  }
+  return curve;
+}
 
 }  // namespace
 
@@ -336,7 +372,17 @@ TrainSummary Train(const TrainOptions& options) {
   Progress progress("train", opt.iterations - loop.iteration, options.progress);
   const auto start = std::chrono::steady_clock::now();
   const double seconds_before = loop.train_seconds;
+  double eval_seconds = 0;  // periodic test evaluations: not training time
+  auto training_seconds = [&] {
+    return seconds_before - eval_seconds +
+           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  bool stopped_by_time = false;
   while (loop.iteration < opt.iterations) {
+    if (options.max_seconds > 0 && training_seconds() >= options.max_seconds) {
+      stopped_by_time = true;
+      break;
+    }
     const int it = ++loop.iteration;
     SetModelLearningRates(LearningRatesAt(opt, extent, it), &adam);
     std::tie(render.sh_degree, render.time_degree) =
@@ -437,28 +483,31 @@ TrainSummary Train(const TrainOptions& options) {
         const double d = std::clamp(ldr_out[i], 0.0f, 1.0f) - gt[i];
         squared += d * d;
       }
-      shown +=
-          fmt::format(" psnr {:.2f}", -10.0 * std::log10(std::max(squared / (pixels * 3), 1e-20)));
+      const double psnr = -10.0 * std::log10(std::max(squared / (pixels * 3), 1e-20));
+      loop.psnr_curve.push_back(psnr);
+      shown += fmt::format(" psnr {:.2f}", psnr);
     }
     progress.Advance(1, fmt::format("{} N {}", shown, model.size()));
     if (options.test_every > 0 && it % options.test_every == 0 && it < opt.iterations) {
-      const nlohmann::json m = evaluate();
+      const auto eval_start = std::chrono::steady_clock::now();
+      nlohmann::json m = evaluate();
       spdlog::info("train: iteration {}: test {}", it, m.dump());
+      m["iteration"] = it;
+      loop.test_curve.push_back(std::move(m));
+      eval_seconds +=
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - eval_start).count();
     }
     if (options.checkpoint_every > 0 && it % options.checkpoint_every == 0) {
-      loop.train_seconds =
-          seconds_before +
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      loop.train_seconds = training_seconds();
       save();
     }
   }
   progress.Finish();
-  loop.train_seconds =
-      seconds_before +
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  loop.train_seconds = training_seconds();
   save();
 
   TrainSummary summary;
+  summary.stopped_by_time = stopped_by_time;
   summary.test_metrics = evaluate();
   summary.train_seconds = loop.train_seconds;
   summary.iterations = loop.iteration;
@@ -472,7 +521,15 @@ TrainSummary Train(const TrainOptions& options) {
       {"gaussians", summary.gaussians},
       {"test_views", test_views.size()},
       {"final_loss",
-       loop.loss_curve.empty() ? nlohmann::json(nullptr) : FiniteOrNull(loop.loss_curve.back())}};
+       loop.loss_curve.empty() ? nlohmann::json(nullptr) : FiniteOrNull(loop.loss_curve.back())},
+      {"stopped_by_time", stopped_by_time},
+      {"curve", CurveBlocks(loop.loss_curve, loop.psnr_curve, 256)},
+      {"test_curve", loop.test_curve}};
+  if (options.test_every > 0) {
+    nlohmann::json last = summary.test_metrics;
+    last["iteration"] = loop.iteration;
+    results["test_curve"].push_back(std::move(last));
+  }
   WriteJsonFile(options.out / "results.json", results);
   return summary;
 }

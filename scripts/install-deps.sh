@@ -11,6 +11,9 @@ PACKAGES=(
   nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
+  # benchmark harness: the SQLite results store; the report test opens the HTML page in
+  # headless Chromium
+  libsqlite3-dev chromium
   # method: SIMD kernels with runtime dispatch
   libhwy-dev
   # hdr4d render --video encodes MP4 with ffmpeg

@@ -19,9 +19,14 @@ TEST(Cli, HelpListsEverySubcommand) {
   const auto r = RunHdr4d("--help");
   EXPECT_EQ(r.exit_code, 0);
   for (const char* name : {"dataset", "eval", "synth-ldr", "make-demo-scene", "merge-hdr",
-                           "make-gaussian-scene", "train", "render", "export-ply"}) {
+                           "make-gaussian-scene", "train", "render", "export-ply", "bench"}) {
     EXPECT_NE(r.out.find(name), std::string::npos) << name;
     EXPECT_EQ(RunHdr4d(std::string(name) + " --help").exit_code, 0) << name;
+  }
+  const auto bench = RunHdr4d("bench --help");
+  for (const char* name : {"run", "table", "pareto", "report", "stress", "submit", "slurm", "collect"}) {
+    EXPECT_NE(bench.out.find(name), std::string::npos) << name;
+    EXPECT_EQ(RunHdr4d(std::string("bench ") + name + " --help").exit_code, 0) << name;
   }
   const auto dataset = RunHdr4d("dataset --help");
   for (const char* name : {"check", "preview"}) {

@@ -1,0 +1,50 @@
+// Mistakes with `hdr4d bench` end in one line "hdr4d: error: ..." naming the file or option,
+// exit code 1, and create nothing.
+#include <gtest/gtest.h>
+
+#include "benchmark/bench_test_util.h"
+#include "core/json_util.h"
+#include "tests/testing.h"
+
+namespace hdr4d::bench {
+namespace {
+namespace fs = std::filesystem;
+using namespace testutil;
+
+TEST(BenchCliErrors, UserMistakesEndInOneLineAndCreateNothing) {
+  testing::TempDir dir;
+  testing::WriteTextFile(dir / "broken.json", "{\"name\": \"x\", ");
+  WriteJsonFile(dir / "unknown_key.json", {{"name", "x"}, {"scenes", nlohmann::json::array()}, {"colour", 1}});
+  WriteTinySuite(dir / "tiny.json", "tiny", {{{"name", "m"}}}, {0}, 10);
+  testing::WriteTextFile(dir / "not_a_db.db", "plain text, not SQLite, and long enough to be read\n");
+  const std::string store = (dir / "store.db").string();
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"bench", "table", "ci", "--store", store}, "no such results store"},
+      {{"bench", "run", (dir / "broken.json").string(), "--store", store}, "broken.json"},
+      {{"bench", "run", (dir / "unknown_key.json").string(), "--store", store}, "unknown key 'colour'"},
+      {{"bench", "run", "no-such-suite", "--store", store}, "no suite 'no-such-suite'"},
+      {{"bench", "run", (dir / "tiny.json").string(), "--store", store, "--jobs", "0"}, "--jobs"},
+      {{"bench", "run", (dir / "tiny.json").string(), "--store", store, "--scenes", "nope"}, "no scene 'nope'"},
+      {{"bench", "run", (dir / "tiny.json").string(), "--store", (dir / "not_a_db.db").string(), "--dry-run"}, "not_a_db.db"},
+      {{"bench", "report", "ci", "--store", (dir / "not_a_db.db").string(), "--out", (dir / "r.html").string()}, "not_a_db.db"},
+      {{"bench", "collect", dir.path().string(), "--store", store}, "not a bench slurm folder"},
+      {{"bench", "task", dir.path().string(), "--array", "0", "--index", "0"}, "plan.json"},
+      {{"bench", "submit", "--store", store, "--method", "m", "--scene", (dir / "nowhere").string(),
+        "--renders", dir.path().string()}, "nowhere"},
+      {{"bench", "stress", "--out", (dir / "s").string(), "--case", "no-such-case"}, "no case 'no-such-case'"},
+      {{"bench", "table", "ci", "--store", (dir / "not_a_db.db").string(), "--protocol", "max"}, "--protocol: expected one of own_max, gt_max, pu21, got 'max'"},
+  };
+  for (const auto& [args, names] : cases) {
+    const Command c = RunHdr4dArgs(args, dir / "log.txt");
+    const std::string what = args[1] + " " + args[2];
+    EXPECT_EQ(c.result.exit_code, 1) << what << "\n" << c.text;
+    EXPECT_EQ(CountLines(c.text, "hdr4d: error: "), 1) << what << "\n" << c.text;
+    EXPECT_NE(c.result.error_line.find(names), std::string::npos) << what << ": " << c.result.error_line;
+    EXPECT_EQ(c.text.find("terminate"), std::string::npos) << c.text;
+  }
+  EXPECT_FALSE(fs::exists(dir / "store.db"));
+  EXPECT_FALSE(fs::exists(dir / "r.html"));
+}
+
+}  // namespace
+}  // namespace hdr4d::bench

@@ -1,0 +1,173 @@
+#include "benchmark/pareto.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+#include <tuple>
+
+#include "benchmark/stats.h"
+#include "core/error.h"
+#include "core/json_util.h"
+#include "core/plot.h"
+
+namespace hdr4d::bench {
+namespace fs = std::filesystem;
+namespace {
+
+using ConfigKey = std::tuple<std::string, std::string, std::string, std::string>;  // m, s, v, b
+
+std::optional<double> TimeOf(const RunSummary& r, ParetoTime time) {
+  const double v = time == ParetoTime::kTraining ? r.train_seconds
+                                                 : (r.render_fps > 0 ? 1000.0 / r.render_fps : NAN);
+  if (!std::isfinite(v) || v <= 0) return std::nullopt;
+  return v;
+}
+
+}  // namespace
+
+std::string ParetoPoint::Config() const {
+  return method + "/" + supervision + (variant.empty() ? "" : "/" + variant);
+}
+
+void MarkFront(std::vector<ParetoPoint>* points) {
+  for (ParetoPoint& p : *points) {
+    p.front = std::none_of(points->begin(), points->end(), [&](const ParetoPoint& q) {
+      return q.seconds <= p.seconds && q.quality >= p.quality &&
+             (q.seconds < p.seconds || q.quality > p.quality);
+    });
+  }
+}
+
+std::vector<ParetoPoint> ParetoPoints(const std::vector<RunSummary>& runs, const Suite& suite,
+                                      const std::string& metric, ParetoTime time,
+                                      const std::string& scene) {
+  // (config, scene) -> per-seed values.
+  std::map<ConfigKey, std::map<std::string, std::pair<std::vector<double>, std::vector<double>>>> values;
+  for (const RunSummary& r : runs) {
+    if (r.status != "ok" || r.source == "submit") continue;
+    const auto m = r.metrics.find(metric);
+    const auto t = TimeOf(r, time);
+    if (m == r.metrics.end() || !std::isfinite(m->second) || !t) continue;
+    auto& v = values[{r.label.method, r.label.supervision, r.label.variant, r.label.budget}][r.label.scene];
+    v.first.push_back(*t);
+    v.second.push_back(m->second);
+  }
+  std::vector<ParetoPoint> points;
+  for (const auto& [key, by_scene] : values) {
+    ParetoPoint p{std::get<0>(key), std::get<1>(key), std::get<2>(key), std::get<3>(key), scene};
+    if (!scene.empty()) {
+      const auto it = by_scene.find(scene);
+      if (it == by_scene.end()) continue;
+      p.seconds = Mean(it->second.first);
+      p.quality = Mean(it->second.second);
+      p.seeds = static_cast<int>(it->second.first.size());
+    } else {
+      // Overall: only configurations with runs on every scene of the suite, so means compare.
+      if (by_scene.size() != suite.scenes.size()) continue;
+      std::vector<double> secs, qual;
+      for (const auto& [s, v] : by_scene) {
+        secs.push_back(Mean(v.first));
+        qual.push_back(Mean(v.second));
+        p.seeds = std::max<int>(p.seeds, static_cast<int>(v.first.size()));
+      }
+      p.seconds = Mean(secs);
+      p.quality = Mean(qual);
+    }
+    points.push_back(p);
+  }
+  MarkFront(&points);
+  return points;
+}
+
+bool ParetoChart(const std::vector<RunSummary>& runs, const Suite& suite, const std::string& metric,
+                 ParetoTime time, const std::string& scene, std::vector<PlotSeries>* out,
+                 PlotOptions* o) {
+  const std::vector<ParetoPoint> points = ParetoPoints(runs, suite, metric, time, scene);
+  if (points.empty()) return false;
+  const char* time_name = time == ParetoTime::kTraining ? "training" : "render";
+  std::vector<PlotSeries>& series = *out;
+  series.clear();
+  // One line per configuration through its budgets (sorted by time), the front in black.
+  std::map<std::string, std::vector<const ParetoPoint*>> by_config;
+  for (const ParetoPoint& p : points) by_config[p.Config()].push_back(&p);
+  int colour = 0;
+  for (auto& [config, list] : by_config) {
+    std::sort(list.begin(), list.end(),
+              [](const ParetoPoint* a, const ParetoPoint* b) { return a->seconds < b->seconds; });
+    PlotSeries s;
+    s.name = config;
+    s.style = list.size() > 1 ? PlotSeries::kLineMarkers : PlotSeries::kMarkers;
+    s.color = PaletteColor(colour++);
+    for (const ParetoPoint* p : list) {
+      s.x.push_back(p->seconds);
+      s.y.push_back(p->quality);
+      s.point_labels.push_back(list.size() > 1 ? p->budget : "");
+    }
+    series.push_back(std::move(s));
+  }
+  std::vector<const ParetoPoint*> front;
+  for (const ParetoPoint& p : points)
+    if (p.front) front.push_back(&p);
+  std::sort(front.begin(), front.end(),
+            [](const ParetoPoint* a, const ParetoPoint* b) { return a->seconds < b->seconds; });
+  PlotSeries f;
+  f.name = "Pareto front";
+  f.style = PlotSeries::kLineMarkers;  // a front of one point still shows
+  f.color = {0.f, 0.f, 0.f};
+  for (const ParetoPoint* p : front) {
+    f.x.push_back(p->seconds);
+    f.y.push_back(p->quality);
+  }
+  series.push_back(std::move(f));
+  *o = PlotOptions{};
+  o->title = fmt::format("{}: {} vs {} time", scene.empty() ? "mean over scenes" : scene,
+                         metric, time_name);
+  o->x_label = time == ParetoTime::kTraining ? "training time (s, log)" : "render time per frame (ms, log)";
+  o->y_label = metric + " (higher is better)";
+  o->log_x = true;
+  o->width = 900;
+  o->height = 560;
+  return true;
+}
+
+std::vector<fs::path> WritePareto(const std::vector<RunSummary>& runs, const Suite& suite,
+                                  const ParetoOptions& options) {
+  std::vector<std::string> scenes;
+  for (const SceneSpec& s : suite.scenes) scenes.push_back(s.name);
+  scenes.push_back("");  // overall
+  std::string csv = "scene,time,method,supervision,variant,budget,seeds,time_value,metric,value,front\n";
+  std::vector<fs::path> charts;
+  bool any = false;
+  for (const ParetoTime time : {ParetoTime::kTraining, ParetoTime::kRender}) {
+    const char* time_name = time == ParetoTime::kTraining ? "train" : "render";
+    for (const std::string& scene : scenes) {
+      std::vector<ParetoPoint> points = ParetoPoints(runs, suite, options.metric, time, scene);
+      if (points.empty()) continue;
+      any = true;
+      for (const ParetoPoint& p : points) {
+        csv += fmt::format("{},{},{},{},{},{},{},{:.6g},{},{:.6g},{}\n",
+                           scene.empty() ? "overall" : scene, time_name, p.method, p.supervision,
+                           p.variant, p.budget, p.seeds, p.seconds, options.metric, p.quality,
+                           p.front ? 1 : 0);
+      }
+      std::vector<PlotSeries> series;
+      PlotOptions o;
+      ParetoChart(runs, suite, options.metric, time, scene, &series, &o);
+      const std::string stem = fmt::format("pareto_{}_{}", scene.empty() ? "overall" : scene, time_name);
+      WritePlot(options.out / (stem + ".png"), series, o);
+      WritePlot(options.out / (stem + ".svg"), series, o);
+      charts.push_back(options.out / (stem + ".png"));
+    }
+  }
+  if (!any) {
+    Fail("bench pareto: no finished run of suite '{}' has both '{}' and a time; nothing to plot",
+         suite.name, options.metric);
+  }
+  WriteTextFileAtomic(options.out / "pareto.csv", csv);
+  return charts;
+}
+
+}  // namespace hdr4d::bench

@@ -1,0 +1,61 @@
+#include "benchmark/pareto.h"
+
+#include <gtest/gtest.h>
+
+namespace hdr4d::bench {
+namespace {
+
+TEST(Pareto, FrontKeepsOnlyUndominatedPoints) {
+  std::vector<ParetoPoint> p(5);
+  const double data[5][2] = {{1, 20}, {2, 25}, {3, 24}, {4, 30}, {2, 25}};  // the last ties the 2nd
+  for (int i = 0; i < 5; ++i) p[i].seconds = data[i][0], p[i].quality = data[i][1];
+  MarkFront(&p);
+  EXPECT_TRUE(p[0].front);
+  EXPECT_TRUE(p[1].front);
+  EXPECT_FALSE(p[2].front);  // (2, 25) is faster and better
+  EXPECT_TRUE(p[3].front);
+  EXPECT_TRUE(p[4].front);  // equal points do not dominate each other
+}
+
+TEST(Pareto, PointsAverageSeedsAndOverallNeedsEveryScene) {
+  const Suite suite = ParseSuite(nlohmann::json::parse(R"({"name": "t",
+      "scenes": [{"name": "s1", "path": "a"}, {"name": "s2", "path": "b"}],
+      "methods": [{"name": "m"}, {"name": "n"}], "budgets": [{"iterations": 1}]})"),
+                                 "/x/t.json");
+  std::vector<RunSummary> runs;
+  auto add = [&](const std::string& m, const std::string& scene, const std::string& budget,
+                 int seed, double secs, double q) {
+    RunSummary r;
+    r.label = {"t", m, scene, "ldr", seed, budget, ""};
+    r.status = "ok";
+    r.source = "harness";
+    r.train_seconds = secs;
+    r.render_fps = 100;
+    r.metrics = {{"mu_psnr", q}};
+    runs.push_back(r);
+  };
+  add("m", "s1", "100it", 0, 10, 20);
+  add("m", "s1", "100it", 1, 12, 22);
+  add("m", "s2", "100it", 0, 20, 30);
+  add("m", "s1", "200it", 0, 30, 25);
+  add("m", "s2", "200it", 0, 40, 35);
+  add("n", "s1", "100it", 0, 5, 10);  // n has no run on s2: left out of the overall points
+  const auto s1 = ParetoPoints(runs, suite, "mu_psnr", ParetoTime::kTraining, "s1");
+  ASSERT_EQ(s1.size(), 3u);
+  for (const ParetoPoint& p : s1) {
+    if (p.method == "m" && p.budget == "100it") {
+      EXPECT_DOUBLE_EQ(p.seconds, 11);
+      EXPECT_DOUBLE_EQ(p.quality, 21);
+      EXPECT_EQ(p.seeds, 2);
+    }
+    EXPECT_TRUE(p.front);  // each is faster or better than the others
+  }
+  const auto overall = ParetoPoints(runs, suite, "mu_psnr", ParetoTime::kTraining, "");
+  ASSERT_EQ(overall.size(), 2u);
+  for (const ParetoPoint& p : overall) EXPECT_EQ(p.method, "m");
+  const auto render = ParetoPoints(runs, suite, "mu_psnr", ParetoTime::kRender, "s1");
+  EXPECT_DOUBLE_EQ(render.front().seconds, 10);  // ms per frame at 100 fps
+}
+
+}  // namespace
+}  // namespace hdr4d::bench

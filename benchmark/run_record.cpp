@@ -1,0 +1,171 @@
+#include "benchmark/run_record.h"
+
+#include <cmath>
+#include <ctime>
+#include <limits>
+#include <tuple>
+
+#include "core/error.h"
+
+namespace hdr4d::bench {
+namespace {
+
+// JSON has no inf/NaN: +inf (a PSNR of identical images) is written as the string "inf",
+// NaN (unknown) as null.
+nlohmann::json Number(double v) {
+  if (std::isnan(v)) return nullptr;
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  return v;
+}
+
+double ToNumber(const nlohmann::json& j, const std::string& source, const std::string& key) {
+  if (j.is_null()) return std::numeric_limits<double>::quiet_NaN();
+  if (j.is_number()) return j.get<double>();
+  if (j.is_string() && (j == "inf" || j == "-inf"))
+    return j == "inf" ? std::numeric_limits<double>::infinity()
+                      : -std::numeric_limits<double>::infinity();
+  Fail("{}: key '{}': expected a number, got {}", source, key, j.dump());
+}
+
+template <typename T>
+T Get(const nlohmann::json& j, const char* key, const std::string& source) {
+  if (!j.contains(key)) Fail("{}: key '{}' missing", source, key);
+  try {
+    return j.at(key).get<T>();
+  } catch (const nlohmann::json::exception&) {
+    Fail("{}: key '{}' has the wrong type ({})", source, key, j.at(key).dump());
+  }
+}
+
+}  // namespace
+
+nlohmann::json RunLabel::ToJson() const {
+  return {{"suite", suite}, {"method", method}, {"scene", scene}, {"supervision", supervision},
+          {"seed", seed},   {"budget", budget}, {"variant", variant}};
+}
+
+RunLabel RunLabel::FromJson(const nlohmann::json& j, const std::string& source) {
+  RunLabel l;
+  l.suite = Get<std::string>(j, "suite", source);
+  l.method = Get<std::string>(j, "method", source);
+  l.scene = Get<std::string>(j, "scene", source);
+  l.supervision = Get<std::string>(j, "supervision", source);
+  l.seed = Get<std::int64_t>(j, "seed", source);
+  l.budget = Get<std::string>(j, "budget", source);
+  l.variant = Get<std::string>(j, "variant", source);
+  return l;
+}
+
+bool RunLabel::operator<(const RunLabel& o) const {
+  return std::tie(suite, method, scene, supervision, seed, budget, variant) <
+         std::tie(o.suite, o.method, o.scene, o.supervision, o.seed, o.budget, o.variant);
+}
+
+nlohmann::json RunRecord::ToJson() const {
+  nlohmann::json j = {{"id", id},
+                      {"source", source},
+                      {"status", status},
+                      {"error", error},
+                      {"config", config},
+                      {"code_version", code_version},
+                      {"git_describe", git_describe},
+                      {"machine", machine},
+                      {"data_checksum", data_checksum},
+                      {"scene_dir", scene_dir},
+                      {"run_dir", run_dir},
+                      {"train_seconds", Number(train_seconds)},
+                      {"render_fps", Number(render_fps)},
+                      {"peak_rss_mb", Number(peak_rss_mb)},
+                      {"wall_seconds", Number(wall_seconds)},
+                      {"iterations", iterations},
+                      {"gaussians", gaussians},
+                      {"started_at", started_at},
+                      {"finished_at", finished_at}};
+  j["labels"] = nlohmann::json::array();
+  for (const RunLabel& l : labels) j["labels"].push_back(l.ToJson());
+  j["frames"] = nlohmann::json::array();
+  for (const FrameResult& f : frames) {
+    nlohmann::json m = nlohmann::json::object(), s = nlohmann::json::object();
+    for (const auto& [k, v] : f.metrics) m[k] = Number(v);
+    for (const auto& [k, v] : f.stats) s[k] = Number(v);
+    j["frames"].push_back({{"frame", f.frame},
+                           {"time", f.time},
+                           {"camera_id", f.camera_id},
+                           {"exposure", f.exposure},
+                           {"metrics", m},
+                           {"stats", s}});
+  }
+  j["series"] = nlohmann::json::object();
+  for (const auto& [name, points] : series) {
+    nlohmann::json p = nlohmann::json::array();
+    for (const auto& [x, y] : points) p.push_back({Number(x), Number(y)});
+    j["series"][name] = p;
+  }
+  return j;
+}
+
+RunRecord RunRecord::FromJson(const nlohmann::json& j, const std::string& source) {
+  if (!j.is_object()) Fail("{}: a run record must be a JSON object", source);
+  RunRecord r;
+  r.id = Get<std::string>(j, "id", source);
+  if (r.id.empty()) Fail("{}: key 'id' is empty", source);
+  r.source = Get<std::string>(j, "source", source);
+  r.status = Get<std::string>(j, "status", source);
+  if (r.status != "ok" && r.status != "failed")
+    Fail("{}: key 'status' must be ok or failed, not '{}'", source, r.status);
+  r.error = Get<std::string>(j, "error", source);
+  r.config = j.value("config", nlohmann::json::object());
+  r.code_version = Get<std::string>(j, "code_version", source);
+  r.git_describe = j.value("git_describe", "");
+  r.machine = j.value("machine", nlohmann::json::object());
+  r.data_checksum = Get<std::string>(j, "data_checksum", source);
+  r.scene_dir = j.value("scene_dir", "");
+  r.run_dir = j.value("run_dir", "");
+  for (auto [key, field] : {std::pair{"train_seconds", &r.train_seconds},
+                            std::pair{"render_fps", &r.render_fps},
+                            std::pair{"peak_rss_mb", &r.peak_rss_mb},
+                            std::pair{"wall_seconds", &r.wall_seconds}}) {
+    *field = ToNumber(j.value(key, nlohmann::json()), source, key);
+  }
+  r.iterations = j.value("iterations", std::int64_t{-1});
+  r.gaussians = j.value("gaussians", std::int64_t{-1});
+  r.started_at = j.value("started_at", "");
+  r.finished_at = j.value("finished_at", "");
+  for (const nlohmann::json& l : Get<nlohmann::json>(j, "labels", source))
+    r.labels.push_back(RunLabel::FromJson(l, source + ": labels"));
+  if (r.labels.empty()) Fail("{}: key 'labels' is empty (a run must appear somewhere)", source);
+  for (const nlohmann::json& f : Get<nlohmann::json>(j, "frames", source)) {
+    FrameResult fr;
+    const std::string where = source + ": frames";
+    fr.frame = Get<std::string>(f, "frame", where);
+    fr.time = Get<double>(f, "time", where);
+    fr.camera_id = f.value("camera_id", std::int64_t{-1});
+    fr.exposure = f.value("exposure", 0.0);
+    // Named copies: items() of a temporary would outlive it.
+    const nlohmann::json metrics = f.value("metrics", nlohmann::json::object());
+    const nlohmann::json stats = f.value("stats", nlohmann::json::object());
+    for (const auto& [k, v] : metrics.items()) fr.metrics[k] = ToNumber(v, where + " " + fr.frame, k);
+    for (const auto& [k, v] : stats.items()) fr.stats[k] = ToNumber(v, where + " " + fr.frame, k);
+    r.frames.push_back(std::move(fr));
+  }
+  const nlohmann::json series = j.value("series", nlohmann::json::object());
+  for (const auto& [name, points] : series.items()) {
+    Series& s = r.series[name];
+    for (const nlohmann::json& p : points) {
+      if (!p.is_array() || p.size() != 2) Fail("{}: series '{}': points must be [x, y]", source, name);
+      s.emplace_back(ToNumber(p[0], source, name), ToNumber(p[1], source, name));
+    }
+  }
+  return r;
+}
+
+std::string UtcNow() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char buffer[32];
+  std::strftime(buffer, sizeof buffer, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buffer;
+}
+
+}  // namespace hdr4d::bench

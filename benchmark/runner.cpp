@@ -1,0 +1,261 @@
+#include "benchmark/runner.h"
+
+#include <fmt/format.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdio>
+#include <deque>
+#include <map>
+#include <mutex>
+#include <thread>
+
+#include "benchmark/child_process.h"
+#include "benchmark/machine.h"
+#include "benchmark/results_store.h"
+#include "benchmark/run_pipeline.h"
+#include "core/error.h"
+
+namespace hdr4d::bench {
+namespace fs = std::filesystem;
+namespace {
+
+std::atomic<bool> g_cancel{false};
+std::atomic<int> g_signal{0};
+
+extern "C" void OnStopSignal(int signal) {
+  g_signal = signal;
+  g_cancel = true;
+}
+
+// SIGINT / SIGTERM / SIGHUP stop the harness cleanly: children are stopped, finished runs are
+// already stored, nothing half-written is stored.
+class StopSignals {
+ public:
+  StopSignals() {
+    g_cancel = false;
+    g_signal = 0;
+    struct sigaction action {};
+    action.sa_handler = OnStopSignal;
+    sigemptyset(&action.sa_mask);
+    for (int i = 0; i < 3; ++i) sigaction(kSignals[i], &action, &old_[i]);
+  }
+  ~StopSignals() {
+    for (int i = 0; i < 3; ++i) sigaction(kSignals[i], &old_[i], nullptr);
+  }
+
+ private:
+  static constexpr int kSignals[3] = {SIGINT, SIGTERM, SIGHUP};
+  struct sigaction old_[3];
+};
+
+std::string Duration(double s) {
+  if (!(s >= 0) || !std::isfinite(s)) return "?";
+  const long t = std::lround(s);
+  if (t >= 3600) return fmt::format("{}h{:02d}m", t / 3600, (t % 3600) / 60);
+  if (t >= 60) return fmt::format("{}m{:02d}s", t / 60, t % 60);
+  return fmt::format("{}s", t);
+}
+
+std::string Describe(const RunLabel& l) {
+  std::string s = fmt::format("{}/{}/{}/s{}", l.method, l.scene, l.supervision, l.seed);
+  if (!l.variant.empty()) s += "/" + l.variant;
+  return s + "/" + l.budget;
+}
+
+struct Running {
+  const RunSpec* run;
+  std::string stage;
+  std::chrono::steady_clock::time_point start;
+};
+
+}  // namespace
+
+void ApplyFilter(const SuiteFilter& f, Suite* suite) {
+  if (!f.scenes.empty()) {
+    std::vector<SceneSpec> kept;
+    for (const std::string& name : f.scenes) {
+      const SceneSpec* s = suite->FindScene(name);
+      if (!s) Fail("{}: no scene '{}' in suite '{}'", suite->file.string(), name, suite->name);
+      kept.push_back(*s);
+    }
+    suite->scenes = kept;
+  }
+  if (!f.methods.empty()) {
+    std::vector<MethodSpec> kept;
+    for (const std::string& name : f.methods) {
+      const MethodSpec* m = suite->FindMethod(name);
+      if (!m) Fail("{}: no method '{}' in suite '{}'", suite->file.string(), name, suite->name);
+      kept.push_back(*m);
+    }
+    suite->methods = kept;
+  }
+  if (!f.seeds.empty()) suite->seeds = f.seeds;
+  if (f.iterations > 0) suite->budgets = {Budget{.iterations = f.iterations}};
+}
+
+std::vector<PreparedScene> PrepareScenes(const Suite& suite, const fs::path& cache, bool verbose) {
+  std::vector<PreparedScene> scenes;
+  const SceneCacheOptions options{.cache_dir = cache, .hdr4d = SelfExecutable(), .verbose = verbose};
+  for (const SceneSpec& s : suite.scenes) scenes.push_back(PrepareScene(s, options));
+  return scenes;
+}
+
+RunnerSummary RunSuite(const Suite& suite, const RunnerOptions& options) {
+  if (options.jobs < 1) Fail("bench run: --jobs must be at least 1");
+  if (options.threads < 0) Fail("bench run: --threads must be >= 0");
+  const fs::path cache = options.cache_dir.empty() ? DefaultCacheDir() : options.cache_dir;
+  const fs::path runs_dir =
+      options.runs_dir.empty() ? fs::path(options.store.string() + ".runs") : options.runs_dir;
+  StopSignals signals;
+  ResultsStore store(options.store);
+  const std::vector<PreparedScene> scenes = PrepareScenes(suite, cache, true);
+  const std::vector<RunSpec> runs = PlanRuns(suite, scenes, CodeVersion());
+
+  RunnerSummary summary;
+  summary.planned = static_cast<int>(runs.size());
+  const std::set<std::string> ok = store.RunIds("ok"), failed = store.RunIds("failed");
+  std::deque<const RunSpec*> queue;
+  for (const RunSpec& r : runs) {
+    if (ok.count(r.id) || (failed.count(r.id) && !options.retry_failed)) {
+      store.AddLabels(r.id, r.labels);  // this suite's names for a run made before
+      ++(ok.count(r.id) ? summary.already_done : summary.skipped_failed);
+      continue;
+    }
+    queue.push_back(&r);
+  }
+  const int threads =
+      options.threads > 0 ? options.threads : std::max(1, AvailableCores() / options.jobs);
+  fmt::print(stderr,
+             "bench: suite '{}': {} runs, {} already in the store{}, {} to run ({} job{} x {} "
+             "thread{}); store {}\n",
+             suite.name, runs.size(), summary.already_done,
+             summary.skipped_failed ? fmt::format(", {} failed before (--retry-failed redoes them)",
+                                                  summary.skipped_failed)
+                                    : "",
+             queue.size(), options.jobs, options.jobs == 1 ? "" : "s", threads,
+             threads == 1 ? "" : "s", options.store.string());
+  if (options.dry_run) {
+    for (const RunSpec& r : runs) {
+      const char* state = ok.count(r.id) ? "stored" : failed.count(r.id) ? "failed" : "to run";
+      fmt::print("{}  {:<7} {}\n", r.id, state, Describe(r.labels.front()));
+    }
+    return summary;
+  }
+  if (queue.empty()) return summary;
+
+  std::mutex mutex;
+  std::condition_variable changed;
+  std::map<std::string, Running> running;
+  double units_left = 0, units_done = 0, seconds_done = 0;
+  for (const RunSpec* r : queue) units_left += WorkUnits(*r);
+  std::vector<std::string> failures;
+  std::string last_line, fatal;
+  const auto start = std::chrono::steady_clock::now();
+  const PipelineOptions pipeline{.runs_dir = runs_dir,
+                                 .hdr4d = SelfExecutable(),
+                                 .threads = threads,
+                                 .cancel = &g_cancel,
+                                 .keep_checkpoint = options.keep_checkpoints};
+
+  auto worker = [&] {
+    for (;;) {
+      const RunSpec* run = nullptr;
+      {
+        std::lock_guard lock(mutex);
+        if (queue.empty() || g_cancel) return;
+        run = queue.front();
+        queue.pop_front();
+        units_left -= WorkUnits(*run);
+        running[run->id] = {run, "prepare", std::chrono::steady_clock::now()};
+      }
+      std::optional<RunRecord> record;
+      std::string error;
+      try {
+        record = ExecuteRun(*run, pipeline, [&](const std::string& s) {
+          std::lock_guard lock(mutex);
+          running[run->id].stage = s;
+        });
+        if (record) store.InsertRun(*record);
+      } catch (const std::exception& e) {
+        error = e.what();
+      }
+      std::lock_guard lock(mutex);
+      const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() -
+                                                        running[run->id].start)
+                              .count();
+      running.erase(run->id);
+      if (!error.empty()) {  // the harness itself failed (store not writable, ...): stop
+        fatal = fmt::format("{}: {}", Describe(run->labels.front()), error);
+        g_cancel = true;
+      } else if (record) {
+        units_done += WorkUnits(*run);
+        seconds_done += took;
+        if (record->status == "ok") {
+          ++summary.done;
+          last_line = fmt::format("{} in {}", Describe(run->labels.front()), Duration(took));
+        } else {
+          ++summary.failed;
+          failures.push_back(fmt::format("{} ({}): {}", Describe(run->labels.front()), run->id,
+                                         record->error));
+          last_line = fmt::format("FAILED {}", Describe(run->labels.front()));
+        }
+      }
+      changed.notify_all();
+    }
+  };
+  std::vector<std::thread> workers;
+  for (int j = 0; j < options.jobs; ++j) workers.emplace_back(worker);
+
+  const bool tty = isatty(fileno(stderr));
+  auto last_print = std::chrono::steady_clock::now() - std::chrono::hours(1);
+  int last_finished = -1;
+  for (;;) {
+    std::unique_lock lock(mutex);
+    changed.wait_for(lock, std::chrono::seconds(1));
+    const bool all_done = running.empty() && (queue.empty() || g_cancel);
+    const int finished = summary.done + summary.failed;
+    // ETA: seconds per budget unit so far, over what is left and what is still running.
+    std::string eta = "?";
+    if (units_done > 0) {
+      const double rate = seconds_done / units_done;
+      double left = units_left * rate;
+      const auto now = std::chrono::steady_clock::now();
+      for (const auto& [id, r] : running)
+        left += std::max(0.0, WorkUnits(*r.run) * rate -
+                                  std::chrono::duration<double>(now - r.start).count());
+      eta = Duration(left / options.jobs);
+    }
+    const std::string line = fmt::format(
+        "bench: {} done ({} failed), {} running, {} left, elapsed {}, ETA {}{}", finished,
+        summary.failed, running.size(), queue.size(),
+        Duration(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()),
+        eta, last_line.empty() ? "" : "; last: " + last_line);
+    const auto now = std::chrono::steady_clock::now();
+    if (tty) {
+      fmt::print(stderr, "\r\033[K{}", line);
+      if (all_done) fmt::print(stderr, "\n");
+    } else if (finished != last_finished || now - last_print > std::chrono::seconds(60) || all_done) {
+      fmt::print(stderr, "{}\n", line);
+      last_print = now;
+      last_finished = finished;
+    }
+    if (all_done) break;
+  }
+  for (std::thread& w : workers) w.join();
+  for (const std::string& f : failures) fmt::print(stderr, "bench: failed: {}\n", f);
+  if (!fatal.empty()) Fail("bench run stopped: {}", fatal);
+  summary.interrupted = g_signal != 0;
+  if (summary.interrupted) {
+    Fail("bench run interrupted by signal {}: {} finished runs are in {}; the unfinished ones "
+         "resume when the same command runs again",
+         g_signal.load(), summary.done + summary.failed, options.store.string());
+  }
+  return summary;
+}
+
+}  // namespace hdr4d::bench

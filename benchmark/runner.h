@@ -1,0 +1,50 @@
+// `hdr4d bench run SUITE --store FILE`: prepares the suite's scenes, plans its runs, skips the
+// ones the store already has (same identity), and runs the rest, --jobs at a time with the
+// cores divided between them, showing runs done / running / left and an ETA. Each finished run
+// is written to the store in one transaction as soon as it ends, so an interrupted suite loses
+// only the runs in progress (their folders stay, and training resumes from its last
+// checkpoint next time).
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "benchmark/run_plan.h"
+#include "benchmark/suite.h"
+
+namespace hdr4d::bench {
+
+// Narrows a suite to a quick pass (a reduced paper run): only these scenes, methods and seeds,
+// and one budget of this many iterations. Empty / 0 keeps the suite's. Throws hdr4d::Error
+// naming an unknown scene or method.
+struct SuiteFilter {
+  std::vector<std::string> scenes, methods;
+  std::vector<std::int64_t> seeds;
+  std::int64_t iterations = 0;
+};
+void ApplyFilter(const SuiteFilter& filter, Suite* suite);
+
+struct RunnerOptions {
+  std::filesystem::path store;
+  std::filesystem::path runs_dir;   // default: <store>.runs
+  std::filesystem::path cache_dir;  // default: DefaultCacheDir()
+  int jobs = 1;
+  int threads = 0;  // per job; 0 = the available cores divided by jobs (at least 1)
+  bool retry_failed = false;
+  bool keep_checkpoints = false;
+  bool dry_run = false;  // print the plan, run nothing
+};
+
+struct RunnerSummary {
+  int planned = 0, already_done = 0, done = 0, failed = 0, skipped_failed = 0;
+  bool interrupted = false;
+};
+
+// Prepares every scene of the suite (generating into the cache) and plans its runs.
+std::vector<PreparedScene> PrepareScenes(const Suite& suite, const std::filesystem::path& cache,
+                                         bool verbose);
+
+RunnerSummary RunSuite(const Suite& suite, const RunnerOptions& options);
+
+}  // namespace hdr4d::bench

@@ -1,0 +1,149 @@
+#include "benchmark/scene_cache.h"
+
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <set>
+
+#include "benchmark/child_process.h"
+#include "benchmark/settings_flags.h"
+#include "core/dataset.h"
+#include "core/error.h"
+#include "datagen/sha256.h"
+
+namespace hdr4d::bench {
+namespace fs = std::filesystem;
+namespace {
+
+// An exclusive lock on a file for as long as the object lives.
+class FileLock {
+ public:
+  explicit FileLock(const fs::path& path) {
+    fd_ = open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd_ < 0) Fail("{}: cannot create the lock file", path.string());
+    if (flock(fd_, LOCK_EX) != 0) Fail("{}: cannot lock", path.string());
+  }
+  ~FileLock() {
+    flock(fd_, LOCK_UN);
+    close(fd_);
+  }
+
+ private:
+  int fd_ = -1;
+};
+
+bool IsDataset(const fs::path& dir) { return fs::exists(dir / "transforms_train.json"); }
+
+void Run(const std::vector<std::string>& argv, const fs::path& log, const std::string& scene) {
+  const ChildResult r = RunChild({.argv = argv, .log = log});
+  if (!r.ok())
+    Fail("scene '{}': generating it failed ({}); see {}", scene, r.Describe(), log.string());
+}
+
+}  // namespace
+
+fs::path DefaultCacheDir() {
+  if (const char* c = std::getenv("HDR4D_CACHE"); c && *c) return c;
+  if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x) return fs::path(x) / "hdr4d";
+  if (const char* h = std::getenv("HOME"); h && *h) return fs::path(h) / ".cache" / "hdr4d";
+  return fs::temp_directory_path() / "hdr4d-cache";
+}
+
+fs::path CachedSceneDir(const SceneSpec& spec, const fs::path& cache) {
+  switch (spec.kind) {
+    case SceneSpec::Kind::kPath:
+      return {};
+    case SceneSpec::Kind::kDatagen:
+      return cache / "datagen" /
+             fmt::format("{}-s{}", spec.source["preset"].get<std::string>(),
+                         spec.source["seed"].get<std::int64_t>()) /
+             spec.source["scene"].get<std::string>();
+    case SceneSpec::Kind::kBuiltin:
+      // Named by the hash of its options: two suites asking for the same scene share it.
+      return cache / "builtin" /
+             fmt::format("{}-{}", spec.source["scene"].get<std::string>(),
+                         datagen::Sha256Hex(spec.source.dump()).substr(0, 12));
+  }
+  return {};
+}
+
+PreparedScene PrepareScene(const SceneSpec& spec, const SceneCacheOptions& options) {
+  PreparedScene p;
+  p.spec = &spec;
+  if (spec.kind == SceneSpec::Kind::kPath) {
+    p.dir = spec.path;
+    if (!IsDataset(p.dir))
+      Fail("scene '{}': {} is not a dataset folder (no transforms_train.json)", spec.name,
+           p.dir.string());
+    p.checksum = DatasetChecksum(p.dir);
+    return p;
+  }
+  p.dir = CachedSceneDir(spec, options.cache_dir);
+  std::error_code ec;
+  fs::create_directories(p.dir.parent_path(), ec);
+  if (ec) Fail("{}: cannot create the scene cache: {}", p.dir.parent_path().string(), ec.message());
+  if (!IsDataset(p.dir)) {
+    FileLock lock(p.dir.string() + ".lock");
+    if (!IsDataset(p.dir)) {  // another harness may have made it while we waited
+      const fs::path log = p.dir.string() + ".log";
+      const std::string hdr4d = options.hdr4d.string();
+      if (options.verbose) fmt::print(stderr, "bench: generating scene '{}' into {}\n", spec.name, p.dir.string());
+      if (spec.kind == SceneSpec::Kind::kDatagen) {
+        // datagen builds OUT/<scene>.partial and renames it into place when complete.
+        Run({hdr4d, "datagen", "--scene", spec.source["scene"].get<std::string>(), "--preset",
+             spec.source["preset"].get<std::string>(), "--seed",
+             std::to_string(spec.source["seed"].get<std::int64_t>()), "--out",
+             p.dir.parent_path().string()},
+            log, spec.name);
+      } else {
+        const fs::path partial = p.dir.string() + ".partial";
+        fs::remove_all(partial, ec);
+        const std::string scene = spec.source["scene"].get<std::string>();
+        std::vector<std::string> make = {
+            hdr4d, scene == "demo" ? "make-demo-scene" : "make-gaussian-scene", "--out",
+            partial.string()};
+        for (const std::string& a : SettingsToArgs(spec.source["flags"], 0, spec.name))
+          make.push_back(a);
+        Run(make, log, spec.name);
+        if (scene == "demo") {
+          std::vector<std::string> synth = {hdr4d, "synth-ldr", "--data", partial.string()};
+          for (const std::string& a : SettingsToArgs(spec.source["synth"], 0, spec.name))
+            synth.push_back(a);
+          Run(synth, log, spec.name);
+        }
+        fs::rename(partial, p.dir, ec);
+        if (ec) Fail("{}: cannot move the generated scene into place: {}", p.dir.string(), ec.message());
+      }
+      if (!IsDataset(p.dir))
+        Fail("scene '{}': the generator finished but {} holds no dataset; see {}", spec.name,
+             p.dir.string(), log.string());
+    }
+  }
+  p.checksum = DatasetChecksum(p.dir);
+  return p;
+}
+
+std::string DatasetChecksum(const fs::path& dir) {
+  const Dataset d = LoadDataset(dir, {.image_check = ImageCheck::kNone, .require_test = false});
+  std::set<fs::path> files;
+  for (const char* name : {"transforms_train.json", "transforms_test.json", "transforms_val.json",
+                           "transforms.json", "point3d.ply"}) {
+    if (fs::exists(dir / name)) files.insert(dir / name);
+  }
+  for (const Frame* f : d.AllFrames()) {
+    files.insert(f->image_path);
+    if (f->hdr_path) files.insert(*f->hdr_path);
+  }
+  std::string listing;
+  for (const fs::path& f : files) {
+    // A frame whose LDR image is not there yet (HDR-only scenes) is named, not hashed.
+    const std::string hash = fs::exists(f) ? datagen::Sha256File(f) : "absent";
+    listing += fs::relative(f, dir).generic_string() + " " + hash + "\n";
+  }
+  return datagen::Sha256Hex(listing);
+}
+
+}  // namespace hdr4d::bench

@@ -1,0 +1,201 @@
+#include "benchmark/slurm.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <map>
+#include <set>
+
+#include "benchmark/child_process.h"
+#include "benchmark/machine.h"
+#include "benchmark/results_store.h"
+#include "benchmark/run_pipeline.h"
+#include "benchmark/run_plan.h"
+#include "core/error.h"
+#include "core/json_util.h"
+
+namespace hdr4d::bench {
+namespace fs = std::filesystem;
+namespace {
+
+std::string SlurmTime(double minutes) {
+  const long total = static_cast<long>(std::ceil(minutes));
+  return fmt::format("{}:{:02d}:00", total / 60, total % 60);
+}
+
+nlohmann::json SpecJson(const RunSpec& r) {
+  nlohmann::json labels = nlohmann::json::array();
+  for (const RunLabel& l : r.labels) labels.push_back(l.ToJson());
+  return {{"id", r.id},
+          {"labels", labels},
+          {"method", r.method},
+          {"scene", r.scene},
+          {"scene_dir", r.prepared->dir.string()},
+          {"data_checksum", r.prepared->checksum},
+          {"region", r.prepared->spec->region ? nlohmann::json(*r.prepared->spec->region)
+                                              : nlohmann::json(nullptr)},
+          {"budget", {{"iterations", r.budget.iterations}, {"seconds", r.budget.seconds}}},
+          {"train_args", r.train_args},
+          {"render_args", r.render_args},
+          {"identity", r.identity},
+          {"resources", r.resources.ToJson()}};
+}
+
+}  // namespace
+
+SlurmPlan WriteSlurmJobs(const Suite& suite, const SlurmOptions& o) {
+  if (o.out.empty()) Fail("bench slurm: --out is required");
+  if (o.max_parallel < 0) Fail("bench slurm: --max-parallel must be >= 0");
+  const fs::path dir = fs::absolute(o.out);
+  const fs::path cache = o.cache_dir.empty() ? DefaultCacheDir() : fs::absolute(o.cache_dir);
+  const std::vector<PreparedScene> scenes = PrepareScenes(suite, cache, true);
+  const std::vector<RunSpec> runs = PlanRuns(suite, scenes, CodeVersion());
+  std::set<std::string> stored;
+  if (!o.store.empty() && fs::exists(o.store)) stored = ResultsStore(o.store, false).RunIds("ok");
+
+  // Group by resource request: a job array asks for one.
+  std::map<std::string, std::vector<const RunSpec*>> groups;
+  SlurmPlan plan;
+  for (const RunSpec& r : runs) {
+    if (stored.count(r.id)) {
+      ++plan.skipped;
+      continue;
+    }
+    groups[r.resources.ToJson().dump()].push_back(&r);
+  }
+  fs::create_directories(dir / "results");
+  fs::create_directories(dir / "logs");
+  const std::string hdr4d = SelfExecutablePath().string();
+  nlohmann::json arrays = nlohmann::json::array();
+  std::string submit = "#!/bin/bash\n# Submits every job array of this plan (hdr4d bench slurm).\nset -euo pipefail\ncd \"$(dirname \"$0\")\"\n";
+  int k = 0;
+  for (const auto& [key, list] : groups) {
+    const Resources& res = list.front()->resources;
+    nlohmann::json tasks = nlohmann::json::array();
+    for (const RunSpec* r : list) tasks.push_back(SpecJson(*r));
+    arrays.push_back({{"resources", res.ToJson()}, {"tasks", tasks}});
+    std::string script = "#!/bin/bash\n";
+    script += fmt::format("#SBATCH --job-name=hdr4d-{}-{}\n", suite.name, k);
+    script += fmt::format("#SBATCH --array=0-{}{}\n", list.size() - 1,
+                          o.max_parallel > 0 ? fmt::format("%{}", o.max_parallel) : "");
+    script += "#SBATCH --ntasks=1\n";
+    script += fmt::format("#SBATCH --cpus-per-task={}\n", res.cpus);
+    script += fmt::format("#SBATCH --mem={}M\n", static_cast<long>(std::ceil(res.memory_gb * 1024)));
+    script += fmt::format("#SBATCH --time={}\n", SlurmTime(res.minutes));
+    script += fmt::format("#SBATCH --output={}/logs/%A_%a.out\n", dir.string());
+    if (!o.partition.empty()) script += fmt::format("#SBATCH --partition={}\n", o.partition);
+    if (!o.account.empty()) script += fmt::format("#SBATCH --account={}\n", o.account);
+    script += fmt::format(
+        "# {} runs of suite '{}' needing {} cpus, {} GB, {} min each; task i runs the i-th of\n"
+        "# arrays[{}].tasks in plan.json and writes results/<run id>.json.\n",
+        list.size(), suite.name, res.cpus, res.memory_gb, res.minutes, k);
+    script += "set -euo pipefail\n";
+    script += "if [ -z \"${SLURM_ARRAY_TASK_ID:-}\" ]; then echo 'hdr4d: error: not a Slurm array task (SLURM_ARRAY_TASK_ID unset)' >&2; exit 1; fi\n";
+    script += fmt::format("exec {} bench task {} --array {} --index \"$SLURM_ARRAY_TASK_ID\"\n",
+                          ShellQuote(hdr4d), ShellQuote(dir.string()), k);
+    const fs::path path = dir / fmt::format("array_{}.sbatch", k);
+    WriteTextFileAtomic(path, script);
+    fs::permissions(path, fs::perms::owner_exec | fs::perms::group_exec, fs::perm_options::add);
+    submit += fmt::format("sbatch --parsable {}\n", path.filename().string());
+    ++k;
+  }
+  WriteJsonFile(dir / "plan.json", {{"suite", suite.name},
+                                    {"suite_file", suite.file.string()},
+                                    {"code_version", CodeVersion()},
+                                    {"hdr4d", hdr4d},
+                                    {"arrays", arrays}});
+  WriteTextFileAtomic(dir / "submit.sh", submit);
+  fs::permissions(dir / "submit.sh", fs::perms::owner_exec | fs::perms::group_exec, fs::perm_options::add);
+  plan.arrays = k;
+  plan.runs = static_cast<int>(runs.size()) - plan.skipped;
+  return plan;
+}
+
+bool RunSlurmTask(const fs::path& dir, int array, int index) {
+  const nlohmann::json plan = ReadJsonFile(dir / "plan.json");
+  const std::string where = (dir / "plan.json").string();
+  if (plan.value("code_version", "") != CodeVersion()) {
+    Fail("{}: planned with code version {}, this hdr4d is {}; run `hdr4d bench slurm` again",
+         where, plan.value("code_version", "?"), CodeVersion());
+  }
+  if (array < 0 || array >= static_cast<int>(plan["arrays"].size()))
+    Fail("{}: no array {}", where, array);
+  const nlohmann::json& tasks = plan["arrays"][array]["tasks"];
+  if (index < 0 || index >= static_cast<int>(tasks.size()))
+    Fail("{}: array {} has tasks 0..{}, not {}", where, array, tasks.size() - 1, index);
+  const nlohmann::json& t = tasks[index];
+  const fs::path result = dir / "results" / (t["id"].get<std::string>() + ".json");
+  if (fs::exists(result) && ReadJsonFile(result).value("status", "") == "ok") {
+    fmt::print("bench task: {} is done already ({})\n", t["id"].get<std::string>(), result.string());
+    return true;
+  }
+  SceneSpec scene;
+  scene.name = t["scene"].get<std::string>();
+  if (!t["region"].is_null()) scene.region = t["region"].get<std::array<double, 4>>();
+  PreparedScene prepared{&scene, t["scene_dir"].get<std::string>(), t["data_checksum"].get<std::string>()};
+  RunSpec spec;
+  spec.id = t["id"];
+  for (const nlohmann::json& l : t["labels"]) spec.labels.push_back(RunLabel::FromJson(l, where));
+  spec.method = t["method"];
+  spec.scene = scene.name;
+  spec.prepared = &prepared;
+  spec.budget = {t["budget"]["iterations"].get<std::int64_t>(), t["budget"]["seconds"].get<double>()};
+  spec.train_args = t["train_args"].get<std::vector<std::string>>();
+  spec.render_args = t["render_args"].get<std::vector<std::string>>();
+  spec.identity = t["identity"];
+  const nlohmann::json& res = t["resources"];
+  spec.resources = {res["cpus"].get<int>(), res["memory_gb"].get<double>(), res["minutes"].get<double>()};
+  int threads = spec.resources.cpus;
+  if (const char* c = std::getenv("SLURM_CPUS_PER_TASK"); c && std::atoi(c) > 0) threads = std::atoi(c);
+  const std::optional<RunRecord> record = ExecuteRun(
+      spec, {.runs_dir = dir / "runs", .hdr4d = SelfExecutable(), .threads = threads, .source = "slurm"});
+  if (!record) Fail("bench task: run {} was cancelled", spec.id);
+  WriteJsonFile(result, record->ToJson());
+  fmt::print("bench task: {} {} -> {}\n", spec.id, record->status, result.string());
+  if (record->status != "ok") fmt::print(stderr, "hdr4d: error: run {} failed: {}\n", spec.id, record->error);
+  return record->status == "ok";
+}
+
+CollectSummary Collect(const fs::path& dir, const fs::path& store_path) {
+  if (!fs::is_directory(dir / "results")) Fail("{}: no results folder (not a bench slurm folder)", dir.string());
+  ResultsStore store(store_path);
+  const std::set<std::string> ok = store.RunIds("ok");
+  CollectSummary s;
+  std::vector<std::string> bad;
+  std::set<std::string> seen;
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(dir / "results"))
+    if (e.path().extension() == ".json") files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  for (const fs::path& f : files) {
+    try {
+      const RunRecord r = RunRecord::FromJson(ReadJsonFile(f), f.string());
+      seen.insert(r.id);
+      if (ok.count(r.id)) {
+        store.AddLabels(r.id, r.labels);
+        ++s.already;
+        continue;
+      }
+      store.InsertRun(r);
+      ++(r.status == "ok" ? s.merged : s.failed_runs);
+    } catch (const Error& e) {
+      bad.push_back(e.what());
+    }
+  }
+  if (fs::exists(dir / "plan.json")) {
+    const nlohmann::json plan = ReadJsonFile(dir / "plan.json");
+    for (const nlohmann::json& a : plan["arrays"])
+      for (const nlohmann::json& t : a["tasks"])
+        if (!seen.count(t["id"].get<std::string>()) && !ok.count(t["id"].get<std::string>())) ++s.missing;
+  }
+  s.bad_files = static_cast<int>(bad.size());
+  if (!bad.empty()) {
+    for (const std::string& b : bad) fmt::print(stderr, "bench collect: not merged: {}\n", b);
+    Fail("bench collect: {} result file(s) could not be merged (listed above; the other {} were)",
+         bad.size(), s.merged + s.failed_runs + s.already);
+  }
+  return s;
+}
+
+}  // namespace hdr4d::bench

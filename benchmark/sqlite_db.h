@@ -1,0 +1,84 @@
+// A thin RAII layer over SQLite's C API (Debian's libsqlite3): a connection, prepared statements
+// and transactions. Every failure throws hdr4d::Error naming the database file and SQLite's
+// message, so a caller never sees a raw result code.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+
+struct sqlite3;
+struct sqlite3_stmt;
+
+namespace hdr4d::bench {
+
+class Statement;
+
+class Database {
+ public:
+  // Opens (creating when `create`) the file with foreign keys on, a busy timeout, WAL journal
+  // and synchronous=FULL: a committed transaction survives the process being killed at any
+  // moment, an uncommitted one leaves no trace.
+  Database(const std::filesystem::path& path, bool create);
+  ~Database();
+  Database(const Database&) = delete;
+  Database& operator=(const Database&) = delete;
+
+  void Exec(const std::string& sql);
+  Statement Prepare(const std::string& sql);
+  const std::filesystem::path& path() const { return path_; }
+  sqlite3* handle() { return db_; }
+  [[noreturn]] void Throw(const std::string& what) const;
+
+ private:
+  std::filesystem::path path_;
+  sqlite3* db_ = nullptr;
+};
+
+class Statement {
+ public:
+  Statement(Database* db, sqlite3_stmt* stmt) : db_(db), stmt_(stmt) {}
+  ~Statement();
+  Statement(Statement&& other) noexcept;
+  Statement(const Statement&) = delete;
+  Statement& operator=(const Statement&) = delete;
+
+  // Parameters are 1-based, as in SQLite. A NaN double binds as NULL (unknown); +-inf stay.
+  Statement& Bind(int index, const std::string& value);
+  Statement& Bind(int index, double value);
+  Statement& Bind(int index, std::int64_t value);
+  Statement& Bind(int index, int value) { return Bind(index, static_cast<std::int64_t>(value)); }
+  Statement& BindNull(int index);
+  // One step: true while a row is available.
+  bool Step();
+  // Runs a statement that returns no rows and resets it for the next bindings.
+  void Run();
+  void Reset();
+
+  bool IsNull(int column) const;
+  std::string Text(int column) const;
+  double Double(int column) const;  // NULL reads as NaN
+  std::int64_t Int(int column) const;
+
+ private:
+  Database* db_;
+  sqlite3_stmt* stmt_;
+};
+
+// BEGIN IMMEDIATE on construction; Commit() makes it durable; destruction without Commit rolls
+// everything back (an exception half-way through leaves the database as it was).
+class Transaction {
+ public:
+  explicit Transaction(Database* db);
+  ~Transaction();
+  Transaction(const Transaction&) = delete;
+  Transaction& operator=(const Transaction&) = delete;
+  void Commit();
+
+ private:
+  Database* db_;
+  bool done_ = false;
+};
+
+}  // namespace hdr4d::bench

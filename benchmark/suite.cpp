@@ -1,0 +1,338 @@
+#include "benchmark/suite.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <set>
+
+#include "benchmark/settings_flags.h"
+#include "core/error.h"
+#include "core/json_util.h"
+
+#ifndef HDR4D_SOURCE_DIR
+#define HDR4D_SOURCE_DIR "."
+#endif
+
+namespace hdr4d::bench {
+namespace fs = std::filesystem;
+namespace {
+
+// The flags the harness sets from the suite's axes and --jobs; settings may not.
+const std::vector<std::string> kReservedTrain = {"data",       "out",         "threads",
+                                                 "seed",       "iterations",  "max-seconds",
+                                                 "supervision", "resume",     "test-every"};
+const std::vector<std::string> kReservedRender = {"run", "out", "split", "threads", "timing"};
+
+// A JSON object reader that names the file and the key path in every error and refuses keys
+// it does not know ("comment" is allowed anywhere, for notes).
+class Obj {
+ public:
+  Obj(const nlohmann::json& j, std::string where) : j_(j), where_(std::move(where)) {
+    if (!j_.is_object()) Fail("{}: expected a JSON object, got {}", where_, Short(j_));
+  }
+  const std::string& where() const { return where_; }
+  std::string At(const std::string& key) const { return where_ + "." + key; }
+  bool Has(const std::string& key) const { return j_.contains(key); }
+  const nlohmann::json& Raw(const std::string& key) const { return j_.at(key); }
+
+  void OnlyKeys(std::initializer_list<const char*> keys) const {
+    for (const auto& [k, v] : j_.items()) {
+      if (k == "comment") continue;
+      if (std::none_of(keys.begin(), keys.end(), [&](const char* a) { return k == a; })) {
+        std::string known;
+        for (const char* a : keys) known += std::string(known.empty() ? "" : ", ") + a;
+        Fail("{}: unknown key '{}' (known: {})", where_, k, known);
+      }
+    }
+  }
+  std::string String(const std::string& key, const std::string& fallback = "",
+                     bool required = false) const {
+    if (!Has(key)) {
+      if (required) Fail("{}: key '{}' missing", where_, key);
+      return fallback;
+    }
+    if (!j_[key].is_string() || j_[key].get<std::string>().empty())
+      Fail("{}: must be a non-empty string, got {}", At(key), Short(j_[key]));
+    return j_[key].get<std::string>();
+  }
+  double Number(const std::string& key, double fallback, double min) const {
+    if (!Has(key)) return fallback;
+    if (!j_[key].is_number() || !(j_[key].get<double>() >= min) ||
+        !std::isfinite(j_[key].get<double>()))
+      Fail("{}: must be a number >= {}, got {}", At(key), min, Short(j_[key]));
+    return j_[key].get<double>();
+  }
+  std::int64_t Integer(const std::string& key, std::int64_t fallback, std::int64_t min) const {
+    if (!Has(key)) return fallback;
+    if (!j_[key].is_number_integer() || j_[key].get<std::int64_t>() < min)
+      Fail("{}: must be an integer >= {}, got {}", At(key), min, Short(j_[key]));
+    return j_[key].get<std::int64_t>();
+  }
+  const nlohmann::json& Array(const std::string& key, bool required) const {
+    static const nlohmann::json kEmpty = nlohmann::json::array();
+    if (!Has(key)) {
+      if (required) Fail("{}: key '{}' missing", where_, key);
+      return kEmpty;
+    }
+    if (!j_[key].is_array() || (required && j_[key].empty()))
+      Fail("{}: must be a non-empty JSON array", At(key));
+    return j_[key];
+  }
+  static std::string Short(const nlohmann::json& j) {
+    std::string s = j.dump();
+    return s.size() > 60 ? s.substr(0, 57) + "..." : s;
+  }
+
+ private:
+  const nlohmann::json& j_;
+  std::string where_;
+};
+
+Resources ParseResources(const nlohmann::json& j, const std::string& where, Resources base) {
+  const Obj o(j, where);
+  o.OnlyKeys({"cpus", "memory_gb", "minutes"});
+  base.cpus = static_cast<int>(o.Integer("cpus", base.cpus, 1));
+  base.memory_gb = o.Number("memory_gb", base.memory_gb, 0.01);
+  base.minutes = o.Number("minutes", base.minutes, 0.01);
+  return base;
+}
+
+nlohmann::json Settings(const Obj& o, const std::string& key,
+                        const std::vector<std::string>& reserved) {
+  if (!o.Has(key)) return nlohmann::json::object();
+  const nlohmann::json& s = o.Raw(key);
+  ValidateSettings(s, reserved, o.At(key));
+  return s;
+}
+
+std::vector<std::string> Supervisions(const nlohmann::json& list, const std::string& where) {
+  std::vector<std::string> out;
+  for (const nlohmann::json& s : list) {
+    const auto& modes = SupervisionModes();
+    if (!s.is_string() || std::find(modes.begin(), modes.end(), s.get<std::string>()) == modes.end())
+      Fail("{}: supervision {} is not one of ldr, hdr, ldr+hdr", where, Obj::Short(s));
+    out.push_back(s.get<std::string>());
+  }
+  return out;
+}
+
+SceneSpec ParseScene(const nlohmann::json& j, const std::string& where, const fs::path& base) {
+  const Obj o(j, where);
+  o.OnlyKeys({"name", "group", "path", "datagen", "builtin", "region"});
+  SceneSpec s;
+  s.name = o.String("name", "", true);
+  s.group = o.String("group", "syn");
+  const int kinds = o.Has("path") + o.Has("datagen") + o.Has("builtin");
+  if (kinds != 1) Fail("{}: give exactly one of 'path', 'datagen' or 'builtin'", where);
+  if (o.Has("path")) {
+    s.kind = SceneSpec::Kind::kPath;
+    const fs::path p = o.String("path");
+    s.path = p.is_absolute() ? p : fs::absolute(base / p).lexically_normal();
+  } else if (o.Has("datagen")) {
+    s.kind = SceneSpec::Kind::kDatagen;
+    const Obj d(o.Raw("datagen"), o.At("datagen"));
+    d.OnlyKeys({"scene", "preset", "seed"});
+    s.source = {{"scene", d.String("scene", "", true)},
+                {"preset", d.String("preset", "mini")},
+                {"seed", d.Integer("seed", 0, 0)}};
+  } else {
+    s.kind = SceneSpec::Kind::kBuiltin;
+    const Obj b(o.Raw("builtin"), o.At("builtin"));
+    b.OnlyKeys({"scene", "flags", "synth"});
+    const std::string scene = b.String("scene", "", true);
+    if (scene != "demo" && scene != "gaussians")
+      Fail("{}: builtin scene '{}' is not demo or gaussians", b.At("scene"), scene);
+    if (scene == "gaussians" && b.Has("synth"))
+      Fail("{}: the gaussians scene is LDR only; 'synth' does not apply", where);
+    s.source = {{"scene", scene},
+                {"flags", Settings(b, "flags", {"out", "o"})},
+                {"synth", Settings(b, "synth", {"data", "out", "o"})}};
+  }
+  if (o.Has("region")) {
+    const nlohmann::json& r = o.Raw("region");
+    if (!r.is_array() || r.size() != 4 ||
+        !std::all_of(r.begin(), r.end(), [](const nlohmann::json& v) {
+          return v.is_number() && v.get<double>() >= 0 && v.get<double>() <= 1;
+        }))
+      Fail("{}: must be [x, y, width, height] as fractions of the image in [0, 1]", o.At("region"));
+    s.region = std::array<double, 4>{r[0].get<double>(), r[1].get<double>(), r[2].get<double>(),
+                                     r[3].get<double>()};
+    if ((*s.region)[2] <= 0 || (*s.region)[3] <= 0 || (*s.region)[0] + (*s.region)[2] > 1 ||
+        (*s.region)[1] + (*s.region)[3] > 1)
+      Fail("{}: the region must have a size and lie inside the image", o.At("region"));
+  }
+  return s;
+}
+
+Budget ParseBudget(const nlohmann::json& j, const std::string& where) {
+  const Obj o(j, where);
+  o.OnlyKeys({"iterations", "seconds"});
+  Budget b;
+  b.iterations = o.Integer("iterations", 0, 1);
+  b.seconds = o.Number("seconds", 0, 0.001);
+  if (b.iterations == 0 && b.seconds == 0)
+    Fail("{}: a budget needs 'iterations' and/or 'seconds'", where);
+  return b;
+}
+
+}  // namespace
+
+nlohmann::json Resources::ToJson() const {
+  return {{"cpus", cpus}, {"memory_gb", memory_gb}, {"minutes", minutes}};
+}
+
+std::string Budget::Label() const {
+  std::string label;
+  if (iterations > 0) label = fmt::format("{}it", iterations);
+  if (seconds > 0) label += fmt::format("{}{}s", label.empty() ? "" : "+", seconds);
+  return label;
+}
+
+const std::vector<std::string>& SupervisionModes() {
+  static const std::vector<std::string> kModes = {"ldr", "hdr", "ldr+hdr"};
+  return kModes;
+}
+
+const MethodSpec* Suite::FindMethod(const std::string& name) const {
+  for (const MethodSpec& m : methods)
+    if (m.name == name) return &m;
+  return nullptr;
+}
+
+const SceneSpec* Suite::FindScene(const std::string& name) const {
+  for (const SceneSpec& s : scenes)
+    if (s.name == name) return &s;
+  return nullptr;
+}
+
+Suite ParseSuite(const nlohmann::json& json, const fs::path& file) {
+  const std::string where = file.string();
+  const Obj o(json, where);
+  o.OnlyKeys({"name", "description", "scenes", "methods", "supervision", "seeds", "budgets",
+              "variants", "train", "render", "resources", "curve_points", "tables"});
+  Suite s;
+  s.file = file;
+  s.name = o.String("name", "", true);
+  s.description = o.String("description", "");
+  s.resources = o.Has("resources") ? ParseResources(o.Raw("resources"), o.At("resources"), {})
+                                   : Resources{};
+  s.train = Settings(o, "train", kReservedTrain);
+  s.render = Settings(o, "render", kReservedRender);
+  s.curve_points = static_cast<int>(o.Integer("curve_points", 0, 0));
+  if (o.Has("supervision")) s.supervision = Supervisions(o.Array("supervision", true), o.At("supervision"));
+  if (o.Has("seeds")) {
+    s.seeds.clear();
+    std::set<std::int64_t> seen;
+    for (const nlohmann::json& v : o.Array("seeds", true)) {
+      if (!v.is_number_integer() || v.get<std::int64_t>() < 0)
+        Fail("{}: seeds are non-negative integers, got {}", o.At("seeds"), Obj::Short(v));
+      if (!seen.insert(v.get<std::int64_t>()).second)
+        Fail("{}: seed {} is listed twice", o.At("seeds"), v.get<std::int64_t>());
+      s.seeds.push_back(v.get<std::int64_t>());
+    }
+  }
+  const nlohmann::json& budgets = o.Array("budgets", true);
+  std::set<std::string> budget_labels;
+  for (std::size_t i = 0; i < budgets.size(); ++i) {
+    s.budgets.push_back(ParseBudget(budgets[i], fmt::format("{}[{}]", o.At("budgets"), i)));
+    if (!budget_labels.insert(s.budgets.back().Label()).second)
+      Fail("{}: budget {} is listed twice", o.At("budgets"), s.budgets.back().Label());
+  }
+  if (o.Has("variants")) {
+    s.variants.clear();
+    std::set<std::string> names;
+    const nlohmann::json& variants = o.Array("variants", true);
+    for (std::size_t i = 0; i < variants.size(); ++i) {
+      const Obj v(variants[i], fmt::format("{}[{}]", o.At("variants"), i));
+      v.OnlyKeys({"name", "train", "render"});
+      Variant var{v.String("name", "", true), Settings(v, "train", kReservedTrain),
+                  Settings(v, "render", kReservedRender)};
+      if (!names.insert(var.name).second) Fail("{}: variant '{}' twice", v.where(), var.name);
+      s.variants.push_back(std::move(var));
+    }
+  }
+  const nlohmann::json& scenes = o.Array("scenes", true);
+  for (std::size_t i = 0; i < scenes.size(); ++i) {
+    s.scenes.push_back(
+        ParseScene(scenes[i], fmt::format("{}[{}]", o.At("scenes"), i), file.parent_path()));
+    if (s.FindScene(s.scenes.back().name) != &s.scenes.back())
+      Fail("{}: scene '{}' is listed twice", o.At("scenes"), s.scenes.back().name);
+  }
+  const nlohmann::json& methods = o.Array("methods", true);
+  for (std::size_t i = 0; i < methods.size(); ++i) {
+    const Obj m(methods[i], fmt::format("{}[{}]", o.At("methods"), i));
+    m.OnlyKeys({"name", "label", "supervision", "train", "render", "resources"});
+    MethodSpec spec;
+    spec.name = m.String("name", "", true);
+    spec.label = m.String("label", spec.name);
+    if (m.Has("supervision"))
+      spec.supervision = Supervisions(m.Array("supervision", true), m.At("supervision"));
+    spec.train = Settings(m, "train", kReservedTrain);
+    spec.render = Settings(m, "render", kReservedRender);
+    if (m.Has("resources"))
+      spec.resources = ParseResources(m.Raw("resources"), m.At("resources"), s.resources);
+    if (s.FindMethod(spec.name))
+      Fail("{}: method '{}' is listed twice", o.At("methods"), spec.name);
+    s.methods.push_back(std::move(spec));
+  }
+  const nlohmann::json& tables = o.Array("tables", false);
+  for (std::size_t i = 0; i < tables.size(); ++i) {
+    const Obj t(tables[i], fmt::format("{}[{}]", o.At("tables"), i));
+    t.OnlyKeys({"id", "title", "layout", "scenes", "rows", "reference", "note"});
+    TableSpec spec;
+    spec.id = t.String("id", "", true);
+    spec.title = t.String("title", spec.id);
+    spec.layout = t.String("layout", "main");
+    if (spec.layout != "main" && spec.layout != "ablation")
+      Fail("{}: layout '{}' is not main or ablation", t.At("layout"), spec.layout);
+    spec.scene_group = t.String("scenes", "syn");
+    spec.note = t.String("note", "");
+    const nlohmann::json& rows = t.Array("rows", true);
+    for (std::size_t r = 0; r < rows.size(); ++r) {
+      const Obj row(rows[r], fmt::format("{}[{}]", t.At("rows"), r));
+      row.OnlyKeys({"label", "method", "supervision"});
+      TableRow tr{row.String("label", ""), row.String("method", "", true),
+                  row.String("supervision", "", true)};
+      if (tr.label.empty()) tr.label = tr.method;
+      Supervisions(nlohmann::json::array({tr.supervision}), row.At("supervision"));
+      // Rows may name methods outside the suite: external submissions (`bench submit`).
+      for (const TableRow& other : spec.rows)
+        if (other.label == tr.label) Fail("{}: row label '{}' twice", t.where(), tr.label);
+      spec.rows.push_back(std::move(tr));
+    }
+    spec.reference = t.String("reference", spec.rows.back().label);
+    if (std::none_of(spec.rows.begin(), spec.rows.end(),
+                     [&](const TableRow& r) { return r.label == spec.reference; }))
+      Fail("{}: reference '{}' is not a row label", t.At("reference"), spec.reference);
+    for (const TableSpec& other : s.tables)
+      if (other.id == spec.id) Fail("{}: table id '{}' twice", t.where(), spec.id);
+    s.tables.push_back(std::move(spec));
+  }
+  return s;
+}
+
+fs::path SuitesDir() {
+  if (const char* dir = std::getenv("HDR4D_SUITES_DIR"); dir && *dir) return dir;
+  return fs::path(HDR4D_SOURCE_DIR) / "benchmark" / "suites";
+}
+
+Suite LoadSuite(const std::string& name_or_path) {
+  fs::path file = name_or_path;
+  const bool looks_like_path = name_or_path.find('/') != std::string::npos ||
+                               file.extension() == ".json";
+  if (!looks_like_path) file = SuitesDir() / (name_or_path + ".json");
+  if (!fs::exists(file)) {
+    if (looks_like_path) Fail("{}: no such suite file", file.string());
+    std::string known;
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(SuitesDir(), ec))
+      if (e.path().extension() == ".json") known += " " + e.path().stem().string();
+    Fail("no suite '{}' (a suite file, or one of the shipped suites in {}:{})", name_or_path,
+         SuitesDir().string(), known);
+  }
+  return ParseSuite(ReadJsonFile(file), fs::absolute(file));
+}
+
+}  // namespace hdr4d::bench

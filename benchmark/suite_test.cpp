@@ -1,0 +1,99 @@
+#include "benchmark/suite.h"
+
+#include <gtest/gtest.h>
+
+#include <set>
+
+#include "tests/testing.h"
+
+namespace hdr4d::bench {
+namespace {
+using testing::ErrorOf;
+
+nlohmann::json Minimal() {
+  return nlohmann::json::parse(R"({
+    "name": "t",
+    "scenes": [{"name": "s", "path": "scene"}],
+    "methods": [{"name": "m", "train": {"method": "hdr4dgs"}}],
+    "budgets": [{"iterations": 100}]})");
+}
+
+std::string ErrorFor(nlohmann::json j) {
+  return ErrorOf([&] { ParseSuite(j, "/x/suite.json"); });
+}
+
+TEST(Suite, MinimalSuiteHasDefaults) {
+  const Suite s = ParseSuite(Minimal(), "/x/suite.json");
+  EXPECT_EQ(s.name, "t");
+  EXPECT_EQ(s.supervision, std::vector<std::string>{"ldr"});
+  EXPECT_EQ(s.seeds, std::vector<std::int64_t>{0});
+  ASSERT_EQ(s.variants.size(), 1u);
+  EXPECT_EQ(s.scenes[0].path, "/x/scene");  // relative to the suite file
+  EXPECT_EQ(s.budgets[0].Label(), "100it");
+  EXPECT_EQ((Budget{.iterations = 10, .seconds = 2.5}).Label(), "10it+2.5s");
+}
+
+TEST(Suite, EveryMistakeNamesTheFileAndTheKey) {
+  auto with = [](const char* pointer, nlohmann::json v) {
+    nlohmann::json j = Minimal();
+    j[nlohmann::json::json_pointer(pointer)] = v;
+    return j;
+  };
+  EXPECT_NE(ErrorFor(with("/colour", 1)).find("unknown key 'colour'"), std::string::npos);
+  EXPECT_NE(ErrorFor(with("/scenes/0/datagen", {{"scene", "lego"}})).find("exactly one of"), std::string::npos);
+  EXPECT_NE(ErrorFor(with("/methods/0/train/seed", 3)).find("set by the harness"), std::string::npos);
+  EXPECT_NE(ErrorFor(with("/methods/0/supervision", {"hdr+ldr"})).find("hdr+ldr"), std::string::npos);
+  EXPECT_NE(ErrorFor(with("/budgets/0", nlohmann::json::object())).find("needs 'iterations'"), std::string::npos);
+  EXPECT_NE(ErrorFor(with("/seeds", {1, 1})).find("twice"), std::string::npos);
+  EXPECT_NE(ErrorFor(with("/methods/1", {{"name", "m"}})).find("listed twice"), std::string::npos);
+  EXPECT_NE(ErrorFor(with("/scenes/0/region", {0.9, 0.9, 0.2, 0.2})).find("inside the image"), std::string::npos);
+  nlohmann::json t = Minimal();
+  t["tables"] = {{{"id", "a"}, {"rows", {{{"method", "m"}, {"supervision", "ldr"}}}}, {"reference", "zz"}}};
+  EXPECT_NE(ErrorFor(t).find("reference 'zz'"), std::string::npos);
+  nlohmann::json n = Minimal();
+  n.erase("name");
+  const std::string e = ErrorFor(n);
+  EXPECT_NE(e.find("/x/suite.json"), std::string::npos) << e;
+  EXPECT_NE(e.find("'name' missing"), std::string::npos) << e;
+}
+
+TEST(Suite, UnknownSuiteNameListsTheShippedOnes) {
+  const std::string e = ErrorOf([] { LoadSuite("no-such-suite"); });
+  EXPECT_NE(e.find("ci"), std::string::npos) << e;
+  EXPECT_NE(e.find("paper"), std::string::npos) << e;
+  EXPECT_NE(ErrorOf([] { LoadSuite("/nowhere/x.json"); }).find("no such suite file"), std::string::npos);
+}
+
+// The paper suite holds every configuration of Tables 1 and 4-7; the ci suite the same ones.
+TEST(Suite, ShippedSuitesCoverThePapersTables) {
+  const std::set<std::string> external = {"HexPlane", "HDR-NeRF", "HDR-HexPlane"};
+  for (const char* name : {"paper", "ci", "speed", "proof", "tone-mappers"}) {
+    const Suite s = LoadSuite(name);
+    EXPECT_EQ(s.name, name);
+    for (const TableSpec& t : s.tables)
+      for (const TableRow& r : t.rows)
+        EXPECT_TRUE(s.FindMethod(r.method) || external.count(r.method)) << name << " " << r.method;
+  }
+  const Suite paper = LoadSuite("paper"), ci = LoadSuite("ci");
+  EXPECT_EQ(paper.scenes.size(), 8u);
+  EXPECT_EQ(paper.seeds.size(), 3u);
+  std::set<std::string> ids;
+  for (const TableSpec& t : paper.tables) ids.insert(t.id);
+  EXPECT_EQ(ids, (std::set<std::string>{"table1", "table2", "table4", "table5", "table6", "table7"}));
+  ASSERT_EQ(paper.methods.size(), ci.methods.size());
+  for (std::size_t i = 0; i < paper.methods.size(); ++i) {
+    EXPECT_EQ(paper.methods[i].name, ci.methods[i].name);
+    EXPECT_EQ(paper.methods[i].train, ci.methods[i].train);
+  }
+  // Table 4 compares every tone mapper; Tables 6-7 every k and context learner of the paper.
+  std::set<std::string> mappers, learners;
+  for (const MethodSpec& m : paper.methods) {
+    mappers.insert(m.train.value("tone-mapper", "dtm"));
+    learners.insert(m.train.value("context-learner", "gru"));
+  }
+  EXPECT_EQ(mappers, (std::set<std::string>{"dtm", "mlp", "sigmoid", "reinhard", "durand"}));
+  EXPECT_EQ(learners, (std::set<std::string>{"gru", "rnn", "lstm", "transformer"}));
+}
+
+}  // namespace
+}  // namespace hdr4d::bench

@@ -1,0 +1,370 @@
+#include "benchmark/tables.h"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+#include <tuple>
+
+#include "core/error.h"
+
+namespace hdr4d::bench {
+namespace {
+
+using Key = std::tuple<std::string, std::string, std::string, std::int64_t>;  // method, sup, scene, seed
+
+const char* kLpipsNote =
+    "LPIPS: not computed. It needs the LPIPS network weights, which cannot be obtained on these "
+    "machines; no substitute is reported.";
+
+std::vector<Column> HdrColumns(const TableOptions& o, bool with_lpips) {
+  std::string psnr = "mu_psnr", ssim = "mu_ssim";
+  if (o.protocol == HdrProtocol::kGtMax) psnr = "mu_psnr_gt_max", ssim = "mu_ssim_gt_max";
+  if (o.protocol == HdrProtocol::kPu21) psnr = "pu21_psnr", ssim = "pu21_ssim";
+  if (!o.hdr_psnr_key.empty()) psnr = o.hdr_psnr_key, ssim = o.hdr_ssim_key;
+  std::vector<Column> c = {{psnr, "HDR", "PSNR", 1, 2}, {ssim, "HDR", "SSIM", 1, 3}};
+  if (with_lpips) c.push_back({"lpips_hdr", "HDR", "LPIPS", -1, 3, false});
+  return c;
+}
+
+std::vector<Column> MainColumns(const TableOptions& o) {
+  std::vector<Column> c = HdrColumns(o, true);
+  c.push_back({"psnr", "LDR", "PSNR", 1, 2});
+  c.push_back({"ssim", "LDR", "SSIM", 1, 3});
+  c.push_back({"lpips", "LDR", "LPIPS", -1, 3, false});
+  c.push_back({"train_minutes", "", "Training time (min)", -1, 2, true, false});
+  c.push_back({"fps", "", "Inference (fps)", 1, 1, true, false});
+  return c;
+}
+int GuessDirection(const std::string& key) {
+  for (const char* up : {"psnr", "ssim", "corr"})
+    if (key.find(up) != std::string::npos) return 1;
+  for (const char* down : {"lpips", "mse", "error", "rmse"})
+    if (key.find(down) != std::string::npos) return -1;
+  return 0;  // e.g. a slope, where the best is 1, not the largest
+}
+
+struct Index {
+  std::map<Key, const RunSummary*> ok;
+  std::map<std::pair<std::string, std::string>, int> failed;  // (method, sup) -> count
+  std::map<std::string, std::set<std::int64_t>> seeds_of_method;
+};
+
+Index BuildIndex(const std::vector<RunSummary>& runs, const std::string& budget,
+                 const std::string& variant) {
+  Index ix;
+  for (const RunSummary& r : runs) {
+    const RunLabel& l = r.label;
+    const bool external = r.source == "submit";
+    if (!external && (l.budget != budget || l.variant != variant)) continue;
+    if (r.status != "ok") {
+      ++ix.failed[{l.method, l.supervision}];
+      continue;
+    }
+    ix.ok[{l.method, l.supervision, l.scene, l.seed}] = &r;
+    ix.seeds_of_method[l.method].insert(l.seed);
+  }
+  return ix;
+}
+
+std::optional<double> ValueOf(const RunSummary& r, const Column& c) {
+  double v = std::nan("");
+  if (c.key == "train_minutes") {
+    v = r.train_seconds / 60.0;
+  } else if (c.key == "fps") {
+    v = r.render_fps;
+  } else if (c.key == "gaussians") {
+    v = r.gaussians >= 0 ? static_cast<double>(r.gaussians) : std::nan("");
+  } else if (c.key == "peak_rss_mb") {
+    v = r.peak_rss_mb;
+  } else if (auto it = r.metrics.find(c.key); it != r.metrics.end()) {
+    v = it->second;
+  }
+  if (std::isnan(v)) return std::nullopt;
+  return v;
+}
+
+std::vector<std::string> GroupScenes(const Suite& suite, const std::string& group) {
+  std::vector<std::string> scenes;
+  for (const SceneSpec& s : suite.scenes)
+    if (s.group == group) scenes.push_back(s.name);
+  return scenes;
+}
+
+std::vector<std::int64_t> RowSeeds(const Suite& suite, const Index& ix, const std::string& method) {
+  if (suite.FindMethod(method)) return suite.seeds;
+  const auto it = ix.seeds_of_method.find(method);  // external: the seeds it was submitted with
+  if (it == ix.seeds_of_method.end()) return {0};
+  return {it->second.begin(), it->second.end()};
+}
+
+Table Build(const TableSpec& spec, const Suite& suite, const std::vector<RunSummary>& runs,
+            const TableOptions& options, std::vector<Column> columns) {
+  Table t;
+  t.id = spec.id;
+  t.title = spec.title;
+  t.note = spec.note;
+  t.reference = spec.reference;
+  t.columns = std::move(columns);
+  t.scenes = GroupScenes(suite, spec.scene_group);
+  t.seeds = suite.seeds;
+  t.budget = options.budget.empty() ? suite.budgets.back().Label() : options.budget;
+  t.variant = options.variant.empty() ? suite.variants.front().name : options.variant;
+  t.protocol = options.hdr_psnr_key.empty()
+                   ? HdrProtocolDescription(options.protocol)
+                   : "the metric keys " + options.hdr_psnr_key + " and " + options.hdr_ssim_key;
+  const Index ix = BuildIndex(runs, t.budget, t.variant);
+
+  // values[row][column][(scene, seed)]
+  std::vector<std::vector<std::map<std::pair<std::string, std::int64_t>, double>>> values;
+  for (const TableRow& row : spec.rows) {
+    RowResult rr{row.label, row.method, row.supervision};
+    rr.is_reference = row.label == spec.reference;
+    const std::vector<std::int64_t> seeds = RowSeeds(suite, ix, row.method);
+    rr.expected = static_cast<int>(t.scenes.size() * seeds.size());
+    if (auto f = ix.failed.find({row.method, row.supervision}); f != ix.failed.end())
+      rr.failed = f->second;
+    auto& row_values = values.emplace_back(t.columns.size());
+    for (const std::string& scene : t.scenes) {
+      for (std::int64_t seed : seeds) {
+        const auto it = ix.ok.find({row.method, row.supervision, scene, seed});
+        if (it == ix.ok.end()) continue;
+        ++rr.runs;
+        for (std::size_t c = 0; c < t.columns.size(); ++c) {
+          if (!t.columns[c].computable) continue;
+          if (const auto v = ValueOf(*it->second, t.columns[c])) row_values[c][{scene, seed}] = *v;
+        }
+      }
+    }
+    for (std::size_t c = 0; c < t.columns.size(); ++c) {
+      Cell cell;
+      cell.expected = rr.expected;
+      const auto& vals = row_values[c];
+      cell.runs = static_cast<int>(vals.size());
+      if (!vals.empty()) {
+        cell.has_value = true;
+        std::vector<double> all, complete_seed_means;
+        for (const auto& [k, v] : vals) all.push_back(v);
+        for (std::int64_t seed : seeds) {
+          std::vector<double> per_seed;
+          for (const std::string& scene : t.scenes)
+            if (auto it = vals.find({scene, seed}); it != vals.end()) per_seed.push_back(it->second);
+          if (per_seed.size() == t.scenes.size()) complete_seed_means.push_back(Mean(per_seed));
+        }
+        cell.mean = cell.complete() ? Mean(complete_seed_means) : Mean(all);
+        if (complete_seed_means.size() >= 2) {
+          cell.spread = SampleStdDev(complete_seed_means);
+          cell.has_spread = true;
+        }
+      }
+      rr.cells.push_back(cell);
+    }
+    t.rows.push_back(std::move(rr));
+  }
+  // Best per column.
+  for (std::size_t c = 0; c < t.columns.size(); ++c) {
+    const int dir = t.columns[c].direction;
+    if (dir == 0) continue;
+    double best = dir > 0 ? -INFINITY : INFINITY;
+    for (const RowResult& r : t.rows)
+      if (r.cells[c].has_value) best = dir > 0 ? std::max(best, r.cells[c].mean) : std::min(best, r.cells[c].mean);
+    for (RowResult& r : t.rows)
+      if (r.cells[c].has_value && r.cells[c].mean == best) r.cells[c].best = true;
+  }
+  // Paired tests against the reference row.
+  std::size_t ref = 0;
+  for (std::size_t i = 0; i < t.rows.size(); ++i)
+    if (t.rows[i].is_reference) ref = i;
+  for (std::size_t i = 0; i < t.rows.size(); ++i) {
+    for (std::size_t c = 0; c < t.columns.size(); ++c) {
+      std::vector<PairedValue> pairs;
+      if (i != ref && t.columns[c].quality && t.columns[c].computable) {
+        for (const auto& [k, v] : values[i][c]) {
+          if (auto it = values[ref][c].find(k); it != values[ref][c].end())
+            pairs.push_back({k.first, v, it->second});
+        }
+      }
+      t.rows[i].tests.push_back(PairedSeedTest(pairs, options.alpha));
+    }
+  }
+  // What the reader needs to know.
+  bool any_incomplete = false, has_lpips = false;
+  std::vector<std::string> external;  // rows of methods this suite cannot run
+  for (const RowResult& r : t.rows) {
+    for (const Cell& c : r.cells) any_incomplete |= c.has_value && !c.complete();
+    if (r.runs == 0 && !suite.FindMethod(r.method)) {
+      external.push_back(r.label);
+    } else if (r.runs == 0) {
+      t.footnotes.push_back(fmt::format("{}: no runs in the store{}.", r.label,
+                                        r.failed ? fmt::format(" ({} failed)", r.failed) : ""));
+    } else if (r.failed) {
+      t.footnotes.push_back(fmt::format("{}: {} failed run(s) left out.", r.label, r.failed));
+    }
+  }
+  if (!external.empty()) {
+    t.footnotes.push_back(fmt::format(
+        "{}: no runs in the store; not methods of this suite: score their renders with `hdr4d "
+        "bench submit --suite {} --method NAME --supervision ldr|hdr|ldr+hdr`.",
+        fmt::format("{}", fmt::join(external, ", ")), suite.name));
+  }
+  for (const Column& c : t.columns) has_lpips |= !c.computable;
+  if (any_incomplete)
+    t.footnotes.push_back("[k/n]: only k of the n scene x seed runs are in the store; the cell is "
+                          "the mean of those k.");
+  if (has_lpips) t.footnotes.push_back(kLpipsNote);
+  if (t.scenes.empty())
+    t.footnotes.push_back(fmt::format("No scene of group '{}' in this suite: add dataset folders "
+                                      "with \"group\": \"{}\" to its scenes.",
+                                      spec.scene_group, spec.scene_group));
+  return t;
+}
+}  // namespace
+
+std::string SupervisionLabel(const std::string& s) {
+  if (s == "ldr") return "LDR";
+  if (s == "hdr") return "HDR";
+  if (s == "ldr+hdr") return "LDR+HDR";
+  return s;
+}
+
+// Direction of a metric key not known in advance (keys added to `hdr4d eval` later).
+std::string ArrowOf(const Column& c) { return c.direction > 0 ? "↑" : c.direction < 0 ? "↓" : ""; }
+
+std::string FormatValue(double v, int digits) {
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  return fmt::format("{:.{}f}", v, digits);
+}
+
+HdrProtocol ParseHdrProtocol(const std::string& name) {
+  if (name == "own_max") return HdrProtocol::kOwnMax;
+  if (name == "gt_max") return HdrProtocol::kGtMax;
+  if (name == "pu21") return HdrProtocol::kPu21;
+  Fail("--protocol {}: not one of own_max, gt_max, pu21", name);
+}
+
+std::string HdrProtocolDescription(HdrProtocol p) {
+  switch (p) {
+    case HdrProtocol::kOwnMax:
+      return "mu-law PSNR/SSIM, each image divided by its own maximum (HDR-4DGS protocol)";
+    case HdrProtocol::kGtMax:
+      return "mu-law PSNR/SSIM, both images divided by the ground truth's maximum (HDR-NeRF "
+             "protocol)";
+    case HdrProtocol::kPu21:
+      return "PU21 PSNR/SSIM of absolute luminance (4000 / ground-truth maximum)";
+  }
+  return "";
+}
+
+std::vector<RunSummary> SuiteRuns(const ResultsStore& store, const Suite& suite) {
+  std::map<std::string, std::string> checksum;  // scene -> the suite's data
+  std::vector<RunSummary> all = store.Summaries(), out;
+  for (const RunSummary& r : all)
+    if (r.label.suite == suite.name) checksum[r.label.scene] = r.data_checksum;
+  for (RunSummary& r : all) {
+    if (r.label.suite == suite.name) {
+      out.push_back(std::move(r));
+    } else if (r.label.suite == "external" && suite.FindScene(r.label.scene)) {
+      // Comparable only on the same data.
+      const auto it = checksum.find(r.label.scene);
+      if (it == checksum.end() || it->second == r.data_checksum) out.push_back(std::move(r));
+    }
+  }
+  return out;
+}
+
+Table BuildTable(const TableSpec& spec, const Suite& suite, const std::vector<RunSummary>& runs,
+                 const TableOptions& options) {
+  if (options.hdr_psnr_key.empty() != options.hdr_ssim_key.empty())
+    Fail("tables: give both HDR keys (PSNR and SSIM) or neither");
+  return Build(spec, suite, runs, options,
+               spec.layout == "main" ? MainColumns(options) : HdrColumns(options, true));
+}
+
+Table BuildAllMetricsTable(const TableSpec& spec, const Suite& suite,
+                           const std::vector<RunSummary>& runs, const TableOptions& options) {
+  std::set<std::string> keys;
+  std::set<std::pair<std::string, std::string>> rows;
+  for (const TableRow& r : spec.rows) rows.insert({r.method, r.supervision});
+  for (const RunSummary& r : runs)
+    if (rows.count({r.label.method, r.label.supervision}))
+      for (const auto& [k, v] : r.metrics) keys.insert(k);
+  // LDR keys first, then the HDR protocols, then anything newer, alphabetically.
+  const std::vector<std::string> order = {"psnr", "psnr_channel_mean", "ssim", "mu_psnr",
+                                          "mu_ssim", "mu_psnr_gt_max", "mu_ssim_gt_max",
+                                          "pu21_psnr", "pu21_ssim"};
+  std::vector<Column> columns;
+  for (const std::string& k : order)
+    if (keys.erase(k)) columns.push_back({k, "", k, GuessDirection(k), k.find("ssim") != std::string::npos ? 3 : 2});
+  for (const std::string& k : keys)
+    columns.push_back({k, "", k, GuessDirection(k), k.find("psnr") != std::string::npos ? 2 : 3});
+  columns.push_back({"gaussians", "", "Gaussians", 0, 0, true, false});
+  columns.push_back({"peak_rss_mb", "", "Peak memory (MB)", -1, 0, true, false});
+  TableSpec all = spec;
+  all.id = spec.id + "-all";
+  all.title = spec.title + ": every metric";
+  Table t = Build(all, suite, runs, options, std::move(columns));
+  t.footnotes.push_back("Columns without an arrow have no single better direction; none is marked best.");
+  return t;
+}
+
+std::string PerSceneMarkdown(const TableSpec& spec, const Suite& suite,
+                             const std::vector<RunSummary>& runs, const TableOptions& options,
+                             const Column& column) {
+  const std::string budget = options.budget.empty() ? suite.budgets.back().Label() : options.budget;
+  const std::string variant = options.variant.empty() ? suite.variants.front().name : options.variant;
+  const Index ix = BuildIndex(runs, budget, variant);
+  const std::vector<std::string> scenes = GroupScenes(suite, spec.scene_group);
+  std::string md = fmt::format("{} {}, mean over seeds (best per scene in bold):\n\n", spec.id, column.key);
+  md += "| scene (seeds) |";
+  for (const TableRow& r : spec.rows) md += fmt::format(" {} |", r.label);
+  md += "\n|---|";
+  for (std::size_t i = 0; i < spec.rows.size(); ++i) md += "---|";
+  md += "\n";
+  std::vector<std::vector<double>> scene_means(spec.rows.size());
+  auto line = [&](const std::string& label, const std::vector<std::optional<double>>& v) {
+    double best = column.direction >= 0 ? -INFINITY : INFINITY;
+    for (const auto& x : v)
+      if (x) best = column.direction >= 0 ? std::max(best, *x) : std::min(best, *x);
+    md += fmt::format("| {} |", label);
+    for (const auto& x : v) {
+      if (!x) {
+        md += " - |";
+        continue;
+      }
+      const std::string s = FormatValue(*x, column.digits);
+      md += fmt::format(" {} |", (column.direction != 0 && *x == best ? "**" + s + "**" : s));
+    }
+    md += "\n";
+  };
+  for (const std::string& scene : scenes) {
+    std::vector<std::optional<double>> row;
+    int seeds_seen = 0;
+    for (std::size_t i = 0; i < spec.rows.size(); ++i) {
+      std::vector<double> v;
+      for (std::int64_t seed : RowSeeds(suite, ix, spec.rows[i].method)) {
+        const auto it = ix.ok.find({spec.rows[i].method, spec.rows[i].supervision, scene, seed});
+        if (it == ix.ok.end()) continue;
+        if (auto x = ValueOf(*it->second, column)) v.push_back(*x);
+      }
+      seeds_seen = std::max<int>(seeds_seen, static_cast<int>(v.size()));
+      if (v.empty()) {
+        row.push_back(std::nullopt);
+      } else {
+        row.push_back(Mean(v));
+        scene_means[i].push_back(Mean(v));
+      }
+    }
+    line(fmt::format("{} ({})", scene, seeds_seen), row);
+  }
+  std::vector<std::optional<double>> mean_row;
+  for (const auto& m : scene_means)
+    mean_row.push_back(m.size() == scenes.size() && !m.empty() ? std::optional<double>(Mean(m))
+                                                                : std::nullopt);
+  line("mean over scenes", mean_row);
+  return md;
+}
+
+}  // namespace hdr4d::bench

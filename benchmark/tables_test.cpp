@@ -1,0 +1,159 @@
+#include "benchmark/tables.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace hdr4d::bench {
+namespace {
+
+Suite TableSuite() {
+  return ParseSuite(nlohmann::json::parse(R"({
+    "name": "t",
+    "scenes": [{"name": "s1", "path": "a"}, {"name": "s2", "path": "b"}, {"name": "r1", "group": "real", "path": "c"}],
+    "methods": [{"name": "a"}, {"name": "b"}, {"name": "d"}],
+    "seeds": [0, 1, 2],
+    "budgets": [{"iterations": 10}],
+    "tables": [{"id": "main", "rows": [
+        {"label": "A", "method": "a", "supervision": "ldr"},
+        {"label": "B", "method": "b", "supervision": "ldr"},
+        {"label": "Ext", "method": "External", "supervision": "ldr"},
+        {"label": "D", "method": "d", "supervision": "ldr"}], "reference": "B"},
+      {"id": "abl", "layout": "ablation", "rows": [
+        {"label": "A", "method": "a", "supervision": "ldr"},
+        {"label": "B", "method": "b", "supervision": "ldr"}]}]})"),
+                    "/x/t.json");
+}
+
+RunSummary Run(const std::string& method, const std::string& scene, int seed, double psnr,
+               double mu_psnr, const std::string& status = "ok") {
+  RunSummary r;
+  r.label = {"t", method, scene, "ldr", seed, "10it", ""};
+  r.run_id = method + scene + std::to_string(seed);
+  r.status = status;
+  r.source = "harness";
+  r.train_seconds = 60 * (method == "a" ? 2 : 1);
+  r.render_fps = 50;
+  if (status == "ok") r.metrics = {{"psnr", psnr}, {"ssim", 0.8}, {"mu_psnr", mu_psnr}, {"mu_ssim", 0.7},
+                                   {"aligned_mu_psnr", mu_psnr + 1}};
+  return r;
+}
+
+std::vector<RunSummary> Runs() {
+  std::vector<RunSummary> runs;
+  const double noise[3] = {0.05, -0.03, -0.02};
+  for (int seed = 0; seed < 3; ++seed) {
+    for (const char* scene : {"s1", "s2"}) {
+      const double base = std::string(scene) == "s1" ? 20 : 24;
+      runs.push_back(Run("b", scene, seed, base + noise[seed], 15 + noise[seed]));
+      // a: 1 dB better in PSNR on every pair; mu-PSNR the same up to noise of its own.
+      runs.push_back(Run("a", scene, seed, base + 1 + noise[(seed + 1) % 3], 15 + noise[(seed + 2) % 3]));
+    }
+  }
+  runs.push_back(Run("d", "s1", 0, 10, 10));  // d: only one of six runs, and a failure
+  runs.push_back(Run("d", "s2", 0, 0, 0, "failed"));
+  runs.push_back(Run("a", "r1", 0, 99, 99));  // another scene group: not in these tables
+  return runs;
+}
+
+std::size_t Column(const Table& t, const std::string& key) {
+  for (std::size_t c = 0; c < t.columns.size(); ++c)
+    if (t.columns[c].key == key) return c;
+  ADD_FAILURE() << "no column " << key;
+  return 0;
+}
+
+TEST(Tables, MainLayoutMeansSpreadsBestAndTests) {
+  const Suite s = TableSuite();
+  const Table t = BuildTable(s.tables[0], s, Runs(), {});
+  ASSERT_EQ(t.rows.size(), 4u);
+  EXPECT_EQ(t.scenes, (std::vector<std::string>{"s1", "s2"}));
+  std::vector<std::string> keys;
+  for (const auto& c : t.columns) keys.push_back(c.key);
+  EXPECT_EQ(keys, (std::vector<std::string>{"mu_psnr", "mu_ssim", "lpips_hdr", "psnr", "ssim", "lpips",
+                                            "train_minutes", "fps"}));
+  const std::size_t psnr = Column(t, "psnr"), mu = Column(t, "mu_psnr"), time = Column(t, "train_minutes");
+  const RowResult &a = t.rows[0], &b = t.rows[1], &ext = t.rows[2], &d = t.rows[3];
+  // B: seed means over scenes are 22 + noise: mean 22, sd = sd of the noise.
+  EXPECT_NEAR(b.cells[psnr].mean, 22.0, 1e-12);
+  EXPECT_NEAR(b.cells[psnr].spread, SampleStdDev({0.05, -0.03, -0.02}), 1e-12);
+  EXPECT_NEAR(a.cells[psnr].mean, 23.0, 1e-12);
+  EXPECT_TRUE(a.cells[psnr].best);
+  EXPECT_FALSE(b.cells[psnr].best);
+  EXPECT_TRUE(b.cells[time].best);  // lower is better for time
+  EXPECT_NEAR(a.cells[time].mean, 2.0, 1e-12);
+  // Paired test against B: +1 dB exceeds seed noise; mu-PSNR differences are noise.
+  EXPECT_TRUE(a.tests[psnr].significant) << a.tests[psnr].Verdict();
+  EXPECT_NEAR(a.tests[psnr].mean_difference, 1.0, 1e-12);
+  EXPECT_EQ(a.tests[psnr].pairs, 6);
+  EXPECT_EQ(a.tests[psnr].dof, 4);
+  EXPECT_FALSE(a.tests[mu].significant) << a.tests[mu].Verdict();
+  EXPECT_FALSE(a.tests[time].testable);  // costs are not tested
+  // External row without runs; D incomplete with a failure.
+  EXPECT_EQ(ext.runs, 0);
+  EXPECT_FALSE(ext.cells[psnr].has_value);
+  EXPECT_EQ(d.runs, 1);
+  EXPECT_EQ(d.failed, 1);
+  EXPECT_FALSE(d.cells[psnr].complete());
+  EXPECT_FALSE(d.cells[psnr].has_spread);
+  // LPIPS says it cannot be computed.
+  EXPECT_FALSE(t.columns[Column(t, "lpips")].computable);
+}
+
+TEST(Tables, FormatsHaveOneLinePerRowAndSayWhatIsMissing) {
+  const Suite s = TableSuite();
+  const Table t = BuildTable(s.tables[0], s, Runs(), {});
+  const std::string md = ToMarkdown(t);
+  EXPECT_NE(md.find("| 1 | A | LDR |"), std::string::npos) << md;
+  EXPECT_NE(md.find("**23.00** ± 0.04"), std::string::npos) << md;
+  EXPECT_NE(md.find("n/a"), std::string::npos);
+  EXPECT_NE(md.find("LPIPS: not computed"), std::string::npos);
+  EXPECT_NE(md.find("Ext: no runs in the store; not methods of this suite"), std::string::npos) << md;
+  EXPECT_NE(md.find("bench submit --suite t --method NAME"), std::string::npos);
+  EXPECT_NE(md.find("[1/6]"), std::string::npos) << md;  // D: 1 of 2 scenes x 3 seeds
+  const std::string tests = PairedTestsMarkdown(t);
+  EXPECT_NE(tests.find("+1.00, p = "), std::string::npos) << tests;
+  EXPECT_NE(tests.find("**exceeds seed noise**"), std::string::npos);
+  const std::string tex = ToLatex(t);
+  EXPECT_NE(tex.find("\\toprule"), std::string::npos);
+  EXPECT_NE(tex.find("\\textbf{23.00}"), std::string::npos) << tex;
+  EXPECT_NE(tex.find("\\multicolumn{3}{c|}{HDR}"), std::string::npos) << tex;
+  const std::string csv = ToCsv(t);
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 4 * 8);
+  EXPECT_NE(csv.find("not computable"), std::string::npos);
+}
+
+TEST(Tables, ProtocolsPickTheirKeysAndNewMetricsAppear) {
+  const Suite s = TableSuite();
+  TableOptions gt;
+  gt.protocol = HdrProtocol::kGtMax;
+  EXPECT_EQ(BuildTable(s.tables[1], s, Runs(), gt).columns[0].key, "mu_psnr_gt_max");
+  gt.protocol = HdrProtocol::kPu21;
+  EXPECT_EQ(BuildTable(s.tables[1], s, Runs(), gt).columns[1].key, "pu21_ssim");
+  TableOptions aligned;
+  aligned.hdr_psnr_key = "aligned_mu_psnr";
+  aligned.hdr_ssim_key = "mu_ssim";
+  const Table at = BuildTable(s.tables[1], s, Runs(), aligned);
+  EXPECT_EQ(at.columns[0].key, "aligned_mu_psnr");
+  EXPECT_NEAR(at.rows[1].cells[0].mean, 16.0, 1e-12);
+  const Table all = BuildAllMetricsTable(s.tables[1], s, Runs(), {});
+  std::vector<std::string> keys;
+  for (const auto& c : all.columns) keys.push_back(c.key);
+  // Known keys first in their order, then keys added later (here a scale-aligned metric).
+  EXPECT_EQ(keys, (std::vector<std::string>{"psnr", "ssim", "mu_psnr", "mu_ssim", "aligned_mu_psnr",
+                                            "gaussians", "peak_rss_mb"}));
+  EXPECT_NEAR(all.rows[0].cells[4].mean, 16.0, 0.05);
+}
+
+TEST(Tables, PerSceneTableHasAMeanLine) {
+  const Suite s = TableSuite();
+  const Table t = BuildTable(s.tables[1], s, Runs(), {});
+  const std::string md = PerSceneMarkdown(s.tables[1], s, Runs(), {}, t.columns[0]);
+  EXPECT_NE(md.find("| s1 (3) |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| mean over scenes |"), std::string::npos) << md;
+}
+
+}  // namespace
+}  // namespace hdr4d::bench
