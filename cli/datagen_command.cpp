@@ -61,14 +61,18 @@ void AddDatagenCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--samples", options->samples, "Cycles samples per pixel (0 = the preset's)")
       ->capture_default_str();
+  cmd->add_option("--width", options->width,
+                  "Image width in pixels (0 = the preset's; the height follows the scene)")
+      ->capture_default_str();
   cmd->add_option("--crf", options->crf,
-                  "Camera response of the LDR images: linear, gamma:G, srgb, filmic[:k,mid]")
-      ->capture_default_str();
+                  "Camera response of the LDR images: linear, gamma:G, srgb, filmic[:k,mid], "
+                  "naka-rushton:k,gamma, table:F.csv (default: the scene's, filmic for the eight)");
   cmd->add_option("--full-well", options->full_well,
-                  "Shot noise: photo-electrons at saturation (0 = none)")
-      ->capture_default_str();
-  cmd->add_option("--read-noise", options->read_sigma, "Read noise std in units of full scale")
-      ->capture_default_str();
+                  "Shot noise: photo-electrons at saturation, 0 = none (default: the scene's, "
+                  "20000 for the eight, none for studio)");
+  cmd->add_option("--read-noise", options->read_sigma,
+                  "Read noise std in units of full scale (default: the scene's, 0.002 for the "
+                  "eight, none for studio)");
   cmd->add_flag("--list", *list, "List the scenes and presets, render nothing");
   cmd->callback([options, out, list] {
     if (*list) {
