@@ -100,6 +100,16 @@ double SceneExtent(const std::vector<TrainView>& views) {
   return 1.1 * std::max(radius, 1e-3);  // one camera: a tiny extent instead of zero
 }
 
+// The training images' size for the densification threshold: the geometric mean of width and
+// height of the median view (views of one scene normally share one size).
+double ImageSize(const std::vector<TrainView>& views) {
+  std::vector<double> sizes;
+  for (const TrainView& v : views) sizes.push_back(std::sqrt(double(v.width()) * v.height()));
+  if (sizes.empty()) return kReferenceImageSize;
+  std::nth_element(sizes.begin(), sizes.begin() + sizes.size() / 2, sizes.end());
+  return sizes[sizes.size() / 2];
+}
+
 // Active colour degrees at an iteration: spatial 0 -> 3 every interval, then temporal 0 -> 2.
 std::pair<int, int> ColorDegrees(int iteration, const GaussianModel& model, int interval) {
   const int steps = iteration / interval;
@@ -188,7 +198,6 @@ int DistinctTimes(const Dataset& dataset) {
 TrainSummary Train(const TrainOptions& options) {
   if (std::string problem = options.Validate(); !problem.empty()) Fail("train: {}", problem);
   const ThreadLimit thread_limit(options.threads);
-  const OptimizationOptions& opt = options.optimization;
 
   const Dataset dataset = LoadDataset(options.data, {.image_check = ImageCheck::kHeaders});
   const SceneProfile profile = ProfileScene(dataset);
@@ -205,6 +214,8 @@ TrainSummary Train(const TrainOptions& options) {
   const bool train_hdr = std::any_of(train_views.begin(), train_views.end(),
                                      [](const TrainView& v) { return !v.hdr_mu.empty(); });
   const double extent = SceneExtent(train_views);
+  // Schedules for this run's length and image size (an explicit value stays as it is).
+  const OptimizationOptions opt = options.optimization.Resolved(ImageSize(train_views));
   const bool temporal = profile.dynamic && !hdr_options.force_static;
   spdlog::info("train: {} train / {} test views, extent {:.3f}, {}, method {}", train_views.size(),
                test_views.size(), extent, temporal ? "dynamic" : "static (no time axis)",
@@ -282,7 +293,9 @@ TrainSummary Train(const TrainOptions& options) {
                      .lr = tone_mapper->learning_rate()});
     }
   }
-  nlohmann::json config = options.ToJson();
+  TrainOptions recorded = options;  // the schedules as resolved for this run
+  recorded.optimization = opt;
+  nlohmann::json config = recorded.ToJson();
   config["scene_extent"] = extent;
   config["profile"] = profile.ToJson();
   config["num_times"] = num_times;
