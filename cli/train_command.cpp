@@ -17,7 +17,7 @@ void AddTrainCommand(CLI::App& app) {
   struct HdrFlags {
     std::string method = "hdr4dgs";
     std::string tone_mapper, supervision = "auto", context_learner;
-    bool no_pixel_branch = false, direct_curves = false;
+    bool no_pixel_branch = false, direct_curves = false, free_curves = false;
     int context_window = 0, context_size = 0;
     float hdr_weight = 0.6f;
   };
@@ -90,6 +90,10 @@ void AddTrainCommand(CLI::App& app) {
   cmd->add_option("--context-learner", flags->context_learner,
                   "gru, rnn, lstm or transformer (Table 7; default gru)");
   cmd->add_option("--context-size", flags->context_size, "Context vector size d (default 2)");
+  cmd->add_flag("--free-tone-curves", flags->free_curves,
+                "Unconstrained tone-curve MLPs (dtm, mlp) as in the reference code; by default "
+                "they are non-decreasing in log exposure (free ones learn one branch per "
+                "exposure and an HDR of the wrong shape)");
   cmd->add_flag("--direct-tone-curves", flags->direct_curves,
                 "Evaluate the tone-curve MLP per value instead of the per-frame table");
   cmd->add_option("--hdr-weight", flags->hdr_weight, "Weight of the HDR term (alpha)")
@@ -101,7 +105,7 @@ void AddTrainCommand(CLI::App& app) {
     hdr = baselines::MethodPreset(flags->method);
     const bool tunes_tone_mapper = !flags->tone_mapper.empty() || flags->context_window > 0 ||
                                    !flags->context_learner.empty() || flags->context_size > 0 ||
-                                   flags->direct_curves;
+                                   flags->direct_curves || flags->free_curves;
     if (tunes_tone_mapper && !hdr.tone_mapper) {
       Fail("--method {} has no tone mapper, so tone-mapper options do not apply", flags->method);
     }
@@ -112,6 +116,7 @@ void AddTrainCommand(CLI::App& app) {
         hdr.tone_mapper->context_learner = flags->context_learner;
       if (flags->context_size > 0) hdr.tone_mapper->context_size = flags->context_size;
       if (flags->direct_curves) hdr.tone_mapper->tabulated = false;
+      if (flags->free_curves) hdr.tone_mapper->monotone_curves = false;
     }
     if (flags->supervision != "auto" || hdr.supervision == method::Supervision::kAuto)
       hdr.supervision = method::ParseSupervision(flags->supervision, "--supervision");

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -56,10 +57,11 @@ struct Chain {
 
 // Log-HDR values whose x = log_hdr + log_e sits in the middle of a table interval (so a small
 // step never crosses a node), plus a few outside the table (the direct fallback).
-Chain MakeChain(ContextKind kind, int hidden, int nodes, int length, unsigned seed) {
+Chain MakeChain(
+    ContextKind kind, int hidden, int nodes, int length, unsigned seed, bool monotone = false) {
   Chain c;
   c.shape.context = {kind, 2};
-  c.shape.curve = {2, hidden};
+  c.shape.curve = {2, hidden, monotone};
   c.shape.window = 20;
   c.shape.table_nodes = nodes;
   c.length = length;
@@ -149,9 +151,12 @@ TEST(DynamicToneMapperChain, GradientsMatchFiniteDifferencesEveryLearner) {
   for (ContextKind kind :
        {ContextKind::kGru, ContextKind::kRnn, ContextKind::kLstm, ContextKind::kTransformer}) {
     for (int nodes : {40, 0}) {  // tabulated, direct
-      SCOPED_TRACE(::testing::Message() << ContextKindName(kind) << " nodes=" << nodes);
-      const Chain c = MakeChain(kind, 6, nodes, 5, 3);
-      CheckChain(c, AllIndices(c.params.size()));
+      for (bool monotone : {false, true}) {
+        SCOPED_TRACE(::testing::Message() << ContextKindName(kind) << " nodes=" << nodes
+                                          << " monotone=" << monotone);
+        const Chain c = MakeChain(kind, 6, nodes, 5, 3, monotone);
+        CheckChain(c, AllIndices(c.params.size()));
+      }
     }
   }
 }
@@ -160,7 +165,7 @@ TEST(DynamicToneMapperChain, GradientsMatchFiniteDifferencesEveryLearner) {
 // sample of curve parameters, windows of 1 and 20 rows.
 TEST(DynamicToneMapperChain, DefaultShapeGradientsMatchFiniteDifferences) {
   for (int length : {1, 20}) {
-    const Chain c = MakeChain(ContextKind::kGru, 64, 1024, length, 7 + length);
+    const Chain c = MakeChain(ContextKind::kGru, 64, 1024, length, 7 + length, length == 20);
     std::vector<std::size_t> indices = AllIndices(c.shape.context.NumParams());
     std::mt19937 rng(length);
     std::uniform_int_distribution<std::size_t> u(c.shape.CurveOffset(0), c.params.size() - 1);
@@ -317,7 +322,10 @@ TEST(DynamicToneMapper, StableAtExtremes) {
         }
         EXPECT_EQ(dlh[246], 0.0f);  // clamped far outside: no gradient
         EXPECT_EQ(dlh[247], 0.0f);
-        EXPECT_NE(dlh[120], 0.0f);  // x = 0
+        // x = 0 is mid-curve for fresh weights; steep monotone ones saturate there, so then
+        // some other value must carry a gradient.
+        if (scale == 1.0) EXPECT_NE(dlh[120], 0.0f);
+        EXPECT_TRUE(std::any_of(dlh.begin(), dlh.end(), [](float g) { return g != 0.0f; }));
       }
       for (float g : m.grads()) ASSERT_TRUE(std::isfinite(g));
     }
@@ -353,7 +361,8 @@ TEST(DynamicToneMapper, TabulatedAgreesWithDirect) {
     diff += std::abs(tab.grads()[i] - direct.grads()[i]);
     norm += std::abs(direct.grads()[i]);
   }
-  EXPECT_LT(diff, 0.02 * norm);
+  // 3% with the default monotone curves, whose kinks crowd the range the values cover.
+  EXPECT_LT(diff, 0.04 * norm);
 }
 
 // The float SIMD loop of the tabulated path (internal::ToneTableBackward and its forward) against
