@@ -31,8 +31,8 @@ void AddTrainCommand(CLI::App& app) {
   cmd->add_option("--data", *data, "Scene folder")->required();
   cmd->add_option("--out", *out, "Run folder")->required();
   cmd->add_option("--iterations", options->optimization.iterations,
-                  "Training iterations. The schedules (densification window and interval, "
-                  "position learning-rate decay, opacity resets, colour degree steps) follow it: "
+                  "Training iterations. The schedules (densification window, position "
+                  "learning-rate decay, opacity resets) follow it: "
                   "the reference's values are those of 20000 iterations; a flag given below "
                   "wins over the scaling")
       ->capture_default_str();
@@ -49,8 +49,8 @@ void AddTrainCommand(CLI::App& app) {
   cmd->add_option("--densify-until", o.densify_until,
                   "Last densification iteration (default: 75% of --iterations, 15000 of 20000)");
   cmd->add_option("--densification-interval", o.densification_interval,
-                  "Iterations between densifications (default: 1% of --iterations, 200 of "
-                  "20000)");
+                  "Iterations between densifications (the reference's, whatever the run length)")
+      ->capture_default_str();
   cmd->add_option("--densify-grad-threshold", o.densify_grad_threshold,
                   "Clone/split when the mean NDC screen gradient reaches this (default: the "
                   "reference's 2e-4 at 400 px, times 400 / the image size: 8e-4 at 100 px)");
@@ -61,8 +61,9 @@ void AddTrainCommand(CLI::App& app) {
                   "Iterations between opacity resets while densifying (default: 15% of "
                   "--iterations, 3000 of 20000)");
   cmd->add_option("--sh-increase-interval", o.sh_increase_interval,
-                  "Iterations per colour degree step, spatial 0->3 then temporal 0->2 (default: "
-                  "5% of --iterations, 1000 of 20000)");
+                  "Iterations per colour degree step, spatial 0->3 then temporal 0->2 (the "
+                  "reference's, whatever the run length)")
+      ->capture_default_str();
   cmd->add_option("--test-every", options->test_every,
                   "Evaluate the test split every N iterations (0: at the end)")
       ->capture_default_str();
