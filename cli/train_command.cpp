@@ -17,7 +17,8 @@ void AddTrainCommand(CLI::App& app) {
   struct HdrFlags {
     std::string method = "hdr4dgs";
     std::string tone_mapper, supervision = "auto", context_learner;
-    bool no_pixel_branch = false, direct_curves = false, free_curves = false;
+    bool no_pixel_branch = false, no_gaussian_branch = false, direct_curves = false,
+         monotone_curves = false;
     int context_window = 0, context_size = 0;
     float hdr_weight = 0.6f;
   };
@@ -86,15 +87,18 @@ void AddTrainCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--no-pixel-branch", flags->no_pixel_branch,
                 "Drop the 2D (per-pixel) tone-mapping branch (Table 5)");
+  cmd->add_flag("--no-gaussian-branch", flags->no_gaussian_branch,
+                "Drop the 3D (per-Gaussian) tone-mapping branch (Table 5): the LDR comes from "
+                "the 2D branch alone");
   cmd->add_option("--context-window", flags->context_window,
                   "Radiance-bank rows the context learner reads (Table 6; default 20)");
   cmd->add_option("--context-learner", flags->context_learner,
                   "gru, rnn, lstm or transformer (Table 7; default gru)");
   cmd->add_option("--context-size", flags->context_size, "Context vector size d (default 2)");
-  cmd->add_flag("--free-tone-curves", flags->free_curves,
-                "Unconstrained tone-curve MLPs (dtm, mlp) as in the reference code; by default "
-                "they are non-decreasing in log exposure (free ones learn one branch per "
-                "exposure and an HDR of the wrong shape)");
+  cmd->add_flag("--monotone-tone-curves", flags->monotone_curves,
+                "Tone-curve MLPs (dtm, mlp) non-decreasing in log exposure instead of the "
+                "reference's free ones, which learn one branch per exposure and an HDR of the "
+                "wrong shape (BENCHMARKS.md, issue 12)");
   cmd->add_flag("--direct-tone-curves", flags->direct_curves,
                 "Evaluate the tone-curve MLP per value instead of the per-frame table");
   cmd->add_option("--hdr-weight", flags->hdr_weight, "Weight of the HDR term (alpha)")
@@ -106,7 +110,7 @@ void AddTrainCommand(CLI::App& app) {
     hdr = baselines::MethodPreset(flags->method);
     const bool tunes_tone_mapper = !flags->tone_mapper.empty() || flags->context_window > 0 ||
                                    !flags->context_learner.empty() || flags->context_size > 0 ||
-                                   flags->direct_curves || flags->free_curves;
+                                   flags->direct_curves || flags->monotone_curves;
     if (tunes_tone_mapper && !hdr.tone_mapper) {
       Fail("--method {} has no tone mapper, so tone-mapper options do not apply", flags->method);
     }
@@ -117,11 +121,12 @@ void AddTrainCommand(CLI::App& app) {
         hdr.tone_mapper->context_learner = flags->context_learner;
       if (flags->context_size > 0) hdr.tone_mapper->context_size = flags->context_size;
       if (flags->direct_curves) hdr.tone_mapper->tabulated = false;
-      if (flags->free_curves) hdr.tone_mapper->monotone_curves = false;
+      if (flags->monotone_curves) hdr.tone_mapper->monotone_curves = true;
     }
     if (flags->supervision != "auto" || hdr.supervision == method::Supervision::kAuto)
       hdr.supervision = method::ParseSupervision(flags->supervision, "--supervision");
     if (flags->no_pixel_branch) hdr.pixel_branch = false;
+    if (flags->no_gaussian_branch) hdr.gaussian_branch = false;
     hdr.hdr_weight = flags->hdr_weight;
     if (std::string p = hdr.Validate(); !p.empty()) Fail("train: {}", p);
     options->tone_mapper_factory = baselines::MakeToneMapper;

@@ -176,6 +176,11 @@ TEST(TrainerHdr, ImpossibleCombinationsAreErrors) {
   o = HdrRun(dir / "scene", dir / "d", 5);
   o.hdr.tone_mapper->context_learner = "mamba";
   EXPECT_NE(ErrorOf([&] { Train(o); }).find("context_learner"), std::string::npos);
+  // Both tone-mapping branches dropped.
+  o = HdrRun(dir / "scene", dir / "f", 5);
+  o.hdr.pixel_branch = false;
+  o.hdr.gaussian_branch = false;
+  EXPECT_NE(ErrorOf([&] { Train(o); }).find("no tone-mapping branch"), std::string::npos);
   // Resuming an LDR run as an HDR one.
   TrainOptions ldr = HdrRun(dir / "scene", dir / "e", 5);
   ldr.hdr = HdrTrainingOptions{};

@@ -2,7 +2,6 @@
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -322,10 +321,7 @@ TEST(DynamicToneMapper, StableAtExtremes) {
         }
         EXPECT_EQ(dlh[246], 0.0f);  // clamped far outside: no gradient
         EXPECT_EQ(dlh[247], 0.0f);
-        // x = 0 is mid-curve for fresh weights; steep monotone ones saturate there, so then
-        // some other value must carry a gradient.
-        if (scale == 1.0) EXPECT_NE(dlh[120], 0.0f);
-        EXPECT_TRUE(std::any_of(dlh.begin(), dlh.end(), [](float g) { return g != 0.0f; }));
+        EXPECT_NE(dlh[120], 0.0f);  // x = 0
       }
       for (float g : m.grads()) ASSERT_TRUE(std::isfinite(g));
     }
@@ -361,8 +357,7 @@ TEST(DynamicToneMapper, TabulatedAgreesWithDirect) {
     diff += std::abs(tab.grads()[i] - direct.grads()[i]);
     norm += std::abs(direct.grads()[i]);
   }
-  // 3% with the default monotone curves, whose kinks crowd the range the values cover.
-  EXPECT_LT(diff, 0.04 * norm);
+  EXPECT_LT(diff, 0.02 * norm);
 }
 
 // The float SIMD loop of the tabulated path (internal::ToneTableBackward and its forward) against

@@ -144,7 +144,7 @@ ToneMapperConfig ToneMapperConfig::FromJson(const nlohmann::json& json, const st
          seed.dump());
   }
   c.seed = seed.get<std::uint64_t>();
-  // Runs from before monotone curves existed had the reference's free ones.
+  // Runs from before the key existed had the reference's free curves.
   c.monotone_curves = false;
   if (const auto it = json.find("monotone_curves"); it != json.end()) {
     if (!it->is_boolean()) {

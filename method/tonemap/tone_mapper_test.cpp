@@ -74,7 +74,7 @@ TEST(ToneMapperConfig, JsonRoundTripKeepsEveryKey) {
   c.tabulated = false;
   c.table_nodes = 333;
   c.seed = std::numeric_limits<std::uint64_t>::max();
-  c.monotone_curves = false;
+  c.monotone_curves = true;
   const nlohmann::json json = c.ToJson();
   EXPECT_EQ(json.size(), 11u);
   // Through text, as config.json is read back.
@@ -91,9 +91,9 @@ TEST(ToneMapperConfig, JsonRoundTripKeepsEveryKey) {
   EXPECT_EQ(r.seed, c.seed);
   EXPECT_EQ(r.monotone_curves, c.monotone_curves);
   EXPECT_EQ(r.ToJson(), json);
-  // Monotone curves are the default; a config.json from before they existed had free ones.
-  EXPECT_TRUE(ToneMapperConfig().monotone_curves);
-  nlohmann::json old = ToneMapperConfig().ToJson();
+  // Free curves (the reference's) are the default, and what a config.json without the key had.
+  EXPECT_FALSE(ToneMapperConfig().monotone_curves);
+  nlohmann::json old = c.ToJson();
   old.erase("monotone_curves");
   EXPECT_FALSE(ToneMapperConfig::FromJson(old, "x").monotone_curves);
 }
