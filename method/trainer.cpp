@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
+#include <filesystem>
 #include <map>
 #include <numeric>
 #include <random>
@@ -14,6 +16,7 @@
 
 #include "core/dataset.h"
 #include "core/error.h"
+#include "core/hdr_alignment.h"
 #include "core/image_io.h"
 #include "core/json_util.h"
 #include "core/metrics.h"
@@ -127,6 +130,16 @@ nlohmann::json Evaluate(ViewRenderer* renderer, const std::vector<TrainView>& vi
   if (views.empty()) return mean;
   std::map<std::string, std::pair<double, int>> sums;
   std::vector<float> ldr, hdr, gt;
+  // The pixels some LDR bracket of the same view and time measures (the views sharing an HDR
+  // ground truth), for the scale-aligned HDR metrics (core/hdr_alignment.h).
+  std::map<std::filesystem::path, std::vector<Image>> brackets;
+  for (const TrainView& v : views) {
+    if (!v.hdr_path) continue;
+    v.ToFloat(&gt);
+    brackets[*v.hdr_path].push_back(DisplayImageFromBuffer(gt.data(), v.width(), v.height(), 3));
+  }
+  std::map<std::filesystem::path, std::vector<std::uint8_t>> measured;
+  for (const auto& [path, images] : brackets) measured[path] = MeasurableInBrackets(images);
   for (const TrainView& v : views) {
     const ToneFrame frame{v.time_index, -1, static_cast<float>(std::log(v.exposure))};
     renderer->Render(v.camera, v.time, frame, &ldr, &hdr);
@@ -144,7 +157,9 @@ nlohmann::json Evaluate(ViewRenderer* renderer, const std::vector<TrainView>& vi
     if (!hdr.empty() && v.hdr_path) {
       Image prediction(v.width(), v.height(), 3, Encoding::kLinear);
       std::copy(hdr.begin(), hdr.end(), prediction.data());
-      add(HdrMetrics(prediction, ReadImage(*v.hdr_path)));
+      const Image truth = ReadImage(*v.hdr_path);
+      add(HdrMetrics(prediction, truth));
+      add(AlignedHdrMetrics(prediction, truth, &measured.at(*v.hdr_path)));
     }
   }
   for (const auto& [key, sum] : sums) mean[key] = FiniteOrNull(sum.first / sum.second);
