@@ -8,6 +8,7 @@
 #include "baselines/static_mlp_curve.h"
 #include "core/error.h"
 #include "core/parallel.h"
+#include "method/tonemap/monotone_mlp.h"
 
 namespace hdr4d::baselines {
 namespace {
@@ -167,25 +168,52 @@ std::vector<float> InitialWeights(std::uint64_t seed) {
 StaticMlpToneMapper::StaticMlpToneMapper(const method::ToneMapperConfig& config)
     : ParamToneMapper(config, InitialWeights(config.seed)) {}
 
+const float* StaticMlpToneMapper::Effective(std::vector<float>* scratch) const {
+  if (!config_.monotone_curves) return params_.data();
+  scratch->resize(params_.size());
+  const std::size_t per_channel = StaticMlpShape().NumParams();
+  for (int c = 0; c < 3; ++c) {
+    method::MonotoneEffective(StaticMlpShape(), params_.data() + c * per_channel,
+                              scratch->data() + c * per_channel);
+  }
+  return scratch->data();
+}
+
 void StaticMlpToneMapper::Map(const float* log_hdr, std::size_t n, float* ldr) const {
+  std::vector<float> scratch;
+  const float* weights = Effective(&scratch);
   if (config_.tabulated) {
-    StaticMlpForwardPiecewise(params_.data(), frame_.log_exposure, log_hdr, n, ldr);
+    StaticMlpForwardPiecewise(weights, frame_.log_exposure, log_hdr, n, ldr);
     return;
   }
-  StaticMlpForward(params_.data(), frame_.log_exposure, log_hdr, n, ldr);
+  StaticMlpForward(weights, frame_.log_exposure, log_hdr, n, ldr);
 }
 
 void StaticMlpToneMapper::MapBackward(const float* log_hdr,
                                       std::size_t n,
                                       const float* dL_dldr,
                                       float* dL_dlog_hdr) {
-  if (config_.tabulated) {
-    StaticMlpBackwardPiecewise(params_.data(), frame_.log_exposure, log_hdr, n, dL_dldr,
-                               dL_dlog_hdr, grads_.data());
-    return;
+  // The gradient with respect to the weights Map used, then (monotone) to the stored ones.
+  float* grads = grads_.data();
+  if (config_.monotone_curves) {
+    effective_grad_.assign(params_.size(), 0.0f);
+    grads = effective_grad_.data();
   }
-  StaticMlpBackward(params_.data(), frame_.log_exposure, log_hdr, n, dL_dldr, dL_dlog_hdr,
-                    grads_.data());
+  std::vector<float> scratch;
+  const float* weights = Effective(&scratch);
+  if (config_.tabulated) {
+    StaticMlpBackwardPiecewise(weights, frame_.log_exposure, log_hdr, n, dL_dldr, dL_dlog_hdr,
+                               grads);
+  } else {
+    StaticMlpBackward(weights, frame_.log_exposure, log_hdr, n, dL_dldr, dL_dlog_hdr, grads);
+  }
+  if (!config_.monotone_curves) return;
+  const std::size_t per_channel = StaticMlpShape().NumParams();
+  for (int c = 0; c < 3; ++c) {
+    method::MonotoneGradientAdd(StaticMlpShape(), params_.data() + c * per_channel,
+                                effective_grad_.data() + c * per_channel,
+                                grads_.data() + c * per_channel);
+  }
 }
 
 }  // namespace hdr4d::baselines

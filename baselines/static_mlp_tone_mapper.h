@@ -8,8 +8,10 @@
 // network's piecewise-linear form (baselines/static_mlp_curve.h), about 30x faster and equal to
 // the direct path up to float rounding (tested), so the baseline is not slowed by its evaluator.
 //
-// Like HDR-GS it starts from PyTorch's default initialisation with no pretraining, so the curve
-// is not monotonic until it has learned to be (it is not constrained to be). Its learning rate is
+// Like HDR-GS it starts from PyTorch's default initialisation with no pretraining. By default
+// (ToneMapperConfig::monotone_curves) its weights are used as monotone_mlp.h says, so each curve
+// is non-decreasing; without it, as in HDR-GS, the curve is unconstrained and learns one branch
+// per exposure on multi-exposure data (issue 12). Its learning rate is
 // HDR-GS's 5e-4 (HDR-GS configures a decay but never applies it). Inputs are clamped as
 // log_domain.h says, so log 0 behaves as very dark radiance with zero gradient.
 #pragma once
@@ -67,6 +69,12 @@ class StaticMlpToneMapper final : public ParamToneMapper {
                    std::size_t n,
                    const float* dL_dldr,
                    float* dL_dlog_hdr) override;
+
+ private:
+  // The weights Map uses: params_ itself, or (config.monotone_curves) their monotone effective
+  // form (monotone_mlp.h), made from the current params_ on every call (about 1000 values).
+  const float* Effective(std::vector<float>* scratch) const;
+  std::vector<float> effective_grad_;
 };
 
 }  // namespace hdr4d::baselines

@@ -69,17 +69,22 @@ void AddDatagenCommand(CLI::App& app) {
   cmd->add_option("--samples", options->samples, "Cycles samples per pixel (0 = the preset's)")
       ->check(Integer(0, 1'000'000))
       ->capture_default_str();
+  cmd->add_option("--width", options->width,
+                  "Image width in pixels (0 = the preset's; the height follows the scene)")
+      ->check(Integer(0, 100000))
+      ->capture_default_str();
   cmd->add_option("--crf", options->crf,
-                  "Camera response of the LDR images: linear, gamma:G, srgb, filmic[:k,mid]")
-      ->check(Text("a camera response"))
-      ->capture_default_str();
+                  "Camera response of the LDR images: linear, gamma:G, srgb, filmic[:k,mid], "
+                  "naka-rushton:k,gamma, table:F.csv (default: the scene's, filmic for the eight)")
+      ->check(Text("a camera response"));
   cmd->add_option("--full-well", options->full_well,
-                  "Shot noise: photo-electrons at saturation (0 = none)")
-      ->check(Real(0, 1e12))
-      ->capture_default_str();
-  cmd->add_option("--read-noise", options->read_sigma, "Read noise std in units of full scale")
-      ->check(Real(0, 1))
-      ->capture_default_str();
+                  "Shot noise: photo-electrons at saturation, 0 = none (default: the scene's, "
+                  "20000 for the eight, none for studio)")
+      ->check(Real(0, 1e12));
+  cmd->add_option("--read-noise", options->read_sigma,
+                  "Read noise std in units of full scale (default: the scene's, 0.002 for the "
+                  "eight, none for studio)")
+      ->check(Real(0, 1));
   cmd->add_flag("--list", *list, "List the scenes and presets, render nothing");
   cmd->callback([options, out, list] {
     if (*list) {

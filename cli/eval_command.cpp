@@ -20,6 +20,7 @@ struct EvalOptions {
   std::string gt;
   bool json = false;
   std::string out;
+  std::string data;
 };
 
 constexpr const char* kEvalFooter = R"(
@@ -42,6 +43,18 @@ HDR pairs (EXR/HDR; both float) are scored with:
   pu21_ssim          SSIM on PU21 luminance, C1 = (0.01*256)^2, C2 = (0.03*256)^2
 PU21 scaling: both images are multiplied by 4000 / (max luminance of the ground truth),
 luminance = 0.212656 R + 0.715158 G + 0.072186 B, then clamped to [0.005, 10000] cd/m^2.
+Scale-aligned HDR metrics (LDR fixes an HDR only up to one factor, and cannot tell how bright
+a light is that clips at every exposure; the own-max protocol divides by exactly that guess):
+  measured pixels    with --data SCENE: pixels that some LDR bracket of the view (the
+                     frames sharing its exr_file_path) records unclipped and above black;
+                     without: pixels of positive luminance in both images
+  hdr_align_scale    exp(median over measured pixels of log Y_gt - log Y_pred), Y = luminance
+  hdr_log_slope      least-squares slope of log Y_pred on log Y_gt over the measured pixels
+                     (1: the truth's shape; 0.25: the truth to the power 0.25)
+  hdr_log_corr       their Pearson correlation
+  hdr_measured_fraction  measured pixels / all pixels
+  mu_*_aligned       prediction times hdr_align_scale, then the HDR-NeRF (GT max) protocol
+  pu21_*_aligned     prediction times hdr_align_scale, then PU21 as above
 Metrics use the first three channels (alpha is ignored). "mean" is the mean of the
 per-image values that are finite. Identical images have PSNR inf, written as null in JSON and
 left out of the means; "identical_pairs" counts them.)";
@@ -61,6 +74,10 @@ void AddEvalCommand(CLI::App& app) {
   sub->add_flag("--json", options->json, "Print the result as JSON instead of a table");
   sub->add_option("--out", options->out, "Also write the JSON result to this file")
       ->check(Text("an output file"));
+  sub->add_option("--data", options->data,
+                  "Scene of the HDR ground truth: its LDR brackets decide the measured pixels of "
+                  "the aligned HDR metrics")
+      ->check(Text("a dataset folder"));
   sub->footer(kEvalFooter);
   sub->callback([options] {
     // The images scored are inputs: --out may not replace them or land among them, and that is
@@ -68,7 +85,10 @@ void AddEvalCommand(CLI::App& app) {
     ProtectInput(options->pred, "the predictions eval scores");
     ProtectInput(options->gt, "the ground truth eval scores against");
     if (!options->out.empty()) CheckOutput(options->out);
-    const nlohmann::json result = EvaluatePaths(options->pred, options->gt);
+    EvalBrackets brackets;
+    if (!options->data.empty()) brackets = DatasetBrackets(options->data);
+    const nlohmann::json result =
+        EvaluatePaths(options->pred, options->gt, options->data.empty() ? nullptr : &brackets);
     if (!options->out.empty()) WriteJsonFile(options->out, result);
     if (options->json) {
       fmt::print("{}\n", result.dump(1));

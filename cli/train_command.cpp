@@ -18,7 +18,8 @@ void AddTrainCommand(CLI::App& app) {
   struct HdrFlags {
     std::string method = "hdr4dgs";
     std::string tone_mapper, supervision = "auto", context_learner;
-    bool no_pixel_branch = false, direct_curves = false;
+    bool no_pixel_branch = false, no_gaussian_branch = false, direct_curves = false,
+         monotone_curves = false;
     int context_window = 20, context_size = 2;
     float hdr_weight = 0.6f;
   };
@@ -31,7 +32,11 @@ void AddTrainCommand(CLI::App& app) {
       "`hdr4d eval`, LDR and HDR, training seconds, iterations, Gaussian count).");
   cmd->add_option("--data", *data, "Scene folder")->required()->check(Text("a scene folder"));
   cmd->add_option("--out", *out, "Run folder")->required()->check(Text("a run folder"));
-  cmd->add_option("--iterations", options->optimization.iterations, "Training iterations")
+  cmd->add_option("--iterations", options->optimization.iterations,
+                  "Training iterations. The schedules (densification window, position "
+                  "learning-rate decay, opacity resets) follow it: "
+                  "the reference's values are those of 20000 iterations; a flag given below "
+                  "wins over the scaling")
       ->check(Integer(1))
       ->capture_default_str();
   cmd->add_option("--seed", options->seed, "Random seed (same seed and threads: identical runs)")
@@ -44,20 +49,33 @@ void AddTrainCommand(CLI::App& app) {
                   "Initial random points when the scene has no point3d.ply")
       ->check(Integer(4, 100'000'000))
       ->capture_default_str();
-  cmd->add_option("--densify-from", options->optimization.densify_from,
-                  "First densification iteration")
-      ->check(Integer(0))
+  method::OptimizationOptions& o = options->optimization;
+  cmd->add_option("--densify-from", o.densify_from,
+                  "First densification iteration (default: 2.5% of --iterations, the "
+                  "reference's 500 of 20000)")
+      ->check(Integer(0));
+  cmd->add_option("--densify-until", o.densify_until,
+                  "Last densification iteration (default: 75% of --iterations, 15000 of 20000)")
+      ->check(Integer(0));
+  cmd->add_option("--densification-interval", o.densification_interval,
+                  "Iterations between densifications (the reference's, whatever the run length)")
+      ->check(Integer(1))
       ->capture_default_str();
-  cmd->add_option("--densify-until", options->optimization.densify_until,
-                  "Last densification iteration")
-      ->check(Integer(0))
-      ->capture_default_str();
-  cmd->add_option("--densify-grad-threshold", options->optimization.densify_grad_threshold,
-                  "Clone/split when the mean NDC screen gradient reaches this")
-      ->check(PositiveReal())
-      ->capture_default_str();
-  cmd->add_option("--position-lr-steps", options->optimization.position_lr_max_steps,
-                  "Iterations over which the position learning rate decays")
+  cmd->add_option("--densify-grad-threshold", o.densify_grad_threshold,
+                  "Clone/split when the mean NDC screen gradient reaches this (default: the "
+                  "reference's 2e-4 at 400 px, times 400 / the image size: 8e-4 at 100 px)")
+      ->check(PositiveReal());
+  cmd->add_option("--position-lr-steps", o.position_lr_max_steps,
+                  "Iterations over which the position learning rate decays (default: 75% of "
+                  "--iterations, 15000 of 20000)")
+      ->check(Integer(1));
+  cmd->add_option("--opacity-reset-interval", o.opacity_reset_interval,
+                  "Iterations between opacity resets while densifying (default: 15% of "
+                  "--iterations, 3000 of 20000)")
+      ->check(Integer(1));
+  cmd->add_option("--sh-increase-interval", o.sh_increase_interval,
+                  "Iterations per colour degree step, spatial 0->3 then temporal 0->2 (the "
+                  "reference's, whatever the run length)")
       ->check(Integer(1))
       ->capture_default_str();
   cmd->add_option("--test-every", options->test_every,
@@ -92,6 +110,9 @@ void AddTrainCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--no-pixel-branch", flags->no_pixel_branch,
                 "Drop the 2D (per-pixel) tone-mapping branch (Table 5)");
+  cmd->add_flag("--no-gaussian-branch", flags->no_gaussian_branch,
+                "Drop the 3D (per-Gaussian) tone-mapping branch (Table 5): the LDR comes from "
+                "the 2D branch alone");
   // Given or not is told by the option's count, never by a sentinel value that a user could type.
   CLI::Option* context_window =
       cmd->add_option("--context-window", flags->context_window,
@@ -105,6 +126,10 @@ void AddTrainCommand(CLI::App& app) {
       cmd->add_option("--context-size", flags->context_size, "Context vector size d")
           ->check(Integer(1, 64))
           ->capture_default_str();
+  cmd->add_flag("--monotone-tone-curves", flags->monotone_curves,
+                "Tone-curve MLPs (dtm, mlp) non-decreasing in log exposure instead of the "
+                "reference's free ones, which learn one branch per exposure and an HDR of the "
+                "wrong shape (BENCHMARKS.md, issue 12)");
   cmd->add_flag("--direct-tone-curves", flags->direct_curves,
                 "Evaluate the tone-curve MLP per value instead of the per-frame table");
   cmd->add_option("--hdr-weight", flags->hdr_weight, "Weight of the HDR term (alpha)")
@@ -118,7 +143,7 @@ void AddTrainCommand(CLI::App& app) {
     const bool window_given = context_window->count() > 0, size_given = context_size->count() > 0;
     const bool tunes_tone_mapper = !flags->tone_mapper.empty() || window_given ||
                                    !flags->context_learner.empty() || size_given ||
-                                   flags->direct_curves;
+                                   flags->direct_curves || flags->monotone_curves;
     if (tunes_tone_mapper && !hdr.tone_mapper) {
       Fail("--method {} has no tone mapper, so tone-mapper options do not apply", flags->method);
     }
@@ -129,10 +154,12 @@ void AddTrainCommand(CLI::App& app) {
         hdr.tone_mapper->context_learner = flags->context_learner;
       if (size_given) hdr.tone_mapper->context_size = flags->context_size;
       if (flags->direct_curves) hdr.tone_mapper->tabulated = false;
+      if (flags->monotone_curves) hdr.tone_mapper->monotone_curves = true;
     }
     if (flags->supervision != "auto" || hdr.supervision == method::Supervision::kAuto)
       hdr.supervision = method::ParseSupervision(flags->supervision, "--supervision");
     if (flags->no_pixel_branch) hdr.pixel_branch = false;
+    if (flags->no_gaussian_branch) hdr.gaussian_branch = false;
     hdr.hdr_weight = flags->hdr_weight;
     if (std::string p = hdr.Validate(); !p.empty()) Fail("train: {}", p);
     options->tone_mapper_factory = baselines::MakeToneMapper;

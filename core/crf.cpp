@@ -197,6 +197,52 @@ nlohmann::json FilmicCrf::ToJson() const {
 }
 
 // ---------------------------------------------------------------------------------------------
+// NakaRushtonCrf
+
+NakaRushtonCrf::NakaRushtonCrf(double half, double gamma) : k_(half), gamma_(gamma) {
+  if (!std::isfinite(half) || !(half > 0)) {
+    Fail("naka-rushton CRF: the half-saturation k must be a finite number > 0, got {}", half);
+  }
+  if (!std::isfinite(gamma) || !(gamma > 0)) {
+    Fail("naka-rushton CRF: gamma must be a finite number > 0, got {}", gamma);
+  }
+}
+
+double NakaRushtonCrf::Apply(double x) const {
+  if (std::isnan(x)) return x;
+  x = ClampExposure(x);
+  if (x >= 1.0) return 1.0;
+  const double s = std::pow(x, 1.0 / gamma_);
+  return (1.0 + k_) * s / (s + k_);
+}
+
+double NakaRushtonCrf::Inverse(double y) const {
+  if (std::isnan(y)) return y;
+  if (y <= 0.0) return 0.0;
+  if (y >= 1.0) return 1.0;
+  const double s = k_ * y / (1.0 + k_ - y);  // 1 + k - y > k > 0
+  return std::min(1.0, std::pow(s, gamma_));
+}
+
+double NakaRushtonCrf::Derivative(double x) const {
+  x = ClampExposure(x);
+  if (x > 1.0) return 0.0;
+  if (x == 0.0) {
+    if (gamma_ > 1.0) return std::numeric_limits<double>::infinity();
+    return gamma_ == 1.0 ? (1.0 + k_) / k_ : 0.0;
+  }
+  const double s = std::pow(x, 1.0 / gamma_);
+  const double ds_dx = s / (gamma_ * x);
+  return (1.0 + k_) * k_ / ((s + k_) * (s + k_)) * ds_dx;
+}
+
+std::string NakaRushtonCrf::Spec() const { return fmt::format("naka-rushton:{},{}", k_, gamma_); }
+
+nlohmann::json NakaRushtonCrf::ToJson() const {
+  return {{"model", "naka-rushton"}, {"half", k_}, {"gamma", gamma_}};
+}
+
+// ---------------------------------------------------------------------------------------------
 // TableCrf
 
 TableCrf::TableCrf(std::vector<double> x, std::vector<double> y, std::string source)
@@ -349,7 +395,8 @@ nlohmann::json TableCrf::ToJson() const {
 namespace {
 
 constexpr const char* kSpecHelp =
-    "expected linear, gamma[:<gamma>], srgb, filmic[:<contrast>,<mid>] or table:<file.csv>";
+    "expected linear, gamma[:<gamma>], srgb, filmic[:<contrast>,<mid>], "
+    "naka-rushton:<k>,<gamma> or table:<file.csv>";
 
 double SpecNumber(const std::string& spec, std::string_view text, const char* what) {
   double value;
@@ -388,6 +435,18 @@ std::unique_ptr<Crf> ParseCrf(const std::string& spec) {
       const std::string_view view(args);
       return std::make_unique<FilmicCrf>(SpecNumber(spec, view.substr(0, comma), "contrast"),
                                          SpecNumber(spec, view.substr(comma + 1), "mid"));
+    }
+    if (model == "naka-rushton") {
+      const std::size_t comma = args.find(',');
+      if (!has_args || comma == std::string::npos) {
+        Fail(
+            "CRF spec '{}': naka-rushton takes two parameters, naka-rushton:<k>,<gamma> (e.g. "
+            "naka-rushton:0.2,2.2)",
+            spec);
+      }
+      const std::string_view view(args);
+      return std::make_unique<NakaRushtonCrf>(SpecNumber(spec, view.substr(0, comma), "k"),
+                                              SpecNumber(spec, view.substr(comma + 1), "gamma"));
     }
     if (model == "table") {
       if (args.empty()) Fail("CRF spec '{}': table needs a file, table:<file.csv>", spec);
@@ -440,6 +499,12 @@ std::unique_ptr<Crf> CrfFromJson(const nlohmann::json& json) {
     if (model == "filmic") {
       return std::make_unique<FilmicCrf>(JsonNumber(json, "contrast", FilmicCrf::kDefaultContrast),
                                          JsonNumber(json, "mid", FilmicCrf::kDefaultMid));
+    }
+    if (model == "naka-rushton") {
+      if (!json.contains("half") || !json.contains("gamma"))
+        Fail("CRF JSON: naka-rushton needs \"half\" and \"gamma\" in {}", json.dump());
+      return std::make_unique<NakaRushtonCrf>(JsonNumber(json, "half", 0.0),
+                                              JsonNumber(json, "gamma", 0.0));
     }
     if (model == "table") {
       std::string path;

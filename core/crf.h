@@ -113,6 +113,29 @@ class FilmicCrf final : public Crf {
   double k_, m_, mk_;  // mk_ = m^k
 };
 
+// A concave (Naka-Rushton / Michaelis-Menten) response on a gamma-encoded signal:
+//   s = min(x, 1)^(1/gamma),   y = (1 + k) s / (s + k),
+// with half-saturation k > 0 and gamma > 0: y(1) = 1. Its slope in log exposure falls from
+// 1/gamma in the shadows towards 0 near white, so it compresses a very wide range into 8 bits
+// (k = 0.2, gamma = 2.2 spans about 1e7:1 between code 1 and white). Inverse closed-form:
+// s = k y / (1 + k - y), x = s^gamma.
+class NakaRushtonCrf final : public Crf {
+ public:
+  NakaRushtonCrf(double half, double gamma);  // throws hdr4d::Error for bad parameters
+  double half() const { return k_; }
+  double gamma() const { return gamma_; }
+  double Apply(double x) const override;
+  double Saturation() const override { return 1.0; }
+  bool Invertible() const override { return true; }
+  double Inverse(double y) const override;
+  double Derivative(double x) const override;
+  std::string Spec() const override;
+  nlohmann::json ToJson() const override;
+
+ private:
+  double k_, gamma_;
+};
+
 // Piecewise-linear through nodes (x_i, y_i), in the table's own units of x: its saturation is
 // the first node with y = 1, not necessarily x = 1. Nodes must be finite, x >= 0 and strictly
 // increasing, y non-decreasing within [0,1] and ending at y = 1; a first node with x > 0 gets
@@ -154,7 +177,8 @@ class TableCrf final : public Crf {
 };
 
 // "linear", "gamma" (2.2) or "gamma:<g>", "srgb", "filmic" (contrast 1.5, mid 0.18) or
-// "filmic:<contrast>,<mid>", "table:<path.csv>" (see TableCrf::FromCsv). Throws hdr4d::Error
+// "filmic:<contrast>,<mid>", "naka-rushton:<k>,<gamma>", "table:<path.csv>" (see
+// TableCrf::FromCsv). Throws hdr4d::Error
 // naming the spec and what is wrong with it.
 std::unique_ptr<Crf> ParseCrf(const std::string& spec);
 // Reads Crf::ToJson output back; a table is rebuilt from its embedded "x"/"y" nodes, or

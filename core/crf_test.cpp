@@ -53,6 +53,8 @@ std::vector<Model> Models() {
       {"filmic", std::make_shared<FilmicCrf>(), 1e-9},
       {"filmic3", std::make_shared<FilmicCrf>(3.0, 0.25), 1e-9},
       {"filmic0.7", std::make_shared<FilmicCrf>(0.7, 0.5), 1e-9},
+      {"naka-rushton", std::make_shared<NakaRushtonCrf>(0.2, 2.2), 1e-9},
+      {"naka-rushton-linear", std::make_shared<NakaRushtonCrf>(3.0, 1.0), 1e-9},
   };
   // Piecewise-linear forward and inverse are exact inverses up to rounding.
   models.push_back(
@@ -132,6 +134,10 @@ TEST(Crf, DerivativeMatchesFiniteDifferences) {
   EXPECT_EQ(LinearCrf().Derivative(1.0), 1.0);
   EXPECT_DOUBLE_EQ(SrgbCrf().Derivative(0.0), 12.92);
   EXPECT_EQ(FilmicCrf(1.5, 0.18).Derivative(0.0), 0.0);
+  EXPECT_EQ(NakaRushtonCrf(0.2, 2.2).Derivative(0.0), std::numeric_limits<double>::infinity());
+  EXPECT_DOUBLE_EQ(NakaRushtonCrf(3.0, 1.0).Derivative(0.0), 4.0 / 3.0);
+  // At white: (1 + k) k / (1 + k)^2 / gamma.
+  EXPECT_DOUBLE_EQ(NakaRushtonCrf(0.2, 2.2).Derivative(1.0), 0.2 / 1.2 / 2.2);
 }
 
 // A model without an analytic derivative uses the base class's finite difference.
@@ -166,6 +172,12 @@ TEST(Crf, GoldenValues) {
   EXPECT_NEAR(FilmicCrf(1.5, 0.18).Apply(0.18), 0.5381837661840736, 1e-15);
   EXPECT_NEAR(FilmicCrf(1.5, 0.18).Apply(0.05), 0.13745799350330087, 1e-15);
   EXPECT_EQ(FilmicCrf(1.5, 0.18).Apply(1.0), 1.0);
+  // y = 1.2 s / (s + 0.2), s = x^(1/2.2): at x = 0.01, s = 0.123284673944207.
+  EXPECT_NEAR(NakaRushtonCrf(0.2, 2.2).Apply(0.01), 1.2 * 0.123284673944207 / 0.323284673944207,
+              1e-14);
+  // Concave in log exposure: code 1 of 8 bits sits near x = 1e-7, mid grey near x = 1.4e-2.
+  EXPECT_NEAR(std::log10(NakaRushtonCrf(0.2, 2.2).Inverse(1.0 / 255)), -7.0, 0.2);
+  EXPECT_NEAR(std::log10(NakaRushtonCrf(0.2, 2.2).Inverse(0.5)), -1.86, 0.01);
 }
 
 TEST(Crf, SrgbIsContinuousAndAgreesWithTheImageFunctions) {
@@ -339,6 +351,7 @@ TEST(Crf, SpecRoundTrips) {
       {"gamma:1.8", "gamma:1.8"},    {"gamma:2.2000000000000006", "gamma:2.2000000000000006"},
       {"gamma:2.20", "gamma:2.2"},   {"srgb", "srgb"},
       {"filmic", "filmic:1.5,0.18"}, {"filmic:2,0.3", "filmic:2,0.3"},
+      {"naka-rushton:0.2,2.2", "naka-rushton:0.2,2.2"},
       {table_spec, table_spec},
   };
   for (const auto& [spec, canonical] : cases) {
@@ -388,6 +401,10 @@ TEST(Crf, BadSpecsGiveClearErrors) {
   EXPECT_THAT(error("filmic:2,-0.1"), HasSubstr("mid must be a finite number > 0, got -0.1"));
   EXPECT_THAT(error("filmic:2,x"), HasSubstr("mid 'x' is not a number"));
   EXPECT_THAT(error("filmic:400,1e-3"), HasSubstr("is not a positive finite number"));
+  EXPECT_THAT(error("naka-rushton"), HasSubstr("naka-rushton takes two parameters"));
+  EXPECT_THAT(error("naka-rushton:0.2"), HasSubstr("naka-rushton takes two parameters"));
+  EXPECT_THAT(error("naka-rushton:0,2.2"), HasSubstr("half-saturation k must be"));
+  EXPECT_THAT(error("naka-rushton:0.2,-1"), HasSubstr("gamma must be a finite number > 0"));
   EXPECT_THAT(error("table:"), HasSubstr("table needs a file"));
   EXPECT_THAT(error("table:/no/such/crf.csv"),
               HasSubstr("CRF spec 'table:/no/such/crf.csv': /no/such/crf.csv: cannot open"));

@@ -14,8 +14,10 @@
 #include <utility>
 #include <vector>
 
+#include "core/dataset.h"
 #include "core/error.h"
 #include "core/file_access.h"
+#include "core/hdr_alignment.h"
 #include "core/image.h"
 #include "core/image_io.h"
 #include "core/json_util.h"
@@ -50,7 +52,25 @@ const char* KindName(const Image& image) {
   return image.encoding() == Encoding::kLinear ? "HDR, float" : "LDR, integer";
 }
 
-PairResult EvaluateFiles(const fs::path& pred_path, const fs::path& gt_path) {
+// The measured-pixel mask of an HDR ground truth from its LDR brackets, or none.
+std::optional<std::vector<std::uint8_t>> BracketMask(const fs::path& gt_path,
+                                                     const EvalBrackets* brackets) {
+  if (!brackets) return std::nullopt;
+  const auto it = brackets->find(gt_path.filename().string());
+  if (it == brackets->end() || it->second.empty()) return std::nullopt;
+  std::vector<Image> ldr;
+  for (const fs::path& p : it->second) ldr.push_back(ReadImage(p));
+  try {
+    return MeasurableInBrackets(ldr);
+  } catch (const Error& e) {
+    Fail("{}: its LDR brackets ({}, ...): {}", gt_path.string(), it->second[0].string(),
+         e.what());
+  }
+}
+
+PairResult EvaluateFiles(const fs::path& pred_path,
+                         const fs::path& gt_path,
+                         const EvalBrackets* brackets) {
   const Image pred = ReadImage(pred_path);
   const Image gt = ReadImage(gt_path);
   // ReadImage marks float formats linear and integer formats display-encoded: that is the kind.
@@ -71,10 +91,23 @@ PairResult EvaluateFiles(const fs::path& pred_path, const fs::path& gt_path) {
   }
   PairResult result;
   result.name = gt_path.filename().string();
+  const bool hdr = gt.encoding() == Encoding::kLinear;
+  const std::optional<std::vector<std::uint8_t>> mask =
+      hdr ? BracketMask(gt_path, brackets) : std::nullopt;
+  if (mask && mask->size() != gt.num_pixels()) {
+    Fail("{}: its LDR brackets are not the size of the HDR image ({})", gt_path.string(),
+         gt.ShapeString());
+  }
   try {
     const Image pred_rgb = pred.Rgb(), gt_rgb = gt.Rgb();
-    result.metrics = gt.encoding() == Encoding::kLinear ? HdrMetrics(pred_rgb, gt_rgb)
-                                                        : LdrMetrics(pred_rgb, gt_rgb);
+    if (hdr) {
+      result.metrics = HdrMetrics(pred_rgb, gt_rgb);
+      for (auto& m : AlignedHdrMetrics(pred_rgb, gt_rgb, mask ? &*mask : nullptr)) {
+        if (!std::isnan(m.second)) result.metrics.push_back(std::move(m));
+      }
+    } else {
+      result.metrics = LdrMetrics(pred_rgb, gt_rgb);
+    }
     result.identical = pred_rgb.values() == gt_rgb.values();
   } catch (const Error& e) {
     Fail("{} vs {}: {}", pred_path.string(), gt_path.string(), e.what());
@@ -194,17 +227,30 @@ std::vector<std::pair<fs::path, fs::path>> MatchFolders(const fs::path& pred_dir
 const std::vector<std::string>& KnownKeys() {
   static const std::vector<std::string> keys = {
       "psnr",           "psnr_channel_mean", "ssim",      "mu_psnr",  "mu_ssim",
-      "mu_psnr_gt_max", "mu_ssim_gt_max",    "pu21_psnr", "pu21_ssim"};
+      "mu_psnr_gt_max", "mu_ssim_gt_max",    "pu21_psnr", "pu21_ssim", "mu_psnr_aligned",
+      "mu_ssim_aligned", "pu21_psnr_aligned", "pu21_ssim_aligned", "hdr_log_slope",
+      "hdr_log_corr", "hdr_align_scale", "hdr_measured_fraction"};
   return keys;
 }
 
 }  // namespace
 
-nlohmann::json EvaluatePair(const fs::path& pred, const fs::path& gt) {
-  return PairJson(EvaluateFiles(pred, gt));
+EvalBrackets DatasetBrackets(const fs::path& scene) {
+  const Dataset dataset = LoadDataset(scene, {.image_check = ImageCheck::kNone});
+  EvalBrackets out;
+  for (const Frame* f : dataset.AllFrames()) {
+    if (f->hdr_path) out[f->hdr_path->filename().string()].push_back(f->image_path);
+  }
+  return out;
 }
 
-nlohmann::json EvaluatePaths(const fs::path& pred, const fs::path& gt) {
+nlohmann::json EvaluatePair(const fs::path& pred, const fs::path& gt, const EvalBrackets* brackets) {
+  return PairJson(EvaluateFiles(pred, gt, brackets));
+}
+
+nlohmann::json EvaluatePaths(const fs::path& pred,
+                             const fs::path& gt,
+                             const EvalBrackets* brackets) {
   std::error_code ec;
   for (const fs::path& p : {pred, gt}) {
     const PathProbe probe = ProbePath(p);  // "permission denied" is not "not found"
@@ -235,7 +281,7 @@ nlohmann::json EvaluatePaths(const fs::path& pred, const fs::path& gt) {
                     jobs.size() >= kProgressMinPairs);
   ParallelFor(static_cast<std::int64_t>(jobs.size()), 1, [&](std::int64_t i) {
     try {
-      results[i] = EvaluateFiles(jobs[i].first, jobs[i].second);
+      results[i] = EvaluateFiles(jobs[i].first, jobs[i].second, brackets);
     } catch (const std::exception& e) {
       errors[i] = e.what();
     }

@@ -7,9 +7,14 @@
 // - LDR pairs (both integer formats such as PNG/JPEG, read as display-encoded values) get the
 //   LdrMetrics keys, computed on the stored sRGB values as the reference code does: "psnr",
 //   "psnr_channel_mean", "ssim".
-// - HDR pairs (both float formats: EXR, Radiance .hdr) get the HdrMetrics keys only: "mu_psnr",
+// - HDR pairs (both float formats: EXR, Radiance .hdr) get the HdrMetrics keys: "mu_psnr",
 //   "mu_ssim" (own-max normalisation), "mu_psnr_gt_max", "mu_ssim_gt_max", "pu21_psnr",
-//   "pu21_ssim".
+//   "pu21_ssim", then the AlignedHdrMetrics keys (core/hdr_alignment.h): "hdr_align_scale",
+//   "hdr_log_slope", "hdr_log_corr", "hdr_measured_fraction", "mu_psnr_aligned",
+//   "mu_ssim_aligned", "pu21_psnr_aligned", "pu21_ssim_aligned". Their pixels are those an LDR
+//   bracket of the view measures when the brackets are known (EvalBrackets), else every pixel
+//   with positive luminance in both images. A key whose value is undefined for a pair (the
+//   log-log slope of an image with one measured pixel) is left out of that pair.
 // - Pairs are listed in sorted order of the ground-truth file name. "mean" is the arithmetic mean
 //   of the per-pair values of each key over the pairs that have the key (not a metric of the
 //   pooled error).
@@ -19,15 +24,27 @@
 #pragma once
 
 #include <filesystem>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 namespace hdr4d {
+
+// The LDR brackets of HDR ground-truth images: ground-truth file name -> the LDR images of the
+// same view at its exposures.
+using EvalBrackets = std::map<std::string, std::vector<std::filesystem::path>>;
+
+// The brackets of every frame of the dataset at `scene` with an exr_file_path (all splits),
+// keyed by the HDR file's name. Throws hdr4d::Error when the dataset cannot be read.
+EvalBrackets DatasetBrackets(const std::filesystem::path& scene);
 
 // One pair of image files: {"name": <gt file name>, <metric>: <value or null>, ...}. Throws
 // hdr4d::Error naming both files for a missing/unreadable image, an LDR file paired with an HDR
 // one, different sizes or channel counts, or an HDR image that cannot be normalised.
-nlohmann::json EvaluatePair(const std::filesystem::path& pred, const std::filesystem::path& gt);
+nlohmann::json EvaluatePair(const std::filesystem::path& pred,
+                            const std::filesystem::path& gt,
+                            const EvalBrackets* brackets = nullptr);
 
 // `pred` and `gt` are both image files (one pair) or both folders. Folders: every image in the
 // pred folder (not recursive; non-image files are ignored) is paired with the ground truth of
@@ -37,7 +54,9 @@ nlohmann::json EvaluatePair(const std::filesystem::path& pred, const std::filesy
 // ground truth, an empty pred folder, or a file paired with a folder throws hdr4d::Error naming
 // what is missing. Pairs are evaluated in parallel; the output
 // does not depend on the thread count.
-nlohmann::json EvaluatePaths(const std::filesystem::path& pred, const std::filesystem::path& gt);
+nlohmann::json EvaluatePaths(const std::filesystem::path& pred,
+                             const std::filesystem::path& gt,
+                             const EvalBrackets* brackets = nullptr);
 
 // A fixed-width text table of an EvaluatePaths result: a header, one line per pair, a "mean"
 // line. A null (non-finite) value is shown as "inf", a key a pair does not have as "-".

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "core/hdr_alignment.h"
 #include "core/image_io.h"
 #include "core/metrics.h"
 #include "core/parallel.h"
@@ -29,8 +30,11 @@ using testing::RunHdr4d;
 using testing::TempDir;
 
 const std::set<std::string> kLdrKeys = {"name", "psnr", "psnr_channel_mean", "ssim"};
-const std::set<std::string> kHdrKeys = {"name",           "mu_psnr",   "mu_ssim",  "mu_psnr_gt_max",
-                                        "mu_ssim_gt_max", "pu21_psnr", "pu21_ssim"};
+const std::set<std::string> kHdrKeys = {
+    "name",           "mu_psnr",           "mu_ssim",         "mu_psnr_gt_max",
+    "mu_ssim_gt_max", "pu21_psnr",         "pu21_ssim",       "hdr_align_scale",
+    "hdr_log_slope",  "hdr_log_corr",      "hdr_measured_fraction", "mu_psnr_aligned",
+    "mu_ssim_aligned", "pu21_psnr_aligned", "pu21_ssim_aligned"};
 
 std::set<std::string> KeysOf(const nlohmann::json& object) {
   std::set<std::string> keys;
@@ -100,6 +104,44 @@ TEST(EvaluateTest, HdrPairsGetHdrKeysOnly) {
     EXPECT_DOUBLE_EQ(result["pairs"][0][key].get<double>(), value) << key;
     EXPECT_DOUBLE_EQ(result["mean"][key].get<double>(), value) << key;
   }
+}
+
+// With the view's LDR brackets, the aligned metrics use the pixels some bracket measures.
+TEST(EvaluateTest, BracketsDecideTheMeasuredPixels) {
+  TempDir dir;
+  const int w = 12, h = 10;
+  WriteHdr(dir / "gt" / "x.exr", w, h, 6);
+  WriteHdr(dir / "pred" / "x.exr", w, h, 7, 8.0f);
+  // Bracket 0 is clipped on the left half, bracket 1 is black on the left 3 columns.
+  Image e0(w, h, 3, Encoding::kSrgb), e1(w, h, 3, Encoding::kSrgb);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      for (int c = 0; c < 3; ++c) {
+        e0.at(x, y, c) = x < w / 2 ? 1.0f : 0.4f;
+        e1.at(x, y, c) = x < 3 ? 0.0f : 0.6f;
+      }
+    }
+  }
+  WriteImage(dir / "x_e0.png", e0);
+  WriteImage(dir / "x_e1.png", e1);
+  const EvalBrackets brackets = {{"x.exr", {dir / "x_e0.png", dir / "x_e1.png"}}};
+  const nlohmann::json with = EvaluatePaths(dir / "pred", dir / "gt", &brackets);
+  const nlohmann::json without = EvaluatePaths(dir / "pred", dir / "gt");
+  EXPECT_DOUBLE_EQ(with["pairs"][0]["hdr_measured_fraction"].get<double>(), 9.0 / 12.0);
+  EXPECT_GT(without["pairs"][0]["hdr_measured_fraction"].get<double>(), 0.99);
+  // The reference's protocols do not depend on the mask.
+  EXPECT_EQ(with["pairs"][0]["mu_psnr"], without["pairs"][0]["mu_psnr"]);
+  const std::vector<std::uint8_t> mask =
+      MeasurableInBrackets({ReadImage(dir / "x_e0.png"), ReadImage(dir / "x_e1.png")});
+  const MetricList aligned =
+      AlignedHdrMetrics(ReadImage(dir / "pred" / "x.exr"), ReadImage(dir / "gt" / "x.exr"), &mask);
+  for (const auto& [key, value] : aligned)
+    EXPECT_DOUBLE_EQ(with["pairs"][0][key].get<double>(), value) << key;
+  // Brackets of another size are an error naming the HDR file.
+  WriteImage(dir / "small.png", Image(4, 4, 3, Encoding::kSrgb));
+  const EvalBrackets wrong = {{"x.exr", {dir / "small.png"}}};
+  EXPECT_THAT(ErrorOf([&] { EvaluatePaths(dir / "pred", dir / "gt", &wrong); }),
+              HasSubstr("x.exr: its LDR brackets are not the size"));
 }
 
 TEST(EvaluateTest, MixedFolderMeansEachKeyOverItsPairs) {

@@ -57,6 +57,7 @@ class BlenderScenes : public ::testing::Test {
     dir_ = std::make_unique<testing::TempDir>();
     GenerateScene(CiOptions(dir_->path(), 2), "airplane");
     GenerateScene(CiOptions(dir_->path(), 2), "hook");
+    GenerateScene(CiOptions(dir_->path(), 2), "studio");
   }
   static void TearDownTestSuite() { dir_.reset(); }
   void SetUp() override { SKIP_WITHOUT_BLENDER(); }
@@ -80,6 +81,23 @@ TEST_F(BlenderScenes, CiPresetOfAMonocularAndAMultiViewSceneMakesCheckedDatasets
   const Dataset hook = LoadDataset(Root("hook"));
   EXPECT_EQ(hook.train.size(), 3u * 2u * 3u);  // cameras x timestamps x exposures
   EXPECT_EQ(hook.test.size(), 3u * 1u * 3u);
+}
+
+// The novel-view scene: the held-out camera is the whole test split, sits lower than every
+// ring camera, and the bulb clips even at the shortest exposure in every test view.
+TEST_F(BlenderScenes, StudioHoldsOutALowCameraAndItsBulbClipsAtEveryExposure) {
+  const Dataset studio = LoadDataset(Root("studio"));
+  ASSERT_FALSE(studio.test.empty());
+  double lowest_train = 1e9;
+  for (const Frame& f : studio.train) lowest_train = std::min(lowest_train, f.camera.Center().z());
+  for (const Frame& f : studio.test) {
+    EXPECT_EQ(f.camera_id, 3);
+    EXPECT_LT(f.camera.Center().z(), lowest_train);
+    if (f.exposure == 0.125) EXPECT_EQ(ReadImage(f.image_path).MaxValue(), 1.0f) << f.file_path;
+  }
+  const json manifest = ReadJsonFile(Root("studio") / "manifest.json");
+  EXPECT_EQ(manifest["ldr_synthesis"]["crf_spec"], "naka-rushton:0.2,2.2");
+  EXPECT_EQ(manifest["held_out_cameras"], 1);
 }
 
 TEST_F(BlenderScenes, HdrExceedsOneAndSpansAHighDynamicRange) {

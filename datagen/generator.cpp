@@ -127,14 +127,25 @@ void DatagenOptions::Validate() const {
   if (out.empty()) Fail("datagen: give an output folder (--out)");
   if (threads < 0) Fail("datagen: --threads must be >= 0 (0 = every core), got {}", threads);
   if (samples < 0) Fail("datagen: --samples must be >= 0 (0 = the preset's), got {}", samples);
-  DatasetSynthesisOptions ldr{.crf = crf, .noise = {full_well, read_sigma, seed}};
-  ldr.Validate();
+  if (width < 0) Fail("datagen: --width must be >= 0 (0 = the preset's), got {}", width);
+  for (const std::string& name : scene == "all" ? DefaultSceneNames() : std::vector{scene})
+    LdrFor(name).Validate();
+}
+
+DatasetSynthesisOptions DatagenOptions::LdrFor(const std::string& name) const {
+  const SceneInfo& info = FindScene(name);
+  constexpr double kFullWell = 20000, kReadSigma = 0.002;  // the eight scenes' sensor
+  return {.crf = crf.value_or(info.crf),
+          .noise = {.full_well = full_well.value_or(info.noise ? kFullWell : 0.0),
+                    .read_sigma = read_sigma.value_or(info.noise ? kReadSigma : 0.0),
+                    .seed = seed},
+          .bits = 8};
 }
 
 SceneResult GenerateScene(const DatagenOptions& options, const std::string& scene) {
   options.Validate();
   const auto start = std::chrono::steady_clock::now();
-  ScenePreset preset = ResolvePreset(scene, options.preset);
+  ScenePreset preset = ResolvePreset(scene, options.preset, options.width);
   if (options.samples > 0) preset.samples = options.samples;
   const std::vector<PlannedRender> renders = PlanRenders(preset);
   const fs::path final_dir = options.out / preset.scene;
@@ -154,11 +165,7 @@ SceneResult GenerateScene(const DatagenOptions& options, const std::string& scen
   WriteDataset(dataset, staging);
   const std::int64_t points = WritePointCloud(preset, info, staging);
 
-  const DatasetSynthesisOptions ldr{.crf = options.crf,
-                                    .noise = {.full_well = options.full_well,
-                                              .read_sigma = options.read_sigma,
-                                              .seed = options.seed},
-                                    .bits = 8};
+  const DatasetSynthesisOptions ldr = options.LdrFor(preset.scene);
   const int ldr_images = SynthesizeDatasetLdr(staging, ldr);
 
   const DatasetReport report = CheckDataset(staging, {.image_check = ImageCheck::kFull});
@@ -178,7 +185,7 @@ SceneResult GenerateScene(const DatagenOptions& options, const std::string& scen
   result.blender_seconds = run.seconds;
   result.range = histogram.Summary();
 
-  const std::unique_ptr<Crf> crf = ParseCrf(options.crf);
+  const std::unique_ptr<Crf> crf = ParseCrf(ldr.crf);
   const SceneInfo& scene_info = FindScene(preset.scene);
   json manifest = {
       {"generator", kGenerator},
@@ -205,6 +212,7 @@ SceneResult GenerateScene(const DatagenOptions& options, const std::string& scen
          "Cycles' timing metadata)"}}},
       {"rig", RigName(preset.rig)},
       {"cameras", preset.cameras},
+      {"held_out_cameras", preset.held_out_cameras},
       {"camera_angle_x", dataset.camera_angle_x},
       {"exposures", preset.exposures},
       {"exposure_pattern", ExposurePatternName(preset.exposure_pattern)},
@@ -214,8 +222,8 @@ SceneResult GenerateScene(const DatagenOptions& options, const std::string& scen
       {"ldr_synthesis",
        {{"crf", crf->ToJson()},
         {"crf_spec", crf->Spec()},
-        {"full_well", options.full_well},
-        {"read_sigma", options.read_sigma},
+        {"full_well", ldr.noise.full_well},
+        {"read_sigma", ldr.noise.read_sigma},
         {"noise_seed", options.seed},
         {"bits", 8}}},
       {"dynamic_range",

@@ -18,9 +18,11 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "core/exposure_stack.h"
 #include "core/ldr_synthesis.h"
 #include "datagen/dynamic_range.h"
 
@@ -35,15 +37,19 @@ struct DatagenOptions {
   std::string scripts_dir;  // empty: $HDR4D_DATAGEN_DIR, then the source tree's datagen/blender
   int threads = 0;          // Cycles threads; 0 = every core (the pixels do not depend on it)
   int samples = 0;          // Cycles samples per pixel; 0 = the preset's
-  // LDR synthesis, as the demo and HDR-4D-Syn-style data: a filmic response, shot and read
-  // noise, 8 bits. The noise seed is the scene seed.
-  std::string crf = "filmic";
-  double full_well = 20000;
-  double read_sigma = 0.002;
+  int width = 0;            // image width; 0 = the preset's (the height follows the aspect)
+  // LDR synthesis, as the demo and HDR-4D-Syn-style data: a camera response, shot and read
+  // noise, 8 bits. The noise seed is the scene seed. Unset: the scene's defaults (a filmic
+  // response with full well 20000 and read noise 0.002; `studio` has its own, see SceneInfo).
+  std::optional<std::string> crf;
+  std::optional<double> full_well;
+  std::optional<double> read_sigma;
   bool show_progress = true;
   // Throws hdr4d::Error for an unknown scene or preset, an empty output folder, negative
-  // threads or samples, or bad LDR settings.
+  // threads, samples or width, or bad LDR settings.
   void Validate() const;
+  // The LDR synthesis of a scene: these options where set, else the scene's defaults.
+  DatasetSynthesisOptions LdrFor(const std::string& scene) const;
 };
 
 struct SceneResult {

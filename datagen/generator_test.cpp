@@ -287,6 +287,25 @@ TEST(Generator, UnwritableOutputIsAnError) {
   EXPECT_TRUE(Contains(error, "file/sub/airplane.partial")) << error;
 }
 
+TEST(Generator, LdrSynthesisIsTheScenesUnlessSet) {
+  DatagenOptions o;
+  o.seed = 7;
+  const DatasetSynthesisOptions hook = o.LdrFor("hook");
+  EXPECT_EQ(hook.crf, "filmic");
+  EXPECT_EQ(hook.noise.full_well, 20000);
+  EXPECT_EQ(hook.noise.read_sigma, 0.002);
+  EXPECT_EQ(hook.noise.seed, 7u);
+  const DatasetSynthesisOptions studio = o.LdrFor("studio");
+  EXPECT_EQ(studio.crf, "naka-rushton:0.2,2.2");
+  EXPECT_EQ(studio.noise.full_well, 0);
+  EXPECT_EQ(studio.noise.read_sigma, 0);
+  o.crf = "gamma";
+  o.read_sigma = 0.01;
+  EXPECT_EQ(o.LdrFor("studio").crf, "gamma");
+  EXPECT_EQ(o.LdrFor("studio").noise.read_sigma, 0.01);
+  EXPECT_EQ(o.LdrFor("studio").noise.full_well, 0);
+}
+
 TEST(Generator, OptionsAreValidated) {
   DatagenOptions o;
   o.out = "x";
@@ -305,6 +324,9 @@ TEST(Generator, OptionsAreValidated) {
   o.samples = -2;
   EXPECT_TRUE(Contains(ErrorOf([&] { o.Validate(); }), "--samples"));
   o.samples = 0;
+  o.width = -1;
+  EXPECT_TRUE(Contains(ErrorOf([&] { o.Validate(); }), "--width"));
+  o.width = 0;
   o.crf = "bogus";
   EXPECT_FALSE(ErrorOf([&] { o.Validate(); }).empty());
   o.crf = "filmic";

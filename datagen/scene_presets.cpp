@@ -71,6 +71,11 @@ const std::vector<SceneInfo>& AllScenes() {
       {"standup", kMultiView, kEveryExposure, 5, 51, 8, 14, 2, true, 1.0, 0,
        "a figure (armature) rises from a stool into a bright overhead beam; a desk lamp warms "
        "up"},
+      {"studio", kMultiView, kEveryExposure, 9, 24, 0, 12, 0, false, 1.0, 0,
+       "a ball rolls past a swaying, bending post under a small bare bulb that dims to a fifth "
+       "(saturated at every exposure) while a spot light ramps up 20x; 8 ring cameras at two "
+       "heights, a 9th held out between two of them and lower; a concave camera response",
+       /*held_out_cameras=*/1, /*crf=*/"naka-rushton:0.2,2.2", /*noise=*/false},
       {"marker", kMonocular, kCycleOverTime, 1, 5, 1, 5, 1, false, 0.75, 64,
        "camera-convention check: a small emissive ball on black visiting every image quadrant "
        "(render_info.json holds its centre per render)"},
@@ -104,7 +109,7 @@ const std::vector<std::string>& PresetNames() {
   return names;
 }
 
-ScenePreset ResolvePreset(const std::string& scene, const std::string& preset) {
+ScenePreset ResolvePreset(const std::string& scene, const std::string& preset, int width) {
   const SceneInfo& info = FindScene(scene);
   const PresetSize* size = nullptr;
   for (const PresetSize& p : kPresetSizes) {
@@ -118,8 +123,10 @@ ScenePreset ResolvePreset(const std::string& scene, const std::string& preset) {
   out.rig = info.rig;
   out.exposure_pattern = info.exposure_pattern;
   out.cameras = info.cameras;
-  out.width = size->width;
-  out.height = std::max(1, static_cast<int>(std::lround(size->width * info.aspect)));
+  out.held_out_cameras = info.held_out_cameras;
+  if (width < 0) Fail("datagen: the image width must be positive, got {}", width);
+  out.width = width > 0 ? width : size->width;
+  out.height = std::max(1, static_cast<int>(std::lround(out.width * info.aspect)));
   out.samples = std::max(size->samples, info.min_samples);
   out.points = size->points;
   if (out.preset == "paper") {
@@ -131,6 +138,11 @@ ScenePreset ResolvePreset(const std::string& scene, const std::string& preset) {
   } else if (info.rig == Rig::kMonocular) {
     out.train_timestamps = kCiMonocularTrain;
     out.test_timestamps = kCiMonocularTest;
+  } else if (info.held_out_cameras > 0) {  // the held-out cameras are the test split
+    out.train_timestamps = kCiMultiViewTrain + kCiMultiViewTest;
+    out.test_timestamps = 0;
+    out.cameras = std::min(out.cameras - info.held_out_cameras, kCiMaxCameras) +
+                  info.held_out_cameras;
   } else {
     out.train_timestamps = kCiMultiViewTrain;
     out.test_timestamps = kCiMultiViewTest;
@@ -152,6 +164,8 @@ std::vector<int> TestTimeIndices(int total, int count) {
 std::vector<PlannedRender> PlanRenders(const ScenePreset& preset) {
   const int total = preset.timestamps();
   HDR4D_CHECK(total >= 2 && preset.cameras >= 1);
+  HDR4D_CHECK(preset.held_out_cameras >= 0 && preset.held_out_cameras < preset.cameras);
+  const int first_held_out = preset.cameras - preset.held_out_cameras;
   const std::vector<int> test = TestTimeIndices(total, preset.test_timestamps);
   const int num_exposures = static_cast<int>(preset.exposures.size());
   std::vector<PlannedRender> renders;
@@ -163,7 +177,7 @@ std::vector<PlannedRender> PlanRenders(const ScenePreset& preset) {
       r.camera_id = c;
       r.time_index = i;
       r.time = static_cast<double>(i) / (total - 1);
-      r.split = is_test ? Split::kTest : Split::kTrain;
+      r.split = is_test || c >= first_held_out ? Split::kTest : Split::kTrain;
       switch (preset.exposure_pattern) {
         case ExposurePattern::kCycleOverTime:
           r.exposure_indices = {i % num_exposures};

@@ -47,6 +47,13 @@ struct SceneInfo {
   double aspect = 1.0;                  // height / width
   int min_samples = 0;                  // Cycles samples at least this (the marker)
   std::string description;
+  // Cameras held out for testing at every timestamp (the last ones): a novel-view split, where
+  // the eight scenes hold out timestamps instead.
+  int held_out_cameras = 0;
+  // The scene's own LDR synthesis defaults (DatagenOptions' flags win): camera response spec
+  // and whether it adds sensor noise.
+  std::string crf = "filmic";
+  bool noise = true;
 };
 
 // The eight HDR-4D-Syn-style scenes, then `marker` (a camera-convention check, not in "all").
@@ -63,7 +70,8 @@ struct ScenePreset {
   std::string scene, preset;
   Rig rig = Rig::kMonocular;
   ExposurePattern exposure_pattern = ExposurePattern::kCycleOverTime;
-  int cameras = 1;
+  int cameras = 1;           // including the held-out ones
+  int held_out_cameras = 0;  // the last cameras: test views at every timestamp
   int train_timestamps = 0, test_timestamps = 0;
   int width = 0, height = 0;
   int samples = 0;  // Cycles samples per pixel
@@ -73,8 +81,9 @@ struct ScenePreset {
   int timestamps() const { return train_timestamps + test_timestamps; }
 };
 
-// Throws hdr4d::Error for an unknown scene or preset (naming it and the known ones).
-ScenePreset ResolvePreset(const std::string& scene, const std::string& preset);
+// Throws hdr4d::Error for an unknown scene or preset (naming it and the known ones). width > 0
+// replaces the preset's image width (the height follows the scene's aspect).
+ScenePreset ResolvePreset(const std::string& scene, const std::string& preset, int width = 0);
 
 // `count` test timestamps out of `total`, spread evenly: floor((j + 1/2) total / count). Sorted,
 // distinct, inside [0, total). Requires 0 <= count <= total.
@@ -89,7 +98,8 @@ struct PlannedRender {
   std::vector<int> exposure_indices;  // into ScenePreset::exposures
 };
 
-// Every render of a scene, ordered by time, then camera.
+// Every render of a scene, ordered by time, then camera. A held-out camera's renders are test
+// views at every timestamp; the other cameras' are test views at the test timestamps.
 std::vector<PlannedRender> PlanRenders(const ScenePreset& preset);
 
 // images/camCC_tTTTT_eK.png: the LDR image of a render at exposure index K.

@@ -132,6 +132,42 @@ TEST(ScenePresets, CiIsTinyAndMarkerIsNotSquare) {
   EXPECT_GE(marker.samples, 64);
 }
 
+// studio: a novel-view split. Its 9th camera is the test split at every timestamp and every
+// exposure; the 8 ring cameras train at every timestamp.
+TEST(ScenePresets, StudioHoldsOutACameraNotTimestamps) {
+  const ScenePreset preset = ResolvePreset("studio", "mini", 96);
+  EXPECT_EQ(preset.width, 96);
+  EXPECT_EQ(preset.height, 96);
+  EXPECT_EQ(preset.cameras, 9);
+  EXPECT_EQ(preset.held_out_cameras, 1);
+  EXPECT_EQ(preset.timestamps(), 12);
+  EXPECT_FALSE(FindScene("studio").in_all);
+  EXPECT_EQ(FindScene("studio").crf, "naka-rushton:0.2,2.2");
+  const std::vector<PlannedRender> renders = PlanRenders(preset);
+  std::set<int> test_cameras, train_times;
+  for (const PlannedRender& r : renders) {
+    EXPECT_EQ(r.exposure_indices, (std::vector<int>{0, 1, 2}));
+    if (r.split == Split::kTest) {
+      test_cameras.insert(r.camera_id);
+    } else {
+      train_times.insert(r.time_index);
+    }
+  }
+  EXPECT_EQ(test_cameras, (std::set<int>{8}));
+  EXPECT_EQ(train_times.size(), 12u);
+  EXPECT_EQ(CountSplit(renders, Split::kTest), (Counts{12, 12, 36}));
+  EXPECT_EQ(CountSplit(renders, Split::kTrain), (Counts{12, 96, 288}));
+  // ci keeps the held-out camera and at most 3 ring cameras.
+  const ScenePreset ci = ResolvePreset("studio", "ci");
+  EXPECT_EQ(ci.cameras, 4);
+  EXPECT_EQ(ci.held_out_cameras, 1);
+  EXPECT_EQ(ci.test_timestamps, 0);
+  EXPECT_EQ(CountSplit(PlanRenders(ci), Split::kTest).hdr, ci.timestamps());
+  // A width override keeps the scene's aspect; a negative one is an error.
+  EXPECT_EQ(ResolvePreset("marker", "ci", 100).height, 75);
+  EXPECT_NE(ErrorOf([] { ResolvePreset("deer", "mini", -5); }).find("width"), std::string::npos);
+}
+
 TEST(ScenePresets, UnknownSceneOrPresetNamesTheKnownOnes) {
   const std::string scene = ErrorOf([] { ResolvePreset("dragon", "mini"); });
   EXPECT_NE(scene.find("unknown scene 'dragon'"), std::string::npos) << scene;

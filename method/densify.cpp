@@ -251,7 +251,11 @@ std::string DensifyParams::Validate() const {
   return "";
 }
 
-DensifyParams DensifyParamsAt(const OptimizationOptions& options, double extent, int iteration) {
+DensifyParams DensifyParamsAt(const OptimizationOptions& unresolved,
+                              double extent,
+                              int iteration) {
+  // The trainer passes resolved options; others get the reference's image size.
+  const OptimizationOptions options = unresolved.Resolved(kReferenceImageSize);
   DensifyParams p;
   p.grad_threshold = static_cast<float>(options.densify_grad_threshold);
   p.percent_dense = static_cast<float>(options.percent_dense);

@@ -35,6 +35,9 @@ std::string HdrTrainingOptions::Validate() const {
   }
   if (tone_mapper) {
     if (std::string p = tone_mapper->Validate(); !p.empty()) return "tone mapper: " + p;
+    // Neither branch would tone-map anything: nothing would compare with the LDR images.
+    if (!pixel_branch && !gaussian_branch)
+      return "no tone-mapping branch left (drop --no-pixel-branch or --no-gaussian-branch)";
   }
   return "";
 }

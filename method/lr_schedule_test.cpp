@@ -63,7 +63,8 @@ TEST(ExponentialLr, ValidateNamesTheProblem) {
 }
 
 TEST(OptimizationOptions, ReferenceDefaults) {
-  const OptimizationOptions o;
+  // A 20000-iteration run on 400-pixel images is the reference's.
+  const OptimizationOptions o = OptimizationOptions{}.Resolved(400.0);
   EXPECT_EQ(o.Validate(), "");
   EXPECT_EQ(o.iterations, 20000);
   EXPECT_EQ(o.batch_size, 1);
@@ -90,6 +91,42 @@ TEST(OptimizationOptions, ReferenceDefaults) {
   EXPECT_EQ(o.sh_increase_interval, 1000);
 }
 
+TEST(OptimizationOptions, SchedulesFollowTheRunLengthUnlessSet) {
+  OptimizationOptions o;
+  o.iterations = 3000;
+  const OptimizationOptions r = o.Resolved(100.0);
+  EXPECT_EQ(r.Validate(), "");
+  EXPECT_EQ(r.position_lr_max_steps, 2250);
+  EXPECT_EQ(r.densify_from, 75);
+  EXPECT_EQ(r.densify_until, 2250);
+  EXPECT_EQ(r.densification_interval, 200);  // not scaled (see lr_schedule.h)
+  EXPECT_EQ(r.opacity_reset_interval, 450);
+  EXPECT_EQ(r.sh_increase_interval, 1000);
+  EXPECT_DOUBLE_EQ(r.densify_grad_threshold, 8e-4);  // 2e-4 x 400 / 100
+  EXPECT_DOUBLE_EQ(o.Resolved(800.0).densify_grad_threshold, 1e-4);
+  // Unresolved options still decay the position rate over the scaled window.
+  EXPECT_EQ(o.PositionLr(1.0).max_steps, 2250);
+  // Explicit values win; a short run never starts densifying after an explicit end.
+  o.densify_until = 50;
+  o.densify_grad_threshold = 1e-3;
+  o.position_lr_max_steps = 3000;
+  const OptimizationOptions e = o.Resolved(100.0);
+  EXPECT_EQ(e.densify_until, 50);
+  EXPECT_EQ(e.densify_from, 50);
+  EXPECT_EQ(e.densify_grad_threshold, 1e-3);
+  EXPECT_EQ(e.position_lr_max_steps, 3000);
+  EXPECT_EQ(e.opacity_reset_interval, 450);
+  // Tiny runs keep every step count at least 1; a bad image size falls back to 400 px.
+  o = OptimizationOptions{};
+  o.iterations = 10;
+  const OptimizationOptions tiny = o.Resolved(0.0);
+  EXPECT_EQ(tiny.opacity_reset_interval, 2);
+  EXPECT_EQ(tiny.position_lr_max_steps, 8);
+  EXPECT_EQ(tiny.densify_from, 1);
+  EXPECT_EQ(tiny.densify_grad_threshold, 2e-4);
+  EXPECT_EQ(tiny.Validate(), "");
+}
+
 TEST(OptimizationOptions, PositionAndTimeRatesScaleWithExtent) {
   OptimizationOptions o;
   const ExponentialLr xyz = o.PositionLr(2.5);
@@ -114,6 +151,10 @@ TEST(OptimizationOptions, ValidateNamesTheBadField) {
       {"position_lr_init", [](auto& o) { o.position_lr_init = 0.0; }},
       {"position_lr_final", [](auto& o) { o.position_lr_final = -1.6e-6; }},
       {"position_lr_max_steps", [](auto& o) { o.position_lr_max_steps = 0; }},
+      {"densify_until", [](auto& o) {
+         o.densify_from = 200;
+         o.densify_until = 100;
+       }},
       {"position_lr_delay_steps", [](auto& o) { o.position_lr_delay_steps = -1; }},
       {"position_lr_delay_mult", [](auto& o) { o.position_lr_delay_mult = NAN; }},
       {"t_lr_init", [](auto& o) { o.t_lr_init = INFINITY; }},
@@ -125,12 +166,11 @@ TEST(OptimizationOptions, ValidateNamesTheBadField) {
       {"tone_mapper_lr", [](auto& o) { o.tone_mapper_lr = NAN; }},
       {"adam_eps", [](auto& o) { o.adam_eps = 0.0; }},
       {"lambda_dssim", [](auto& o) { o.lambda_dssim = 1.5; }},
-      {"densify_from", [](auto& o) { o.densify_from = -1; }},
-      {"densify_until", [](auto& o) { o.densify_until = 100; }},
       {"densification_interval", [](auto& o) { o.densification_interval = 0; }},
       {"densify_grad_threshold", [](auto& o) { o.densify_grad_threshold = 0.0; }},
+      {"densify_grad_threshold", [](auto& o) { o.densify_grad_threshold = INFINITY; }},
       {"percent_dense", [](auto& o) { o.percent_dense = 0.0; }},
-      {"opacity_reset_interval", [](auto& o) { o.opacity_reset_interval = -3000; }},
+      {"opacity_reset_interval", [](auto& o) { o.opacity_reset_interval = 0; }},
       {"prune_opacity", [](auto& o) { o.prune_opacity = 1.0; }},
       {"sh_increase_interval", [](auto& o) { o.sh_increase_interval = 0; }},
   };

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
+#include <filesystem>
 #include <map>
 #include <numeric>
 #include <random>
@@ -14,6 +16,7 @@
 
 #include "core/dataset.h"
 #include "core/error.h"
+#include "core/hdr_alignment.h"
 #include "core/image_io.h"
 #include "core/json_util.h"
 #include "core/metrics.h"
@@ -102,6 +105,16 @@ double SceneExtent(const std::vector<TrainView>& views) {
   return 1.1 * std::max(radius, 1e-3);  // one camera: a tiny extent instead of zero
 }
 
+// The training images' size for the densification threshold: the geometric mean of width and
+// height of the median view (views of one scene normally share one size).
+double ImageSize(const std::vector<TrainView>& views) {
+  std::vector<double> sizes;
+  for (const TrainView& v : views) sizes.push_back(std::sqrt(double(v.width()) * v.height()));
+  if (sizes.empty()) return kReferenceImageSize;
+  std::nth_element(sizes.begin(), sizes.begin() + sizes.size() / 2, sizes.end());
+  return sizes[sizes.size() / 2];
+}
+
 // Active colour degrees at an iteration: spatial 0 -> 3 every interval, then temporal 0 -> 2.
 std::pair<int, int> ColorDegrees(int iteration, const GaussianModel& model, int interval) {
   const int steps = iteration / interval;
@@ -119,6 +132,16 @@ nlohmann::json Evaluate(ViewRenderer* renderer, const std::vector<TrainView>& vi
   if (views.empty()) return mean;
   std::map<std::string, std::pair<double, int>> sums;
   std::vector<float> ldr, hdr, gt;
+  // The pixels some LDR bracket of the same view and time measures (the views sharing an HDR
+  // ground truth), for the scale-aligned HDR metrics (core/hdr_alignment.h).
+  std::map<std::filesystem::path, std::vector<Image>> brackets;
+  for (const TrainView& v : views) {
+    if (!v.hdr_path) continue;
+    v.ToFloat(&gt);
+    brackets[*v.hdr_path].push_back(DisplayImageFromBuffer(gt.data(), v.width(), v.height(), 3));
+  }
+  std::map<std::filesystem::path, std::vector<std::uint8_t>> measured;
+  for (const auto& [path, images] : brackets) measured[path] = MeasurableInBrackets(images);
   for (const TrainView& v : views) {
     const ToneFrame frame{v.time_index, -1, static_cast<float>(std::log(v.exposure))};
     renderer->Render(v.camera, v.time, frame, &ldr, &hdr);
@@ -136,7 +159,9 @@ nlohmann::json Evaluate(ViewRenderer* renderer, const std::vector<TrainView>& vi
     if (!hdr.empty() && v.hdr_path) {
       Image prediction(v.width(), v.height(), 3, Encoding::kLinear);
       std::copy(hdr.begin(), hdr.end(), prediction.data());
-      add(HdrMetrics(prediction, ReadImage(*v.hdr_path)));
+      const Image truth = ReadImage(*v.hdr_path);
+      add(HdrMetrics(prediction, truth));
+      add(AlignedHdrMetrics(prediction, truth, &measured.at(*v.hdr_path)));
     }
   }
   for (const auto& [key, sum] : sums) mean[key] = FiniteOrNull(sum.first / sum.second);
@@ -224,7 +249,6 @@ int DistinctTimes(const Dataset& dataset) {
 TrainSummary Train(const TrainOptions& options) {
   if (std::string problem = options.Validate(); !problem.empty()) Fail("train: {}", problem);
   const ThreadLimit thread_limit(options.threads);
-  const OptimizationOptions& opt = options.optimization;
 
   const Dataset dataset = LoadDataset(options.data, {.image_check = ImageCheck::kHeaders});
   const SceneProfile profile = ProfileScene(dataset);
@@ -241,6 +265,8 @@ TrainSummary Train(const TrainOptions& options) {
   const bool train_hdr = std::any_of(train_views.begin(), train_views.end(),
                                      [](const TrainView& v) { return !v.hdr_mu.empty(); });
   const double extent = SceneExtent(train_views);
+  // Schedules for this run's length and image size (an explicit value stays as it is).
+  const OptimizationOptions opt = options.optimization.Resolved(ImageSize(train_views));
   const bool temporal = profile.dynamic && !hdr_options.force_static;
   spdlog::info("train: {} train / {} test views, extent {:.3f}, {}, method {}", train_views.size(),
                test_views.size(), extent, temporal ? "dynamic" : "static (no time axis)",
@@ -318,7 +344,9 @@ TrainSummary Train(const TrainOptions& options) {
                      .lr = tone_mapper->learning_rate()});
     }
   }
-  nlohmann::json config = options.ToJson();
+  TrainOptions recorded = options;  // the schedules as resolved for this run
+  recorded.optimization = opt;
+  nlohmann::json config = recorded.ToJson();
   config["scene_extent"] = extent;
   config["profile"] = profile.ToJson();
   config["num_times"] = num_times;

@@ -72,7 +72,8 @@ TEST(TrainerHdr, LdrSupervisionTrainsAndReportsHdrMetrics) {
   for (int i = 0; i < 30; ++i)
     first += s.loss_curve[i], last += s.loss_curve[s.loss_curve.size() - 1 - i];
   EXPECT_LT(last, 0.9 * first);
-  for (const char* key : {"psnr", "ssim", "mu_psnr", "mu_ssim", "pu21_psnr"}) {
+  for (const char* key : {"psnr", "ssim", "mu_psnr", "mu_ssim", "pu21_psnr", "mu_psnr_aligned",
+                          "pu21_psnr_aligned", "hdr_log_slope", "hdr_log_corr"}) {
     ASSERT_TRUE(s.test_metrics.contains(key)) << key << " in " << s.test_metrics.dump();
     EXPECT_TRUE(s.test_metrics[key].is_number()) << key;
   }
@@ -176,6 +177,11 @@ TEST(TrainerHdr, ImpossibleCombinationsAreErrors) {
   o = HdrRun(dir / "scene", dir / "d", 5);
   o.hdr.tone_mapper->context_learner = "mamba";
   EXPECT_NE(ErrorOf([&] { Train(o); }).find("context_learner"), std::string::npos);
+  // Both tone-mapping branches dropped.
+  o = HdrRun(dir / "scene", dir / "f", 5);
+  o.hdr.pixel_branch = false;
+  o.hdr.gaussian_branch = false;
+  EXPECT_NE(ErrorOf([&] { Train(o); }).find("no tone-mapping branch"), std::string::npos);
   // Resuming an LDR run as an HDR one.
   TrainOptions ldr = HdrRun(dir / "scene", dir / "e", 5);
   ldr.hdr = HdrTrainingOptions{};

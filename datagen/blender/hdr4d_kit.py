@@ -27,13 +27,16 @@ def link(obj):
     return obj
 
 
-def set_world(color, strength):
-    """A uniform environment: the dim fill that keeps deep shadows above zero."""
+def set_world(color, strength, seen_by_camera=True):
+    """A uniform environment: the dim fill that keeps deep shadows above zero. With
+    seen_by_camera False it still lights the scene but renders black behind it (as the method's
+    background is), so no view has to explain a sky the others never saw."""
     world = bpy.data.worlds.new("world")
     world.use_nodes = True
     background = world.node_tree.nodes["Background"]
     background.inputs["Color"].default_value = (*color, 1.0)
     background.inputs["Strength"].default_value = strength
+    world.cycles_visibility.camera = seen_by_camera
     bpy.context.scene.world = world
     return background.inputs["Strength"]
 

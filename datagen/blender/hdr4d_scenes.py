@@ -24,11 +24,12 @@ class Scene:
     markers: Callable[[float], list] = field(default=lambda t: [])  # world points per time
 
 
-def stage(rng, color_a=(0.55, 0.55, 0.52), color_b=(0.08, 0.08, 0.08), sky=0.005):
+def stage(rng, color_a=(0.55, 0.55, 0.52), color_b=(0.08, 0.08, 0.08), sky=0.005,
+          sky_seen=True):
     """A 5 x 5 checkered floor under a dim blue sky (the fill that keeps shadows above zero)."""
     floor = kit.checker("floor", color_a, color_b, scale=3.0)
     kit.mesh_object("floor", kit.grid(5.0, 5.0, 1, 1), floor)
-    return kit.set_world((0.45, 0.55, 0.8), sky)
+    return kit.set_world((0.45, 0.55, 0.8), sky, seen_by_camera=sky_seen)
 
 
 def jitter(rng, amount):
@@ -489,6 +490,51 @@ def standup(rng):
 
 
 # ---------------------------------------------------------------------------------------------
+# A novel-view HDR check (not one of the eight): a bulb saturated at every exposure whose power
+# changes over time and a spot light that ramps up, seen by a ring of cameras with one held out
+# between two of them and lower. Its default response is concave (generator: naka-rushton).
+
+
+def studio(rng):
+    """A ball rolls past a waving figure under a small bare bulb that dims to a fifth while a
+    spot light ramps up 20x."""
+    # The sky lights the scene but renders black: the held-out camera looks below the ring and
+    # would see sky no training view saw.
+    stage(rng, (0.55, 0.52, 0.48), (0.07, 0.07, 0.08), sky=0.01, sky_seen=False)
+    cloth = kit.diffuse("cloth", (0.25, 0.45, 0.6), roughness=0.6)
+    rig, _ = kit.humanoid("figure", cloth, location=(0.35, 0.25, 0))
+    rubber = kit.diffuse("rubber", (0.75, 0.2, 0.08), roughness=0.4)
+    ball = kit.mesh_object("ball", kit.uv_sphere(0.22, 24, 12), rubber)
+    stripe = kit.diffuse("stripe", (0.9, 0.85, 0.2), roughness=0.4)
+    kit.mesh_object("stripe", kit.band(0.225, 0.06, 24), stripe, parent=ball)
+    bulb, bulb_strength, _ = kit.emissive("bulb", (1.0, 0.8, 0.55), 400.0)
+    bulb_position = (-0.55, 0.35, 1.55)
+    kit.mesh_object("bulb", kit.uv_sphere(0.07, 16, 8), bulb, location=bulb_position)
+    lamp = kit.point_light("bulb_light", 60.0, (1.0, 0.8, 0.55), 0.07, bulb_position)
+    spot = kit.spot_light("spot", 40.0, kit.warm_color(6000), cone_deg=30,
+                          location=(1.0, -1.1, 2.7))
+    kit.aim(spot, (0.2, 0.0, 0.4))
+    bulb_power0, spot_power0 = 400.0, 40.0
+
+    def update(t):
+        dim = 1.0 - 0.8 * t  # to a fifth
+        bulb_strength.default_value = bulb_power0 * dim
+        lamp.data.energy = 60.0 * dim
+        spot.data.energy = spot_power0 * (1.0 + 19.0 * t)  # 20x
+        x = -0.9 + 1.5 * t
+        ball.location = (x, -0.45, 0.22)
+        ball.rotation_euler = (0, (x + 0.9) / 0.22, 0)
+        wave = math.sin(TWO_PI * 1.5 * t)
+        kit.pose(rig, {
+            "upper_arm.L": [("Y", -60 - 25 * wave)], "forearm.L": [("Y", -30 - 30 * wave)],
+            "upper_arm.R": [("Y", -70)], "spine": [("Z", 20 * wave), ("X", 8 * t)],
+            "head": [("Z", -15 * wave)],
+        })
+
+    return Scene(update, target=(0, 0, 0.6), distance=4.0)
+
+
+# ---------------------------------------------------------------------------------------------
 # The camera-convention check: a small emissive ball on black, moving so that it visits every
 # quadrant of the image. Its centre is reported per render.
 
@@ -521,5 +567,5 @@ def hsv(h, s, v):
 SCENES = {
     "airplane": airplane, "deer": deer, "lego": lego, "tank": tank,
     "hook": hook, "jump": jump, "mutant": mutant, "standup": standup,
-    "marker": marker,
+    "studio": studio, "marker": marker,
 }

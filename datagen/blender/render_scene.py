@@ -96,16 +96,25 @@ def configure_render(plan):
     scene.frame_set(1)
 
 
-def ring_layout(count):
+def ring_layout(count, held_out=0):
     """(azimuth, elevation) in degrees for `count` fixed cameras: a full ring for large rigs, an
-    arc in front (-Y) for small ones; elevations alternate so the views differ in height."""
-    if count >= 8:
-        azimuths = [-90 + 360 * k / count for k in range(count)]
+    arc in front (-Y) for small ones; elevations alternate so the views differ in height. The
+    last `held_out` of them are novel views: each halfway (in azimuth) between two neighbouring
+    ring cameras and lower than both."""
+    ring = count - held_out
+    if ring >= 8:
+        azimuths = [-90 + 360 * k / ring for k in range(ring)]
     else:
-        span = 45.0 * (count - 1)
-        azimuths = [-90 - span / 2 + (span * k / (count - 1) if count > 1 else 0)
-                    for k in range(count)]
-    return [(az, 14 if k % 2 == 0 else 32) for k, az in enumerate(azimuths)]
+        span = 45.0 * (ring - 1)
+        azimuths = [-90 - span / 2 + (span * k / (ring - 1) if ring > 1 else 0)
+                    for k in range(ring)]
+    layout = [(az, 14 if k % 2 == 0 else 32) for k, az in enumerate(azimuths)]
+    for j in range(held_out):
+        a, b = azimuths[j % ring], azimuths[(j + 1) % ring]
+        if b < a:
+            b += 360
+        layout.append(((a + b) / 2, 6))
+    return layout
 
 
 def monocular_pose(plan, scene_def, time_index, t):
@@ -133,7 +142,7 @@ def main():
 
     cameras = {}
     multiview = plan["rig"] == "multiview"
-    layout = ring_layout(plan["cameras"]) if multiview else []
+    layout = ring_layout(plan["cameras"], plan.get("held_out_cameras", 0)) if multiview else []
     for camera_id in sorted({r["camera_id"] for r in plan["renders"]}):
         obj = kit.camera(f"camera{camera_id:02d}", plan["camera_angle_x"])
         if multiview:

@@ -7,6 +7,7 @@
 
 #include "core/error.h"
 #include "core/parallel.h"
+#include "method/tonemap/monotone_mlp.h"
 #include "method/tonemap/tone_table_simd.h"
 
 namespace hdr4d::method {
@@ -38,6 +39,7 @@ DtmShape DtmShape::FromConfig(const ToneMapperConfig& config) {
   s.context.size = config.context_size;
   s.curve.context_size = config.context_size;
   s.curve.hidden = config.curve_hidden;
+  s.curve.monotone = config.monotone_curves;
   s.window = config.context_window;
   s.table_nodes = config.tabulated ? config.table_nodes : 0;
   return s;
@@ -79,6 +81,7 @@ void DtmCore<T>::BeginFrame(const T* params, const T* window, int length, T log_
   ResetAccumulators();
   const std::size_t nc = shape_.context.NumParams();
   context_params_.assign(params, params + nc);
+  curve_params_.assign(params + nc, params + shape_.NumParams());
   window_.assign(window, window + std::size_t(length) * ContextLearnerShape::kInputs);
   f_.resize(shape_.context.size);
   ContextLearnerForward(shape_.context, context_params_.data(), window_.data(), length, f_.data(),
@@ -333,17 +336,34 @@ void DtmCore<T>::EndFrameBackward(T* dL_dparams) {
   const int d = shape_.context.size;
   const std::size_t curve_params = shape_.curve.NumParams();
   std::vector<T> df(d, T(0));
+  // The curves' gradients are with respect to their effective parameters; with monotone curves
+  // they go through |p| to the stored ones (monotone_mlp.h).
+  const bool monotone = shape_.curve.monotone;
+  const MlpShape mlp = shape_.curve.Mlp();
+  std::vector<T> effective_grad(monotone ? curve_params : 0);
   for (int c = 0; c < 3 && tabulated_; ++c) {
     const double* g = node_grad_.data() + std::size_t(c) * nodes_;
     if (std::any_of(g, g + nodes_, [](double v) { return v != 0.0; })) {
-      curves_[c].TableBackward(g, dL_dparams + shape_.CurveOffset(c), df.data());
+      T* dst = dL_dparams + shape_.CurveOffset(c);
+      if (!monotone) {
+        curves_[c].TableBackward(g, dst, df.data());
+        continue;
+      }
+      std::fill(effective_grad.begin(), effective_grad.end(), T(0));
+      curves_[c].TableBackward(g, effective_grad.data(), df.data());
+      MonotoneGradientAdd(mlp, curve_params_.data() + c * curve_params, effective_grad.data(),
+                          dst);
     }
   }
   if (direct_used_) {
     for (int c = 0; c < 3; ++c) {
       T* dst = dL_dparams + shape_.CurveOffset(c);
       const double* src = direct_grad_.data() + c * curve_params;
-      for (std::size_t k = 0; k < curve_params; ++k) dst[k] += T(src[k]);
+      if (monotone) {
+        MonotoneGradientAdd(mlp, curve_params_.data() + c * curve_params, src, dst);
+      } else {
+        for (std::size_t k = 0; k < curve_params; ++k) dst[k] += T(src[k]);
+      }
     }
     for (int k = 0; k < d; ++k) df[k] += T(direct_grad_[3 * curve_params + k]);
   }

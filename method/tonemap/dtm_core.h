@@ -94,7 +94,7 @@ class DtmCore {
   bool simd_ = true;
   // The frame.
   bool ready_ = false;
-  std::vector<T> context_params_, window_, f_;
+  std::vector<T> context_params_, curve_params_, window_, f_;  // curve_params_: stored R, G, B
   ContextTape<T> tape_;
   T log_e_ = T(0);
   std::array<FrameToneCurve<T>, 3> curves_;

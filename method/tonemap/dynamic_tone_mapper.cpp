@@ -145,6 +145,7 @@ void DynamicToneMapper::Load(std::istream& in, const std::string& source) {
   differs("context_window", saved.context_window, config_.context_window);
   differs("context_size", saved.context_size, config_.context_size);
   differs("curve_hidden", saved.curve_hidden, config_.curve_hidden);
+  differs("monotone_curves", saved.monotone_curves, config_.monotone_curves);
   differs("num_times", saved.num_times, config_.num_times);
   for (std::size_t i = 0; i < params.size(); ++i) {
     if (!std::isfinite(params[i])) {

@@ -56,10 +56,11 @@ struct Chain {
 
 // Log-HDR values whose x = log_hdr + log_e sits in the middle of a table interval (so a small
 // step never crosses a node), plus a few outside the table (the direct fallback).
-Chain MakeChain(ContextKind kind, int hidden, int nodes, int length, unsigned seed) {
+Chain MakeChain(
+    ContextKind kind, int hidden, int nodes, int length, unsigned seed, bool monotone = false) {
   Chain c;
   c.shape.context = {kind, 2};
-  c.shape.curve = {2, hidden};
+  c.shape.curve = {2, hidden, monotone};
   c.shape.window = 20;
   c.shape.table_nodes = nodes;
   c.length = length;
@@ -149,9 +150,12 @@ TEST(DynamicToneMapperChain, GradientsMatchFiniteDifferencesEveryLearner) {
   for (ContextKind kind :
        {ContextKind::kGru, ContextKind::kRnn, ContextKind::kLstm, ContextKind::kTransformer}) {
     for (int nodes : {40, 0}) {  // tabulated, direct
-      SCOPED_TRACE(::testing::Message() << ContextKindName(kind) << " nodes=" << nodes);
-      const Chain c = MakeChain(kind, 6, nodes, 5, 3);
-      CheckChain(c, AllIndices(c.params.size()));
+      for (bool monotone : {false, true}) {
+        SCOPED_TRACE(::testing::Message() << ContextKindName(kind) << " nodes=" << nodes
+                                          << " monotone=" << monotone);
+        const Chain c = MakeChain(kind, 6, nodes, 5, 3, monotone);
+        CheckChain(c, AllIndices(c.params.size()));
+      }
     }
   }
 }
@@ -160,7 +164,7 @@ TEST(DynamicToneMapperChain, GradientsMatchFiniteDifferencesEveryLearner) {
 // sample of curve parameters, windows of 1 and 20 rows.
 TEST(DynamicToneMapperChain, DefaultShapeGradientsMatchFiniteDifferences) {
   for (int length : {1, 20}) {
-    const Chain c = MakeChain(ContextKind::kGru, 64, 1024, length, 7 + length);
+    const Chain c = MakeChain(ContextKind::kGru, 64, 1024, length, 7 + length, length == 20);
     std::vector<std::size_t> indices = AllIndices(c.shape.context.NumParams());
     std::mt19937 rng(length);
     std::uniform_int_distribution<std::size_t> u(c.shape.CurveOffset(0), c.params.size() - 1);

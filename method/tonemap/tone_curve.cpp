@@ -4,6 +4,7 @@
 #include <numeric>
 
 #include "core/error.h"
+#include "method/tonemap/monotone_mlp.h"
 
 namespace hdr4d::method {
 
@@ -25,13 +26,15 @@ struct CurveLayout {
 
 template <typename T>
 void FrameToneCurve<T>::Prepare(const ToneCurveShape& shape,
-                                const T* params,
+                                const T* stored,
                                 const T* f,
                                 int table_nodes) {
   HDR4D_CHECK(table_nodes == 0 || table_nodes >= 2);
   shape_ = shape;
   mlp_ = shape.Mlp();
-  params_.assign(params, params + shape.NumParams());
+  params_.assign(stored, stored + shape.NumParams());
+  if (shape.monotone) MonotoneEffective(mlp_, stored, params_.data());
+  const T* params = params_.data();  // effective from here on
   f_.assign(f, f + shape.context_size);
   z_.clear();
   dz_.clear();

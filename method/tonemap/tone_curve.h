@@ -33,6 +33,10 @@ inline constexpr double kTableXMax = 22.0;
 struct ToneCurveShape {
   int context_size = 2;  // d
   int hidden = 64;       // H
+  // Non-decreasing in x by construction (monotone_mlp.h): Prepare maps the stored parameters to
+  // the effective ones, and every gradient these curves produce is with respect to the
+  // effective parameters (DtmCore applies the chain rule to the stored ones).
+  bool monotone = false;
 
   MlpShape Mlp() const { return {{1 + context_size, hidden, hidden, 1}, MlpOutput::kSigmoid}; }
   std::size_t NumParams() const { return Mlp().NumParams(); }
@@ -42,7 +46,8 @@ struct ToneCurveShape {
 template <typename T>
 class FrameToneCurve {
  public:
-  // table_nodes >= 2 builds the table; 0 prepares the direct path only.
+  // table_nodes >= 2 builds the table; 0 prepares the direct path only. `params` are the stored
+  // parameters (mapped to effective ones when shape.monotone).
   void Prepare(const ToneCurveShape& shape, const T* params, const T* f, int table_nodes);
 
   // ---- Direct path ---------------------------------------------------------------------------

@@ -42,9 +42,10 @@ std::string CheckRange(const char* key, long long value, long long lo, long long
   return "";
 }
 
-constexpr std::array<std::string_view, 10> kKeys = {
+constexpr std::array<std::string_view, 11> kKeys = {
     "kind",         "num_times",    "num_images", "context_learner", "context_window",
-    "context_size", "curve_hidden", "tabulated",  "table_nodes",     "seed"};
+    "context_size", "curve_hidden", "tabulated",  "table_nodes",     "seed",
+    "monotone_curves"};
 
 const nlohmann::json& Member(const nlohmann::json& json,
                              const std::string& source,
@@ -109,7 +110,8 @@ nlohmann::json ToneMapperConfig::ToJson() const {
           {"curve_hidden", curve_hidden},
           {"tabulated", tabulated},
           {"table_nodes", table_nodes},
-          {"seed", seed}};
+          {"seed", seed},
+          {"monotone_curves", monotone_curves}};
 }
 
 ToneMapperConfig ToneMapperConfig::FromJson(const nlohmann::json& json, const std::string& source) {
@@ -142,6 +144,15 @@ ToneMapperConfig ToneMapperConfig::FromJson(const nlohmann::json& json, const st
          seed.dump());
   }
   c.seed = seed.get<std::uint64_t>();
+  // Runs from before the key existed had the reference's free curves.
+  c.monotone_curves = false;
+  if (const auto it = json.find("monotone_curves"); it != json.end()) {
+    if (!it->is_boolean()) {
+      Fail("{}: tone mapper config: 'monotone_curves' must be true or false (got {})", source,
+           it->dump());
+    }
+    c.monotone_curves = it->get<bool>();
+  }
   const std::string problem = c.Validate();
   if (!problem.empty()) Fail("{}: tone mapper config: {}", source, problem);
   return c;

@@ -49,6 +49,11 @@ struct ToneMapperConfig {
   // through its nodes) instead of evaluating the MLP per value.
   bool tabulated = true;
   int table_nodes = 1024;
+  // Learned curves (dtm, mlp) non-decreasing in log exposure by construction
+  // (method/tonemap/monotone_mlp.h); false, the default, is the reference's free MLP, which
+  // learns one branch per exposure on multi-exposure data (issue 12). Opt-in until it wins on
+  // LDR too (BENCHMARKS.md). A config.json without the key means false.
+  bool monotone_curves = false;
   std::uint64_t seed = 0;  // initial weights
 
   // "" when valid, else a message naming the bad field.

@@ -74,8 +74,9 @@ TEST(ToneMapperConfig, JsonRoundTripKeepsEveryKey) {
   c.tabulated = false;
   c.table_nodes = 333;
   c.seed = std::numeric_limits<std::uint64_t>::max();
+  c.monotone_curves = true;
   const nlohmann::json json = c.ToJson();
-  EXPECT_EQ(json.size(), 10u);
+  EXPECT_EQ(json.size(), 11u);
   // Through text, as config.json is read back.
   const ToneMapperConfig r = ToneMapperConfig::FromJson(nlohmann::json::parse(json.dump()), "x");
   EXPECT_EQ(r.kind, c.kind);
@@ -88,12 +89,19 @@ TEST(ToneMapperConfig, JsonRoundTripKeepsEveryKey) {
   EXPECT_EQ(r.tabulated, c.tabulated);
   EXPECT_EQ(r.table_nodes, c.table_nodes);
   EXPECT_EQ(r.seed, c.seed);
+  EXPECT_EQ(r.monotone_curves, c.monotone_curves);
   EXPECT_EQ(r.ToJson(), json);
+  // Free curves (the reference's) are the default, and what a config.json without the key had.
+  EXPECT_FALSE(ToneMapperConfig().monotone_curves);
+  nlohmann::json old = c.ToJson();
+  old.erase("monotone_curves");
+  EXPECT_FALSE(ToneMapperConfig::FromJson(old, "x").monotone_curves);
 }
 
 TEST(ToneMapperConfig, FromJsonNamesSourceAndKey) {
   const nlohmann::json good = ToneMapperConfig().ToJson();
   for (const auto& item : good.items()) {
+    if (item.key() == "monotone_curves") continue;  // optional: see above
     nlohmann::json j = good;
     j.erase(item.key());
     const std::string e = FromJsonError(j);
@@ -119,6 +127,7 @@ TEST(ToneMapperConfig, FromJsonNamesSourceAndKey) {
       {"context_size", -1},
       {"curve_hidden", "64"},
       {"tabulated", 1},
+      {"monotone_curves", "yes"},
       {"table_nodes", 1},
       {"seed", -1},
       {"seed", 0.5},

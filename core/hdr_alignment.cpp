@@ -1,0 +1,141 @@
+#include "core/hdr_alignment.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/error.h"
+
+namespace hdr4d {
+
+namespace {
+
+double PixelLuminance(const Image& image, int x, int y) {
+  if (image.channels() < 3) return image.at(x, y, 0);
+  return Luminance(image.at(x, y, 0), image.at(x, y, 1), image.at(x, y, 2));
+}
+
+void CheckHdrPair(const Image& pred, const Image& gt, const std::vector<std::uint8_t>* mask) {
+  if (pred.empty() || gt.empty()) Fail("HDR alignment: an image is empty");
+  if (pred.width() != gt.width() || pred.height() != gt.height() ||
+      std::min(pred.channels(), 3) != std::min(gt.channels(), 3)) {
+    Fail("HDR alignment: prediction {} and ground truth {} differ in shape", pred.ShapeString(),
+         gt.ShapeString());
+  }
+  const std::size_t pixels = std::size_t(gt.width()) * gt.height();
+  if (mask && mask->size() != pixels) {
+    Fail("HDR alignment: the mask has {} entries for {} pixels", mask->size(), pixels);
+  }
+  for (const Image* image : {&pred, &gt}) {
+    const float* d = image->data();
+    for (std::size_t i = 0; i < image->size(); ++i) {
+      if (!std::isfinite(d[i])) {
+        Fail("HDR alignment: the {} holds a non-finite value (value index {})",
+             image == &pred ? "prediction" : "ground truth", i);
+      }
+    }
+  }
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> MeasurableInBrackets(const std::vector<Image>& brackets) {
+  if (brackets.empty()) Fail("measurable pixels: no bracket images given");
+  const int w = brackets[0].width(), h = brackets[0].height();
+  std::vector<std::uint8_t> mask(std::size_t(w) * h, 0);
+  for (const Image& ldr : brackets) {
+    if (ldr.width() != w || ldr.height() != h) {
+      Fail("measurable pixels: bracket images differ in size ({} vs {}x{})", ldr.ShapeString(), w,
+           h);
+    }
+    const int colours = std::min(ldr.channels(), 3);
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        bool clipped = false, lit = false;
+        for (int c = 0; c < colours; ++c) {
+          const float v = ldr.at(x, y, c);
+          clipped = clipped || !(v < kBracketClipped);  // NaN counts as clipped
+          lit = lit || v > kBracketBlack;
+        }
+        if (!clipped && lit) mask[std::size_t(y) * w + x] = 1;
+      }
+    }
+  }
+  return mask;
+}
+
+HdrAlignment AlignHdr(const Image& pred, const Image& gt, const std::vector<std::uint8_t>* mask) {
+  CheckHdrPair(pred, gt, mask);
+  const int w = gt.width(), h = gt.height();
+  std::vector<double> log_gt, log_pred;
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      if (mask && !(*mask)[std::size_t(y) * w + x]) continue;
+      const double g = PixelLuminance(gt, x, y), p = PixelLuminance(pred, x, y);
+      // Positive and normal: log of a denormal or of 0 says nothing about the shape.
+      if (!(g >= std::numeric_limits<float>::min() && p >= std::numeric_limits<float>::min()))
+        continue;
+      log_gt.push_back(std::log(g));
+      log_pred.push_back(std::log(p));
+    }
+  }
+  HdrAlignment a;
+  a.total = std::size_t(w) * h;
+  a.pixels = log_gt.size();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  a.slope = a.corr = nan;
+  if (a.pixels == 0) return a;
+
+  std::vector<double> ratio(a.pixels);
+  for (std::size_t i = 0; i < a.pixels; ++i) ratio[i] = log_gt[i] - log_pred[i];
+  // Median (the mean of the two middle values for an even count).
+  const std::size_t mid = a.pixels / 2;
+  std::nth_element(ratio.begin(), ratio.begin() + mid, ratio.end());
+  double median = ratio[mid];
+  if (a.pixels % 2 == 0) median = 0.5 * (median + *std::max_element(ratio.begin(), ratio.begin() + mid));
+  a.scale = std::exp(std::clamp(median, -700.0, 700.0));
+
+  if (a.pixels < 2) return a;
+  double mean_g = 0, mean_p = 0;
+  for (std::size_t i = 0; i < a.pixels; ++i) {
+    mean_g += log_gt[i];
+    mean_p += log_pred[i];
+  }
+  mean_g /= double(a.pixels);
+  mean_p /= double(a.pixels);
+  double sgg = 0, spp = 0, sgp = 0;
+  for (std::size_t i = 0; i < a.pixels; ++i) {
+    const double dg = log_gt[i] - mean_g, dp = log_pred[i] - mean_p;
+    sgg += dg * dg;
+    spp += dp * dp;
+    sgp += dg * dp;
+  }
+  if (sgg > 0) a.slope = sgp / sgg;
+  if (sgg > 0 && spp > 0) a.corr = sgp / std::sqrt(sgg * spp);
+  return a;
+}
+
+MetricList AlignedHdrMetrics(const Image& pred,
+                             const Image& gt,
+                             const std::vector<std::uint8_t>* mask) {
+  const HdrAlignment a = AlignHdr(pred, gt, mask);
+  Image aligned = pred.Rgb();
+  float* d = aligned.data();
+  for (std::size_t i = 0; i < aligned.size(); ++i) {
+    // Clamped to float range: a prediction far off in scale must not overflow to inf.
+    d[i] = float(std::min(double(d[i]) * a.scale, double(std::numeric_limits<float>::max())));
+  }
+  const Image gt_rgb = gt.Rgb();
+  return {
+      {"hdr_align_scale", a.scale},
+      {"hdr_log_slope", a.slope},
+      {"hdr_log_corr", a.corr},
+      {"hdr_measured_fraction", a.total ? double(a.pixels) / double(a.total) : 0.0},
+      {"mu_psnr_aligned", MuPsnr(aligned, gt_rgb, HdrNormalisation::kGtMax)},
+      {"mu_ssim_aligned", MuSsim(aligned, gt_rgb, HdrNormalisation::kGtMax)},
+      {"pu21_psnr_aligned", Pu21Psnr(aligned, gt_rgb)},
+      {"pu21_ssim_aligned", Pu21Ssim(aligned, gt_rgb)},
+  };
+}
+
+}  // namespace hdr4d

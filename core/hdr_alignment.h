@@ -1,0 +1,60 @@
+// HDR metrics that a light saturated in every exposure cannot decide (issue 12 §4).
+//
+// LDR supervision fixes an HDR prediction up to one global factor, and it cannot say how bright
+// a light is that clips in every bracket. The reference's own-maximum mu-law protocol divides the
+// prediction by its brightest value, i.e. by exactly that guess. These metrics instead:
+//   1. keep the pixels an LDR bracket measures: unclipped and not black in at least one
+//      exposure of the view (MeasurableInBrackets), or, without brackets, every pixel whose
+//      luminance is positive in both images;
+//   2. align the prediction to the truth by one robust factor per image,
+//        scale = exp(median over those pixels of (log Y_gt - log Y_pred)),   Y = luminance;
+//   3. score the aligned prediction with the truth's maximum (mu-law, as the HDR-NeRF protocol)
+//      and with PU21 (both images times 4000 / the truth's maximum luminance);
+//   4. report, as diagnostics of the HDR's shape, the least-squares slope of log Y_pred on
+//      log Y_gt over the same pixels (1 for a prediction proportional to the truth, 0.25 for
+//      one that is the truth to the power 0.25) and their Pearson correlation.
+// Results go under stable keys (AlignedHdrMetrics) into `hdr4d eval` and RUN/results.json.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "core/image.h"
+#include "core/metrics.h"
+
+namespace hdr4d {
+
+// Display values a bracket counts as clipped (>=) or black (<=): half a code of 8 bits from
+// the ends, so 254/255 is measured and 255/255 is clipped.
+inline constexpr double kBracketClipped = 1.0 - 0.5 / 255.0;
+inline constexpr double kBracketBlack = 0.5 / 255.0;
+
+// Per pixel (W x H, row-major; 1 = measurable): at least one of the LDR images of the view (the
+// same view at several exposures, display values in [0,1]) has every colour channel below
+// kBracketClipped and at least one above kBracketBlack. Throws hdr4d::Error for an empty list or
+// images of different sizes.
+std::vector<std::uint8_t> MeasurableInBrackets(const std::vector<Image>& brackets);
+
+struct HdrAlignment {
+  double scale = 1.0;  // multiplies the prediction (1 when no pixel qualifies)
+  double slope = 0.0;  // NaN when fewer than 2 pixels or log Y_gt is constant
+  double corr = 0.0;   // NaN likewise, or when log Y_pred is constant
+  std::size_t pixels = 0;
+  std::size_t total = 0;  // all pixels of the image
+};
+
+// The alignment of `pred` to `gt` (linear HDR, same size; RGB or grey) over the pixels `mask`
+// keeps (W x H; null keeps all) whose luminance is positive in both. Throws hdr4d::Error for
+// mismatched shapes, a mask of the wrong size, or NaN/Inf values.
+HdrAlignment AlignHdr(const Image& pred, const Image& gt, const std::vector<std::uint8_t>* mask);
+
+// In this order: "hdr_align_scale", "hdr_log_slope", "hdr_log_corr", "hdr_measured_fraction"
+// (pixels used / all pixels), "mu_psnr_aligned", "mu_ssim_aligned" (prediction times the scale,
+// both divided by the truth's maximum, clamped, mu-law), "pu21_psnr_aligned", "pu21_ssim_aligned".
+// Throws as AlignHdr, and hdr4d::Error for an all-black truth.
+MetricList AlignedHdrMetrics(const Image& pred,
+                             const Image& gt,
+                             const std::vector<std::uint8_t>* mask);
+
+}  // namespace hdr4d

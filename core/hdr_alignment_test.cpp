@@ -1,0 +1,167 @@
+#include "core/hdr_alignment.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <random>
+
+#include "tests/testing.h"
+
+namespace hdr4d {
+namespace {
+
+using ::testing::HasSubstr;
+using testing::ErrorOf;
+
+// A grey-ish HDR image whose luminance spans 1e-3 .. 1e3 with a few colours.
+Image WideRangeHdr(int w, int h, std::uint32_t seed) {
+  Image image(w, h, 3, Encoding::kLinear);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-3.0, 3.0), tint(0.6, 1.4);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const double level = std::pow(10.0, u(rng));
+      for (int c = 0; c < 3; ++c) image.at(x, y, c) = float(level * tint(rng));
+    }
+  }
+  return image;
+}
+
+Image Power(const Image& gt, double k, double p) {
+  Image out = gt;
+  for (float& v : out.values()) v = float(k * std::pow(double(v), p));
+  return out;
+}
+
+std::map<std::string, double> AsMap(const MetricList& list) {
+  return {list.begin(), list.end()};
+}
+
+TEST(HdrAlignment, SlopeAndScaleOfAPowerOfTheTruth) {
+  const Image gt = WideRangeHdr(40, 30, 1);
+  // Luminance of a power of the colours is not exactly the power of the luminance; with equal
+  // channels it is.
+  Image grey(40, 30, 3, Encoding::kLinear);
+  for (int y = 0; y < 30; ++y)
+    for (int x = 0; x < 40; ++x)
+      for (int c = 0; c < 3; ++c) grey.at(x, y, c) = gt.at(x, y, 0);
+  for (double p : {1.0, 0.25, 0.84, 1.3}) {
+    SCOPED_TRACE(p);
+    const HdrAlignment a = AlignHdr(Power(grey, 7.0, p), grey, nullptr);
+    EXPECT_NEAR(a.slope, p, 1e-5);
+    EXPECT_NEAR(a.corr, 1.0, 1e-9);
+    EXPECT_EQ(a.pixels, 1200u);
+    if (p == 1.0) EXPECT_NEAR(a.scale, 1.0 / 7.0, 1e-6);
+  }
+}
+
+TEST(HdrAlignment, AlignedMetricsIgnoreTheGlobalScaleButNotTheShape) {
+  const Image gt = WideRangeHdr(48, 48, 2);
+  const auto proportional = AsMap(AlignedHdrMetrics(Power(gt, 1e-3, 1.0), gt, nullptr));
+  EXPECT_GT(proportional.at("mu_psnr_aligned"), 90.0);
+  EXPECT_GT(proportional.at("pu21_psnr_aligned"), 90.0);
+  EXPECT_NEAR(proportional.at("mu_ssim_aligned"), 1.0, 1e-6);
+  EXPECT_NEAR(proportional.at("hdr_align_scale"), 1e3, 1e-2);
+  EXPECT_EQ(proportional.at("hdr_measured_fraction"), 1.0);
+  const auto compressed = AsMap(AlignedHdrMetrics(Power(gt, 1.0, 0.25), gt, nullptr));
+  EXPECT_LT(compressed.at("mu_psnr_aligned"), 25.0);
+  EXPECT_LT(compressed.at("pu21_psnr_aligned"), 25.0);
+  EXPECT_NEAR(compressed.at("hdr_log_slope"), 0.25, 0.02);
+  EXPECT_GT(compressed.at("hdr_log_corr"), 0.98);
+}
+
+// The case the metrics exist for: a lamp clipped in every bracket, whose brightness the
+// prediction gets wrong by 100x, while everything else is right up to one factor.
+TEST(HdrAlignment, ASaturatedLampCannotFoolTheAlignedMetrics) {
+  const int w = 64, h = 64;
+  Image gt(w, h, 3, Encoding::kLinear);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 3; ++c) gt.at(x, y, c) = float(0.01 + 0.5 * (x + y) / (w + h));
+  std::vector<std::uint8_t> measured(std::size_t(w) * h, 1);
+  for (int y = 30; y < 34; ++y) {
+    for (int x = 30; x < 34; ++x) {
+      for (int c = 0; c < 3; ++c) gt.at(x, y, c) = 5000.0f;
+      measured[std::size_t(y) * w + x] = 0;
+    }
+  }
+  Image pred = Power(gt, 3.0, 1.0);
+  for (int y = 30; y < 34; ++y)
+    for (int x = 30; x < 34; ++x)
+      for (int c = 0; c < 3; ++c) pred.at(x, y, c) = 150.0f;  // 100x too dim after alignment
+  const auto m = AsMap(AlignedHdrMetrics(pred, gt, &measured));
+  const auto own = AsMap(HdrMetrics(pred, gt));
+  EXPECT_NEAR(m.at("hdr_align_scale"), 1.0 / 3.0, 1e-6);
+  EXPECT_NEAR(m.at("hdr_log_slope"), 1.0, 1e-6);
+  EXPECT_NEAR(m.at("hdr_measured_fraction"), 1.0 - 16.0 / (w * h), 1e-12);
+  // The own-maximum protocol divides by the lamp's guessed brightness: everything else is 100x
+  // too bright relative to it.
+  EXPECT_LT(own.at("mu_psnr"), 15.0);
+  EXPECT_GT(m.at("mu_psnr_aligned"), own.at("mu_psnr") + 10.0);
+}
+
+TEST(HdrAlignment, MeasurablePixelsAreUnclippedAndLitInSomeBracket) {
+  // Pixel 0: clipped in both brackets. 1: black in both. 2: clipped in one, fine in the other.
+  // 3: one channel clipped, another black in the only bracket that is not all black.
+  Image short_exposure(4, 1, 3, Encoding::kSrgb), long_exposure(4, 1, 3, Encoding::kSrgb);
+  const float v[2][4][3] = {{{1, 1, 1}, {0, 0, 0}, {0.2f, 0.3f, 0.1f}, {1, 0, 0}},
+                            {{1, 1, 1}, {0, 0, 0}, {1, 1, 1}, {0, 0, 0}}};
+  for (int x = 0; x < 4; ++x) {
+    for (int c = 0; c < 3; ++c) {
+      short_exposure.at(x, 0, c) = v[0][x][c];
+      long_exposure.at(x, 0, c) = v[1][x][c];
+    }
+  }
+  EXPECT_EQ(MeasurableInBrackets({short_exposure, long_exposure}),
+            (std::vector<std::uint8_t>{0, 0, 1, 0}));
+  // 254/255 is measured, 255/255 is not.
+  Image almost(1, 1, 3, Encoding::kSrgb);
+  for (int c = 0; c < 3; ++c) almost.at(0, 0, c) = 254.0f / 255.0f;
+  EXPECT_EQ(MeasurableInBrackets({almost}), (std::vector<std::uint8_t>{1}));
+}
+
+TEST(HdrAlignment, NoMeasuredPixelGivesNoDiagnosticsAndUnitScale) {
+  const Image gt = WideRangeHdr(8, 8, 3);
+  const std::vector<std::uint8_t> none(64, 0);
+  const HdrAlignment a = AlignHdr(gt, gt, &none);
+  EXPECT_EQ(a.pixels, 0u);
+  EXPECT_EQ(a.scale, 1.0);
+  EXPECT_TRUE(std::isnan(a.slope));
+  EXPECT_TRUE(std::isnan(a.corr));
+  // A black prediction has no positive pixel either; a constant one has no correlation.
+  Image black = gt;
+  for (float& x : black.values()) x = 0;
+  EXPECT_EQ(AlignHdr(black, gt, nullptr).pixels, 0u);
+  Image flat = gt;
+  for (float& x : flat.values()) x = 2;
+  const HdrAlignment f = AlignHdr(flat, gt, nullptr);
+  EXPECT_NEAR(f.slope, 0.0, 1e-12);
+  EXPECT_TRUE(std::isnan(f.corr));
+}
+
+TEST(HdrAlignment, ExtremesStayFinite) {
+  // Radiance up to 1e6 against a prediction 1e-30 of it: the factor is huge but finite, and
+  // the aligned image does not overflow.
+  const Image gt = Power(WideRangeHdr(16, 16, 4), 1e3, 1.0);
+  const auto m = AsMap(AlignedHdrMetrics(Power(gt, 1e-30, 1.0), gt, nullptr));
+  EXPECT_NEAR(std::log10(m.at("hdr_align_scale")), 30.0, 1e-4);
+  EXPECT_GT(m.at("mu_psnr_aligned"), 60.0);
+  EXPECT_NEAR(m.at("hdr_log_slope"), 1.0, 1e-4);
+}
+
+TEST(HdrAlignment, BadInputsNameTheProblem) {
+  const Image a = WideRangeHdr(8, 8, 5), b = WideRangeHdr(8, 9, 6);
+  EXPECT_THAT(ErrorOf([&] { AlignHdr(a, b, nullptr); }), HasSubstr("differ in shape"));
+  const std::vector<std::uint8_t> small(10, 1);
+  EXPECT_THAT(ErrorOf([&] { AlignHdr(a, a, &small); }), HasSubstr("10 entries for 64 pixels"));
+  Image nan = a;
+  nan.at(3, 3, 1) = std::nanf("");
+  EXPECT_THAT(ErrorOf([&] { AlignHdr(nan, a, nullptr); }), HasSubstr("prediction holds a non-finite"));
+  EXPECT_THAT(ErrorOf([&] { MeasurableInBrackets({}); }), HasSubstr("no bracket images"));
+  EXPECT_THAT(ErrorOf([&] { MeasurableInBrackets({a, b}); }), HasSubstr("differ in size"));
+}
+
+}  // namespace
+}  // namespace hdr4d
