@@ -1,5 +1,6 @@
 #include "method/checkpoint.h"
 
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -59,6 +60,15 @@ std::vector<float> ReadFloats(std::istream& in,
     Fail("{}: truncated checkpoint (while reading {})", path.string(), what);
   }
   return v;
+}
+
+void RequireFiniteValues(const std::vector<float>& v, const fs::path& path, const char* what) {
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    if (!std::isfinite(v[i])) {
+      Fail("{}: corrupt checkpoint: {} holds {} at value {} of {}", path.string(), what, v[i], i,
+           v.size());
+    }
+  }
 }
 
 // The model's buffers in file order.
@@ -186,6 +196,13 @@ Checkpoint LoadCheckpoint(const fs::path& path) {
       Fail("{}: truncated checkpoint (while reading the tone mapper state)", path.string());
     }
   }
+  // Values, not only sizes: a model with NaN or Inf in it is never resumed or rendered (version
+  // 1-2 files have no checksum, and a writer bug could store them).
+  ForEachBuffer(c.model, [&](const char* name, const std::vector<float>& v) {
+    RequireFiniteValues(v, path, name);
+  });
+  for (const std::vector<float>& v : c.extra_floats)
+    RequireFiniteValues(v, path, "the densification statistics");
   if (const std::string problem = c.model.Validate(); !problem.empty()) {
     Fail("{}: inconsistent checkpoint: {}", path.string(), problem);
   }

@@ -10,16 +10,19 @@
 #include <filesystem>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <random>
 #include <set>
 #include <sstream>
 
 #include "core/dataset.h"
 #include "core/error.h"
+#include "core/folder_lock.h"
 #include "core/hdr_alignment.h"
 #include "core/image_io.h"
 #include "core/json_util.h"
 #include "core/metrics.h"
+#include "core/output_guard.h"
 #include "core/parallel.h"
 #include "core/ply.h"
 #include "core/progress.h"
@@ -32,6 +35,7 @@
 #include "method/hdr_loss.h"
 #include "method/loss.h"
 #include "method/render.h"
+#include "method/resume_check.h"
 #include "method/tonemap/radiance_bank.h"
 #include "method/train_views.h"
 #include "method/view_render.h"
@@ -145,8 +149,11 @@ nlohmann::json Evaluate(ViewRenderer* renderer, const std::vector<TrainView>& vi
   for (const TrainView& v : views) {
     const ToneFrame frame{v.time_index, -1, static_cast<float>(std::log(v.exposure))};
     renderer->Render(v.camera, v.time, frame, &ldr, &hdr);
+    // Means over the views where a metric is defined, as hdr4d eval does: the log-log slope
+    // of a view with no measured pixel (every bracket clipped) is NaN and left out.
     auto add = [&](const MetricList& metrics) {
       for (const auto& [key, value] : metrics) {
+        if (!std::isfinite(value)) continue;
         sums[key].first += value;
         sums[key].second += 1;
       }
@@ -201,17 +208,32 @@ struct LoopState {
             {"test_curve", test_curve},
             {"train_seconds", train_seconds}};
   }
-  void FromJson(const nlohmann::json& j) {
-    iteration = j.at("iteration").get<int>();
-    std::istringstream rng_state(j.at("rng").get<std::string>());
-    rng_state >> rng;
-    order = j.at("order").get<std::vector<std::uint32_t>>();
-    next = j.at("next").get<std::size_t>();
-    loss_curve = j.at("loss_curve").get<std::vector<double>>();
-    // Checkpoints from before the curves were kept resume with empty ones.
-    psnr_curve = j.value("psnr_curve", std::vector<double>{});
-    test_curve = j.value("test_curve", nlohmann::json::array());
-    train_seconds = j.at("train_seconds").get<double>();
+  // The checkpoint's trainer state, checked: values out of range are refused with the file
+  // named, never resumed (the checksum catches damage; this catches a writer's mistake).
+  void FromJson(const nlohmann::json& j, const fs::path& path, std::size_t num_views) {
+    try {
+      iteration = j.at("iteration").get<int>();
+      std::istringstream rng_state(j.at("rng").get<std::string>());
+      rng_state >> rng;
+      if (rng_state.fail()) Fail("{}: corrupt checkpoint: unreadable random state", path.string());
+      order = j.at("order").get<std::vector<std::uint32_t>>();
+      next = j.at("next").get<std::size_t>();
+      loss_curve = j.at("loss_curve").get<std::vector<double>>();
+      // Checkpoints from before the curves were kept resume with empty ones.
+      psnr_curve = j.value("psnr_curve", std::vector<double>{});
+      test_curve = j.value("test_curve", nlohmann::json::array());
+      train_seconds = j.at("train_seconds").get<double>();
+    } catch (const nlohmann::json::exception& e) {
+      Fail("{}: corrupt checkpoint trainer state: {}", path.string(), e.what());
+    }
+    const bool order_ok = std::all_of(order.begin(), order.end(),
+                                      [&](std::uint32_t v) { return v < num_views; });
+    if (iteration < 0 || !order_ok || next > order.size() || !std::isfinite(train_seconds) ||
+        train_seconds < 0 || loss_curve.size() > static_cast<std::size_t>(iteration)) {
+      Fail("{}: corrupt checkpoint: trainer state out of range (iteration {}, view order of {} "
+           "for {} views, next {}, {} s)",
+           path.string(), iteration, order.size(), num_views, next, train_seconds);
+    }
   }
 };
 
@@ -237,6 +259,29 @@ nlohmann::json CurveBlocks(const std::vector<double>& loss, const std::vector<do
   }
   return curve;
 }
+
+// Removes `folder` when the scope ends by an exception and `made` says this run created it
+// and nothing but the run lock is in it.
+class RemoveIfFailedEmpty {
+ public:
+  RemoveIfFailedEmpty(fs::path folder, bool made)
+      : folder_(std::move(folder)), made_(made), exceptions_(std::uncaught_exceptions()) {}
+  ~RemoveIfFailedEmpty() {
+    if (!made_ || std::uncaught_exceptions() == exceptions_) return;
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator(folder_, ec)) {
+      if (entry.path().filename() != FolderLock::kFileName) return;
+    }
+    if (!ec) fs::remove_all(folder_, ec);
+  }
+  RemoveIfFailedEmpty(const RemoveIfFailedEmpty&) = delete;
+  RemoveIfFailedEmpty& operator=(const RemoveIfFailedEmpty&) = delete;
+
+ private:
+  fs::path folder_;
+  bool made_;
+  int exceptions_;
+};
 
 }  // namespace
 
@@ -265,8 +310,15 @@ TrainSummary Train(const TrainOptions& options) {
   const bool train_hdr = std::any_of(train_views.begin(), train_views.end(),
                                      [](const TrainView& v) { return !v.hdr_mu.empty(); });
   const double extent = SceneExtent(train_views);
+  // A resumed run keeps the configuration it was started with: read it before anything else.
+  std::optional<nlohmann::json> saved_config;
+  OptimizationOptions requested = options.optimization;
+  if (options.resume) {
+    saved_config = ReadSavedRunConfig(options.out);
+    KeepSavedSchedules(*saved_config, &requested);
+  }
   // Schedules for this run's length and image size (an explicit value stays as it is).
-  const OptimizationOptions opt = options.optimization.Resolved(ImageSize(train_views));
+  const OptimizationOptions opt = requested.Resolved(ImageSize(train_views));
   const bool temporal = profile.dynamic && !hdr_options.force_static;
   spdlog::info("train: {} train / {} test views, extent {:.3f}, {}, method {}", train_views.size(),
                test_views.size(), extent, temporal ? "dynamic" : "static (no time axis)",
@@ -282,10 +334,25 @@ TrainSummary Train(const TrainOptions& options) {
   }
   const ResolvedHdrTraining resolved =
       ResolveHdrTraining(hdr_options, train_hdr, !tone_mapper || tone_mapper->pointwise());
+  TrainOptions recorded = options;  // the schedules as resolved for this run
+  recorded.optimization = opt;
+  nlohmann::json config = recorded.ToJson();
+  config["scene_extent"] = extent;
+  config["profile"] = profile.ToJson();
+  config["num_times"] = num_times;
+  config["resolved"] = resolved.ToJson();
+  if (tone_mapper) config["tone_mapper"] = tone_mapper->config().ToJson();
+  if (saved_config) RequireSameConfig(*saved_config, config, options.out / "config.json");
 
+  // One writer per run folder; a folder this run made and left with nothing in it on failure
+  // is removed again, so a failed start leaves nothing a later command trips over.
+  CheckOutputFolder(options.out);  // before the folder or anything in it is made
   std::error_code ec;
+  const bool made_folder = !fs::exists(options.out, ec);
   fs::create_directories(options.out, ec);
   if (ec) Fail("{}: cannot create the run folder: {}", options.out.string(), ec.message());
+  const RemoveIfFailedEmpty cleanup(options.out, made_folder);
+  const FolderLock lock(options.out, "hdr4d train --out " + options.out.string());
   const fs::path checkpoint_path = options.out / kCheckpointName;
 
   GaussianModel model;
@@ -298,7 +365,7 @@ TrainSummary Train(const TrainOptions& options) {
     model = std::move(c.model);
     std::istringstream adam_state(c.adam_state);
     adam.Load(adam_state, checkpoint_path.string());
-    loop.FromJson(c.trainer);
+    loop.FromJson(c.trainer, checkpoint_path, train_views.size());
     if (c.extra_floats.size() != 3)
       Fail("{}: checkpoint has no densification statistics", checkpoint_path.string());
     stats.grad_accum = std::move(c.extra_floats[0]);
@@ -344,14 +411,6 @@ TrainSummary Train(const TrainOptions& options) {
                      .lr = tone_mapper->learning_rate()});
     }
   }
-  TrainOptions recorded = options;  // the schedules as resolved for this run
-  recorded.optimization = opt;
-  nlohmann::json config = recorded.ToJson();
-  config["scene_extent"] = extent;
-  config["profile"] = profile.ToJson();
-  config["num_times"] = num_times;
-  config["resolved"] = resolved.ToJson();
-  if (tone_mapper) config["tone_mapper"] = tone_mapper->config().ToJson();
   WriteJsonFile(options.out / "config.json", config);
 
   RenderOptions render;

@@ -188,7 +188,7 @@ TEST(TrainerHdr, ImpossibleCombinationsAreErrors) {
   Train(ldr);
   o = HdrRun(dir / "scene", dir / "e", 10);
   o.resume = true;
-  EXPECT_NE(ErrorOf([&] { Train(o); }).find("colour model"), std::string::npos);
+  EXPECT_NE(ErrorOf([&] { Train(o); }).find("--resume with hdr."), std::string::npos);
 }
 
 }  // namespace

@@ -10,6 +10,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
+#include <limits>
 #include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -212,6 +214,117 @@ TEST_F(Hostile, Case05DeeplyNestedJsonIsAProblemNotACrash) {
 }
 
 // --- Silent wrong results ----------------------------------------------------------------------
+
+// FNV-1a over `bytes`, as the checkpoint trailer stores it (method/checkpoint.cpp), so a test can
+// write a damaged checkpoint that still passes the checksum and reach the value checks.
+std::uint64_t Fnv1a(const std::string& bytes) {
+  std::uint64_t h = 0xcbf29ce484222325ull;
+  for (unsigned char c : bytes) {
+    h ^= c;
+    h *= 0x100000001b3ull;
+  }
+  return h;
+}
+
+// Case 6: damage in the Gaussian section, NaN values and header edits were resumed silently.
+TEST_F(Hostile, Case06DamagedCheckpointsAreRefusedOnResumeAndRender) {
+  TrainRun();
+  const fs::path ckpt = fs::path(R()) / "checkpoint.bin";
+  const std::string good = ReadTextFile(ckpt);
+  std::uint64_t header_size = 0;
+  std::memcpy(&header_size, good.data() + 8, 8);
+  const std::size_t first_value = 16 + header_size + 8;  // xyz[0], after its count
+  const std::string resume =
+      "train --data " + S() + " --out " + R() + " --iterations 30 --threads 1 --resume";
+  const std::string render = "render --run " + R() + " --out " + (*this / "renders").string();
+
+  // One flipped byte in the Gaussian section, and a hand edit of the header's iteration.
+  std::string flipped = good;
+  flipped[first_value + 5] ^= 0x10;
+  std::string edited = good;
+  const std::size_t at = edited.find("\"iteration\":20");
+  ASSERT_NE(at, std::string::npos);
+  edited[at + 13] = '1';
+  for (const std::string* bytes : {&flipped, &edited}) {
+    testing::WriteTextFile(ckpt, *bytes);
+    ExpectErrorLast(RunHdr4d(resume), resume, {ckpt.string(), "checksum"});
+    ExpectErrorLast(RunHdr4d(render), render, {ckpt.string(), "checksum"});
+    EXPECT_EQ(ReadTextFile(ckpt), *bytes);  // refused, not rewritten
+  }
+
+  // A NaN position with a checksum that matches (a writer's mistake): the values are checked.
+  std::string nan = good.substr(0, good.size() - 8);
+  const float value = std::numeric_limits<float>::quiet_NaN();
+  std::memcpy(nan.data() + first_value, &value, 4);
+  const std::uint64_t sum = Fnv1a(nan.substr(0, nan.size() - 8));
+  nan.append(reinterpret_cast<const char*>(&sum), 8);
+  testing::WriteTextFile(ckpt, nan);
+  ExpectErrorLast(RunHdr4d(resume), resume, {ckpt.string(), "xyz", "nan"});
+  ExpectErrorLast(RunHdr4d(render), render, {ckpt.string(), "xyz", "nan"});
+  EXPECT_FALSE(fs::exists(*this / "renders"));
+}
+
+// Case 7: two trainings into one run folder at once both succeeded and mixed their files.
+TEST_F(Hostile, Case07ASecondTrainingIntoABusyRunFolderIsRefused) {
+  const std::string first = "train --data " + S() + " --out " + R() +
+                            " --iterations 1000000 --max-seconds 6 --threads 1";
+  testing::CommandResult first_result;
+  std::thread holder([&] { first_result = RunHdr4d(first); });
+  const fs::path lock = fs::path(R()) / ".hdr4d-lock";
+  for (int i = 0; i < 400 && ReadTextFile(lock).empty(); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  const std::string second =
+      "train --data " + S() + " --out " + R() + " --iterations 20 --threads 1 --seed 9";
+  ExpectOneLineError(RunHdr4d(second), second, {R(), "in use by hdr4d train", "pid"});
+  holder.join();
+  EXPECT_EQ(first_result.exit_code, 0) << first_result.err;
+  // The folder is the first run's alone.
+  const json config = json::parse(ReadTextFile(fs::path(R()) / "config.json"));
+  EXPECT_EQ(config.at("seed"), 0);
+  EXPECT_EQ(config.at("optimization").at("iterations"), 1000000);
+  // Released when the first ended: a resume may take it.
+  EXPECT_EQ(RunHdr4d("train --data " + S() + " --out " + R() +
+                     " --iterations 1000000 --max-seconds 1 --threads 1 --resume")
+                .exit_code,
+            0);
+}
+
+// Case 8: --resume with another scene, seed or HDR weight rewrote config.json, crashed or
+// trained with values that config.json then misreported.
+TEST_F(Hostile, Case08ResumeRefusesAnotherConfigurationBeforeWritingAnything) {
+  TrainRun();
+  fs::copy(S(), *this / "OTHER", fs::copy_options::recursive);
+  const auto before = Snapshot(R());
+  const std::string base = " --out " + R() + " --iterations 40 --resume";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"train --data " + (*this / "OTHER").string() + base, "data"},
+      {"train --data " + S() + base + " --seed 3", "seed = 3"},
+      {"train --data " + S() + base + " --hdr-weight 0.5", "hdr.hdr_weight = 0.5"},
+      {"train --data " + S() + base + " --densify-grad-threshold 0.01",
+       "optimization.densify_grad_threshold = 0.01"},
+      {"train --data " + S() + base + " --tone-mapper sigmoid", "tone_mapper"},
+  };
+  for (const auto& [args, key] : cases) {
+    ExpectOneLineError(RunHdr4d(args), args,
+                       {(fs::path(R()) / "config.json").string(), key, "a resumed run keeps"});
+    EXPECT_EQ(Snapshot(R()), before) << args;  // nothing written
+  }
+  // What may differ: the run length and threads. It continues, and says what it used.
+  const auto r = RunHdr4d("train --data " + S() + base + " --threads 2");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json config = json::parse(ReadTextFile(fs::path(R()) / "config.json"));
+  EXPECT_EQ(config.at("threads"), 2);
+  EXPECT_EQ(config.at("optimization").at("iterations"), 40);
+  // The schedules that follow the run length stay those the run started with (20 iterations).
+  const json started = json::parse(before.at("config.json"));
+  EXPECT_EQ(config.at("optimization").at("densify_until"),
+            started.at("optimization").at("densify_until"));
+  // Without a saved configuration there is nothing to resume.
+  fs::remove(fs::path(R()) / "config.json");
+  const std::string lost = "train --data " + S() + base;
+  ExpectOneLineError(RunHdr4d(lost), lost, {"config.json", "no run here to resume"});
+}
 
 // Case 9: flags silently replaced by defaults, wrapped or ignored.
 TEST_F(Hostile, Case09EveryFlagIsValidatedBeforeAnythingRuns) {
