@@ -437,7 +437,8 @@ TEST_F(Hostile, Case12AKilledRenderLeavesNoHalfImageBehind) {
     _exit(127);
   }
   // Wait for the first frames, then kill -9 mid-stream.
-  for (int i = 0; i < 400 && !fs::exists(fs::path(video) / "frame_0003.png"); ++i)
+  // Up to a minute: a loaded machine (ctest -j) can be slow to start the first frames.
+  for (int i = 0; i < 6000 && !fs::exists(fs::path(video) / "frame_0003.png"); ++i)
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   kill(child, SIGKILL);
   int status = 0;
