@@ -19,12 +19,18 @@ bool WellExposed(int code) {
   return code >= kWellExposedMargin && code <= kResponseCodes - 1 - kWellExposedMargin;
 }
 
+// Codes whose radiance estimate is trusted enough to call a disagreement motion: recovered
+// responses are steep and noisy in the darkest eighth.
+constexpr int kReliableMargin = 32;
+bool Reliable(int code) { return code >= kReliableMargin && code <= kResponseCodes - 1 - kReliableMargin; }
+
 }  // namespace
 
 FusionResult FuseBrackets(const std::vector<Bracket>& brackets,
                           const CameraResponse& response,
                           const FusionOptions& options) {
   if (brackets.empty()) Fail("HDR fusion: no brackets");
+  if (response.inverse.empty()) Fail("HDR fusion: the response has no channels");
   const Image& first = brackets.front().image;
   for (const Bracket& b : brackets) {
     if (!b.image.SameShape(first))
@@ -47,11 +53,22 @@ FusionResult FuseBrackets(const std::vector<Bracket>& brackets,
   int best_count = -1;
   for (int j = 0; j < nb; ++j) {
     int count = 0;
-    for (std::size_t p = 0; p < n; ++p) count += WellExposed(mean_code(j, p));
+    for (std::size_t p = 0; p < n; ++p) {
+      bool reliable = true;
+      for (int c = 0; c < channels; ++c) reliable &= Reliable(CodeOf(brackets[j].image.data()[p * channels + c]));
+      count += reliable;
+    }
     if (count > best_count) best_count = count, result.reference_bracket = j;
   }
   const int ref = result.reference_bracket;
 
+  // How much one code step changes log exposure at a value: where the response is steep (dark
+  // codes), quantisation alone makes brackets disagree by this much, which is no motion.
+  auto log_step = [&](int c, float value) {
+    const int z = std::clamp(CodeOf(value), 1, kResponseCodes - 2);
+    const auto& x = response.inverse[std::min<std::size_t>(c, response.inverse.size() - 1)];
+    return x[z - 1] > 0 ? 0.5 * std::log(x[z + 1] / x[z - 1]) : 0.0;
+  };
   auto radiance = [&](int j, std::size_t p, int c) {
     return response.Linearize(c, brackets[j].image.data()[p * channels + c]) / brackets[j].exposure;
   };
@@ -59,30 +76,44 @@ FusionResult FuseBrackets(const std::vector<Bracket>& brackets,
   std::vector<std::uint8_t> moving(n, 0);
   if (options.detect_motion && nb > 1) {
     for (std::size_t p = 0; p < n; ++p) {
-      if (!WellExposed(mean_code(ref, p))) continue;
       for (int j = 0; j < nb && !moving[p]; ++j) {
-        if (j == ref || !WellExposed(mean_code(j, p))) continue;
+        if (j == ref) continue;
         for (int c = 0; c < channels; ++c) {
+          if (!Reliable(CodeOf(brackets[ref].image.data()[p * channels + c])) ||
+              !Reliable(CodeOf(brackets[j].image.data()[p * channels + c])))
+            continue;
           const double a = radiance(ref, p, c), b = radiance(j, p, c);
-          if (a > 0 && b > 0 && std::abs(std::log(a / b)) > options.motion_log_threshold) {
+          const double tolerance = options.motion_log_threshold +
+                                   2 * (log_step(c, brackets[ref].image.data()[p * channels + c]) +
+                                        log_step(c, brackets[j].image.data()[p * channels + c]));
+          if (a > 0 && b > 0 && std::abs(std::log(a / b)) > tolerance) {
             moving[p] = 1;
             break;
           }
         }
       }
     }
-    // Dilate so the blurred border of a moving object is covered too.
-    for (int pass = 0; pass < options.motion_dilation; ++pass) {
-      std::vector<std::uint8_t> grown = moving;
-      for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) {
-          if (!moving[static_cast<std::size_t>(y) * w + x]) continue;
-          for (int dy = -1; dy <= 1; ++dy)
-            for (int dx = -1; dx <= 1; ++dx) {
-              const int xx = x + dx, yy = y + dy;
-              if (xx >= 0 && yy >= 0 && xx < w && yy < h) grown[static_cast<std::size_t>(yy) * w + xx] = 1;
-            }
+    // Noise and grain flag scattered single pixels; a moving object flags a region. Keep a
+    // flag only where most of its 3x3 neighbourhood agrees, then dilate so the blurred border
+    // of the object is covered too.
+    auto neighbours = [&](const std::vector<std::uint8_t>& mask, int x, int y) {
+      int count = 0;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int xx = std::clamp(x + dx, 0, w - 1), yy = std::clamp(y + dy, 0, h - 1);
+          count += mask[static_cast<std::size_t>(yy) * w + xx];
         }
+      return count;
+    };
+    std::vector<std::uint8_t> kept(n, 0);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        kept[static_cast<std::size_t>(y) * w + x] = moving[static_cast<std::size_t>(y) * w + x] && neighbours(moving, x, y) >= 5;
+    moving.swap(kept);
+    for (int pass = 0; pass < options.motion_dilation; ++pass) {
+      std::vector<std::uint8_t> grown(n, 0);
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) grown[static_cast<std::size_t>(y) * w + x] = neighbours(moving, x, y) > 0;
       moving.swap(grown);
     }
   }

@@ -17,5 +17,6 @@ void AddGaussianSceneCommand(CLI::App& app);  // make-gaussian-scene
 void AddExportPlyCommand(CLI::App& app);      // export-ply
 void AddToneCurvesCommand(CLI::App& app);     // tone-curves
 void AddDatagenCommand(CLI::App& app);        // datagen
+void AddCalibrateCommand(CLI::App& app);      // calibrate
 
 }  // namespace hdr4d::cli

@@ -36,6 +36,7 @@ int main(int argc, char** argv) {
   hdr4d::cli::AddExportPlyCommand(app);
   hdr4d::cli::AddToneCurvesCommand(app);
   hdr4d::cli::AddDatagenCommand(app);
+  hdr4d::cli::AddCalibrateCommand(app);
 
   try {
     app.parse(argc, argv);

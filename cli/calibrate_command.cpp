@@ -1,0 +1,48 @@
+// hdr4d calibrate: a fixed multi-camera rig with bracketed exposures, calibrated into a dataset.
+#include <fmt/format.h>
+
+#include "calibration/calibrate.h"
+#include "cli/commands.h"
+
+namespace hdr4d::cli {
+
+void AddCalibrateCommand(CLI::App& app) {
+  auto options = std::make_shared<CalibrateOptions>();
+  auto capture = std::make_shared<std::string>();
+  auto out = std::make_shared<std::string>();
+  auto colmap_model = std::make_shared<std::string>();
+  auto stage = std::make_shared<std::string>("all");
+  auto no_motion = std::make_shared<bool>(false);
+  CLI::App* cmd = app.add_subcommand(
+      "calibrate",
+      "Turn a capture of a fixed camera rig with bracketed exposures (static/<camera>/, "
+      "sequence/<camera>/<frame>_<k>.<ext>, optional exposures.json) into a dataset: COLMAP + "
+      "Ceres rig geometry, Debevec-Malik response, fused HDR ground truth, report.md.");
+  cmd->add_option("--capture", *capture, "Capture folder")->required();
+  cmd->add_option("--out,-o", *out, "Output dataset folder")->required();
+  cmd->add_option("--colmap-model", *colmap_model,
+                  "Reuse this COLMAP sparse model (image names <camera>/<file>) instead of running COLMAP");
+  cmd->add_option("--stage", *stage, "geometry, radiometry or all")->capture_default_str();
+  cmd->add_option("--fps", options->fps, "Frames per second (time = frame index / fps)")->capture_default_str();
+  cmd->add_option("--test-camera", options->test_camera, "Held-out camera (default: the last one)");
+  cmd->add_option("--colmap-binary", options->colmap_binary, "COLMAP executable")->capture_default_str();
+  cmd->add_option("--samples", options->response.samples, "Pixels sampled for the response")->capture_default_str();
+  cmd->add_option("--smoothness", options->response.smoothness, "Debevec-Malik smoothness weight")->capture_default_str();
+  cmd->add_option("--undistort-threshold", options->undistort_threshold_pixels,
+                  "Undistort images when lens distortion moves a pixel by more than this")->capture_default_str();
+  cmd->add_flag("--no-motion-detection", *no_motion, "Average every bracket even where they disagree");
+  cmd->callback([=] {
+    options->capture = *capture;
+    options->out = *out;
+    if (!colmap_model->empty()) options->colmap_model = *colmap_model;
+    options->stage = ParseCalibrationStage(*stage);
+    options->fusion.detect_motion = !*no_motion;
+    const CalibrateSummary s = Calibrate(*options);
+    fmt::print("calibrate: {} cameras, {} frames, {} images written{} to {} (geometry {:.1f} s, "
+               "radiometry {:.1f} s); see {}/report.md\n",
+               s.cameras, s.frames, s.images_written, s.dataset_written ? ", dataset" : "", *out,
+               s.seconds_geometry, s.seconds_radiometry, *out);
+  });
+}
+
+}  // namespace hdr4d::cli
