@@ -3,6 +3,7 @@
 #include <ceres/ceres.h>
 #include <ceres/rotation.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/error.h"
@@ -93,6 +94,18 @@ BundleReport RefineBundle(BundleProblem* problem, const BundleOptions& options) 
   for (Eigen::Vector3d& p : problem->points)
     if (!options.refine_points && ceres_problem.HasParameterBlock(p.data()))
       ceres_problem.SetParameterBlockConstant(p.data());
+  if (options.refine_points) {
+    // A fixed pose leaves the scale free (a rank-deficient system); also holding the point that
+    // the fixed camera sees most often pins the scale through its depth.
+    std::vector<int> seen(problem->points.size(), 0);
+    for (const BundleObservation& o : problem->observations)
+      if (problem->poses[o.pose].fixed) seen[o.point] += 1;
+    std::vector<int> track(problem->points.size(), 0);
+    for (const BundleObservation& o : problem->observations) track[o.point] += seen[o.point] > 0;
+    const auto best = std::max_element(track.begin(), track.end());
+    if (best != track.end() && *best > 0)
+      ceres_problem.SetParameterBlockConstant(problem->points[best - track.begin()].data());
+  }
 
   ceres::Solver::Options solver;
   solver.linear_solver_type = ceres::SPARSE_SCHUR;

@@ -86,8 +86,8 @@ TEST(BundleRefinement, RobustLossIgnoresOutliersAndRefinesPoints) {
   BundleOptions l2 = robust;
   l2.huber_pixels = 1e6;  // effectively squared loss
   RefineBundle(&plain, l2);
-  // 0.3 px noise on three views: a fraction of a degree, from about 1.4 degrees off.
-  EXPECT_LT(RotationErrorDegrees(problem.poses[2], truth.poses[2]), 0.3);
+  // 0.3 px noise on three views and one held point: well under a degree, from 1.4 degrees off.
+  EXPECT_LT(RotationErrorDegrees(problem.poses[2], truth.poses[2]), 0.5);
   EXPECT_LT(RotationErrorDegrees(problem.poses[2], truth.poses[2]),
             RotationErrorDegrees(plain.poses[2], truth.poses[2]));
   EXPECT_LT(report.rms_after[2], report.rms_before[2]);

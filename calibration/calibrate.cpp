@@ -90,6 +90,7 @@ std::optional<Rig> RunGeometry(const Capture& capture, const CalibrateOptions& o
     ColmapRunOptions colmap;
     colmap.binary = options.colmap_binary;
     colmap.show_progress = options.show_progress;
+    colmap.max_image_size = options.colmap_max_image_size;
     model_folder = RunColmap(capture.root / "static", staging / "colmap", colmap);
     source = "COLMAP 3.8 (SIFT on CPU, exhaustive matching, incremental mapping)";
   }
@@ -218,7 +219,7 @@ CalibrationStage ParseCalibrationStage(const std::string& name) {
 
 CalibrateSummary Calibrate(const CalibrateOptions& options) {
   if (!(options.fps > 0) || !std::isfinite(options.fps)) Fail("--fps must be positive");
-  const Capture capture = ScanCapture(options.capture);
+  const Capture capture = ScanCapture(options.capture, options.stage != CalibrationStage::kGeometry);
   for (const std::string& w : capture.warnings) spdlog::warn("calibrate: {}", w);
   fs::path out = fs::absolute(options.out).lexically_normal();
   if (out.filename().empty()) out = out.parent_path();
@@ -233,7 +234,7 @@ CalibrateSummary Calibrate(const CalibrateOptions& options) {
   record.warnings = capture.warnings;
   CalibrateSummary summary;
   summary.cameras = static_cast<int>(capture.cameras.size());
-  summary.frames = static_cast<int>(capture.cameras.front().frames.size());
+  summary.frames = capture.cameras.front().frames.empty() ? 0 : static_cast<int>(capture.cameras.front().frames.size());
   try {
     const bool geometry = options.stage != CalibrationStage::kRadiometry;
     const bool radiometry = options.stage != CalibrationStage::kGeometry;

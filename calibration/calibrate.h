@@ -26,6 +26,7 @@ struct CalibrateOptions {
   std::optional<std::filesystem::path> colmap_model;  // reuse this sparse model
   CalibrationStage stage = CalibrationStage::kAll;
   std::string colmap_binary = "colmap";
+  int colmap_max_image_size = 0;  // COLMAP's SIFT downscales larger images to this; 0 = its default
   double fps = 30;                // frame index / fps = time (seconds)
   std::string test_camera;        // held-out camera; empty = the last one (when >= 2 cameras)
   ResponseOptions response;

@@ -88,13 +88,26 @@ Sidecar ReadSidecar(const fs::path& path) {
 
 }  // namespace
 
-Capture ScanCapture(const fs::path& root) {
+Capture ScanCapture(const fs::path& root, bool need_sequence) {
   Capture capture;
   capture.root = root;
   std::error_code ec;
   if (!fs::is_directory(root, ec)) Fail("{}: capture folder not found", root.string());
   const fs::path sequence = root / "sequence";
-  const std::vector<std::string> names = SubfoldersOf(sequence);
+  std::vector<std::string> names = SubfoldersOf(sequence);
+  if (names.empty() && !need_sequence && !fs::exists(sequence, ec)) {
+    for (const std::string& name : SubfoldersOf(root / "static"))
+      if (name != "extra") {
+        CaptureCamera camera;
+        camera.name = name;
+        camera.static_images = ImagesIn(root / "static" / name);
+        capture.cameras.push_back(std::move(camera));
+      }
+    if (capture.cameras.empty())
+      Fail("{}: no camera folders (expected static/<camera>/<image>)", (root / "static").string());
+    capture.extra_images = ImagesIn(root / "static" / "extra");
+    return capture;
+  }
   if (names.empty())
     Fail("{}: no camera folders (expected sequence/<camera>/<frame>_<k>.<ext>)", sequence.string());
   const Sidecar sidecar = ReadSidecar(root / "exposures.json");

@@ -37,6 +37,8 @@ struct Capture {
 // or extra brackets, a frame missing for one camera, an image without an exposure time, and
 // brackets of one frame with equal exposure times. A bracket whose exposure differs from the
 // same bracket of other frames is a warning (auto-exposure may have moved).
-Capture ScanCapture(const std::filesystem::path& root);
+// With need_sequence = false (`--stage geometry`) a capture without sequence/ is accepted and its
+// cameras are the folders of static/ other than extra/.
+Capture ScanCapture(const std::filesystem::path& root, bool need_sequence = true);
 
 }  // namespace hdr4d

@@ -58,8 +58,11 @@ fs::path RunColmap(const fs::path& image_root, const fs::path& workspace,
   RunStep(options, "feature_extractor",
           fmt::format("{} --image_path {} --ImageReader.single_camera_per_folder 1 "
                       "--ImageReader.camera_model {} --SiftExtraction.use_gpu 0 "
-                      "--SiftExtraction.num_threads {}",
-                      common, Quote(image_root.string()), options.camera_model, options.threads),
+                      "--SiftExtraction.num_threads {}{}",
+                      common, Quote(image_root.string()), options.camera_model, options.threads,
+                      options.max_image_size > 0
+                          ? fmt::format(" --SiftExtraction.max_image_size {}", options.max_image_size)
+                          : std::string()),
           workspace);
   progress.Advance(1, "features");
   RunStep(options, "exhaustive_matcher",

@@ -13,6 +13,7 @@ struct ColmapRunOptions {
   std::string binary = "colmap";
   std::string camera_model = "RADIAL";  // pinhole + k1 k2, what the refinement uses
   int threads = 2;
+  int max_image_size = 0;  // --SiftExtraction.max_image_size; 0 = COLMAP's default (3200)
   bool show_progress = true;
 };
 

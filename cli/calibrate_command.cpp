@@ -26,6 +26,8 @@ void AddCalibrateCommand(CLI::App& app) {
   cmd->add_option("--fps", options->fps, "Frames per second (time = frame index / fps)")->capture_default_str();
   cmd->add_option("--test-camera", options->test_camera, "Held-out camera (default: the last one)");
   cmd->add_option("--colmap-binary", options->colmap_binary, "COLMAP executable")->capture_default_str();
+  cmd->add_option("--colmap-max-image-size", options->colmap_max_image_size,
+                  "Downscale images to this size for COLMAP's SIFT (0: COLMAP's default, 3200)");
   cmd->add_option("--samples", options->response.samples, "Pixels sampled for the response")->capture_default_str();
   cmd->add_option("--smoothness", options->response.smoothness, "Debevec-Malik smoothness weight")->capture_default_str();
   cmd->add_option("--undistort-threshold", options->undistort_threshold_pixels,

@@ -1,0 +1,220 @@
+// End-to-end `hdr4d calibrate` on a small synthetic rig whose poses, intrinsics, response and
+// radiance are known, with its sparse model given (--colmap-model) so the test needs no COLMAP
+// run; plus the error paths, each of which must leave --out as it was.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <fstream>
+#include <random>
+
+#include "core/colmap_model.h"
+#include "core/crf.h"
+#include "core/dataset.h"
+#include "core/image_io.h"
+#include "tests/testing.h"
+
+namespace hdr4d {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kW = 48, kH = 32, kCameras = 3, kFrames = 2;
+const double kExposures[] = {0.25, 1.0, 4.0};
+
+struct SyntheticRig {
+  std::vector<Eigen::Matrix4d> cam_from_world;  // OpenCV axes
+  double f = 40;
+  std::vector<Image> radiance;  // per camera (the scene as each camera sees it)
+};
+
+Eigen::Matrix4d LookAt(const Eigen::Vector3d& centre) {
+  const Eigen::Vector3d z = -centre.normalized();
+  const Eigen::Vector3d x = Eigen::Vector3d::UnitY().cross(z).normalized();
+  const Eigen::Vector3d y = z.cross(x);
+  Eigen::Matrix3d r;
+  r << x.transpose(), y.transpose(), z.transpose();
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  m.topLeftCorner<3, 3>() = r;
+  m.topRightCorner<3, 1>() = -r * centre;
+  return m;
+}
+
+// Writes a capture (static images, bracketed sequences through a gamma-2.2 camera, a sidecar)
+// and a COLMAP text model whose images are named <camera>/static.png.
+SyntheticRig WriteCapture(const fs::path& root, const fs::path& model_folder) {
+  SyntheticRig rig;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1), log_r(std::log(0.02), std::log(3.0));
+  ColmapModel model;
+  const GammaCrf crf(2.2);
+  for (int c = 0; c < kCameras; ++c) {
+    const double a = (c - 1) * 0.5;
+    rig.cam_from_world.push_back(LookAt({4 * std::sin(a), 0.5 * c, -4 * std::cos(a)}));
+    const std::string name = "cam" + std::to_string(c);
+    model.cameras[c + 1] = {c + 1, "SIMPLE_RADIAL", kW, kH, {rig.f, kW / 2.0, kH / 2.0, 0.0}};
+    ColmapImage image;
+    image.id = c + 1;
+    image.camera_id = c + 1;
+    image.name = name + "/static.png";
+    const Eigen::Matrix3d r = rig.cam_from_world[c].topLeftCorner<3, 3>();
+    image.cam_from_world_rotation = Eigen::Quaterniond(r);
+    image.cam_from_world_translation = rig.cam_from_world[c].topRightCorner<3, 1>();
+    model.images[c + 1] = image;
+    Image radiance(kW, kH, 3);
+    for (float& v : radiance.values()) v = static_cast<float>(std::exp(log_r(rng)));
+    rig.radiance.push_back(radiance);
+    WriteImage(root / "static" / name / "static.png", ToSrgb(radiance));
+    for (int frame = 0; frame < kFrames; ++frame)
+      for (int k = 0; k < 3; ++k) {
+        Image ldr(kW, kH, 3, Encoding::kSrgb);
+        for (std::size_t i = 0; i < ldr.size(); ++i)
+          ldr.data()[i] = static_cast<float>(crf.Apply(radiance.data()[i] * kExposures[k]));
+        WriteImage(root / "sequence" / name / (std::to_string(frame) + "_" + std::to_string(k) + ".png"), ldr);
+      }
+  }
+  // Points seen by every camera.
+  for (int i = 0; i < 60; ++i) {
+    ColmapPoint p;
+    p.id = i + 1;
+    p.xyz = {u(rng), u(rng), u(rng)};
+    for (int c = 0; c < kCameras; ++c) {
+      const Eigen::Vector3d q = (rig.cam_from_world[c] * p.xyz.homogeneous()).head<3>();
+      ColmapImage& image = model.images[c + 1];
+      image.points2d.emplace_back(rig.f * q.x() / q.z() + kW / 2.0, rig.f * q.y() / q.z() + kH / 2.0);
+      image.point3d_ids.push_back(p.id);
+      p.track.emplace_back(c + 1, static_cast<int>(image.points2d.size()) - 1);
+    }
+    model.points[p.id] = p;
+  }
+  WriteColmapModel(model_folder, model, ColmapFormat::kText);
+  testing::WriteTextFile(root / "exposures.json", R"({"brackets": [0.25, 1.0, 4.0]})");
+  return rig;
+}
+
+double AngleDegrees(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
+  return Eigen::AngleAxisd(a.transpose() * b).angle() * 180 / M_PI;
+}
+
+TEST(Calibrate, SyntheticRigBecomesADataset) {
+  testing::TempDir dir;
+  const SyntheticRig truth = WriteCapture(dir / "capture", dir / "model");
+  const auto result = testing::RunHdr4d("calibrate --capture '" + (dir / "capture").string() +
+                                        "' --out '" + (dir / "out").string() + "' --colmap-model '" +
+                                        (dir / "model").string() + "' --fps 10");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const Dataset dataset = LoadDataset(dir / "out", {.image_check = ImageCheck::kFull});
+  EXPECT_EQ(dataset.train.size(), 2u * kFrames * 3);  // cam0, cam1: 2 frames x 3 brackets
+  EXPECT_EQ(dataset.test.size(), 1u * kFrames * 3);   // cam2 held out
+  ASSERT_TRUE(dataset.point_cloud_path.has_value());
+  // Relative rotations between cameras survive normalisation exactly (up to refinement noise).
+  std::vector<Eigen::Matrix4d> got(kCameras);
+  for (const Frame* f : dataset.AllFrames()) got[f->camera_id] = f->camera.CamFromWorldCv();
+  for (int c = 1; c < kCameras; ++c) {
+    const Eigen::Matrix3d rel_truth = truth.cam_from_world[c].topLeftCorner<3, 3>() *
+                                      truth.cam_from_world[0].topLeftCorner<3, 3>().transpose();
+    const Eigen::Matrix3d rel_got = got[c].topLeftCorner<3, 3>() * got[0].topLeftCorner<3, 3>().transpose();
+    EXPECT_LT(AngleDegrees(rel_truth, rel_got), 0.01) << "camera " << c;
+  }
+  // Camera centres agree after the similarity (distance ratios are scale-free).
+  auto centre = [](const Eigen::Matrix4d& m) -> Eigen::Vector3d {
+    return -m.topLeftCorner<3, 3>().transpose() * m.topRightCorner<3, 1>();
+  };
+  const double ratio_truth = (centre(truth.cam_from_world[2]) - centre(truth.cam_from_world[0])).norm() /
+                             (centre(truth.cam_from_world[1]) - centre(truth.cam_from_world[0])).norm();
+  const double ratio_got = (centre(got[2]) - centre(got[0])).norm() / (centre(got[1]) - centre(got[0])).norm();
+  EXPECT_NEAR(ratio_got, ratio_truth, 1e-3 * ratio_truth);
+  EXPECT_NEAR(dataset.train.front().camera.intrinsics.fx, truth.f, 1e-3);
+  // The fused HDR matches the radiance up to the response's unknown scale.
+  const Frame& f = dataset.train.front();
+  const Image hdr = ReadImage(*f.hdr_path);
+  const Image& radiance = truth.radiance[f.camera_id];
+  std::vector<double> ratios;
+  for (std::size_t i = 0; i < hdr.size(); ++i) ratios.push_back(std::log(hdr.data()[i] / radiance.data()[i]));
+  std::sort(ratios.begin(), ratios.end());
+  const double scale = ratios[ratios.size() / 2];
+  double worst = 0;
+  for (std::size_t i = ratios.size() / 20; i < ratios.size() * 19 / 20; ++i)
+    worst = std::max(worst, std::abs(ratios[i] - scale));
+  EXPECT_LT(worst, 0.1);  // 90% of the pixels within 10% of the truth (8-bit brackets)
+  for (const char* name : {"report.md", "response.csv", "response.png", "rig.json", "calibration.json"})
+    EXPECT_TRUE(fs::exists(dir / "out" / name)) << name;
+  EXPECT_NE(testing::ReadTextFile(dir / "out" / "report.md").find("reprojection RMS"), std::string::npos);
+}
+
+// Runs calibrate on the capture and expects exit 1, `message` in stderr, and --out untouched.
+void ExpectFailure(const fs::path& capture, const fs::path& model, const fs::path& out,
+                   const std::string& message, const std::string& extra = "") {
+  fs::create_directories(out);
+  testing::WriteTextFile(out / "keep.txt", "mine");
+  const auto result = testing::RunHdr4d("calibrate --capture '" + capture.string() + "' --out '" +
+                                        out.string() + "' --colmap-model '" + model.string() + "' " + extra);
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_NE(result.err.find(message), std::string::npos) << result.err;
+  std::vector<fs::path> left;
+  for (const auto& e : fs::directory_iterator(out)) left.push_back(e.path().filename());
+  EXPECT_EQ(left, std::vector<fs::path>{"keep.txt"});
+  EXPECT_FALSE(fs::exists(out.parent_path() / ("." + out.filename().string() + ".calibrate-partial")));
+}
+
+TEST(Calibrate, BadCapturesAreClearErrorsAndWriteNothing) {
+  testing::TempDir dir;
+  const fs::path capture = dir / "capture", model = dir / "model", out = dir / "out";
+  WriteCapture(capture, model);
+  // A missing bracket.
+  fs::rename(capture / "sequence/cam1/1_1.png", dir / "moved.png");
+  ExpectFailure(capture, model, out, "camera cam1, frame 1: bracket 1 is missing");
+  fs::rename(dir / "moved.png", capture / "sequence/cam1/1_1.png");
+  // A frame missing for one camera.
+  for (int k = 0; k < 3; ++k) fs::remove(capture / ("sequence/cam2/1_" + std::to_string(k) + ".png"));
+  ExpectFailure(capture, model, out, "camera cam2: frame 1 is missing");
+  WriteCapture(capture, model);
+  // No exposure times: no sidecar and PNGs carry no EXIF.
+  fs::rename(capture / "exposures.json", dir / "exposures.json");
+  ExpectFailure(capture, model, out, "no exposure time");
+  fs::rename(dir / "exposures.json", capture / "exposures.json");
+  // Equal exposure times within a frame.
+  testing::WriteTextFile(capture / "exposures.json", R"({"brackets": [1, 1, 4]})");
+  ExpectFailure(capture, model, out, "same exposure time");
+  testing::WriteTextFile(capture / "exposures.json", R"({"brackets": [0.25, 1.0, 4.0]})");
+  // A camera COLMAP did not register.
+  ColmapModel partial = ReadColmapModel(model);
+  partial.images.erase(3);
+  for (auto& [id, p] : partial.points)
+    std::erase_if(p.track, [](const auto& t) { return t.first == 3; });
+  WriteColmapModel(dir / "partial", partial, ColmapFormat::kBinary);
+  ExpectFailure(capture, dir / "partial", out, "camera cam2: none of its static images");
+  // Missing images (a bracket that is not an image).
+  testing::WriteTextFile(capture / "sequence/cam0/0_2.png", "not a png");
+  ExpectFailure(capture, model, out, "0_2.png");
+}
+
+TEST(Calibrate, UnwritableOutputIsAnError) {
+  testing::TempDir dir;
+  WriteCapture(dir / "capture", dir / "model");
+  testing::WriteTextFile(dir / "file", "x");
+  const auto result = testing::RunHdr4d("calibrate --capture '" + (dir / "capture").string() + "' --out '" +
+                                        (dir / "file").string() + "' --colmap-model '" + (dir / "model").string() + "'");
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_NE(result.err.find("is not a folder"), std::string::npos) << result.err;
+  EXPECT_EQ(testing::ReadTextFile(dir / "file"), "x");
+}
+
+TEST(Calibrate, ColmapThatReconstructsNothingIsAClearError) {
+  if (std::system("command -v colmap > /dev/null 2>&1") != 0) GTEST_SKIP() << "colmap not installed";
+  testing::TempDir dir;
+  // Two unrelated noise images: SIFT finds features but nothing matches.
+  for (int c = 0; c < 2; ++c) {
+    const std::string name = "cam" + std::to_string(c);
+    WriteImage(dir / "capture" / "static" / name / "a.png", testing::RandomImage(64, 64, 3, c + 1, 0, 1, Encoding::kSrgb));
+  }
+  const auto result = testing::RunHdr4d("calibrate --capture '" + (dir / "capture").string() +
+                                        "' --out '" + (dir / "out").string() + "' --stage geometry");
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_NE(result.err.find("COLMAP"), std::string::npos) << result.err;
+  std::vector<fs::path> left;
+  for (const auto& e : fs::directory_iterator(dir / "out")) left.push_back(e.path());
+  EXPECT_TRUE(left.empty());
+}
+
+}  // namespace
+}  // namespace hdr4d
