@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <fstream>
@@ -40,8 +41,15 @@ void RunStep(const ColmapRunOptions& options, const std::string& step, const std
   if (code == 127)
     Fail("COLMAP not found ('{}'); install it with scripts/install-deps.sh or pass --colmap-model",
          options.binary);
-  if (code != 0)
-    Fail("COLMAP {} failed (exit {}); see {}: {}", step, code, log.string(), LastLine(log));
+  if (code != 0) {
+    // The workspace is inside calibrate's staging folder, which a failure removes: keep the log.
+    const fs::path kept = fs::temp_directory_path() / fmt::format("hdr4d-colmap-{}-{}.log", step, getpid());
+    std::error_code ec;
+    fs::copy_file(log, kept, fs::copy_options::overwrite_existing, ec);
+    Fail("COLMAP {} failed (exit {}{}): {}; log in {}", step, code,
+         step == "mapper" ? ", too few matches between the static images?" : "", LastLine(log),
+         ec ? log.string() : kept.string());
+  }
 }
 
 }  // namespace
@@ -89,7 +97,7 @@ fs::path RunColmap(const fs::path& image_root, const fs::path& workspace,
   }
   if (best.empty())
     Fail("COLMAP could not reconstruct the static scene in {} (no model; too few matches between "
-         "the images?); see {}", image_root.string(), (workspace / "colmap_mapper.log").string());
+         "the images?)", image_root.string());
   return best;
 }
 
