@@ -6,6 +6,7 @@
 #include <chrono>
 
 #include "calibration/calibration_report.h"
+#include "calibration/camera_gains.h"
 #include "calibration/capture.h"
 #include "calibration/colmap_driver.h"
 #include "calibration/rig_geometry.h"
@@ -120,6 +121,28 @@ std::vector<Frame> RunRadiometry(const Capture& capture, const CalibrateOptions&
   WriteResponsePlot((staging / "response.png").string(), response);
   record->response_method = response.method;
 
+  // Unlike cameras: gains from the first frame of every camera on the points they share.
+  std::optional<CameraGains> gains;
+  if (rig && !rig->visibility.empty() && capture.cameras.size() >= 2) {
+    std::vector<Image> first;
+    for (std::size_t c = 0; c < capture.cameras.size(); ++c)
+      first.push_back(FuseBrackets(c < stacks.size() ? stacks[c] : LoadFrame(capture.cameras[c], capture.cameras[c].frames.front()),
+                                   response, options.fusion).hdr);
+    std::vector<Image> ordered;  // the rig's camera order
+    for (const RigCamera& rc : rig->cameras)
+      for (std::size_t c = 0; c < capture.cameras.size(); ++c)
+        if (capture.cameras[c].name == rc.name) ordered.push_back(first[c]);
+    if (ordered.size() == rig->cameras.size()) gains = EstimateCameraGains(*rig, ordered);
+  }
+  record->gains = gains;
+  record->gains_applied = gains.has_value() && options.correct_gains;
+  auto gain_of = [&](const std::string& name) -> std::array<double, 3> {
+    if (!gains || !options.correct_gains) return {1.0, 1.0, 1.0};
+    for (std::size_t c = 0; c < rig->cameras.size(); ++c)
+      if (rig->cameras[c].name == name) return gains->gain[c];
+    return {1.0, 1.0, 1.0};
+  };
+
   std::size_t total = 0;
   for (const CaptureCamera& camera : capture.cameras) total += camera.frames.size();
   Progress progress("fuse", static_cast<std::int64_t>(total), options.show_progress);
@@ -138,6 +161,8 @@ std::vector<Frame> RunRadiometry(const Capture& capture, const CalibrateOptions&
              brackets.front().name, camera.name, capture_frame.index, brackets.front().image.width(),
              brackets.front().image.height(), rig_camera->width, rig_camera->height);
       FusionResult fused = FuseBrackets(brackets, response, options.fusion);
+      const std::array<double, 3> gain = gain_of(camera.name);
+      for (std::size_t i = 0; i < fused.hdr.size(); ++i) fused.hdr.data()[i] /= static_cast<float>(gain[i % 3]);
       const bool undistort = rig_camera && rig_camera->undistort;
       if (undistort) fused.hdr = Undistort(fused.hdr, rig_camera->intrinsics);
       const std::string hdr_name = fmt::format("hdr/{}/{:05d}.exr", camera.name, capture_frame.index);
@@ -165,7 +190,9 @@ std::vector<Frame> RunRadiometry(const Capture& capture, const CalibrateOptions&
         frame.file_path = name;
         frame.exr_file_path = hdr_name;
         frame.time_raw = capture_frame.index / options.fps;
-        frame.exposure = capture_frame.exposures[k];
+        // The camera's overall gain becomes part of its effective exposure, so that
+        // LDR = response(radiance x exposure) holds for the corrected radiance.
+        frame.exposure = capture_frame.exposures[k] * (gain[0] + gain[1] + gain[2]) / 3;
         frame.exposure_given = true;
         frame.camera_id = static_cast<int>(c);
         frame.exposure_index = static_cast<int>(k);

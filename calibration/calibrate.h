@@ -32,6 +32,7 @@ struct CalibrateOptions {
   ResponseOptions response;
   FusionOptions fusion;
   double undistort_threshold_pixels = 0.5;
+  bool correct_gains = true;  // divide each camera's HDR by its gains (calibration/camera_gains.h)
   bool show_progress = true;
 };
 

@@ -36,8 +36,26 @@ void WriteCalibrationReport(const std::filesystem::path& folder, const Calibrati
   }
   if (!record.response_method.empty()) {
     md += fmt::format("## Radiometry\n\nResponse: {} (one curve per channel shared by every "
-                      "camera; per-camera gain correction is not done yet), in response.csv.\n\n"
+                      "camera), in response.csv.\n\n"
                       "![response](response.png)\n\n", record.response_method);
+    if (record.gains && record.rig) {
+      const CameraGains& g = *record.gains;
+      md += fmt::format("### Camera agreement\n\nOn {} sparse points seen by two or more cameras (first "
+                        "frame), the cameras' HDR differed from the points' mean by {:.1f}% (median) "
+                        "before the per-camera gains and {:.1f}% after{}.\n\n| camera | gain R | G | B |\n"
+                        "|---|---|---|---|\n",
+                        g.points_used, 100 * g.disagreement_before, 100 * g.disagreement_after,
+                        record.gains_applied ? " (applied to hdr/, the mean gain folded into `exposures`)"
+                                             : " (not applied: --no-gain-correction)");
+      for (std::size_t c = 0; c < g.gain.size() && c < record.rig->cameras.size(); ++c)
+        md += fmt::format("| {} | {:.4f} | {:.4f} | {:.4f} |\n", record.rig->cameras[c].name,
+                          g.gain[c][0], g.gain[c][1], g.gain[c][2]);
+      md += "\n";
+      doc["camera_agreement"] = {{"points", g.points_used},
+                                 {"disagreement_before", g.disagreement_before},
+                                 {"disagreement_after", g.disagreement_after},
+                                 {"gains", g.gain}};
+    }
     md += "| camera | frame | dynamic range (stops) | moving pixels (best-exposed bracket only) | "
           "reference bracket |\n|---|---|---|---|---|\n";
     for (const FrameRecord& f : record.frames) {

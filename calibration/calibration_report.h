@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "calibration/camera_gains.h"
 #include "calibration/rig_geometry.h"
 
 namespace hdr4d {
@@ -24,6 +25,8 @@ struct CalibrationRecord {
   bool geometry_run = false;  // this run computed the rig (else it was read from rig.json)
   std::string response_method;  // empty: radiometry not run
   std::vector<FrameRecord> frames;
+  std::optional<CameraGains> gains;  // cameras' agreement (radiometry with a rig of 2+ cameras)
+  bool gains_applied = false;
   std::vector<std::string> warnings;
   std::string test_camera;
   double seconds_geometry = 0, seconds_radiometry = 0;

@@ -97,9 +97,13 @@ Rig RigFromColmap(const ColmapModel& model, const std::vector<std::string>& came
     const int index = static_cast<int>(problem.points.size());
     problem.points.push_back(point.xyz);
     point_ids.push_back(id);
+    rig.visibility.emplace_back();
     for (const auto& [image_id, idx] : point.track) {
       const ColmapImage& image = model.images.at(image_id);
       const int pose = pose_of_image.at(image_id);
+      if (pose < static_cast<int>(camera_names.size()) &&
+          std::find(rig.visibility.back().begin(), rig.visibility.back().end(), pose) == rig.visibility.back().end())
+        rig.visibility.back().push_back(pose);
       const int k = pose < static_cast<int>(camera_names.size()) ? rig_intrinsics[pose]
                                                                  : intrinsics_index(image.camera_id);
       problem.observations.push_back({pose, k, index, image.points2d[idx]});

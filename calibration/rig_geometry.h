@@ -30,6 +30,7 @@ struct RigCamera {
 struct Rig {
   std::vector<RigCamera> cameras;
   PointCloud points;                         // normalised world
+  std::vector<std::vector<int>> visibility;  // rig cameras that saw each point (not in rig.json)
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();  // COLMAP world point moved to the origin
   double scale = 1;                          // then multiplied by this
   int extra_images_registered = 0;

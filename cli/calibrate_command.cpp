@@ -13,6 +13,7 @@ void AddCalibrateCommand(CLI::App& app) {
   auto colmap_model = std::make_shared<std::string>();
   auto stage = std::make_shared<std::string>("all");
   auto no_motion = std::make_shared<bool>(false);
+  auto no_gains = std::make_shared<bool>(false);
   CLI::App* cmd = app.add_subcommand(
       "calibrate",
       "Turn a capture of a fixed camera rig with bracketed exposures (static/<camera>/, "
@@ -33,7 +34,10 @@ void AddCalibrateCommand(CLI::App& app) {
   cmd->add_option("--undistort-threshold", options->undistort_threshold_pixels,
                   "Undistort images when lens distortion moves a pixel by more than this")->capture_default_str();
   cmd->add_flag("--no-motion-detection", *no_motion, "Average every bracket even where they disagree");
+  cmd->add_flag("--no-gain-correction", *no_gains,
+                "Measure the cameras' disagreement but leave their HDR and exposures as fused");
   cmd->callback([=] {
+    options->correct_gains = !*no_gains;
     options->capture = *capture;
     options->out = *out;
     if (!colmap_model->empty()) options->colmap_model = *colmap_model;
