@@ -183,6 +183,11 @@ TEST(Calibrate, SyntheticRigBecomesADataset) {
   for (const char* name : {"report.md", "response.csv", "response.png", "rig.json", "calibration.json"})
     EXPECT_TRUE(fs::exists(dir / "out" / name)) << name;
   EXPECT_NE(testing::ReadTextFile(dir / "out" / "report.md").find("reprojection RMS"), std::string::npos);
+  // The trainer reads the result (a few iterations: this checks the format, not the quality).
+  const auto train = testing::RunHdr4d("train --data '" + (dir / "out").string() + "' --out '" +
+                                       (dir / "run").string() + "' --iterations 20 --threads 2");
+  EXPECT_EQ(train.exit_code, 0) << train.err;
+  EXPECT_TRUE(fs::exists(dir / "run" / "results.json"));
 }
 
 // Runs calibrate on the capture and expects exit 1, `message` in stderr, and --out untouched.
