@@ -89,7 +89,7 @@ BundleReport RefineBundle(BundleProblem* problem, const BundleOptions& options) 
     ceres_problem.SetParameterBlockConstant(pose.translation.data());
   }
   for (BundleIntrinsics& k : problem->intrinsics)
-    if (!options.refine_intrinsics && ceres_problem.HasParameterBlock(Data(k)))
+    if ((!options.refine_intrinsics || k.fixed) && ceres_problem.HasParameterBlock(Data(k)))
       ceres_problem.SetParameterBlockConstant(Data(k));
   for (Eigen::Vector3d& p : problem->points)
     if (!options.refine_points && ceres_problem.HasParameterBlock(p.data()))

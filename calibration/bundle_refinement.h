@@ -16,7 +16,8 @@ struct BundlePose {
 };
 
 struct BundleIntrinsics {
-  double f = 1, cx = 0, cy = 0, k1 = 0, k2 = 0;
+  double f = 1, cx = 0, cy = 0, k1 = 0, k2 = 0;  // contiguous: Ceres sees them as one block
+  bool fixed = false;  // known from elsewhere (a calibration board): not refined
 };
 
 struct BundleObservation {

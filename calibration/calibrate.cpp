@@ -1,10 +1,13 @@
 #include "calibration/calibrate.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <numeric>
 
+#include "calibration/board_calibration.h"
 #include "calibration/calibration_report.h"
 #include "calibration/camera_gains.h"
 #include "calibration/capture.h"
@@ -101,8 +104,34 @@ std::optional<Rig> RunGeometry(const Capture& capture, const CalibrateOptions& o
   RigOptions rig_options;
   rig_options.undistort_threshold_pixels = options.undistort_threshold_pixels;
   rig_options.show_progress = options.show_progress;
+  std::vector<BoardCalibration> boards;
+  std::vector<std::string> board_notes;
+  if (!options.board.empty()) {
+    const BoardSpec spec = ParseBoardSpec(options.board);
+    for (const CaptureCamera& camera : capture.cameras) {
+      boards.push_back(CalibrateFromBoard(camera.static_images, spec));
+      const BoardCalibration& b = boards.back();
+      if (b.views > 0) {
+        rig_options.board_intrinsics[camera.name] = b.intrinsics;
+        board_notes.push_back(fmt::format("{} ({} views, {:.2f} px)", camera.name, b.views, b.rms));
+      }
+    }
+  }
   Rig rig = RigFromColmap(model, names, rig_options);
   rig.model_source = source;
+  if (!board_notes.empty()) {
+    rig.intrinsics_source = fmt::format("checkerboard {} for {}; COLMAP, refined with Ceres, for the others",
+                                        options.board, fmt::join(board_notes, ", "));
+    // Metric scale: every pair of cameras that saw the board at the same moment.
+    std::vector<double> scales;
+    for (std::size_t a = 0; a < boards.size(); ++a)
+      for (std::size_t b = a + 1; b < boards.size(); ++b) {
+        const double units = (rig.cameras[a].world_from_cam_gl.topRightCorner<3, 1>() -
+                              rig.cameras[b].world_from_cam_gl.topRightCorner<3, 1>()).norm();
+        if (const double m = MetresPerUnit(boards[a], boards[b], units); m > 0) scales.push_back(m);
+      }
+    if (!scales.empty()) rig.metres_per_unit = std::accumulate(scales.begin(), scales.end(), 0.0) / scales.size();
+  }
   WriteRigJson(staging / "rig.json", rig);
   WritePly(staging / "point3d.ply", rig.points);
   return rig;

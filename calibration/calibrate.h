@@ -25,6 +25,7 @@ struct CalibrateOptions {
   std::filesystem::path capture, out;
   std::optional<std::filesystem::path> colmap_model;  // reuse this sparse model
   CalibrationStage stage = CalibrationStage::kAll;
+  std::string board;  // "<cols>x<rows>:<square metres>": a checkerboard in static/ (optional)
   std::string colmap_binary = "colmap";
   int colmap_max_image_size = 0;  // COLMAP's SIFT downscales larger images to this; 0 = its default
   double fps = 30;                // frame index / fps = time (seconds)

@@ -19,14 +19,14 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr int kW = 96, kH = 64, kCameras = 3, kFrames = 2;
+constexpr int kW = 320, kH = 240, kCameras = 3, kFrames = 2;
 // Unlike cameras: each sees the scene's radiance times its own gain per channel.
 const double kGains[kCameras][3] = {{1, 1, 1}, {1.4, 1.2, 1.0}, {0.7, 0.8, 0.9}};
 const double kExposures[] = {0.25, 1.0, 4.0};
 
 struct SyntheticRig {
   std::vector<Eigen::Matrix4d> cam_from_world;  // OpenCV axes
-  double f = 80;
+  double f = 250;
   std::vector<Image> radiance;  // per camera, the scene as it would be without the camera's gain
 };
 
@@ -44,7 +44,48 @@ Eigen::Matrix4d LookAt(const Eigen::Vector3d& centre) {
 
 // Writes a capture (static images, bracketed sequences through a gamma-2.2 camera, a sidecar)
 // and a COLMAP text model whose images are named <camera>/static.png.
-SyntheticRig WriteCapture(const fs::path& root, const fs::path& model_folder) {
+// A 9x6 checkerboard (inner corners), square 0.25 units, first inner corner at (-1, -0.625) in
+// its own plane z = 0: what --board 9x6:<0.25 M> sees at M metres per unit. The static images
+// show it in three poses (tilted about the world origin), one image per pose in every camera.
+constexpr double kBoardSquare = 0.25;
+const Eigen::Vector2d kBoardOrigin(-1.0, -0.625);
+
+Eigen::Matrix4d BoardFromWorld(int pose) {
+  const double tilt[3][2] = {{0, 0}, {0.45, 0.2}, {-0.3, -0.45}};
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  m.topLeftCorner<3, 3>() = (Eigen::AngleAxisd(tilt[pose][0], Eigen::Vector3d::UnitX()) *
+                             Eigen::AngleAxisd(tilt[pose][1], Eigen::Vector3d::UnitY())).toRotationMatrix();
+  return m;
+}
+
+// Draws the board over `image` as the camera sees it (2x2 supersampled).
+void DrawBoard(Image* image, const Eigen::Matrix4d& cam_from_world, const Eigen::Matrix4d& board_from_world, double f) {
+  const Eigen::Matrix4d board_from_cam = board_from_world * cam_from_world.inverse();
+  const Eigen::Matrix3d r = board_from_cam.topLeftCorner<3, 3>();
+  const Eigen::Vector3d centre = board_from_cam.topRightCorner<3, 1>();
+  for (int v = 0; v < image->height(); ++v)
+    for (int u = 0; u < image->width(); ++u) {
+      double sum = 0;
+      int hits = 0;
+      for (int s = 0; s < 4; ++s) {
+        const Eigen::Vector3d d = r * Eigen::Vector3d((u + 0.25 + 0.5 * (s % 2) - kW / 2.0) / f,
+                                                      (v + 0.25 + 0.5 * (s / 2) - kH / 2.0) / f, 1);
+        const double k = -centre.z() / d.z();
+        const Eigen::Vector3d p = centre + k * d;
+        const int i = static_cast<int>(std::floor((p.x() - kBoardOrigin.x()) / kBoardSquare)) + 1;
+        const int j = static_cast<int>(std::floor((p.y() - kBoardOrigin.y()) / kBoardSquare)) + 1;
+        // The board with a white margin of one square around it.
+        if (k > 0 && i >= -1 && j >= -1 && i <= 10 && j <= 7) {
+          ++hits;
+          sum += i >= 0 && j >= 0 && i <= 9 && j <= 6 && (i + j) % 2 == 0 ? 0.05 : 0.95;
+        }
+      }
+      if (hits == 4)
+        for (int c = 0; c < 3; ++c) image->at(u, v, c) = static_cast<float>(sum / 4);
+    }
+}
+
+SyntheticRig WriteCapture(const fs::path& root, const fs::path& model_folder, bool board = false) {
   SyntheticRig rig;
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1, 1), log_r(std::log(0.02), std::log(3.0));
@@ -110,6 +151,11 @@ SyntheticRig WriteCapture(const fs::path& root, const fs::path& model_folder) {
     Image seen = radiance;
     for (std::size_t i = 0; i < seen.size(); ++i) seen.data()[i] *= static_cast<float>(kGains[c][i % 3]);
     WriteImage(root / "static" / name / "static.png", ToSrgb(seen));
+    for (int pose = 0; board && pose < 3; ++pose) {
+      Image with_board = ToSrgb(seen);
+      DrawBoard(&with_board, rig.cam_from_world[c], BoardFromWorld(pose), rig.f);
+      WriteImage(root / "static" / name / ("board" + std::to_string(pose) + ".png"), with_board);
+    }
     for (int frame = 0; frame < kFrames; ++frame)
       for (int k = 0; k < 3; ++k) {
         Image ldr(kW, kH, 3, Encoding::kSrgb);
@@ -188,6 +234,27 @@ TEST(Calibrate, SyntheticRigBecomesADataset) {
                                        (dir / "run").string() + "' --iterations 20 --threads 2");
   EXPECT_EQ(train.exit_code, 0) << train.err;
   EXPECT_TRUE(fs::exists(dir / "run" / "results.json"));
+}
+
+TEST(Calibrate, BoardGivesIntrinsicsAndMetricScale) {
+  testing::TempDir dir;
+  const SyntheticRig truth = WriteCapture(dir / "capture", dir / "model", /*board=*/true);
+  const double metres_per_world_unit = 0.2;  // so a square is 5 cm
+  const auto result = testing::RunHdr4d(
+      "calibrate --capture '" + (dir / "capture").string() + "' --out '" + (dir / "out").string() +
+      "' --colmap-model '" + (dir / "model").string() + "' --stage geometry --board 9x6:" +
+      std::to_string(kBoardSquare * metres_per_world_unit));
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const nlohmann::json rig = nlohmann::json::parse(testing::ReadTextFile(dir / "out" / "rig.json"));
+  for (const auto& camera : rig["cameras"]) {
+    EXPECT_TRUE(camera["board_intrinsics"].get<bool>()) << camera["name"];
+    EXPECT_NEAR(camera["f"].get<double>(), truth.f, 0.03 * truth.f) << camera["name"];
+  }
+  // The normalised world is the COLMAP world times `scale`, so a unit of it is
+  // metres_per_world_unit / scale metres.
+  const double expected = metres_per_world_unit / rig["normalisation"]["scale"].get<double>();
+  EXPECT_NEAR(rig["metres_per_unit"].get<double>(), expected, 0.03 * expected);
+  EXPECT_NE(testing::ReadTextFile(dir / "out" / "report.md").find("checkerboard 9x6"), std::string::npos);
 }
 
 // Runs calibrate on the capture and expects exit 1, `message` in stderr, and --out untouched.

@@ -13,13 +13,17 @@ void WriteCalibrationReport(const std::filesystem::path& folder, const Calibrati
   nlohmann::json doc;
   if (record.rig) {
     const Rig& rig = *record.rig;
-    md += fmt::format("## Geometry{}\n\nSparse model: {}. Intrinsics: COLMAP's, refined with Ceres "
-                      "(a calibration board was not used). {} extra image(s) helped the "
-                      "reconstruction and were dropped. Scene normalised: centre ({:.4g}, {:.4g}, "
-                      "{:.4g}), scale {:.4g}. Refinement: {} iterations.\n\n",
+    md += fmt::format("## Geometry{}\n\nSparse model: {}. Intrinsics: {}. {} extra image(s) helped "
+                      "the reconstruction and were dropped. Scene normalised: centre ({:.4g}, {:.4g}, "
+                      "{:.4g}), scale {:.4g}; metric scale: {}. Refinement: {} iterations.\n\n",
                       record.geometry_run ? "" : " (from rig.json of an earlier run)",
-                      rig.model_source, rig.extra_images_registered, rig.centre.x(), rig.centre.y(),
-                      rig.centre.z(), rig.scale, rig.refinement_iterations);
+                      rig.model_source, rig.intrinsics_source, rig.extra_images_registered,
+                      rig.centre.x(), rig.centre.y(), rig.centre.z(), rig.scale,
+                      rig.metres_per_unit > 0 ? fmt::format("1 unit = {:.4g} m (checkerboard)", rig.metres_per_unit)
+                                              : std::string("unknown (no board seen by two cameras)"),
+                      rig.refinement_iterations);
+    doc["metres_per_unit"] = rig.metres_per_unit;
+    doc["intrinsics_source"] = rig.intrinsics_source;
     md += "| camera | static images registered | observations | reprojection RMS before (px) | "
           "after (px) | focal (px) | k1 | k2 | max distortion (px) | undistorted |\n"
           "|---|---|---|---|---|---|---|---|---|---|\n";

@@ -82,7 +82,15 @@ Rig RigFromColmap(const ColmapModel& model, const std::vector<std::string>& came
     const ColmapCamera& colmap_camera = model.cameras.at(model.images.at(first).camera_id);
     camera.width = colmap_camera.width;
     camera.height = colmap_camera.height;
-    rig_intrinsics.push_back(intrinsics_index(colmap_camera.id));
+    if (const auto board = options.board_intrinsics.find(camera.name); board != options.board_intrinsics.end()) {
+      // Its own block, held: the board's intrinsics are the better measurement.
+      rig_intrinsics.push_back(static_cast<int>(problem.intrinsics.size()));
+      problem.intrinsics.push_back(board->second);
+      problem.intrinsics.back().fixed = true;
+      camera.board_intrinsics = true;
+    } else {
+      rig_intrinsics.push_back(intrinsics_index(colmap_camera.id));
+    }
     rig.cameras.push_back(camera);
   }
   // Extra (hand-held) images: a pose each; they constrain the points and are then dropped.
@@ -154,6 +162,8 @@ Rig RigFromColmap(const ColmapModel& model, const std::vector<std::string>& came
 void WriteRigJson(const fs::path& path, const Rig& rig) {
   nlohmann::json doc;
   doc["model_source"] = rig.model_source;
+  doc["intrinsics_source"] = rig.intrinsics_source;
+  doc["metres_per_unit"] = rig.metres_per_unit;
   doc["normalisation"] = {{"centre", {rig.centre.x(), rig.centre.y(), rig.centre.z()}},
                           {"scale", rig.scale}};
   doc["extra_images_registered"] = rig.extra_images_registered;
@@ -176,7 +186,8 @@ void WriteRigJson(const fs::path& path, const Rig& rig) {
                               {"observations", c.observations},
                               {"static_images_registered", c.static_images_registered},
                               {"max_distortion_pixels", c.max_distortion_pixels},
-                              {"undistort", c.undistort}});
+                              {"undistort", c.undistort},
+                              {"board_intrinsics", c.board_intrinsics}});
   }
   WriteJsonFile(path, doc);
 }
@@ -186,6 +197,8 @@ Rig ReadRigJson(const fs::path& path) {
   Rig rig;
   try {
     rig.model_source = doc.at("model_source").get<std::string>();
+    rig.intrinsics_source = doc.value("intrinsics_source", rig.intrinsics_source);
+    rig.metres_per_unit = doc.value("metres_per_unit", 0.0);
     const auto& n = doc.at("normalisation");
     for (int a = 0; a < 3; ++a) rig.centre[a] = n.at("centre").at(a).get<double>();
     rig.scale = n.at("scale").get<double>();
@@ -206,6 +219,7 @@ Rig ReadRigJson(const fs::path& path) {
       c.static_images_registered = j.at("static_images_registered").get<int>();
       c.max_distortion_pixels = j.at("max_distortion_pixels").get<double>();
       c.undistort = j.at("undistort").get<bool>();
+      c.board_intrinsics = j.value("board_intrinsics", false);
       rig.cameras.push_back(c);
     }
   } catch (const nlohmann::json::exception& e) {

@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,7 @@ struct RigCamera {
   int static_images_registered = 0;
   double max_distortion_pixels = 0;
   bool undistort = false;  // distortion above the threshold: images are undistorted
+  bool board_intrinsics = false;  // intrinsics from a calibration board
 };
 
 struct Rig {
@@ -36,11 +38,15 @@ struct Rig {
   int extra_images_registered = 0;
   int refinement_iterations = 0;
   std::string model_source;  // where the sparse model came from
+  std::string intrinsics_source = "COLMAP, refined with Ceres";
+  double metres_per_unit = 0;  // of the normalised world; 0 = unknown (no board seen by 2 cameras)
 
   const RigCamera* Find(const std::string& name) const;
 };
 
 struct RigOptions {
+  // Intrinsics known from a calibration board, by camera name: used as they are.
+  std::map<std::string, BundleIntrinsics> board_intrinsics;
   double undistort_threshold_pixels = 0.5;
   bool show_progress = true;
 };

@@ -26,6 +26,9 @@ void AddCalibrateCommand(CLI::App& app) {
   cmd->add_option("--stage", *stage, "geometry, radiometry or all")->capture_default_str();
   cmd->add_option("--fps", options->fps, "Frames per second (time = frame index / fps)")->capture_default_str();
   cmd->add_option("--test-camera", options->test_camera, "Held-out camera (default: the last one)");
+  cmd->add_option("--board", options->board,
+                  "A checkerboard in static/: <cols>x<rows>:<square metres> (inner corners), for "
+                  "intrinsics and the metric scale");
   cmd->add_option("--colmap-binary", options->colmap_binary, "COLMAP executable")->capture_default_str();
   cmd->add_option("--colmap-max-image-size", options->colmap_max_image_size,
                   "Downscale images to this size for COLMAP's SIFT (0: COLMAP's default, 3200)");
