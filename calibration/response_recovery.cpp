@@ -115,6 +115,61 @@ std::array<double, kResponseCodes> SolveDebevec(const std::vector<std::vector<Br
   return Normalise(x);
 }
 
+// Robertson, Borman & Stevenson: alternate the radiance of every pixel given the curve and
+// the curve (the mean exposure behind each code) given the radiances. Clipped codes (0, 255)
+// carry no weight: their mean exposure says nothing about the curve and would drag every
+// pixel that clips in some bracket.
+std::array<double, kResponseCodes> SolveRobertson(const std::vector<std::vector<Bracket>>& stacks,
+                                                  int channel,
+                                                  int iterations) {
+  auto weight = [](int z) {
+    if (z == 0 || z == kResponseCodes - 1) return 0.0;
+    const double d = (z - 127.5) / 127.5;
+    return std::exp(-4.0 * d * d);
+  };
+  std::array<double, kResponseCodes> x;
+  for (int z = 0; z < kResponseCodes; ++z) x[z] = (z + 0.5) / (kMidCode + 0.5);
+  for (int it = 0; it < iterations; ++it) {
+    std::array<double, kResponseCodes> sum{}, count{};
+    for (const auto& stack : stacks) {
+      const std::size_t n = stack.front().image.num_pixels();
+      const int channels = stack.front().image.channels();
+      for (std::size_t p = 0; p < n; ++p) {
+        double num = 0, den = 0;
+        for (const Bracket& b : stack) {
+          const int z = CodeOf(b.image.data()[p * channels + channel]);
+          num += weight(z) * b.exposure * x[z];
+          den += weight(z) * b.exposure * b.exposure;
+        }
+        if (!(den > 0)) continue;  // clipped in every bracket
+        const double radiance = num / den;
+        for (const Bracket& b : stack) {
+          const int z = CodeOf(b.image.data()[p * channels + channel]);
+          sum[z] += radiance * b.exposure;
+          count[z] += 1;
+        }
+      }
+    }
+    for (int z = 1; z < kResponseCodes - 1; ++z)
+      if (count[z] > 0) x[z] = sum[z] / count[z];
+    // Codes never seen: interpolate between seen neighbours; below the darkest go linearly to 0,
+    // above the brightest stay flat (stale values would bias every pixel showing such a code).
+    for (int z = 0; z < kResponseCodes; ++z) {
+      if (count[z] > 0 && z > 0 && z < kResponseCodes - 1) continue;
+      int lo = z - 1, hi = z + 1;
+      while (lo >= 1 && count[lo] == 0) --lo;
+      while (hi < kResponseCodes - 1 && count[hi] == 0) ++hi;
+      const bool has_lo = lo >= 1, has_hi = hi < kResponseCodes - 1;
+      if (has_lo && has_hi) x[z] = x[lo] + (x[hi] - x[lo]) * (z - lo) / double(hi - lo);
+      else if (has_hi) x[z] = x[hi] * (z + 0.5) / (hi + 0.5);
+      else if (has_lo) x[z] = x[lo];
+    }
+    const double mid = x[kMidCode] > 0 ? x[kMidCode] : 1.0;
+    for (double& v : x) v /= mid;  // only the scale while iterating; monotone at the end
+  }
+  return Normalise(x);
+}
+
 }  // namespace
 
 int CodeOf(float value01) {
@@ -137,8 +192,15 @@ CameraResponse RecoverResponse(const std::vector<std::vector<Bracket>>& stacks,
   if (options.samples < 1) Fail("response recovery: --samples must be positive");
   if (!(options.smoothness >= 0)) Fail("response recovery: smoothness must be >= 0");
   CameraResponse response;
-  response.method = "debevec";
   const int channels = stacks.front().front().image.channels();
+  if (options.robertson) {
+    if (options.robertson_iterations < 1) Fail("response recovery: Robertson needs at least one iteration");
+    response.method = "robertson";
+    for (int c = 0; c < channels; ++c)
+      response.inverse.push_back(SolveRobertson(stacks, c, options.robertson_iterations));
+    return response;
+  }
+  response.method = "debevec";
   const auto pixels = SamplePixels(stacks, options.samples);
   for (int c = 0; c < channels; ++c)
     response.inverse.push_back(SolveDebevec(stacks, pixels, c, options.smoothness));

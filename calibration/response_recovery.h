@@ -1,6 +1,7 @@
 // Recovering a camera's response per colour channel from brackets of a static scene
 // (several exposure times, same view): Debevec & Malik 1997, least squares on log exposure
-// with a smoothness prior, solved as sparse normal equations with Eigen.
+// with a smoothness prior, solved as sparse normal equations with Eigen; or Robertson et al.
+// 2003 (alternating maximum likelihood of radiances and curve).
 // The result is the inverse response per 8-bit code, x(code) = exposure that produces the
 // code, normalised so that x(128) = 1 (the curves are known only up to scale).
 #pragma once
@@ -20,8 +21,10 @@ struct Bracket {
 };
 
 struct ResponseOptions {
-  int samples = 200;       // pixel locations sampled over all stacks
-  double smoothness = 30;  // lambda of the second-difference prior
+  int samples = 200;       // pixel locations sampled over all stacks (Debevec)
+  double smoothness = 30;  // lambda of the second-difference prior (Debevec)
+  bool robertson = false;  // Robertson et al. instead: every pixel, alternating estimates
+  int robertson_iterations = 30;
 };
 
 constexpr int kResponseCodes = 256;

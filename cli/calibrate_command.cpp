@@ -33,6 +33,8 @@ void AddCalibrateCommand(CLI::App& app) {
   cmd->add_option("--colmap-max-image-size", options->colmap_max_image_size,
                   "Downscale images to this size for COLMAP's SIFT (0: COLMAP's default, 3200)");
   cmd->add_option("--samples", options->response.samples, "Pixels sampled for the response")->capture_default_str();
+  cmd->add_flag("--robertson", options->response.robertson,
+                "Recover the response with Robertson et al. instead of Debevec-Malik");
   cmd->add_option("--smoothness", options->response.smoothness, "Debevec-Malik smoothness weight")->capture_default_str();
   cmd->add_option("--undistort-threshold", options->undistort_threshold_pixels,
                   "Undistort images when lens distortion moves a pixel by more than this")->capture_default_str();
