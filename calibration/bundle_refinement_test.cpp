@@ -98,7 +98,7 @@ TEST(BundleRefinement, BadIndicesAreErrors) {
   EXPECT_NE(testing::ErrorOf([&] { RefineBundle(&problem); }).find("no observations"), std::string::npos);
   problem.poses.resize(1);
   problem.intrinsics.resize(1);
-  problem.observations.push_back({0, 0, 3, {}});
+  problem.observations.push_back({0, 0, 3, Eigen::Vector2d::Zero()});
   EXPECT_NE(testing::ErrorOf([&] { RefineBundle(&problem); }).find("not there"), std::string::npos);
 }
 

@@ -1,6 +1,7 @@
 // End-to-end `hdr4d calibrate` on a small synthetic rig whose poses, intrinsics, response and
 // radiance are known, with its sparse model given (--colmap-model) so the test needs no COLMAP
 // run; plus the error paths, each of which must leave --out as it was.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -94,7 +95,7 @@ SyntheticRig WriteCapture(const fs::path& root, const fs::path& model_folder, bo
   for (int c = 0; c < kCameras; ++c) {
     const double a = (c - 1) * 0.5;
     rig.cam_from_world.push_back(LookAt({4 * std::sin(a), 0.5 * c, -4 * std::cos(a)}));
-    const std::string name = "cam" + std::to_string(c);
+    const std::string name = fmt::format("cam{}", c);
     model.cameras[c + 1] = {c + 1, "SIMPLE_RADIAL", kW, kH, {rig.f, kW / 2.0, kH / 2.0, 0.0}};
     ColmapImage image;
     image.id = c + 1;
@@ -135,7 +136,7 @@ SyntheticRig WriteCapture(const fs::path& root, const fs::path& model_folder, bo
   for (std::size_t i = 0; i < model.points.size(); ++i)
     point_radiance.push_back({std::exp(log_r(rng)), std::exp(log_r(rng)), std::exp(log_r(rng))});
   for (int c = 0; c < kCameras; ++c) {
-    const std::string name = "cam" + std::to_string(c);
+    const std::string name = fmt::format("cam{}", c);
     Image radiance(kW, kH, 3);
     for (float& v : radiance.values()) v = static_cast<float>(std::exp(log_r(rng)));
     for (std::size_t i = 0; i < model.points.size(); ++i) {
@@ -154,14 +155,14 @@ SyntheticRig WriteCapture(const fs::path& root, const fs::path& model_folder, bo
     for (int pose = 0; board && pose < 3; ++pose) {
       Image with_board = ToSrgb(seen);
       DrawBoard(&with_board, rig.cam_from_world[c], BoardFromWorld(pose), rig.f);
-      WriteImage(root / "static" / name / ("board" + std::to_string(pose) + ".png"), with_board);
+      WriteImage(root / "static" / name / fmt::format("board{}.png", pose), with_board);
     }
     for (int frame = 0; frame < kFrames; ++frame)
       for (int k = 0; k < 3; ++k) {
         Image ldr(kW, kH, 3, Encoding::kSrgb);
         for (std::size_t i = 0; i < ldr.size(); ++i)
           ldr.data()[i] = static_cast<float>(crf.Apply(seen.data()[i] * kExposures[k]));
-        WriteImage(root / "sequence" / name / (std::to_string(frame) + "_" + std::to_string(k) + ".png"), ldr);
+        WriteImage(root / "sequence" / name / fmt::format("{}_{}.png", frame, k), ldr);
       }
   }
   WriteColmapModel(model_folder, model, ColmapFormat::kText);
@@ -243,7 +244,7 @@ TEST(Calibrate, BoardGivesIntrinsicsAndMetricScale) {
   const auto result = testing::RunHdr4d(
       "calibrate --capture '" + (dir / "capture").string() + "' --out '" + (dir / "out").string() +
       "' --colmap-model '" + (dir / "model").string() + "' --stage geometry --board 9x6:" +
-      std::to_string(kBoardSquare * metres_per_world_unit));
+      fmt::format("{}", kBoardSquare * metres_per_world_unit));
   ASSERT_EQ(result.exit_code, 0) << result.err;
   const nlohmann::json rig = nlohmann::json::parse(testing::ReadTextFile(dir / "out" / "rig.json"));
   for (const auto& camera : rig["cameras"]) {
@@ -269,7 +270,7 @@ void ExpectFailure(const fs::path& capture, const fs::path& model, const fs::pat
   std::vector<fs::path> left;
   for (const auto& e : fs::directory_iterator(out)) left.push_back(e.path().filename());
   EXPECT_EQ(left, std::vector<fs::path>{"keep.txt"});
-  EXPECT_FALSE(fs::exists(out.parent_path() / ("." + out.filename().string() + ".calibrate-partial")));
+  EXPECT_FALSE(fs::exists(out.parent_path() / fmt::format(".{}.calibrate-partial", out.filename().string())));
 }
 
 TEST(Calibrate, BadCapturesAreClearErrorsAndWriteNothing) {
@@ -281,7 +282,7 @@ TEST(Calibrate, BadCapturesAreClearErrorsAndWriteNothing) {
   ExpectFailure(capture, model, out, "camera cam1, frame 1: bracket 1 is missing");
   fs::rename(dir / "moved.png", capture / "sequence/cam1/1_1.png");
   // A frame missing for one camera.
-  for (int k = 0; k < 3; ++k) fs::remove(capture / ("sequence/cam2/1_" + std::to_string(k) + ".png"));
+  for (int k = 0; k < 3; ++k) fs::remove(capture / fmt::format("sequence/cam2/1_{}.png", k));
   ExpectFailure(capture, model, out, "camera cam2: frame 1 is missing");
   WriteCapture(capture, model);
   // No exposure times: no sidecar and PNGs carry no EXIF.
@@ -320,7 +321,7 @@ TEST(Calibrate, ColmapThatReconstructsNothingIsAClearError) {
   testing::TempDir dir;
   // Two unrelated noise images: SIFT finds features but nothing matches.
   for (int c = 0; c < 2; ++c) {
-    const std::string name = "cam" + std::to_string(c);
+    const std::string name = fmt::format("cam{}", c);
     WriteImage(dir / "capture" / "static" / name / "a.png", testing::RandomImage(64, 64, 3, c + 1, 0, 1, Encoding::kSrgb));
   }
   const auto result = testing::RunHdr4d("calibrate --capture '" + (dir / "capture").string() +
