@@ -218,7 +218,7 @@ std::vector<Frame> RunRadiometry(const Capture& capture, const CalibrateOptions&
         Frame frame;
         frame.file_path = name;
         frame.exr_file_path = hdr_name;
-        frame.time_raw = capture_frame.index / options.fps;
+        frame.time_raw = capture_frame.time ? *capture_frame.time : capture_frame.index / options.fps;
         // The camera's overall gain becomes part of its effective exposure, so that
         // LDR = response(radiance x exposure) holds for the corrected radiance.
         frame.exposure = capture_frame.exposures[k] * (gain[0] + gain[1] + gain[2]) / 3;
@@ -250,11 +250,11 @@ void WriteCalibratedDataset(std::vector<Frame> frames, const Capture& capture,
   Dataset dataset;
   dataset.root = staging;
   dataset.layout = "hdr4d";
-  const int last_frame = capture.cameras.front().frames.back().index;
+  double last_time = 0;
+  for (const Frame& frame : frames) last_time = std::max(last_time, frame.time_raw);
   for (Frame& frame : frames) {
     // One camera: its last frame is the test split (novel time rather than novel view).
-    const bool is_test = test_id >= 0 ? frame.camera_id == test_id
-                                      : static_cast<int>(std::lround(frame.time_raw * options.fps)) == last_frame;
+    const bool is_test = test_id >= 0 ? frame.camera_id == test_id : frame.time_raw == last_time;
     frame.split = is_test ? Split::kTest : Split::kTrain;
     (is_test ? dataset.test : dataset.train).push_back(frame);
   }

@@ -177,6 +177,7 @@ double AngleDegrees(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
 TEST(Calibrate, SyntheticRigBecomesADataset) {
   testing::TempDir dir;
   const SyntheticRig truth = WriteCapture(dir / "capture", dir / "model");
+  testing::WriteTextFile(dir / "capture" / "timestamps.json", R"({"0": 2.0, "1": 4.0})");
   const auto result = testing::RunHdr4d("calibrate --capture '" + (dir / "capture").string() +
                                         "' --out '" + (dir / "out").string() + "' --colmap-model '" +
                                         (dir / "model").string() + "' --fps 10");
@@ -185,6 +186,7 @@ TEST(Calibrate, SyntheticRigBecomesADataset) {
   EXPECT_EQ(dataset.train.size(), 2u * kFrames * 3);  // cam0, cam1: 2 frames x 3 brackets
   EXPECT_EQ(dataset.test.size(), 1u * kFrames * 3);   // cam2 held out
   ASSERT_TRUE(dataset.point_cloud_path.has_value());
+  for (const Frame* f : dataset.AllFrames()) EXPECT_TRUE(f->time_raw == 2.0 || f->time_raw == 4.0) << f->time_raw;
   // Relative rotations between cameras survive normalisation exactly (up to refinement noise).
   std::vector<Eigen::Matrix4d> got(kCameras);
   for (const Frame* f : dataset.AllFrames()) got[f->camera_id] = f->camera.CamFromWorldCv();
@@ -289,6 +291,10 @@ TEST(Calibrate, BadCapturesAreClearErrorsAndWriteNothing) {
   fs::rename(capture / "exposures.json", dir / "exposures.json");
   ExpectFailure(capture, model, out, "no exposure time");
   fs::rename(dir / "exposures.json", capture / "exposures.json");
+  // A timestamp sidecar without frame 1.
+  testing::WriteTextFile(capture / "timestamps.json", R"({"0": 0.0})");
+  ExpectFailure(capture, model, out, "frame 1 (camera cam0) has no timestamp");
+  fs::remove(capture / "timestamps.json");
   // Equal exposure times within a frame.
   testing::WriteTextFile(capture / "exposures.json", R"({"brackets": [1, 1, 4]})");
   ExpectFailure(capture, model, out, "same exposure time");

@@ -160,6 +160,20 @@ Capture ScanCapture(const fs::path& root, bool need_sequence) {
   }
   capture.extra_images = ImagesIn(root / "static" / "extra");
 
+  // Timestamps: every frame of every camera needs one when the sidecar is there.
+  if (const fs::path path = root / "timestamps.json"; fs::exists(path, ec)) {
+    const nlohmann::json doc = ReadJsonFile(path);
+    if (!doc.is_object()) Fail("{}: expected an object mapping frame numbers to seconds", path.string());
+    for (CaptureCamera& camera : capture.cameras)
+      for (CaptureFrame& frame : camera.frames) {
+        const auto it = doc.find(std::to_string(frame.index));
+        if (it == doc.end()) Fail("{}: frame {} (camera {}) has no timestamp", path.string(), frame.index, camera.name);
+        if (!it->is_number() || !std::isfinite(it->get<double>()) || it->get<double>() < 0)
+          Fail("{}: frame {}: {} is not a time in seconds >= 0", path.string(), frame.index, it->dump());
+        frame.time = it->get<double>();
+      }
+  }
+
   // Every camera shows the same frames with the same number of brackets.
   const CaptureCamera& first = capture.cameras.front();
   capture.brackets_per_frame = static_cast<int>(first.frames.front().brackets.size());

@@ -4,9 +4,11 @@
 //   sequence/<camera>/<frame>_<k>.<ext>   bracket k of each frame (JPEG, PNG, 16-bit TIFF)
 //   exposures.json (optional)      {"brackets": [t0, t1, ...]} for every camera, and/or
 //                                  {"<camera>/<file>": seconds} per image; else EXIF ExposureTime
+//   timestamps.json (optional)     {"<frame>": seconds} for every frame; else frame / --fps
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,6 +18,7 @@ struct CaptureFrame {
   int index = 0;                                   // <frame> in the file name
   std::vector<std::filesystem::path> brackets;     // by k
   std::vector<double> exposures;                   // seconds, by k
+  std::optional<double> time;                      // seconds, from timestamps.json
 };
 
 struct CaptureCamera {
