@@ -99,6 +99,7 @@ std::unique_ptr<CLI::App> MakeApp() {
   AddExportPlyCommand(*app);
   AddToneCurvesCommand(*app);
   AddDatagenCommand(*app);
+  AddCalibrateCommand(*app);
   AddBenchCommand(*app);
   return app;
 }

@@ -18,5 +18,6 @@ void AddExportPlyCommand(CLI::App& app);      // export-ply
 void AddToneCurvesCommand(CLI::App& app);     // tone-curves
 void AddDatagenCommand(CLI::App& app);        // datagen
 void AddBenchCommand(CLI::App& app);          // bench run|table|pareto|report|stress|submit|...
+void AddCalibrateCommand(CLI::App& app);      // calibrate
 
 }  // namespace hdr4d::cli

@@ -1,5 +1,7 @@
 #include "core/dataset.h"
 
+#include "core/colmap_layout.h"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -596,10 +598,23 @@ DatasetReport CheckDataset(const fs::path& root, const DatasetLoadOptions& optio
   const fs::path nerfstudio_path = root / "transforms.json";
   const bool nerfstudio = !fs::exists(train_path, ec) && fs::exists(nerfstudio_path, ec);
   if (!fs::exists(train_path, ec) && !nerfstudio) {
-    if (fs::is_directory(root / "sparse", ec)) {
+    if (IsHdrGsColmapLayout(root)) {
+      try {
+        report.dataset = ReadHdrGsColmapLayout(root);
+        if (options.image_check != ImageCheck::kNone)
+          for (const Frame* f : report.dataset->AllFrames()) {
+            const ImageSpecInfo spec = ReadImageSpec(f->image_path);
+            if (spec.width != f->camera.intrinsics.width || spec.height != f->camera.intrinsics.height)
+              sink.Add(kRankRoot, f->image_path, -1, "",
+                       fmt::format("size {}x{} differs from the COLMAP camera's {}x{}", spec.width,
+                                   spec.height, f->camera.intrinsics.width, f->camera.intrinsics.height));
+          }
+      } catch (const std::exception& e) {
+        sink.Add(kRankRoot, root, -1, "", e.what());
+      }
+    } else if (fs::is_directory(root / "sparse", ec)) {
       sink.Add(kRankRoot, root, -1, "",
-               "a COLMAP layout (sparse/ without transforms_train.json, as in HDR-GS) is not "
-               "supported yet; convert it to transforms_{train,test}.json");
+               "a COLMAP layout needs images/ beside sparse/ (as in HDR-GS's synthetic scenes)");
     } else if (fs::exists(root / "poses_bounds_exps.npy", ec)) {
       sink.Add(kRankRoot, root, -1, "",
                "an LLFF layout (poses_bounds_exps.npy, as in HDR-NeRF real scenes) is not "

@@ -30,8 +30,9 @@
 //   held out for test. Read as layout "nerfstudio"; problems name transforms.json.
 // Other layouts: HDR-NeRF synthetic (static; exposure_{train,test}.json maps
 //   "<file_path>_<k>.png" to an exposure; each view becomes one frame per exposure, time 0) is
-//   read as layout "hdrnerf". HDR-GS's COLMAP layout (sparse/ without transforms JSON) and the
-//   LLFF poses_bounds_exps.npy layout are detected and reported as not supported yet.
+//   read as layout "hdrnerf". HDR-GS's synthetic COLMAP layout (sparse/ and images/ without
+//   transforms JSON) is read as layout "hdrgs-colmap" (core/colmap_layout.h). The LLFF
+//   poses_bounds_exps.npy layout is detected and reported as not supported yet.
 #pragma once
 
 #include <cstdint>

@@ -804,8 +804,7 @@ TEST(DatasetProblems, UnsupportedLayoutsAndMissingRoot) {
   TempDir dir;
   fs::create_directories(dir / "colmap/sparse/0");
   const DatasetReport colmap = CheckDataset(dir / "colmap");
-  EXPECT_PROBLEM(colmap, "colmap", -1, "", "COLMAP layout");
-  EXPECT_PROBLEM(colmap, "colmap", -1, "", "not supported yet");
+  EXPECT_PROBLEM(colmap, "colmap", -1, "", "COLMAP layout needs images/");
   testing::WriteTextFile(dir / "llff/poses_bounds_exps.npy", "x");
   EXPECT_PROBLEM(CheckDataset(dir / "llff"), "llff", -1, "", "LLFF layout");
   EXPECT_PROBLEM(CheckDataset(dir / "nothing"), "nothing", -1, "", "folder not found");

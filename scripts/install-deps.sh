@@ -21,6 +21,9 @@ PACKAGES=(
   # hdr4d datagen renders its scenes with Blender (bpy scripts in datagen/blender; they use
   # only bpy and Python's standard library)
   blender
+  # hdr4d calibrate: COLMAP 3.8 (CPU SIFT, run headless), Ceres for the rig refinement, OpenCV
+  # for checkerboards, undistortion and the CalibrateDebevec cross-check
+  colmap libceres-dev libopencv-dev
 )
 
 missing=()

@@ -6,7 +6,7 @@
 #   ok    exit 0 (a valid edge case that must work)
 #   report  exit 1 with the problem named in the command's own report on stdout (dataset check)
 # Never a signal (crash), never exit 0 for a mistake, never a changed input.
-# Usage: benchmark/sweeps/hostile_sweep.sh HDR4D_BINARY WORK_DIR
+# Usage: benchmark/proofs/hostile_sweep.sh HDR4D_BINARY WORK_DIR
 set -uo pipefail
 B=$(realpath "$1"); W=$2
 rm -rf "$W"; mkdir -p "$W"; cd "$W" || exit 2
@@ -105,6 +105,19 @@ case_ err "" bench stress --case nosuch --out SW
 case_ err "" bench collect nosuch --store st.db
 case_ err "--index" bench task nosuch --array 0 --index -1
 case_ err "" bench slurm nosuch-suite --out SL
+# calibrate
+mkdir -p cap/static/cam0 cap/sequence/cam0
+case_ err "not found" calibrate --capture nosuch --out CAL
+case_ err "--stage" calibrate --capture cap --out CAL --stage colour
+case_ err "--fps" calibrate --capture cap --out CAL --fps 0
+case_ err "--samples" calibrate --capture cap --out CAL --samples 1
+case_ err "" calibrate --capture cap --out CAL
+case_ err "" calibrate --capture empty.png --out CAL
+case_ err "" calibrate --capture S --out CAL2
+case_ err "" calibrate --capture cap --out S/images --stage radiometry
+case_ err "" calibrate --capture cap --out CAL --colmap-model nosuch
+case_ err "" calibrate --capture cap --out CAL --board 9x
+[ ! -e CAL ] && [ ! -e CAL2 ] || failed_cases+=("calibrate: a failed calibration left an output folder")
 
 echo "hostile sweep: $tried cases tried, $held held"
 for f in "${failed_cases[@]}"; do echo "  FAILED: $f"; done

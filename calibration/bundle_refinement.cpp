@@ -1,0 +1,123 @@
+#include "calibration/bundle_refinement.h"
+
+#include <ceres/ceres.h>
+#include <ceres/rotation.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.h"
+
+namespace hdr4d {
+namespace {
+
+// Residual of one observation: projected minus observed pixel (COLMAP's RADIAL model).
+struct ReprojectionError {
+  Eigen::Vector2d observed;
+
+  template <typename T>
+  bool operator()(const T* rotation, const T* translation, const T* k, const T* point, T* r) const {
+    T p[3];
+    ceres::AngleAxisRotatePoint(rotation, point, p);
+    for (int i = 0; i < 3; ++i) p[i] += translation[i];
+    // A point behind (or on) the camera plane cannot be seen: a large, smooth penalty instead of
+    // a division by zero.
+    if (p[2] <= T(1e-9)) {
+      r[0] = r[1] = T(1e3);
+      return true;
+    }
+    const T x = p[0] / p[2], y = p[1] / p[2];
+    const T r2 = x * x + y * y;
+    const T d = T(1) + k[3] * r2 + k[4] * r2 * r2;
+    r[0] = k[0] * d * x + k[1] - T(observed.x());
+    r[1] = k[0] * d * y + k[2] - T(observed.y());
+    return true;
+  }
+};
+
+double* Data(BundleIntrinsics& k) { return &k.f; }  // f, cx, cy, k1, k2 are contiguous
+
+std::vector<double> RmsPerPose(const BundleProblem& problem, std::vector<int>* counts) {
+  std::vector<double> sum(problem.poses.size(), 0.0);
+  std::vector<int> n(problem.poses.size(), 0);
+  for (const BundleObservation& o : problem.observations) {
+    const Eigen::Vector2d e = ProjectRadial(problem.poses[o.pose], problem.intrinsics[o.intrinsics],
+                                            problem.points[o.point]) - o.pixel;
+    sum[o.pose] += e.squaredNorm();
+    ++n[o.pose];
+  }
+  std::vector<double> rms(sum.size(), 0.0);
+  for (std::size_t i = 0; i < sum.size(); ++i) rms[i] = n[i] > 0 ? std::sqrt(sum[i] / n[i]) : 0.0;
+  if (counts) *counts = n;
+  return rms;
+}
+
+}  // namespace
+
+Eigen::Vector2d ProjectRadial(const BundlePose& pose, const BundleIntrinsics& k, const Eigen::Vector3d& point) {
+  double p[3];
+  ceres::AngleAxisRotatePoint(pose.rotation.data(), point.data(), p);
+  for (int i = 0; i < 3; ++i) p[i] += pose.translation[i];
+  if (p[2] <= 1e-12) return {std::nan(""), std::nan("")};
+  const double x = p[0] / p[2], y = p[1] / p[2], r2 = x * x + y * y;
+  const double d = 1 + k.k1 * r2 + k.k2 * r2 * r2;
+  return {k.f * d * x + k.cx, k.f * d * y + k.cy};
+}
+
+BundleReport RefineBundle(BundleProblem* problem, const BundleOptions& options) {
+  if (problem->observations.empty()) Fail("bundle refinement: no observations");
+  for (const BundleObservation& o : problem->observations)
+    if (o.pose < 0 || o.pose >= static_cast<int>(problem->poses.size()) || o.intrinsics < 0 ||
+        o.intrinsics >= static_cast<int>(problem->intrinsics.size()) || o.point < 0 ||
+        o.point >= static_cast<int>(problem->points.size()))
+      Fail("bundle refinement: an observation names a pose, intrinsics or point that is not there");
+  BundleReport report;
+  report.rms_before = RmsPerPose(*problem, &report.observations);
+
+  ceres::Problem ceres_problem;
+  for (BundleObservation& o : problem->observations) {
+    auto* cost = new ceres::AutoDiffCostFunction<ReprojectionError, 2, 3, 3, 5, 3>(
+        new ReprojectionError{o.pixel});
+    BundlePose& pose = problem->poses[o.pose];
+    ceres_problem.AddResidualBlock(cost, new ceres::HuberLoss(options.huber_pixels),
+                                   pose.rotation.data(), pose.translation.data(),
+                                   Data(problem->intrinsics[o.intrinsics]), problem->points[o.point].data());
+  }
+  for (BundlePose& pose : problem->poses) {
+    if (!pose.fixed || !ceres_problem.HasParameterBlock(pose.rotation.data())) continue;
+    ceres_problem.SetParameterBlockConstant(pose.rotation.data());
+    ceres_problem.SetParameterBlockConstant(pose.translation.data());
+  }
+  for (BundleIntrinsics& k : problem->intrinsics)
+    if ((!options.refine_intrinsics || k.fixed) && ceres_problem.HasParameterBlock(Data(k)))
+      ceres_problem.SetParameterBlockConstant(Data(k));
+  for (Eigen::Vector3d& p : problem->points)
+    if (!options.refine_points && ceres_problem.HasParameterBlock(p.data()))
+      ceres_problem.SetParameterBlockConstant(p.data());
+  if (options.refine_points) {
+    // A fixed pose leaves the scale free (a rank-deficient system); also holding the point that
+    // the fixed camera sees most often pins the scale through its depth.
+    std::vector<int> seen(problem->points.size(), 0);
+    for (const BundleObservation& o : problem->observations)
+      if (problem->poses[o.pose].fixed) seen[o.point] += 1;
+    std::vector<int> track(problem->points.size(), 0);
+    for (const BundleObservation& o : problem->observations) track[o.point] += seen[o.point] > 0;
+    const auto best = std::max_element(track.begin(), track.end());
+    if (best != track.end() && *best > 0)
+      ceres_problem.SetParameterBlockConstant(problem->points[best - track.begin()].data());
+  }
+
+  ceres::Solver::Options solver;
+  solver.linear_solver_type = ceres::SPARSE_SCHUR;
+  solver.max_num_iterations = options.max_iterations;
+  solver.num_threads = 2;
+  solver.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver, &ceres_problem, &summary);
+  report.iterations = static_cast<int>(summary.iterations.size());
+  report.converged = summary.termination_type == ceres::CONVERGENCE;
+  report.rms_after = RmsPerPose(*problem, nullptr);
+  return report;
+}
+
+}  // namespace hdr4d

@@ -1,0 +1,344 @@
+// End-to-end `hdr4d calibrate` on a small synthetic rig whose poses, intrinsics, response and
+// radiance are known, with its sparse model given (--colmap-model) so the test needs no COLMAP
+// run; plus the error paths, each of which must leave --out as it was.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+
+#include "core/colmap_model.h"
+#include "core/crf.h"
+#include "core/dataset.h"
+#include "core/image_io.h"
+#include "tests/testing.h"
+
+namespace hdr4d {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kW = 320, kH = 240, kCameras = 3, kFrames = 2;
+// Unlike cameras: each sees the scene's radiance times its own gain per channel.
+const double kGains[kCameras][3] = {{1, 1, 1}, {1.4, 1.2, 1.0}, {0.7, 0.8, 0.9}};
+const double kExposures[] = {0.25, 1.0, 4.0};
+
+struct SyntheticRig {
+  std::vector<Eigen::Matrix4d> cam_from_world;  // OpenCV axes
+  double f = 250;
+  std::vector<Image> radiance;  // per camera, the scene as it would be without the camera's gain
+};
+
+Eigen::Matrix4d LookAt(const Eigen::Vector3d& centre) {
+  const Eigen::Vector3d z = -centre.normalized();
+  const Eigen::Vector3d x = Eigen::Vector3d::UnitY().cross(z).normalized();
+  const Eigen::Vector3d y = z.cross(x);
+  Eigen::Matrix3d r;
+  r << x.transpose(), y.transpose(), z.transpose();
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  m.topLeftCorner<3, 3>() = r;
+  m.topRightCorner<3, 1>() = -r * centre;
+  return m;
+}
+
+// Writes a capture (static images, bracketed sequences through a gamma-2.2 camera, a sidecar)
+// and a COLMAP text model whose images are named <camera>/static.png.
+// A 9x6 checkerboard (inner corners), square 0.25 units, first inner corner at (-1, -0.625) in
+// its own plane z = 0: what --board 9x6:<0.25 M> sees at M metres per unit. The static images
+// show it in three poses (tilted about the world origin), one image per pose in every camera.
+constexpr double kBoardSquare = 0.25;
+const Eigen::Vector2d kBoardOrigin(-1.0, -0.625);
+
+Eigen::Matrix4d BoardFromWorld(int pose) {
+  const double tilt[3][2] = {{0, 0}, {0.45, 0.2}, {-0.3, -0.45}};
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  m.topLeftCorner<3, 3>() = (Eigen::AngleAxisd(tilt[pose][0], Eigen::Vector3d::UnitX()) *
+                             Eigen::AngleAxisd(tilt[pose][1], Eigen::Vector3d::UnitY())).toRotationMatrix();
+  return m;
+}
+
+// Draws the board over `image` as the camera sees it (2x2 supersampled).
+void DrawBoard(Image* image, const Eigen::Matrix4d& cam_from_world, const Eigen::Matrix4d& board_from_world, double f) {
+  const Eigen::Matrix4d board_from_cam = board_from_world * cam_from_world.inverse();
+  const Eigen::Matrix3d r = board_from_cam.topLeftCorner<3, 3>();
+  const Eigen::Vector3d centre = board_from_cam.topRightCorner<3, 1>();
+  for (int v = 0; v < image->height(); ++v)
+    for (int u = 0; u < image->width(); ++u) {
+      double sum = 0;
+      int hits = 0;
+      for (int s = 0; s < 4; ++s) {
+        const Eigen::Vector3d d = r * Eigen::Vector3d((u + 0.25 + 0.5 * (s % 2) - kW / 2.0) / f,
+                                                      (v + 0.25 + 0.5 * (s / 2) - kH / 2.0) / f, 1);
+        const double k = -centre.z() / d.z();
+        const Eigen::Vector3d p = centre + k * d;
+        const int i = static_cast<int>(std::floor((p.x() - kBoardOrigin.x()) / kBoardSquare)) + 1;
+        const int j = static_cast<int>(std::floor((p.y() - kBoardOrigin.y()) / kBoardSquare)) + 1;
+        // The board with a white margin of one square around it.
+        if (k > 0 && i >= -1 && j >= -1 && i <= 10 && j <= 7) {
+          ++hits;
+          sum += i >= 0 && j >= 0 && i <= 9 && j <= 6 && (i + j) % 2 == 0 ? 0.05 : 0.95;
+        }
+      }
+      if (hits == 4)
+        for (int c = 0; c < 3; ++c) image->at(u, v, c) = static_cast<float>(sum / 4);
+    }
+}
+
+SyntheticRig WriteCapture(const fs::path& root, const fs::path& model_folder, bool board = false) {
+  SyntheticRig rig;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1), log_r(std::log(0.02), std::log(3.0));
+  ColmapModel model;
+  const GammaCrf crf(2.2);
+  for (int c = 0; c < kCameras; ++c) {
+    const double a = (c - 1) * 0.5;
+    rig.cam_from_world.push_back(LookAt({4 * std::sin(a), 0.5 * c, -4 * std::cos(a)}));
+    const std::string name = fmt::format("cam{}", c);
+    model.cameras[c + 1] = {c + 1, "SIMPLE_RADIAL", kW, kH, {rig.f, kW / 2.0, kH / 2.0, 0.0}};
+    ColmapImage image;
+    image.id = c + 1;
+    image.camera_id = c + 1;
+    image.name = name + "/static.png";
+    const Eigen::Matrix3d r = rig.cam_from_world[c].topLeftCorner<3, 3>();
+    image.cam_from_world_rotation = Eigen::Quaterniond(r);
+    image.cam_from_world_translation = rig.cam_from_world[c].topRightCorner<3, 1>();
+    model.images[c + 1] = image;
+  }
+  // Points seen by every camera, 40 of them, kept apart by 4 pixels in every image so that their
+  // patches (below) do not overwrite each other.
+  for (int id = 1; model.points.size() < 40;) {
+    const Eigen::Vector3d xyz(0.8 * u(rng), 0.8 * u(rng), 0.8 * u(rng));
+    std::vector<Eigen::Vector2d> uv;
+    bool apart = true;
+    for (int c = 0; c < kCameras; ++c) {
+      const Eigen::Vector3d q = (rig.cam_from_world[c] * xyz.homogeneous()).head<3>();
+      uv.emplace_back(rig.f * q.x() / q.z() + kW / 2.0, rig.f * q.y() / q.z() + kH / 2.0);
+      for (const Eigen::Vector2d& other : model.images[c + 1].points2d)
+        apart &= (other - uv.back()).cwiseAbs().maxCoeff() > 4;
+    }
+    if (!apart) continue;
+    ColmapPoint p;
+    p.id = id++;
+    p.xyz = xyz;
+    for (int c = 0; c < kCameras; ++c) {
+      ColmapImage& image = model.images[c + 1];
+      image.points2d.push_back(uv[c]);
+      image.point3d_ids.push_back(p.id);
+      p.track.emplace_back(c + 1, static_cast<int>(image.points2d.size()) - 1);
+    }
+    model.points[p.id] = p;
+  }
+  // Each camera's radiance: noise, with the points painted as 3x3 patches of their own radiance
+  // where they project (the surfaces the cameras share).
+  std::vector<std::array<double, 3>> point_radiance;
+  for (std::size_t i = 0; i < model.points.size(); ++i)
+    point_radiance.push_back({std::exp(log_r(rng)), std::exp(log_r(rng)), std::exp(log_r(rng))});
+  for (int c = 0; c < kCameras; ++c) {
+    const std::string name = fmt::format("cam{}", c);
+    Image radiance(kW, kH, 3);
+    for (float& v : radiance.values()) v = static_cast<float>(std::exp(log_r(rng)));
+    for (std::size_t i = 0; i < model.points.size(); ++i) {
+      const Eigen::Vector2d uv = model.images[c + 1].points2d[i];
+      const int x0 = static_cast<int>(std::floor(uv.x())), y0 = static_cast<int>(std::floor(uv.y()));
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx)
+          for (int ch = 0; ch < 3; ++ch)
+            if (x0 + dx >= 0 && y0 + dy >= 0 && x0 + dx < kW && y0 + dy < kH)
+              radiance.at(x0 + dx, y0 + dy, ch) = static_cast<float>(point_radiance[i][ch]);
+    }
+    rig.radiance.push_back(radiance);
+    Image seen = radiance;
+    for (std::size_t i = 0; i < seen.size(); ++i) seen.data()[i] *= static_cast<float>(kGains[c][i % 3]);
+    WriteImage(root / "static" / name / "static.png", ToSrgb(seen));
+    for (int pose = 0; board && pose < 3; ++pose) {
+      Image with_board = ToSrgb(seen);
+      DrawBoard(&with_board, rig.cam_from_world[c], BoardFromWorld(pose), rig.f);
+      WriteImage(root / "static" / name / fmt::format("board{}.png", pose), with_board);
+    }
+    for (int frame = 0; frame < kFrames; ++frame)
+      for (int k = 0; k < 3; ++k) {
+        Image ldr(kW, kH, 3, Encoding::kSrgb);
+        for (std::size_t i = 0; i < ldr.size(); ++i)
+          ldr.data()[i] = static_cast<float>(crf.Apply(seen.data()[i] * kExposures[k]));
+        WriteImage(root / "sequence" / name / fmt::format("{}_{}.png", frame, k), ldr);
+      }
+  }
+  WriteColmapModel(model_folder, model, ColmapFormat::kText);
+  testing::WriteTextFile(root / "exposures.json", R"({"brackets": [0.25, 1.0, 4.0]})");
+  return rig;
+}
+
+double AngleDegrees(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
+  return Eigen::AngleAxisd(a.transpose() * b).angle() * 180 / M_PI;
+}
+
+TEST(Calibrate, SyntheticRigBecomesADataset) {
+  testing::TempDir dir;
+  const SyntheticRig truth = WriteCapture(dir / "capture", dir / "model");
+  testing::WriteTextFile(dir / "capture" / "timestamps.json", R"({"0": 2.0, "1": 4.0})");
+  const auto result = testing::RunHdr4d("calibrate --capture '" + (dir / "capture").string() +
+                                        "' --out '" + (dir / "out").string() + "' --colmap-model '" +
+                                        (dir / "model").string() + "' --fps 10");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const Dataset dataset = LoadDataset(dir / "out", {.image_check = ImageCheck::kFull});
+  EXPECT_EQ(dataset.train.size(), 2u * kFrames * 3);  // cam0, cam1: 2 frames x 3 brackets
+  EXPECT_EQ(dataset.test.size(), 1u * kFrames * 3);   // cam2 held out
+  ASSERT_TRUE(dataset.point_cloud_path.has_value());
+  for (const Frame* f : dataset.AllFrames()) EXPECT_TRUE(f->time_raw == 2.0 || f->time_raw == 4.0) << f->time_raw;
+  // Relative rotations between cameras survive normalisation exactly (up to refinement noise).
+  std::vector<Eigen::Matrix4d> got(kCameras);
+  for (const Frame* f : dataset.AllFrames()) got[f->camera_id] = f->camera.CamFromWorldCv();
+  for (int c = 1; c < kCameras; ++c) {
+    const Eigen::Matrix3d rel_truth = truth.cam_from_world[c].topLeftCorner<3, 3>() *
+                                      truth.cam_from_world[0].topLeftCorner<3, 3>().transpose();
+    const Eigen::Matrix3d rel_got = got[c].topLeftCorner<3, 3>() * got[0].topLeftCorner<3, 3>().transpose();
+    EXPECT_LT(AngleDegrees(rel_truth, rel_got), 0.01) << "camera " << c;
+  }
+  // Camera centres agree after the similarity (distance ratios are scale-free).
+  auto centre = [](const Eigen::Matrix4d& m) -> Eigen::Vector3d {
+    return -m.topLeftCorner<3, 3>().transpose() * m.topRightCorner<3, 1>();
+  };
+  const double ratio_truth = (centre(truth.cam_from_world[2]) - centre(truth.cam_from_world[0])).norm() /
+                             (centre(truth.cam_from_world[1]) - centre(truth.cam_from_world[0])).norm();
+  const double ratio_got = (centre(got[2]) - centre(got[0])).norm() / (centre(got[1]) - centre(got[0])).norm();
+  EXPECT_NEAR(ratio_got, ratio_truth, 1e-3 * ratio_truth);
+  EXPECT_NEAR(dataset.train.front().camera.intrinsics.fx, truth.f, 1e-3);
+  // The fused HDR matches the radiance without the camera's gain, up to the response's unknown
+  // scale per channel, which must then be the same for every camera: the gains were undone.
+  std::array<std::array<double, 3>, kCameras> scale{};
+  for (const Frame* f : dataset.AllFrames()) {
+    if (f->exposure_index != 0 || f->time_raw != 0) continue;
+    const Image hdr = ReadImage(*f->hdr_path);
+    const Image& radiance = truth.radiance[f->camera_id];
+    for (int ch = 0; ch < 3; ++ch) {
+      std::vector<double> ratios;
+      for (std::size_t i = ch; i < hdr.size(); i += 3) ratios.push_back(std::log(hdr.data()[i] / radiance.data()[i]));
+      std::sort(ratios.begin(), ratios.end());
+      scale[f->camera_id][ch] = ratios[ratios.size() / 2];
+      double worst = 0;
+      for (std::size_t i = ratios.size() / 20; i < ratios.size() * 19 / 20; ++i)
+        worst = std::max(worst, std::abs(ratios[i] - scale[f->camera_id][ch]));
+      EXPECT_LT(worst, 0.1) << "camera " << f->camera_id << " channel " << ch;  // 90% within 10%
+    }
+  }
+  for (int c = 1; c < kCameras; ++c)
+    for (int ch = 0; ch < 3; ++ch)
+      EXPECT_NEAR(scale[c][ch], scale[0][ch], 0.03) << "camera " << c << " channel " << ch;
+  const nlohmann::json report = nlohmann::json::parse(testing::ReadTextFile(dir / "out" / "calibration.json"));
+  EXPECT_GT(report["camera_agreement"]["disagreement_before"].get<double>(), 0.05);
+  EXPECT_LT(report["camera_agreement"]["disagreement_after"].get<double>(), 0.01);
+  for (const char* name : {"report.md", "response.csv", "response.png", "rig.json", "calibration.json"})
+    EXPECT_TRUE(fs::exists(dir / "out" / name)) << name;
+  EXPECT_NE(testing::ReadTextFile(dir / "out" / "report.md").find("reprojection RMS"), std::string::npos);
+  // The trainer reads the result (a few iterations: this checks the format, not the quality).
+  const auto train = testing::RunHdr4d("train --data '" + (dir / "out").string() + "' --out '" +
+                                       (dir / "run").string() + "' --iterations 20 --threads 2");
+  EXPECT_EQ(train.exit_code, 0) << train.err;
+  EXPECT_TRUE(fs::exists(dir / "run" / "results.json"));
+}
+
+TEST(Calibrate, BoardGivesIntrinsicsAndMetricScale) {
+  testing::TempDir dir;
+  const SyntheticRig truth = WriteCapture(dir / "capture", dir / "model", /*board=*/true);
+  const double metres_per_world_unit = 0.2;  // so a square is 5 cm
+  const auto result = testing::RunHdr4d(
+      "calibrate --capture '" + (dir / "capture").string() + "' --out '" + (dir / "out").string() +
+      "' --colmap-model '" + (dir / "model").string() + "' --stage geometry --board 9x6:" +
+      fmt::format("{}", kBoardSquare * metres_per_world_unit));
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const nlohmann::json rig = nlohmann::json::parse(testing::ReadTextFile(dir / "out" / "rig.json"));
+  for (const auto& camera : rig["cameras"]) {
+    EXPECT_TRUE(camera["board_intrinsics"].get<bool>()) << camera["name"];
+    EXPECT_NEAR(camera["f"].get<double>(), truth.f, 0.03 * truth.f) << camera["name"];
+  }
+  // The normalised world is the COLMAP world times `scale`, so a unit of it is
+  // metres_per_world_unit / scale metres.
+  const double expected = metres_per_world_unit / rig["normalisation"]["scale"].get<double>();
+  EXPECT_NEAR(rig["metres_per_unit"].get<double>(), expected, 0.03 * expected);
+  EXPECT_NE(testing::ReadTextFile(dir / "out" / "report.md").find("checkerboard 9x6"), std::string::npos);
+}
+
+// Runs calibrate on the capture and expects exit 1, `message` in stderr, and --out untouched.
+void ExpectFailure(const fs::path& capture, const fs::path& model, const fs::path& out,
+                   const std::string& message, const std::string& extra = "") {
+  fs::create_directories(out);
+  testing::WriteTextFile(out / "keep.txt", "mine");
+  const auto result = testing::RunHdr4d("calibrate --capture '" + capture.string() + "' --out '" +
+                                        out.string() + "' --colmap-model '" + model.string() + "' " + extra);
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_NE(result.err.find(message), std::string::npos) << result.err;
+  std::vector<fs::path> left;
+  for (const auto& e : fs::directory_iterator(out)) left.push_back(e.path().filename());
+  EXPECT_EQ(left, std::vector<fs::path>{"keep.txt"});
+  EXPECT_FALSE(fs::exists(out.parent_path() / fmt::format(".{}.calibrate-partial", out.filename().string())));
+}
+
+TEST(Calibrate, BadCapturesAreClearErrorsAndWriteNothing) {
+  testing::TempDir dir;
+  const fs::path capture = dir / "capture", model = dir / "model", out = dir / "out";
+  WriteCapture(capture, model);
+  // A missing bracket.
+  fs::rename(capture / "sequence/cam1/1_1.png", dir / "moved.png");
+  ExpectFailure(capture, model, out, "camera cam1, frame 1: bracket 1 is missing");
+  fs::rename(dir / "moved.png", capture / "sequence/cam1/1_1.png");
+  // A frame missing for one camera.
+  for (int k = 0; k < 3; ++k) fs::remove(capture / fmt::format("sequence/cam2/1_{}.png", k));
+  ExpectFailure(capture, model, out, "camera cam2: frame 1 is missing");
+  WriteCapture(capture, model);
+  // No exposure times: no sidecar and PNGs carry no EXIF.
+  fs::rename(capture / "exposures.json", dir / "exposures.json");
+  ExpectFailure(capture, model, out, "no exposure time");
+  fs::rename(dir / "exposures.json", capture / "exposures.json");
+  // A timestamp sidecar without frame 1.
+  testing::WriteTextFile(capture / "timestamps.json", R"({"0": 0.0})");
+  ExpectFailure(capture, model, out, "frame 1 (camera cam0) has no timestamp");
+  fs::remove(capture / "timestamps.json");
+  // Equal exposure times within a frame.
+  testing::WriteTextFile(capture / "exposures.json", R"({"brackets": [1, 1, 4]})");
+  ExpectFailure(capture, model, out, "same exposure time");
+  testing::WriteTextFile(capture / "exposures.json", R"({"brackets": [0.25, 1.0, 4.0]})");
+  // A camera COLMAP did not register.
+  ColmapModel partial = ReadColmapModel(model);
+  partial.images.erase(3);
+  for (auto& [id, p] : partial.points)
+    std::erase_if(p.track, [](const auto& t) { return t.first == 3; });
+  WriteColmapModel(dir / "partial", partial, ColmapFormat::kBinary);
+  ExpectFailure(capture, dir / "partial", out, "camera cam2: none of its static images");
+  // Missing images (a bracket that is not an image).
+  testing::WriteTextFile(capture / "sequence/cam0/0_2.png", "not a png");
+  ExpectFailure(capture, model, out, "0_2.png");
+}
+
+TEST(Calibrate, UnwritableOutputIsAnError) {
+  testing::TempDir dir;
+  WriteCapture(dir / "capture", dir / "model");
+  testing::WriteTextFile(dir / "file", "x");
+  const auto result = testing::RunHdr4d("calibrate --capture '" + (dir / "capture").string() + "' --out '" +
+                                        (dir / "file").string() + "' --colmap-model '" + (dir / "model").string() + "'");
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_NE(result.err.find("is not a folder"), std::string::npos) << result.err;
+  EXPECT_EQ(testing::ReadTextFile(dir / "file"), "x");
+}
+
+TEST(Calibrate, ColmapThatReconstructsNothingIsAClearError) {
+  if (std::system("command -v colmap > /dev/null 2>&1") != 0) GTEST_SKIP() << "colmap not installed";
+  testing::TempDir dir;
+  // Two unrelated noise images: SIFT finds features but nothing matches.
+  for (int c = 0; c < 2; ++c) {
+    const std::string name = fmt::format("cam{}", c);
+    WriteImage(dir / "capture" / "static" / name / "a.png", testing::RandomImage(64, 64, 3, c + 1, 0, 1, Encoding::kSrgb));
+  }
+  const auto result = testing::RunHdr4d("calibrate --capture '" + (dir / "capture").string() +
+                                        "' --out '" + (dir / "out").string() + "' --stage geometry");
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_NE(result.err.find("COLMAP mapper failed"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("too few matches"), std::string::npos) << result.err;
+  std::vector<fs::path> left;
+  for (const auto& e : fs::directory_iterator(dir / "out")) left.push_back(e.path());
+  EXPECT_TRUE(left.empty());
+}
+
+}  // namespace
+}  // namespace hdr4d

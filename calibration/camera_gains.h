@@ -1,0 +1,28 @@
+// Rigs of unlike cameras: each camera's fused HDR differs from the others' on the same surface
+// by a gain per colour channel (sensor sensitivity, white balance). The gains come from the
+// sparse points that several cameras saw: each camera's log radiance there against the
+// points' mean, a median over points (moving objects and occlusions are outliers).
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "calibration/rig_geometry.h"
+#include "core/image.h"
+
+namespace hdr4d {
+
+struct CameraGains {
+  std::vector<std::array<double, 3>> gain;  // per camera and channel; geometric mean 1 per channel
+  // Median over (point, camera) of |radiance / the point's mean radiance - 1|, before and
+  // after dividing by the gains.
+  double disagreement_before = 0, disagreement_after = 0;
+  int points_used = 0;
+  double Mean(int camera) const;  // mean of the three channel gains
+};
+
+// `hdr` holds one fused RGB image per rig camera of the same time (distorted, as fused).
+// `rig.visibility` says which cameras saw each point. Fewer than 10 shared points: gains 1.
+CameraGains EstimateCameraGains(const Rig& rig, const std::vector<Image>& hdr);
+
+}  // namespace hdr4d

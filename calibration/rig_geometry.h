@@ -1,0 +1,65 @@
+// The geometry of a fixed rig from a COLMAP sparse model: one pose and one set of intrinsics
+// per physical camera (its static images share them), refined with Ceres, the scene centred and
+// scaled for the trainer, and the points kept for point3d.ply. Saved as rig.json so that
+// `--stage radiometry` can build the dataset later.
+#pragma once
+
+#include <Eigen/Core>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "calibration/bundle_refinement.h"
+#include "core/colmap_model.h"
+#include "core/ply.h"
+
+namespace hdr4d {
+
+struct RigCamera {
+  std::string name;
+  int width = 0, height = 0;
+  BundleIntrinsics intrinsics;
+  Eigen::Matrix4d world_from_cam_gl = Eigen::Matrix4d::Identity();  // normalised world
+  double rms_before = 0, rms_after = 0;  // reprojection error, pixels, before/after refinement
+  int observations = 0;
+  int static_images_registered = 0;
+  double max_distortion_pixels = 0;
+  bool undistort = false;  // distortion above the threshold: images are undistorted
+  bool board_intrinsics = false;  // intrinsics from a calibration board
+};
+
+struct Rig {
+  std::vector<RigCamera> cameras;
+  PointCloud points;                         // normalised world
+  std::vector<std::vector<int>> visibility;  // rig cameras that saw each point (not in rig.json)
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();  // COLMAP world point moved to the origin
+  double scale = 1;                          // then multiplied by this
+  int extra_images_registered = 0;
+  int refinement_iterations = 0;
+  std::string model_source;  // where the sparse model came from
+  std::string intrinsics_source = "COLMAP, refined with Ceres";
+  double metres_per_unit = 0;  // of the normalised world; 0 = unknown (no board seen by 2 cameras)
+
+  const RigCamera* Find(const std::string& name) const;
+};
+
+struct RigOptions {
+  // Intrinsics known from a calibration board, by camera name: used as they are.
+  std::map<std::string, BundleIntrinsics> board_intrinsics;
+  double undistort_threshold_pixels = 0.5;
+  bool show_progress = true;
+};
+
+// Builds the rig for `camera_names` from `model`, whose image names are <camera>/<file> (any
+// other folder counts as extra images, used for the points and dropped). Throws hdr4d::Error
+// naming the camera when none of its static images was registered.
+Rig RigFromColmap(const ColmapModel& model,
+                  const std::vector<std::string>& camera_names,
+                  const RigOptions& options = {});
+
+void WriteRigJson(const std::filesystem::path& path, const Rig& rig);
+// Throws hdr4d::Error naming the file and key.
+Rig ReadRigJson(const std::filesystem::path& path);
+
+}  // namespace hdr4d

@@ -1,0 +1,72 @@
+// hdr4d calibrate: a fixed multi-camera rig with bracketed exposures, calibrated into a dataset.
+#include <fmt/format.h>
+
+#include "calibration/calibrate.h"
+#include "cli/commands.h"
+#include "cli/flags.h"
+
+namespace hdr4d::cli {
+
+void AddCalibrateCommand(CLI::App& app) {
+  auto options = std::make_shared<CalibrateOptions>();
+  auto capture = std::make_shared<std::string>();
+  auto out = std::make_shared<std::string>();
+  auto colmap_model = std::make_shared<std::string>();
+  auto stage = std::make_shared<std::string>("all");
+  auto no_motion = std::make_shared<bool>(false);
+  auto no_gains = std::make_shared<bool>(false);
+  CLI::App* cmd = app.add_subcommand(
+      "calibrate",
+      "Turn a capture of a fixed camera rig with bracketed exposures (static/<camera>/, "
+      "sequence/<camera>/<frame>_<k>.<ext>, optional exposures.json) into a dataset: COLMAP + "
+      "Ceres rig geometry, Debevec-Malik response, fused HDR ground truth, report.md.");
+  cmd->add_option("--capture", *capture, "Capture folder")->required()
+      ->check(Text("a capture folder"));
+  cmd->add_option("--out,-o", *out, "Output dataset folder")->required()
+      ->check(Text("an output folder"));
+  cmd->add_option("--colmap-model", *colmap_model,
+                  "Reuse this COLMAP sparse model (image names <camera>/<file>) instead of running COLMAP")
+      ->check(Text("a COLMAP sparse model folder"));
+  cmd->add_option("--stage", *stage, "geometry, radiometry or all")->capture_default_str()
+      ->check(OneOf({"geometry", "radiometry", "all"}));
+  cmd->add_option("--fps", options->fps, "Frames per second (time = frame index / fps)")->capture_default_str()
+      ->check(PositiveReal(1e6));
+  cmd->add_option("--test-camera", options->test_camera, "Held-out camera (default: the last one)")
+      ->check(Text("a camera name"));
+  cmd->add_option("--board", options->board,
+                  "A checkerboard in static/: <cols>x<rows>:<square metres> (inner corners), for "
+                  "intrinsics and the metric scale")
+      ->check(Text("a board spec"));
+  cmd->add_option("--colmap-binary", options->colmap_binary, "COLMAP executable")->capture_default_str()
+      ->check(Text("an executable"));
+  cmd->add_option("--colmap-max-image-size", options->colmap_max_image_size,
+                  "Downscale images to this size for COLMAP's SIFT (0: COLMAP's default, 3200)")
+      ->check(Integer(0, 100000));
+  cmd->add_option("--samples", options->response.samples, "Pixels sampled for the response")->capture_default_str()
+      ->check(Integer(2, 10000000));
+  cmd->add_flag("--robertson", options->response.robertson,
+                "Recover the response with Robertson et al. instead of Debevec-Malik");
+  cmd->add_option("--smoothness", options->response.smoothness, "Debevec-Malik smoothness weight")->capture_default_str()
+      ->check(Real(0, 1e9));
+  cmd->add_option("--undistort-threshold", options->undistort_threshold_pixels,
+                  "Undistort images when lens distortion moves a pixel by more than this")->capture_default_str()
+      ->check(Real(0, 1e6));
+  cmd->add_flag("--no-motion-detection", *no_motion, "Average every bracket even where they disagree");
+  cmd->add_flag("--no-gain-correction", *no_gains,
+                "Measure the cameras' disagreement but leave their HDR and exposures as fused");
+  cmd->callback([=] {
+    options->correct_gains = !*no_gains;
+    options->capture = *capture;
+    options->out = *out;
+    if (!colmap_model->empty()) options->colmap_model = *colmap_model;
+    options->stage = ParseCalibrationStage(*stage);
+    options->fusion.detect_motion = !*no_motion;
+    const CalibrateSummary s = Calibrate(*options);
+    fmt::print("calibrate: {} cameras, {} frames, {} images written{} to {} (geometry {:.1f} s, "
+               "radiometry {:.1f} s); see {}/report.md\n",
+               s.cameras, s.frames, s.images_written, s.dataset_written ? ", dataset" : "", *out,
+               s.seconds_geometry, s.seconds_radiometry, *out);
+  });
+}
+
+}  // namespace hdr4d::cli
