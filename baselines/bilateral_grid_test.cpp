@@ -12,9 +12,7 @@
 namespace hdr4d::baselines {
 namespace {
 
-using testing::Dot;
-using testing::ExpectFdMatch;
-using testing::Uniform;
+using namespace testing;  // baselines/test_util.h
 
 // The bilateral filter by its definition: Gaussian spatial and range weights over a window of
 // 3 sigma, normalised.

@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/sigmoid.h"
+
 namespace hdr4d::baselines {
 
 // Log-radiance inputs are clamped to +-kMaxAbsLogInput before the exposure is added: e^60 is
@@ -40,12 +42,10 @@ inline T Softplus(T z) {
   return z > T(0) ? z + std::log1p(std::exp(-z)) : std::log1p(std::exp(z));
 }
 
-// Logistic function; never the exponential of a large positive number.
+// Logistic function; never the exponential of a large positive number (core/sigmoid.h).
 template <typename T>
 inline T Logistic(T z) {
-  if (z >= T(0)) return T(1) / (T(1) + std::exp(-z));
-  const T e = std::exp(z);
-  return e / (T(1) + e);
+  return StableSigmoid(z);
 }
 
 // log of the luminance sum_c w_c e^{x_c} of three log-RGB values, by log-sum-exp around the

@@ -1,13 +1,13 @@
 #include "baselines/param_tone_mapper.h"
 
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <istream>
 #include <ostream>
 
+#include "core/binary_stream.h"
 #include "core/error.h"
 
 namespace hdr4d::baselines {
@@ -16,60 +16,6 @@ namespace {
 constexpr char kMagic[8] = {'H', 'D', 'R', '4', 'D', 'T', 'M', 'B'};
 constexpr std::uint32_t kVersion = 1;
 constexpr std::uint32_t kMaxKindLength = 64;
-constexpr std::uint64_t kFnvOffset = 14695981039346656037ull;
-constexpr std::uint64_t kFnvPrime = 1099511628211ull;
-
-std::uint64_t Fnv1a(std::uint64_t hash, const void* data, std::size_t size) {
-  const auto* bytes = static_cast<const unsigned char*>(data);
-  for (std::size_t i = 0; i < size; ++i) hash = (hash ^ bytes[i]) * kFnvPrime;
-  return hash;
-}
-
-// Little-endian is what every supported machine is; the format says so and we check it.
-static_assert(std::endian::native == std::endian::little, "the checkpoint format is little-endian");
-
-class HashingWriter {
- public:
-  explicit HashingWriter(std::ostream& out) : out_(out) {}
-  void Bytes(const void* data, std::size_t size, bool hashed = true) {
-    out_.write(static_cast<const char*>(data), static_cast<std::streamsize>(size));
-    if (hashed) hash_ = Fnv1a(hash_, data, size);
-  }
-  template <typename V>
-  void Value(const V& v, bool hashed = true) {
-    Bytes(&v, sizeof(V), hashed);
-  }
-  std::uint64_t hash() const { return hash_; }
-
- private:
-  std::ostream& out_;
-  std::uint64_t hash_ = kFnvOffset;
-};
-
-class HashingReader {
- public:
-  HashingReader(std::istream& in, const std::string& source) : in_(in), source_(source) {}
-  void Bytes(void* data, std::size_t size, const char* what, bool hashed = true) {
-    in_.read(static_cast<char*>(data), static_cast<std::streamsize>(size));
-    if (static_cast<std::size_t>(in_.gcount()) != size) {
-      Fail("{}: tone mapper state is truncated while reading {}", source_, what);
-    }
-    if (hashed) hash_ = Fnv1a(hash_, data, size);
-  }
-  template <typename V>
-  V Value(const char* what, bool hashed = true) {
-    V v;
-    Bytes(&v, sizeof(V), what, hashed);
-    return v;
-  }
-  std::uint64_t hash() const { return hash_; }
-
- private:
-  std::istream& in_;
-  const std::string& source_;
-  std::uint64_t hash_ = kFnvOffset;
-};
-
 }  // namespace
 
 ParamToneMapper::ParamToneMapper(const method::ToneMapperConfig& config,
@@ -84,28 +30,30 @@ void ParamToneMapper::BeginFrame(const method::ToneFrame& frame) {
 
 void ParamToneMapper::Save(std::ostream& out) const {
   HashingWriter w(out);
-  w.Bytes(kMagic, sizeof(kMagic), false);
-  w.Value(kVersion, false);
+  w.Bytes(kMagic, sizeof(kMagic));
+  w.Value(kVersion);
+  w.ResetHash();  // the checksum covers what follows the version
   const auto kind_length = static_cast<std::uint32_t>(config_.kind.size());
   w.Value(kind_length);
   w.Bytes(config_.kind.data(), kind_length);
   w.Value(static_cast<std::uint64_t>(params_.size()));
   w.Bytes(params_.data(), params_.size() * sizeof(float));
-  w.Value(w.hash(), false);
+  w.Value(w.hash());
 }
 
 void ParamToneMapper::Load(std::istream& in, const std::string& source) {
-  HashingReader r(in, source);
+  HashingReader r(in, source, "tone mapper state");
   char magic[sizeof(kMagic)];
-  r.Bytes(magic, sizeof(magic), "the magic word", false);
+  r.Bytes(magic, sizeof(magic), "the magic word");
   if (std::memcmp(magic, kMagic, sizeof(kMagic)) != 0) {
     Fail("{}: not a tone mapper state (bad magic; expected \"HDR4DTMB\")", source);
   }
-  const auto version = r.Value<std::uint32_t>("the version", false);
+  const auto version = r.Value<std::uint32_t>("the version");
   if (version != kVersion) {
     Fail("{}: tone mapper state version {} is not supported (this build reads version {})", source,
          version, kVersion);
   }
+  r.ResetHash();  // the checksum covers what follows the version
   const auto kind_length = r.Value<std::uint32_t>("the kind");
   if (kind_length == 0 || kind_length > kMaxKindLength) {
     Fail("{}: tone mapper state has a kind of length {} (must be 1..{}: corrupt)", source,
@@ -125,16 +73,8 @@ void ParamToneMapper::Load(std::istream& in, const std::string& source) {
   if (!kind_matches && count > (std::uint64_t{1} << 28)) {
     Fail("{}: tone mapper state claims {} parameters (corrupt)", source, count);
   }
-  std::vector<float> values(count);
-  r.Bytes(values.data(), values.size() * sizeof(float), "the parameters");
-  const std::uint64_t computed = r.hash();
-  const auto stored = r.Value<std::uint64_t>("the checksum", false);
-  if (stored != computed) {
-    Fail(
-        "{}: tone mapper state checksum mismatch (stored {:016x}, computed {:016x}): the data is "
-        "corrupt",
-        source, stored, computed);
-  }
+  const std::vector<float> values = r.Floats(count, "the parameters");
+  r.VerifyChecksum();
   if (!kind_matches) {
     Fail("{}: tone mapper state is for kind '{}', not '{}'", source, kind, config_.kind);
   }

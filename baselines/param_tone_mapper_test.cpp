@@ -10,7 +10,8 @@
 #include <sstream>
 
 #include "baselines/test_util.h"
-#include "baselines/tone_mapper_factory.h"
+#include "baselines/tone_mapper_kinds.h"
+#include "method/tonemap/tone_mapper_registry.h"
 #include "tests/testing.h"
 
 namespace hdr4d::baselines {
@@ -23,7 +24,8 @@ std::unique_ptr<method::ToneMapper> Make(const std::string& kind, int num_images
   config.kind = kind;
   config.num_images = num_images;
   config.seed = 5;
-  return MakeToneMapper(config);
+  RegisterToneMappers();
+  return method::MakeToneMapper(config);
 }
 
 std::string Saved(const method::ToneMapper& mapper) {

@@ -13,11 +13,7 @@
 namespace hdr4d::baselines {
 namespace {
 
-using testing::AllFinite;
-using testing::AllFiniteIn01;
-using testing::Dot;
-using testing::ExpectFdMatch;
-using testing::Uniform;
+using namespace testing;  // baselines/test_util.h
 
 method::ToneMapperConfig Config() {
   method::ToneMapperConfig config;

@@ -1,5 +1,5 @@
 // The scene-level methods of the paper's Tables 1-2 as presets of the trainer's switches
-// (method/hdr_training.h), selected with `hdr4d train --method`:
+// (method/train/hdr_training_options.h), selected with `hdr4d train --method`:
 //   hdr4dgs   the paper's method: log-HDR 4D Gaussians, the Dynamic Tone Mapper, both branches
 //   4dgs      plain 4DGS on the LDR images (no HDR, no tone mapping)
 //   4dgs-hdr  4DGS with log-HDR colours trained on the HDR ground truth only
@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "method/hdr_training.h"
+#include "method/train/hdr_training_options.h"
 
 namespace hdr4d::baselines {
 

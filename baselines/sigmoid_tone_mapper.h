@@ -1,5 +1,5 @@
-// The static sigmoid tone mapper of HDR-HexPlane (Wu et al. 2024; notes/reference-code-facts.md
-// §3.4): LDR_c = sigmoid(log_hdr_c + log exposure + delta_i) per channel, with no learned camera
+// The static sigmoid tone mapper of HDR-HexPlane (Wu et al. 2024; ARCHITECTURE §4 "Baselines"):
+// LDR_c = sigmoid(log_hdr_c + log exposure + delta_i) per channel, with no learned camera
 // response and a learned log-exposure offset delta_i per training image i.
 //
 // Simplification: HDR-HexPlane computes the offset as MLP(Embedding[i]) (a scalar embedding, then

@@ -8,16 +8,12 @@
 
 #include "baselines/test_util.h"
 #include "core/parallel.h"
-#include "method/adam.h"
+#include "method/optim/adam.h"
 
 namespace hdr4d::baselines {
 namespace {
 
-using testing::AllFinite;
-using testing::AllFiniteIn01;
-using testing::Dot;
-using testing::ExpectFdMatch;
-using testing::Uniform;
+using namespace testing;  // baselines/test_util.h
 
 method::ToneMapperConfig Config(int num_images) {
   method::ToneMapperConfig config;

@@ -1,12 +1,13 @@
-// The static MLP tone mapper of HDR-GS (Cai et al. 2024; notes/reference-code-facts.md §3.3),
+// The static MLP tone mapper of HDR-GS (Cai et al. 2024; ARCHITECTURE §4),
 // the "MLP (HDR-GS)" row of the paper's tone-mapper ablation: three independent per-channel
 // networks 1 -> 128 -> 1 with a ReLU hidden layer and a sigmoid output, applied pointwise to
 // x_c = log_hdr_c + log exposure. It has no notion of time: one curve for every frame.
 //
 // Two exact evaluations: `direct` runs method::MlpForward / MlpBackward per value; the default
 // (ToneMapperConfig::tabulated, the same switch as the Dynamic Tone Mapper's fast path) uses the
-// network's piecewise-linear form (baselines/static_mlp_curve.h), about 30x faster and equal to
-// the direct path up to float rounding (tested), so the baseline is not slowed by its evaluator.
+// network's piecewise-linear form (baselines/static_mlp_curve.h), much faster (BENCHMARKS.md) and
+// equal to the direct path up to float rounding (tested), so the baseline is not slowed by its
+// evaluator.
 //
 // Like HDR-GS it starts from PyTorch's default initialisation with no pretraining. By default
 // (ToneMapperConfig::monotone_curves) its weights are used as monotone_mlp.h says, so each curve

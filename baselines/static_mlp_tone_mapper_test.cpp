@@ -10,17 +10,13 @@
 #include "baselines/static_mlp_curve.h"
 #include "baselines/test_util.h"
 #include "core/parallel.h"
-#include "method/adam.h"
+#include "method/optim/adam.h"
 #include "method/tonemap/monotone_mlp.h"
 
 namespace hdr4d::baselines {
 namespace {
 
-using testing::AllFinite;
-using testing::AllFiniteIn01;
-using testing::Dot;
-using testing::ExpectFdMatch;
-using testing::Uniform;
+using namespace testing;  // baselines/test_util.h
 
 method::ToneMapperConfig Config(std::uint64_t seed = 3,
                                 bool tabulated = true,

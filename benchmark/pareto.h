@@ -11,7 +11,7 @@
 
 #include "benchmark/results_store.h"
 #include "benchmark/suite.h"
-#include "core/plot.h"
+#include "core/viz/plot.h"
 
 namespace hdr4d::bench {
 

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "core/image.h"
-#include "core/plot.h"
+#include "core/viz/plot.h"
 
 namespace hdr4d::bench {
 

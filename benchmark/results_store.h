@@ -1,4 +1,4 @@
-// The results store: one SQLite file holding every run of every suite (DESIGN: benchmark/).
+// The results store: one SQLite file holding every run of every suite (ARCHITECTURE §2).
 //
 // Schema (PRAGMA user_version 1):
 //   runs           one row per run identity: status, resolved config (JSON), code version,

@@ -6,7 +6,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "baselines/tone_mapper_factory.h"
+#include "baselines/tone_mapper_kinds.h"
 #include "benchmark/child_process.h"
 #include "benchmark/machine.h"
 #include "benchmark/scoring.h"
@@ -14,6 +14,7 @@
 #include "core/error.h"
 #include "core/json_util.h"
 #include "method/tonemap/tone_mapper.h"
+#include "method/tonemap/tone_mapper_registry.h"
 
 namespace hdr4d::bench {
 namespace fs = std::filesystem;
@@ -27,7 +28,8 @@ double NumberOr(const nlohmann::json& j, const char* key, double fallback) {
 // operator), i.e. whether `hdr4d tone-curves` applies.
 bool HasPointwiseToneMapper(const nlohmann::json& config, const std::string& source) {
   if (!config.contains("tone_mapper")) return false;
-  const auto mapper = baselines::MakeToneMapper(
+  baselines::RegisterToneMappers();
+  const auto mapper = method::MakeToneMapper(
       method::ToneMapperConfig::FromJson(config["tone_mapper"], source));
   return mapper->pointwise();
 }

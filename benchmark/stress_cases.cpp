@@ -16,8 +16,8 @@
 #include "core/image_io.h"
 #include "core/json_util.h"
 #include "core/ply.h"
-#include "method/checkpoint.h"
-#include "method/constants.h"
+#include "method/gaussian/constants.h"
+#include "method/train/checkpoint.h"
 
 namespace hdr4d::bench::stress {
 namespace fs = std::filesystem;

@@ -1,4 +1,4 @@
-// `hdr4d calibrate`: a capture (calibration/capture.h) in, a dataset (DESIGN §3) out.
+// `hdr4d calibrate`: a capture (calibration/capture.h) in, a dataset (ARCHITECTURE §3) out.
 //   geometry:   COLMAP on static/ (or --colmap-model), Ceres rig refinement, normalisation,
 //               rig.json, point3d.ply
 //   radiometry: Debevec-Malik response from the brackets, HDR fusion of every frame with

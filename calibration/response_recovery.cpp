@@ -11,7 +11,7 @@
 
 #include "core/error.h"
 #include "core/json_util.h"
-#include "core/plot.h"
+#include "core/viz/plot.h"
 
 namespace hdr4d {
 namespace {

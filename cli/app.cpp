@@ -7,6 +7,7 @@
 #include <new>
 #include <string>
 
+#include "baselines/tone_mapper_kinds.h"
 #include "cli/commands.h"
 #include "core/error.h"
 #include "core/image_io.h"
@@ -55,8 +56,7 @@ std::string LowerFirst(std::string s) {
 
 int ReportParseError(const CLI::App& app, const CLI::ParseError& e) {
   // --help and --version: CLI11 prints them, exit 0.
-  if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success))
-    return app.exit(e);
+  if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
   // Thrown by a command that printed its own report (dataset check): only the exit code.
   if (dynamic_cast<const CLI::RuntimeError*>(&e) != nullptr) return e.get_exit_code();
   const std::string command = CommandPath(app);
@@ -77,7 +77,10 @@ int ReportParseError(const CLI::App& app, const CLI::ParseError& e) {
 }  // namespace
 
 std::unique_ptr<CLI::App> MakeApp() {
-  auto app = std::make_unique<CLI::App>("hdr4d: HDR dynamic novel view synthesis (HDR-4DGS) toolkit");
+  // Every tone-mapper kind, the baselines' too, before any flag lists them or a run needs one.
+  baselines::RegisterToneMappers();
+  auto app =
+      std::make_unique<CLI::App>("hdr4d: HDR dynamic novel view synthesis (HDR-4DGS) toolkit");
   app->set_version_flag("--version", "hdr4d 0.1.0");
   app->require_subcommand(1);
   app->fallthrough(false);

@@ -14,8 +14,8 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/json_util.h"
-#include "core/preview.h"
 #include "core/scene_profile.h"
+#include "core/viz/preview.h"
 
 namespace hdr4d::cli {
 namespace {
@@ -175,7 +175,7 @@ void RunPreview(const PreviewArgs& args) {
 
 void AddDatasetCommand(CLI::App& app) {
   CLI::App* dataset =
-      app.add_subcommand("dataset", "Inspect scenes in the dataset format (DESIGN §3)");
+      app.add_subcommand("dataset", "Inspect scenes in the dataset format (ARCHITECTURE §3)");
   // `hdr4d dataset` alone: one line naming the subcommands, like every other usage mistake.
   dataset->require_subcommand(0, 1);
   dataset->callback([dataset] {

@@ -1,13 +1,12 @@
 // hdr4d export-ply: a run's slice at time t as a standard 3DGS .ply for any viewer.
 #include <fmt/format.h>
 
-#include "baselines/tone_mapper_factory.h"
 #include "cli/commands.h"
 #include "cli/flags.h"
 #include "core/error.h"
 #include "core/output_guard.h"
-#include "method/export_ply.h"
-#include "method/render_run.h"
+#include "method/run/export_ply.h"
+#include "method/run/render_split.h"
 #include "method/tonemap/radiance_bank.h"
 
 namespace hdr4d::cli {
@@ -36,7 +35,7 @@ void AddExportPlyCommand(CLI::App& app) {
   cmd->callback([run, out, time, exposure] {
     const std::string path = out->empty() ? fmt::format("{}/slice_t{:.3f}.ply", *run, *time) : *out;
     method::ProtectRunInputs(*run);
-    method::LoadedRun loaded = method::LoadRun(*run, baselines::MakeToneMapper);
+    method::LoadedRun loaded = method::LoadRun(*run);
     CheckOutput(path);
     if (!(*time >= 0 && *time <= 1)) Fail("export-ply: --time {} is outside [0, 1]", *time);
     const double e = *exposure > 0 ? *exposure : method::MedianExposure(loaded.dataset);

@@ -4,7 +4,7 @@
 
 #include "cli/commands.h"
 #include "cli/flags.h"
-#include "method/gaussian_scene.h"
+#include "method/run/gaussian_scene.h"
 
 namespace hdr4d::cli {
 

@@ -1,10 +1,9 @@
 // hdr4d render: images of a trained run.
 #include <fmt/format.h>
 
-#include "baselines/tone_mapper_factory.h"
 #include "cli/commands.h"
 #include "cli/flags.h"
-#include "method/render_run.h"
+#include "method/run/render_split.h"
 
 namespace hdr4d::cli {
 
@@ -66,7 +65,6 @@ void AddRenderCommand(CLI::App& app) {
     if (time_option->count() > 0) options->time = *time;
     if (exposure_option->count() > 0) options->exposure = *exposure;
     options->write_hdr = !*no_hdr;
-    options->tone_mapper_factory = baselines::MakeToneMapper;
     options->run = *run;
     options->out = *out;
     method::ProtectRunInputs(*run);

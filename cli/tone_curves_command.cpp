@@ -1,11 +1,10 @@
 // hdr4d tone-curves: the learned tone curves of a run per channel at chosen times (paper Fig. 3).
 #include <fmt/format.h>
 
-#include "baselines/tone_mapper_factory.h"
 #include "cli/commands.h"
 #include "cli/flags.h"
-#include "method/render_run.h"
-#include "method/tone_curves.h"
+#include "method/run/render_split.h"
+#include "method/run/tone_curve_report.h"
 
 namespace hdr4d::cli {
 
@@ -39,7 +38,6 @@ void AddToneCurvesCommand(CLI::App& app) {
   cmd->callback([options, run, out] {
     options->run = *run;
     options->out = *out;
-    options->tone_mapper_factory = baselines::MakeToneMapper;
     method::ProtectRunInputs(*run);
     for (const auto& path : method::WriteToneCurves(*options))
       fmt::print("tone-curves: {}\n", path.string());

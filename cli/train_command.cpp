@@ -3,11 +3,11 @@
 #include <fmt/ranges.h>
 
 #include "baselines/scene_baselines.h"
-#include "baselines/tone_mapper_factory.h"
 #include "cli/commands.h"
 #include "cli/flags.h"
 #include "core/error.h"
-#include "method/trainer.h"
+#include "method/tonemap/tone_mapper_registry.h"
+#include "method/train/trainer.h"
 
 namespace hdr4d::cli {
 
@@ -103,7 +103,7 @@ void AddTrainCommand(CLI::App& app) {
   cmd->add_option("--tone-mapper", flags->tone_mapper,
                   "Tone mapper (Table 4): dtm, mlp, sigmoid, reinhard or durand (default: the "
                   "method's)")
-      ->check(OneOf(baselines::ToneMapperKinds()));
+      ->check(OneOf(method::ToneMapperKinds()));
   cmd->add_option("--supervision", flags->supervision,
                   "auto (LDR, plus HDR where the scene has HDR ground truth), ldr, hdr or ldr+hdr")
       ->check(OneOf({"auto", "ldr", "hdr", "ldr+hdr"}))
@@ -162,7 +162,6 @@ void AddTrainCommand(CLI::App& app) {
     if (flags->no_gaussian_branch) hdr.gaussian_branch = false;
     hdr.hdr_weight = flags->hdr_weight;
     if (std::string p = hdr.Validate(); !p.empty()) Fail("train: {}", p);
-    options->tone_mapper_factory = baselines::MakeToneMapper;
     const method::TrainSummary s = method::Train(*options);
     fmt::print("train: {} iterations in {:.1f} s, {} Gaussians; test {}\n", s.iterations,
                s.train_seconds, s.gaussians, s.test_metrics.dump());

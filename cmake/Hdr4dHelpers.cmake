@@ -1,10 +1,17 @@
 # Small wrappers so every module is built the same way and every test is named <folder>/<name>
 # (`ctest -R core/` runs one module).
 
-# hdr4d_add_library(<folder> SOURCES ... DEPS ...): the library hdr4d_<folder>.
-function(hdr4d_add_library folder)
+# hdr4d_add_library(<name> [SOURCES ...] DEPS ...): the library hdr4d_<name>; without SOURCES a
+# header-only (INTERFACE) library.
+function(hdr4d_add_library name)
   cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
-  set(target hdr4d_${folder})
+  set(target hdr4d_${name})
+  if(NOT ARG_SOURCES)
+    add_library(${target} INTERFACE)
+    target_include_directories(${target} INTERFACE ${PROJECT_SOURCE_DIR})
+    target_link_libraries(${target} INTERFACE ${ARG_DEPS})
+    return()
+  endif()
   add_library(${target} STATIC ${ARG_SOURCES})
   target_include_directories(${target} PUBLIC ${PROJECT_SOURCE_DIR})
   target_link_libraries(${target} PUBLIC ${ARG_DEPS})

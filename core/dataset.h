@@ -1,4 +1,4 @@
-// The dataset format (DESIGN §3): the HDR-4DGS / D-NeRF JSON layout, read so that the
+// The dataset format (ARCHITECTURE §3): the HDR-4DGS / D-NeRF JSON layout, read so that the
 // reference downloads load unchanged, checked so that a broken scene is reported completely
 // (every problem, each naming the file, the frame and the key), and never half-loaded.
 //

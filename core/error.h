@@ -1,4 +1,4 @@
-// Two error tiers (DESIGN §7): HDR4D_CHECK aborts on a broken invariant (a bug in hdr4d);
+// Two error tiers (ARCHITECTURE §7): HDR4D_CHECK aborts on a broken invariant (a bug in hdr4d);
 // hdr4d::Error is thrown for bad user input and I/O, with a message that names the file and
 // the problem, and the CLI turns it into one line on stderr and a non-zero exit.
 #pragma once

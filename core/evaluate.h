@@ -1,5 +1,5 @@
 // `hdr4d eval`: score predicted images against ground truth, file by file or folder by folder
-// (DESIGN §5). The result is one JSON document:
+// (ARCHITECTURE §5). The result is one JSON document:
 //
 //   {"pairs": [{"name": <gt file name>, <metric>: <value>, ...}, ...],
 //    "mean":  {<metric>: <value>, ...}, "identical_pairs": <count>}

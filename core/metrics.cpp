@@ -242,7 +242,7 @@ std::pair<Values, Values> MuLawPair(const Image& pred_rgb,
           MapValues(gt_rgb, [&](float x) { return encode(x, gt_max); })};
 }
 
-// PU21 `banding_glare` coefficients (notes/metrics-facts.md §1).
+// PU21 `banding_glare` coefficients (Mantiuk and Azimi 2021, the pu21 reference code).
 constexpr double kP1 = 0.353487901;
 constexpr double kP2 = 0.3734658629;
 constexpr double kP3 = 8.277049286e-05;

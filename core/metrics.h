@@ -1,5 +1,6 @@
 // Image quality metrics, each defined exactly so that numbers can be reproduced elsewhere
-// (DESIGN §5; sources and golden values in notes/metrics-facts.md §1 and §4).
+// (ARCHITECTURE §5; the PU21 coefficients and golden values are cited in metrics.cpp and the
+// tests).
 //
 // Shared conventions:
 // - Both images must have the same shape (width, height, channels), else hdr4d::Error.

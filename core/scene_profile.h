@@ -1,4 +1,4 @@
-// What a scene needs: the facts about a dataset that let later stages skip work (DESIGN §1: a
+// What a scene needs: the facts about a dataset that let later stages skip work (ARCHITECTURE §1: a
 // static scene trains no time axis, a scene without HDR ground truth computes no HDR loss, ...).
 #pragma once
 

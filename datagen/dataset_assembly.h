@@ -1,4 +1,4 @@
-// Turning Blender's output into a dataset (DESIGN §3): the EXRs checked and rewritten without
+// Turning Blender's output into a dataset (ARCHITECTURE §3): the EXRs checked and rewritten without
 // Cycles' timing metadata, one Frame per render and exposure, point3d.ply from the t = 0 surface
 // samples.
 #pragma once

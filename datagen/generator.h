@@ -1,7 +1,7 @@
 // `hdr4d datagen`: renders a procedural scene with Blender (Cycles on the CPU, linear float EXR),
 // then makes the dataset around it: multi-exposure LDR images through core's LDR synthesis
 // (exposure, camera response, sensor noise, 8 bits), transforms_{train,test}.json in the layout
-// of DESIGN §3, point3d.ply sampled from the surfaces at t = 0, and manifest.json (versions,
+// of ARCHITECTURE §3, point3d.ply sampled from the surfaces at t = 0, and manifest.json (versions,
 // preset, seed, render settings, dynamic range, SHA-256 of every file).
 //
 // Output of one scene, OUT/<scene>/:

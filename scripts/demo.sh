@@ -8,7 +8,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT=${1:-demo}
 bash scripts/install-deps.sh
-bash scripts/build.sh
+HDR4D_TARGET=hdr4d bash scripts/build.sh  # only the binary: the tests are scripts/test.sh's
 HDR4D=${HDR4D_BUILD_DIR:-build}/cli/hdr4d
 
 rm -rf "$OUT"

@@ -45,4 +45,19 @@ inline void ExpectGradientsMatch(const FdVector& analytic,
   EXPECT_GT(GradientError(wrong, numeric), 100 * tolerance);
 }
 
+// A check with its step and tolerance, chosen per test file (each file says why):
+//   constexpr FdCheck kFd{1e-5, 1e-6};  kFd.ExpectMatch(analytic, kFd.Gradient(loss, x));
+struct FdCheck {
+  double step;
+  double tolerance;
+  FdVector Gradient(const std::function<double(const FdVector&)>& f,
+                    const FdVector& x,
+                    double h = 0) const {
+    return NumericGradient(f, x, h > 0 ? h : step);
+  }
+  void ExpectMatch(const FdVector& analytic, const FdVector& numeric) const {
+    ExpectGradientsMatch(analytic, numeric, tolerance);
+  }
+};
+
 }  // namespace hdr4d::testing

@@ -215,8 +215,9 @@ TEST_F(Hostile, Case05DeeplyNestedJsonIsAProblemNotACrash) {
 
 // --- Silent wrong results ----------------------------------------------------------------------
 
-// FNV-1a over `bytes`, as the checkpoint trailer stores it (method/checkpoint.cpp), so a test can
-// write a damaged checkpoint that still passes the checksum and reach the value checks.
+// FNV-1a over `bytes`, as the checkpoint trailer stores it (core/binary_stream.h), written out
+// independently here so a test can write a damaged checkpoint that still passes the checksum and
+// reach the value checks.
 std::uint64_t Fnv1a(const std::string& bytes) {
   std::uint64_t h = 0xcbf29ce484222325ull;
   for (unsigned char c : bytes) {

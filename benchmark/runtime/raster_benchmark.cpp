@@ -20,7 +20,7 @@
 #include <vector>
 
 #include "core/parallel.h"
-#include "method/constants.h"
+#include "method/gaussian/constants.h"
 #include "method/raster/binning.h"
 #include "method/raster/blend.h"
 

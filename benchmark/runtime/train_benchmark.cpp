@@ -8,11 +8,11 @@
 #include <random>
 
 #include "core/parallel.h"
-#include "method/adam.h"
-#include "method/densify.h"
-#include "method/fused_step.h"
-#include "method/loss.h"
-#include "method/render.h"
+#include "method/optim/adam.h"
+#include "method/optim/densify.h"
+#include "method/optim/fused_adam_step.h"
+#include "method/render/frame_render.h"
+#include "method/train/loss.h"
 
 namespace hdr4d::method {
 namespace {

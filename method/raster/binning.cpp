@@ -10,7 +10,7 @@
 
 #include "core/error.h"
 #include "core/parallel.h"
-#include "method/constants.h"
+#include "method/gaussian/constants.h"
 
 namespace hdr4d::method {
 namespace {

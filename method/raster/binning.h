@@ -1,4 +1,4 @@
-// Binning of projected Gaussians to 16x16 pixel tiles (DESIGN §4, §6), the first half of the
+// Binning of projected Gaussians to 16x16 pixel tiles (ARCHITECTURE §4, §6), the first half of the
 // 3DGS tile rasteriser: every Gaussian is listed in each tile its screen rectangle covers, and
 // each tile's list is ordered front to back.
 //

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "core/parallel.h"
-#include "method/constants.h"
+#include "method/gaussian/constants.h"
 
 namespace hdr4d::method {
 namespace {

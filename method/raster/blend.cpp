@@ -10,13 +10,13 @@
 
 #include "core/error.h"
 #include "core/parallel.h"
-#include "method/constants.h"
+#include "method/gaussian/constants.h"
 #include "method/raster/binning.h"
 
 namespace hdr4d::method {
 namespace {
 
-using internal::SlotStride;
+using detail::SlotStride;
 
 // A few values per pixel or per Gaussian, on the stack unless the channel count is unusual.
 template <typename T>
@@ -170,7 +170,7 @@ void BackwardTileReference(const SplatBuffersT<T>& splats,
           accum[c] = last_alpha * last_color[c] + (T(1) - last_alpha) * accum[c];
           last_color[c] = f[c];
           dL_dalpha += (f[c] - accum[c]) * dpix[c];
-          slot[internal::kSlotFeatures + c] += dchannel_dcolor * dpix[c];
+          slot[detail::kSlotFeatures + c] += dchannel_dcolor * dpix[c];
         }
         dL_dalpha *= transmittance;
         last_alpha = alpha;
@@ -178,12 +178,12 @@ void BackwardTileReference(const SplatBuffersT<T>& splats,
         const T dL_dG = opacity[g] * dL_dalpha;
         const T gdx = G * dx;
         const T gdy = G * dy;
-        slot[internal::kSlotMean] += dL_dG * (-gdx * q[0] - gdy * q[1]);
-        slot[internal::kSlotMean + 1] += dL_dG * (-gdy * q[2] - gdx * q[1]);
-        slot[internal::kSlotConic] += T(-0.5) * gdx * dx * dL_dG;
-        slot[internal::kSlotConic + 1] += -gdx * dy * dL_dG;
-        slot[internal::kSlotConic + 2] += T(-0.5) * gdy * dy * dL_dG;
-        slot[internal::kSlotOpacity] += G * dL_dalpha;
+        slot[detail::kSlotMean] += dL_dG * (-gdx * q[0] - gdy * q[1]);
+        slot[detail::kSlotMean + 1] += dL_dG * (-gdy * q[2] - gdx * q[1]);
+        slot[detail::kSlotConic] += T(-0.5) * gdx * dx * dL_dG;
+        slot[detail::kSlotConic + 1] += -gdx * dy * dL_dG;
+        slot[detail::kSlotConic + 2] += T(-0.5) * gdy * dy * dL_dG;
+        slot[detail::kSlotOpacity] += G * dL_dalpha;
       }
     }
   }
@@ -240,20 +240,20 @@ void ReduceGradients(const RasterState& bins,
         const T* slot = slots + at * n;
         for (int s = 0; s < n; ++s) sum[s] += slot[s];
       }
-      grads->mean2d[2 * g] += sum[internal::kSlotMean];
-      grads->mean2d[2 * g + 1] += sum[internal::kSlotMean + 1];
-      for (int i = 0; i < 3; ++i) grads->conic[3 * g + i] += sum[internal::kSlotConic + i];
-      grads->opacity[g] += sum[internal::kSlotOpacity];
+      grads->mean2d[2 * g] += sum[detail::kSlotMean];
+      grads->mean2d[2 * g + 1] += sum[detail::kSlotMean + 1];
+      for (int i = 0; i < 3; ++i) grads->conic[3 * g + i] += sum[detail::kSlotConic + i];
+      grads->opacity[g] += sum[detail::kSlotOpacity];
       T* gf = grads->features.data() + g * channels;
-      for (int c = 0; c < channels; ++c) gf[c] += sum[internal::kSlotFeatures + c];
+      for (int c = 0; c < channels; ++c) gf[c] += sum[detail::kSlotFeatures + c];
     }
   };
   ParallelForChunks(visible, 2048, [&](std::int64_t begin, std::int64_t end) {
     switch (stride) {
-      case internal::kSlotFeatures + 3:
-        return reduce.template operator()<internal::kSlotFeatures + 3>(begin, end);
-      case internal::kSlotFeatures + 6:
-        return reduce.template operator()<internal::kSlotFeatures + 6>(begin, end);
+      case detail::kSlotFeatures + 3:
+        return reduce.template operator()<detail::kSlotFeatures + 3>(begin, end);
+      case detail::kSlotFeatures + 6:
+        return reduce.template operator()<detail::kSlotFeatures + 6>(begin, end);
       default:
         return reduce.template operator()<0>(begin, end);
     }
@@ -303,10 +303,10 @@ const float* BackgroundOf(const RasterSettings& settings, int channels) {
   return zeros.data();
 }
 
-internal::TileJob MakeJob(const SplatBuffers& splats,
+detail::TileJob MakeJob(const SplatBuffers& splats,
                           const RasterSettings& settings,
                           RasterState* state) {
-  internal::TileJob job;
+  detail::TileJob job;
   job.mean2d = splats.mean2d.data();
   job.conic = splats.conic.data();
   job.opacity = splats.opacity.data();
@@ -327,8 +327,8 @@ internal::TileJob MakeJob(const SplatBuffers& splats,
 // The SIMD kernels' per-Gaussian records, for the Gaussians listed in some tile (in parallel).
 // packed_splats holds the per-Gaussian records, then the forward's per-entry records, then a
 // marker that is 1 once the forward has written the latter for the current packing.
-void PackSplats(internal::TileJob& job, RasterState* state) {
-  const std::size_t stride = internal::PackedStride(job.channels);
+void PackSplats(detail::TileJob& job, RasterState* state) {
+  const std::size_t stride = detail::PackedStride(job.channels);
   const std::size_t per_gaussian = static_cast<std::size_t>(state->num_gaussians) * stride;
   state->packed_splats.resize(per_gaussian + state->num_entries() * stride + 1);
   state->packed_splats.back() = 0.0f;
@@ -336,7 +336,7 @@ void PackSplats(internal::TileJob& job, RasterState* state) {
   job.tile_records = job.packed + per_gaussian;
   ParallelForChunks(
       static_cast<std::int64_t>(state->depth_order.size()), 4096,
-      [&](std::int64_t begin, std::int64_t end) { internal::PackSplatsSimd(job, begin, end); });
+      [&](std::int64_t begin, std::int64_t end) { detail::PackSplatsSimd(job, begin, end); });
   state->packed_ready = true;
 }
 
@@ -409,11 +409,11 @@ void BlendForward(const SplatBuffers& splats,
                                  state->final_transmittance.data(), state->n_contrib.data());
     return;
   }
-  internal::TileJob job = MakeJob(splats, settings, state);
+  detail::TileJob job = MakeJob(splats, settings, state);
   job.image = image;
   PackSplats(job, state);
   ParallelFor(state->num_tiles(), 1,
-              [&](std::int64_t tile) { internal::ForwardTileSimd(job, static_cast<int>(tile)); });
+              [&](std::int64_t tile) { detail::ForwardTileSimd(job, static_cast<int>(tile)); });
   state->packed_splats.back() = 1.0f;  // the per-entry records are there for the backward
 }
 
@@ -448,7 +448,7 @@ void BlendBackward(const SplatBuffers& splats,
   const int channels = splats.channels;
   state->entry_gradients.resize(state->num_entries() * SlotStride(channels));
   state->tile_background_grad.resize(static_cast<std::size_t>(state->num_tiles()) * channels);
-  internal::TileJob job = MakeJob(splats, settings, state);
+  detail::TileJob job = MakeJob(splats, settings, state);
   job.dL_dimage = dL_dimage;
   job.dL_dfinal_T = dL_dfinal_T;
   job.entry_gradients = state->entry_gradients.data();
@@ -458,10 +458,10 @@ void BlendBackward(const SplatBuffers& splats,
   if (!state->packed_ready) PackSplats(job, state);
   job.packed = state->packed_splats.data();
   job.tile_records = job.packed + static_cast<std::size_t>(state->num_gaussians) *
-                                      internal::PackedStride(channels);
+                                      detail::PackedStride(channels);
   job.tile_records_ready = state->packed_splats.back() == 1.0f;
   ParallelFor(state->num_tiles(), 1,
-              [&](std::int64_t tile) { internal::BackwardTileSimd(job, static_cast<int>(tile)); });
+              [&](std::int64_t tile) { detail::BackwardTileSimd(job, static_cast<int>(tile)); });
   ReduceGradients<float>(*state, channels, state->entry_gradients.data(), job.tile_background_grad,
                          grads, dL_dbackground, /*streamed=*/true);
 }

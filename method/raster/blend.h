@@ -1,5 +1,5 @@
 // Front-to-back alpha blending of binned splats and its hand-written backward: the second half of
-// the 3DGS / 4DGS tile rasteriser (DESIGN §4, §6), on the CPU, for any number of channels.
+// the 3DGS / 4DGS tile rasteriser (ARCHITECTURE §4, §6), on the CPU, for any number of channels.
 //
 // Forward, per pixel with centre p, over its tile's list in depth order (binning.h):
 //   d = mean2d - p;  power = -0.5 (a dx^2 + c dy^2) - b dx dy;  skip if power > 0;
@@ -103,7 +103,7 @@ void BlendBackwardReference(const SplatBuffersT<T>& splats,
 // 1.2e-7), 2^n built in the exponent bits.
 void FastExp(const float* x, float* out, std::size_t n);
 
-namespace internal {
+namespace detail {
 
 // Gradient slot layout per entry: mean x, mean y, conic a, b, c, opacity, then the features.
 inline constexpr int kSlotMean = 0;
@@ -150,5 +150,5 @@ void PackSplatsSimd(const TileJob& job, std::int64_t begin, std::int64_t end);
 void ForwardTileSimd(const TileJob& job, int tile);
 void BackwardTileSimd(const TileJob& job, int tile);
 
-}  // namespace internal
+}  // namespace detail
 }  // namespace hdr4d::method

@@ -27,8 +27,7 @@
 // The channel count is a template parameter for 1, 3, 4 and 6 channels (accumulators in
 // registers) and a run-time value otherwise (accumulators in L1).
 //
-// Measured on the 2-core AVX-512 (Zen) machine, 200x200, 20k splats, ~35 contributors per pixel,
-// 3 channels, one thread: forward 2.7 ms, backward 4.2 ms (benchmark/runtime/raster_benchmark).
+// Timings: benchmark/runtime/raster_benchmark, recorded in BENCHMARKS.md.
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "method/raster/blend_simd.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
@@ -44,11 +43,11 @@
 #include <limits>
 
 #include "core/error.h"
-#include "method/constants.h"
+#include "method/gaussian/constants.h"
 #include "method/raster/blend.h"
 
 HWY_BEFORE_NAMESPACE();
-namespace hdr4d::method::internal {
+namespace hdr4d::method::detail {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
@@ -858,12 +857,12 @@ void FastExpArray(const float* x, float* out, std::size_t n) {
 }
 
 }  // namespace HWY_NAMESPACE
-}  // namespace hdr4d::method::internal
+}  // namespace hdr4d::method::detail
 HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
 namespace hdr4d::method {
-namespace internal {
+namespace detail {
 
 HWY_EXPORT(ForwardTile);
 HWY_EXPORT(BackwardTile);
@@ -881,9 +880,9 @@ void FastExpSimd(const float* x, float* out, std::size_t n) {
   HWY_DYNAMIC_DISPATCH(FastExpArray)(x, out, n);
 }
 
-}  // namespace internal
+}  // namespace detail
 
-void FastExp(const float* x, float* out, std::size_t n) { internal::FastExpSimd(x, out, n); }
+void FastExp(const float* x, float* out, std::size_t n) { detail::FastExpSimd(x, out, n); }
 
 }  // namespace hdr4d::method
 #endif  // HWY_ONCE

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "core/parallel.h"
-#include "method/constants.h"
+#include "method/gaussian/constants.h"
 #include "method/raster/binning.h"
 
 namespace hdr4d::method {

@@ -1,4 +1,4 @@
-// The data the tile rasteriser consumes and produces for one frame (DESIGN §4, §6): projected
+// The data the tile rasteriser consumes and produces for one frame (ARCHITECTURE §4, §6): projected
 // 2D Gaussians ("splats") as structure-of-arrays buffers, their gradients, the raster settings,
 // and the state the forward keeps for the backward.
 //

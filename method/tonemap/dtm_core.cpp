@@ -128,8 +128,8 @@ thread_local SimdScratch tls_simd;
 }  // namespace
 
 template <typename T>
-internal::ToneTableView DtmCore<T>::TableView() const {
-  internal::ToneTableView view;
+detail::ToneTableView DtmCore<T>::TableView() const {
+  detail::ToneTableView view;
   view.z = table_z_.data();
   view.dz = table_dz_.data();
   view.nodes = nodes_;
@@ -190,7 +190,7 @@ void DtmCore<T>::Map(const T* log_hdr, std::size_t n, T* ldr) const {
     if constexpr (std::is_same_v<T, float>) {
       if (UseSimd()) {
         tls_simd.Reserve(count);
-        const std::size_t n_out = internal::ToneTableForward(TableView(), log_hdr + v0, count,
+        const std::size_t n_out = detail::ToneTableForward(TableView(), log_hdr + v0, count,
                                                              ldr + v0, tls_simd.outside.data());
         for (std::size_t k = 0; k < n_out; ++k) {
           const std::size_t v = v0 + tls_simd.outside[k];
@@ -234,7 +234,7 @@ void DtmCore<T>::MapBackward(const T* log_hdr, std::size_t n, const T* dL_dldr, 
         SimdScratch& s = tls_simd;
         s.Reserve(count);
         const std::size_t n_out =
-            internal::ToneTableBackward(TableView(), log_hdr + v0, dL_dldr + v0, count,
+            detail::ToneTableBackward(TableView(), log_hdr + v0, dL_dldr + v0, count,
                                         dL_dlog_hdr ? dL_dlog_hdr + v0 : nullptr, s.node.data(),
                                         s.a0.data(), s.a1.data(), s.outside.data());
         // Each channel's touched node range (indices into the concatenated tables), zeroed,

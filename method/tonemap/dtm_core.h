@@ -79,7 +79,7 @@ class DtmCore {
  private:
   std::size_t DirectStride() const { return 3 * shape_.curve.NumParams() + shape_.context.size; }
   bool UseSimd() const;
-  internal::ToneTableView TableView() const;
+  detail::ToneTableView TableView() const;
   // One value of channel c on the scalar path.
   T MapValue(T log_hdr, int c, std::vector<T>* scratch) const;
   // The direct path's backward of one value: adds to the chunk's direct gradients `dacc`

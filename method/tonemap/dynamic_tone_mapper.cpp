@@ -7,7 +7,7 @@
 #include <ostream>
 
 #include "core/error.h"
-#include "method/tonemap/binary_stream.h"
+#include "core/binary_stream.h"
 
 namespace hdr4d::method {
 namespace {

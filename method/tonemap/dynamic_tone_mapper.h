@@ -1,4 +1,4 @@
-// The Dynamic Tone Mapper of HDR-4DGS (paper §3.3; DESIGN §4): a radiance bank of mean log-HDR
+// The Dynamic Tone Mapper of HDR-4DGS (paper §3.3; ARCHITECTURE §4): a radiance bank of mean log-HDR
 // colours per timestamp, a context learner (GRU by default) over the window of rows before the
 // view's time giving the context f, and per-channel tone curves g_c(log HDR + log e, f). Works
 // per Gaussian (3D branch) and per pixel (2D branch) with the same weights and context.

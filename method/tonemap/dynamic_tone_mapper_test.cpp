@@ -360,7 +360,7 @@ TEST(DynamicToneMapper, TabulatedAgreesWithDirect) {
   EXPECT_LT(diff, 0.02 * norm);
 }
 
-// The float SIMD loop of the tabulated path (internal::ToneTableBackward and its forward) against
+// The float SIMD loop of the tabulated path (detail::ToneTableBackward and its forward) against
 // the scalar loop, whose gradients the finite-difference tests above check (same maths, another
 // exp).
 TEST(DynamicToneMapperChain, SimdMatchesScalar) {

@@ -13,17 +13,11 @@
 #include <random>
 #include <vector>
 
+#include "core/sigmoid.h"
+
 namespace hdr4d::method {
 
 enum class MlpOutput { kLinear, kSigmoid };
-
-// Numerically safe logistic: never exp of a large positive number.
-template <typename T>
-inline T StableSigmoid(T z) {
-  if (z >= T(0)) return T(1) / (T(1) + std::exp(-z));
-  const T e = std::exp(z);
-  return e / (T(1) + e);
-}
 
 struct MlpShape {
   std::vector<int> widths;  // input width first, output width last (at least 2 entries)

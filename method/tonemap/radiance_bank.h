@@ -1,7 +1,7 @@
 // The radiance bank of the Dynamic Tone Mapper: one row per distinct normalised timestamp of the
 // scene (F rows of mean log-HDR RGB), zero until written. Each render writes its time's row
 // with the plain mean over all Gaussians; the context learner reads a window of rows before it.
-// Follows the reference code (notes/reference-code-facts.md §3.1).
+// Follows the reference code (ARCHITECTURE §4, "Radiance bank").
 #pragma once
 
 #include <cstddef>

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "method/tonemap/binary_stream.h"
+#include "core/binary_stream.h"
 #include "tests/testing.h"
 
 namespace hdr4d::method {

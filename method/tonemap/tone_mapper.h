@@ -1,13 +1,12 @@
-// The tone-mapper interface (DESIGN §4): a learned or fixed map from log-HDR colour, given the
+// The tone-mapper interface (ARCHITECTURE §4): a learned or fixed map from log-HDR colour, given the
 // frame's log exposure and time index, to LDR colour in [0,1], with a backward to its inputs and
 // to its own parameters. The same object serves both supervision branches of HDR-4DGS: per
 // Gaussian (3D branch, before rasterisation) and per pixel (2D branch, after it).
 //
 // Every tone mapper of the paper's Table 4 implements it: the Dynamic Tone Mapper
 // (method/tonemap/dynamic_tone_mapper.h) and the baselines (baselines/): static MLP (HDR-GS),
-// sigmoid (HDR-HexPlane), Reinhard, Durand. The method library cannot see baselines/, so the
-// trainer receives a ToneMapperFactory from its caller (cli/ builds it with baselines'
-// MakeToneMapper, which knows every kind).
+// sigmoid (HDR-HexPlane), Reinhard, Durand. They are built by kind through
+// method/tonemap/tone_mapper_registry.h, where baselines/ registers its kinds.
 //
 // Frame protocol, for one rendered view:
 //   BeginFrame(frame)                   once, before any mapping of that view;
@@ -19,7 +18,6 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <functional>
 #include <iosfwd>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -111,14 +109,12 @@ class ToneMapper {
   virtual std::vector<float>& params() = 0;
   virtual std::vector<float>& grads() = 0;
   void ZeroGrad() { grads().assign(grads().size(), 0.f); }
-  virtual float learning_rate() const { return 5e-4f; }  // DESIGN §4: tone mapper 5e-4
+  virtual float learning_rate() const { return 5e-4f; }  // ARCHITECTURE §4: tone mapper 5e-4
 
   // Checkpoint state: parameters and any state (the radiance bank), versioned. Load throws
   // hdr4d::Error naming `source` and the problem and leaves the mapper unchanged.
   virtual void Save(std::ostream& out) const = 0;
   virtual void Load(std::istream& in, const std::string& source) = 0;
 };
-
-using ToneMapperFactory = std::function<std::unique_ptr<ToneMapper>(const ToneMapperConfig&)>;
 
 }  // namespace hdr4d::method

@@ -11,7 +11,7 @@
 #include "method/tonemap/tone_table_simd.h"
 
 HWY_BEFORE_NAMESPACE();
-namespace hdr4d::method::internal {
+namespace hdr4d::method::detail {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
@@ -180,11 +180,11 @@ std::size_t Backward(const ToneTableView& view,
 }
 
 }  // namespace HWY_NAMESPACE
-}  // namespace hdr4d::method::internal
+}  // namespace hdr4d::method::detail
 HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
-namespace hdr4d::method::internal {
+namespace hdr4d::method::detail {
 
 HWY_EXPORT(Forward);
 HWY_EXPORT(Backward);
@@ -210,5 +210,5 @@ std::size_t ToneTableBackward(const ToneTableView& table,
                                         outside);
 }
 
-}  // namespace hdr4d::method::internal
+}  // namespace hdr4d::method::detail
 #endif  // HWY_ONCE

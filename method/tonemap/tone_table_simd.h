@@ -8,7 +8,7 @@
 #include <cstddef>
 #include <cstdint>
 
-namespace hdr4d::method::internal {
+namespace hdr4d::method::detail {
 
 // The three channels' tables of one frame, concatenated: channel c's node j at c * nodes + j;
 // dz[c * nodes + j] = z[c * nodes + j + 1] - z[c * nodes + j] (0 for a channel's last node).
@@ -41,4 +41,4 @@ std::size_t ToneTableBackward(const ToneTableView& table,
                               float* a1,
                               std::int32_t* outside);
 
-}  // namespace hdr4d::method::internal
+}  // namespace hdr4d::method::detail

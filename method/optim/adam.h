@@ -1,0 +1,192 @@
+// Adam as PyTorch's torch.optim.Adam computes it (no weight decay, no amsgrad), over named
+// parameter groups with one learning rate each (ARCHITECTURE §4 "Optimisation"):
+//   step += 1
+//   m = m + (1 - beta1) (g - m)                      (torch: exp_avg.lerp_(grad, 1 - beta1))
+//   v = beta2 v + (1 - beta2) g^2
+//   p = p - (lr / (1 - beta1^step)) m / (sqrt(v) / sqrt(1 - beta2^step) + eps)
+// The first step therefore moves every parameter by lr g / (|g| + eps), about lr sign(g).
+// The bias corrections are formed in double, the per-element arithmetic in float, as torch does
+// for float tensors (SIMD, with fused multiply-adds where the CPU has them: the last bit can
+// differ between machines, never between runs or thread counts). Vectors of elements with
+// g = m = v = 0 are skipped, which is exact (such an update changes nothing). Elements are
+// updated in parallel; each is independent.
+//
+// The step count is kept per group, as torch keeps `step` per parameter tensor: the 3DGS
+// densification surgery (cat / prune / opacity reset) keeps it and edits only the moments.
+//
+// Buffers: a group points at caller-owned parameter and gradient arrays. Any operation that
+// changes a group's size (ResizeGroup, GatherGroup, AppendRows, Load) unbinds it; the caller
+// applies the same change to its arrays and calls SetBuffers before the next Step.
+//
+// Non-finite gradients: a NaN would spread into the moments and from there into every later
+// step, so the update leaves every vector of elements whose gradient holds a NaN or an infinity
+// as it was, and AdamRowStep reports the group. The trainer checks the gradients (in the fused
+// row step, or FirstNonFiniteGradient before Step) and stops with an error naming the group.
+//
+// Fused row steps: the gradients of a 4DGS model (~160 floats per Gaussian, 13 MB at 20k
+// Gaussians) do not stay in cache between the backward that writes them and the step that reads
+// them, and the update is memory-bound. BeginRowStep counts one step of the named groups, whose
+// arrays hold `rows` rows of equal width; the backward then calls StepRows on each block of rows
+// as soon as their gradients are final, while they are still in cache. The values are exactly
+// those of StepGroup (each element's update is independent of the others).
+#pragma once
+
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <iosfwd>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace hdr4d::method {
+
+struct AdamOptions {
+  double beta1 = 0.9;
+  double beta2 = 0.999;
+  double eps = 1e-15;  // the 3DGS / 4DGS value (torch's default is 1e-8)
+
+  // "" when valid, else a message naming the bad field: betas in [0, 1), eps > 0, all finite.
+  std::string Validate() const;
+};
+
+// One named parameter group: `size` floats of parameters updated from `size` floats of
+// gradients with learning rate `lr`. The arrays belong to the caller.
+struct AdamGroup {
+  std::string name;
+  float* params = nullptr;
+  const float* grads = nullptr;
+  std::size_t size = 0;
+  float lr = 0.0f;
+};
+
+namespace detail {
+// The per-step constants of one group's update.
+struct StepConstants {
+  float w1;  // 1 - beta1
+  float beta2;
+  float w2;              // 1 - beta2
+  float inv_bias2_sqrt;  // 1 / sqrt(1 - beta2^step)
+  float eps;
+  float step_size;  // lr / (1 - beta1^step)
+};
+}  // namespace detail
+
+// One step of some groups, applied block of rows by block of rows (Adam::BeginRowStep). The Adam
+// it came from must not be resized or rebound until every row has been stepped.
+class AdamRowStep {
+ public:
+  // Updates rows [begin, end) of every group of the step. Safe from several threads at once on
+  // disjoint ranges; every row must be stepped exactly once. When grad_rows is given (one entry
+  // per group, in the order of BeginRowStep), a non-null grad_rows[k] holds group k's gradient
+  // of these rows (row `begin` first) in place of its bound gradient buffer.
+  void StepRows(std::int64_t begin, std::int64_t end, std::span<const float* const> grad_rows = {});
+  // The first group (in the order given to BeginRowStep) whose gradient held a NaN or an
+  // infinity in the rows stepped so far, or "". Such a group is partly stepped: its state must
+  // be discarded (the trainer stops and keeps its last checkpoint).
+  std::string FirstNonFinite() const;
+
+ private:
+  friend class Adam;
+  struct Part {
+    std::string name;
+    float* params;
+    const float* grads;
+    float* m;
+    float* v;
+    std::size_t width;  // floats per row
+    detail::StepConstants constants;
+  };
+  std::vector<Part> parts_;
+  std::size_t rows_ = 0;
+  std::unique_ptr<std::atomic<bool>[]> bad_;
+};
+
+class Adam {
+ public:
+  // Throws hdr4d::Error when the options are invalid.
+  explicit Adam(const AdamOptions& options = {});
+
+  const AdamOptions& options() const { return options_; }
+
+  // Registers a group with zero moments and step 0. The name must be new and non-empty, and the
+  // buffers non-null unless size is 0 (checked: a caller bug).
+  void AddGroup(const AdamGroup& group);
+  bool HasGroup(const std::string& name) const;
+  std::vector<std::string> GroupNames() const;  // in the order they were added
+  // The group's current binding, size and learning rate. The name must exist (checked).
+  const AdamGroup& group(const std::string& name) const;
+
+  // Points the group at (possibly reallocated) arrays; `size` must equal its size (checked).
+  void SetBuffers(const std::string& name, float* params, const float* grads, std::size_t size);
+  void SetLearningRate(const std::string& name, float lr);
+  float LearningRate(const std::string& name) const;
+  std::int64_t StepCount(const std::string& name) const;
+
+  // One Adam update of every group (in the order added), or of one group. Every group stepped
+  // must be bound to buffers of its size (checked).
+  void Step();
+  void StepGroup(const std::string& name);
+  // Counts one step of each named group (bound, size a multiple of `rows`; checked) and returns
+  // the row-wise update that applies it (see "Fused row steps" above).
+  AdamRowStep BeginRowStep(const std::vector<std::string>& names, std::size_t rows);
+
+  // The moments, for diagnostics and tests.
+  const std::vector<float>& FirstMoment(const std::string& name) const;
+  const std::vector<float>& SecondMoment(const std::string& name) const;
+
+  // ---- Surgery for densification (each keeps the step count; size changes unbind) ----------
+  // Truncates, or extends with zero moments.
+  void ResizeGroup(const std::string& name, std::size_t new_size);
+  // Keeps the rows `keep` (in that order; each row is `row_width` floats). The group size must
+  // be a multiple of row_width and every index a valid row (checked).
+  void GatherGroup(const std::string& name,
+                   const std::vector<std::uint32_t>& keep,
+                   std::size_t row_width);
+  // Appends `count` rows of `row_width` floats with zero moments.
+  void AppendRows(const std::string& name, std::size_t count, std::size_t row_width);
+  // Zeroes the moments of the whole group (as 3DGS's opacity reset does), or of the given rows.
+  void ResetMoments(const std::string& name);
+  void ResetMoments(const std::string& name,
+                    const std::vector<std::uint32_t>& rows,
+                    std::size_t row_width);
+
+  // The first group (in the order added; of `only` when given) whose bound gradients contain a
+  // NaN or an infinity, or "" when all are finite.
+  std::string FirstNonFiniteGradient() const;
+  std::string FirstNonFiniteGradient(const std::vector<std::string>& only) const;
+
+  // ---- Checkpoints ---------------------------------------------------------------------------
+  // Binary state: options, and per group its name, size, step, learning rate and moments, with
+  // a version and a checksum. Format (little-endian):
+  //   "HDR4DADM" | u32 version (1) | f64 beta1, beta2, eps | u32 group count |
+  //   per group: u32 name length, name bytes, u64 size, i64 step, f32 lr, f32 m[size],
+  //   f32 v[size] | u64 FNV-1a (64-bit) of every byte after the version field.
+  void Save(std::ostream& out) const;
+  // Replaces the whole state (options included) with the stream's, or throws hdr4d::Error naming
+  // `source` and what is wrong (bad magic, unsupported version, truncation, checksum, invalid
+  // values) and leaves the optimiser unchanged. A loaded group keeps its current buffers when one
+  // of the same name and size was bound before; otherwise it is unbound until SetBuffers.
+  void Load(std::istream& in, const std::string& source);
+
+ private:
+  struct State {
+    AdamGroup group;
+    std::vector<float> m, v;
+    std::int64_t step = 0;
+  };
+  State& Find(const std::string& name);
+  const State& Find(const std::string& name) const;
+  void StepState(State& state);
+  // Counts a step of the group and returns its update constants.
+  detail::StepConstants NextStep(State& state);
+
+  AdamOptions options_;
+  std::vector<State> groups_;
+};
+
+// True when every value is finite (no NaN, no +-infinity); true for size 0.
+bool AllFinite(const float* values, std::size_t size);
+
+}  // namespace hdr4d::method

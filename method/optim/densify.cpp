@@ -1,0 +1,414 @@
+#include "method/optim/densify.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+
+#include "core/error.h"
+#include "core/sigmoid.h"
+#include "method/gaussian/rotation4d.h"
+
+namespace hdr4d::method {
+
+namespace {
+
+constexpr int kSplitChildren = 2;  // the reference's N
+// log(0.8 N): children's scales are the parent's divided by 1.6.
+const float kLogSplitShrink = static_cast<float>(std::log(0.8 * kSplitChildren));
+// Screen-size prune threshold in pixels after the first opacity reset (reference train.py).
+constexpr float kMaxScreenSize = 20.0f;
+// World-size prune: max spatial scale above this fraction of the extent.
+constexpr double kLargeWorldFraction = 0.1;
+
+// One model group: its name, the model and gradient buffers and the floats per Gaussian.
+struct GroupBuffers {
+  const char* name = nullptr;
+  std::vector<float>* params = nullptr;
+  std::vector<float>* grads = nullptr;
+  std::size_t width = 0;
+};
+
+// In kModelGroups order.
+std::array<GroupBuffers, kModelGroups.size()> Groups(GaussianModel& m, GaussianGradients& g) {
+  const std::array<std::vector<float>*, kModelGroups.size()> params = {
+      &m.xyz,           &m.t,        &m.log_scales, &m.rot_left, &m.rot_right,
+      &m.opacity_logit, &m.color_dc, &m.color_rest};
+  const std::array<std::vector<float>*, kModelGroups.size()> grads = {
+      &g.xyz,           &g.t,        &g.log_scales, &g.rot_left, &g.rot_right,
+      &g.opacity_logit, &g.color_dc, &g.color_rest};
+  std::array<GroupBuffers, kModelGroups.size()> out;
+  for (std::size_t k = 0; k < kModelGroups.size(); ++k) {
+    out[k] = {kModelGroups[k], params[k], grads[k], GroupRowWidth(m, kModelGroups[k])};
+  }
+  return out;
+}
+
+bool SameShape(const GaussianModel& a, const GaussianModel& b) {
+  return a.channels == b.channels && a.basis.max_sh_degree == b.basis.max_sh_degree &&
+         a.basis.max_time_degree == b.basis.max_time_degree && a.xyz.size() == b.xyz.size() &&
+         a.t.size() == b.t.size() && a.log_scales.size() == b.log_scales.size() &&
+         a.rot_left.size() == b.rot_left.size() && a.rot_right.size() == b.rot_right.size() &&
+         a.opacity_logit.size() == b.opacity_logit.size() &&
+         a.color_dc.size() == b.color_dc.size() && a.color_rest.size() == b.color_rest.size();
+}
+
+// Standard normals by the Box-Muller transform from 53-bit uniforms, so the draws are the same
+// with every standard library (std::normal_distribution's algorithm is unspecified).
+class NormalSampler {
+ public:
+  explicit NormalSampler(std::mt19937_64* rng) : rng_(rng) {}
+  double operator()() {
+    if (has_spare_) {
+      has_spare_ = false;
+      return spare_;
+    }
+    constexpr double kScale = 1.0 / 9007199254740992.0;                     // 2^-53
+    const double u1 = static_cast<double>(((*rng_)() >> 11) + 1) * kScale;  // (0, 1]
+    const double u2 = static_cast<double>((*rng_)() >> 11) * kScale;        // [0, 1)
+    const double r = std::sqrt(-2.0 * std::log(u1));
+    const double angle = 2.0 * std::numbers::pi * u2;
+    spare_ = r * std::sin(angle);
+    has_spare_ = true;
+    return r * std::cos(angle);
+  }
+
+ private:
+  std::mt19937_64* rng_;
+  double spare_ = 0.0;
+  bool has_spare_ = false;
+};
+
+float MaxSpatialScale(const float* log_scales) {
+  return std::exp(std::max({log_scales[0], log_scales[1], log_scales[2]}));
+}
+
+// Copies rows `rows` of `src` (width floats each) into a new buffer, in that order.
+std::vector<float> GatherRows(const std::vector<float>& src,
+                              const std::vector<std::uint32_t>& rows,
+                              std::size_t width) {
+  std::vector<float> out(rows.size() * width);
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    std::copy_n(src.begin() + static_cast<std::size_t>(rows[k]) * width, width,
+                out.begin() + k * width);
+  }
+  return out;
+}
+
+// *buf becomes its rows `kept` (increasing) followed by its rows `appended` (any order). In place
+// when the result fits the capacity (no allocation, no page faults: a model of 10^5 - 10^6
+// Gaussians is hundreds of MB), else through one buffer of exactly the new size.
+void RebuildRows(std::vector<float>* buf,
+                 const std::vector<std::uint32_t>& kept,
+                 const std::vector<std::uint32_t>& appended,
+                 std::size_t width) {
+  if (width == 0) return;
+  const std::size_t total = (kept.size() + appended.size()) * width;
+  if (total > buf->capacity()) {
+    std::vector<float> out;
+    out.reserve(total);
+    for (const auto* rows : {&kept, &appended}) {
+      for (const std::size_t r : *rows) {
+        out.insert(out.end(), buf->begin() + r * width, buf->begin() + (r + 1) * width);
+      }
+    }
+    buf->swap(out);
+    return;
+  }
+  const std::vector<float> extra = GatherRows(*buf, appended, width);
+  // kept[k] >= k, so moving rows forward in order never overwrites a row still to be read.
+  for (std::size_t k = 0; k < kept.size(); ++k) {
+    if (kept[k] != k) {
+      std::copy_n(buf->begin() + static_cast<std::size_t>(kept[k]) * width, width,
+                  buf->begin() + k * width);
+    }
+  }
+  buf->resize(kept.size() * width);
+  buf->insert(buf->end(), extra.begin(), extra.end());
+}
+
+}  // namespace
+
+// ---- Parameter groups ----------------------------------------------------------------------
+
+std::size_t GroupRowWidth(const GaussianModel& model, const std::string& group) {
+  if (group == kGroupXyz) return 3;
+  if (group == kGroupT || group == kGroupOpacity) return 1;
+  if (group == kGroupScaling || group == kGroupRotation || group == kGroupRotationR) return 4;
+  if (group == kGroupFDc) return static_cast<std::size_t>(model.channels);
+  HDR4D_CHECK(group == kGroupFRest);
+  return model.rest_stride();
+}
+
+ModelLearningRates LearningRatesAt(const OptimizationOptions& options, double extent, int step) {
+  ModelLearningRates r;
+  r.xyz = static_cast<float>(options.PositionLr(extent)(step));
+  r.t = static_cast<float>(options.TLr(extent)(step));
+  r.scaling = static_cast<float>(options.scaling_lr);
+  r.rotation = static_cast<float>(options.rotation_lr);
+  r.opacity = static_cast<float>(options.opacity_lr);
+  r.f_dc = static_cast<float>(options.f_dc_lr);
+  r.f_rest = static_cast<float>(options.f_rest_lr);
+  return r;
+}
+
+namespace {
+float RateOf(const ModelLearningRates& r, const std::string& name) {
+  if (name == kGroupXyz) return r.xyz;
+  if (name == kGroupT) return r.t;
+  if (name == kGroupScaling) return r.scaling;
+  if (name == kGroupRotation || name == kGroupRotationR) return r.rotation;
+  if (name == kGroupOpacity) return r.opacity;
+  if (name == kGroupFDc) return r.f_dc;
+  return r.f_rest;
+}
+}  // namespace
+
+void AddModelGroups(GaussianModel& model,
+                    GaussianGradients& grads,
+                    const ModelLearningRates& rates,
+                    Adam* adam) {
+  HDR4D_CHECK(adam != nullptr);
+  HDR4D_CHECK(model.Validate().empty());
+  HDR4D_CHECK(SameShape(model, grads));
+  for (const GroupBuffers& g : Groups(model, grads)) {
+    adam->AddGroup(
+        {g.name, g.params->data(), g.grads->data(), g.params->size(), RateOf(rates, g.name)});
+  }
+}
+
+void BindModelGroups(GaussianModel& model, GaussianGradients& grads, Adam* adam) {
+  HDR4D_CHECK(adam != nullptr);
+  HDR4D_CHECK(SameShape(model, grads));
+  for (const GroupBuffers& g : Groups(model, grads)) {
+    adam->SetBuffers(g.name, g.params->data(), g.grads->data(), g.params->size());
+  }
+}
+
+void SetModelLearningRates(const ModelLearningRates& rates, Adam* adam) {
+  HDR4D_CHECK(adam != nullptr);
+  for (const char* name : kModelGroups) adam->SetLearningRate(name, RateOf(rates, name));
+}
+
+// ---- Statistics ----------------------------------------------------------------------------
+
+void DensifyStats::Reset(std::size_t n) {
+  grad_accum.assign(n, 0.0f);
+  denom.assign(n, 0.0f);
+  max_radii.assign(n, 0.0f);
+}
+
+std::vector<float> DensifyStats::MeanGradient() const {
+  HDR4D_CHECK(grad_accum.size() == denom.size());
+  std::vector<float> mean(denom.size(), 0.0f);
+  for (std::size_t i = 0; i < denom.size(); ++i) {
+    if (denom[i] > 0.0f) mean[i] = grad_accum[i] / denom[i];
+  }
+  return mean;
+}
+
+void AccumulateStats(const std::vector<float>& mean2d_grad,
+                     const std::vector<int>& radius,
+                     int width,
+                     int height,
+                     DensifyStats* stats) {
+  HDR4D_CHECK(stats != nullptr && width > 0 && height > 0);
+  const std::size_t n = radius.size();
+  HDR4D_CHECK(mean2d_grad.size() == 2 * n && stats->grad_accum.size() == n &&
+              stats->denom.size() == n && stats->max_radii.size() == n);
+  // d(pixel)/d(NDC) = size / 2, so the NDC gradient is the pixel one times size / 2.
+  const double sx = 0.5 * width, sy = 0.5 * height;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (radius[i] <= 0) continue;
+    const double gx = mean2d_grad[2 * i] * sx, gy = mean2d_grad[2 * i + 1] * sy;
+    stats->grad_accum[i] += static_cast<float>(std::sqrt(gx * gx + gy * gy));
+    stats->denom[i] += 1.0f;
+    stats->max_radii[i] = std::max(stats->max_radii[i], static_cast<float>(radius[i]));
+  }
+}
+
+// ---- Clone / split / prune -----------------------------------------------------------------
+
+std::string DensifyParams::Validate() const {
+  if (!(grad_threshold >= 0.0f && std::isfinite(grad_threshold))) {
+    return fmt::format("grad_threshold must be finite and >= 0, got {}", grad_threshold);
+  }
+  if (!(percent_dense > 0.0f && percent_dense <= 1.0f)) {
+    return fmt::format("percent_dense must be in (0, 1], got {}", percent_dense);
+  }
+  if (!(scene_extent > 0.0f && std::isfinite(scene_extent))) {
+    return fmt::format("scene_extent must be positive and finite, got {}", scene_extent);
+  }
+  if (!(min_opacity >= 0.0f && min_opacity < 1.0f)) {
+    return fmt::format("min_opacity must be in [0, 1), got {}", min_opacity);
+  }
+  if (!(max_screen_size >= 0.0f && std::isfinite(max_screen_size))) {
+    return fmt::format("max_screen_size must be finite and >= 0, got {}", max_screen_size);
+  }
+  return "";
+}
+
+DensifyParams DensifyParamsAt(const OptimizationOptions& unresolved,
+                              double extent,
+                              int iteration) {
+  // The trainer passes resolved options; others get the reference's image size.
+  const OptimizationOptions options = unresolved.Resolved(kReferenceImageSize);
+  DensifyParams p;
+  p.grad_threshold = static_cast<float>(options.densify_grad_threshold);
+  p.percent_dense = static_cast<float>(options.percent_dense);
+  p.scene_extent = static_cast<float>(extent);
+  p.min_opacity = static_cast<float>(options.prune_opacity);
+  const bool late = iteration > options.opacity_reset_interval;
+  p.max_screen_size = late ? kMaxScreenSize : 0.0f;
+  p.prune_large_world = late;
+  return p;
+}
+
+DensifyResult DensifyAndPrune(GaussianModel* model,
+                              GaussianGradients* grads,
+                              Adam* adam,
+                              DensifyStats* stats,
+                              const DensifyParams& params,
+                              std::mt19937_64* rng) {
+  HDR4D_CHECK(model != nullptr && grads != nullptr && adam != nullptr && stats != nullptr &&
+              rng != nullptr);
+  HDR4D_CHECK(params.Validate().empty());
+  HDR4D_CHECK(model->Validate().empty());
+  const std::size_t n = model->size();
+  HDR4D_CHECK(n <= UINT32_MAX);  // row indices are 32-bit, as Adam's
+  HDR4D_CHECK(stats->grad_accum.size() == n && stats->denom.size() == n &&
+              stats->max_radii.size() == n);
+  for (const GroupBuffers& g : Groups(*model, *grads)) {
+    HDR4D_CHECK(adam->group(g.name).size == g.params->size());
+  }
+
+  // Thresholds as float, as torch compares a float tensor with a Python scalar.
+  const float grad_threshold = params.grad_threshold;
+  const float dense_limit =
+      static_cast<float>(static_cast<double>(params.percent_dense) * params.scene_extent);
+  const float world_limit = static_cast<float>(kLargeWorldFraction * params.scene_extent);
+  const std::vector<float> mean_grad = stats->MeanGradient();
+
+  std::vector<std::uint32_t> clones, parents;
+  std::vector<std::uint8_t> is_parent(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!(mean_grad[i] >= grad_threshold)) continue;
+    if (MaxSpatialScale(&model->log_scales[4 * i]) <= dense_limit) {
+      clones.push_back(static_cast<std::uint32_t>(i));
+    } else {
+      parents.push_back(static_cast<std::uint32_t>(i));
+      is_parent[i] = 1;
+    }
+  }
+
+  // Children, copy-major; every child's offset is drawn whether or not it is pruned later.
+  const std::size_t num_children = parents.size() * kSplitChildren;
+  std::vector<float> child_xyz(num_children * 3), child_t(num_children),
+      child_log_scales(num_children * 4);
+  {
+    NormalSampler normal(rng);
+    for (std::size_t c = 0; c < num_children; ++c) {
+      const std::size_t p = parents[c % parents.size()];
+      const float* ls = &model->log_scales[4 * p];
+      const float* mu = &model->xyz[3 * p];
+      if (model->temporal) {
+        const Vec4<double> q_l(model->rot_left[4 * p], model->rot_left[4 * p + 1],
+                               model->rot_left[4 * p + 2], model->rot_left[4 * p + 3]);
+        const Vec4<double> q_r(model->rot_right[4 * p], model->rot_right[4 * p + 1],
+                               model->rot_right[4 * p + 2], model->rot_right[4 * p + 3]);
+        Vec4<double> scaled;
+        for (int k = 0; k < 4; ++k) scaled(k) = normal() * std::exp(double{ls[k]});
+        const Vec4<double> offset = Rotation4D(q_l, q_r) * scaled;
+        for (int k = 0; k < 3; ++k) child_xyz[3 * c + k] = static_cast<float>(mu[k] + offset(k));
+        child_t[c] = static_cast<float>(model->t[p] + offset(3));
+        for (int k = 0; k < 4; ++k) child_log_scales[4 * c + k] = ls[k] - kLogSplitShrink;
+      } else {
+        const Vec4<double> q(model->rot_left[4 * p], model->rot_left[4 * p + 1],
+                             model->rot_left[4 * p + 2], model->rot_left[4 * p + 3]);
+        Vec3<double> scaled;
+        for (int k = 0; k < 3; ++k) scaled(k) = normal() * std::exp(double{ls[k]});
+        const Vec3<double> offset = Rotation3D(q) * scaled;
+        for (int k = 0; k < 3; ++k) child_xyz[3 * c + k] = static_cast<float>(mu[k] + offset(k));
+        child_t[c] = model->t[p];  // ignored in 3D mode: left as it was
+        for (int k = 0; k < 3; ++k) child_log_scales[4 * c + k] = ls[k] - kLogSplitShrink;
+        child_log_scales[4 * c + 3] = ls[3];
+      }
+    }
+  }
+
+  // The prune test on a Gaussian with these log-scales, opacity logit and max radius.
+  const bool test_radii = params.max_screen_size > 0.0f && params.keep_radii_for_prune;
+  auto pruned = [&](const float* log_scales, float logit, float max_radius) {
+    if (Sigmoid(logit) < params.min_opacity) return true;
+    if (test_radii && max_radius > params.max_screen_size) return true;
+    return params.prune_large_world && MaxSpatialScale(log_scales) > world_limit;
+  };
+
+  DensifyResult result;
+  result.cloned = clones.size();
+  result.split = parents.size();
+  // Rows of the new model: surviving originals, then clones (both taken from the old model by
+  // index), then children (from the child buffers).
+  std::vector<std::uint32_t> kept_originals, kept_clones, kept_children;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (is_parent[i]) continue;
+    if (pruned(&model->log_scales[4 * i], model->opacity_logit[i], stats->max_radii[i])) {
+      ++result.pruned;
+    } else {
+      kept_originals.push_back(static_cast<std::uint32_t>(i));
+    }
+  }
+  for (std::uint32_t i : clones) {
+    if (pruned(&model->log_scales[4 * i], model->opacity_logit[i], 0.0f)) {
+      ++result.pruned;
+    } else {
+      kept_clones.push_back(i);
+    }
+  }
+  for (std::size_t c = 0; c < num_children; ++c) {
+    const std::uint32_t p = parents[c % parents.size()];
+    if (pruned(&child_log_scales[4 * c], model->opacity_logit[p], 0.0f)) {
+      ++result.pruned;
+    } else {
+      kept_children.push_back(static_cast<std::uint32_t>(c));
+    }
+  }
+
+  // Old row of every appended row (children copy their parent's other fields).
+  std::vector<std::uint32_t> appended = kept_clones;
+  for (std::uint32_t c : kept_children) appended.push_back(parents[c % parents.size()]);
+  const std::size_t first_child = kept_originals.size() + kept_clones.size();
+  const std::size_t new_n = kept_originals.size() + appended.size();
+
+  for (const GroupBuffers& g : Groups(*model, *grads)) {
+    RebuildRows(g.params, kept_originals, appended, g.width);
+    if (g.width > 0) {  // Adam checks row_width > 0; a 0-wide group stays empty
+      adam->GatherGroup(g.name, kept_originals, g.width);
+      adam->AppendRows(g.name, new_n - kept_originals.size(), g.width);
+    }
+  }
+  for (std::size_t k = 0; k < kept_children.size(); ++k) {
+    const std::size_t c = kept_children[k], row = first_child + k;
+    std::copy_n(&child_xyz[3 * c], 3, &model->xyz[3 * row]);
+    model->t[row] = child_t[c];
+    std::copy_n(&child_log_scales[4 * c], 4, &model->log_scales[4 * row]);
+  }
+
+  grads->ZerosLike(*model);
+  BindModelGroups(*model, *grads, adam);
+  stats->Reset(new_n);
+  return result;
+}
+
+void ResetOpacity(GaussianModel* model, Adam* adam, float max_opacity) {
+  HDR4D_CHECK(model != nullptr && adam != nullptr);
+  HDR4D_CHECK(max_opacity > 0.0f && max_opacity < 1.0f);
+  const double p = max_opacity;
+  const float max_logit = static_cast<float>(std::log(p / (1.0 - p)));
+  for (float& logit : model->opacity_logit) logit = std::min(logit, max_logit);
+  adam->ResetMoments(kGroupOpacity);
+}
+
+}  // namespace hdr4d::method

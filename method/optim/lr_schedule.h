@@ -1,0 +1,240 @@
+// Learning-rate schedules and the optimisation options of 4DGS / HDR-4DGS (ARCHITECTURE §4
+// "Optimisation"). Header-only.
+#pragma once
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <string>
+
+namespace hdr4d::method {
+
+// The reference's get_expon_lr_func: a log-linear interpolation from `init` at step 0 to `final`
+// at step max_steps (held there afterwards),
+//   lr(step) = exp((1 - p) ln(init) + p ln(final)),   p = clamp(step / max_steps, 0, 1),
+// optionally times a warm-up factor when delay_steps > 0:
+//   delay_mult + (1 - delay_mult) sin(pi/2 clamp(step / delay_steps, 0, 1)).
+// lr = 0 for step < 0 and when init == final == 0. The midpoint is the geometric mean.
+struct ExponentialLr {
+  double init = 0.0;
+  double final = 0.0;
+  int max_steps = 1;
+  int delay_steps = 0;
+  double delay_mult = 1.0;
+
+  double operator()(int step) const {
+    if (step < 0 || (init == 0.0 && final == 0.0)) return 0.0;
+    double delay = 1.0;
+    if (delay_steps > 0) {
+      const double q = std::clamp(static_cast<double>(step) / delay_steps, 0.0, 1.0);
+      delay = delay_mult + (1.0 - delay_mult) * std::sin(0.5 * std::numbers::pi * q);
+    }
+    const double p = std::clamp(static_cast<double>(step) / max_steps, 0.0, 1.0);
+    return delay * std::exp((1.0 - p) * std::log(init) + p * std::log(final));
+  }
+
+  // "" when usable, else the problem: init and final both positive (or both 0, "off"), finite;
+  // max_steps > 0; delay_steps >= 0; delay_mult finite and >= 0.
+  std::string Validate() const {
+    const bool off = init == 0.0 && final == 0.0;
+    if (!off && !(init > 0.0 && std::isfinite(init))) {
+      return fmt::format("initial learning rate must be positive and finite, got {}", init);
+    }
+    if (!off && !(final > 0.0 && std::isfinite(final))) {
+      return fmt::format("final learning rate must be positive and finite, got {}", final);
+    }
+    if (max_steps <= 0) return fmt::format("max_steps must be positive, got {}", max_steps);
+    if (delay_steps < 0) return fmt::format("delay_steps must be >= 0, got {}", delay_steps);
+    if (!(delay_mult >= 0.0) || !std::isfinite(delay_mult)) {
+      return fmt::format("delay_mult must be finite and >= 0, got {}", delay_mult);
+    }
+    return "";
+  }
+};
+
+// The same learning rate at every step (the reference's t, colour, opacity, scale, rotation and
+// tone-mapper groups).
+struct ConstantLr {
+  double lr = 0.0;
+  double operator()(int /*step*/) const { return lr; }
+};
+
+// The reference's schedules are those of its 20000-iteration runs (every HDR-4DGS config), and
+// its densification threshold that of its 400-pixel training images (HDR-4D-Syn and D-NeRF at
+// resolution 2).
+inline constexpr int kReferenceIterations = 20000;
+inline constexpr double kReferenceImageSize = 400.0;
+// A schedule field set to this (any negative value) follows the run length; see Resolved().
+inline constexpr int kFollowRunLength = -1;
+
+// The reference's `reference_steps` of a 20000-iteration run scaled to `iterations`, at least 1.
+inline int StepsForRunLength(int reference_steps, int iterations) {
+  const double scaled = double(reference_steps) * double(iterations) / kReferenceIterations;
+  return std::max(1, static_cast<int>(std::lround(scaled)));
+}
+
+// Optimisation settings with the HDR-4DGS HDR-4D-Syn defaults (which are the 4DGS ones except for
+// iterations, the densification interval and the tone mapper). Learning rates of the 4D mean
+// (xyz and t) are in scene-extent units: the caller multiplies them by the extent (PositionLr,
+// TLr). Iterations are counted from 1 as in the reference training loop.
+//
+// Schedules follow the run length: the fields marked "scaled" default to kFollowRunLength and
+// Resolved() gives them the reference's value times iterations / 20000 (so a 20000-iteration
+// run is the reference's, and a 3000-iteration run densifies until 2250, decays the position
+// learning rate over 2250 steps, ...), and the densification threshold the reference's 2e-4
+// times 400 / the image size (the mean screen-space gradient of a Gaussian a few pixels wide
+// grows as the image shrinks, so 2e-4 over-densifies small images). A value set explicitly is
+// used as it is. The densification interval and the colour-degree interval stay the
+// reference's: scaled down they densify and unlock SH detail too often for the views a step
+// sees (a 3000-iteration run on the known Gaussian scene: 28.5 dB scaled, 31.8 dB not;
+// BENCHMARKS.md, issue 12).
+struct OptimizationOptions {
+  int iterations = 20000;
+  int batch_size = 1;  // camera/time samples per step; losses are divided by it
+
+  // xyz: decays log-linearly from init to final x extent over position_lr_max_steps (the
+  // reference sets it equal to densify_until). The reference passes delay_mult 0.01 but delay
+  // steps 0, so there is no warm-up by default.
+  double position_lr_init = 1.6e-4;
+  double position_lr_final = 1.6e-6;
+  int position_lr_max_steps = kFollowRunLength;  // scaled: 15000 of 20000
+  int position_lr_delay_steps = 0;
+  double position_lr_delay_mult = 0.01;
+  // t: constant (the reference's t scheduler is commented out); < 0 means position_lr_init.
+  double t_lr_init = -1.0;
+  double f_dc_lr = 2.5e-3;
+  double f_rest_lr = 2.5e-3 / 20.0;
+  double opacity_lr = 0.05;
+  double scaling_lr = 5e-3;   // the xyz and the t log-scales
+  double rotation_lr = 1e-3;  // both quaternions
+  double tone_mapper_lr = 5e-4;
+  double adam_eps = 1e-15;
+
+  double lambda_dssim = 0.2;
+
+  // Densification: every densification_interval iterations in (densify_from, densify_until),
+  // clone / split where the mean screen-space gradient norm >= densify_grad_threshold; clone when
+  // the largest scale <= percent_dense x extent. Opacity reset every opacity_reset_interval;
+  // prune opacity < prune_opacity. One more SH degree every sh_increase_interval.
+  int densify_from = kFollowRunLength;            // scaled: 500 of 20000
+  int densify_until = kFollowRunLength;           // scaled: 15000 of 20000
+  int densification_interval = 200;
+  double densify_grad_threshold = kFollowRunLength;  // scaled: 2e-4 at 400 px, x 400 / size
+  double percent_dense = 0.01;
+  int opacity_reset_interval = kFollowRunLength;  // scaled: 3000 of 20000
+  double prune_opacity = 0.005;
+  int sh_increase_interval = 1000;
+
+  // The reference's values of the scaled fields (a 20000-iteration run on 400-pixel images).
+  static constexpr int kRefPositionLrMaxSteps = 15000;
+  static constexpr int kRefDensifyFrom = 500;
+  static constexpr int kRefDensifyUntil = 15000;
+  static constexpr double kRefDensifyGradThreshold = 2e-4;
+  static constexpr int kRefOpacityResetInterval = 3000;
+
+  // A copy with every field that follows the run length given its value for `iterations` and
+  // training images of `image_size` pixels (the geometric mean of width and height, > 0).
+  OptimizationOptions Resolved(double image_size) const {
+    OptimizationOptions r = *this;
+    auto steps = [&](int& field, int reference) {
+      if (field < 0) field = StepsForRunLength(reference, iterations);
+    };
+    steps(r.position_lr_max_steps, kRefPositionLrMaxSteps);
+    steps(r.densify_until, kRefDensifyUntil);
+    steps(r.opacity_reset_interval, kRefOpacityResetInterval);
+    if (r.densify_from < 0) {
+      // Never past an explicit densify_until (a short run that densifies early).
+      r.densify_from = std::min(StepsForRunLength(kRefDensifyFrom, iterations), r.densify_until);
+    }
+    if (r.densify_grad_threshold < 0) {
+      const double size = image_size > 0 && std::isfinite(image_size) ? image_size
+                                                                       : kReferenceImageSize;
+      r.densify_grad_threshold = kRefDensifyGradThreshold * kReferenceImageSize / size;
+    }
+    return r;
+  }
+
+  // The xyz schedule for a scene of the given extent.
+  ExponentialLr PositionLr(double extent) const {
+    const int steps = position_lr_max_steps > 0
+                          ? position_lr_max_steps
+                          : StepsForRunLength(kRefPositionLrMaxSteps, iterations);
+    return ExponentialLr{position_lr_init * extent, position_lr_final * extent, steps,
+                         position_lr_delay_steps, position_lr_delay_mult};
+  }
+  // The t learning rate for a scene of the given extent.
+  ConstantLr TLr(double extent) const {
+    return ConstantLr{(t_lr_init < 0.0 ? position_lr_init : t_lr_init) * extent};
+  }
+
+  // "" when every field is usable, else a message that starts with the bad field's name.
+  std::string Validate() const {
+    auto positive_int = [](const char* name, int v) {
+      return v > 0 ? std::string() : fmt::format("{} must be positive, got {}", name, v);
+    };
+    auto rate = [](const char* name, double v) {
+      return v >= 0.0 && std::isfinite(v)
+                 ? std::string()
+                 : fmt::format("{} must be finite and >= 0, got {}", name, v);
+    };
+    auto positive = [](const char* name, double v) {
+      return v > 0.0 && std::isfinite(v)
+                 ? std::string()
+                 : fmt::format("{} must be positive and finite, got {}", name, v);
+    };
+    std::string e;
+    if (!(e = positive_int("iterations", iterations)).empty()) return e;
+    if (!(e = positive_int("batch_size", batch_size)).empty()) return e;
+    if (!(e = positive("position_lr_init", position_lr_init)).empty()) return e;
+    if (!(e = positive("position_lr_final", position_lr_final)).empty()) return e;
+    // A negative schedule field follows the run length (Resolved); 0 is not a schedule.
+    auto schedule = [](const char* name, int v) {
+      return v != 0 ? std::string()
+                    : fmt::format("{} must be positive (or negative: follow the run length), got 0",
+                                  name);
+    };
+    if (!(e = schedule("position_lr_max_steps", position_lr_max_steps)).empty()) return e;
+    if (position_lr_delay_steps < 0) {
+      return fmt::format("position_lr_delay_steps must be >= 0, got {}", position_lr_delay_steps);
+    }
+    if (!(e = rate("position_lr_delay_mult", position_lr_delay_mult)).empty()) return e;
+    if (!std::isfinite(t_lr_init)) {
+      return fmt::format("t_lr_init must be finite (< 0 means position_lr_init), got {}",
+                         t_lr_init);
+    }
+    if (!(e = rate("f_dc_lr", f_dc_lr)).empty()) return e;
+    if (!(e = rate("f_rest_lr", f_rest_lr)).empty()) return e;
+    if (!(e = rate("opacity_lr", opacity_lr)).empty()) return e;
+    if (!(e = rate("scaling_lr", scaling_lr)).empty()) return e;
+    if (!(e = rate("rotation_lr", rotation_lr)).empty()) return e;
+    if (!(e = rate("tone_mapper_lr", tone_mapper_lr)).empty()) return e;
+    if (!(e = positive("adam_eps", adam_eps)).empty()) return e;
+    if (!(lambda_dssim >= 0.0 && lambda_dssim <= 1.0)) {
+      return fmt::format("lambda_dssim must be in [0, 1], got {}", lambda_dssim);
+    }
+    if (densify_from >= 0 && densify_until >= 0 && densify_until < densify_from) {
+      return fmt::format("densify_until ({}) must be >= densify_from ({})", densify_until,
+                         densify_from);
+    }
+    if (!(e = positive_int("densification_interval", densification_interval)).empty()) return e;
+    if (densify_grad_threshold == 0.0 || !std::isfinite(densify_grad_threshold)) {
+      return fmt::format(
+          "densify_grad_threshold must be positive and finite (or negative: scaled to the image "
+          "size), got {}",
+          densify_grad_threshold);
+    }
+    if (!(percent_dense > 0.0 && percent_dense <= 1.0)) {
+      return fmt::format("percent_dense must be in (0, 1], got {}", percent_dense);
+    }
+    if (!(e = schedule("opacity_reset_interval", opacity_reset_interval)).empty()) return e;
+    if (!(prune_opacity >= 0.0 && prune_opacity < 1.0)) {
+      return fmt::format("prune_opacity must be in [0, 1), got {}", prune_opacity);
+    }
+    if (!(e = positive_int("sh_increase_interval", sh_increase_interval)).empty()) return e;
+    return "";
+  }
+};
+
+}  // namespace hdr4d::method

@@ -1,0 +1,78 @@
+#include "method/optim/model_optimizer.h"
+
+#include <algorithm>
+
+#include "method/optim/densify.h"
+#include "method/optim/fused_adam_step.h"
+
+namespace hdr4d::method {
+
+ModelOptimizer::ModelOptimizer(const OptimizationOptions& options, double extent)
+    : options_(options), extent_(extent), adam_(AdamOptions{.eps = options.adam_eps}) {}
+
+void ModelOptimizer::AddGroups(GaussianModel& model,
+                               GaussianGradients& grads,
+                               ToneMapper* tone_mapper) {
+  AddModelGroups(model, grads, LearningRatesAt(options_, extent_, 0), &adam_);
+  tone_mapper_group_ = tone_mapper && !tone_mapper->params().empty();
+  if (!tone_mapper_group_) return;
+  adam_.AddGroup({.name = kGroupToneMapper,
+                  .params = tone_mapper->params().data(),
+                  .grads = tone_mapper->grads().data(),
+                  .size = tone_mapper->params().size(),
+                  .lr = tone_mapper->learning_rate()});
+}
+
+void ModelOptimizer::BindGroups(GaussianModel& model,
+                                GaussianGradients& grads,
+                                ToneMapper* tone_mapper) {
+  BindModelGroups(model, grads, &adam_);
+  tone_mapper_group_ = tone_mapper && !tone_mapper->params().empty();
+  if (!tone_mapper_group_) return;
+  adam_.SetBuffers(kGroupToneMapper, tone_mapper->params().data(), tone_mapper->grads().data(),
+                   tone_mapper->params().size());
+}
+
+void ModelOptimizer::SetIteration(int iteration) {
+  SetModelLearningRates(LearningRatesAt(options_, extent_, iteration), &adam_);
+}
+
+GradientRowsDone ModelOptimizer::Begin(bool densify,
+                                       bool reset_opacity,
+                                       std::size_t num_gaussians) {
+  densify_ = densify;
+  reset_opacity_ = reset_opacity;
+  fused_.clear();
+  if (!densify) {
+    for (const char* group : kModelGroups) {
+      if (!(reset_opacity && std::string(group) == kGroupOpacity)) fused_.emplace_back(group);
+    }
+  }
+  unfused_.clear();
+  for (const std::string& group : adam_.GroupNames()) {
+    if (std::find(fused_.begin(), fused_.end(), group) == fused_.end()) unfused_.push_back(group);
+  }
+  row_step_.emplace(adam_.BeginRowStep(fused_, num_gaussians));
+  return StepModelRows(fused_, &*row_step_);
+}
+
+std::string ModelOptimizer::FirstNonFinite() const {
+  std::string bad = row_step_ ? row_step_->FirstNonFinite() : "";
+  if (bad.empty()) bad = adam_.FirstNonFiniteGradient(unfused_);
+  return bad;
+}
+
+void ModelOptimizer::Finish() {
+  row_step_.reset();
+  if (densify_) {
+    // Densification replaced the model tensors (they have no gradient now), but the reference's
+    // step after it still moves the tone mapper, which densification leaves alone.
+    if (tone_mapper_group_) adam_.StepGroup(kGroupToneMapper);
+    return;
+  }
+  for (const std::string& group : unfused_) {
+    if (!(reset_opacity_ && group == kGroupOpacity)) adam_.StepGroup(group);
+  }
+}
+
+}  // namespace hdr4d::method

@@ -1,0 +1,71 @@
+// The optimiser of one training run: Adam over the model's eight parameter groups and the tone
+// mapper's parameters, with the model's step fused into the backward. The renderer knows nothing
+// of it: it calls the GradientRowsDone callback that Begin returns with each block of Gaussians
+// whose gradient rows are final (frame_render.h), and the block is stepped there, while its
+// gradients are still in cache (fused_adam_step.h). Per iteration the trainer calls
+//   SetIteration -> Begin -> (backward) -> FirstNonFinite -> [densify] -> Finish
+// (docs/ARCHITECTURE.md, "One training step").
+#pragma once
+
+#include <cstddef>
+#include <iosfwd>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "method/gaussian/gaussian_model.h"
+#include "method/optim/adam.h"
+#include "method/optim/lr_schedule.h"
+#include "method/render/frame_render.h"
+#include "method/tonemap/tone_mapper.h"
+
+namespace hdr4d::method {
+
+inline constexpr const char* kGroupToneMapper = "tone_mapper";
+
+class ModelOptimizer {
+ public:
+  // `options` resolved for the run (schedules), `extent` the scene's (position learning rate).
+  ModelOptimizer(const OptimizationOptions& options, double extent);
+
+  // A new run: registers the model groups (learning rates of iteration 0) and the tone mapper's
+  // parameters when it has any (`tone_mapper` may be null). The optimiser keeps pointers into
+  // model, gradients and mapper.
+  void AddGroups(GaussianModel& model, GaussianGradients& grads, ToneMapper* tone_mapper);
+  // A resumed run, after Load: points the loaded groups at the buffers.
+  void BindGroups(GaussianModel& model, GaussianGradients& grads, ToneMapper* tone_mapper);
+
+  // The model's learning rates at `iteration` (position decays with the run's schedule).
+  void SetIteration(int iteration);
+
+  // Begins one step over `num_gaussians` rows. `densify`: this iteration densifies, which
+  // replaces every model tensor, so no model group is stepped (as in the reference);
+  // `reset_opacity`: the opacity is reset instead of stepped. Returns the callback for
+  // RenderBackward (empty when no model group is stepped); this object must outlive the backward.
+  GradientRowsDone Begin(bool densify, bool reset_opacity, std::size_t num_gaussians);
+  // After the backward: the first group whose gradient held a NaN or an infinity this step, or
+  // "". Such a state is partly stepped and must be dropped.
+  std::string FirstNonFinite() const;
+  // Steps what the backward did not: the tone mapper always; the model groups outside the fused
+  // step unless this iteration densifies or resets them. Call after any densification.
+  void Finish();
+
+  // The Adam state, for densification (which resizes its groups) and the opacity reset.
+  Adam& adam() { return adam_; }
+  void Save(std::ostream& out) const { adam_.Save(out); }
+  // Throws hdr4d::Error naming `source`; call BindGroups after it.
+  void Load(std::istream& in, const std::string& source) { adam_.Load(in, source); }
+
+ private:
+  OptimizationOptions options_;
+  double extent_;
+  Adam adam_;
+  bool tone_mapper_group_ = false;
+  bool densify_ = false;
+  bool reset_opacity_ = false;
+  std::vector<std::string> fused_;       // stepped inside the backward
+  std::vector<std::string> unfused_;     // every other registered group
+  std::optional<AdamRowStep> row_step_;  // the callback of Begin points at it
+};
+
+}  // namespace hdr4d::method

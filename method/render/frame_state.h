@@ -1,0 +1,97 @@
+// The state one frame's render keeps between its forward and backward, and the options and
+// hooks the renderer takes (ARCHITECTURE §4, "One training step").
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "method/gaussian/gaussian_model.h"
+#include "method/gaussian/projection.h"
+#include "method/gaussian/rotation4d.h"
+#include "method/raster/splats.h"
+
+namespace hdr4d::method {
+
+// An optional stage between each visible Gaussian's colour (model.channels values: the SH x time
+// value + 0.5, the log-HDR colour in ColorMode::kLogHdr) and the features the rasteriser blends.
+// HDR-4DGS's 3D branch is one: [exp(c), tone-mapped c], six channels in one pass (ARCHITECTURE §4).
+// Float production path only (RenderForward / RenderBackward).
+class ColorStage {
+ public:
+  virtual ~ColorStage() = default;
+  virtual int feature_channels() const = 0;
+  // colors: N x color_channels, valid in the rows listed in `visible` (ascending). Writes those
+  // rows of `features` (N x feature_channels).
+  virtual void Forward(const float* colors,
+                       int color_channels,
+                       const std::vector<std::uint32_t>& visible,
+                       float* features) = 0;
+  // From the rows `visible` of dL_dfeatures to the same rows of dL_dcolors (overwritten).
+  virtual void Backward(const float* colors,
+                        int color_channels,
+                        const std::vector<std::uint32_t>& visible,
+                        const float* dL_dfeatures,
+                        float* dL_dcolors) = 0;
+};
+
+struct RenderOptions {
+  int sh_degree = 3;              // active spatial SH degree (grows during training)
+  int time_degree = 2;            // active temporal degree (0 in 3D mode)
+  float time_duration = 1.0f;     // T of the cosine time basis
+  std::vector<float> background;  // one value per channel (empty: zeros)
+  RasterBackend backend = RasterBackend::kSimd;
+  ColorStage* color_stage = nullptr;  // null: the colours are the features
+};
+
+// The 3D Gaussian a 4D one (or a 3D one in static mode) presents at the frame's time, with the
+// intermediate matrices the backward needs (kept by the forward instead of recomputed).
+template <typename T>
+struct ConditionalGaussian {
+  Vec3<T> mean;
+  Mat3<T> cov;
+  T marginal = T(1);
+  Mat4<T> rotation4, sigma4;  // 4D mode
+  Mat3<T> rotation3;          // 3D mode
+};
+
+// Buffers of one frame, reused from frame to frame (they only grow).
+template <typename T>
+struct FrameStateT {
+  SplatBuffersT<T> splats;
+  SplatGradientsT<T> splat_grads;
+  RasterState raster;
+  std::vector<std::uint8_t> clamped;  // N x channels: LDR colour clamped at 0 (no gradient)
+  std::vector<ConditionalGaussian<T>> conditionals;  // N: valid where splats.radius > 0
+  // N: the reference's 3-sigma screen radius (0 = culled), what densification statistics use;
+  // splats.radius is the tighter radius the tiles are binned with (preprocess_common.h).
+  std::vector<int> screen_radius;
+  std::size_t num_visible = 0;  // Gaussians with radius > 0 after the preprocess
+  // With a colour stage only: the colours before it, their gradients, the visible rows.
+  std::vector<T> colors, color_grads;
+  std::vector<std::uint32_t> visible;
+  // Reference (scalar, any T) path only: the forward's outputs the backward needs.
+  std::vector<T> final_T;
+  std::vector<std::int32_t> n_contrib;
+};
+using FrameState = FrameStateT<float>;
+
+// The colour gradient rows of a block of Gaussians [begin, end): colour_dc and colour_rest of
+// Gaussian begin + r at color_dc + r * channels and color_rest + r * rest_stride.
+template <typename T>
+struct GradientRowsT {
+  const T* color_dc;
+  const T* color_rest;
+};
+using GradientRows = GradientRowsT<float>;
+
+// Called with Gaussian ranges [begin, end) whose gradient rows are final, from worker threads,
+// each Gaussian exactly once per backward: the trainer's optimiser step runs here, on rows still
+// in cache (AdamRowStep). The colour rows are passed (see PreprocessBackward); the other rows
+// are in `grads`.
+template <typename T>
+using GradientRowsDoneT =
+    std::function<void(std::int64_t begin, std::int64_t end, const GradientRowsT<T>& colour)>;
+using GradientRowsDone = GradientRowsDoneT<float>;
+
+}  // namespace hdr4d::method

@@ -1,0 +1,71 @@
+// HDR-4DGS's 3D branch (ARCHITECTURE §4): each visible Gaussian's log-HDR colour c becomes the features
+// the rasteriser blends, in one pass:
+//   HDR only:            [exp(c)]                         (3 channels; 4dgs-hdr, or a mapper
+//                                                          that needs whole images: Durand)
+//   HDR + tone-mapped:   [exp(c), TM(c + log e)]          (6 channels; hdr4dgs, hdr-gs)
+// Before mapping it writes the radiance bank (the mean log-HDR colour, ToneMapper::
+// ObserveMeanLogHdr) and starts the tone mapper's frame (BeginFrame), so the context learner of
+// the Dynamic Tone Mapper sees the row written for this very frame when it is the first one.
+//
+// The bank's mean runs over the Gaussians present at the frame's time (not culled by the
+// temporal marginal or the frustum), not over every Gaussian as the reference does: a culled
+// Gaussian then costs nothing, and the mean describes what the frame shows. Said in README.
+//
+// exp is evaluated at min(c, kMaxLogRadiance) (radiance up to e^30 ~ 1e13) so no blended value
+// can overflow; beyond it the gradient is 0.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "method/render/frame_state.h"
+#include "method/tonemap/tone_mapper.h"
+
+namespace hdr4d::method {
+
+inline constexpr float kMaxLogRadiance = 30.0f;
+
+// exp(min(c, kMaxLogRadiance)) and its derivative, in any floating type.
+template <typename T>
+inline T GuardedExp(T c) {
+  return c < T(kMaxLogRadiance) ? std::exp(c) : std::exp(T(kMaxLogRadiance));
+}
+template <typename T>
+inline T GuardedExpBackward(T c, T dL_dy) {
+  return c < T(kMaxLogRadiance) ? dL_dy * std::exp(c) : T(0);
+}
+
+class HdrColorStage final : public ColorStage {
+ public:
+  // tone_mapper may be null (HDR only). With map_gaussians false (or a mapper that is not
+  // pointwise) the stage still writes the bank and begins the frame, but blends HDR only.
+  HdrColorStage(ToneMapper* tone_mapper, bool map_gaussians);
+
+  // The view the next Forward renders. observe_bank: write the radiance bank (every render does,
+  // as in the reference; off for renders that must not change the run, e.g. tone-curve plots).
+  void SetFrame(const ToneFrame& frame, bool observe_bank) {
+    frame_ = frame;
+    observe_bank_ = observe_bank;
+  }
+  bool maps_gaussians() const { return map_; }
+
+  int feature_channels() const override { return map_ ? 6 : 3; }
+  void Forward(const float* colors,
+               int color_channels,
+               const std::vector<std::uint32_t>& visible,
+               float* features) override;
+  void Backward(const float* colors,
+                int color_channels,
+                const std::vector<std::uint32_t>& visible,
+                const float* dL_dfeatures,
+                float* dL_dcolors) override;
+
+ private:
+  ToneMapper* tm_;
+  bool map_;
+  ToneFrame frame_;
+  bool observe_bank_ = true;
+  std::vector<float> packed_, ldr_, dldr_, dlog_;  // compact rows of the visible Gaussians
+};
+
+}  // namespace hdr4d::method

@@ -1,0 +1,165 @@
+// The fast preprocess (preprocess.h): float, 4D, the Highway kernels of preprocess_simd.h over
+// batches of Gaussians, the colour sums per Gaussian (preprocess_common.h).
+#include <algorithm>
+#include <vector>
+
+#include "core/parallel.h"
+#include "method/render/preprocess.h"
+#include "method/render/preprocess_common.h"
+#include "method/render/preprocess_simd.h"
+
+namespace hdr4d::method {
+using namespace detail;
+namespace {
+
+PreprocessSimdJob MakePreprocessJob(const GaussianModel& model,
+                                    const ViewParams<float>& view,
+                                    float time,
+                                    const RenderOptions& options) {
+  PreprocessSimdJob job;
+  job.xyz = model.xyz.data();
+  job.t = model.t.data();
+  job.log_scales = model.log_scales.data();
+  job.rot_left = model.rot_left.data();
+  job.rot_right = model.rot_right.data();
+  job.opacity_logit = model.opacity_logit.data();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) job.rotation[3 * r + c] = view.rotation(r, c);
+    job.translation[r] = view.translation[r];
+  }
+  job.fx = view.fx;
+  job.fy = view.fy;
+  job.cx = view.cx;
+  job.cy = view.cy;
+  job.lim_x = kFrustumTanMargin * view.TanFovX();
+  job.lim_y = kFrustumTanMargin * view.TanFovY();
+  const Vec3<float> center = view.Center();
+  for (int k = 0; k < 3; ++k) job.center[k] = center[k];
+  job.time = time;
+  job.duration = options.time_duration;
+  job.sh_degree = options.sh_degree;
+  job.time_degree = TimeDegree(model, options);
+  job.functions = model.basis.sh_functions();
+  job.coefficients = model.basis.coefficients();
+  detail::CheckColorDegrees(model.basis, job.sh_degree, job.time_degree);
+  HDR4D_CHECK(job.time_degree == 0 || job.duration > 0.0f);
+  return job;
+}
+
+// One lane's weights out of a batch's [k][lane] block.
+inline void LaneWeights(const float* batch, int lane, int coefficients, float* w) {
+  for (int k = 0; k < coefficients; ++k) w[k] = batch[k * kPreprocessBatch + lane];
+}
+
+}  // namespace
+
+void PreprocessForwardFast(const GaussianModel& model,
+                           const ViewParams<float>& view,
+                           float time,
+                           const RenderOptions& options,
+                           FrameState* state) {
+  HDR4D_CHECK(model.temporal);
+  BeginPreprocess(model, options, state);
+  const std::size_t n = model.size();
+  SplatBuffersT<float>& s = state->splats;
+  const int time_degree = TimeDegree(model, options);
+  const std::size_t stride = model.rest_stride();
+  std::vector<std::int64_t> visible_per_chunk((n + kGaussianGrain - 1) / kGaussianGrain, 0);
+  PreprocessSimdJob job = MakePreprocessJob(model, view, time, options);
+  job.mean2d = s.mean2d.data();
+  job.conic = s.conic.data();
+  job.depth = s.depth.data();
+  job.opacity = s.opacity.data();
+  job.radius = s.radius.data();
+  job.screen_radius = state->screen_radius.data();
+  const int coefficients = job.coefficients;
+  ParallelForChunks(
+      static_cast<std::int64_t>(n), kGaussianGrain, [&](std::int64_t b, std::int64_t e) {
+        alignas(64) float batch_w[kMaxColorCoefficients * kPreprocessBatch];
+        float w[kMaxColorCoefficients];
+        std::int64_t visible = 0;
+        for (std::int64_t g0 = b; g0 < e; g0 += kPreprocessBatch) {
+          const int count = static_cast<int>(std::min<std::int64_t>(kPreprocessBatch, e - g0));
+          PreprocessForwardSimd(job, g0, count, batch_w);
+          for (int l = 0; l < count; ++l) {
+            const std::size_t i = static_cast<std::size_t>(g0 + l);
+            // The colour rows stream from memory (the optimiser's sweep evicts them).
+            if (stride > 0 && g0 + l + kColorAhead < e)
+              PrefetchRow(&model.color_rest[(i + kColorAhead) * stride], stride);
+            if (state->screen_radius[i] == 0) continue;
+            LaneWeights(batch_w, l, coefficients, w);
+            WriteColour(model, i, w, options, time_degree, state);
+            ++visible;
+          }
+        }
+        visible_per_chunk[b / kGaussianGrain] = visible;
+      });
+  FinishPreprocess(options, model, visible_per_chunk, state);
+}
+
+void PreprocessBackwardFast(const GaussianModel& model,
+                            const ViewParams<float>& view,
+                            float time,
+                            const RenderOptions& options,
+                            const FrameState& state,
+                            GaussianGradients* grads,
+                            const GradientRowsDone& rows_done) {
+  HDR4D_CHECK(model.temporal);
+  const std::size_t n = model.size();
+  HDR4D_CHECK(grads->size() == n && grads->color_rest.size() == model.color_rest.size());
+  const int channels = model.channels;
+  const SplatBuffersT<float>& s = state.splats;
+  const SplatGradientsT<float>& sg = state.splat_grads;
+  HDR4D_CHECK(sg.opacity.size() == n);
+  const std::size_t stride = model.rest_stride();
+  const int num_coefficients = model.basis.coefficients();
+  PreprocessSimdJob job = MakePreprocessJob(model, view, time, options);
+  job.radius_in = s.radius.data();
+  job.g_mean2d = sg.mean2d.data();
+  job.g_conic = sg.conic.data();
+  job.g_opacity = sg.opacity.data();
+  job.d_xyz = grads->xyz.data();
+  job.d_t = grads->t.data();
+  job.d_log_scales = grads->log_scales.data();
+  job.d_rot_left = grads->rot_left.data();
+  job.d_rot_right = grads->rot_right.data();
+  job.d_opacity_logit = grads->opacity_logit.data();
+  ParallelForChunks(
+      static_cast<std::int64_t>(n), kGaussianGrain, [&](std::int64_t b, std::int64_t e) {
+        alignas(64) float batch_w[kMaxColorCoefficients * kPreprocessBatch];
+        float w[kMaxColorCoefficients];
+        std::int64_t done = b;  // rows before this are handed to rows_done
+        // With rows_done the colour rows (nine tenths of the gradient) go to a per-thread block
+        // that is handed over and reused, so they never travel to memory and back.
+        thread_local std::vector<float> block_dc, block_rest;
+        if (rows_done) {
+          block_dc.resize(static_cast<std::size_t>(kRowsDoneBlock + kPreprocessBatch) * channels);
+          block_rest.resize(static_cast<std::size_t>(kRowsDoneBlock + kPreprocessBatch) * stride);
+        }
+        for (std::int64_t g0 = b; g0 < e; g0 += kPreprocessBatch) {
+          const int count = static_cast<int>(std::min<std::int64_t>(kPreprocessBatch, e - g0));
+          PreprocessBackwardSimd(job, g0, count, batch_w);
+          for (int l = 0; l < count; ++l) {
+            const std::size_t i = static_cast<std::size_t>(g0 + l);
+            const std::size_t row = rows_done ? i - static_cast<std::size_t>(done) : i;
+            float* gdc = rows_done ? &block_dc[row * channels] : &grads->color_dc[i * channels];
+            float* grest = rows_done ? &block_rest[row * stride] : &grads->color_rest[i * stride];
+            if (s.radius[i] <= 0) {
+              std::fill_n(gdc, channels, 0.0f);
+              std::fill_n(grest, stride, 0.0f);
+              continue;
+            }
+            LaneWeights(batch_w, l, num_coefficients, w);
+            WriteColourGradient(model, i, w, options, state, gdc, grest);
+          }
+          // Blocks of kRowsDoneBlock rows: ~160 KB of gradients at 160 floats a row, still in L2.
+          const std::int64_t next = g0 + count;
+          if (rows_done && (next - done >= kRowsDoneBlock || next == e)) {
+            rows_done(done, next, GradientRows{block_dc.data(), block_rest.data()});
+            done = next;
+          }
+        }
+      });
+}
+
+}  // namespace hdr4d::method

@@ -1,0 +1,68 @@
+// The Highway kernels of the fast preprocess (preprocess.h, preprocess_fast.cpp): the float
+// preprocess of 4D Gaussians vectorised over Gaussians, runtime dispatch over the compiled
+// targets. It computes what the reference (preprocess_reference.cpp) computes per Gaussian with
+// method/gaussian/'s maths, in the same formulas, so results agree up to float rounding; the
+// tests hold the two together on every compiled target. The colour sums over each Gaussian's
+// coefficient rows are shared with the reference (preprocess_common.h).
+#pragma once
+
+#include <cstdint>
+
+namespace hdr4d::method::detail {
+
+// Gaussians per batch: one AVX-512 vector (two AVX2 vectors, and so on).
+inline constexpr int kPreprocessBatch = 16;
+
+struct PreprocessSimdJob {
+  // Model (4D mode), N rows each.
+  const float* xyz = nullptr;  // N x 3
+  const float* t = nullptr;
+  const float* log_scales = nullptr;  // N x 4
+  const float* rot_left = nullptr;    // N x 4
+  const float* rot_right = nullptr;   // N x 4
+  const float* opacity_logit = nullptr;
+  // View.
+  float rotation[9] = {};  // row-major cam_from_world rotation
+  float translation[3] = {};
+  float fx = 0, fy = 0, cx = 0, cy = 0;
+  float lim_x = 0, lim_y = 0;  // kFrustumTanMargin x tan(fov / 2)
+  float center[3] = {};
+  float time = 0, duration = 1;
+  // Colour basis.
+  int sh_degree = 0, time_degree = 0;
+  int functions = 16;     // SH functions per time block of the basis
+  int coefficients = 48;  // K, all time blocks
+  // Forward outputs (rows of Gaussian i).
+  float* mean2d = nullptr;  // N x 2
+  float* conic = nullptr;   // N x 3
+  float* depth = nullptr;
+  float* opacity = nullptr;
+  int* radius = nullptr;         // binning radius, 0: culled or unreachable
+  int* screen_radius = nullptr;  // 3-sigma radius, 0: culled
+  // Backward inputs.
+  const int* radius_in = nullptr;  // the forward's binning radius: > 0 gets gradients
+  const float* g_mean2d = nullptr;
+  const float* g_conic = nullptr;
+  const float* g_opacity = nullptr;
+  // Backward outputs, written for every Gaussian of the batch (zeros where radius_in is 0).
+  float* d_xyz = nullptr;
+  float* d_t = nullptr;
+  float* d_log_scales = nullptr;
+  float* d_rot_left = nullptr;
+  float* d_rot_right = nullptr;
+  float* d_opacity_logit = nullptr;
+};
+
+// Gaussians [begin, begin + count), count <= kPreprocessBatch. Both also write the colour-basis
+// weights of each Gaussian (zeros beyond the active degrees) at weights[k * kPreprocessBatch +
+// lane], k < coefficients; in the forward only for lanes with screen_radius > 0.
+void PreprocessForwardSimd(const PreprocessSimdJob& job,
+                           std::int64_t begin,
+                           int count,
+                           float* weights);
+void PreprocessBackwardSimd(const PreprocessSimdJob& job,
+                            std::int64_t begin,
+                            int count,
+                            float* weights);
+
+}  // namespace hdr4d::method::detail

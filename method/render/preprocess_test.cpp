@@ -1,0 +1,269 @@
+// The fast preprocess against the reference (preprocess.h), forward and backward, on every
+// Highway target compiled in, on random scenes and on the edge cases where the two could part:
+// the near plane, the frustum guard band, the time-variance floor, Gaussians culled in time,
+// degenerate scales, one Gaussian and none.
+#include "method/render/preprocess.h"
+
+#include <gtest/gtest.h>
+#include <hwy/targets.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/camera.h"
+
+namespace hdr4d::method {
+namespace {
+
+constexpr float kTime = 0.5f;
+
+Camera TestCamera() {
+  return Camera{PinholeIntrinsics::FromFovX(0.9, 64, 48),
+                LookAtWorldFromCamGl({0.3, -4.0, 0.4}, {0, 0, 0}, Eigen::Vector3d::UnitZ())};
+}
+
+// Gaussian i with identity-ish rotations, the given centre, time and log-scales.
+void SetGaussian(GaussianModel& m,
+                 int i,
+                 const Eigen::Vector3d& p,
+                 float t,
+                 float log_scale,
+                 float log_time_scale,
+                 std::mt19937& rng) {
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  for (int a = 0; a < 3; ++a) m.xyz[i * 3 + a] = static_cast<float>(p[a]);
+  m.t[i] = t;
+  for (int a = 0; a < 3; ++a) m.log_scales[i * 4 + a] = log_scale + 0.3f * u(rng);
+  m.log_scales[i * 4 + 3] = log_time_scale;
+  for (int a = 0; a < 4; ++a) {
+    m.rot_left[i * 4 + a] = 0.4f * u(rng) + (a == 0 ? 1.0f : 0.0f);
+    m.rot_right[i * 4 + a] = 0.4f * u(rng) + (a == 0 ? 1.0f : 0.0f);
+  }
+  m.opacity_logit[i] = 1.5f * u(rng);
+  for (int c = 0; c < 3; ++c) m.color_dc[i * 3 + c] = 0.5f + 0.5f * u(rng);
+  const std::size_t stride = m.rest_stride();
+  for (std::size_t k = 0; k < stride; ++k) m.color_rest[i * stride + k] = 0.1f * u(rng);
+}
+
+// `random` Gaussians in front of the camera, then (with edge_cases) the ones on the boundaries.
+GaussianModel Scene(int random, bool edge_cases, unsigned seed) {
+  const Camera camera = TestCamera();
+  const Eigen::Vector3d eye = camera.Center();
+  const Eigen::Matrix3d world_from_cam = camera.world_from_cam_gl.topLeftCorner<3, 3>();
+  // OpenGL camera axes: x right, y up, looking down -z.
+  const Eigen::Vector3d right = world_from_cam.col(0), up = world_from_cam.col(1),
+                        forward = -world_from_cam.col(2);
+  const double tan_x = std::tan(0.45);  // half of the 0.9 rad horizontal field of view
+  std::vector<Eigen::Vector3d> points;
+  std::vector<std::pair<float, float>> scales;  // log spatial scale, log time scale
+  std::vector<float> times;
+  if (edge_cases) {
+    for (double depth : {0.15, 0.199, 0.201, 0.25, 0.5}) {  // around kNearPlane = 0.2
+      points.push_back(eye + depth * forward + 0.01 * right);
+      scales.push_back({std::log(0.05f), std::log(0.3f)});
+      times.push_back(kTime);
+    }
+    for (double side : {-1.0, 1.0}) {  // around the guard band at 1.3 tan(fov / 2)
+      for (double f : {1.1, 1.29, 1.31, 1.6}) {
+        points.push_back(eye + 3.0 * forward + side * f * tan_x * 3.0 * right);
+        scales.push_back({std::log(0.2f), std::log(0.3f)});
+        times.push_back(kTime);
+      }
+    }
+    for (float log_time_scale : {std::log(1e-6f), std::log(1e-12f), -40.0f}) {  // floor
+      points.push_back(eye + 4.0 * forward + 0.2 * up);
+      scales.push_back({std::log(0.1f), log_time_scale});
+      times.push_back(kTime);
+    }
+    for (float t : {kTime + 0.9f, kTime - 2.0f, kTime + 0.31f}) {  // culled in time, or nearly
+      points.push_back(eye + 4.0 * forward);
+      scales.push_back({std::log(0.1f), std::log(0.12f)});
+      times.push_back(t);
+    }
+    for (float log_scale : {-16.0f, -9.0f, 2.0f}) {  // needle, dot and a huge Gaussian
+      points.push_back(eye + 4.0 * forward - 0.3 * right);
+      scales.push_back({log_scale, std::log(0.3f)});
+      times.push_back(kTime);
+    }
+  }
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int i = 0; i < random; ++i) {
+    points.push_back(Eigen::Vector3d(0.8 * u(rng), 0.8 * u(rng), 0.8 * u(rng)));
+    scales.push_back({static_cast<float>(std::log(0.1) + 0.5 * u(rng)),
+                      static_cast<float>(std::log(0.3) + 0.3 * u(rng))});
+    times.push_back(static_cast<float>(0.5 + 0.2 * u(rng)));
+  }
+  GaussianModel m;
+  m.temporal = true;
+  m.channels = 3;
+  m.Resize(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    SetGaussian(m, static_cast<int>(i), points[i], times[i], scales[i].first, scales[i].second,
+                rng);
+  }
+  return m;
+}
+
+// |a - b| within abs + rel * |b| for every value; returns how many were not.
+int CountFar(const std::vector<float>& a,
+             const std::vector<float>& b,
+             float abs,
+             float rel,
+             const std::string& name) {
+  EXPECT_EQ(a.size(), b.size()) << name;
+  int far = 0;
+  for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i) {
+    if (!(std::abs(a[i] - b[i]) <= abs + rel * std::abs(b[i]))) {
+      if (far < 5)
+        ADD_FAILURE() << name << "[" << i << "]: fast " << a[i] << ", reference " << b[i];
+      ++far;
+    }
+  }
+  return far;
+}
+
+// Forward and backward of both paths on `model`; every output agrees.
+void ExpectPathsAgree(const GaussianModel& model, int sh_degree, unsigned seed) {
+  const ViewParams<float> view = ViewParams<float>::FromCamera(TestCamera());
+  RenderOptions options;
+  options.sh_degree = sh_degree;
+  options.time_degree = 2;
+  FrameState fast, ref;
+  PreprocessForwardFast(model, view, kTime, options, &fast);
+  PreprocessForwardReference(model, view, kTime, options, &ref);
+  const std::size_t n = model.size();
+  ASSERT_EQ(fast.splats.radius.size(), n);
+  // Integer radii may differ by one where a float lands on the other side of a ceil.
+  int radius_off = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const int a = fast.splats.radius[i], b = ref.splats.radius[i];
+    EXPECT_LE(std::abs(a - b), 1) << "radius of Gaussian " << i;
+    EXPECT_EQ(a > 0, b > 0) << "visibility of Gaussian " << i;
+    EXPECT_LE(std::abs(fast.screen_radius[i] - ref.screen_radius[i]), 1) << i;
+    radius_off += a != b;
+  }
+  EXPECT_LE(radius_off, static_cast<int>(n / 50 + 1));
+  EXPECT_EQ(fast.num_visible, ref.num_visible);
+  // Outputs of the visible Gaussians (the rest are unspecified).
+  auto visible_rows = [&](const std::vector<float>& v, int width) {
+    std::vector<float> out;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (ref.splats.radius[i] > 0 && fast.splats.radius[i] > 0)
+        out.insert(out.end(), v.begin() + i * width, v.begin() + (i + 1) * width);
+    }
+    return out;
+  };
+  CountFar(visible_rows(fast.splats.mean2d, 2), visible_rows(ref.splats.mean2d, 2), 2e-3f, 1e-5f,
+           "mean2d");
+  // The conic against its row's largest entry: an off-diagonal near zero (a needle whose 2D
+  // covariance is the dilation alone) is a difference of nearly equal numbers.
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!(ref.splats.radius[i] > 0 && fast.splats.radius[i] > 0)) continue;
+    float row = 0;
+    for (int k = 0; k < 3; ++k) row = std::max(row, std::abs(ref.splats.conic[3 * i + k]));
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NEAR(fast.splats.conic[3 * i + k], ref.splats.conic[3 * i + k], 2e-4f * row)
+          << "conic of Gaussian " << i << ", entry " << k;
+    }
+  }
+  CountFar(visible_rows(fast.splats.depth, 1), visible_rows(ref.splats.depth, 1), 1e-6f, 1e-5f,
+           "depth");
+  CountFar(visible_rows(fast.splats.opacity, 1), visible_rows(ref.splats.opacity, 1), 1e-6f, 1e-4f,
+           "opacity");
+  CountFar(visible_rows(fast.splats.features, 3), visible_rows(ref.splats.features, 3), 2e-6f,
+           1e-4f, "features");
+
+  // Backward from the same splat gradients (zero where either path culled).
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  ref.splat_grads.SetZero(n, 3);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!(ref.splats.radius[i] > 0 && fast.splats.radius[i] > 0)) continue;
+    for (int k = 0; k < 2; ++k) ref.splat_grads.mean2d[2 * i + k] = u(rng);
+    for (int k = 0; k < 3; ++k) ref.splat_grads.conic[3 * i + k] = u(rng);
+    ref.splat_grads.opacity[i] = u(rng);
+    for (int k = 0; k < 3; ++k) ref.splat_grads.features[3 * i + k] = u(rng);
+  }
+  fast.splat_grads = ref.splat_grads;
+  GaussianGradients g_fast, g_ref;
+  g_fast.ZerosLike(model);
+  g_ref.ZerosLike(model);
+  PreprocessBackwardFast(model, view, kTime, options, fast, &g_fast);
+  PreprocessBackwardReference(model, view, kTime, options, ref, &g_ref);
+  // Gradients of badly conditioned Gaussians (needles, floored time variance) are large; the
+  // absolute tolerance scales with each field's largest value.
+  auto max_abs = [](const std::vector<float>& v) {
+    float m = 0;
+    for (float x : v) m = std::max(m, std::abs(x));
+    return m;
+  };
+  for (const auto& [name, a, b] :
+       {std::tuple{"xyz", &g_fast.xyz, &g_ref.xyz}, std::tuple{"t", &g_fast.t, &g_ref.t},
+        std::tuple{"log_scales", &g_fast.log_scales, &g_ref.log_scales},
+        std::tuple{"rot_left", &g_fast.rot_left, &g_ref.rot_left},
+        std::tuple{"rot_right", &g_fast.rot_right, &g_ref.rot_right},
+        std::tuple{"opacity_logit", &g_fast.opacity_logit, &g_ref.opacity_logit},
+        std::tuple{"color_dc", &g_fast.color_dc, &g_ref.color_dc},
+        std::tuple{"color_rest", &g_fast.color_rest, &g_ref.color_rest}}) {
+    CountFar(*a, *b, 1e-4f * std::max(1e-3f, max_abs(*b)), 2e-3f, name);
+  }
+}
+
+// Runs `body` once per Highway target compiled into hdr4d and supported here (AVX-512, AVX2,
+// the baseline), with dispatch restricted to that target; returns how many ran.
+template <typename Body>
+int ForEachCompiledTarget(Body body) {
+  const std::int64_t supported = hwy::SupportedTargets();
+  int ran = 0;
+  for (std::int64_t target = 1; target != 0 && target <= HWY_TARGETS; target <<= 1) {
+    if ((HWY_TARGETS & target) == 0 || (supported & target) == 0) continue;
+    hwy::SetSupportedTargetsForTest(target);
+    SCOPED_TRACE(hwy::TargetName(target));
+    body();
+    ++ran;
+  }
+  hwy::SetSupportedTargetsForTest(0);
+  return ran;
+}
+
+TEST(Preprocess, EveryCompiledTargetMatchesTheReference) {
+  const GaussianModel model = Scene(300, /*edge_cases=*/true, 11);
+  const int ran = ForEachCompiledTarget([&] {
+    ExpectPathsAgree(model, 3, 1);
+    ExpectPathsAgree(model, 1, 2);  // SH degree still growing: inactive coefficients
+  });
+  EXPECT_GE(ran, 2);  // at least one vector target and the baseline
+}
+
+TEST(Preprocess, EdgeCasesAreHandledAlikeAndAsIntended) {
+  const GaussianModel model = Scene(0, /*edge_cases=*/true, 12);
+  ForEachCompiledTarget([&] { ExpectPathsAgree(model, 3, 3); });
+  // The intended outcome, from the reference: behind the near plane and far outside the guard
+  // band culled, far from t culled, the floored time variance still finite.
+  const ViewParams<float> view = ViewParams<float>::FromCamera(TestCamera());
+  RenderOptions options;
+  FrameState ref;
+  PreprocessForwardReference(model, view, kTime, options, &ref);
+  EXPECT_EQ(ref.splats.radius[0], 0) << "0.15 in front of the camera: before the near plane";
+  EXPECT_EQ(ref.splats.radius[1], 0) << "0.199: before the near plane";
+  for (int i : {16, 17}) EXPECT_EQ(ref.screen_radius[i], 0) << "culled in time: " << i;
+  for (std::size_t i = 0; i < model.size(); ++i) {
+    if (ref.splats.radius[i] == 0) continue;
+    for (int k = 0; k < 3; ++k) EXPECT_TRUE(std::isfinite(ref.splats.conic[3 * i + k])) << i;
+    EXPECT_TRUE(std::isfinite(ref.splats.opacity[i])) << i;
+  }
+}
+
+TEST(Preprocess, OneGaussianAndNone) {
+  ForEachCompiledTarget([&] {
+    ExpectPathsAgree(Scene(1, false, 13), 3, 4);
+    ExpectPathsAgree(Scene(0, false, 14), 3, 5);
+  });
+}
+
+}  // namespace
+}  // namespace hdr4d::method

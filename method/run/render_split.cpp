@@ -1,0 +1,270 @@
+#include "method/run/render_split.h"
+
+#include <fmt/format.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <chrono>
+#include <cstdlib>
+#include <numbers>
+#include <sstream>
+
+#include "core/atomic_file.h"
+#include "core/dataset.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/json_util.h"
+#include "core/output_guard.h"
+#include "core/parallel.h"
+#include "core/progress.h"
+#include "method/render/frame_render.h"
+#include "method/tonemap/radiance_bank.h"
+#include "method/tonemap/tone_mapper_registry.h"
+#include "method/train/checkpoint.h"
+#include "method/train/view_outputs.h"
+
+namespace hdr4d::method {
+namespace fs = std::filesystem;
+
+LoadedRun LoadRun(const fs::path& run) {
+  LoadedRun r;
+  const fs::path config_path = run / "config.json";
+  r.config = ReadJsonFile(config_path);
+  // Typed reads name the file and the key of a value that is missing or of the wrong type.
+  const JsonField config(r.config, config_path.string());
+  r.dataset = LoadDataset(config["data"].String(),
+                          {.image_check = ImageCheck::kNone, .require_test = false});
+  const fs::path checkpoint_path = run / "checkpoint.bin";
+  Checkpoint c = LoadCheckpoint(checkpoint_path);
+  r.model = std::move(c.model);
+  r.background = static_cast<float>(config.NumberOr("background", 0.0));
+  if (!(r.background >= 0 && r.background <= 1))
+    config["background"].Fail(fmt::format("must be within [0, 1], got {}", r.background));
+  r.num_times = static_cast<int>(config.IntOr("num_times", 1, 1, 10'000'000));
+  if (!config.Has("resolved")) {  // runs of plain 4DGS from before HDR training existed
+    r.resolved.hdr_colors = r.model.color_mode == ColorMode::kLogHdr;
+    return r;
+  }
+  const JsonField resolved = config["resolved"].Object();
+  r.resolved.hdr_colors = resolved["hdr_colors"].Bool();
+  r.resolved.ldr_gaussian = resolved["ldr_gaussian"].Bool();
+  r.resolved.ldr_pixel = resolved["ldr_pixel"].Bool();
+  r.resolved.hdr = resolved["hdr"].Bool();
+  r.resolved.final_ldr_from_pixels = resolved["final_ldr_from_pixels"].Bool();
+  if (r.config.contains("tone_mapper")) {
+    r.tone_mapper =
+        MakeToneMapper(ToneMapperConfig::FromJson(r.config["tone_mapper"], config_path.string()));
+    if (c.tone_mapper_state.empty())
+      Fail("{}: checkpoint has no tone mapper state", checkpoint_path.string());
+    std::istringstream state(c.tone_mapper_state);
+    r.tone_mapper->Load(state, checkpoint_path.string());
+  }
+  return r;
+}
+
+std::string LoadedRun::MethodName() const {
+  const auto hdr = config.find("hdr");
+  if (hdr == config.end() || !hdr->is_object()) return "?";
+  const auto method = hdr->find("method");
+  return method != hdr->end() && method->is_string() ? method->get<std::string>() : "?";
+}
+
+void ProtectRunInputs(const fs::path& run) {
+  const std::string role = fmt::format("a file of run {} that this command reads", run.string());
+  ProtectInputFile(run / "config.json", role);
+  ProtectInputFile(run / "checkpoint.bin", role);
+}
+
+double MedianExposure(const Dataset& dataset) {
+  std::vector<double> e;
+  for (const Frame& f : dataset.train) e.push_back(f.exposure);
+  if (e.empty()) return 1.0;
+  std::nth_element(e.begin(), e.begin() + e.size() / 2, e.end());
+  return e[e.size() / 2];
+}
+
+namespace {
+
+bool HaveFfmpeg() { return std::system("command -v ffmpeg >/dev/null 2>&1") == 0; }
+
+// A path as one shell word, whatever quotes or spaces it holds.
+std::string ShellQuote(const std::string& text) {
+  std::string quoted = "'";
+  for (char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return quoted + "'";
+}
+
+}  // namespace
+
+std::vector<Camera> OrbitCameras(const std::vector<Camera>& train, int frames) {
+  HDR4D_CHECK(!train.empty() && frames > 0);
+  // Least-squares point closest to every optical axis: sum (I - d d^T) p = sum (I - d d^T) c.
+  Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  Eigen::Vector3d up = Eigen::Vector3d::Zero();
+  for (const Camera& c : train) {
+    const Eigen::Vector3d d =
+        -c.world_from_cam_gl.block<3, 1>(0, 2).normalized();  // GL looks down -Z
+    const Eigen::Matrix3d p = Eigen::Matrix3d::Identity() - d * d.transpose();
+    a += p;
+    b += p * c.Center();
+    up += c.world_from_cam_gl.block<3, 1>(0, 1);
+  }
+  Eigen::Vector3d target = Eigen::Vector3d::Zero();
+  if (std::abs(a.determinant()) > 1e-9) target = a.ldlt().solve(b);  // parallel axes: origin
+  up = up.norm() > 1e-9 ? up.normalized() : Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d start = train.front().Center() - target;
+  std::vector<Camera> path;
+  for (int k = 0; k < frames; ++k) {
+    const double angle = 2 * std::numbers::pi * k / frames;
+    const Eigen::Vector3d eye = target + Eigen::AngleAxisd(angle, up) * start;
+    path.push_back(Camera{train.front().intrinsics, LookAtWorldFromCamGl(eye, target, up)});
+  }
+  return path;
+}
+
+int RenderRun(const RenderRunOptions& options) {
+  // The CLI checks its flags too; a library caller gets the same refusals.
+  if (options.threads < 0) Fail("render: threads {} must be >= 0", options.threads);
+  if (options.video_frames < 0) Fail("render: video frames {} must be >= 1", options.video_frames);
+  if (options.fps < 1 || options.fps > 1000)
+    Fail("render: fps {} must be within [1, 1000]", options.fps);
+  if (options.camera_index < 0) Fail("render: camera {} must be >= 0", options.camera_index);
+  const ThreadLimit limit(options.threads);
+  if (options.exposure && !(*options.exposure > 0 && std::isfinite(*options.exposure)))
+    Fail("render: --exposure {} must be a positive number of seconds", *options.exposure);
+  const Split split = ParseSplit(options.split, "render");
+  LoadedRun run = LoadRun(options.run);
+  const Dataset& dataset = run.dataset;
+  const GaussianModel& model = run.model;
+  const fs::path out = options.out.empty() ? options.run / "renders" / options.split : options.out;
+  RenderOptions render;
+  render.sh_degree = model.basis.max_sh_degree;
+  render.time_degree = model.temporal ? model.basis.max_time_degree : 0;
+  ViewRenderer renderer(model, run.tone_mapper.get(), run.resolved, render, run.background);
+  const std::vector<Frame>& frames = dataset.FramesOf(split);
+  if (frames.empty()) Fail("{}: the {} split has no frames", dataset.root.string(), options.split);
+  const double default_exposure = options.exposure.value_or(MedianExposure(dataset));
+  std::vector<float> ldr, hdr;
+  // A command's renders are moved into place together once all are made: a failure or a kill
+  // halfway never leaves new renders mixed with an earlier run's (core/atomic_file.h).
+  FileBatch batch;
+  std::vector<double> render_seconds;  // per view, the Render call alone
+  // Renders one view; writes the LDR image to ldr_path and the HDR one to hdr_path (each when
+  // the model has that output and the path is not empty). Returns the number of files written.
+  auto render_to = [&](const Camera& camera, float time, double exposure, const fs::path& ldr_path,
+                       const fs::path& hdr_path) {
+    const int w = camera.intrinsics.width, h = camera.intrinsics.height;
+    const ToneFrame frame{RadianceBank::TimeIndex(time, run.num_times), -1,
+                          static_cast<float>(std::log(exposure))};
+    const auto start = std::chrono::steady_clock::now();
+    renderer.Render(camera, time, frame, &ldr, options.write_hdr ? &hdr : nullptr);
+    render_seconds.push_back(
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    int written = 0;
+    if (!ldr.empty() && !ldr_path.empty()) {
+      WriteImage(ldr_path, DisplayImageFromBuffer(ldr.data(), w, h, 3), {.batch = &batch});
+      ++written;
+    }
+    if (options.write_hdr && !hdr.empty() && !hdr_path.empty()) {
+      Image image(w, h, 3, Encoding::kLinear);
+      std::copy(hdr.begin(), hdr.end(), image.data());
+      // Float, not half: radiance in physical units passes half's 65504 (the stress suite's
+      // 1e6 scene) and falls below its normal range (1e-6).
+      WriteImage(hdr_path, image, {.format = PixelFormat::kFloat, .batch = &batch});
+      ++written;
+    }
+    return written;
+  };
+
+  if (options.time) {
+    if (options.camera_index < 0 || options.camera_index >= static_cast<int>(frames.size())) {
+      Fail("render: --camera {} is not a frame of the {} split (0..{})", options.camera_index,
+           options.split, frames.size() - 1);
+    }
+    if (!(*options.time >= 0 && *options.time <= 1))
+      Fail("render: --time {} is outside [0, 1]", *options.time);
+    const fs::path dir = options.out.empty() ? options.run / "renders" / "time" : options.out;
+    CheckOutputFolder(dir);
+    const std::string stem =
+        fmt::format("{}_cam{:03d}_t{:.4f}", options.split, options.camera_index, *options.time);
+    const Frame& f = frames[options.camera_index];
+    const int written = render_to(f.camera, *options.time, options.exposure.value_or(f.exposure),
+                                  dir / (stem + ".png"), dir / (stem + ".exr"));
+    batch.Commit();
+    fmt::print("render: {} ({} file{})\n", (dir / stem).string(), written, written == 1 ? "" : "s");
+    return written;
+  }
+
+  if (options.video_frames > 0) {
+    if (!renderer.has_ldr()) {
+      Fail("render: --video writes LDR frames, and this run ({}) has no LDR output",
+           run.MethodName());
+    }
+    std::vector<Camera> train_cameras;
+    for (const Frame& f : dataset.train) train_cameras.push_back(f.camera);
+    const std::vector<Camera> path = OrbitCameras(train_cameras, options.video_frames);
+    const fs::path dir = options.out.empty() ? options.run / "video" : options.out;
+    CheckOutputFolder(dir);
+    Progress progress("render video", options.video_frames);
+    for (int k = 0; k < options.video_frames; ++k) {
+      const float time =
+          options.video_frames > 1 ? static_cast<float>(k) / (options.video_frames - 1) : 0.0f;
+      render_to(path[k], time, default_exposure, dir / fmt::format("frame_{:04d}.png", k), {});
+      progress.Advance();
+    }
+    progress.Finish();
+    batch.Commit();
+    if (HaveFfmpeg()) {
+      const fs::path mp4 = dir / "video.mp4";
+      // Through the atomic writer like every output (a killed ffmpeg leaves no half video);
+      // -frames:v: exactly this video's frames, even if a longer earlier one left more.
+      WriteFileAtomicAt(mp4, [&](const fs::path& tmp) {
+        const std::string command = fmt::format(
+            "ffmpeg -loglevel error -y -framerate {} -i {} -frames:v {} -vf "
+            "'pad=ceil(iw/2)*2:ceil(ih/2)*2' -pix_fmt yuv420p -c:v libx264 -f mp4 {}",
+            options.fps, ShellQuote((dir / "frame_%04d.png").string()), options.video_frames,
+            ShellQuote(tmp.string()));
+        if (std::system(command.c_str()) != 0)
+          Fail("{}: ffmpeg failed to encode the frames in {}", mp4.string(), dir.string());
+      });
+      fmt::print("render: {} frames and {}\n", options.video_frames, mp4.string());
+    } else {
+      fmt::print("render: {} frames in {} (install ffmpeg for an MP4)\n", options.video_frames,
+                 dir.string());
+    }
+    return options.video_frames;
+  }
+
+  CheckOutputFolder(out);  // before the first render: never among the dataset's images
+  Progress progress("render", static_cast<std::int64_t>(frames.size()));
+  int written = 0;
+  for (const Frame& f : frames) {
+    // Named like the ground truth so `hdr4d eval` pairs them: the LDR render as the frame's
+    // image, the HDR render as its EXR (or the image's stem + .exr when it has none).
+    fs::path name = f.image_path.filename();
+    if (name.extension() != ".png") name += ".png";
+    fs::path hdr_name = f.hdr_path ? f.hdr_path->filename() : f.image_path.stem();
+    if (hdr_name.extension() != ".exr") hdr_name += ".exr";
+    written += render_to(f.camera, static_cast<float>(f.time),
+                         options.exposure.value_or(f.exposure), out / name, out / hdr_name);
+    progress.Advance();
+  }
+  progress.Finish();
+  batch.Commit();
+  if (!options.timing.empty()) {
+    const std::size_t warmup = render_seconds.size() > 1 ? 1 : 0;
+    double timed = 0;
+    for (std::size_t i = warmup; i < render_seconds.size(); ++i) timed += render_seconds[i];
+    const double fps =
+        timed > 0 ? static_cast<double>(render_seconds.size() - warmup) / timed : 0.0;
+    WriteJsonFile(options.timing, {{"views", render_seconds.size()},
+                                   {"warmup_views", warmup},
+                                   {"threads", MaxThreads()},
+                                   {"fps", FiniteOrNull(fps)},
+                                   {"view_seconds", render_seconds}});
+  }
+  return written;
+}
+
+}  // namespace hdr4d::method

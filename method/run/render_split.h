@@ -1,0 +1,76 @@
+// Rendering a trained run (`hdr4d render`): the run's checkpoint and configuration give the
+// model, its tone mapper and the scene; each view of a split is rendered and written under its
+// ground truth's file names (the LDR render as its file_path, the HDR render as its
+// exr_file_path), so `hdr4d eval OUT <scene>/<image folder>` compares them directly.
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/camera.h"
+#include "core/dataset.h"
+#include "method/gaussian/gaussian_model.h"
+#include "method/tonemap/tone_mapper.h"
+#include "method/train/hdr_training_options.h"
+
+namespace hdr4d::method {
+
+struct RenderRunOptions {
+  std::filesystem::path run;
+  std::filesystem::path out;   // default: RUN/renders/<split>, RUN/renders/time, RUN/video
+  std::string split = "test";  // train, test or val
+  int threads = 0;
+  // One view at any time: the camera of frame `camera_index` of the split, at `time`.
+  std::optional<float> time;
+  int camera_index = 0;
+  // A camera path over time: `video_frames` frames orbiting the scene once while time runs
+  // from 0 to 1, written as a PNG sequence and, when ffmpeg is installed, an MP4.
+  int video_frames = 0;
+  int fps = 24;
+  // LDR renders at this exposure (seconds) instead of each frame's own (--time and the video
+  // default to the median training exposure).
+  std::optional<double> exposure;
+  bool write_hdr = true;  // also the linear HDR render as EXR, for models with HDR colours
+  // Split renders only: when set, a JSON file with each view's render time (slicing, tone
+  // mapping, rasterisation; not the file writes) and the frames per second over every view but
+  // the first (the warm-up; with one view, that view).
+  std::filesystem::path timing;
+};
+
+// Returns the number of images written.
+int RenderRun(const RenderRunOptions& options);
+
+// The orbit of the video: around the point the training cameras look at (least squares
+// intersection of their optical axes), at their mean distance, about their mean up axis,
+// starting at the first training camera. Frame k of n is at angle 2 pi k / n.
+std::vector<Camera> OrbitCameras(const std::vector<Camera>& train_cameras, int frames);
+
+// Everything a trained run needs to render: its configuration, scene, model and tone mapper.
+struct LoadedRun {
+  nlohmann::json config;
+  Dataset dataset;
+  GaussianModel model;
+  std::unique_ptr<ToneMapper> tone_mapper;  // null for methods without one
+  ResolvedHdrTraining resolved;
+  int num_times = 1;
+  float background = 0;
+  // The method's name from the configuration, or "?" (for messages).
+  std::string MethodName() const;
+};
+// The median training exposure: a middle exposure of the bracket for views that have none.
+double MedianExposure(const Dataset& dataset);
+
+// Throws hdr4d::Error naming the file when the run is incomplete or inconsistent.
+// The run's tone mapper is rebuilt by kind (tone_mapper_registry.h): a baseline's kind needs
+// baselines::RegisterToneMappers() first.
+LoadedRun LoadRun(const std::filesystem::path& run);
+
+// For commands that only read a run (render, export-ply, tone-curves): its configuration and
+// checkpoint become protected inputs (core/output_guard.h), so no output of theirs replaces them.
+void ProtectRunInputs(const std::filesystem::path& run);
+
+}  // namespace hdr4d::method

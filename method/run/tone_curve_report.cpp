@@ -1,0 +1,115 @@
+#include "method/run/tone_curve_report.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <sstream>
+
+#include "core/error.h"
+#include "core/json_util.h"
+#include "core/output_guard.h"
+#include "core/viz/plot.h"
+#include "method/run/render_split.h"
+#include "method/tonemap/radiance_bank.h"
+
+namespace hdr4d::method {
+namespace fs = std::filesystem;
+
+ToneCurveSamples SampleToneCurves(ToneMapper* tone_mapper,
+                                  const std::vector<double>& times,
+                                  int num_times,
+                                  double x_min,
+                                  double x_max,
+                                  int samples) {
+  HDR4D_CHECK(tone_mapper && samples >= 2 && x_max > x_min && num_times >= 1);
+  if (!tone_mapper->pointwise()) {
+    Fail(
+        "tone-curves: the '{}' tone mapper works on whole images (a local operator), so it has "
+        "no single curve to plot",
+        tone_mapper->config().kind);
+  }
+  ToneCurveSamples s;
+  s.times = times;
+  s.x.resize(samples);
+  for (int i = 0; i < samples; ++i) s.x[i] = x_min + (x_max - x_min) * i / (samples - 1);
+  // The curve is g(log_hdr + log e): sample log_hdr = x at log e = 0, all channels at once.
+  std::vector<float> in(std::size_t(samples) * 3), out(in.size());
+  for (int i = 0; i < samples; ++i)
+    for (int c = 0; c < 3; ++c) in[i * 3 + c] = static_cast<float>(s.x[i]);
+  for (double t : times) {
+    tone_mapper->BeginFrame({RadianceBank::TimeIndex(t, num_times), -1, 0.0f});
+    tone_mapper->Map(in.data(), samples, out.data());
+    std::vector<std::vector<double>> per_channel(3, std::vector<double>(samples));
+    for (int i = 0; i < samples; ++i)
+      for (int c = 0; c < 3; ++c) per_channel[c][i] = out[i * 3 + c];
+    s.ldr.push_back(std::move(per_channel));
+  }
+  return s;
+}
+
+std::string ToneCurvesOptions::Validate() const {
+  if (run.empty()) return "--run: no run folder given";
+  if (times.empty()) return "--times: give at least one time";
+  for (double t : times) {
+    if (!(t >= 0 && t <= 1)) return fmt::format("--times: {} is outside [0, 1]", t);
+  }
+  if (!(x_max > x_min) || !std::isfinite(x_min) || !std::isfinite(x_max))
+    return "--x-min / --x-max: need finite x-min < x-max";
+  if (samples < 2 || samples > 100000) return "--samples: must be within [2, 100000]";
+  return "";
+}
+
+std::vector<fs::path> WriteToneCurves(const ToneCurvesOptions& options) {
+  if (std::string p = options.Validate(); !p.empty()) Fail("tone-curves: {}", p);
+  LoadedRun run = LoadRun(options.run);
+  if (!run.tone_mapper) {
+    Fail("{}: this run ({}) has no tone mapper", options.run.string(),
+         run.MethodName());
+  }
+  const ToneCurveSamples s = SampleToneCurves(run.tone_mapper.get(), options.times, run.num_times,
+                                              options.x_min, options.x_max, options.samples);
+  const fs::path out = options.out.empty() ? options.run / "tone_curves" : options.out;
+  CheckOutputFolder(out);
+
+  std::ostringstream csv;
+  csv << "x";
+  for (double t : s.times)
+    for (const char* c : {"r", "g", "b"}) csv << fmt::format(",{}_t{:.4f}", c, t);
+  csv << "\n";
+  for (std::size_t i = 0; i < s.x.size(); ++i) {
+    csv << fmt::format("{:.6g}", s.x[i]);
+    for (const auto& per_channel : s.ldr)
+      for (const auto& values : per_channel) csv << fmt::format(",{:.6f}", values[i]);
+    csv << "\n";
+  }
+  const fs::path csv_path = out / "tone_curves.csv";
+  WriteTextFileAtomic(csv_path, csv.str());
+
+  std::vector<PlotPanel> panels;
+  const char* names[3] = {"red", "green", "blue"};
+  for (int c = 0; c < 3; ++c) {
+    std::vector<PlotSeries> series;
+    for (std::size_t k = 0; k < s.times.size(); ++k) {
+      PlotSeries line;
+      line.name = fmt::format("t = {:.2f}", s.times[k]);
+      line.x = s.x;
+      line.y = s.ldr[k][c];
+      line.color = SequentialColor(s.times.size() > 1 ? double(k) / (s.times.size() - 1) : 0.0);
+      series.push_back(std::move(line));
+    }
+    PlotOptions o;
+    o.title = fmt::format("{} tone curve ({})", names[c], run.tone_mapper->config().kind);
+    o.x_label = "log radiance + log exposure";
+    o.y_label = "LDR value";
+    o.width = 560;
+    o.height = 420;
+    o.y_range = AxisRange{0.0, 1.0};
+    panels.emplace_back(std::move(series), o);
+  }
+  const fs::path png = out / "tone_curves.png", svg = out / "tone_curves.svg";
+  WritePlotGrid(png, panels, 3);
+  WritePlotGrid(svg, panels, 3);
+  return {csv_path, png, svg};
+}
+
+}  // namespace hdr4d::method

@@ -1,0 +1,207 @@
+#include "method/train/checkpoint.h"
+
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include "core/binary_stream.h"
+#include "core/error.h"
+#include "core/json_util.h"
+
+namespace hdr4d::method {
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr char kMagic[8] = {'H', 'D', 'R', '4', 'D', 'C', 'K', 'P'};
+// Version 2 adds the tone mapper's state after the optimiser's; version 3 a trailer with a
+// checksum of every byte before it, so damage inside the float buffers (which no size check
+// can see) is refused instead of rendered. Versions 1 and 2 still load.
+constexpr std::uint32_t kVersion = 3;
+constexpr char kTrailerMagic[8] = {'H', 'D', 'R', '4', 'D', 'S', 'U', 'M'};
+constexpr std::size_t kTrailerSize = 16;
+
+void WriteU64(std::ostream& out, std::uint64_t v) {
+  out.write(reinterpret_cast<const char*>(&v), 8);
+}
+
+std::uint64_t ReadU64(std::istream& in, const fs::path& path, const char* what) {
+  std::uint64_t v = 0;
+  if (!in.read(reinterpret_cast<char*>(&v), 8))
+    Fail("{}: truncated checkpoint (while reading {})", path.string(), what);
+  return v;
+}
+
+void WriteFloats(std::ostream& out, const std::vector<float>& v) {
+  WriteU64(out, v.size());
+  out.write(reinterpret_cast<const char*>(v.data()),
+            static_cast<std::streamsize>(v.size() * sizeof(float)));
+}
+
+std::vector<float> ReadFloats(std::istream& in,
+                              const fs::path& path,
+                              const char* what,
+                              std::uint64_t limit) {
+  const std::uint64_t n = ReadU64(in, path, what);
+  if (n > limit) Fail("{}: corrupt checkpoint ({} claims {} values)", path.string(), what, n);
+  std::vector<float> v(n);
+  if (!in.read(reinterpret_cast<char*>(v.data()),
+               static_cast<std::streamsize>(n * sizeof(float)))) {
+    Fail("{}: truncated checkpoint (while reading {})", path.string(), what);
+  }
+  return v;
+}
+
+void RequireFiniteValues(const std::vector<float>& v, const fs::path& path, const char* what) {
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    if (!std::isfinite(v[i])) {
+      Fail("{}: corrupt checkpoint: {} holds {} at value {} of {}", path.string(), what, v[i], i,
+           v.size());
+    }
+  }
+}
+
+// The model's buffers in file order.
+template <typename Model, typename Fn>
+void ForEachBuffer(Model& m, Fn&& fn) {
+  fn("xyz", m.xyz);
+  fn("t", m.t);
+  fn("log_scales", m.log_scales);
+  fn("rot_left", m.rot_left);
+  fn("rot_right", m.rot_right);
+  fn("opacity_logit", m.opacity_logit);
+  fn("color_dc", m.color_dc);
+  fn("color_rest", m.color_rest);
+}
+
+}  // namespace
+
+void SaveCheckpoint(const fs::path& path, const Checkpoint& c) {
+  HDR4D_CHECK(c.model.Validate().empty());
+  nlohmann::json header = {
+      {"version", kVersion},
+      {"temporal", c.model.temporal},
+      {"color_mode", c.model.color_mode == ColorMode::kLdr ? "ldr" : "log_hdr"},
+      {"max_sh_degree", c.model.basis.max_sh_degree},
+      {"max_time_degree", c.model.basis.max_time_degree},
+      {"channels", c.model.channels},
+      {"gaussians", c.model.size()},
+      {"trainer", c.trainer},
+  };
+  std::ostringstream out;
+  out.write(kMagic, sizeof(kMagic));
+  const std::string text = header.dump();
+  WriteU64(out, text.size());
+  out.write(text.data(), static_cast<std::streamsize>(text.size()));
+  ForEachBuffer(c.model, [&](const char*, const std::vector<float>& v) { WriteFloats(out, v); });
+  WriteU64(out, c.extra_floats.size());
+  for (const auto& v : c.extra_floats) WriteFloats(out, v);
+  WriteU64(out, c.adam_state.size());
+  out.write(c.adam_state.data(), static_cast<std::streamsize>(c.adam_state.size()));
+  WriteU64(out, c.tone_mapper_state.size());
+  out.write(c.tone_mapper_state.data(), static_cast<std::streamsize>(c.tone_mapper_state.size()));
+  const std::string bytes = out.str();
+  WriteFileAtomic(path, [&](std::ostream& file) {
+    file.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    file.write(kTrailerMagic, sizeof(kTrailerMagic));
+    WriteU64(file, Fnv1a(bytes.data(), bytes.size()));
+  });
+}
+
+Checkpoint LoadCheckpoint(const fs::path& path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) Fail("{}: checkpoint not found", path.string());
+  std::ifstream file(path, std::ios::binary);
+  if (!file) Fail("{}: cannot open for reading", path.string());
+  std::string bytes;
+  {
+    std::ostringstream all;
+    all << file.rdbuf();
+    bytes = all.str();
+  }
+  std::istringstream in(bytes);
+  const std::uint64_t file_size = bytes.size();
+  char magic[8] = {};
+  if (!in.read(magic, 8) || std::memcmp(magic, kMagic, 8) != 0)
+    Fail("{}: not an hdr4d checkpoint", path.string());
+  const std::uint64_t header_size = ReadU64(in, path, "the header size");
+  if (header_size > file_size) Fail("{}: corrupt checkpoint header", path.string());
+  std::string text(header_size, '\0');
+  if (!in.read(text.data(), static_cast<std::streamsize>(header_size)))
+    Fail("{}: truncated checkpoint header", path.string());
+  nlohmann::json header;
+  try {
+    header = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
+    Fail("{}: corrupt checkpoint header: {}", path.string(), e.what());
+  }
+  Checkpoint c;
+  std::uint32_t version = 0;
+  try {
+    version = header.at("version").get<std::uint32_t>();
+    if (version < 1 || version > kVersion) {
+      Fail("{}: checkpoint version {} is not supported (this build reads {})", path.string(),
+           header.at("version").get<std::uint32_t>(), kVersion);
+    }
+    c.model.temporal = header.at("temporal").get<bool>();
+    c.model.color_mode =
+        header.at("color_mode").get<std::string>() == "ldr" ? ColorMode::kLdr : ColorMode::kLogHdr;
+    c.model.basis.max_sh_degree = header.at("max_sh_degree").get<int>();
+    c.model.basis.max_time_degree = header.at("max_time_degree").get<int>();
+    c.model.channels = header.at("channels").get<int>();
+    c.trainer = header.at("trainer");
+  } catch (const nlohmann::json::exception& e) {
+    Fail("{}: checkpoint header is missing a key: {}", path.string(), e.what());
+  }
+  if (version >= 3) {
+    const std::size_t body = bytes.size() >= kTrailerSize ? bytes.size() - kTrailerSize : 0;
+    std::uint64_t stored = 0;
+    if (body < header_size || std::memcmp(bytes.data() + body, kTrailerMagic, 8) != 0)
+      Fail("{}: truncated checkpoint (its checksum trailer is missing)", path.string());
+    std::memcpy(&stored, bytes.data() + body + 8, 8);
+    if (stored != Fnv1a(bytes.data(), body)) {
+      Fail("{}: corrupt checkpoint (checksum mismatch: the file was damaged after it was written)",
+           path.string());
+    }
+  }
+  const std::uint64_t limit = file_size / sizeof(float);
+  ForEachBuffer(c.model, [&](const char* name, std::vector<float>& v) {
+    v = ReadFloats(in, path, name, limit);
+  });
+  const std::uint64_t extras = ReadU64(in, path, "the extra buffer count");
+  if (extras > 64) Fail("{}: corrupt checkpoint ({} extra buffers)", path.string(), extras);
+  for (std::uint64_t i = 0; i < extras; ++i)
+    c.extra_floats.push_back(ReadFloats(in, path, "an extra buffer", limit));
+  const std::uint64_t adam_size = ReadU64(in, path, "the optimiser state size");
+  if (adam_size > file_size) Fail("{}: corrupt checkpoint (optimiser state size)", path.string());
+  c.adam_state.resize(adam_size);
+  if (!in.read(c.adam_state.data(), static_cast<std::streamsize>(adam_size))) {
+    Fail("{}: truncated checkpoint (while reading the optimiser state)", path.string());
+  }
+  if (version >= 2) {
+    const std::uint64_t tm_size = ReadU64(in, path, "the tone mapper state size");
+    if (tm_size > file_size) Fail("{}: corrupt checkpoint (tone mapper state size)", path.string());
+    c.tone_mapper_state.resize(tm_size);
+    if (!in.read(c.tone_mapper_state.data(), static_cast<std::streamsize>(tm_size))) {
+      Fail("{}: truncated checkpoint (while reading the tone mapper state)", path.string());
+    }
+  }
+  // Values, not only sizes: a model with NaN or Inf in it is never resumed or rendered (version
+  // 1-2 files have no checksum, and a writer bug could store them).
+  ForEachBuffer(c.model, [&](const char* name, const std::vector<float>& v) {
+    RequireFiniteValues(v, path, name);
+  });
+  for (const std::vector<float>& v : c.extra_floats)
+    RequireFiniteValues(v, path, "the densification statistics");
+  if (const std::string problem = c.model.Validate(); !problem.empty()) {
+    Fail("{}: inconsistent checkpoint: {}", path.string(), problem);
+  }
+  if (c.model.size() != header.value("gaussians", std::size_t{0})) {
+    Fail("{}: inconsistent checkpoint: header says {} Gaussians, buffers hold {}", path.string(),
+         header.value("gaussians", std::size_t{0}), c.model.size());
+  }
+  return c;
+}
+
+}  // namespace hdr4d::method

@@ -1,0 +1,89 @@
+#include "method/train/checkpoint.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "core/error.h"
+#include "method/train/initialise.h"
+#include "tests/testing.h"
+
+namespace hdr4d::method {
+namespace {
+
+using hdr4d::testing::ErrorOf;
+using hdr4d::testing::TempDir;
+
+Checkpoint Sample() {
+  InitOptions init;
+  init.num_random_points = 50;
+  init.seed = 5;
+  Checkpoint c;
+  c.model = InitialiseGaussians(std::nullopt, init);
+  c.trainer = {{"iteration", 42}, {"rng", "1 2 3"}};
+  c.extra_floats = {{1.0f, 2.0f}, {}, {3.5f}};
+  c.adam_state = std::string("adam\0bytes", 10);
+  return c;
+}
+
+TEST(Checkpoint, RoundTripIsExact) {
+  TempDir dir;
+  const Checkpoint c = Sample();
+  SaveCheckpoint(dir / "ck.bin", c);
+  const Checkpoint back = LoadCheckpoint(dir / "ck.bin");
+  EXPECT_EQ(back.model.xyz, c.model.xyz);
+  EXPECT_EQ(back.model.t, c.model.t);
+  EXPECT_EQ(back.model.log_scales, c.model.log_scales);
+  EXPECT_EQ(back.model.rot_left, c.model.rot_left);
+  EXPECT_EQ(back.model.rot_right, c.model.rot_right);
+  EXPECT_EQ(back.model.opacity_logit, c.model.opacity_logit);
+  EXPECT_EQ(back.model.color_dc, c.model.color_dc);
+  EXPECT_EQ(back.model.color_rest, c.model.color_rest);
+  EXPECT_EQ(back.model.temporal, c.model.temporal);
+  EXPECT_EQ(back.trainer, c.trainer);
+  EXPECT_EQ(back.extra_floats, c.extra_floats);
+  EXPECT_EQ(back.adam_state, c.adam_state);
+}
+
+TEST(Checkpoint, BadFilesAreErrorsNamingTheFile) {
+  TempDir dir;
+  EXPECT_NE(ErrorOf([&] { LoadCheckpoint(dir / "none.bin"); }).find("not found"),
+            std::string::npos);
+  testing::WriteTextFile(dir / "foreign.bin", "PK\x03\x04 something else entirely");
+  EXPECT_NE(ErrorOf([&] { LoadCheckpoint(dir / "foreign.bin"); }).find("not an hdr4d checkpoint"),
+            std::string::npos);
+  SaveCheckpoint(dir / "ck.bin", Sample());
+  const std::string bytes = testing::ReadTextFile(dir / "ck.bin");
+  // Every truncation is reported, never a crash or a half-filled model.
+  for (std::size_t cut : {std::size_t{9}, bytes.size() / 3, bytes.size() / 2, bytes.size() - 1}) {
+    testing::WriteTextFile(dir / "cut.bin", bytes.substr(0, cut));
+    const std::string error = ErrorOf([&] { LoadCheckpoint(dir / "cut.bin"); });
+    EXPECT_NE(error.find((dir / "cut.bin").string()), std::string::npos) << cut << ": " << error;
+  }
+}
+
+TEST(Checkpoint, DamagedBytesAreRefusedByTheChecksum) {
+  TempDir dir;
+  SaveCheckpoint(dir / "ck.bin", Sample());
+  std::string bytes = testing::ReadTextFile(dir / "ck.bin");
+  // One bit inside the float buffers: sizes and structure stay valid, only the checksum sees it.
+  bytes[bytes.size() / 2] ^= 0x10;
+  testing::WriteTextFile(dir / "flipped.bin", bytes);
+  const std::string error = ErrorOf([&] { LoadCheckpoint(dir / "flipped.bin"); });
+  EXPECT_NE(error.find("checksum mismatch"), std::string::npos) << error;
+  EXPECT_NE(error.find("flipped.bin"), std::string::npos) << error;
+}
+
+TEST(Checkpoint, FailedSaveKeepsThePreviousCheckpoint) {
+  TempDir dir;
+  SaveCheckpoint(dir / "ck.bin", Sample());
+  const std::string before = testing::ReadTextFile(dir / "ck.bin");
+  std::filesystem::create_directory(dir / "ck.bin.dir");
+  // A checkpoint path that is a folder cannot be replaced: the error names it.
+  EXPECT_THROW(SaveCheckpoint(dir / "ck.bin.dir", Sample()), Error);
+  EXPECT_EQ(testing::ReadTextFile(dir / "ck.bin"), before);
+}
+
+}  // namespace
+}  // namespace hdr4d::method

@@ -1,0 +1,102 @@
+#include "method/train/hdr_loss.h"
+
+#include <algorithm>
+
+#include "core/error.h"
+#include "core/parallel.h"
+#include "method/train/loss.h"
+
+namespace hdr4d::method {
+
+namespace {
+
+constexpr std::int64_t kGrain = 8192;
+
+}  // namespace
+
+void ExtractChannels(
+    const float* src, int channels, int first, std::size_t pixels, std::vector<float>* dst) {
+  dst->resize(pixels * 3);
+  ParallelFor(static_cast<std::int64_t>(pixels), kGrain, [&](std::int64_t p) {
+    for (int c = 0; c < 3; ++c) (*dst)[p * 3 + c] = src[p * channels + first + c];
+  });
+}
+
+void PixelLogImage(const std::vector<float>& hdr, std::vector<float>* x) {
+  x->resize(hdr.size());
+  for (std::size_t i = 0; i < hdr.size(); ++i) (*x)[i] = PixelLog(hdr[i]);
+}
+
+FrameLoss HdrFrameLoss(const float* raster,
+                       int channels,
+                       int width,
+                       int height,
+                       const float* ldr_gt,
+                       const float* hdr_mu_gt,
+                       ToneMapper* tone_mapper,
+                       const SupervisionTerms& terms,
+                       HdrLossScratch* s,
+                       float* dL_draster) {
+  HDR4D_CHECK(channels == 3 || channels == 6);
+  HDR4D_CHECK(!terms.ldr_gaussian || channels == 6);
+  HDR4D_CHECK(!terms.ldr_pixel || tone_mapper != nullptr);
+  const std::size_t pixels = static_cast<std::size_t>(width) * height;
+  const std::size_t values = pixels * 3;
+  std::fill(dL_draster, dL_draster + pixels * channels, 0.0f);
+  FrameLoss loss;
+  ExtractChannels(raster, channels, 0, pixels, &s->hdr);
+  s->grad.resize(values);
+
+  // 3D branch: the tone-mapped Gaussians, clamped to [0,1] as the reference does.
+  if (terms.ldr_gaussian) {
+    ExtractChannels(raster, channels, 3, pixels, &s->ldr);
+    for (float& v : s->ldr) v = std::clamp(v, 0.0f, 1.0f);
+    loss.ldr_gaussian =
+        PhotometricLoss(s->ldr.data(), ldr_gt, width, height, 3, terms.lambda_dssim, s->grad.data())
+            .value;
+    ParallelFor(static_cast<std::int64_t>(pixels), kGrain, [&](std::int64_t p) {
+      for (int c = 0; c < 3; ++c) {
+        const float v = raster[p * channels + 3 + c];
+        // The clamp passes the gradient inside [0,1] only.
+        dL_draster[p * channels + 3 + c] = (v >= 0.0f && v <= 1.0f) ? s->grad[p * 3 + c] : 0.0f;
+      }
+    });
+  }
+
+  // 2D branch: the same tone curves per pixel on the HDR raster.
+  if (terms.ldr_pixel) {
+    PixelLogImage(s->hdr, &s->x);
+    s->pixel_ldr.resize(values);
+    tone_mapper->MapImage(s->x.data(), width, height, s->pixel_ldr.data());
+    loss.ldr_pixel = PhotometricLoss(s->pixel_ldr.data(), ldr_gt, width, height, 3,
+                                     terms.lambda_dssim, s->grad.data())
+                         .value;
+    s->dx.resize(values);
+    tone_mapper->MapImageBackward(s->x.data(), width, height, s->grad.data(), s->dx.data());
+    ParallelFor(static_cast<std::int64_t>(pixels), kGrain, [&](std::int64_t p) {
+      for (int c = 0; c < 3; ++c) {
+        dL_draster[p * channels + c] += PixelLogBackward(s->hdr[p * 3 + c], s->dx[p * 3 + c]);
+      }
+    });
+  }
+
+  // HDR term on the mu-law of the raw HDR raster.
+  if (terms.hdr && hdr_mu_gt) {
+    s->target.resize(values);
+    for (std::size_t i = 0; i < values; ++i) s->target[i] = MuLawEncode(s->hdr[i]);
+    loss.hdr = PhotometricLoss(s->target.data(), hdr_mu_gt, width, height, 3, terms.lambda_dssim,
+                               s->grad.data())
+                   .value;
+    const float w = terms.hdr_weight;
+    ParallelFor(static_cast<std::int64_t>(pixels), kGrain, [&](std::int64_t p) {
+      for (int c = 0; c < 3; ++c) {
+        dL_draster[p * channels + c] +=
+            w * MuLawEncodeBackward(s->hdr[p * 3 + c], s->grad[p * 3 + c]);
+      }
+    });
+  }
+  loss.total = loss.ldr_gaussian + loss.ldr_pixel + terms.hdr_weight * loss.hdr;
+  return loss;
+}
+
+}  // namespace hdr4d::method

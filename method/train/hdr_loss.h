@@ -1,0 +1,86 @@
+// The HDR-4DGS training loss of one view (ARCHITECTURE §4 "Losses") and its backward:
+//   L = L(clamp(LDR_3D), gt)                              LDR supervision, 3D branch
+//     + L(TM(log(HDR + 1e-5) + log e), gt)                 LDR supervision, 2D (pixel) branch
+//     + 0.6 L(mu(HDR), mu(gt_hdr / max gt_hdr))            HDR supervision, views with HDR GT
+// with L = 0.8 L1 + 0.2 (1 - SSIM) (method/train/loss.h) and mu(x) = log(1 + 5000 x) / log(5001).
+// As in the reference, the HDR raster enters mu unnormalised (the target is max-normalised);
+// evaluation normalises each image by its own maximum instead (core/metrics.h).
+//
+// The raster holds 3 channels (HDR only) or 6 (HDR, then the 3D branch's LDR), interleaved.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "core/metrics.h"
+
+#include "method/tonemap/tone_mapper.h"
+
+namespace hdr4d::method {
+
+inline constexpr float kPixelLogEpsilon = 1e-5f;  // log(HDR + 1e-5) in the 2D branch
+
+// mu-law of the loss, for x >= 0 (negative x is treated as 0: the HDR raster is a sum of
+// non-negative values, so only rounding can make it negative).
+template <typename T>
+inline T MuLawEncode(T x) {
+  const T y = x > T(0) ? x : T(0);
+  return std::log1p(T(kMuLawMu) * y) / std::log(T(1) + T(kMuLawMu));
+}
+template <typename T>
+inline T MuLawEncodeBackward(T x, T dL_dy) {
+  if (!(x > T(0))) return T(0);
+  return dL_dy * T(kMuLawMu) / ((T(1) + T(kMuLawMu) * x) * std::log(T(1) + T(kMuLawMu)));
+}
+
+// The 2D branch's input: log(max(HDR, 0) + 1e-5), and its derivative.
+template <typename T>
+inline T PixelLog(T hdr) {
+  return std::log((hdr > T(0) ? hdr : T(0)) + T(kPixelLogEpsilon));
+}
+template <typename T>
+inline T PixelLogBackward(T hdr, T dL_dy) {
+  return hdr > T(0) ? dL_dy / (hdr + T(kPixelLogEpsilon)) : T(0);
+}
+
+// Channels [first, first + 3) of an interleaved H x W x channels buffer as a 3-channel one.
+void ExtractChannels(
+    const float* src, int channels, int first, std::size_t pixels, std::vector<float>* dst);
+// The 2D branch's input for every value of a 3-channel HDR image: PixelLog of each.
+void PixelLogImage(const std::vector<float>& hdr, std::vector<float>* x);
+
+struct SupervisionTerms {
+  bool ldr_gaussian = true;  // L(clamp(LDR_3D), gt): needs a 6-channel raster
+  bool ldr_pixel = true;     // the 2D branch: needs a tone mapper
+  bool hdr = true;           // used only for views with HDR ground truth
+  float hdr_weight = 0.6f;
+  float lambda_dssim = 0.2f;
+};
+
+struct FrameLoss {
+  double total = 0, ldr_gaussian = 0, ldr_pixel = 0, hdr = 0;
+};
+
+// Working buffers, reused from view to view. After HdrFrameLoss, `ldr` holds the clamped 3D
+// branch (when that term ran) and `pixel_ldr` the 2D branch (when it ran).
+struct HdrLossScratch {
+  std::vector<float> hdr, ldr, grad, target, x, pixel_ldr, dpixel, dx;
+};
+
+// The loss of one view and dL/draster (same layout as `raster`, overwritten). ldr_gt: H x W x 3
+// in [0,1]; hdr_mu_gt: mu(gt_hdr / max gt_hdr), H x W x 3, or null when the view has no HDR
+// ground truth. The tone mapper must have begun this view's frame (HdrColorStage does); its
+// parameter gradients are added to.
+FrameLoss HdrFrameLoss(const float* raster,
+                       int channels,
+                       int width,
+                       int height,
+                       const float* ldr_gt,
+                       const float* hdr_mu_gt,
+                       ToneMapper* tone_mapper,
+                       const SupervisionTerms& terms,
+                       HdrLossScratch* scratch,
+                       float* dL_draster);
+
+}  // namespace hdr4d::method

@@ -1,0 +1,132 @@
+#include "method/train/hdr_training_options.h"
+
+#include "core/error.h"
+
+namespace hdr4d::method {
+
+const char* SupervisionName(Supervision s) {
+  switch (s) {
+    case Supervision::kAuto:
+      return "auto";
+    case Supervision::kLdr:
+      return "ldr";
+    case Supervision::kHdr:
+      return "hdr";
+    case Supervision::kLdrHdr:
+      return "ldr+hdr";
+  }
+  return "?";
+}
+
+Supervision ParseSupervision(const std::string& name, const std::string& what) {
+  for (Supervision s :
+       {Supervision::kAuto, Supervision::kLdr, Supervision::kHdr, Supervision::kLdrHdr}) {
+    if (name == SupervisionName(s)) return s;
+  }
+  Fail("{}: unknown supervision '{}' (auto, ldr, hdr or ldr+hdr)", what, name);
+}
+
+std::string HdrTrainingOptions::Validate() const {
+  if (!(hdr_weight >= 0.0f && hdr_weight < 1e6f)) return "hdr_weight: must be >= 0 and finite";
+  if (color_mode == ColorMode::kLdr) {
+    if (tone_mapper) return "an LDR colour model has no tone mapper";
+    if (supervision == Supervision::kHdr || supervision == Supervision::kLdrHdr)
+      return "an LDR colour model cannot be supervised with HDR";
+  }
+  if (tone_mapper) {
+    if (std::string p = tone_mapper->Validate(); !p.empty()) return "tone mapper: " + p;
+    // Neither branch would tone-map anything: nothing would compare with the LDR images.
+    if (!pixel_branch && !gaussian_branch)
+      return "no tone-mapping branch left (drop --no-pixel-branch or --no-gaussian-branch)";
+  }
+  return "";
+}
+
+nlohmann::json HdrTrainingOptions::ToJson() const {
+  return {{"method", method},
+          {"color_mode", color_mode == ColorMode::kLdr ? "ldr" : "log_hdr"},
+          {"force_static", force_static},
+          {"tone_mapper", tone_mapper ? tone_mapper->ToJson() : nlohmann::json(nullptr)},
+          {"supervision", SupervisionName(supervision)},
+          {"pixel_branch", pixel_branch},
+          {"gaussian_branch", gaussian_branch},
+          {"hdr_weight", hdr_weight}};
+}
+
+HdrTrainingOptions HdrTrainingOptions::FromJson(const nlohmann::json& j,
+                                                const std::string& source) {
+  HdrTrainingOptions o;
+  try {
+    o.method = j.at("method").get<std::string>();
+    const std::string mode = j.at("color_mode").get<std::string>();
+    if (mode != "ldr" && mode != "log_hdr")
+      Fail("{}: color_mode '{}' is not ldr or log_hdr", source, mode);
+    o.color_mode = mode == "ldr" ? ColorMode::kLdr : ColorMode::kLogHdr;
+    o.force_static = j.at("force_static").get<bool>();
+    if (j.at("tone_mapper").is_null()) {
+      o.tone_mapper.reset();
+    } else {
+      o.tone_mapper = ToneMapperConfig::FromJson(j.at("tone_mapper"), source);
+    }
+    o.supervision = ParseSupervision(j.at("supervision").get<std::string>(), source);
+    o.pixel_branch = j.at("pixel_branch").get<bool>();
+    o.gaussian_branch = j.at("gaussian_branch").get<bool>();
+    o.hdr_weight = j.at("hdr_weight").get<float>();
+  } catch (const nlohmann::json::exception& e) {
+    Fail("{}: bad or missing HDR training setting: {}", source, e.what());
+  }
+  return o;
+}
+
+nlohmann::json ResolvedHdrTraining::ToJson() const {
+  return {{"hdr_colors", hdr_colors},
+          {"ldr_gaussian", ldr_gaussian},
+          {"ldr_pixel", ldr_pixel},
+          {"hdr", hdr},
+          {"final_ldr_from_pixels", final_ldr_from_pixels}};
+}
+
+ResolvedHdrTraining ResolveHdrTraining(const HdrTrainingOptions& o,
+                                       bool train_views_have_hdr,
+                                       bool pointwise) {
+  if (std::string p = o.Validate(); !p.empty()) Fail("train: {}", p);
+  ResolvedHdrTraining r;
+  if (o.color_mode == ColorMode::kLdr) {
+    r.hdr_colors = false;
+    return r;  // plain 4DGS: the raster is the LDR image, one L1 + D-SSIM term
+  }
+  Supervision s = o.supervision;
+  if (s == Supervision::kAuto) {
+    if (o.tone_mapper) {
+      s = train_views_have_hdr ? Supervision::kLdrHdr : Supervision::kLdr;
+    } else {
+      s = Supervision::kHdr;  // no tone mapper: nothing can be compared with the LDR images
+    }
+  }
+  const bool ldr = s == Supervision::kLdr || s == Supervision::kLdrHdr;
+  r.hdr = s == Supervision::kHdr || s == Supervision::kLdrHdr;
+  if (r.hdr && !train_views_have_hdr) {
+    Fail(
+        "train: supervision '{}' needs HDR ground truth (exr_file_path) in the training views; "
+        "this scene has none (use --supervision ldr)",
+        SupervisionName(s));
+  }
+  if (ldr && !o.tone_mapper) {
+    Fail("train: LDR supervision of HDR colours needs a tone mapper (method '{}' has none)",
+         o.method);
+  }
+  if (o.tone_mapper) {
+    r.ldr_gaussian = ldr && o.gaussian_branch && pointwise;
+    r.ldr_pixel = ldr && (o.pixel_branch || !pointwise);
+    r.final_ldr_from_pixels = !pointwise || !o.gaussian_branch;
+    if (!pointwise && !o.pixel_branch) {
+      Fail(
+          "train: the '{}' tone mapper works on whole images only, so it needs the pixel "
+          "branch (drop --no-pixel-branch)",
+          o.tone_mapper->kind);
+    }
+  }
+  return r;
+}
+
+}  // namespace hdr4d::method

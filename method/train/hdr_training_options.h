@@ -1,0 +1,55 @@
+// What the trainer optimises and supervises beyond plain 4DGS: the colour mode, the tone mapper
+// and the supervision branches of HDR-4DGS (ARCHITECTURE §4). Generic switches only; the named
+// methods of the paper's tables (hdr4dgs, 4dgs, 4dgs-hdr, hdr-gs) are presets of these, set by
+// baselines/scene_baselines.h.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+
+#include "method/gaussian/gaussian_model.h"
+#include "method/tonemap/tone_mapper.h"
+
+namespace hdr4d::method {
+
+enum class Supervision { kAuto, kLdr, kHdr, kLdrHdr };
+// "auto", "ldr", "hdr", "ldr+hdr"; ParseSupervision throws hdr4d::Error naming `what`.
+const char* SupervisionName(Supervision s);
+Supervision ParseSupervision(const std::string& name, const std::string& what);
+
+// The defaults are plain LDR 4DGS; `hdr4d train`'s default method, hdr4dgs, is a preset.
+struct HdrTrainingOptions {
+  std::string method = "4dgs";  // the preset's name, recorded in the run
+  ColorMode color_mode = ColorMode::kLdr;
+  bool force_static = false;  // no time axis even on a dynamic scene (HDR-GS on dynamic scenes)
+  std::optional<ToneMapperConfig> tone_mapper;  // none: no tone mapping
+  // auto: LDR, plus HDR where the training views have HDR ground truth (the reference's rule).
+  Supervision supervision = Supervision::kAuto;
+  bool pixel_branch = true;     // the 2D branch: the tone curves per pixel on the HDR raster
+  bool gaussian_branch = true;  // the 3D branch: tone-mapped Gaussians in the raster (6 ch)
+  float hdr_weight = 0.6f;      // alpha of the HDR term
+
+  std::string Validate() const;
+  nlohmann::json ToJson() const;
+  static HdrTrainingOptions FromJson(const nlohmann::json& json, const std::string& source);
+};
+
+// The switches resolved against a scene and a tone mapper: what one training view computes.
+struct ResolvedHdrTraining {
+  bool hdr_colors = true;              // log-HDR colours and an HDR raster (false: plain LDR 4DGS)
+  bool ldr_gaussian = false;           // 3D branch LDR term (6-channel raster)
+  bool ldr_pixel = false;              // 2D branch LDR term
+  bool hdr = false;                    // HDR term (views with HDR ground truth)
+  bool final_ldr_from_pixels = false;  // the LDR output is the 2D branch (whole-image mappers)
+  nlohmann::json ToJson() const;
+};
+
+// Throws hdr4d::Error when the combination cannot train on this scene (HDR supervision without
+// HDR ground truth, a whole-image mapper without the pixel branch, ...). pointwise: whether the
+// tone mapper (if any) maps values on their own.
+ResolvedHdrTraining ResolveHdrTraining(const HdrTrainingOptions& options,
+                                       bool train_views_have_hdr,
+                                       bool pointwise);
+
+}  // namespace hdr4d::method

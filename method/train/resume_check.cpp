@@ -1,0 +1,102 @@
+#include "method/train/resume_check.h"
+
+#include <array>
+#include <string>
+
+#include "core/error.h"
+#include "core/json_util.h"
+
+namespace hdr4d::method {
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr std::array<const char*, 5> kMayDiffer = {"threads", "test_every", "checkpoint_every",
+                                                   "max_seconds", "optimization.iterations"};
+
+bool MayDiffer(const std::string& key) {
+  for (const char* k : kMayDiffer)
+    if (key == k) return true;
+  return false;
+}
+
+std::string Short(const nlohmann::json& v) {
+  std::string text = v.dump();
+  if (text.size() > 80) text = text.substr(0, 77) + "...";
+  return text;
+}
+
+fs::path Canonical(const std::string& path) {
+  std::error_code ec;
+  const fs::path p = fs::weakly_canonical(path, ec);
+  return ec ? fs::path(path).lexically_normal() : p;
+}
+
+// Depth is bounded by the configuration's own shape (a few levels): it is our file.
+void Compare(const nlohmann::json& saved,
+             const nlohmann::json& requested,
+             const std::string& key,
+             const fs::path& config_file) {
+  if (MayDiffer(key)) return;
+  if (saved.is_object() && requested.is_object()) {
+    for (const auto& [name, value] : saved.items()) {
+      const std::string sub = key.empty() ? name : key + "." + name;
+      const auto it = requested.find(name);
+      if (it == requested.end()) {
+        if (MayDiffer(sub)) continue;
+        Fail("{}: --resume would drop the run's {} = {} (start a new run folder to change the "
+             "configuration)",
+             config_file.string(), sub, Short(value));
+      }
+      Compare(value, *it, sub, config_file);
+    }
+    return;
+  }
+  if (key == "data" && saved.is_string() && requested.is_string()) {
+    if (Canonical(saved.get<std::string>()) == Canonical(requested.get<std::string>())) return;
+  } else if (saved == requested) {
+    return;
+  }
+  Fail("{}: --resume with {} = {}, but the run was started with {}; a resumed run keeps its "
+       "configuration (start a new run folder to change it)",
+       config_file.string(), key, Short(requested), Short(saved));
+}
+
+}  // namespace
+
+nlohmann::json ReadSavedRunConfig(const fs::path& run) {
+  const fs::path file = run / "config.json";
+  std::error_code ec;
+  if (!fs::exists(file, ec))
+    Fail("{}: not found: no run here to resume from its checkpoint (train without --resume to "
+         "start one)",
+         file.string());
+  nlohmann::json config = ReadJsonFile(file);
+  if (!config.is_object()) Fail("{}: not a run configuration (expected a JSON object)", file.string());
+  return config;
+}
+
+void KeepSavedSchedules(const nlohmann::json& saved, OptimizationOptions* requested) {
+  const auto it = saved.find("optimization");
+  if (it == saved.end() || !it->is_object()) return;
+  const nlohmann::json& o = *it;
+  auto keep = [&](const char* name, auto* field) {
+    if (*field >= 0) return;  // given explicitly
+    const auto v = o.find(name);
+    if (v != o.end() && v->is_number() && v->template get<double>() >= 0)
+      *field = v->template get<std::remove_pointer_t<decltype(field)>>();
+  };
+  keep("position_lr_max_steps", &requested->position_lr_max_steps);
+  keep("densify_from", &requested->densify_from);
+  keep("densify_until", &requested->densify_until);
+  keep("densify_grad_threshold", &requested->densify_grad_threshold);
+  keep("opacity_reset_interval", &requested->opacity_reset_interval);
+}
+
+void RequireSameConfig(const nlohmann::json& saved,
+                       const nlohmann::json& requested,
+                       const fs::path& config_file) {
+  Compare(saved, requested, "", config_file);
+}
+
+}  // namespace hdr4d::method

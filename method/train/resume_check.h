@@ -1,0 +1,30 @@
+// Resuming a run (hdr4d train --resume): the configuration asked for now against the one the
+// run was started with, checked before anything is read from the checkpoint or written.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+
+#include "method/optim/lr_schedule.h"
+
+namespace hdr4d::method {
+
+// RUN/config.json as the run wrote it; errors name the file (missing: "nothing to resume").
+nlohmann::json ReadSavedRunConfig(const std::filesystem::path& run);
+
+// Schedules left to follow the run length (kFollowRunLength) take the values the run resolved
+// when it started, so a resumed run continues the schedule it was on, whatever --iterations
+// says now; a schedule given explicitly stays as given (and must then match, below).
+void KeepSavedSchedules(const nlohmann::json& saved, OptimizationOptions* requested);
+
+// Throws hdr4d::Error naming `config_file` and the first key (a dotted path) whose value differs
+// between the saved and the requested configuration. Allowed to differ: what decides how long
+// and how fast the run goes and how often it reports, not what it learns (threads, test_every,
+// checkpoint_every, max_seconds, optimization.iterations). Keys the saved file lacks (runs
+// from older versions) are not compared. `data` is compared as a canonical path.
+void RequireSameConfig(const nlohmann::json& saved,
+                       const nlohmann::json& requested,
+                       const std::filesystem::path& config_file);
+
+}  // namespace hdr4d::method

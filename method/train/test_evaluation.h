@@ -1,0 +1,19 @@
+// The test metrics of a model during and after training: every view rendered, the LDR metrics
+// of its final LDR image and, where it has HDR ground truth, the HDR metrics of its HDR render
+// (raw and scale-aligned, core/hdr_alignment.h), averaged as hdr4d eval does.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <vector>
+
+#include "method/train/train_views.h"
+#include "method/train/view_outputs.h"
+
+namespace hdr4d::method {
+
+// Means over the views of the LDR metrics of the final LDR render and, where a view has HDR
+// ground truth, of the HDR metrics of the HDR render (PSNR as the mean of per-view values, 3DGS).
+// A metric that is not finite for a view (a slope with no measured pixel) is left out of its mean.
+nlohmann::json EvaluateViews(ViewRenderer* renderer, const std::vector<TrainView>& views);
+
+}  // namespace hdr4d::method

@@ -1,0 +1,95 @@
+#include "method/train/train_views.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/dataset_image_rules.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/parallel.h"
+#include "method/train/hdr_loss.h"
+
+namespace hdr4d::method {
+
+void TrainView::ToFloat(std::vector<float>* out) const {
+  out->resize(rgb.size());
+  constexpr float kScale = 1.0f / 255.0f;
+  for (std::size_t i = 0; i < rgb.size(); ++i) (*out)[i] = rgb[i] * kScale;
+}
+
+void TrainView::HdrMuToFloat(std::vector<float>* out) const {
+  HDR4D_CHECK(!hdr_mu.empty());
+  out->resize(hdr_mu.size());
+  constexpr float kScale = 1.0f / 65535.0f;
+  for (std::size_t i = 0; i < hdr_mu.size(); ++i) (*out)[i] = hdr_mu[i] * kScale;
+}
+
+namespace {
+
+// mu(gt / max gt) of the training loss, 16 bits per value.
+std::vector<std::uint16_t> LoadHdrMuTarget(const std::filesystem::path& path,
+                                           int width,
+                                           int height) {
+  // The dataset's rules for HDR ground truth (`dataset check` applies the same ones): linear,
+  // RGB, finite, non-negative, some light.
+  const Image hdr = ReadHdrGroundTruth(path);
+  if (hdr.width() != width || hdr.height() != height) {
+    Fail("{}: HDR ground truth is {}x{} but the LDR image is {}x{}", path.string(), hdr.width(),
+         hdr.height(), width, height);
+  }
+  const int c = hdr.channels();
+  float max_value = 0;
+  for (std::size_t p = 0; p < hdr.num_pixels(); ++p)
+    for (int k = 0; k < 3; ++k) max_value = std::max(max_value, hdr.data()[p * c + k]);
+  std::vector<std::uint16_t> mu(hdr.num_pixels() * 3);
+  for (std::size_t p = 0; p < hdr.num_pixels(); ++p) {
+    for (int k = 0; k < 3; ++k) {
+      const float v = MuLawEncode(hdr.data()[p * c + k] / max_value);
+      mu[p * 3 + k] = static_cast<std::uint16_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 65535.0f));
+    }
+  }
+  return mu;
+}
+
+}  // namespace
+
+std::vector<TrainView> LoadViews(const Dataset& dataset,
+                                 Split split,
+                                 const float background[3],
+                                 bool load_hdr) {
+  const std::vector<Frame>& frames = dataset.FramesOf(split);
+  std::vector<TrainView> views(frames.size());
+  ParallelFor(static_cast<std::int64_t>(frames.size()), 1, [&](std::int64_t i) {
+    const Frame& f = frames[i];
+    const Image image = ReadImage(f.image_path);
+    if (std::string problem = LdrImageProblem(image); !problem.empty())
+      Fail("{}: {}", f.image_path.string(), problem);
+    if (image.width() != f.camera.intrinsics.width ||
+        image.height() != f.camera.intrinsics.height) {
+      Fail("{}: image is {}x{} but the camera says {}x{}", f.image_path.string(), image.width(),
+           image.height(), f.camera.intrinsics.width, f.camera.intrinsics.height);
+    }
+    TrainView& v = views[i];
+    v.camera = f.camera;
+    v.time = static_cast<float>(f.time);
+    v.exposure = f.exposure;
+    v.name = f.image_path.filename().string();
+    v.image_index = static_cast<int>(i);
+    v.hdr_path = f.hdr_path;
+    if (load_hdr && f.hdr_path) v.hdr_mu = LoadHdrMuTarget(*f.hdr_path, v.width(), v.height());
+    v.rgb.resize(image.num_pixels() * 3);
+    const int c = image.channels();
+    for (std::size_t p = 0; p < image.num_pixels(); ++p) {
+      const float* px = image.data() + p * c;
+      const float alpha = c == 4 ? px[3] : 1.0f;
+      for (int k = 0; k < 3; ++k) {
+        const float value = (c == 1 ? px[0] : px[k]) * alpha + background[k] * (1.0f - alpha);
+        v.rgb[p * 3 + k] =
+            static_cast<std::uint8_t>(std::lround(std::clamp(value, 0.0f, 1.0f) * 255.0f));
+      }
+    }
+  });
+  return views;
+}
+
+}  // namespace hdr4d::method

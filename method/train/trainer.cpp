@@ -1,0 +1,546 @@
+#include "method/train/trainer.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <set>
+#include <sstream>
+
+#include "core/dataset.h"
+#include "core/error.h"
+#include "core/folder_lock.h"
+#include "core/json_util.h"
+#include "core/output_guard.h"
+#include "core/parallel.h"
+#include "core/ply.h"
+#include "core/progress.h"
+#include "core/scene_profile.h"
+#include "method/optim/densify.h"
+#include "method/optim/model_optimizer.h"
+#include "method/render/frame_render.h"
+#include "method/render/hdr_color_stage.h"
+#include "method/tonemap/radiance_bank.h"
+#include "method/tonemap/tone_mapper_registry.h"
+#include "method/train/checkpoint.h"
+#include "method/train/hdr_loss.h"
+#include "method/train/loop_state.h"
+#include "method/train/loss.h"
+#include "method/train/resume_check.h"
+#include "method/train/test_evaluation.h"
+#include "method/train/train_views.h"
+#include "method/train/view_outputs.h"
+
+namespace hdr4d::method {
+namespace fs = std::filesystem;
+
+std::string TrainOptions::Validate() const {
+  if (data.empty()) return "data: no scene folder given";
+  if (out.empty()) return "out: no run folder given";
+  if (threads < 0) return "threads: must be >= 0";
+  if (test_every < 0 || checkpoint_every < 0) return "test_every / checkpoint_every: must be >= 0";
+  if (!(max_seconds >= 0 && std::isfinite(max_seconds))) return "max_seconds: must be >= 0";
+  if (!(background >= 0 && background <= 1)) return "background: must be within [0, 1]";
+  if (std::string p = optimization.Validate(); !p.empty()) return p;
+  if (std::string p = hdr.Validate(); !p.empty()) return p;
+  return "";
+}
+
+nlohmann::json TrainOptions::ToJson() const {
+  const OptimizationOptions& o = optimization;
+  return {
+      {"data", fs::absolute(data).string()},
+      {"seed", seed},
+      {"threads", threads},
+      {"test_every", test_every},
+      {"checkpoint_every", checkpoint_every},
+      {"max_seconds", max_seconds},
+      {"background", background},
+      {"hdr", hdr.ToJson()},
+      {"init",
+       {{"num_random_points", init.num_random_points},
+        {"random_half_extent", init.random_half_extent},
+        {"initial_opacity", init.initial_opacity}}},
+      {"optimization",
+       {{"iterations", o.iterations},
+        {"position_lr_init", o.position_lr_init},
+        {"position_lr_final", o.position_lr_final},
+        {"position_lr_max_steps", o.position_lr_max_steps},
+        {"t_lr_init", o.t_lr_init},
+        {"f_dc_lr", o.f_dc_lr},
+        {"f_rest_lr", o.f_rest_lr},
+        {"opacity_lr", o.opacity_lr},
+        {"scaling_lr", o.scaling_lr},
+        {"rotation_lr", o.rotation_lr},
+        {"adam_eps", o.adam_eps},
+        {"lambda_dssim", o.lambda_dssim},
+        {"densify_from", o.densify_from},
+        {"densify_until", o.densify_until},
+        {"densification_interval", o.densification_interval},
+        {"densify_grad_threshold", o.densify_grad_threshold},
+        {"percent_dense", o.percent_dense},
+        {"opacity_reset_interval", o.opacity_reset_interval},
+        {"prune_opacity", o.prune_opacity},
+        {"sh_increase_interval", o.sh_increase_interval}}},
+  };
+}
+
+int DistinctTimes(const Dataset& dataset) {
+  std::set<double> times;
+  for (const Frame* f : dataset.AllFrames()) times.insert(f->time);
+  return std::max<int>(1, static_cast<int>(times.size()));
+}
+
+namespace {
+
+constexpr const char* kCheckpointName = "checkpoint.bin";
+
+// NeRF++ normalisation: 1.1 x the largest distance of a training camera from their centroid.
+double SceneExtent(const std::vector<TrainView>& views) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const TrainView& v : views) mean += v.camera.Center();
+  mean /= static_cast<double>(views.size());
+  double radius = 0;
+  for (const TrainView& v : views) radius = std::max(radius, (v.camera.Center() - mean).norm());
+  return 1.1 * std::max(radius, 1e-3);  // one camera: a tiny extent instead of zero
+}
+
+// The training images' size for the densification threshold: the geometric mean of width and
+// height of the median view (views of one scene normally share one size).
+double ImageSize(const std::vector<TrainView>& views) {
+  std::vector<double> sizes;
+  for (const TrainView& v : views) sizes.push_back(std::sqrt(double(v.width()) * v.height()));
+  if (sizes.empty()) return kReferenceImageSize;
+  std::nth_element(sizes.begin(), sizes.begin() + sizes.size() / 2, sizes.end());
+  return sizes[sizes.size() / 2];
+}
+
+// Active colour degrees at an iteration: spatial 0 -> 3 every interval, then temporal 0 -> 2.
+std::pair<int, int> ColorDegrees(int iteration, const GaussianModel& model, int interval) {
+  const int steps = iteration / interval;
+  const int sh = std::min(model.basis.max_sh_degree, steps);
+  const int time =
+      model.temporal ? std::clamp(steps - model.basis.max_sh_degree, 0, model.basis.max_time_degree)
+                     : 0;
+  return {sh, time};
+}
+
+// Removes `folder` when the scope ends by an exception and `made` says this run created it
+// and nothing but the run lock is in it.
+class RemoveIfFailedEmpty {
+ public:
+  RemoveIfFailedEmpty(fs::path folder, bool made)
+      : folder_(std::move(folder)), made_(made), exceptions_(std::uncaught_exceptions()) {}
+  ~RemoveIfFailedEmpty() {
+    if (!made_ || std::uncaught_exceptions() == exceptions_) return;
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator(folder_, ec)) {
+      if (entry.path().filename() != FolderLock::kFileName) return;
+    }
+    if (!ec) fs::remove_all(folder_, ec);
+  }
+  RemoveIfFailedEmpty(const RemoveIfFailedEmpty&) = delete;
+  RemoveIfFailedEmpty& operator=(const RemoveIfFailedEmpty&) = delete;
+
+ private:
+  fs::path folder_;
+  bool made_;
+  int exceptions_;
+};
+
+// One training run from set-up to results.json: Train() below reads top to bottom as set-up,
+// resume or initialise, the steps, and the final save (docs/ARCHITECTURE.md, "One training
+// step"). Members are declared in the order they are made.
+class TrainingRun {
+ public:
+  explicit TrainingRun(const TrainOptions& options) : options_(options) {}
+
+  void SetUp();
+  void OpenRunFolder();
+  void ResumeOrInitialise();
+  void PrepareRendering();
+  bool StepsLeft() const { return loop_.iteration < opt_.iterations; }
+  bool OutOfTime() const;
+  void Step();
+  TrainSummary Finish();
+
+ private:
+  double ForwardAndLoss(const TrainView& view, const float** ldr_out);
+  void BackwardAndUpdate(const TrainView& view, int it, double loss_value);
+  void ShowProgress(double loss_value, const float* ldr_out, std::size_t pixels);
+  void EvaluateAndCheckpoint(int it);
+  nlohmann::json EvaluateTestViews();
+  void Save();
+  double TrainingSeconds() const;
+
+  const TrainOptions& options_;
+  std::optional<Dataset> dataset_;
+  SceneProfile profile_;
+  std::vector<TrainView> train_views_, test_views_;
+  int num_times_ = 1;
+  double extent_ = 0;
+  OptimizationOptions opt_;  // the schedules resolved for this run
+  bool temporal_ = false;
+  std::optional<nlohmann::json> saved_config_;
+  nlohmann::json config_;
+  std::unique_ptr<ToneMapper> tone_mapper_;
+  ResolvedHdrTraining resolved_;
+  // The folder guard is declared before the lock: the lock goes first when a failure unwinds.
+  std::optional<RemoveIfFailedEmpty> cleanup_;
+  std::optional<FolderLock> lock_;
+  fs::path checkpoint_path_;
+  GaussianModel model_;
+  GaussianGradients grads_;
+  std::optional<ModelOptimizer> optimizer_;
+  DensifyStats stats_;
+  LoopState loop_;
+  RenderOptions render_;
+  std::optional<HdrColorStage> stage_;
+  int raster_channels_ = 3;
+  SupervisionTerms terms_;
+  FrameState state_;
+  HdrLossScratch scratch_;
+  std::vector<float> image_, gt_, hdr_mu_, dL_dimage_;
+  std::optional<Progress> progress_;
+  std::chrono::steady_clock::time_point start_;
+  double seconds_before_ = 0;
+  double eval_seconds_ = 0;  // periodic test evaluations: not training time
+};
+
+// The data, the schedules for this run's length and image size, the tone mapper and the
+// configuration to record (a resumed run must match the one it continues).
+void TrainingRun::SetUp() {
+  dataset_.emplace(LoadDataset(options_.data, {.image_check = ImageCheck::kHeaders}));
+  profile_ = ProfileScene(*dataset_);
+  const HdrTrainingOptions& hdr = options_.hdr;
+  const float background[3] = {options_.background, options_.background, options_.background};
+  train_views_ = LoadViews(*dataset_, Split::kTrain, background,
+                           /*load_hdr=*/hdr.color_mode == ColorMode::kLogHdr);
+  test_views_ = LoadViews(*dataset_, Split::kTest, background);
+  num_times_ = DistinctTimes(*dataset_);
+  for (auto* views : {&train_views_, &test_views_}) {
+    for (TrainView& v : *views) v.time_index = RadianceBank::TimeIndex(v.time, num_times_);
+  }
+  const bool train_hdr = std::any_of(train_views_.begin(), train_views_.end(),
+                                     [](const TrainView& v) { return !v.hdr_mu.empty(); });
+  extent_ = SceneExtent(train_views_);
+  // A resumed run keeps the configuration it was started with: read it before anything else.
+  OptimizationOptions requested = options_.optimization;
+  if (options_.resume) {
+    saved_config_ = ReadSavedRunConfig(options_.out);
+    KeepSavedSchedules(*saved_config_, &requested);
+  }
+  // Schedules for this run's length and image size (an explicit value stays as it is).
+  opt_ = requested.Resolved(ImageSize(train_views_));
+  temporal_ = profile_.dynamic && !hdr.force_static;
+  spdlog::info("train: {} train / {} test views, extent {:.3f}, {}, method {}", train_views_.size(),
+               test_views_.size(), extent_, temporal_ ? "dynamic" : "static (no time axis)",
+               hdr.method);
+  if (hdr.tone_mapper) {
+    ToneMapperConfig tc = *hdr.tone_mapper;
+    tc.num_times = num_times_;
+    tc.num_images = static_cast<int>(train_views_.size());
+    tc.seed = options_.seed;
+    tone_mapper_ = MakeToneMapper(tc);
+  }
+  resolved_ = ResolveHdrTraining(hdr, train_hdr, !tone_mapper_ || tone_mapper_->pointwise());
+  TrainOptions recorded = options_;
+  recorded.optimization = opt_;
+  config_ = recorded.ToJson();
+  config_["scene_extent"] = extent_;
+  config_["profile"] = profile_.ToJson();
+  config_["num_times"] = num_times_;
+  config_["resolved"] = resolved_.ToJson();
+  if (tone_mapper_) config_["tone_mapper"] = tone_mapper_->config().ToJson();
+  if (saved_config_) RequireSameConfig(*saved_config_, config_, options_.out / "config.json");
+}
+
+// One writer per run folder; a folder this run made and left with nothing in it on failure is
+// removed again, so a failed start leaves nothing a later command trips over.
+void TrainingRun::OpenRunFolder() {
+  CheckOutputFolder(options_.out);  // before the folder or anything in it is made
+  std::error_code ec;
+  const bool made_folder = !fs::exists(options_.out, ec);
+  fs::create_directories(options_.out, ec);
+  if (ec) Fail("{}: cannot create the run folder: {}", options_.out.string(), ec.message());
+  cleanup_.emplace(options_.out, made_folder);
+  lock_.emplace(options_.out, "hdr4d train --out " + options_.out.string());
+  checkpoint_path_ = options_.out / kCheckpointName;
+}
+
+// The model, optimiser and loop state from the checkpoint, or a new model from the point cloud
+// (or random points); then RUN/config.json.
+void TrainingRun::ResumeOrInitialise() {
+  optimizer_.emplace(opt_, extent_);
+  loop_.rng.seed(options_.seed);
+  if (options_.resume) {
+    Checkpoint c = LoadCheckpoint(checkpoint_path_);
+    model_ = std::move(c.model);
+    std::istringstream adam_state(c.adam_state);
+    optimizer_->Load(adam_state, checkpoint_path_.string());
+    loop_.FromJson(c.trainer, checkpoint_path_, train_views_.size());
+    if (c.extra_floats.size() != 3)
+      Fail("{}: checkpoint has no densification statistics", checkpoint_path_.string());
+    stats_.grad_accum = std::move(c.extra_floats[0]);
+    stats_.denom = std::move(c.extra_floats[1]);
+    stats_.max_radii = std::move(c.extra_floats[2]);
+    if (model_.color_mode != options_.hdr.color_mode) {
+      Fail("{}: the checkpoint's colour model does not match method '{}'",
+           checkpoint_path_.string(), options_.hdr.method);
+    }
+    if (tone_mapper_) {
+      if (c.tone_mapper_state.empty())
+        Fail("{}: checkpoint has no tone mapper state", checkpoint_path_.string());
+      std::istringstream tm_state(c.tone_mapper_state);
+      tone_mapper_->Load(tm_state, checkpoint_path_.string());
+    }
+    spdlog::info("train: resuming {} at iteration {}", checkpoint_path_.string(), loop_.iteration);
+  } else {
+    InitOptions init = options_.init;
+    init.seed = options_.seed;
+    init.temporal = temporal_;  // a static scene trains without the time axis
+    init.color_mode = options_.hdr.color_mode;
+    std::optional<PointCloud> cloud;
+    if (dataset_->point_cloud_path) cloud = ReadPly(*dataset_->point_cloud_path);
+    model_ = InitialiseGaussians(cloud, init);
+    stats_.Reset(model_.size());
+  }
+  grads_.ZerosLike(model_);
+  if (options_.resume) {
+    optimizer_->BindGroups(model_, grads_, tone_mapper_.get());
+  } else {
+    optimizer_->AddGroups(model_, grads_, tone_mapper_.get());
+  }
+  WriteJsonFile(options_.out / "config.json", config_);
+}
+
+// The render options of the training views (with the HDR colour stage for log-HDR colours),
+// the loss terms, and the clock.
+void TrainingRun::PrepareRendering() {
+  if (resolved_.hdr_colors) {
+    stage_.emplace(tone_mapper_.get(), resolved_.ldr_gaussian);
+    render_.color_stage = &*stage_;
+    render_.background.assign(stage_->feature_channels(), 0.0f);
+    for (int c = 3; c < stage_->feature_channels(); ++c)
+      render_.background[c] = options_.background;
+  } else {
+    render_.background.assign(model_.channels, options_.background);
+  }
+  raster_channels_ = static_cast<int>(render_.background.size());
+  terms_ = {.ldr_gaussian = resolved_.ldr_gaussian,
+            .ldr_pixel = resolved_.ldr_pixel,
+            .hdr = resolved_.hdr,
+            .hdr_weight = options_.hdr.hdr_weight,
+            .lambda_dssim = static_cast<float>(opt_.lambda_dssim)};
+  progress_.emplace("train", opt_.iterations - loop_.iteration, options_.progress);
+  start_ = std::chrono::steady_clock::now();
+  seconds_before_ = loop_.train_seconds;
+}
+
+double TrainingRun::TrainingSeconds() const {
+  return seconds_before_ - eval_seconds_ +
+         std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+}
+
+bool TrainingRun::OutOfTime() const {
+  return options_.max_seconds > 0 && TrainingSeconds() >= options_.max_seconds;
+}
+
+// One iteration: pick a view, render it, the loss, the backward with the fused optimiser step,
+// densification, progress, and the periodic evaluation and checkpoint.
+void TrainingRun::Step() {
+  const int it = ++loop_.iteration;
+  optimizer_->SetIteration(it);
+  std::tie(render_.sh_degree, render_.time_degree) =
+      ColorDegrees(it, model_, opt_.sh_increase_interval);
+  const TrainView& view = train_views_[loop_.NextView(train_views_.size())];
+  const std::size_t pixels = static_cast<std::size_t>(view.width()) * view.height();
+  image_.resize(pixels * raster_channels_);
+  dL_dimage_.resize(pixels * raster_channels_);
+  view.ToFloat(&gt_);
+  const float* ldr_out = nullptr;  // the final LDR image of this view, for the PSNR shown
+  const double loss_value = ForwardAndLoss(view, &ldr_out);
+  if (!std::isfinite(loss_value)) {
+    Fail("train: iteration {}: the loss is {} (view {}); stopped, the last good checkpoint is {}",
+         it, loss_value, view.name, checkpoint_path_.string());
+  }
+  BackwardAndUpdate(view, it, loss_value);
+  ShowProgress(loss_value, ldr_out, pixels);
+  EvaluateAndCheckpoint(it);
+}
+
+// Renders `view` and returns the loss of every supervision term; *ldr_out is the final LDR
+// image the loss made (null under HDR-only supervision).
+double TrainingRun::ForwardAndLoss(const TrainView& view, const float** ldr_out) {
+  if (!resolved_.hdr_colors) {
+    RenderForward(model_, view.camera, view.time, render_, &state_, image_.data());
+    *ldr_out = image_.data();
+    return PhotometricLoss(image_.data(), gt_.data(), view.width(), view.height(), 3,
+                           static_cast<float>(opt_.lambda_dssim), dL_dimage_.data())
+        .value;
+  }
+  if (tone_mapper_) tone_mapper_->ZeroGrad();
+  stage_->SetFrame({view.time_index, view.image_index, static_cast<float>(std::log(view.exposure))},
+                   /*observe_bank=*/true);
+  RenderForward(model_, view.camera, view.time, render_, &state_, image_.data());
+  const float* mu = nullptr;
+  if (!view.hdr_mu.empty()) {
+    view.HdrMuToFloat(&hdr_mu_);
+    mu = hdr_mu_.data();
+  }
+  const double loss =
+      HdrFrameLoss(image_.data(), raster_channels_, view.width(), view.height(), gt_.data(), mu,
+                   tone_mapper_.get(), terms_, &scratch_, dL_dimage_.data())
+          .total;
+  // The loss already made the final LDR image: the 2D branch for whole-image mappers, else the
+  // clamped 3D branch (none under HDR-only supervision).
+  if (resolved_.final_ldr_from_pixels && terms_.ldr_pixel) {
+    *ldr_out = scratch_.pixel_ldr.data();
+  } else if (terms_.ldr_gaussian) {
+    *ldr_out = scratch_.ldr.data();
+  }
+  return loss;
+}
+
+// The backward with the model's optimiser step fused into it, the finite check, densification
+// and the opacity reset on their schedule, and the steps the backward did not take.
+void TrainingRun::BackwardAndUpdate(const TrainView& view, int it, double loss_value) {
+  // As in the reference, densification replaces every parameter tensor, so no optimiser step
+  // happens on that iteration; an opacity reset replaces only the opacity.
+  const bool densify =
+      it < opt_.densify_until && it > opt_.densify_from && it % opt_.densification_interval == 0;
+  const bool reset_opacity = it < opt_.densify_until && it % opt_.opacity_reset_interval == 0;
+  const GradientRowsDone step_rows = optimizer_->Begin(densify, reset_opacity, model_.size());
+  RenderBackward(model_, view.camera, view.time, render_, &state_, dL_dimage_.data(), &grads_,
+                 step_rows);
+  if (tone_mapper_) tone_mapper_->EndFrameBackward();
+  // A non-finite gradient stops training: the state in memory is partly stepped and dropped,
+  // the last checkpoint kept.
+  if (const std::string bad = optimizer_->FirstNonFinite(); !bad.empty()) {
+    Fail(
+        "train: iteration {}: non-finite gradient in parameter group '{}'; stopped, the last "
+        "good checkpoint is {}",
+        it, bad, checkpoint_path_.string());
+  }
+  if (it < opt_.densify_until)
+    AccumulateStats(state_.splat_grads.mean2d, state_.screen_radius, view.width(), view.height(),
+                    &stats_);
+  loop_.loss_curve.push_back(loss_value);
+  if (densify) {
+    DensifyAndPrune(&model_, &grads_, &optimizer_->adam(), &stats_,
+                    DensifyParamsAt(opt_, extent_, it), &loop_.rng);
+  }
+  optimizer_->Finish();
+  if (reset_opacity) ResetOpacity(&model_, &optimizer_->adam());
+}
+
+// The loss, the training-view PSNR of the final LDR image and the Gaussian count on the
+// progress line; the PSNR is also kept for results.json.
+void TrainingRun::ShowProgress(double loss_value, const float* ldr_out, std::size_t pixels) {
+  std::string shown = fmt::format("loss {:.4f}", loss_value);
+  if (ldr_out) {
+    double squared = 0;
+    for (std::size_t i = 0; i < pixels * 3; ++i) {
+      const double d = std::clamp(ldr_out[i], 0.0f, 1.0f) - gt_[i];
+      squared += d * d;
+    }
+    const double psnr = -10.0 * std::log10(std::max(squared / (pixels * 3), 1e-20));
+    loop_.psnr_curve.push_back(psnr);
+    shown += fmt::format(" psnr {:.2f}", psnr);
+  }
+  progress_->Advance(1, fmt::format("{} N {}", shown, model_.size()));
+}
+
+void TrainingRun::EvaluateAndCheckpoint(int it) {
+  if (options_.test_every > 0 && it % options_.test_every == 0 && it < opt_.iterations) {
+    const auto eval_start = std::chrono::steady_clock::now();
+    nlohmann::json m = EvaluateTestViews();
+    spdlog::info("train: iteration {}: test {}", it, m.dump());
+    m["iteration"] = it;
+    loop_.test_curve.push_back(std::move(m));
+    eval_seconds_ +=
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - eval_start).count();
+  }
+  if (options_.checkpoint_every > 0 && it % options_.checkpoint_every == 0) {
+    loop_.train_seconds = TrainingSeconds();
+    Save();
+  }
+}
+
+nlohmann::json TrainingRun::EvaluateTestViews() {
+  RenderOptions base = render_;
+  base.color_stage = nullptr;
+  ViewRenderer renderer(model_, tone_mapper_.get(), resolved_, base, options_.background);
+  return EvaluateViews(&renderer, test_views_);
+}
+
+void TrainingRun::Save() {
+  Checkpoint c;
+  c.model = model_;
+  c.trainer = loop_.ToJson();
+  c.extra_floats = {stats_.grad_accum, stats_.denom, stats_.max_radii};
+  std::ostringstream adam_state;
+  optimizer_->Save(adam_state);
+  c.adam_state = adam_state.str();
+  if (tone_mapper_) {
+    std::ostringstream tm_state;
+    tone_mapper_->Save(tm_state);
+    c.tone_mapper_state = tm_state.str();
+  }
+  SaveCheckpoint(checkpoint_path_, c);
+}
+
+// The last checkpoint, the final test metrics and RUN/results.json.
+TrainSummary TrainingRun::Finish() {
+  progress_->Finish();
+  loop_.train_seconds = TrainingSeconds();
+  Save();
+  TrainSummary summary;
+  summary.stopped_by_time = loop_.iteration < opt_.iterations;
+  summary.test_metrics = EvaluateTestViews();
+  summary.train_seconds = loop_.train_seconds;
+  summary.iterations = loop_.iteration;
+  summary.gaussians = model_.size();
+  summary.loss_curve = loop_.loss_curve;
+  nlohmann::json results = {
+      {"method", options_.hdr.method},
+      {"test", summary.test_metrics},
+      {"train_seconds", summary.train_seconds},
+      {"iterations", summary.iterations},
+      {"gaussians", summary.gaussians},
+      {"test_views", test_views_.size()},
+      {"final_loss",
+       loop_.loss_curve.empty() ? nlohmann::json(nullptr) : FiniteOrNull(loop_.loss_curve.back())},
+      {"stopped_by_time", summary.stopped_by_time},
+      {"curve", CurveBlocks(loop_.loss_curve, loop_.psnr_curve, 256)},
+      {"test_curve", loop_.test_curve}};
+  if (options_.test_every > 0) {
+    nlohmann::json last = summary.test_metrics;
+    last["iteration"] = loop_.iteration;
+    results["test_curve"].push_back(std::move(last));
+  }
+  WriteJsonFile(options_.out / "results.json", results);
+  return summary;
+}
+
+}  // namespace
+
+TrainSummary Train(const TrainOptions& options) {
+  if (std::string problem = options.Validate(); !problem.empty()) Fail("train: {}", problem);
+  const ThreadLimit thread_limit(options.threads);
+  TrainingRun run(options);
+  run.SetUp();
+  run.OpenRunFolder();
+  run.ResumeOrInitialise();
+  run.PrepareRendering();
+  while (run.StepsLeft() && !run.OutOfTime()) run.Step();
+  return run.Finish();
+}
+
+}  // namespace hdr4d::method

@@ -1,0 +1,58 @@
+// `hdr4d train`: 4D Gaussian Splatting from a dataset (ARCHITECTURE §4): initialisation, the training
+// loop (render, L1 + D-SSIM, backward, Adam with the reference's schedules, densification),
+// periodic test evaluation, checkpoints that resume exactly, and RUN/results.json.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "core/dataset.h"
+#include "method/optim/lr_schedule.h"
+#include "method/train/hdr_training_options.h"
+#include "method/train/initialise.h"
+
+namespace hdr4d::method {
+
+struct TrainOptions {
+  std::filesystem::path data;  // scene folder
+  std::filesystem::path out;   // run folder
+  OptimizationOptions optimization;
+  InitOptions init;  // seed, random point count, ...
+  std::uint64_t seed = 0;
+  int threads = 0;           // 0 = all cores
+  int test_every = 0;        // evaluate the test split every N iterations (0 = only at the end)
+  int checkpoint_every = 0;  // save RUN/checkpoint.bin every N iterations (0 = only at the end)
+  // Wall-clock budget of the training loop in seconds (0 = none): training stops after the first
+  // iteration that reaches it (the schedules still run over optimization.iterations).
+  double max_seconds = 0;
+  bool resume = false;       // continue from RUN/checkpoint.bin
+  bool progress = true;
+  float background = 0.0f;  // grey level behind the scene (the reference trains on black)
+  HdrTrainingOptions hdr;   // colour mode, tone mapper, supervision branches (plain 4DGS default)
+  std::string Validate() const;
+  nlohmann::json ToJson() const;
+};
+
+struct TrainSummary {
+  nlohmann::json test_metrics;  // keys of `hdr4d eval` (means over the test views), LDR and HDR
+  double train_seconds = 0;
+  int iterations = 0;
+  std::size_t gaussians = 0;
+  std::vector<double> loss_curve;  // per iteration
+  bool stopped_by_time = false;    // max_seconds ended the loop before optimization.iterations
+};
+
+// Runs (or resumes) training; writes RUN/config.json, RUN/checkpoint.bin, RUN/results.json.
+// results.json also holds the training curves ("curve": loss and training-view PSNR as means
+// over at most 256 equal blocks of iterations) and, with test_every, the test metrics at each
+// evaluation ("test_curve"). train_seconds is the loop's wall time without those evaluations.
+TrainSummary Train(const TrainOptions& options);
+
+// The radiance-bank size of a scene: the number of distinct normalised timestamps over all its
+// frames (the reference's len(set(times))).
+int DistinctTimes(const Dataset& dataset);
+
+
+}  // namespace hdr4d::method

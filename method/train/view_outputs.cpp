@@ -1,0 +1,70 @@
+#include "method/train/view_outputs.h"
+
+#include <algorithm>
+
+#include "method/train/hdr_loss.h"
+
+namespace hdr4d::method {
+
+ViewRenderer::ViewRenderer(const GaussianModel& model,
+                           ToneMapper* tone_mapper,
+                           const ResolvedHdrTraining& resolved,
+                           const RenderOptions& base,
+                           float background)
+    : model_(model), tone_mapper_(tone_mapper), resolved_(resolved), options_(base) {
+  if (!resolved_.hdr_colors) {
+    options_.color_stage = nullptr;
+    options_.background.assign(model.channels, background);
+    return;
+  }
+  // Tone-mapped Gaussians whenever the mapper can (even if training used only the HDR term).
+  const bool map = tone_mapper && tone_mapper->pointwise() && !resolved_.final_ldr_from_pixels;
+  stage_.emplace(tone_mapper, map);
+  options_.color_stage = &*stage_;
+  options_.background.assign(stage_->feature_channels(), 0.0f);
+  for (int c = 3; c < stage_->feature_channels(); ++c) options_.background[c] = background;
+}
+
+void ViewRenderer::Render(const Camera& camera,
+                          float time,
+                          const ToneFrame& frame,
+                          std::vector<float>* ldr,
+                          std::vector<float>* hdr) {
+  const std::size_t pixels =
+      static_cast<std::size_t>(camera.intrinsics.width) * camera.intrinsics.height;
+  if (!resolved_.hdr_colors) {
+    raster_.resize(pixels * 3);
+    RenderForward(model_, camera, time, options_, &state_, raster_.data());
+    if (ldr) {
+      ldr->resize(pixels * 3);
+      std::transform(raster_.begin(), raster_.end(), ldr->begin(),
+                     [](float v) { return std::clamp(v, 0.0f, 1.0f); });
+    }
+    if (hdr) hdr->clear();
+    return;
+  }
+  stage_->SetFrame(frame, /*observe_bank=*/false);
+  const int channels = stage_->feature_channels();
+  raster_.resize(pixels * channels);
+  RenderForward(model_, camera, time, options_, &state_, raster_.data());
+  if (hdr) {
+    ExtractChannels(raster_.data(), channels, 0, pixels, hdr);
+    for (float& v : *hdr) v = std::max(v, 0.0f);
+  }
+  if (!ldr) return;
+  if (channels == 6) {
+    ExtractChannels(raster_.data(), channels, 3, pixels, ldr);
+  } else if (tone_mapper_) {
+    ExtractChannels(raster_.data(), channels, 0, pixels, &x_);
+    PixelLogImage(x_, &x_);
+    ldr->resize(pixels * 3);
+    tone_mapper_->MapImage(x_.data(), camera.intrinsics.width, camera.intrinsics.height,
+                           ldr->data());
+  } else {
+    ldr->clear();  // HDR colours without a tone mapper (4dgs-hdr): no LDR output
+    return;
+  }
+  for (float& v : *ldr) v = std::clamp(v, 0.0f, 1.0f);
+}
+
+}  // namespace hdr4d::method

@@ -1,0 +1,49 @@
+// One view of a trained model as its outputs: the final LDR image and, for HDR colours, the HDR
+// image (ARCHITECTURE §4: the final LDR render is the 3D branch, or the 2D branch for a whole-image
+// tone mapper; the final HDR render is the HDR raster). Shared by the trainer's evaluation and
+// `hdr4d render`. Rendering here never writes the radiance bank: looking at a run does not
+// change it.
+#pragma once
+
+#include <optional>
+#include <vector>
+
+#include "core/camera.h"
+#include "method/render/frame_render.h"
+#include "method/render/hdr_color_stage.h"
+#include "method/train/hdr_training_options.h"
+
+namespace hdr4d::method {
+
+class ViewRenderer {
+ public:
+  // The model and tone mapper (may be null) must outlive the renderer. `base` gives the colour
+  // degrees, time span, backend and the LDR background (one value, repeated).
+  ViewRenderer(const GaussianModel& model,
+               ToneMapper* tone_mapper,
+               const ResolvedHdrTraining& resolved,
+               const RenderOptions& base,
+               float background);
+
+  // ldr: H x W x 3 in [0,1]; hdr: H x W x 3 linear radiance (left empty for an LDR model).
+  // Either may be null.
+  void Render(const Camera& camera,
+              float time,
+              const ToneFrame& frame,
+              std::vector<float>* ldr,
+              std::vector<float>* hdr);
+
+  bool has_hdr() const { return resolved_.hdr_colors; }
+  bool has_ldr() const { return !resolved_.hdr_colors || tone_mapper_ != nullptr; }
+
+ private:
+  const GaussianModel& model_;
+  ToneMapper* tone_mapper_;
+  ResolvedHdrTraining resolved_;
+  RenderOptions options_;
+  std::optional<HdrColorStage> stage_;
+  FrameState state_;
+  std::vector<float> raster_, x_;
+};
+
+}  // namespace hdr4d::method
