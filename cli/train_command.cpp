@@ -70,8 +70,8 @@ void AddTrainCommand(CLI::App& app) {
                   "--iterations, 15000 of 20000)")
       ->check(Integer(1));
   cmd->add_option("--opacity-reset-interval", o.opacity_reset_interval,
-                  "Iterations between opacity resets while densifying (default: 15% of "
-                  "--iterations, 3000 of 20000)")
+                  "Iterations between opacity resets while densifying (default: the reference's "
+                  "3000 whatever --iterations: more frequent resets leave no time to recover)")
       ->check(Integer(1));
   cmd->add_option("--sh-increase-interval", o.sh_increase_interval,
                   "Iterations per colour degree step, spatial 0->3 then temporal 0->2 (the "

@@ -123,11 +123,13 @@ struct OptimizationOptions {
   int densification_interval = 200;
   double densify_grad_threshold = kFollowRunLength;  // scaled: 2e-4 at 400 px, x 400 / size
   double percent_dense = 0.01;
-  int opacity_reset_interval = kFollowRunLength;  // scaled: 3000 of 20000
+  // Resolved to the reference's 3000 whatever the run length: scaled resets (every 450 of 3000
+  // iterations) leave the model no time to recover between them (issue 12, BENCHMARKS.md).
+  int opacity_reset_interval = kFollowRunLength;
   double prune_opacity = 0.005;
   int sh_increase_interval = 1000;
 
-  // The reference's values of the scaled fields (a 20000-iteration run on 400-pixel images).
+  // The reference's values of the resolved fields (a 20000-iteration run on 400-pixel images).
   static constexpr int kRefPositionLrMaxSteps = 15000;
   static constexpr int kRefDensifyFrom = 500;
   static constexpr int kRefDensifyUntil = 15000;
@@ -135,7 +137,9 @@ struct OptimizationOptions {
   static constexpr int kRefOpacityResetInterval = 3000;
 
   // A copy with every field that follows the run length given its value for `iterations` and
-  // training images of `image_size` pixels (the geometric mean of width and height, > 0).
+  // training images of `image_size` pixels (the geometric mean of width and height, > 0). The
+  // densification window and the position-LR decay scale with the run; the opacity reset keeps
+  // the reference's interval (a short run then resets rarely or never).
   OptimizationOptions Resolved(double image_size) const {
     OptimizationOptions r = *this;
     auto steps = [&](int& field, int reference) {
@@ -143,7 +147,7 @@ struct OptimizationOptions {
     };
     steps(r.position_lr_max_steps, kRefPositionLrMaxSteps);
     steps(r.densify_until, kRefDensifyUntil);
-    steps(r.opacity_reset_interval, kRefOpacityResetInterval);
+    if (r.opacity_reset_interval < 0) r.opacity_reset_interval = kRefOpacityResetInterval;
     if (r.densify_from < 0) {
       // Never past an explicit densify_until (a short run that densifies early).
       r.densify_from = std::min(StepsForRunLength(kRefDensifyFrom, iterations), r.densify_until);

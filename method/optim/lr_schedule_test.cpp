@@ -100,7 +100,7 @@ TEST(OptimizationOptions, SchedulesFollowTheRunLengthUnlessSet) {
   EXPECT_EQ(r.densify_from, 75);
   EXPECT_EQ(r.densify_until, 2250);
   EXPECT_EQ(r.densification_interval, 200);  // not scaled (see lr_schedule.h)
-  EXPECT_EQ(r.opacity_reset_interval, 450);
+  EXPECT_EQ(r.opacity_reset_interval, 3000);  // the reference's: scaled resets ruin short runs
   EXPECT_EQ(r.sh_increase_interval, 1000);
   EXPECT_DOUBLE_EQ(r.densify_grad_threshold, 8e-4);  // 2e-4 x 400 / 100
   EXPECT_DOUBLE_EQ(o.Resolved(800.0).densify_grad_threshold, 1e-4);
@@ -115,12 +115,14 @@ TEST(OptimizationOptions, SchedulesFollowTheRunLengthUnlessSet) {
   EXPECT_EQ(e.densify_from, 50);
   EXPECT_EQ(e.densify_grad_threshold, 1e-3);
   EXPECT_EQ(e.position_lr_max_steps, 3000);
-  EXPECT_EQ(e.opacity_reset_interval, 450);
+  EXPECT_EQ(e.opacity_reset_interval, 3000);
+  o.opacity_reset_interval = 450;  // an explicit interval wins
+  EXPECT_EQ(o.Resolved(100.0).opacity_reset_interval, 450);
   // Tiny runs keep every step count at least 1; a bad image size falls back to 400 px.
   o = OptimizationOptions{};
   o.iterations = 10;
   const OptimizationOptions tiny = o.Resolved(0.0);
-  EXPECT_EQ(tiny.opacity_reset_interval, 2);
+  EXPECT_EQ(tiny.opacity_reset_interval, 3000);
   EXPECT_EQ(tiny.position_lr_max_steps, 8);
   EXPECT_EQ(tiny.densify_from, 1);
   EXPECT_EQ(tiny.densify_grad_threshold, 2e-4);
