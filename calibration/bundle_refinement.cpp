@@ -1,6 +1,7 @@
 #include "calibration/bundle_refinement.h"
 
 #include <ceres/ceres.h>
+#include <ceres/manifold.h>
 #include <ceres/rotation.h>
 
 #include <algorithm>
@@ -88,9 +89,14 @@ BundleReport RefineBundle(BundleProblem* problem, const BundleOptions& options) 
     ceres_problem.SetParameterBlockConstant(pose.rotation.data());
     ceres_problem.SetParameterBlockConstant(pose.translation.data());
   }
-  for (BundleIntrinsics& k : problem->intrinsics)
-    if ((!options.refine_intrinsics || k.fixed) && ceres_problem.HasParameterBlock(Data(k)))
+  for (BundleIntrinsics& k : problem->intrinsics) {
+    if (!ceres_problem.HasParameterBlock(Data(k))) continue;
+    if (!options.refine_intrinsics || k.fixed) {
       ceres_problem.SetParameterBlockConstant(Data(k));
+    } else if (!options.refine_principal_point) {
+      ceres_problem.SetManifold(Data(k), new ceres::SubsetManifold(5, {1, 2}));  // cx, cy held
+    }
+  }
   for (Eigen::Vector3d& p : problem->points)
     if (!options.refine_points && ceres_problem.HasParameterBlock(p.data()))
       ceres_problem.SetParameterBlockConstant(p.data());

@@ -68,6 +68,27 @@ TEST(BundleRefinement, RecoversPerturbedPoses) {
   }
 }
 
+// The principal point is held unless asked for: a start 4 px off stays there (the rest absorbs
+// what it can), and with refine_principal_point the truth comes back.
+TEST(BundleRefinement, PrincipalPointIsHeldUnlessRequested) {
+  std::mt19937 rng(9);
+  const BundleProblem truth = Synthetic(rng);
+  BundleProblem held = truth;
+  held.intrinsics[1].cx += 4;
+  held.intrinsics[1].cy -= 3;
+  BundleProblem refined = held;
+  BundleOptions options;
+  options.refine_points = false;
+  RefineBundle(&held, options);
+  EXPECT_EQ(held.intrinsics[1].cx, truth.intrinsics[1].cx + 4);
+  EXPECT_EQ(held.intrinsics[1].cy, truth.intrinsics[1].cy - 3);
+  options.refine_principal_point = true;
+  const BundleReport report = RefineBundle(&refined, options);
+  EXPECT_NEAR(refined.intrinsics[1].cx, truth.intrinsics[1].cx, 1e-3);
+  EXPECT_NEAR(refined.intrinsics[1].cy, truth.intrinsics[1].cy, 1e-3);
+  EXPECT_LT(report.rms_after[1], 1e-4);
+}
+
 TEST(BundleRefinement, RobustLossIgnoresOutliersAndRefinesPoints) {
   std::mt19937 rng(8);
   const BundleProblem truth = Synthetic(rng);

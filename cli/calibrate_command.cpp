@@ -1,7 +1,12 @@
 // hdr4d calibrate: a fixed multi-camera rig with bracketed exposures, calibrated into a dataset.
 #include <fmt/format.h>
 
+#include <filesystem>
+
 #include "calibration/calibrate.h"
+#include "calibration/truth_comparison.h"
+#include "core/error.h"
+#include "core/json_util.h"
 #include "cli/commands.h"
 #include "cli/flags.h"
 
@@ -15,6 +20,7 @@ void AddCalibrateCommand(CLI::App& app) {
   auto stage = std::make_shared<std::string>("all");
   auto no_motion = std::make_shared<bool>(false);
   auto no_gains = std::make_shared<bool>(false);
+  auto truth = std::make_shared<std::string>();
   CLI::App* cmd = app.add_subcommand(
       "calibrate",
       "Turn a capture of a fixed camera rig with bracketed exposures (static/<camera>/, "
@@ -52,6 +58,11 @@ void AddCalibrateCommand(CLI::App& app) {
                   "Undistort images when lens distortion moves a pixel by more than this")->capture_default_str()
       ->check(Real(0, 1e6));
   cmd->add_flag("--no-motion-detection", *no_motion, "Average every bracket even where they disagree");
+  cmd->add_option("--truth", *truth,
+                  "The truth/ folder of a synthetic capture (hdr4d datagen --capture): after "
+                  "calibrating, compare poses (after a similarity), focal lengths, the response "
+                  "and the fused HDR with it; prints a table, writes truth_comparison.{json,md}")
+      ->check(Text("a truth folder"));
   cmd->add_flag("--no-gain-correction", *no_gains,
                 "Measure the cameras' disagreement but leave their HDR and exposures as fused");
   cmd->callback([=] {
@@ -61,11 +72,23 @@ void AddCalibrateCommand(CLI::App& app) {
     if (!colmap_model->empty()) options->colmap_model = *colmap_model;
     options->stage = ParseCalibrationStage(*stage);
     options->fusion.detect_motion = !*no_motion;
+    // A truth folder that cannot be read fails before the calibration, not after it.
+    if (!truth->empty() && !std::filesystem::is_regular_file(std::filesystem::path(*truth) / "cameras.json"))
+      Fail("{}: --truth needs the truth/ folder of `hdr4d datagen --capture` (no cameras.json in it)",
+           *truth);
     const CalibrateSummary s = Calibrate(*options);
     fmt::print("calibrate: {} cameras, {} frames, {} images written{} to {} (geometry {:.1f} s, "
                "radiometry {:.1f} s); see {}/report.md\n",
                s.cameras, s.frames, s.images_written, s.dataset_written ? ", dataset" : "", *out,
                s.seconds_geometry, s.seconds_radiometry, *out);
+    if (!truth->empty()) {
+      const TruthComparison comparison = CompareWithTruth(*out, *truth);
+      const std::string md = TruthComparisonMarkdown(comparison);
+      WriteJsonFile(std::filesystem::path(*out) / "truth_comparison.json", TruthComparisonJson(comparison));
+      WriteTextFileAtomic(std::filesystem::path(*out) / "truth_comparison.md",
+                          "# Calibration against the truth of " + *truth + "\n\n" + md);
+      fmt::print("calibrate: against the truth of {}:\n{}", *truth, md);
+    }
   });
 }
 

@@ -137,8 +137,9 @@ json RenderPlanJson(const ScenePreset& preset,
                      {"time_index", r.time_index},
                      {"time", r.time},
                      {"split", SplitName(r.split)}});
+    if (r.still) items.back()["static"] = true;  // only then, so other plans keep their bytes
   }
-  return {{"format", "hdr4d-datagen-plan"}, {"format_version", kPlanFormatVersion},
+  json plan = {{"format", "hdr4d-datagen-plan"}, {"format_version", kPlanFormatVersion},
           {"scene", preset.scene},          {"preset", preset.preset},
           {"seed", settings.seed},          {"rig", RigName(preset.rig)},
           {"cameras", preset.cameras},      {"held_out_cameras", preset.held_out_cameras},
@@ -147,6 +148,8 @@ json RenderPlanJson(const ScenePreset& preset,
           {"threads", settings.threads},    {"camera_angle_x", preset.camera_angle_x},
           {"points", preset.points},        {"points_file", kPointsFile},
           {"info_file", kInfoFile},         {"renders", items}};
+  if (preset.layout != "scene") plan["layout"] = preset.layout;
+  return plan;
 }
 
 BlenderRender RenderWithBlender(const ScenePreset& preset,

@@ -3,6 +3,7 @@
 // failing script. Skipped, with the reason, where Blender is not installed.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <memory>
@@ -205,6 +206,71 @@ TEST(BlenderMarker, ProjectsThroughTheDatasetCameraToWhereBlenderDrewIt) {
   // The ball visits both halves of the image in both directions, so a flipped axis shows.
   EXPECT_GE(std::min(left, right), 2);
   EXPECT_GE(std::min(above, below), 2);
+}
+
+// datagen --capture with the real Blender: the rig's layout, static images of the empty scene,
+// and a capture `hdr4d calibrate` reads (its radiometry stage, which needs no COLMAP; the whole
+// chain with COLMAP is calibration/capture_proof_test.cpp).
+TEST(BlenderCapture, RoomRigIsAnArcWithTheEmptySceneAsStaticImagesAndCalibrates) {
+  SKIP_WITHOUT_BLENDER();
+  testing::TempDir dir;
+  const testing::CommandResult run = testing::RunHdr4d(
+      "datagen --capture --scene room --preset ci --width 96 --samples 16 --cameras 4 --frames 2 "
+      "--extra-views 2 --brackets 0.5,2,8 --threads 2 --out '" + dir.path().string() + "'");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("capture of 4 cameras x 2 frames x 3 brackets"), std::string::npos)
+      << run.out;
+  const fs::path root = dir / "room";
+  const json cameras = ReadJsonFile(root / "truth" / "cameras.json")["cameras"];
+  ASSERT_EQ(cameras.size(), 4u);
+  // Camera centres around the scene's target (0, 0.2): neighbours 30 degrees apart in azimuth,
+  // the held-out camera between cam01 and cam02 (the middle of three) and below every other.
+  std::vector<double> azimuth, height;
+  for (const json& c : cameras) {
+    const json& m = c["transform_matrix"];
+    azimuth.push_back(std::atan2(m[1][3].get<double>() - 0.2, m[0][3].get<double>()) * 180 / M_PI);
+    height.push_back(m[2][3].get<double>());
+  }
+  EXPECT_NEAR(azimuth[1] - azimuth[0], 30, 0.01);
+  EXPECT_NEAR(azimuth[2] - azimuth[1], 30, 0.01);
+  EXPECT_NEAR(azimuth[3], (azimuth[1] + azimuth[2]) / 2, 0.01);
+  EXPECT_LT(height[3], std::min({height[0], height[1], height[2]}));
+  EXPECT_EQ(cameras[3]["held_out"], true);
+  // The hand-held views stand elsewhere than any rig camera.
+  const json extra = ReadJsonFile(root / "truth" / "cameras.json")["extra_views"];
+  ASSERT_EQ(extra.size(), 2u);
+  for (const json& view : extra) {
+    EXPECT_TRUE(fs::is_regular_file(root / view["file"].get<std::string>()));
+    for (const json& c : cameras)
+      EXPECT_NE(view["transform_matrix"][0][3], c["transform_matrix"][0][3]);
+  }
+  // The static render is the room without the figure and the ball: it differs from the t = 0
+  // render where they stand, and only there.
+  const Image empty = ReadImage(root / "truth" / "static" / "cam01.exr");
+  const Image full = ReadImage(root / "truth" / "hdr" / "cam01_t0000.exr");
+  ASSERT_TRUE(empty.SameShape(full));
+  std::size_t changed = 0;  // a channel at least 3x brighter or darker: not render noise
+  for (std::size_t p = 0; p < empty.num_pixels(); ++p) {
+    bool differs = false;
+    for (int c = 0; c < 3; ++c) {
+      const double a = empty.data()[3 * p + c], b = full.data()[3 * p + c];
+      differs |= std::abs(a - b) > 0.5 * (a + b);
+    }
+    changed += differs;
+  }
+  const double fraction = static_cast<double>(changed) / empty.num_pixels();
+  EXPECT_GT(fraction, 0.02) << fraction;
+  EXPECT_LT(fraction, 0.5) << fraction;
+  // calibrate reads it: the radiometry stage against the truth.
+  const testing::CommandResult calibrate = testing::RunHdr4d(
+      "calibrate --stage radiometry --capture '" + root.string() + "' --out '" +
+      (dir / "calibrated").string() + "' --truth '" + (root / "truth").string() + "'");
+  ASSERT_EQ(calibrate.exit_code, 0) << calibrate.err;
+  const json comparison = ReadJsonFile(dir / "calibrated" / "truth_comparison.json");
+  EXPECT_EQ(comparison["hdr"]["frames"], 8);
+  EXPECT_LT(comparison["hdr"]["median_relative_error"].get<double>(), 0.1) << comparison.dump();
+  EXPECT_LT(comparison["response"]["rms_relative_error"][1].get<double>(), 0.1) << comparison.dump();
+  EXPECT_FALSE(comparison.contains("geometry"));  // radiometry only: no rig.json
 }
 
 TEST(BlenderScript, FailureIsAnErrorWithPythonsMessage) {

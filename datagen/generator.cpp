@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <nlohmann/json.hpp>
 #include <set>
 
@@ -14,9 +15,10 @@
 #include "core/json_util.h"
 #include "datagen/blender_process.h"
 #include "datagen/blender_render.h"
+#include "datagen/capture_generator.h"
 #include "datagen/dataset_assembly.h"
+#include "datagen/output_folder.h"
 #include "datagen/scene_presets.h"
-#include "datagen/sha256.h"
 
 namespace hdr4d::datagen {
 namespace fs = std::filesystem;
@@ -24,57 +26,8 @@ using nlohmann::json;
 
 namespace {
 
-constexpr const char* kGenerator = "hdr4d datagen";
-constexpr const char* kManifestFile = "manifest.json";
-
 double SecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-bool IsEmptyDir(const fs::path& dir) {
-  std::error_code ec;
-  return fs::is_directory(dir, ec) && fs::directory_iterator(dir, ec) == fs::directory_iterator();
-}
-
-// True when `dir` holds a previous datagen run (its manifest names this generator).
-bool IsDatagenOutput(const fs::path& dir) {
-  const fs::path manifest = dir / kManifestFile;
-  std::error_code ec;
-  if (!fs::is_regular_file(manifest, ec)) return false;
-  try {
-    const json j = ReadJsonFile(manifest);
-    return j.is_object() && j.contains("generator") && j["generator"] == kGenerator;
-  } catch (const Error&) {
-    return false;
-  }
-}
-
-// Checks that the scene may be written and returns a fresh staging folder next to it.
-fs::path PrepareStaging(const fs::path& final_dir, const std::string& scene) {
-  std::error_code ec;
-  if (fs::exists(final_dir, ec) &&
-      !(fs::is_directory(final_dir, ec) && (IsEmptyDir(final_dir) || IsDatagenOutput(final_dir)))) {
-    Fail(
-        "{}: exists and is not the output of a previous `hdr4d datagen` run (no manifest.json "
-        "naming it); choose another --out or remove it",
-        final_dir.string());
-  }
-  const fs::path staging = final_dir.string() + ".partial";
-  if (fs::exists(staging, ec)) {
-    if (!fs::is_directory(staging, ec) ||
-        !(IsEmptyDir(staging) || fs::exists(staging / kPlanFile, ec))) {
-      Fail("{}: exists and is not a datagen work folder; remove it to render scene '{}'",
-           staging.string(), scene);
-    }
-    fs::remove_all(staging, ec);
-    if (ec) Fail("{}: cannot remove the previous work folder: {}", staging.string(), ec.message());
-  }
-  fs::create_directories(staging, ec);
-  if (ec || !fs::is_directory(staging)) {
-    Fail("{}: cannot create the output folder: {}", staging.string(),
-         ec ? ec.message() : "not a directory");
-  }
-  return staging;
 }
 
 json SplitCounts(const std::vector<PlannedRender>& renders, Split split) {
@@ -89,35 +42,6 @@ json SplitCounts(const std::vector<PlannedRender>& renders, Split split) {
   return {{"frames", times.size()}, {"hdr", hdr}, {"ldr", ldr}};
 }
 
-json Checksums(const fs::path& root) {
-  std::vector<fs::path> files;
-  for (const auto& entry : fs::recursive_directory_iterator(root)) {
-    if (!entry.is_regular_file()) continue;
-    const fs::path relative = fs::relative(entry.path(), root);
-    // The log holds timings and the manifest holds the checksums: neither is reproducible.
-    if (relative == kManifestFile || relative == kLogFile) continue;
-    files.push_back(relative);
-  }
-  std::sort(files.begin(), files.end());
-  json out = json::object();
-  for (const fs::path& f : files) out[f.generic_string()] = Sha256File(root / f);
-  return out;
-}
-
-void MoveIntoPlace(const fs::path& staging, const fs::path& final_dir) {
-  std::error_code ec;
-  if (fs::exists(final_dir, ec)) {
-    // Checked before rendering: empty, or a previous datagen output of this scene.
-    fs::remove_all(final_dir, ec);
-    if (ec) Fail("{}: cannot replace the previous output: {}", final_dir.string(), ec.message());
-  }
-  fs::rename(staging, final_dir, ec);
-  if (ec) {
-    Fail("{}: cannot move the finished scene into place from {}: {}", final_dir.string(),
-         staging.string(), ec.message());
-  }
-}
-
 }  // namespace
 
 void DatagenOptions::Validate() const {
@@ -128,6 +52,43 @@ void DatagenOptions::Validate() const {
   if (threads < 0) Fail("datagen: --threads must be >= 0 (0 = every core), got {}", threads);
   if (samples < 0) Fail("datagen: --samples must be >= 0 (0 = the preset's), got {}", samples);
   if (width < 0) Fail("datagen: --width must be >= 0 (0 = the preset's), got {}", width);
+  if (std::find(UnlikeCamerasModes().begin(), UnlikeCamerasModes().end(), unlike_cameras) ==
+      UnlikeCamerasModes().end())
+    Fail("datagen: --unlike-cameras {}: use none, gains, responses or both", unlike_cameras);
+  if (!capture) {
+    const char* flag = cameras != 0              ? "--cameras"
+                       : frames != 0             ? "--frames"
+                       : extra_views != 0        ? "--extra-views"
+                       : !brackets.empty()       ? "--brackets"
+                       : unlike_cameras != "none" ? "--unlike-cameras"
+                                                 : nullptr;
+    if (flag != nullptr)
+      Fail("datagen: {} describes a capture rig and needs --capture (a dataset keeps its scene's "
+           "own cameras and timestamps)", flag);
+  } else {
+    if (scene == "all")
+      Fail("datagen: --capture renders one scene; give --scene (room is made for it: textured "
+           "floor and walls that COLMAP can match)");
+    if (cameras != 0 && (cameras < 2 || cameras > kCaptureMaxCameras))
+      Fail("datagen: --cameras {}: a capture rig has 2 to {} cameras (30 degrees apart, the last "
+           "one held out), or 0 for {}", cameras, kCaptureMaxCameras, kCaptureCameras);
+    if (frames != 0 && frames < 2)
+      Fail("datagen: --frames {}: a capture needs at least 2 frames (0 = the preset's)", frames);
+    if (extra_views < 0 || extra_views > 100)
+      Fail("datagen: --extra-views {}: use 0 to 100 hand-held views", extra_views);
+    if (!brackets.empty()) {
+      if (brackets.size() < 2)
+        Fail("datagen: --brackets: {} exposure time; a capture needs at least two",
+             brackets.size());
+      for (std::size_t k = 0; k < brackets.size(); ++k) {
+        if (!(brackets[k] > 0) || !std::isfinite(brackets[k]))
+          Fail("datagen: --brackets: {} is not a positive exposure time in seconds", brackets[k]);
+        if (k > 0 && !(brackets[k] > brackets[k - 1]))
+          Fail("datagen: --brackets: {} after {}: give the times in increasing order, each once",
+               brackets[k], brackets[k - 1]);
+      }
+    }
+  }
   for (const std::string& name : scene == "all" ? DefaultSceneNames() : std::vector{scene})
     LdrFor(name).Validate();
 }
@@ -142,8 +103,14 @@ DatasetSynthesisOptions DatagenOptions::LdrFor(const std::string& name) const {
           .bits = 8};
 }
 
+const std::vector<std::string>& UnlikeCamerasModes() {
+  static const std::vector<std::string> modes = {"none", "gains", "responses", "both"};
+  return modes;
+}
+
 SceneResult GenerateScene(const DatagenOptions& options, const std::string& scene) {
   options.Validate();
+  if (options.capture) return GenerateCapture(options, scene);
   const auto start = std::chrono::steady_clock::now();
   ScenePreset preset = ResolvePreset(scene, options.preset, options.width);
   if (options.samples > 0) preset.samples = options.samples;

@@ -45,18 +45,39 @@ struct DatagenOptions {
   std::optional<double> full_well;
   std::optional<double> read_sigma;
   bool show_progress = true;
+  // --capture: instead of a dataset, the capture layout `hdr4d calibrate` reads (a fixed rig
+  // with bracketed exposures) plus truth/ (datagen/capture_generator.h). One scene at a time.
+  bool capture = false;
+  int cameras = 0;  // capture rig cameras, the last one held out; 0 = kCaptureCameras
+  int frames = 0;   // capture timestamps; 0 = the preset's count for the scene
+  int extra_views = 0;  // capture: hand-held views of the empty scene in static/extra/
+  // Capture: the bracket exposure times in seconds, increasing; empty = the scene's (0.125, 2,
+  // 32 s: four stops apart, more than a camera's auto-bracketing gives).
+  std::vector<double> brackets;
+  // How the capture's cameras differ: none, gains (a gain per camera and colour channel, as
+  // unlike sensors and white balance give), responses (each camera's response bent by its own
+  // exponent, x^e with e in [0.9, 1.1]) or both. Camera 0 is always the reference.
+  std::string unlike_cameras = "none";
   // Throws hdr4d::Error for an unknown scene or preset, an empty output folder, negative
-  // threads, samples or width, or bad LDR settings.
+  // threads, samples or width, bad LDR settings, capture flags without --capture, or a capture
+  // of "all", of fewer than 2 or more than 12 cameras, fewer than 2 frames, more than 100
+  // extra views, or brackets that are not at least two increasing positive times.
   void Validate() const;
   // The LDR synthesis of a scene: these options where set, else the scene's defaults.
   DatasetSynthesisOptions LdrFor(const std::string& scene) const;
 };
+
+inline constexpr int kCaptureCameras = 6;
+inline constexpr int kCaptureMaxCameras = 12;  // 30 degrees apart: 12 fill the circle
+const std::vector<std::string>& UnlikeCamerasModes();  // none, gains, responses, both
 
 struct SceneResult {
   std::string scene;
   std::filesystem::path root;  // OUT/<scene>
   int renders = 0;
   int ldr_images = 0;
+  bool capture = false;  // a capture (static/, sequence/, truth/) rather than a dataset
+  int cameras = 0, frames = 0, brackets = 0, extra_views = 0;  // of a capture
   double blender_seconds = 0;  // Blender's wall time: start-up, scene building, every render
   double total_seconds = 0;
   DynamicRange range;
@@ -68,6 +89,7 @@ struct SceneResult {
 // previous datagen run.
 SceneResult GenerateScene(const DatagenOptions& options, const std::string& scene);
 
+// With options.capture: the capture of one scene (datagen/capture_generator.h).
 // Every scene options.scene names ("all" = the eight HDR-4D-Syn-style scenes), in order;
 // on_done (optional) hears of each scene as soon as it is finished.
 std::vector<SceneResult> Generate(const DatagenOptions& options,

@@ -3,6 +3,7 @@
 // Blender; blender_scenes_test.cpp runs the real one.
 #include "datagen/generator.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
@@ -13,7 +14,9 @@
 #include "core/dataset.h"
 #include "core/image_io.h"
 #include "core/json_util.h"
+#include "core/ldr_synthesis.h"
 #include "core/ply.h"
+#include "datagen/capture_generator.h"
 #include "datagen/scene_presets.h"
 #include "datagen/sha256.h"
 #include "tests/testing.h"
@@ -304,6 +307,245 @@ TEST(Generator, LdrSynthesisIsTheScenesUnlessSet) {
   EXPECT_EQ(o.LdrFor("studio").crf, "gamma");
   EXPECT_EQ(o.LdrFor("studio").noise.read_sigma, 0.01);
   EXPECT_EQ(o.LdrFor("studio").noise.full_well, 0);
+}
+
+// What Blender leaves for a capture of the ci room with 3 cameras: every render of
+// CaptureRenders (static images first) as a small EXR, render_info.json, points.
+void WriteCaptureFixture(const fs::path& fixture, const ScenePreset& preset) {
+  json renders = json::array();
+  int i = 0;
+  for (const PlannedRender& r : CaptureRenders(preset)) {
+    const double angle = -2.0 + 0.5 * r.camera_id;
+    const Eigen::Matrix4d pose = LookAtWorldFromCamGl(
+        {4 * std::cos(angle), 4 * std::sin(angle), 1.5}, {0, 0, 0.5}, Eigen::Vector3d::UnitZ());
+    json m = json::array();
+    for (int row = 0; row < 4; ++row)
+      m.push_back({pose(row, 0), pose(row, 1), pose(row, 2), pose(row, 3)});
+    renders.push_back({{"file", r.hdr_file}, {"camera_id", r.camera_id},
+                       {"time_index", r.time_index}, {"time", r.time},
+                       {"transform_matrix", m}, {"markers", json::array()}});
+    WriteImage(fixture / r.hdr_file,
+               testing::RandomImage(preset.width, preset.height, 3, 40 + i++, 0.002f, 0.5f),
+               {.format = PixelFormat::kFloat});
+  }
+  WriteJsonFile(fixture / "render_info.json", {{"blender_version", "3.4.1"},
+                                               {"script_version", 1},
+                                               {"camera_angle_x", preset.camera_angle_x},
+                                               {"points", {{"count", 10}}},
+                                               {"renders", renders}});
+  std::vector<float> points(60, 0.25f);
+  std::ofstream(fixture / "points_t0.bin", std::ios::binary)
+      .write(reinterpret_cast<const char*>(points.data()), points.size() * sizeof(float));
+}
+
+struct CaptureFixture {
+  TempDir dir;
+  DatagenOptions options;
+  explicit CaptureFixture(const std::string& unlike = "none", int extra_views = 0,
+                          std::vector<double> brackets = {}) {
+    options.scene = "room";
+    options.preset = "ci";
+    options.out = dir / "out";
+    options.show_progress = false;
+    options.capture = true;
+    options.cameras = 3;
+    options.frames = 2;
+    options.unlike_cameras = unlike;
+    options.extra_views = extra_views;
+    options.brackets = std::move(brackets);
+    WriteCaptureFixture(dir / "fixture", CapturePreset(options, "room"));
+    options.blender = WriteFakeBlender(dir.path(), dir / "fixture", "").string();
+  }
+  fs::path Root() const { return options.out / "room"; }
+};
+
+TEST(Capture, WritesTheLayoutCalibrateReadsAndTheTruth) {
+  CaptureFixture f;
+  const SceneResult result = GenerateScene(f.options, "room");
+  const fs::path root = f.Root();
+  EXPECT_TRUE(result.capture);
+  EXPECT_EQ(result.cameras, 3);
+  EXPECT_EQ(result.frames, 2);
+  EXPECT_EQ(result.brackets, 3);
+  EXPECT_EQ(result.renders, 3 + 3 * 2);
+  EXPECT_EQ(result.ldr_images, 3 + 3 * 2 * 3);
+  EXPECT_FALSE(fs::exists(f.options.out / "room.partial"));
+  // The plan asks the script for the capture layout and marks the static renders.
+  const json plan = ReadJsonFile(root / "render_plan.json");
+  EXPECT_EQ(plan["layout"], "capture");
+  EXPECT_EQ(plan["held_out_cameras"], 1);
+  EXPECT_EQ(plan["renders"][0]["static"], true);
+  EXPECT_EQ(plan["renders"][0]["file"], "truth/static/cam00.exr");
+  EXPECT_FALSE(plan["renders"][3].contains("static"));
+  // The capture.
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_EQ(ReadImage(root / CaptureStaticFile(c)).width(), 48);
+    for (int frame = 0; frame < 2; ++frame)
+      for (int k = 0; k < 3; ++k)
+        EXPECT_TRUE(fs::is_regular_file(root / CaptureBracketFile(c, frame, k))) << c << frame << k;
+  }
+  EXPECT_EQ(CaptureBracketFile(2, 1, 0), "sequence/cam02/00001_0.png");
+  EXPECT_EQ(ReadJsonFile(root / "exposures.json")["brackets"], json({0.125, 2.0, 32.0}));
+  EXPECT_EQ(ReadJsonFile(root / "timestamps.json"), json({{"0", 0.0}, {"1", 1.0}}));
+  // The truth: a checked dataset whose last camera is the test split, its LDR images the very
+  // brackets of alike cameras.
+  const Dataset truth = LoadDataset(root / "truth", {.image_check = ImageCheck::kFull});
+  EXPECT_EQ(truth.train.size(), 2u * 2u * 3u);
+  EXPECT_EQ(truth.test.size(), 1u * 2u * 3u);
+  for (const Frame& f : truth.test) EXPECT_EQ(f.camera_id, 2);
+  for (const Frame* frame : truth.AllFrames()) {
+    const int t = static_cast<int>(std::lround(frame->time));
+    EXPECT_EQ(testing::ReadTextFile(frame->image_path),
+              testing::ReadTextFile(root / CaptureBracketFile(frame->camera_id, t, frame->exposure_index)))
+        << frame->file_path;
+  }
+  const json cameras = ReadJsonFile(root / "truth" / "cameras.json");
+  ASSERT_EQ(cameras["cameras"].size(), 3u);
+  const json& cam1 = cameras["cameras"][1];
+  EXPECT_EQ(cam1["name"], "cam01");
+  EXPECT_EQ(cam1["gain"], json({1.0, 1.0, 1.0}));
+  EXPECT_EQ(cam1["hdr_files"]["1"], "hdr/cam01_t0001.exr");
+  EXPECT_EQ(cam1["held_out"], false);
+  EXPECT_EQ(cameras["cameras"][2]["held_out"], true);
+  EXPECT_NEAR(cam1["fx"].get<double>(), 24 / std::tan(kSynCameraAngleX / 2), 1e-9);
+  EXPECT_TRUE(fs::exists(root / "truth" / "static" / "cam01.exr"));
+  EXPECT_TRUE(fs::exists(root / "truth" / "point3d.ply"));
+  EXPECT_FALSE(fs::exists(root / "truth" / "response_cam01.csv"));  // alike responses
+  // The true response in calibrate's format: x(128) = 1, the filmic curve's inverse.
+  const std::string csv = testing::ReadTextFile(root / "truth" / "response.csv");
+  EXPECT_TRUE(Contains(csv, "\n128,1,1,1\n")) << csv.substr(0, 200);
+  const json manifest = ReadJsonFile(root / "manifest.json");
+  EXPECT_EQ(manifest["mode"], "capture");
+  EXPECT_TRUE(manifest["files"].contains("sequence/cam00/00000_0.png"));
+  EXPECT_TRUE(manifest["files"].contains("truth/cameras.json"));
+  // A rerun replaces it (the manifest names datagen).
+  GenerateScene(f.options, "room");
+  EXPECT_TRUE(fs::exists(root / "truth" / "cameras.json"));
+}
+
+TEST(Capture, UnlikeCamerasRecordTheirOwnGainsAndResponses) {
+  CaptureFixture f("both");
+  GenerateScene(f.options, "room");
+  const fs::path root = f.Root();
+  const json cameras = ReadJsonFile(root / "truth" / "cameras.json");
+  EXPECT_EQ(cameras["cameras"][0]["gain"], json({1.0, 1.0, 1.0}));
+  EXPECT_EQ(cameras["cameras"][0]["response_exponent"], 1.0);
+  const json& cam1 = cameras["cameras"][1];
+  const double exponent = cam1["response_exponent"].get<double>();
+  EXPECT_GE(exponent, 0.9);
+  EXPECT_LE(exponent, 1.1);
+  EXPECT_NE(exponent, 1.0);
+  for (int ch = 0; ch < 3; ++ch) {
+    const double g = cam1["gain"][ch].get<double>();
+    EXPECT_GT(g, std::exp(-0.3) - 1e-9);
+    EXPECT_LT(g, std::exp(0.3) + 1e-9);
+  }
+  EXPECT_TRUE(fs::exists(root / "truth" / "response_cam01.csv"));
+  // Camera 1's bracket is its own record of the radiance, through its gains and its response,
+  // not the truth dataset's reference image. The room adds sensor noise, so the mean code is
+  // compared, which the noise barely moves.
+  const Image hdr = ReadImage(root / "truth" / "hdr" / "cam01_t0000.exr");
+  Image gained = hdr;
+  for (std::size_t i = 0; i < gained.size(); ++i)
+    gained.data()[i] *= static_cast<float>(cam1["gain"][i % 3].get<double>());
+  const std::unique_ptr<Crf> base = ParseCrf("filmic");
+  const Image bracket = ReadImage(root / CaptureBracketFile(1, 0, 1));
+  const Image reference = ReadImage(root / "truth" / "images" / "cam01_t0000_e1.png");
+  double expected = 0, got = 0, ref = 0;
+  for (std::size_t i = 0; i < hdr.size(); ++i) {
+    expected += base->Apply(std::pow(gained.data()[i] * 2.0, exponent));
+    got += bracket.data()[i];
+    ref += reference.data()[i];
+  }
+  EXPECT_NEAR(got / expected, 1.0, 0.02);
+  EXPECT_GT(std::abs(got / ref - 1.0), 0.02);
+}
+
+TEST(Capture, HandHeldViewsAndOwnBracketsAreWritten) {
+  CaptureFixture f("none", 2, {0.5, 2, 8});
+  const SceneResult result = GenerateScene(f.options, "room");
+  const fs::path root = f.Root();
+  EXPECT_EQ(result.extra_views, 2);
+  EXPECT_EQ(result.renders, 3 + 2 + 3 * 2);
+  // Blender renders them as cameras after the rig's, static only.
+  const json plan = ReadJsonFile(root / "render_plan.json");
+  EXPECT_EQ(plan["renders"][4]["file"], "truth/static/extra01.exr");
+  EXPECT_EQ(plan["renders"][4]["camera_id"], 4);
+  EXPECT_EQ(plan["renders"][4]["static"], true);
+  EXPECT_EQ(plan["cameras"], 3);
+  for (int j = 0; j < 2; ++j) EXPECT_TRUE(fs::is_regular_file(root / CaptureExtraFile(j))) << j;
+  EXPECT_EQ(CaptureExtraFile(1), "static/extra/extra01.png");
+  const json truth = ReadJsonFile(root / "truth" / "cameras.json");
+  ASSERT_EQ(truth["extra_views"].size(), 2u);
+  EXPECT_EQ(truth["extra_views"][1]["file"], "static/extra/extra01.png");
+  EXPECT_EQ(truth["extra_views"][1]["transform_matrix"].size(), 4u);
+  // The brackets are the capture's and the truth dataset's exposures.
+  EXPECT_EQ(ReadJsonFile(root / "exposures.json")["brackets"], json({0.5, 2.0, 8.0}));
+  EXPECT_EQ(truth["exposures"], json({0.5, 2.0, 8.0}));
+  const Dataset dataset = LoadDataset(root / "truth");
+  for (const Frame* frame : dataset.AllFrames())
+    EXPECT_EQ(frame->exposure, (std::vector<double>{0.5, 2, 8})[frame->exposure_index]);
+}
+
+TEST(Capture, BadFlagsAreClearErrors) {
+  DatagenOptions o;
+  o.out = "x";
+  o.scene = "room";
+  o.cameras = 4;
+  EXPECT_EQ(ErrorOf([&] { o.Validate(); }),
+            "datagen: --cameras describes a capture rig and needs --capture (a dataset keeps its "
+            "scene's own cameras and timestamps)");
+  o.cameras = 0;
+  o.frames = 3;
+  EXPECT_TRUE(Contains(ErrorOf([&] { o.Validate(); }), "--frames describes a capture rig"));
+  o.frames = 0;
+  o.unlike_cameras = "gains";
+  EXPECT_TRUE(Contains(ErrorOf([&] { o.Validate(); }), "--unlike-cameras describes a capture rig"));
+  o.capture = true;
+  EXPECT_EQ(ErrorOf([&] { o.Validate(); }), "");
+  o.unlike_cameras = "sometimes";
+  EXPECT_EQ(ErrorOf([&] { o.Validate(); }),
+            "datagen: --unlike-cameras sometimes: use none, gains, responses or both");
+  o.unlike_cameras = "none";
+  o.scene = "all";
+  EXPECT_TRUE(Contains(ErrorOf([&] { o.Validate(); }), "--capture renders one scene; give --scene"));
+  o.scene = "room";
+  for (int bad : {1, -1, 13}) {
+    o.cameras = bad;
+    EXPECT_TRUE(Contains(ErrorOf([&] { o.Validate(); }),
+                         fmt::format("--cameras {}: a capture rig has 2 to 12 cameras", bad)));
+  }
+  o.cameras = 12;
+  EXPECT_EQ(ErrorOf([&] { o.Validate(); }), "");
+  o.frames = 1;
+  EXPECT_TRUE(Contains(ErrorOf([&] { o.Validate(); }), "--frames 1: a capture needs at least 2"));
+  o.frames = 0;
+  o.extra_views = 101;
+  EXPECT_TRUE(Contains(ErrorOf([&] { o.Validate(); }), "--extra-views 101: use 0 to 100"));
+  o.extra_views = 0;
+  o.brackets = {2};
+  EXPECT_TRUE(Contains(ErrorOf([&] { o.Validate(); }), "--brackets: 1 exposure time; a capture needs at least two"));
+  o.brackets = {0.5, 2, 2};
+  EXPECT_TRUE(Contains(ErrorOf([&] { o.Validate(); }), "--brackets: 2 after 2: give the times in increasing order"));
+  o.brackets = {0.5, -1};
+  EXPECT_TRUE(Contains(ErrorOf([&] { o.Validate(); }), "--brackets: -1 is not a positive exposure time"));
+  o.brackets = {0.5, 2};
+  EXPECT_EQ(ErrorOf([&] { o.Validate(); }), "");
+  o.capture = false;
+  o.cameras = 0;
+  o.unlike_cameras = "none";
+  EXPECT_TRUE(Contains(ErrorOf([&] { o.Validate(); }), "--brackets describes a capture rig"));
+  // Through the command line: one line, exit 1, nothing written.
+  TempDir dir;
+  const testing::CommandResult cli = testing::RunHdr4d(
+      "datagen --scene room --cameras 3 --out '" + (dir / "o").string() + "'");
+  EXPECT_EQ(cli.exit_code, 1);
+  EXPECT_TRUE(Contains(cli.err, "--cameras describes a capture rig and needs --capture")) << cli.err;
+  EXPECT_FALSE(fs::exists(dir / "o"));
+  const testing::CommandResult mode = testing::RunHdr4d(
+      "datagen --capture --scene room --unlike-cameras odd --out '" + (dir / "o").string() + "'");
+  EXPECT_EQ(mode.exit_code, 1);
+  EXPECT_TRUE(Contains(mode.err, "--unlike-cameras")) << mode.err;
 }
 
 TEST(Generator, OptionsAreValidated) {

@@ -76,6 +76,11 @@ const std::vector<SceneInfo>& AllScenes() {
        "(saturated at every exposure) while a spot light ramps up 20x; 8 ring cameras at two "
        "heights, a 9th held out between two of them and lower; a concave camera response",
        /*held_out_cameras=*/1, /*crf=*/"naka-rushton:0.2,2.2", /*noise=*/false},
+      {"room", kMultiView, kEveryExposure, 6, 24, 0, 8, 0, false, 0.75, 0,
+       "a figure waves and a ball rolls through a room of non-repeating texture (floor, three "
+       "walls, crates) that COLMAP can match, under a bare bulb (saturated at every exposure) "
+       "and a spot light sweeping the floor; made for rig calibration (datagen --capture)",
+       /*held_out_cameras=*/1},
       {"marker", kMonocular, kCycleOverTime, 1, 5, 1, 5, 1, false, 0.75, 64,
        "camera-convention check: a small emissive ball on black visiting every image quadrant "
        "(render_info.json holds its centre per render)"},

@@ -78,6 +78,10 @@ struct ScenePreset {
   int points = 0;   // point3d.ply size
   double camera_angle_x = kSynCameraAngleX;
   std::vector<double> exposures = kSynExposures;
+  // Where the script puts the fixed cameras: "scene" (the scene's ring or arc) or "capture"
+  // (datagen --capture: an arc of neighbours 30 degrees apart, see render_scene.py).
+  std::string layout = "scene";
+  int extra_views = 0;  // a capture's hand-held static views (static/extra/), after the cameras
   int timestamps() const { return train_timestamps + test_timestamps; }
 };
 
@@ -96,6 +100,9 @@ struct PlannedRender {
   double time = 0;  // time_index / (timestamps - 1), in [0, 1]
   Split split = Split::kTrain;
   std::vector<int> exposure_indices;  // into ScenePreset::exposures
+  // A capture's static image (datagen --capture): the scene at t = 0 with its actors hidden,
+  // the empty scene a rig is calibrated on. Not part of any dataset split.
+  bool still = false;
 };
 
 // Every render of a scene, ordered by time, then camera. A held-out camera's renders are test

@@ -78,6 +78,49 @@ def checker(name, color_a, color_b, scale):
     return material
 
 
+def speckled(name, rng, color_a, color_b, scale, detail_scale):
+    """A non-repeating pattern that feature matchers (COLMAP's SIFT) lock on to: cells of random
+    colour (Voronoi) between `color_a` and `color_b`, each broken up by fine high-contrast noise.
+    `scale` sets the cell count per unit, `detail_scale` the noise's; a seeded offset moves the
+    pattern so seeds differ."""
+    mean = [(a + b) / 2 for a, b in zip(color_a, color_b)]
+    material = _material(name, mean)
+    nodes, links = material.node_tree.nodes, material.node_tree.links
+    bsdf = nodes["Principled BSDF"]
+    bsdf.inputs["Roughness"].default_value = 0.85
+    bsdf.inputs["Specular"].default_value = 0.2
+    coords = nodes.new("ShaderNodeTexCoord")
+    mapping = nodes.new("ShaderNodeMapping")
+    mapping.inputs["Location"].default_value = tuple(rng.uniform(-50, 50) for _ in range(3))
+    links.new(coords.outputs["Object"], mapping.inputs["Vector"])
+    cells = nodes.new("ShaderNodeTexVoronoi")
+    cells.inputs["Scale"].default_value = scale
+    links.new(mapping.outputs["Vector"], cells.inputs["Vector"])
+    cell_ramp = nodes.new("ShaderNodeValToRGB")  # cell colour (a random grey) -> a to b
+    cell_ramp.color_ramp.elements[0].color = (*color_a, 1.0)
+    cell_ramp.color_ramp.elements[1].color = (*color_b, 1.0)
+    to_bw = nodes.new("ShaderNodeRGBToBW")
+    links.new(cells.outputs["Color"], to_bw.inputs["Color"])
+    links.new(to_bw.outputs["Val"], cell_ramp.inputs["Fac"])
+    noise = nodes.new("ShaderNodeTexNoise")
+    noise.inputs["Scale"].default_value = detail_scale
+    noise.inputs["Detail"].default_value = 6.0
+    links.new(mapping.outputs["Vector"], noise.inputs["Vector"])
+    noise_ramp = nodes.new("ShaderNodeValToRGB")  # contrast: dark blots on a light ground
+    noise_ramp.color_ramp.elements[0].position = 0.42
+    noise_ramp.color_ramp.elements[0].color = (0.25, 0.25, 0.25, 1.0)
+    noise_ramp.color_ramp.elements[1].position = 0.58
+    noise_ramp.color_ramp.elements[1].color = (1.0, 1.0, 1.0, 1.0)
+    links.new(noise.outputs["Fac"], noise_ramp.inputs["Fac"])
+    multiply = nodes.new("ShaderNodeMixRGB")
+    multiply.blend_type = "MULTIPLY"
+    multiply.inputs["Fac"].default_value = 1.0
+    links.new(cell_ramp.outputs["Color"], multiply.inputs["Color1"])
+    links.new(noise_ramp.outputs["Color"], multiply.inputs["Color2"])
+    links.new(multiply.outputs["Color"], bsdf.inputs["Base Color"])
+    return material
+
+
 def emissive(name, color, strength):
     """Returns (material, strength socket, colour socket): both can be animated."""
     material = _material(name, color)

@@ -22,6 +22,9 @@ class Scene:
     target: tuple = (0.0, 0.0, 0.6)  # cameras look here
     distance: float = 4.0  # camera distance from the target
     markers: Callable[[float], list] = field(default=lambda t: [])  # world points per time
+    # What moves: hidden in a capture's static images (datagen --capture), which show the empty
+    # scene as a rig's calibration shots do. Empty: the static images show the scene at t = 0.
+    actors: list = field(default_factory=list)
 
 
 def stage(rng, color_a=(0.55, 0.55, 0.52), color_b=(0.08, 0.08, 0.08), sky=0.005,
@@ -535,6 +538,60 @@ def studio(rng):
 
 
 # ---------------------------------------------------------------------------------------------
+# A room for rig calibration (datagen --capture, not one of the eight): a floor and three walls
+# of non-repeating texture that COLMAP's SIFT can match between fixed cameras, a figure and a
+# ball that move through it, a bare bulb that saturates every bracket and a spot light that
+# sweeps across the floor.
+
+
+def room(rng):
+    """A figure waves while a ball rolls across a textured room; a spot light sweeps the floor
+    under a bare bulb."""
+    kit.set_world((0.55, 0.6, 0.7), 0.35)
+    floor = kit.speckled("floor", rng, (0.12, 0.1, 0.08), (0.75, 0.62, 0.45), 2.5, 14.0)
+    kit.mesh_object("floor", kit.grid(12.0, 12.0, 1, 1), floor)
+    wall = kit.speckled("wall", rng, (0.1, 0.14, 0.2), (0.55, 0.7, 0.8), 2.0, 11.0)
+    kit.mesh_object("back_wall", kit.box((10.0, 0.1, 3.0)), wall, location=(0, 3.2, 1.5))
+    side = kit.speckled("side_wall", rng, (0.2, 0.12, 0.1), (0.8, 0.6, 0.55), 2.0, 11.0)
+    for x in (-5.0, 5.0):
+        kit.mesh_object("side_wall", kit.box((0.1, 8.0, 3.0)), side, location=(x, -0.8, 1.5))
+    crate = kit.speckled("crate", rng, (0.15, 0.2, 0.1), (0.7, 0.75, 0.5), 6.0, 20.0)
+    kit.mesh_object("crate", kit.box((0.5, 0.5, 0.5)), crate, location=(-1.1, 0.9, 0.25))
+    kit.mesh_object("shelf", kit.box((1.2, 0.35, 0.9)), crate, location=(1.3, 1.4, 0.45))
+
+    cloth = kit.diffuse("cloth", (0.25, 0.45, 0.6), roughness=0.6)
+    rig, body = kit.humanoid("figure", cloth, location=(0.3, 0.3, 0))
+    rubber = kit.diffuse("rubber", (0.75, 0.2, 0.08), roughness=0.4)
+    ball = kit.mesh_object("ball", kit.uv_sphere(0.2, 24, 12), rubber)
+    stripe = kit.diffuse("stripe", (0.9, 0.85, 0.2), roughness=0.4)
+    ball_stripe = kit.mesh_object("stripe", kit.band(0.205, 0.06, 24), stripe, parent=ball)
+
+    bulb, _, _ = kit.emissive("bulb", (1.0, 0.8, 0.55), 300.0)
+    bulb_position = (-0.8, 1.6, 1.9)
+    kit.mesh_object("bulb", kit.uv_sphere(0.08, 16, 8), bulb, location=bulb_position)
+    kit.point_light("bulb_light", 80.0, (1.0, 0.8, 0.55), 0.08, bulb_position)
+    spot = kit.spot_light("spot", 400.0, kit.warm_color(5000), cone_deg=25,
+                          location=(0.5, -1.5, 3.0))
+    sun = kit.sun("sun", 0.6, (1.0, 0.95, 0.9))
+    kit.sun_direction(sun, 60 + jitter(rng, 10), 55)
+
+    def update(t):
+        x = -1.0 + 1.8 * t
+        ball.location = (x, -0.5, 0.2)
+        ball.rotation_euler = (0, (x + 1.0) / 0.2, 0)
+        wave = math.sin(TWO_PI * 1.5 * t)
+        kit.pose(rig, {
+            "upper_arm.L": [("Y", -60 - 25 * wave)], "forearm.L": [("Y", -30 - 30 * wave)],
+            "upper_arm.R": [("Y", 70)], "spine": [("Z", 20 * wave)],
+            "head": [("Z", -15 * wave)],
+        })
+        kit.aim(spot, (-0.9 + 1.6 * t, -0.2, 0.0))
+
+    return Scene(update, target=(0, 0.2, 0.7), distance=4.0,
+                 actors=[rig, body, ball, ball_stripe])
+
+
+# ---------------------------------------------------------------------------------------------
 # The camera-convention check: a small emissive ball on black, moving so that it visits every
 # quadrant of the image. Its centre is reported per render.
 
@@ -567,5 +624,5 @@ def hsv(h, s, v):
 SCENES = {
     "airplane": airplane, "deer": deer, "lego": lego, "tank": tank,
     "hook": hook, "jump": jump, "mutant": mutant, "standup": standup,
-    "studio": studio, "marker": marker,
+    "studio": studio, "room": room, "marker": marker,
 }

@@ -43,6 +43,8 @@ def load_plan(path):
         raise ValueError(f"{path}: unknown scene '{plan['scene']}'")
     if plan["rig"] not in ("monocular", "multiview"):
         raise ValueError(f"{path}: rig must be monocular or multiview")
+    if plan.get("layout", "scene") not in ("scene", "capture"):
+        raise ValueError(f"{path}: layout must be scene or capture")
     return plan
 
 
@@ -117,6 +119,54 @@ def ring_layout(count, held_out=0):
     return layout
 
 
+def capture_layout(count, held_out=0):
+    """(azimuth, elevation) in degrees for a calibration rig (datagen --capture): an arc in front
+    (-Y) with neighbours 30 degrees apart, so that feature matching links every camera to the
+    next, at three heights; the last `held_out` cameras sit halfway between two neighbouring arc
+    cameras near the middle, lower than both (novel views). place_rig_camera adds each tripod's
+    own distance and aim."""
+    ring = count - held_out
+    spacing = 30.0
+    azimuths = [-90 - spacing * (ring - 1) / 2 + spacing * k for k in range(ring)]
+    heights = (12, 26, 19)
+    layout = [(az, heights[k % 3]) for k, az in enumerate(azimuths)]
+    for j in range(held_out):
+        a = azimuths[(ring - 1) // 2 + j % max(1, ring - 1)] if ring > 1 else azimuths[0]
+        layout.append((a + spacing / 2, 7))
+    return layout
+
+
+def place_rig_camera(obj, plan, scene_def, camera_id, azimuth, elevation):
+    """A capture rig's camera as tripods stand: at its own distance (within 12% of the scene's)
+    and aimed at its own point near the target (within 0.35 units across, 0.2 up or down), all
+    seeded. Optical axes that all meet in one point at one distance are a critical configuration
+    for self-calibration: COLMAP's focal lengths came out 5-7% long on such a rig."""
+    rng = kit.new_rng(plan["seed"], f"tripod{camera_id}")
+    distance = scene_def.distance * (1 + rng.uniform(-0.12, 0.12))
+    aim_at = [scene_def.target[0] + rng.uniform(-0.35, 0.35),
+              scene_def.target[1] + rng.uniform(-0.35, 0.35),
+              scene_def.target[2] + rng.uniform(-0.2, 0.2)]
+    kit.place_camera(obj, scene_def.target, azimuth, elevation, distance)
+    kit.aim(obj, aim_at)
+
+
+def place_extra_view(obj, plan, scene_def, index):
+    """A capture's hand-held walk-around view (static/extra/): anywhere along the rig's arc and
+    a little beyond, from low to high, nearer or farther than the tripods, aimed loosely at the
+    scene; seeded. They give COLMAP more views of the empty scene and are then dropped."""
+    rng = kit.new_rng(plan["seed"], f"walk{index}")
+    ring = plan["cameras"] - plan.get("held_out_cameras", 0)
+    half_span = 30.0 * (ring - 1) / 2 + 15
+    azimuth = -90 + rng.uniform(-half_span, half_span)
+    elevation = rng.uniform(5, 45)
+    distance = scene_def.distance * rng.uniform(0.7, 1.25)
+    aim_at = [scene_def.target[0] + rng.uniform(-0.5, 0.5),
+              scene_def.target[1] + rng.uniform(-0.5, 0.5),
+              scene_def.target[2] + rng.uniform(-0.3, 0.3)]
+    kit.place_camera(obj, scene_def.target, azimuth, elevation, distance)
+    kit.aim(obj, aim_at)
+
+
 def monocular_pose(plan, scene_def, time_index, t):
     """One camera moving around the scene: three quarters of an orbit over the sequence, rising
     and falling, with a seeded wobble."""
@@ -142,10 +192,19 @@ def main():
 
     cameras = {}
     multiview = plan["rig"] == "multiview"
-    layout = ring_layout(plan["cameras"], plan.get("held_out_cameras", 0)) if multiview else []
+    held_out = plan.get("held_out_cameras", 0)
+    capture = plan.get("layout", "scene") == "capture"
+    if capture:
+        layout = capture_layout(plan["cameras"], held_out)
+    else:
+        layout = ring_layout(plan["cameras"], held_out) if multiview else []
     for camera_id in sorted({r["camera_id"] for r in plan["renders"]}):
         obj = kit.camera(f"camera{camera_id:02d}", plan["camera_angle_x"])
-        if multiview:
+        if capture and camera_id >= plan["cameras"]:  # a hand-held view: static only
+            place_extra_view(obj, plan, scene_def, camera_id - plan["cameras"])
+        elif capture:
+            place_rig_camera(obj, plan, scene_def, camera_id, *layout[camera_id])
+        elif multiview:
             azimuth, elevation = layout[camera_id]
             kit.place_camera(obj, scene_def.target, azimuth, elevation, scene_def.distance)
         cameras[camera_id] = obj
@@ -164,6 +223,9 @@ def main():
     for i, item in enumerate(plan["renders"], start=1):
         t = float(item["time"])
         print(f"HDR4D_RENDERING {i} {total} {item['file']}", flush=True)
+        still = bool(item.get("static", False))  # a capture's static image: the empty scene
+        for actor in scene_def.actors:
+            actor.hide_render = still
         scene_def.update(t)
         obj = cameras[item["camera_id"]]
         if not multiview:
@@ -179,7 +241,7 @@ def main():
             raise RuntimeError(f"{out}: Blender rendered frame {i} but wrote no file")
         renders.append({
             "file": item["file"], "camera_id": item["camera_id"],
-            "time_index": item["time_index"], "time": t,
+            "time_index": item["time_index"], "time": t, **({"static": True} if still else {}),
             "transform_matrix": matrix_rows(obj.matrix_world),
             "markers": [[float(x) for x in m] for m in scene_def.markers(t)],
         })

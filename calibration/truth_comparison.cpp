@@ -1,0 +1,440 @@
+#include "calibration/truth_comparison.h"
+
+#include <fmt/format.h>
+
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "calibration/rig_geometry.h"
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/json_util.h"
+
+namespace hdr4d {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+constexpr int kFirstCode = 16, kLastCode = 240;
+
+double Quantile(std::vector<double>* values, double q) {
+  if (values->empty()) return 0;
+  const std::size_t i = static_cast<std::size_t>(q * static_cast<double>(values->size() - 1));
+  std::nth_element(values->begin(), values->begin() + static_cast<std::ptrdiff_t>(i), values->end());
+  return (*values)[i];
+}
+
+// code -> (r, g, b) from a response CSV as calibrate writes it (# comments, a header).
+std::vector<std::array<double, 3>> ReadResponseCsv(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) Fail("{}: cannot read the response", path.string());
+  std::vector<std::array<double, 3>> table(256, {-1, -1, -1});
+  std::string line;
+  int line_number = 0, rows = 0;
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (line.empty() || line[0] == '#' || line.rfind("code", 0) == 0) continue;
+    std::replace(line.begin(), line.end(), ',', ' ');
+    std::istringstream fields(line);
+    int code = -1;
+    std::array<double, 3> x{};
+    if (!(fields >> code >> x[0] >> x[1] >> x[2]) || code < 0 || code > 255)
+      Fail("{}: line {}: expected code,r,g,b with a code in 0..255", path.string(), line_number);
+    table[code] = x;
+    ++rows;
+  }
+  for (int z = kFirstCode; z <= kLastCode; ++z)
+    if (table[z][0] < 0) Fail("{}: code {} is missing ({} rows)", path.string(), z, rows);
+  return table;
+}
+
+Eigen::Matrix4d MatrixFromJson(const json& m, const fs::path& file, const std::string& camera) {
+  Eigen::Matrix4d out;
+  try {
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c < 4; ++c) out(r, c) = m.at(r).at(c).get<double>();
+  } catch (const json::exception&) {
+    Fail("{}: camera {}: transform_matrix is not a 4x4 array of numbers", file.string(), camera);
+  }
+  return out;
+}
+
+struct TruthCamera {
+  std::string name;
+  double fx = 0, cx = 0, cy = 0;
+  int width = 0, height = 0;
+  Eigen::Matrix4d world_from_cam_gl;
+  std::array<double, 3> low{}, high{};
+  std::map<int, std::string> hdr_files;  // frame -> file relative to truth/
+};
+
+std::vector<TruthCamera> ReadTruthCameras(const fs::path& truth) {
+  const fs::path path = truth / "cameras.json";
+  if (!fs::exists(path))
+    Fail("{}: not found; --truth takes the truth/ folder of `hdr4d datagen --capture`",
+         path.string());
+  const json doc = ReadJsonFile(path);
+  if (!doc.is_object() || doc.value("format", "") != "hdr4d-capture-truth")
+    Fail("{}: not a capture truth file (format hdr4d-capture-truth)", path.string());
+  std::vector<TruthCamera> cameras;
+  try {
+    for (const json& j : doc.at("cameras")) {
+      TruthCamera c;
+      c.name = j.at("name").get<std::string>();
+      c.fx = j.at("fx").get<double>();
+      c.cx = j.at("cx").get<double>();
+      c.cy = j.at("cy").get<double>();
+      c.width = j.at("width").get<int>();
+      c.height = j.at("height").get<int>();
+      c.world_from_cam_gl = MatrixFromJson(j.at("transform_matrix"), path, c.name);
+      for (int ch = 0; ch < 3; ++ch) {
+        c.low[ch] = j.at("measured_radiance").at("low").at(ch).get<double>();
+        c.high[ch] = j.at("measured_radiance").at("high").at(ch).get<double>();
+      }
+      for (const auto& [frame, file] : j.at("hdr_files").items())
+        c.hdr_files[std::stoi(frame)] = file.get<std::string>();
+      cameras.push_back(std::move(c));
+    }
+  } catch (const json::exception& e) {
+    Fail("{}: {}", path.string(), e.what());
+  } catch (const std::invalid_argument&) {
+    Fail("{}: hdr_files: a key is not a frame number", path.string());
+  }
+  if (cameras.empty()) Fail("{}: no cameras", path.string());
+  return cameras;
+}
+
+const TruthCamera& FindTruth(const std::vector<TruthCamera>& cameras, const std::string& name,
+                             const fs::path& where) {
+  for (const TruthCamera& c : cameras)
+    if (c.name == name) return c;
+  Fail("{}: camera {} is not in the truth's cameras.json", where.string(), name);
+}
+
+void CompareGeometry(const Rig& rig, const std::vector<TruthCamera>& truth, const fs::path& rig_file,
+                     TruthComparison* out) {
+  std::vector<Eigen::Vector3d> from, to;
+  std::vector<const TruthCamera*> matched;
+  for (const RigCamera& c : rig.cameras) {
+    const TruthCamera& t = FindTruth(truth, c.name, rig_file);
+    from.push_back(c.world_from_cam_gl.topRightCorner<3, 1>());
+    to.push_back(t.world_from_cam_gl.topRightCorner<3, 1>());
+    matched.push_back(&t);
+  }
+  if (from.size() < 3) {
+    out->notes.push_back(fmt::format("geometry not compared: {} camera(s); a similarity needs 3",
+                                     from.size()));
+    return;
+  }
+  out->alignment = AlignSimilarity(from, to);
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const auto& p : to) centroid += p;
+  centroid /= static_cast<double>(to.size());
+  double sum = 0;
+  for (const auto& p : to) sum += (p - centroid).squaredNorm();
+  out->rig_size = std::sqrt(sum / static_cast<double>(to.size()));
+  out->geometry = true;
+  for (std::size_t i = 0; i < rig.cameras.size(); ++i) {
+    const RigCamera& c = rig.cameras[i];
+    const TruthCamera& t = *matched[i];
+    CameraTruthError& e = out->cameras[i];
+    e.geometry = true;
+    const Eigen::Matrix3d aligned = out->alignment.rotation * c.world_from_cam_gl.topLeftCorner<3, 3>();
+    e.rotation_deg = RotationAngleDegrees(aligned, t.world_from_cam_gl.topLeftCorner<3, 3>());
+    e.position_error = (out->alignment.Apply(from[i]) - to[i]).norm();
+    e.position_relative = out->rig_size > 0 ? e.position_error / out->rig_size : 0;
+    e.focal = c.intrinsics.f;
+    e.focal_truth = t.fx;
+    e.focal_relative = std::abs(e.focal - t.fx) / t.fx;
+    e.principal_point_px = std::hypot(c.intrinsics.cx - t.cx, c.intrinsics.cy - t.cy);
+    out->max_rotation_deg = std::max(out->max_rotation_deg, e.rotation_deg);
+    out->mean_rotation_deg += e.rotation_deg / static_cast<double>(rig.cameras.size());
+    out->max_position_relative = std::max(out->max_position_relative, e.position_relative);
+    out->mean_position_relative += e.position_relative / static_cast<double>(rig.cameras.size());
+    out->max_focal_relative = std::max(out->max_focal_relative, e.focal_relative);
+  }
+}
+
+void CompareResponse(const fs::path& calibrated, const fs::path& truth, TruthComparison* out) {
+  const auto recovered = ReadResponseCsv(calibrated);
+  const auto expected = ReadResponseCsv(truth);
+  out->response = true;
+  for (int ch = 0; ch < 3; ++ch) {
+    double max = 0, sum = 0;
+    for (int z = kFirstCode; z <= kLastCode; ++z) {
+      const double rel = recovered[z][ch] / expected[z][ch] - 1;
+      max = std::max(max, std::abs(rel));
+      sum += rel * rel;
+    }
+    out->response_max_relative[ch] = max;
+    out->response_rms_relative[ch] = std::sqrt(sum / (kLastCode - kFirstCode + 1));
+  }
+}
+
+struct HdrPair {
+  std::size_t camera;  // index into out->cameras
+  fs::path calibrated, truth;
+  const TruthCamera* truth_camera;
+};
+
+void CompareHdr(const std::vector<HdrPair>& pairs, TruthComparison* out) {
+  // Pass 1: the scale per channel, the median of truth / calibrated over measured pixels.
+  std::array<std::vector<double>, 3> ratios;
+  std::vector<std::pair<Image, Image>> images;
+  std::vector<std::vector<char>> measured;
+  long pixels = 0, excluded = 0;
+  for (const HdrPair& p : pairs) {
+    Image cal = ReadImage(p.calibrated).Rgb();
+    Image tru = ReadImage(p.truth).Rgb();
+    if (!cal.SameShape(tru))
+      Fail("{}: {} pixels, the rendered {} has {}", p.calibrated.string(), cal.ShapeString(),
+           p.truth.string(), tru.ShapeString());
+    std::vector<char> use(cal.num_pixels(), 0);
+    for (std::size_t i = 0; i < cal.num_pixels(); ++i) {
+      bool ok = true;
+      for (int ch = 0; ch < 3; ++ch) {
+        const double t = tru.data()[3 * i + ch], c = cal.data()[3 * i + ch];
+        ok &= t >= p.truth_camera->low[ch] && t <= p.truth_camera->high[ch] && c > 0;
+      }
+      use[i] = ok;
+      ++pixels;
+      if (!ok) {
+        ++excluded;
+        continue;
+      }
+      for (int ch = 0; ch < 3; ++ch)
+        ratios[ch].push_back(tru.data()[3 * i + ch] / static_cast<double>(cal.data()[3 * i + ch]));
+    }
+    images.emplace_back(std::move(cal), std::move(tru));
+    measured.push_back(std::move(use));
+  }
+  if (ratios[0].empty()) {
+    out->notes.push_back("HDR not compared: no pixel lies in the radiance range the brackets measure");
+    return;
+  }
+  for (int ch = 0; ch < 3; ++ch) out->hdr_scale[ch] = Quantile(&ratios[ch], 0.5);
+  // Pass 2: relative errors.
+  std::vector<double> all;
+  std::vector<std::vector<double>> per_camera(out->cameras.size());
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    const auto& [cal, tru] = images[k];
+    for (std::size_t i = 0; i < cal.num_pixels(); ++i) {
+      if (!measured[k][i]) continue;
+      for (int ch = 0; ch < 3; ++ch) {
+        const double t = tru.data()[3 * i + ch];
+        const double rel = std::abs(out->hdr_scale[ch] * cal.data()[3 * i + ch] - t) / t;
+        all.push_back(rel);
+        per_camera[pairs[k].camera].push_back(rel);
+      }
+    }
+  }
+  out->hdr = true;
+  out->hdr_frames = static_cast<int>(pairs.size());
+  out->hdr_values = static_cast<long>(all.size());
+  out->hdr_excluded_fraction = pixels > 0 ? static_cast<double>(excluded) / pixels : 0;
+  out->hdr_within_10_percent =
+      static_cast<double>(std::count_if(all.begin(), all.end(), [](double r) { return r <= 0.1; })) /
+      static_cast<double>(all.size());
+  out->hdr_median_relative = Quantile(&all, 0.5);
+  out->hdr_p90_relative = Quantile(&all, 0.9);
+  for (std::size_t c = 0; c < per_camera.size(); ++c) {
+    if (per_camera[c].empty()) continue;
+    out->cameras[c].hdr = true;
+    out->cameras[c].hdr_values = static_cast<long>(per_camera[c].size());
+    out->cameras[c].hdr_median_relative = Quantile(&per_camera[c], 0.5);
+  }
+}
+
+}  // namespace
+
+Similarity AlignSimilarity(const std::vector<Eigen::Vector3d>& from,
+                           const std::vector<Eigen::Vector3d>& to) {
+  if (from.size() != to.size())
+    Fail("similarity alignment: {} points against {}", from.size(), to.size());
+  if (from.size() < 3) Fail("similarity alignment: {} points; it needs at least 3", from.size());
+  const Eigen::Index n = static_cast<Eigen::Index>(from.size());
+  Eigen::Matrix3Xd a(3, n), b(3, n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    a.col(i) = from[i];
+    b.col(i) = to[i];
+  }
+  // Collinear (or coincident) points leave the rotation about their line free.
+  for (const Eigen::Matrix3Xd* m : {&a, &b}) {
+    const Eigen::Matrix3Xd centred = m->colwise() - m->rowwise().mean();
+    const Eigen::JacobiSVD<Eigen::Matrix3Xd> svd(centred);
+    const Eigen::Vector3d s = svd.singularValues();
+    if (!(s(0) > 0) || s(1) < 1e-6 * s(0))
+      Fail("similarity alignment: the {} points lie on a line; the rotation is not determined",
+           n);
+  }
+  const Eigen::Matrix4d t = Eigen::umeyama(a, b, true);
+  Similarity out;
+  const Eigen::Matrix3d sr = t.topLeftCorner<3, 3>();
+  out.scale = std::cbrt(sr.determinant());
+  out.rotation = sr / out.scale;
+  out.translation = t.topRightCorner<3, 1>();
+  return out;
+}
+
+double RotationAngleDegrees(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
+  const double c = std::clamp(((a.transpose() * b).trace() - 1) / 2, -1.0, 1.0);
+  return std::acos(c) * 180.0 / M_PI;
+}
+
+TruthComparison CompareWithTruth(const fs::path& calibrated, const fs::path& truth) {
+  const std::vector<TruthCamera> truth_cameras = ReadTruthCameras(truth);
+  TruthComparison out;
+  for (const TruthCamera& t : truth_cameras) out.cameras.push_back({.name = t.name});
+
+  const fs::path rig_file = calibrated / "rig.json";
+  if (fs::exists(rig_file)) {
+    const Rig rig = ReadRigJson(rig_file);
+    // Results in the rig's camera order, which is the capture's (sorted names).
+    std::vector<CameraTruthError> ordered;
+    for (const RigCamera& c : rig.cameras) {
+      FindTruth(truth_cameras, c.name, rig_file);
+      ordered.push_back({.name = c.name});
+    }
+    for (const TruthCamera& t : truth_cameras)
+      if (!rig.Find(t.name)) {
+        ordered.push_back({.name = t.name});
+        out.notes.push_back(fmt::format("camera {} is not in {}", t.name, rig_file.string()));
+      }
+    out.cameras = std::move(ordered);
+    CompareGeometry(rig, truth_cameras, rig_file, &out);
+  } else {
+    out.notes.push_back(fmt::format("geometry not compared: no {}", rig_file.string()));
+  }
+
+  if (fs::exists(calibrated / "response.csv")) {
+    CompareResponse(calibrated / "response.csv", truth / "response.csv", &out);
+  } else {
+    out.notes.push_back("response not compared: no response.csv (geometry stage only?)");
+  }
+
+  std::vector<HdrPair> pairs;
+  for (std::size_t c = 0; c < out.cameras.size(); ++c) {
+    const TruthCamera& t = FindTruth(truth_cameras, out.cameras[c].name, truth / "cameras.json");
+    const fs::path folder = calibrated / "hdr" / t.name;
+    if (!fs::is_directory(folder)) continue;
+    for (const auto& entry : fs::directory_iterator(folder)) {
+      if (entry.path().extension() != ".exr") continue;
+      int frame = -1;
+      try {
+        frame = std::stoi(entry.path().stem().string());
+      } catch (const std::exception&) {
+        Fail("{}: not a frame number", entry.path().string());
+      }
+      const auto it = t.hdr_files.find(frame);
+      if (it == t.hdr_files.end())
+        Fail("{}: camera {} has no frame {} in the truth", entry.path().string(), t.name, frame);
+      pairs.push_back({c, entry.path(), truth / it->second, &t});
+    }
+  }
+  std::sort(pairs.begin(), pairs.end(),
+            [](const HdrPair& a, const HdrPair& b) { return a.calibrated < b.calibrated; });
+  if (pairs.empty()) {
+    out.notes.push_back(fmt::format("HDR not compared: no {}", (calibrated / "hdr").string()));
+  } else {
+    CompareHdr(pairs, &out);
+  }
+  return out;
+}
+
+json TruthComparisonJson(const TruthComparison& c) {
+  json cameras = json::array();
+  for (const CameraTruthError& e : c.cameras) {
+    json j = {{"name", e.name}};
+    if (e.geometry) {
+      j["rotation_error_deg"] = e.rotation_deg;
+      j["position_error"] = e.position_error;
+      j["position_error_relative"] = e.position_relative;
+      j["focal"] = e.focal;
+      j["focal_truth"] = e.focal_truth;
+      j["focal_error_relative"] = e.focal_relative;
+      j["principal_point_error_px"] = e.principal_point_px;
+    }
+    if (e.hdr) {
+      j["hdr_median_relative_error"] = e.hdr_median_relative;
+      j["hdr_values"] = e.hdr_values;
+    }
+    cameras.push_back(j);
+  }
+  json out = {{"cameras", cameras}, {"notes", c.notes}};
+  if (c.geometry) {
+    out["geometry"] = {{"rig_size", c.rig_size},
+                       {"rig_size_definition", "RMS distance of the true camera centres from their centroid"},
+                       {"similarity_scale", c.alignment.scale},
+                       {"max_rotation_error_deg", c.max_rotation_deg},
+                       {"mean_rotation_error_deg", c.mean_rotation_deg},
+                       {"max_position_error_relative", c.max_position_relative},
+                       {"mean_position_error_relative", c.mean_position_relative},
+                       {"max_focal_error_relative", c.max_focal_relative}};
+  }
+  if (c.response) {
+    out["response"] = {{"codes", {kFirstCode, kLastCode}},
+                       {"max_relative_error", c.response_max_relative},
+                       {"rms_relative_error", c.response_rms_relative}};
+  }
+  if (c.hdr) {
+    out["hdr"] = {{"frames", c.hdr_frames},
+                  {"values", c.hdr_values},
+                  {"scale", c.hdr_scale},
+                  {"median_relative_error", c.hdr_median_relative},
+                  {"p90_relative_error", c.hdr_p90_relative},
+                  {"within_10_percent", c.hdr_within_10_percent},
+                  {"excluded_pixel_fraction", c.hdr_excluded_fraction}};
+  }
+  return out;
+}
+
+std::string TruthComparisonMarkdown(const TruthComparison& c) {
+  std::string md = "| camera | rotation error (deg) | position error (% of rig size) | focal / truth (px) | "
+                   "focal error | principal point error (px) | HDR median rel. error |\n"
+                   "|---|---|---|---|---|---|---|\n";
+  for (const CameraTruthError& e : c.cameras) {
+    md += fmt::format("| {} | {} | {} | {} | {} | {} | {} |\n", e.name,
+                      e.geometry ? fmt::format("{:.3f}", e.rotation_deg) : "-",
+                      e.geometry ? fmt::format("{:.2f}", 100 * e.position_relative) : "-",
+                      e.geometry ? fmt::format("{:.1f} / {:.1f}", e.focal, e.focal_truth) : "-",
+                      e.geometry ? fmt::format("{:.2f}%", 100 * e.focal_relative) : "-",
+                      e.geometry ? fmt::format("{:.2f}", e.principal_point_px) : "-",
+                      e.hdr ? fmt::format("{:.1f}%", 100 * e.hdr_median_relative) : "-");
+  }
+  md += "\n";
+  if (c.geometry) {
+    md += fmt::format(
+        "- geometry (after a similarity, scale {:.4g}): rotation error max {:.3f} deg, mean {:.3f} "
+        "deg; position error max {:.2f}%, mean {:.2f}% of the rig size ({:.3g} units, the RMS "
+        "distance of the true centres from their centroid); focal error max {:.2f}%\n",
+        c.alignment.scale, c.max_rotation_deg, c.mean_rotation_deg, 100 * c.max_position_relative,
+        100 * c.mean_position_relative, c.rig_size, 100 * c.max_focal_relative);
+  }
+  if (c.response) {
+    md += fmt::format(
+        "- response (codes {}-{}, x(128) = 1): max relative error r {:.1f}%, g {:.1f}%, b {:.1f}%; "
+        "RMS r {:.1f}%, g {:.1f}%, b {:.1f}%\n",
+        kFirstCode, kLastCode, 100 * c.response_max_relative[0], 100 * c.response_max_relative[1],
+        100 * c.response_max_relative[2], 100 * c.response_rms_relative[0],
+        100 * c.response_rms_relative[1], 100 * c.response_rms_relative[2]);
+  }
+  if (c.hdr) {
+    md += fmt::format(
+        "- fused HDR vs rendered EXR ({} frames, {} values, one scale per channel {:.4g} {:.4g} "
+        "{:.4g}): median relative error {:.1f}%, 90th percentile {:.1f}%, {:.1f}% of values "
+        "within 10%; {:.1f}% of pixels excluded (outside the radiance the brackets measure)\n",
+        c.hdr_frames, c.hdr_values, c.hdr_scale[0], c.hdr_scale[1], c.hdr_scale[2],
+        100 * c.hdr_median_relative, 100 * c.hdr_p90_relative, 100 * c.hdr_within_10_percent,
+        100 * c.hdr_excluded_fraction);
+  }
+  for (const std::string& note : c.notes) md += "- " + note + "\n";
+  return md;
+}
+
+}  // namespace hdr4d

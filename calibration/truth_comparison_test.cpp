@@ -1,0 +1,203 @@
+// The comparison behind `hdr4d calibrate --truth`: the similarity alignment on its own, then a
+// calibrated folder made from a known truth with known errors put in (a camera turned by 2
+// degrees, one moved by 0.02 units, a focal length off by 1%, a response off by 5%, HDR at a third of the
+// radiance with 2% noise), each of which the comparison must report.
+#include "calibration/truth_comparison.h"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <random>
+
+#include "calibration/rig_geometry.h"
+#include "core/camera.h"
+#include "core/image_io.h"
+#include "core/json_util.h"
+#include "tests/testing.h"
+
+namespace hdr4d {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using testing::ErrorOf;
+
+bool Contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+TEST(AlignSimilarity, RecoversAKnownSimilarity) {
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> u(-2, 2);
+  const Eigen::Matrix3d r =
+      Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  const Eigen::Vector3d t(0.5, -1, 2);
+  const double s = 3.5;
+  std::vector<Eigen::Vector3d> from, to;
+  for (int i = 0; i < 6; ++i) {
+    from.emplace_back(u(rng), u(rng), u(rng));
+    to.push_back(s * r * from.back() + t);
+  }
+  const Similarity sim = AlignSimilarity(from, to);
+  EXPECT_NEAR(sim.scale, s, 1e-9);
+  EXPECT_LT((sim.rotation - r).norm(), 1e-9);
+  EXPECT_LT((sim.translation - t).norm(), 1e-9);
+  for (std::size_t i = 0; i < from.size(); ++i) EXPECT_LT((sim.Apply(from[i]) - to[i]).norm(), 1e-9);
+}
+
+TEST(AlignSimilarity, RefusesTooFewOrCollinearPoints) {
+  const std::vector<Eigen::Vector3d> two = {{0, 0, 0}, {1, 0, 0}};
+  EXPECT_TRUE(Contains(ErrorOf([&] { AlignSimilarity(two, two); }), "at least 3")) << ErrorOf([&] { AlignSimilarity(two, two); });
+  const std::vector<Eigen::Vector3d> line = {{0, 0, 0}, {1, 1, 1}, {2, 2, 2}, {3, 3, 3}};
+  EXPECT_TRUE(Contains(ErrorOf([&] { AlignSimilarity(line, line); }), "on a line"));
+  const std::vector<Eigen::Vector3d> three = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  EXPECT_TRUE(Contains(ErrorOf([&] { AlignSimilarity(three, two); }), "3 points against 2"));
+}
+
+TEST(RotationAngleDegrees, IsTheAngleBetween) {
+  const Eigen::Matrix3d a = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const Eigen::Matrix3d b = a * Eigen::AngleAxisd(M_PI / 18, Eigen::Vector3d(1, 1, 0).normalized()).toRotationMatrix();
+  EXPECT_NEAR(RotationAngleDegrees(a, b), 10.0, 1e-9);
+  EXPECT_NEAR(RotationAngleDegrees(a, a), 0.0, 1e-6);
+}
+
+constexpr int kW = 40, kH = 30, kCameras = 4;
+constexpr double kF = 50;
+
+json Matrix(const Eigen::Matrix4d& m) {
+  json rows = json::array();
+  for (int r = 0; r < 4; ++r) rows.push_back({m(r, 0), m(r, 1), m(r, 2), m(r, 3)});
+  return rows;
+}
+
+double TrueInverse(int code) { return std::pow(code / 255.0, 2.2) / std::pow(128 / 255.0, 2.2); }
+
+void WriteResponse(const fs::path& path, double error_above_200) {
+  std::string text = "# a response\ncode,r,g,b\n";
+  for (int z = 0; z < 256; ++z) {
+    const double x = TrueInverse(z) * (z > 200 ? 1 + error_above_200 : 1.0);
+    text += fmt::format("{},{},{},{}\n", z, x, x, x);
+  }
+  testing::WriteTextFile(path, text);
+}
+
+// truth/ with four cameras on an arc and one frame each; cal/ as a calibration would leave it,
+// in a world scaled by 0.25, turned and moved, with the errors above put in.
+struct Fixture {
+  testing::TempDir dir;
+  fs::path truth = dir.path() / "truth", cal = dir.path() / "cal";
+  std::vector<Eigen::Matrix4d> poses;
+
+  Fixture() {
+    json cameras = json::array();
+    const Eigen::Matrix3d world_r = Eigen::AngleAxisd(0.4, Eigen::Vector3d(0, 0, 1)).toRotationMatrix();
+    const Eigen::Vector3d world_t(0.3, 0.2, -0.1);
+    Rig rig;
+    rig.model_source = "test";
+    std::mt19937 rng(5);
+    std::normal_distribution<float> noise(0, 0.02f);
+    for (int c = 0; c < kCameras; ++c) {
+      const double a = -M_PI / 2 + 0.5 * (c - 1.5);
+      const Eigen::Vector3d eye(4 * std::cos(a), 4 * std::sin(a), 1 + 0.4 * (c % 2));
+      poses.push_back(LookAtWorldFromCamGl(eye, {0, 0, 0.5}, Eigen::Vector3d::UnitZ()));
+      const std::string name = fmt::format("cam{:02d}", c);
+      const std::string hdr = fmt::format("hdr/{}_t0000.exr", name);
+      cameras.push_back({{"name", name}, {"width", kW}, {"height", kH}, {"fx", kF}, {"fy", kF},
+                         {"cx", kW / 2.0}, {"cy", kH / 2.0}, {"transform_matrix", Matrix(poses[c])},
+                         {"measured_radiance", {{"low", {0.01, 0.01, 0.01}}, {"high", {10, 10, 10}}}},
+                         {"hdr_files", {{"0", hdr}}}});
+      Image radiance = testing::RandomImage(kW, kH, 3, 10 + c, 0.02f, 5.0f);
+      radiance.at(0, 0, 0) = 100.0f;  // beyond what the brackets measure: excluded
+      WriteImage(truth / hdr, radiance, {.format = PixelFormat::kFloat});
+      Image fused = radiance;
+      for (float& v : fused.values()) v = v / 3.0f * (1.0f + noise(rng));
+      WriteImage(cal / "hdr" / name / "00000.exr", fused, {.format = PixelFormat::kFloat});
+
+      // The calibrated pose: the truth in the other world; camera 1 turned by 2 degrees about its
+      // viewing axis, camera 2 moved sideways by 0.02 truth units.
+      Eigen::Matrix4d world_from_cam = poses[c];
+      if (c == 1)
+        world_from_cam.topLeftCorner<3, 3>() =
+            world_from_cam.topLeftCorner<3, 3>() *
+            Eigen::AngleAxisd(2 * M_PI / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      if (c == 2) world_from_cam.topRightCorner<3, 1>() += Eigen::Vector3d(0.02, 0, 0);
+      RigCamera rc;
+      rc.name = name;
+      rc.width = kW;
+      rc.height = kH;
+      rc.intrinsics = {c == 3 ? kF * 1.01 : kF, kW / 2.0, kH / 2.0, 0, 0};
+      rc.world_from_cam_gl.setIdentity();
+      rc.world_from_cam_gl.topLeftCorner<3, 3>() = world_r * world_from_cam.topLeftCorner<3, 3>();
+      rc.world_from_cam_gl.topRightCorner<3, 1>() = 0.25 * (world_r * world_from_cam.topRightCorner<3, 1>()) + world_t;
+      rig.cameras.push_back(rc);
+    }
+    WriteJsonFile(truth / "cameras.json", {{"format", "hdr4d-capture-truth"}, {"cameras", cameras}});
+    WriteRigJson(cal / "rig.json", rig);
+    WriteResponse(truth / "response.csv", 0.0);
+    WriteResponse(cal / "response.csv", 0.05);
+  }
+};
+
+TEST(CompareWithTruth, ReportsTheErrorsPutIn) {
+  Fixture f;
+  const TruthComparison c = CompareWithTruth(f.cal, f.truth);
+  ASSERT_TRUE(c.geometry);
+  ASSERT_EQ(c.cameras.size(), 4u);
+  // Camera 2's move shifts the least-squares alignment a little (part of it shows on the others):
+  // their errors stay small, camera 1 shows its 2 degrees.
+  EXPECT_NEAR(c.alignment.scale, 4.0, 0.1);
+  EXPECT_NEAR(c.cameras[1].rotation_deg, 2.0, 0.1);
+  EXPECT_LT(c.cameras[0].rotation_deg, 0.2);
+  EXPECT_GT(c.cameras[2].position_error, 0.008);
+  EXPECT_LT(c.cameras[2].position_error, 0.02);
+  EXPECT_EQ(c.cameras[2].name, "cam02");
+  EXPECT_NEAR(c.max_position_relative, c.cameras[2].position_relative, 1e-12);
+  EXPECT_NEAR(c.cameras[3].focal_relative, 0.01, 1e-9);
+  EXPECT_NEAR(c.max_focal_relative, 0.01, 1e-9);
+  EXPECT_NEAR(c.cameras[0].principal_point_px, 0.0, 1e-9);
+  ASSERT_TRUE(c.response);
+  for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(c.response_max_relative[ch], 0.05, 1e-6);
+  ASSERT_TRUE(c.hdr);
+  for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(c.hdr_scale[ch], 3.0, 0.05);
+  EXPECT_NEAR(c.hdr_median_relative, 0.02 * 0.6745, 0.005);  // median |N(0, 0.02)|
+  EXPECT_GT(c.hdr_within_10_percent, 0.99);
+  EXPECT_EQ(c.hdr_frames, 4);
+  EXPECT_GT(c.hdr_excluded_fraction, 0.0);  // the pixel at 100
+  const std::string md = TruthComparisonMarkdown(c);
+  EXPECT_TRUE(Contains(md, "| cam01 | 1.9")) << md;
+  EXPECT_EQ(TruthComparisonJson(c)["cameras"][3]["focal_error_relative"].get<double>(), c.cameras[3].focal_relative);
+}
+
+TEST(CompareWithTruth, ComparesWhatIsThereAndSaysWhatIsNot) {
+  Fixture f;
+  fs::remove(f.cal / "rig.json");
+  fs::remove(f.cal / "response.csv");
+  const TruthComparison c = CompareWithTruth(f.cal, f.truth);
+  EXPECT_FALSE(c.geometry);
+  EXPECT_FALSE(c.response);
+  EXPECT_TRUE(c.hdr);
+  ASSERT_EQ(c.notes.size(), 2u);
+  EXPECT_TRUE(Contains(c.notes[0], "no ")) << c.notes[0];
+}
+
+TEST(CompareWithTruth, BadInputNamesTheFile) {
+  Fixture f;
+  EXPECT_TRUE(Contains(ErrorOf([&] { CompareWithTruth(f.cal, f.dir.path() / "nowhere"); }),
+                       "cameras.json: not found"));
+  testing::WriteTextFile(f.cal / "hdr" / "cam00" / "00007.exr", "");
+  fs::copy_file(f.cal / "hdr" / "cam01" / "00000.exr", f.cal / "hdr" / "cam00" / "00007.exr",
+                fs::copy_options::overwrite_existing);
+  const std::string missing = ErrorOf([&] { CompareWithTruth(f.cal, f.truth); });
+  EXPECT_TRUE(Contains(missing, "00007.exr: camera cam00 has no frame 7 in the truth")) << missing;
+  fs::remove(f.cal / "hdr" / "cam00" / "00007.exr");
+  WriteImage(f.cal / "hdr" / "cam00" / "00000.exr", Image(8, 8, 3), {.format = PixelFormat::kFloat});
+  const std::string size = ErrorOf([&] { CompareWithTruth(f.cal, f.truth); });
+  EXPECT_TRUE(Contains(size, "8x8x3 pixels")) << size;
+  testing::WriteTextFile(f.truth / "cameras.json", "{\"format\": \"something else\"}");
+  EXPECT_TRUE(Contains(ErrorOf([&] { CompareWithTruth(f.cal, f.truth); }), "not a capture truth file"));
+}
+
+}  // namespace
+}  // namespace hdr4d

@@ -1,0 +1,30 @@
+// The output folder of one datagen scene (a dataset or a capture): built in OUT/<scene>.partial
+// and moved into place only when complete, so a failed run keeps the previous output; a folder
+// that holds anything but a previous datagen run is never replaced.
+#pragma once
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace hdr4d::datagen {
+
+inline constexpr const char* kGenerator = "hdr4d datagen";  // manifest.json's "generator"
+inline constexpr const char* kManifestFile = "manifest.json";
+
+// True when `dir` holds a previous datagen run (its manifest names this generator).
+bool IsDatagenOutput(const std::filesystem::path& dir);
+
+// Checks that `final_dir` may be written (absent, empty or a previous datagen run) and returns a
+// fresh staging folder next to it. Throws hdr4d::Error naming the folder otherwise.
+std::filesystem::path PrepareStaging(const std::filesystem::path& final_dir,
+                                     const std::string& scene);
+
+// SHA-256 of every file under `root` by relative path, except the manifest and Blender's log
+// (neither is reproducible).
+nlohmann::json Checksums(const std::filesystem::path& root);
+
+// Replaces `final_dir` (checked by PrepareStaging) with the finished `staging` folder.
+void MoveIntoPlace(const std::filesystem::path& staging, const std::filesystem::path& final_dir);
+
+}  // namespace hdr4d::datagen
