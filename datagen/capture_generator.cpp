@@ -32,10 +32,6 @@ constexpr const char* kTruth = "truth";
 // longest exposure, below the clip of the shortest.
 constexpr double kLowCode = 8, kHighCode = 247;
 
-double SecondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
 std::uint64_t SplitMix(std::uint64_t x) {
   x += 0x9e3779b97f4a7c15ULL;
   x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
@@ -404,13 +400,9 @@ SceneResult GenerateCapture(const DatagenOptions& options, const std::string& sc
         {"ratio_p99.9_p0.1", result.range.ratio}}},
       {"points", points},
   };
-  result.total_seconds = SecondsSince(start);
-  manifest["timing"] = {{"blender_seconds", result.blender_seconds},
-                        {"seconds_per_render", result.blender_seconds / result.renders},
-                        {"total_seconds", result.total_seconds}};
-  manifest["files"] = Checksums(staging);
-  WriteJsonFile(staging / kManifestFile, manifest);
-  MoveIntoPlace(staging, final_dir);
+  result.total_seconds =
+      FinishOutput(std::move(manifest), result.blender_seconds, result.renders, start, staging,
+                   final_dir);
   return result;
 }
 

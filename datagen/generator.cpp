@@ -26,10 +26,6 @@ using nlohmann::json;
 
 namespace {
 
-double SecondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
 json SplitCounts(const std::vector<PlannedRender>& renders, Split split) {
   std::set<int> times;
   int hdr = 0, ldr = 0;
@@ -202,13 +198,9 @@ SceneResult GenerateScene(const DatagenOptions& options, const std::string& scen
         {"zero_fraction", result.range.zero_fraction}}},
       {"points", {{"count", points}, {"time", 0.0}}},
   };
-  result.total_seconds = SecondsSince(start);
-  manifest["timing"] = {{"blender_seconds", result.blender_seconds},
-                        {"seconds_per_render", result.blender_seconds / result.renders},
-                        {"total_seconds", result.total_seconds}};
-  manifest["files"] = Checksums(staging);
-  WriteJsonFile(staging / kManifestFile, manifest);
-  MoveIntoPlace(staging, final_dir);
+  result.total_seconds =
+      FinishOutput(std::move(manifest), result.blender_seconds, result.renders, start, staging,
+                   final_dir);
   return result;
 }
 

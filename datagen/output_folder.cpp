@@ -62,7 +62,6 @@ fs::path PrepareStaging(const fs::path& final_dir, const std::string& scene) {
   return staging;
 }
 
-
 json Checksums(const fs::path& root) {
   std::vector<fs::path> files;
   for (const auto& entry : fs::recursive_directory_iterator(root)) {
@@ -90,6 +89,22 @@ void MoveIntoPlace(const fs::path& staging, const fs::path& final_dir) {
     Fail("{}: cannot move the finished scene into place from {}: {}", final_dir.string(),
          staging.string(), ec.message());
   }
+}
+
+double FinishOutput(nlohmann::json manifest,
+                    double blender_seconds,
+                    int renders,
+                    std::chrono::steady_clock::time_point start,
+                    const std::filesystem::path& staging,
+                    const std::filesystem::path& final_dir) {
+  const double total_seconds = SecondsSince(start);
+  manifest["timing"] = {{"blender_seconds", blender_seconds},
+                        {"seconds_per_render", blender_seconds / renders},
+                        {"total_seconds", total_seconds}};
+  manifest["files"] = Checksums(staging);
+  WriteJsonFile(staging / kManifestFile, manifest);
+  MoveIntoPlace(staging, final_dir);
+  return total_seconds;
 }
 
 }  // namespace hdr4d::datagen

@@ -3,6 +3,7 @@
 // that holds anything but a previous datagen run is never replaced.
 #pragma once
 
+#include <chrono>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -26,5 +27,19 @@ nlohmann::json Checksums(const std::filesystem::path& root);
 
 // Replaces `final_dir` (checked by PrepareStaging) with the finished `staging` folder.
 void MoveIntoPlace(const std::filesystem::path& staging, const std::filesystem::path& final_dir);
+
+inline double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// Finishes a scene's output: the timing (Blender's seconds over `renders`, the total since
+// `start`) and the checksum of every file into `manifest`, written into `staging`, which then
+// replaces `final_dir`. Returns the total seconds (taken before the checksums).
+double FinishOutput(nlohmann::json manifest,
+                    double blender_seconds,
+                    int renders,
+                    std::chrono::steady_clock::time_point start,
+                    const std::filesystem::path& staging,
+                    const std::filesystem::path& final_dir);
 
 }  // namespace hdr4d::datagen
