@@ -46,5 +46,30 @@ TEST(BenchCliErrors, UserMistakesEndInOneLineAndCreateNothing) {
   EXPECT_FALSE(fs::exists(dir / "r.html"));
 }
 
+// A dry run lists the plan without rendering: a Blender-made scene that is not in the cache is
+// named as such, its runs listed with '-' for an id, and nothing is generated or stored.
+TEST(BenchDryRun, ListsThePlanWithoutGeneratingScenes) {
+  testing::TempDir dir;
+  WriteJsonFile(dir / "suite.json",
+                {{"name", "dry"},
+                 {"scenes", {{{"name", "lego"}, {"datagen", {{"scene", "lego"}, {"preset", "ci"}, {"seed", 0}}}}}},
+                 {"methods", {{{"name", "4dgs"}, {"train", {{"method", "4dgs"}}}}}},
+                 {"seeds", {0, 1}},
+                 {"budgets", {{{"iterations", 10}}}}});
+  const Command c = RunHdr4dArgs({"bench", "run", (dir / "suite.json").string(), "--store",
+                                  (dir / "store.db").string(), "--cache", (dir / "cache").string(),
+                                  "--dry-run"},
+                                 dir / "log.txt", 60);
+  EXPECT_EQ(c.result.exit_code, 0) << c.text;
+  EXPECT_NE(c.text.find("scene 'lego' is not generated yet"), std::string::npos) << c.text;
+  EXPECT_EQ(CountLines(c.text, "-"), 2) << c.text;  // one run per seed, no id yet
+  EXPECT_EQ(c.text.find("generating scene"), std::string::npos) << c.text;
+  bool generated = false;
+  std::error_code ec;
+  for (const auto& entry : fs::recursive_directory_iterator(dir / "cache", ec))
+    generated |= entry.path().filename() == "transforms_train.json";
+  EXPECT_FALSE(generated);
+}
+
 }  // namespace
 }  // namespace hdr4d::bench

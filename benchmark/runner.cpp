@@ -98,9 +98,13 @@ void ApplyFilter(const SuiteFilter& f, Suite* suite) {
   if (f.iterations > 0) suite->budgets = {Budget{.iterations = f.iterations}};
 }
 
-std::vector<PreparedScene> PrepareScenes(const Suite& suite, const fs::path& cache, bool verbose) {
+std::vector<PreparedScene> PrepareScenes(const Suite& suite,
+                                         const fs::path& cache,
+                                         bool verbose,
+                                         bool generate) {
   std::vector<PreparedScene> scenes;
-  const SceneCacheOptions options{.cache_dir = cache, .hdr4d = SelfExecutable(), .verbose = verbose};
+  const SceneCacheOptions options{
+      .cache_dir = cache, .hdr4d = SelfExecutable(), .verbose = verbose, .generate = generate};
   for (const SceneSpec& s : suite.scenes) scenes.push_back(PrepareScene(s, options));
   return scenes;
 }
@@ -113,7 +117,9 @@ RunnerSummary RunSuite(const Suite& suite, const RunnerOptions& options) {
       options.runs_dir.empty() ? fs::path(options.store.string() + ".runs") : options.runs_dir;
   StopSignals signals;
   ResultsStore store(options.store);
-  const std::vector<PreparedScene> scenes = PrepareScenes(suite, cache, true);
+  // A dry run lists; it does not render scenes that are not in the cache yet.
+  const std::vector<PreparedScene> scenes =
+      PrepareScenes(suite, cache, true, /*generate=*/!options.dry_run);
   const std::vector<RunSpec> runs = PlanRuns(suite, scenes, CodeVersion());
 
   RunnerSummary summary;
@@ -140,7 +146,19 @@ RunnerSummary RunSuite(const Suite& suite, const RunnerOptions& options) {
              queue.size(), options.jobs, options.jobs == 1 ? "" : "s", threads,
              threads == 1 ? "" : "s", options.store.string());
   if (options.dry_run) {
+    for (const PreparedScene& s : scenes) {
+      if (!s.ready) {
+        fmt::print(stderr,
+                   "bench: scene '{}' is not generated yet ({}): a real run renders it first; "
+                   "its runs' ids depend on its data and are shown as '-'\n",
+                   s.spec->name, s.dir.string());
+      }
+    }
     for (const RunSpec& r : runs) {
+      if (!r.prepared->ready) {
+        fmt::print("{:<16}  {:<7} {}\n", "-", "to run", Describe(r.labels.front()));
+        continue;
+      }
       const char* state = ok.count(r.id) ? "stored" : failed.count(r.id) ? "failed" : "to run";
       fmt::print("{}  {:<7} {}\n", r.id, state, Describe(r.labels.front()));
     }
@@ -185,9 +203,9 @@ RunnerSummary RunSuite(const Suite& suite, const RunnerOptions& options) {
         error = e.what();
       }
       std::lock_guard lock(mutex);
-      const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() -
-                                                        running[run->id].start)
-                              .count();
+      const double took =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - running[run->id].start)
+              .count();
       running.erase(run->id);
       if (!error.empty()) {  // the harness itself failed (store not writable, ...): stop
         fatal = fmt::format("{}: {}", Describe(run->labels.front()), error);
@@ -200,8 +218,8 @@ RunnerSummary RunSuite(const Suite& suite, const RunnerOptions& options) {
           last_line = fmt::format("{} in {}", Describe(run->labels.front()), Duration(took));
         } else {
           ++summary.failed;
-          failures.push_back(fmt::format("{} ({}): {}", Describe(run->labels.front()), run->id,
-                                         record->error));
+          failures.push_back(
+              fmt::format("{} ({}): {}", Describe(run->labels.front()), run->id, record->error));
           last_line = fmt::format("FAILED {}", Describe(run->labels.front()));
         }
       }
@@ -226,8 +244,8 @@ RunnerSummary RunSuite(const Suite& suite, const RunnerOptions& options) {
       double left = units_left * rate;
       const auto now = std::chrono::steady_clock::now();
       for (const auto& [id, r] : running)
-        left += std::max(0.0, WorkUnits(*r.run) * rate -
-                                  std::chrono::duration<double>(now - r.start).count());
+        left += std::max(
+            0.0, WorkUnits(*r.run) * rate - std::chrono::duration<double>(now - r.start).count());
       eta = Duration(left / options.jobs);
     }
     const std::string line = fmt::format(
@@ -239,7 +257,8 @@ RunnerSummary RunSuite(const Suite& suite, const RunnerOptions& options) {
     if (tty) {
       fmt::print(stderr, "\r\033[K{}", line);
       if (all_done) fmt::print(stderr, "\n");
-    } else if (finished != last_finished || now - last_print > std::chrono::seconds(60) || all_done) {
+    } else if (finished != last_finished || now - last_print > std::chrono::seconds(60) ||
+               all_done) {
       fmt::print(stderr, "{}\n", line);
       last_print = now;
       last_finished = finished;
@@ -251,9 +270,10 @@ RunnerSummary RunSuite(const Suite& suite, const RunnerOptions& options) {
   if (!fatal.empty()) Fail("bench run stopped: {}", fatal);
   summary.interrupted = g_signal != 0;
   if (summary.interrupted) {
-    Fail("bench run interrupted by signal {}: {} finished runs are in {}; the unfinished ones "
-         "resume when the same command runs again",
-         g_signal.load(), summary.done + summary.failed, options.store.string());
+    Fail(
+        "bench run interrupted by signal {}: {} finished runs are in {}; the unfinished ones "
+        "resume when the same command runs again",
+        g_signal.load(), summary.done + summary.failed, options.store.string());
   }
   return summary;
 }

@@ -41,9 +41,10 @@ struct RunnerSummary {
   bool interrupted = false;
 };
 
-// Prepares every scene of the suite (generating into the cache) and plans its runs.
+// Prepares every scene of the suite (generating into the cache; with generate off, a scene not
+// in the cache is returned not ready instead).
 std::vector<PreparedScene> PrepareScenes(const Suite& suite, const std::filesystem::path& cache,
-                                         bool verbose);
+                                         bool verbose, bool generate = true);
 
 RunnerSummary RunSuite(const Suite& suite, const RunnerOptions& options);
 

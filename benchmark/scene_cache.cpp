@@ -82,6 +82,11 @@ PreparedScene PrepareScene(const SceneSpec& spec, const SceneCacheOptions& optio
     return p;
   }
   p.dir = CachedSceneDir(spec, options.cache_dir);
+  if (!options.generate && !IsDataset(p.dir)) {
+    p.ready = false;  // listing only (bench run --dry-run): nothing is rendered or written
+    p.checksum = "not generated: " + spec.name;  // keeps the runs of two such scenes apart
+    return p;
+  }
   std::error_code ec;
   fs::create_directories(p.dir.parent_path(), ec);
   if (ec) Fail("{}: cannot create the scene cache: {}", p.dir.parent_path().string(), ec.message());
@@ -90,7 +95,8 @@ PreparedScene PrepareScene(const SceneSpec& spec, const SceneCacheOptions& optio
     if (!IsDataset(p.dir)) {  // another harness may have made it while we waited
       const fs::path log = p.dir.string() + ".log";
       const std::string hdr4d = options.hdr4d.string();
-      if (options.verbose) fmt::print(stderr, "bench: generating scene '{}' into {}\n", spec.name, p.dir.string());
+      if (options.verbose)
+        fmt::print(stderr, "bench: generating scene '{}' into {}\n", spec.name, p.dir.string());
       if (spec.kind == SceneSpec::Kind::kDatagen) {
         // datagen builds OUT/<scene>.partial and renames it into place when complete.
         Run({hdr4d, "datagen", "--scene", spec.source["scene"].get<std::string>(), "--preset",
@@ -115,7 +121,8 @@ PreparedScene PrepareScene(const SceneSpec& spec, const SceneCacheOptions& optio
           Run(synth, log, spec.name);
         }
         fs::rename(partial, p.dir, ec);
-        if (ec) Fail("{}: cannot move the generated scene into place: {}", p.dir.string(), ec.message());
+        if (ec)
+          Fail("{}: cannot move the generated scene into place: {}", p.dir.string(), ec.message());
       }
       if (!IsDataset(p.dir))
         Fail("scene '{}': the generator finished but {} holds no dataset; see {}", spec.name,

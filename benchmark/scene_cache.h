@@ -14,13 +14,15 @@ namespace hdr4d::bench {
 struct PreparedScene {
   const SceneSpec* spec = nullptr;
   std::filesystem::path dir;  // the dataset folder
-  std::string checksum;       // DatasetChecksum(dir)
+  std::string checksum;       // DatasetChecksum(dir); a placeholder when not ready
+  bool ready = true;          // false: a generated scene not made yet (generate off)
 };
 
 struct SceneCacheOptions {
   std::filesystem::path cache_dir;  // generated scenes live here
   std::filesystem::path hdr4d;      // the hdr4d binary that generates them
   bool verbose = true;              // say on stderr when a scene is generated
+  bool generate = true;             // false: a scene not in the cache is returned not ready
 };
 
 // $HDR4D_CACHE, else $XDG_CACHE_HOME/hdr4d, else ~/.cache/hdr4d.
