@@ -53,7 +53,7 @@ TEST_F(ToneMapperKindsTest, InvalidConfigurationNamesTheField) {
   EXPECT_NE(message.find("num_images"), std::string::npos) << message;
 }
 
-TEST_F(ToneMapperKindsTest, RegisteringAgainstChangesNothing) {
+TEST_F(ToneMapperKindsTest, RegisteringTwiceChangesNothing) {
   RegisterToneMappers();
   EXPECT_EQ(ToneMapperKinds(),
             (std::vector<std::string>{"dtm", "mlp", "sigmoid", "reinhard", "durand"}));
