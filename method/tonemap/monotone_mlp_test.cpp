@@ -48,7 +48,23 @@ TEST(MonotoneMlp, ConstrainedWeightsAreThePathsFromInputZero) {
   std::vector<double> eff(p.size());
   MonotoneEffective(kCurve, p.data(), eff.data());
   for (std::size_t i = 0; i < p.size(); ++i) {
-    EXPECT_EQ(eff[i], IsMonotoneWeight(kCurve, i) ? std::abs(p[i]) : p[i]) << i;
+    EXPECT_EQ(std::abs(eff[i]), std::abs(p[i])) << i;
+    if (!IsMonotoneWeight(kCurve, i)) EXPECT_EQ(eff[i], p[i]) << i;
+  }
+  // Signs: W1[1][0] is an odd (falling) unit's; W2[0][1] joins a rising unit to a falling one;
+  // W2[1][1] two falling ones; W3[0][1] a falling unit's output weight.
+  EXPECT_LE(eff[3], 0.0);
+  EXPECT_LE(eff[64 + 1], 0.0);
+  EXPECT_GE(eff[64 + 16 + 1], 0.0);
+  EXPECT_LE(eff[64 + 256 + 16 + 1], 0.0);
+}
+
+// Rising and falling units together leave no floor or ceiling: the curve runs from 0 to 1.
+TEST(MonotoneMlp, CurvesReachZeroAndOne) {
+  for (unsigned seed = 0; seed < 20; ++seed) {
+    const std::vector<double> p = RandomParams(kCurve, seed);
+    EXPECT_LT(Eval(kCurve, p, -1e4, 0.5), 1e-3) << seed;
+    EXPECT_GT(Eval(kCurve, p, 1e4, 0.5), 1 - 1e-3) << seed;
   }
 }
 

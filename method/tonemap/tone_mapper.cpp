@@ -42,10 +42,13 @@ std::string CheckRange(const char* key, long long value, long long lo, long long
   return "";
 }
 
-constexpr std::array<std::string_view, 11> kKeys = {
+constexpr std::array<std::string_view, 12> kKeys = {
     "kind",         "num_times",    "num_images", "context_learner", "context_window",
     "context_size", "curve_hidden", "tabulated",  "table_nodes",     "seed",
-    "monotone_curves"};
+    "monotone_curves", "monotone_form"};
+// The construction of monotone curves (monotone_mlp.h). Configs with monotone curves and no
+// form are from the earlier all-positive (convex) construction, which is gone.
+constexpr std::string_view kMonotoneForm = "rising+falling";
 
 const nlohmann::json& Member(const nlohmann::json& json,
                              const std::string& source,
@@ -101,7 +104,7 @@ std::string ToneMapperConfig::Validate() const {
 }
 
 nlohmann::json ToneMapperConfig::ToJson() const {
-  return {{"kind", kind},
+  nlohmann::json j = {{"kind", kind},
           {"num_times", num_times},
           {"num_images", num_images},
           {"context_learner", context_learner},
@@ -112,6 +115,8 @@ nlohmann::json ToneMapperConfig::ToJson() const {
           {"table_nodes", table_nodes},
           {"seed", seed},
           {"monotone_curves", monotone_curves}};
+  if (monotone_curves) j["monotone_form"] = kMonotoneForm;
+  return j;
 }
 
 ToneMapperConfig ToneMapperConfig::FromJson(const nlohmann::json& json, const std::string& source) {
@@ -152,6 +157,15 @@ ToneMapperConfig ToneMapperConfig::FromJson(const nlohmann::json& json, const st
            it->dump());
     }
     c.monotone_curves = it->get<bool>();
+  }
+  if (c.monotone_curves) {
+    const auto form = json.find("monotone_form");
+    if (form == json.end() || !form->is_string() || form->get<std::string>() != kMonotoneForm) {
+      Fail("{}: tone mapper config: monotone curves of another construction ('monotone_form' "
+           "{}, this version has \"{}\"): retrain the run",
+           source, form == json.end() ? "missing: the earlier all-positive one" : form->dump(),
+           kMonotoneForm);
+    }
   }
   const std::string problem = c.Validate();
   if (!problem.empty()) Fail("{}: tone mapper config: {}", source, problem);

@@ -48,9 +48,10 @@ struct ToneMapperConfig {
   bool tabulated = true;
   int table_nodes = 1024;
   // Learned curves (dtm, mlp) non-decreasing in log exposure by construction
-  // (method/tonemap/monotone_mlp.h); false, the default, is the reference's free MLP, which
-  // learns one branch per exposure on multi-exposure data (issue 12). Opt-in until it wins on
-  // LDR too (BENCHMARKS.md). A config.json without the key means false.
+  // (method/tonemap/monotone_mlp.h). false, the default, is the reference's free MLP: with log
+  // colours at their own learning rate (lr_schedule.h, f_dc_lr_log_hdr) it learns a smooth
+  // rising curve, and the monotone one adds nothing measurable (issue 12, BENCHMARKS.md). A
+  // config.json without the key means false.
   bool monotone_curves = false;
   std::uint64_t seed = 0;  // initial weights
 

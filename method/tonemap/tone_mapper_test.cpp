@@ -76,7 +76,7 @@ TEST(ToneMapperConfig, JsonRoundTripKeepsEveryKey) {
   c.seed = std::numeric_limits<std::uint64_t>::max();
   c.monotone_curves = true;
   const nlohmann::json json = c.ToJson();
-  EXPECT_EQ(json.size(), 11u);
+  EXPECT_EQ(json.size(), 12u);  // monotone_form only with monotone curves
   // Through text, as config.json is read back.
   const ToneMapperConfig r = ToneMapperConfig::FromJson(nlohmann::json::parse(json.dump()), "x");
   EXPECT_EQ(r.kind, c.kind);
@@ -96,6 +96,12 @@ TEST(ToneMapperConfig, JsonRoundTripKeepsEveryKey) {
   nlohmann::json old = c.ToJson();
   old.erase("monotone_curves");
   EXPECT_FALSE(ToneMapperConfig::FromJson(old, "x").monotone_curves);
+  // A run with the earlier all-positive monotone curves (no form) cannot load as the new ones.
+  nlohmann::json convex = c.ToJson();
+  convex.erase("monotone_form");
+  const std::string e = FromJsonError(convex);
+  EXPECT_NE(e.find("monotone_form"), std::string::npos) << e;
+  EXPECT_NE(e.find("retrain"), std::string::npos) << e;
 }
 
 TEST(ToneMapperConfig, FromJsonNamesSourceAndKey) {
