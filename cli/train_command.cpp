@@ -22,6 +22,7 @@ void AddTrainCommand(CLI::App& app) {
          monotone_curves = false;
     int context_window = 20, context_size = 2;
     float hdr_weight = 0.6f;
+    std::string hdr_target;
   };
   auto flags = std::make_shared<HdrFlags>();
   CLI::App* cmd = app.add_subcommand(
@@ -127,14 +128,29 @@ void AddTrainCommand(CLI::App& app) {
           ->check(Integer(1, 64))
           ->capture_default_str();
   cmd->add_flag("--monotone-tone-curves", flags->monotone_curves,
-                "Tone-curve MLPs (dtm, mlp) non-decreasing in log exposure instead of the "
-                "reference's free ones, which learn one branch per exposure and an HDR of the "
-                "wrong shape (BENCHMARKS.md, issue 12)");
+                "Tone-curve MLPs (dtm, mlp) non-decreasing in log exposure by construction "
+                "instead of the reference's free ones (BENCHMARKS.md, issue 12: no better once "
+                "log colours learn at --color-lr's default)");
   cmd->add_flag("--direct-tone-curves", flags->direct_curves,
                 "Evaluate the tone-curve MLP per value instead of the per-frame table");
   cmd->add_option("--hdr-weight", flags->hdr_weight, "Weight of the HDR term (alpha)")
       ->check(Real(0, 1e6))
       ->capture_default_str();
+  cmd->add_option_function<double>(
+         "--color-lr",
+         [options](double lr) {
+           options->optimization.f_dc_lr = lr;
+           options->optimization.f_dc_lr_log_hdr = lr;
+         },
+         "Learning rate of the colours' DC term (default: the reference's 2.5e-3 for LDR "
+         "colours, 0.04 for log-HDR colours, which span about ten log units where LDR colours "
+         "span one: slower, the tone curve squeezes the HDR instead; BENCHMARKS.md, issue 12)")
+      ->check(Real(1e-9, 10));
+  cmd->add_option("--hdr-target", flags->hdr_target,
+                  "Target of the HDR term: image-max (the reference: mu-law, mu 5000, of each "
+                  "image over its own maximum) or scene-log (mu 1e6, one maximum for the whole "
+                  "scene: a constant scale over time, dark regions weighed like bright ones)")
+      ->check(CLI::IsMember({"image-max", "scene-log"}));
   cmd->callback([options, data, out, flags, context_window, context_size] {
     options->data = *data;
     options->out = *out;
@@ -161,6 +177,8 @@ void AddTrainCommand(CLI::App& app) {
     if (flags->no_pixel_branch) hdr.pixel_branch = false;
     if (flags->no_gaussian_branch) hdr.gaussian_branch = false;
     hdr.hdr_weight = flags->hdr_weight;
+    if (!flags->hdr_target.empty())
+      hdr.hdr_target = method::ParseHdrTarget(flags->hdr_target, "--hdr-target");
     if (std::string p = hdr.Validate(); !p.empty()) Fail("train: {}", p);
     const method::TrainSummary s = method::Train(*options);
     fmt::print("train: {} iterations in {:.1f} s, {} Gaussians; test {}\n", s.iterations,

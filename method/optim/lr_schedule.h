@@ -105,6 +105,11 @@ struct OptimizationOptions {
   // t: constant (the reference's t scheduler is commented out); < 0 means position_lr_init.
   double t_lr_init = -1.0;
   double f_dc_lr = 2.5e-3;
+  // The colours' DC when they are log-HDR (Resolved(.., true) uses it for f_dc_lr): 16x the
+  // reference's. Log colours span about ten units (ln of a 1e4:1 scene) where LDR colours span
+  // one, and at 2.5e-3 they cannot spread that far in a run: the tone curve squeezes the HDR
+  // instead (slope 0.27 of the truth's; 0.79 at 0.04; issue 12, BENCHMARKS.md).
+  double f_dc_lr_log_hdr = 4e-2;
   double f_rest_lr = 2.5e-3 / 20.0;
   double opacity_lr = 0.05;
   double scaling_lr = 5e-3;   // the xyz and the t log-scales
@@ -140,8 +145,9 @@ struct OptimizationOptions {
   // training images of `image_size` pixels (the geometric mean of width and height, > 0). The
   // densification window and the position-LR decay scale with the run; the opacity reset keeps
   // the reference's interval (a short run then resets rarely or never).
-  OptimizationOptions Resolved(double image_size) const {
+  OptimizationOptions Resolved(double image_size, bool log_hdr_colors = false) const {
     OptimizationOptions r = *this;
+    if (log_hdr_colors) r.f_dc_lr = f_dc_lr_log_hdr;
     auto steps = [&](int& field, int reference) {
       if (field < 0) field = StepsForRunLength(reference, iterations);
     };
@@ -209,6 +215,7 @@ struct OptimizationOptions {
                          t_lr_init);
     }
     if (!(e = rate("f_dc_lr", f_dc_lr)).empty()) return e;
+    if (!(e = rate("f_dc_lr_log_hdr", f_dc_lr_log_hdr)).empty()) return e;
     if (!(e = rate("f_rest_lr", f_rest_lr)).empty()) return e;
     if (!(e = rate("opacity_lr", opacity_lr)).empty()) return e;
     if (!(e = rate("scaling_lr", scaling_lr)).empty()) return e;

@@ -83,7 +83,7 @@ FrameLoss HdrFrameLoss(const float* raster,
   // HDR term on the mu-law of the raw HDR raster.
   if (terms.hdr && hdr_mu_gt) {
     s->target.resize(values);
-    for (std::size_t i = 0; i < values; ++i) s->target[i] = MuLawEncode(s->hdr[i]);
+    for (std::size_t i = 0; i < values; ++i) s->target[i] = MuLawEncode(s->hdr[i], terms.hdr_mu);
     loss.hdr = PhotometricLoss(s->target.data(), hdr_mu_gt, width, height, 3, terms.lambda_dssim,
                                s->grad.data())
                    .value;
@@ -91,7 +91,7 @@ FrameLoss HdrFrameLoss(const float* raster,
     ParallelFor(static_cast<std::int64_t>(pixels), kGrain, [&](std::int64_t p) {
       for (int c = 0; c < 3; ++c) {
         dL_draster[p * channels + c] +=
-            w * MuLawEncodeBackward(s->hdr[p * 3 + c], s->grad[p * 3 + c]);
+            w * MuLawEncodeBackward(s->hdr[p * 3 + c], s->grad[p * 3 + c], terms.hdr_mu);
       }
     });
   }

@@ -2,9 +2,11 @@
 //   L = L(clamp(LDR_3D), gt)                              LDR supervision, 3D branch
 //     + L(TM(log(HDR + 1e-5) + log e), gt)                 LDR supervision, 2D (pixel) branch
 //     + 0.6 L(mu(HDR), mu(gt_hdr / max gt_hdr))            HDR supervision, views with HDR GT
-// with L = 0.8 L1 + 0.2 (1 - SSIM) (method/train/loss.h) and mu(x) = log(1 + 5000 x) / log(5001).
-// As in the reference, the HDR raster enters mu unnormalised (the target is max-normalised);
-// evaluation normalises each image by its own maximum instead (core/metrics.h).
+// with L = 0.8 L1 + 0.2 (1 - SSIM) (method/train/loss.h) and mu(x) = log(1 + m x) / log(1 + m),
+// m = 5000 and the maximum of each image (the reference), or m = 1e6 and one maximum over the
+// scene's training views (--hdr-target scene-log, hdr_training_options.h). As in the reference,
+// the HDR raster enters mu unnormalised (the target is normalised); evaluation normalises each
+// image by its own maximum instead (core/metrics.h).
 //
 // The raster holds 3 channels (HDR only) or 6 (HDR, then the 3D branch's LDR), interleaved.
 #pragma once
@@ -24,14 +26,14 @@ inline constexpr float kPixelLogEpsilon = 1e-5f;  // log(HDR + 1e-5) in the 2D b
 // mu-law of the loss, for x >= 0 (negative x is treated as 0: the HDR raster is a sum of
 // non-negative values, so only rounding can make it negative).
 template <typename T>
-inline T MuLawEncode(T x) {
+inline T MuLawEncode(T x, double mu = kMuLawMu) {
   const T y = x > T(0) ? x : T(0);
-  return std::log1p(T(kMuLawMu) * y) / std::log(T(1) + T(kMuLawMu));
+  return std::log1p(T(mu) * y) / std::log(T(1) + T(mu));
 }
 template <typename T>
-inline T MuLawEncodeBackward(T x, T dL_dy) {
+inline T MuLawEncodeBackward(T x, T dL_dy, double mu = kMuLawMu) {
   if (!(x > T(0))) return T(0);
-  return dL_dy * T(kMuLawMu) / ((T(1) + T(kMuLawMu) * x) * std::log(T(1) + T(kMuLawMu)));
+  return dL_dy * T(mu) / ((T(1) + T(mu) * x) * std::log(T(1) + T(mu)));
 }
 
 // The 2D branch's input: log(max(HDR, 0) + 1e-5), and its derivative.
@@ -56,6 +58,7 @@ struct SupervisionTerms {
   bool hdr = true;           // used only for views with HDR ground truth
   float hdr_weight = 0.6f;
   float lambda_dssim = 0.2f;
+  double hdr_mu = kMuLawMu;  // the mu of the HDR target's encoding (HdrTargetMu)
 };
 
 struct FrameLoss {

@@ -26,6 +26,17 @@ Supervision ParseSupervision(const std::string& name, const std::string& what) {
   Fail("{}: unknown supervision '{}' (auto, ldr, hdr or ldr+hdr)", what, name);
 }
 
+const char* HdrTargetName(HdrTarget t) {
+  return t == HdrTarget::kSceneLog ? "scene-log" : "image-max";
+}
+
+HdrTarget ParseHdrTarget(const std::string& name, const std::string& what) {
+  for (HdrTarget t : {HdrTarget::kImageMax, HdrTarget::kSceneLog}) {
+    if (name == HdrTargetName(t)) return t;
+  }
+  Fail("{}: unknown HDR target '{}' (image-max or scene-log)", what, name);
+}
+
 std::string HdrTrainingOptions::Validate() const {
   if (!(hdr_weight >= 0.0f && hdr_weight < 1e6f)) return "hdr_weight: must be >= 0 and finite";
   if (color_mode == ColorMode::kLdr) {
@@ -50,7 +61,8 @@ nlohmann::json HdrTrainingOptions::ToJson() const {
           {"supervision", SupervisionName(supervision)},
           {"pixel_branch", pixel_branch},
           {"gaussian_branch", gaussian_branch},
-          {"hdr_weight", hdr_weight}};
+          {"hdr_weight", hdr_weight},
+          {"hdr_target", HdrTargetName(hdr_target)}};
 }
 
 HdrTrainingOptions HdrTrainingOptions::FromJson(const nlohmann::json& j,
@@ -72,6 +84,9 @@ HdrTrainingOptions HdrTrainingOptions::FromJson(const nlohmann::json& j,
     o.pixel_branch = j.at("pixel_branch").get<bool>();
     o.gaussian_branch = j.at("gaussian_branch").get<bool>();
     o.hdr_weight = j.at("hdr_weight").get<float>();
+    // Runs from before the key trained with the reference's target.
+    if (const auto it = j.find("hdr_target"); it != j.end())
+      o.hdr_target = ParseHdrTarget(it->get<std::string>(), source);
   } catch (const nlohmann::json::exception& e) {
     Fail("{}: bad or missing HDR training setting: {}", source, e.what());
   }

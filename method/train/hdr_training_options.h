@@ -8,12 +8,25 @@
 #include <optional>
 #include <string>
 
+#include "core/metrics.h"
 #include "method/gaussian/gaussian_model.h"
 #include "method/tonemap/tone_mapper.h"
 
 namespace hdr4d::method {
 
 enum class Supervision { kAuto, kLdr, kHdr, kLdrHdr };
+
+// The HDR term's target (issue 12 §3, BENCHMARKS.md "LDR+HDR supervision"):
+//   image-max  the reference's mu(gt / max of that image), mu = 5000: a light that dims over
+//              time changes every other pixel's target, and the dark half of the range is
+//              almost flat under mu = 5000;
+//   scene-log  gt / one maximum over all training views, encoded with mu = 1e6 (log-like over
+//              six decades): one consistent scale for the whole scene, dark and bright alike.
+enum class HdrTarget { kImageMax, kSceneLog };
+inline constexpr double kSceneLogMu = 1e6;
+inline double HdrTargetMu(HdrTarget t) { return t == HdrTarget::kSceneLog ? kSceneLogMu : kMuLawMu; }
+const char* HdrTargetName(HdrTarget t);
+HdrTarget ParseHdrTarget(const std::string& name, const std::string& what);
 // "auto", "ldr", "hdr", "ldr+hdr"; ParseSupervision throws hdr4d::Error naming `what`.
 const char* SupervisionName(Supervision s);
 Supervision ParseSupervision(const std::string& name, const std::string& what);
@@ -29,6 +42,7 @@ struct HdrTrainingOptions {
   bool pixel_branch = true;     // the 2D branch: the tone curves per pixel on the HDR raster
   bool gaussian_branch = true;  // the 3D branch: tone-mapped Gaussians in the raster (6 ch)
   float hdr_weight = 0.6f;      // alpha of the HDR term
+  HdrTarget hdr_target = HdrTarget::kImageMax;
 
   std::string Validate() const;
   nlohmann::json ToJson() const;

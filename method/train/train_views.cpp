@@ -26,10 +26,21 @@ void TrainView::HdrMuToFloat(std::vector<float>* out) const {
 
 namespace {
 
-// mu(gt / max gt) of the training loss, 16 bits per value.
+float MaxRgb(const Image& hdr) {
+  const int c = hdr.channels();
+  float max_value = 0;
+  for (std::size_t p = 0; p < hdr.num_pixels(); ++p)
+    for (int k = 0; k < 3; ++k) max_value = std::max(max_value, hdr.data()[p * c + k]);
+  return max_value;
+}
+
+// The HDR target of the training loss, 16 bits per value: mu(gt / divisor), the image's own
+// maximum when divisor is 0.
 std::vector<std::uint16_t> LoadHdrMuTarget(const std::filesystem::path& path,
                                            int width,
-                                           int height) {
+                                           int height,
+                                           float divisor,
+                                           double mu_law) {
   // The dataset's rules for HDR ground truth (`dataset check` applies the same ones): linear,
   // RGB, finite, non-negative, some light.
   const Image hdr = ReadHdrGroundTruth(path);
@@ -38,13 +49,11 @@ std::vector<std::uint16_t> LoadHdrMuTarget(const std::filesystem::path& path,
          hdr.height(), width, height);
   }
   const int c = hdr.channels();
-  float max_value = 0;
-  for (std::size_t p = 0; p < hdr.num_pixels(); ++p)
-    for (int k = 0; k < 3; ++k) max_value = std::max(max_value, hdr.data()[p * c + k]);
+  const float max_value = divisor > 0 ? divisor : MaxRgb(hdr);
   std::vector<std::uint16_t> mu(hdr.num_pixels() * 3);
   for (std::size_t p = 0; p < hdr.num_pixels(); ++p) {
     for (int k = 0; k < 3; ++k) {
-      const float v = MuLawEncode(hdr.data()[p * c + k] / max_value);
+      const float v = MuLawEncode(hdr.data()[p * c + k] / max_value, mu_law);
       mu[p * 3 + k] = static_cast<std::uint16_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 65535.0f));
     }
   }
@@ -56,9 +65,19 @@ std::vector<std::uint16_t> LoadHdrMuTarget(const std::filesystem::path& path,
 std::vector<TrainView> LoadViews(const Dataset& dataset,
                                  Split split,
                                  const float background[3],
-                                 bool load_hdr) {
+                                 bool load_hdr,
+                                 HdrTarget target) {
   const std::vector<Frame>& frames = dataset.FramesOf(split);
   std::vector<TrainView> views(frames.size());
+  // scene-log: one divisor, the largest value of the split's HDR ground truth (a first pass).
+  float divisor = 0;
+  if (load_hdr && target == HdrTarget::kSceneLog) {
+    std::vector<float> maxima(frames.size(), 0.0f);
+    ParallelFor(static_cast<std::int64_t>(frames.size()), 1, [&](std::int64_t i) {
+      if (frames[i].hdr_path) maxima[i] = MaxRgb(ReadHdrGroundTruth(*frames[i].hdr_path));
+    });
+    for (float m : maxima) divisor = std::max(divisor, m);
+  }
   ParallelFor(static_cast<std::int64_t>(frames.size()), 1, [&](std::int64_t i) {
     const Frame& f = frames[i];
     const Image image = ReadImage(f.image_path);
@@ -76,7 +95,9 @@ std::vector<TrainView> LoadViews(const Dataset& dataset,
     v.name = f.image_path.filename().string();
     v.image_index = static_cast<int>(i);
     v.hdr_path = f.hdr_path;
-    if (load_hdr && f.hdr_path) v.hdr_mu = LoadHdrMuTarget(*f.hdr_path, v.width(), v.height());
+    if (load_hdr && f.hdr_path) {
+      v.hdr_mu = LoadHdrMuTarget(*f.hdr_path, v.width(), v.height(), divisor, HdrTargetMu(target));
+    }
     v.rgb.resize(image.num_pixels() * 3);
     const int c = image.channels();
     for (std::size_t p = 0; p < image.num_pixels(); ++p) {

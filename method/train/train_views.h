@@ -11,6 +11,7 @@
 
 #include "core/camera.h"
 #include "core/dataset.h"
+#include "method/train/hdr_training_options.h"
 
 namespace hdr4d::method {
 
@@ -23,7 +24,8 @@ struct TrainView {
   std::string name;               // the image's file name (renders are written under it)
   std::vector<std::uint8_t> rgb;  // H x W x 3, display-encoded as stored
   // HDR ground truth, when the frame has one: its file (renders are written under its name) and,
-  // when loaded for training, mu(gt / max gt) of the loss in 16 bits (quantisation 1.5e-5).
+  // when loaded for training, the loss's target mu(gt / max) in 16 bits (quantisation 1.5e-5;
+  // the maximum and mu as HdrTarget says).
   std::optional<std::filesystem::path> hdr_path;
   std::vector<std::uint16_t> hdr_mu;
   bool has_hdr() const { return hdr_path.has_value(); }
@@ -38,10 +40,11 @@ struct TrainView {
 // Reads the frames of `split`: RGB, or RGBA composited over `background` (the reference
 // composites D-NeRF's RGBA onto black). Integer images are required (the LDR targets). With
 // load_hdr, frames with an exr_file_path also get their mu-law HDR target (the file must be
-// linear, the size of the LDR image, finite, with a positive maximum).
+// linear, the size of the LDR image, finite, with a positive maximum), encoded as `target` says.
 std::vector<TrainView> LoadViews(const Dataset& dataset,
                                  Split split,
                                  const float background[3],
-                                 bool load_hdr = false);
+                                 bool load_hdr = false,
+                                 HdrTarget target = HdrTarget::kImageMax);
 
 }  // namespace hdr4d::method

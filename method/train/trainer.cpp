@@ -74,6 +74,7 @@ nlohmann::json TrainOptions::ToJson() const {
         {"position_lr_max_steps", o.position_lr_max_steps},
         {"t_lr_init", o.t_lr_init},
         {"f_dc_lr", o.f_dc_lr},
+        {"f_dc_lr_log_hdr", o.f_dc_lr_log_hdr},
         {"f_rest_lr", o.f_rest_lr},
         {"opacity_lr", o.opacity_lr},
         {"scaling_lr", o.scaling_lr},
@@ -221,7 +222,7 @@ void TrainingRun::SetUp() {
   const HdrTrainingOptions& hdr = options_.hdr;
   const float background[3] = {options_.background, options_.background, options_.background};
   train_views_ = LoadViews(*dataset_, Split::kTrain, background,
-                           /*load_hdr=*/hdr.color_mode == ColorMode::kLogHdr);
+                           /*load_hdr=*/hdr.color_mode == ColorMode::kLogHdr, hdr.hdr_target);
   test_views_ = LoadViews(*dataset_, Split::kTest, background);
   num_times_ = DistinctTimes(*dataset_);
   for (auto* views : {&train_views_, &test_views_}) {
@@ -237,7 +238,7 @@ void TrainingRun::SetUp() {
     KeepSavedSchedules(*saved_config_, &requested);
   }
   // Schedules for this run's length and image size (an explicit value stays as it is).
-  opt_ = requested.Resolved(ImageSize(train_views_));
+  opt_ = requested.Resolved(ImageSize(train_views_), hdr.color_mode == ColorMode::kLogHdr);
   temporal_ = profile_.dynamic && !hdr.force_static;
   spdlog::info("train: {} train / {} test views, extent {:.3f}, {}, method {}", train_views_.size(),
                test_views_.size(), extent_, temporal_ ? "dynamic" : "static (no time axis)",
@@ -337,7 +338,8 @@ void TrainingRun::PrepareRendering() {
             .ldr_pixel = resolved_.ldr_pixel,
             .hdr = resolved_.hdr,
             .hdr_weight = options_.hdr.hdr_weight,
-            .lambda_dssim = static_cast<float>(opt_.lambda_dssim)};
+            .lambda_dssim = static_cast<float>(opt_.lambda_dssim),
+            .hdr_mu = HdrTargetMu(options_.hdr.hdr_target)};
   progress_.emplace("train", opt_.iterations - loop_.iteration, options_.progress);
   start_ = std::chrono::steady_clock::now();
   seconds_before_ = loop_.train_seconds;

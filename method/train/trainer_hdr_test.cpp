@@ -3,15 +3,21 @@
 // the tone mapper in checkpoints and exact resume, and the errors of impossible combinations.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
+#include "core/dataset.h"
+#include "core/dataset_image_rules.h"
 #include "core/demo_scene.h"
+#include "core/image_io.h"
 #include "core/error.h"
 #include "core/exposure_stack.h"
 #include "core/json_util.h"
 #include "method/run/render_split.h"
 #include "method/tonemap/dynamic_tone_mapper.h"
 #include "method/train/checkpoint.h"
+#include "method/train/hdr_loss.h"
+#include "method/train/train_views.h"
 #include "method/train/trainer.h"
 #include "tests/testing.h"
 
@@ -187,6 +193,40 @@ TEST(TrainerHdr, ImpossibleCombinationsAreErrors) {
   o = HdrRun(dir / "scene", dir / "e", 10);
   o.resume = true;
   EXPECT_NE(ErrorOf([&] { Train(o); }).find("--resume with hdr."), std::string::npos);
+}
+
+
+// The HDR term's two targets (issue 12 §3): the reference's divides each view by its own maximum;
+// scene-log divides every view by one maximum, so a view without the brightest light keeps its
+// smaller values, and encodes with mu = 1e6 (equal steps per decade down to 1e-6).
+TEST(TrainerHdr, HdrTargetsDivideByTheImageOrTheSceneMaximum) {
+  TempDir dir;
+  MakeHdrScene(dir / "scene", 16);
+  const Dataset data = LoadDataset(dir / "scene");
+  const float black[3] = {0, 0, 0};
+  const std::vector<TrainView> own = LoadViews(data, Split::kTrain, black, true);
+  const std::vector<TrainView> scene =
+      LoadViews(data, Split::kTrain, black, true, HdrTarget::kSceneLog);
+  ASSERT_EQ(own.size(), scene.size());
+  std::vector<float> maxima;
+  for (const TrainView& v : own) {
+    maxima.push_back(ReadHdrGroundTruth(*v.hdr_path).MaxValue());
+    EXPECT_EQ(*std::max_element(v.hdr_mu.begin(), v.hdr_mu.end()), 65535) << v.name;
+  }
+  const float scene_max = *std::max_element(maxima.begin(), maxima.end());
+  ASSERT_LT(*std::min_element(maxima.begin(), maxima.end()), 0.9f * scene_max)
+      << "the scene's light must change over time for this test";
+  std::vector<float> target;
+  for (std::size_t i = 0; i < scene.size(); ++i) {
+    scene[i].HdrMuToFloat(&target);
+    const Image gt = ReadHdrGroundTruth(*scene[i].hdr_path);
+    for (std::size_t p = 0; p < gt.num_pixels(); p += 7) {
+      for (int c = 0; c < 3; ++c) {
+        const float expected = MuLawEncode(gt.data()[p * gt.channels() + c] / scene_max, 1e6);
+        EXPECT_NEAR(target[p * 3 + c], expected, 1e-5) << scene[i].name << " pixel " << p;
+      }
+    }
+  }
 }
 
 }  // namespace
