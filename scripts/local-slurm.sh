@@ -34,21 +34,30 @@ fail() {
   exit 1
 }
 
-# The last lines of a daemon's log, to show why it failed.
+# The last lines of a daemon's log and of its console (stdout and stderr: what it says before
+# its log is open), to show why it failed.
 show_log() {
-  local name=$1 file=$2
-  if [ -s "$file" ]; then
-    echo "---- last lines of $name's log ($file) ----" >&2
+  local name=$1 file
+  for file in "$state/log/$name.log" "$state/log/$name.console"; do
+    [ -s "$file" ] || continue
+    echo "---- last lines of $file ----" >&2
     tail -n 25 "$file" >&2
-    echo "----" >&2
-  else
-    echo "($name wrote no log at $file)" >&2
-  fi
+  done
+  echo "---- (end of $name's output)" >&2
+}
+
+# Whether a process runs (a zombie does not: in a container whose init does not reap, a stopped
+# daemon stays one).
+running() {
+  local stat
+  stat=$(cat "/proc/$1/stat" 2>/dev/null) || return 1
+  stat=${stat##*) }
+  [ "${stat:0:1}" != Z ]
 }
 
 pid_alive() {
   local file=$1
-  [ -s "$file" ] && kill -0 "$(cat "$file")" 2>/dev/null
+  [ -s "$file" ] && running "$(cat "$file")"
 }
 
 # Stops the daemon whose pid file is $2: TERM, then KILL after 10 s.
@@ -58,7 +67,7 @@ stop_daemon() {
   pid=$(cat "$file")
   kill -TERM "$pid" 2>/dev/null || true
   for _ in $(seq 100); do
-    kill -0 "$pid" 2>/dev/null || return 0
+    running "$pid" || return 0
     sleep 0.1
   done
   echo "local-slurm: $name (pid $pid) ignored SIGTERM for 10 s; killing it" >&2
@@ -67,6 +76,17 @@ stop_daemon() {
 
 port_in_use() {
   (exec 3<>"/dev/tcp/127.0.0.1/$1") 2>/dev/null
+}
+
+# Starts daemon $1 (command $2...) in the foreground of a background process in its own
+# session, so its pid is known at once (the daemons' own pid files come later) and it outlives
+# this script; stdout and stderr go to log/$1.console. slurmctld and slurmd write their own pid files
+# too, so those are named *.own to keep apart.
+launch() {
+  local name=$1
+  shift
+  setsid "$@" </dev/null >>"$state/log/$name.console" 2>&1 &
+  echo $! >"$state/run/$name.pid"
 }
 
 stop_all() {
@@ -94,8 +114,8 @@ CredType=cred/munge
 AuthInfo=socket=$socket
 StateSaveLocation=$state/ctld
 SlurmdSpoolDir=$state/spool
-SlurmctldPidFile=$state/run/slurmctld.pid
-SlurmdPidFile=$state/run/slurmd.pid
+SlurmctldPidFile=$state/run/slurmctld.pid.own
+SlurmdPidFile=$state/run/slurmd.pid.own
 SlurmctldLogFile=$state/log/slurmctld.log
 SlurmdLogFile=$state/log/slurmd.log
 SlurmctldDebug=info
@@ -145,14 +165,15 @@ start() {
   # munged: a fresh key, its own socket.
   dd if=/dev/urandom of="$state/munge/munge.key" bs=1024 count=1 status=none
   chmod 400 "$state/munge/munge.key"
-  if ! munged --force --socket="$socket" --key-file="$state/munge/munge.key" \
-      --pid-file="$state/run/munged.pid" --log-file="$state/log/munged.log" \
-      --seed-file="$state/munge/munged.seed" 2>>"$state/log/munged.log"; then
-    show_log munged "$state/log/munged.log"
-    fail "munged did not start"
-  fi
-  if ! munge -S "$socket" -n | unmunge -S "$socket" >/dev/null 2>>"$state/log/munged.log"; then
-    show_log munged "$state/log/munged.log"
+  launch munged munged --foreground --force --socket="$socket" --key-file="$state/munge/munge.key" \
+    --pid-file="$state/run/munged.pid.own" --log-file="$state/log/munged.log" \
+    --seed-file="$state/munge/munged.seed"
+  for _ in $(seq 100); do
+    [ -S "$socket" ] && break
+    sleep 0.1
+  done
+  if ! munge -S "$socket" -n | unmunge -S "$socket" >/dev/null 2>>"$state/log/munged.console"; then
+    show_log munged
     stop_all
     fail "munged started but a credential did not round-trip through $socket"
   fi
@@ -160,22 +181,14 @@ start() {
   write_conf "$node" "$ctld_port" "$slurmd_port"
   export SLURM_CONF=$conf
   # -c: start from empty state (no jobs or node states from an earlier cluster here).
-  if ! slurmctld -f "$conf" -c 2>>"$state/log/slurmctld.log"; then
-    show_log slurmctld "$state/log/slurmctld.log"
-    stop_all
-    fail "slurmctld did not start"
-  fi
-  if ! slurmd -f "$conf" -N "$node" 2>>"$state/log/slurmd.log"; then
-    show_log slurmd "$state/log/slurmd.log"
-    stop_all
-    fail "slurmd did not start"
-  fi
+  launch slurmctld slurmctld -D -f "$conf" -c
+  launch slurmd slurmd -D -f "$conf" -N "$node"
 
   local timeout=${HDR4D_SLURM_START_TIMEOUT:-60} waited=0 node_state=""
   while :; do
     for d in slurmctld slurmd munged; do
       if ! pid_alive "$state/run/$d.pid"; then
-        show_log "$d" "$state/log/$d.log"
+        show_log "$d"
         stop_all
         fail "$d exited during start-up"
       fi
@@ -183,8 +196,8 @@ start() {
     node_state=$(sinfo -h -N -n "$node" -o %T 2>/dev/null | head -n 1 || true)
     [ "$node_state" = idle ] && break
     if [ "$waited" -ge "$((timeout * 2))" ]; then
-      show_log slurmctld "$state/log/slurmctld.log"
-      show_log slurmd "$state/log/slurmd.log"
+      show_log slurmctld
+      show_log slurmd
       stop_all
       fail "node $node is '${node_state:-not listed}' after ${timeout} s, not idle"
     fi
