@@ -3,8 +3,8 @@
 // submit.sh submits the job arrays with sbatch, the test waits for every array task to leave
 // the queue and finish COMPLETED, `hdr4d bench collect` merges the results, and every run's
 // metrics are compared with the same suite run locally by `hdr4d bench run`. The daemons are
-// stopped whatever happens. Skipped only when Slurm or munge is not installed
-// (Debian: apt-get install slurm-wlm munge; scripts/install-deps.sh installs them).
+// stopped whatever happens. Skipped only when Slurm or munge is not installed (Debian:
+// apt-get install slurm-wlm munge; scripts/install-deps.sh installs them) or not run as root.
 #include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
@@ -150,6 +150,7 @@ TEST(SlurmCluster, ArraysRunUnderRealSlurmAndCollectLikeALocalRun) {
     GTEST_SKIP() << "Slurm/munge not installed (missing:" << list
                  << "); apt-get install slurm-wlm munge, or run scripts/install-deps.sh";
   }
+  if (geteuid() != 0) GTEST_SKIP() << "a local Slurm needs root (slurmd starts jobs as their owner); run as root";
   const Clock::time_point t0 = Clock::now();
   testing::TempDir dir;
   LocalSlurm slurm(dir.path());
