@@ -231,11 +231,12 @@ TEST(SlurmCluster, ArraysRunUnderRealSlurmAndCollectLikeALocalRun) {
     for (std::string line; std::getline(in, line);) {
       if (line.empty()) continue;
       const std::string task = Field(line, "ArrayJobId") + "_" + Field(line, "ArrayTaskId");
-      EXPECT_EQ(Field(line, "JobState"), "COMPLETED") << task << ": " << line;
-      EXPECT_EQ(Field(line, "ExitCode"), "0:0") << task;
       const fs::path out = jobs / "logs" / (task + ".out");
-      ASSERT_TRUE(fs::exists(out)) << out << " (the --output of the array script)";
-      EXPECT_NE(testing::ReadTextFile(out).find("bench task: "), std::string::npos) << testing::ReadTextFile(out);
+      ASSERT_TRUE(fs::exists(out)) << out << " (the --output of the array script) is missing: " << line;
+      const std::string output = testing::ReadTextFile(out);
+      EXPECT_EQ(Field(line, "JobState"), "COMPLETED") << task << ": " << line << "\n" << output;
+      EXPECT_EQ(Field(line, "ExitCode"), "0:0") << task << ":\n" << output;
+      EXPECT_NE(output.find("bench task: "), std::string::npos) << output;
       ++completed;
     }
   }

@@ -23,8 +23,7 @@ usage() {
 action=$1
 state=$2
 [ -n "$state" ] || usage
-mkdir -p "$state"
-state=$(cd "$state" && pwd)
+state=$(realpath -m "$state")
 marker=$state/.hdr4d-local-slurm
 conf=$state/slurm.conf
 socket=$state/munge/munge.socket
@@ -147,8 +146,9 @@ start() {
     fail "a cluster is running under $state already; run '$0 stop $state' first"
   fi
   local ctld_port=${HDR4D_SLURM_PORT:-6817}
-  [[ $ctld_port =~ ^[0-9]+$ ]] && [ "$ctld_port" -ge 1024 ] && [ "$ctld_port" -lt 65535 ] ||
+  if ! [[ $ctld_port =~ ^[0-9]+$ ]] || [ "$ctld_port" -lt 1024 ] || [ "$ctld_port" -ge 65535 ]; then
     fail "HDR4D_SLURM_PORT must be a port number from 1024 to 65534, not '$ctld_port'"
+  fi
   local slurmd_port=$((ctld_port + 1))
   local p
   for p in "$ctld_port" "$slurmd_port"; do
@@ -156,6 +156,7 @@ start() {
       fail "port $p is taken (another Slurm?); set HDR4D_SLURM_PORT to a free pair of ports"
     fi
   done
+  mkdir -p "$state"
   touch "$marker"
   mkdir -p "$state/munge" "$state/ctld" "$state/spool" "$state/log" "$state/run"
   chmod 700 "$state/munge"
@@ -208,11 +209,12 @@ start() {
 }
 
 stop() {
-  if [ ! -e "$marker" ]; then
-    # Never delete a folder this script did not make.
-    rmdir "$state" 2>/dev/null || fail "$state is not a local-slurm state folder (no $marker)"
+  if [ ! -e "$state" ]; then
+    echo "local-slurm: nothing under $state to stop"
     return 0
   fi
+  # Never delete a folder this script did not make.
+  [ -e "$marker" ] || fail "$state is not a local-slurm state folder (no $marker); left alone"
   stop_all
   rm -rf "$state"
   echo "local-slurm: stopped; removed $state"
