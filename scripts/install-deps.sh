@@ -14,6 +14,8 @@ PACKAGES=(
   # benchmark harness: the SQLite results store; the report test opens the HTML page in
   # headless Chromium
   libsqlite3-dev chromium
+  # bench slurm's test against a real one-node Slurm (scripts/local-slurm.sh)
+  slurm-wlm munge
   # method: SIMD kernels with runtime dispatch
   libhwy-dev
   # hdr4d render --video encodes MP4 with ffmpeg
