@@ -1,5 +1,7 @@
 #include "method/train/train_views.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -27,16 +29,20 @@ void TrainView::HdrMuToFloat(std::vector<float>* out) const {
 namespace {
 
 // mu(gt / max gt) of the training loss, 16 bits per value.
+// At `resolution` the radiance is box-averaged (linear light: the mean a pixel R times larger
+// would integrate) before the max and the mu-law.
 std::vector<std::uint16_t> LoadHdrMuTarget(const std::filesystem::path& path,
                                            int width,
-                                           int height) {
+                                           int height,
+                                           int resolution) {
   // The dataset's rules for HDR ground truth (`dataset check` applies the same ones): linear,
   // RGB, finite, non-negative, some light.
-  const Image hdr = ReadHdrGroundTruth(path);
-  if (hdr.width() != width || hdr.height() != height) {
-    Fail("{}: HDR ground truth is {}x{} but the LDR image is {}x{}", path.string(), hdr.width(),
-         hdr.height(), width, height);
+  const Image full = ReadHdrGroundTruth(path);
+  if (full.width() != width || full.height() != height) {
+    Fail("{}: HDR ground truth is {}x{} but the LDR image is {}x{}", path.string(), full.width(),
+         full.height(), width, height);
   }
+  const Image hdr = DownsampleBox(full, resolution);
   const int c = hdr.channels();
   float max_value = 0;
   for (std::size_t p = 0; p < hdr.num_pixels(); ++p)
@@ -53,10 +59,54 @@ std::vector<std::uint16_t> LoadHdrMuTarget(const std::filesystem::path& path,
 
 }  // namespace
 
+Image DownsampleBox(const Image& image, int factor) {
+  HDR4D_CHECK(factor >= 1 && image.width() % factor == 0 && image.height() % factor == 0);
+  if (factor == 1) return image;
+  const int w = image.width() / factor, h = image.height() / factor, c = image.channels();
+  Image out(w, h, c, image.encoding());
+  const double scale = 1.0 / (double(factor) * factor);
+  std::vector<double> sum(c);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      std::fill(sum.begin(), sum.end(), 0.0);
+      for (int dy = 0; dy < factor; ++dy)
+        for (int dx = 0; dx < factor; ++dx)
+          for (int k = 0; k < c; ++k) sum[k] += image.at(x * factor + dx, y * factor + dy, k);
+      for (int k = 0; k < c; ++k) out.at(x, y, k) = static_cast<float>(sum[k] * scale);
+    }
+  }
+  return out;
+}
+
+PinholeIntrinsics DownscaledIntrinsics(const PinholeIntrinsics& intrinsics, int factor) {
+  HDR4D_CHECK(factor >= 1 && intrinsics.width % factor == 0 && intrinsics.height % factor == 0);
+  PinholeIntrinsics k = intrinsics;
+  k.fx /= factor;
+  k.fy /= factor;
+  k.cx /= factor;
+  k.cy /= factor;
+  k.width /= factor;
+  k.height /= factor;
+  return k;
+}
+
+std::string ResolutionProblem(int width, int height, int resolution) {
+  if (resolution < 1) return fmt::format("--resolution {} must be >= 1", resolution);
+  if (width % resolution != 0 || height % resolution != 0) {
+    return fmt::format(
+        "{}x{} is not divisible by --resolution {} (a reduced pixel must cover whole pixels; "
+        "pick a factor of both sides)",
+        width, height, resolution);
+  }
+  return "";
+}
+
 std::vector<TrainView> LoadViews(const Dataset& dataset,
                                  Split split,
                                  const float background[3],
-                                 bool load_hdr) {
+                                 bool load_hdr,
+                                 int resolution) {
+  if (resolution < 1) Fail("train: --resolution {} must be >= 1", resolution);
   const std::vector<Frame>& frames = dataset.FramesOf(split);
   std::vector<TrainView> views(frames.size());
   ParallelFor(static_cast<std::int64_t>(frames.size()), 1, [&](std::int64_t i) {
@@ -69,25 +119,35 @@ std::vector<TrainView> LoadViews(const Dataset& dataset,
       Fail("{}: image is {}x{} but the camera says {}x{}", f.image_path.string(), image.width(),
            image.height(), f.camera.intrinsics.width, f.camera.intrinsics.height);
     }
+    if (std::string problem = ResolutionProblem(image.width(), image.height(), resolution);
+        !problem.empty())
+      Fail("{}: {}", f.image_path.string(), problem);
     TrainView& v = views[i];
     v.camera = f.camera;
+    v.camera.intrinsics = DownscaledIntrinsics(f.camera.intrinsics, resolution);
     v.time = static_cast<float>(f.time);
     v.exposure = f.exposure;
     v.name = f.image_path.filename().string();
     v.image_index = static_cast<int>(i);
     v.hdr_path = f.hdr_path;
-    if (load_hdr && f.hdr_path) v.hdr_mu = LoadHdrMuTarget(*f.hdr_path, v.width(), v.height());
-    v.rgb.resize(image.num_pixels() * 3);
+    if (load_hdr && f.hdr_path)
+      v.hdr_mu = LoadHdrMuTarget(*f.hdr_path, image.width(), image.height(), resolution);
+    // Composited at full size, then box-averaged in the stored (display) encoding, as the
+    // reference composites and then resizes the 8-bit image with PIL.
+    Image rgb(image.width(), image.height(), 3, image.encoding());
     const int c = image.channels();
     for (std::size_t p = 0; p < image.num_pixels(); ++p) {
       const float* px = image.data() + p * c;
       const float alpha = c == 4 ? px[3] : 1.0f;
-      for (int k = 0; k < 3; ++k) {
-        const float value = (c == 1 ? px[0] : px[k]) * alpha + background[k] * (1.0f - alpha);
-        v.rgb[p * 3 + k] =
-            static_cast<std::uint8_t>(std::lround(std::clamp(value, 0.0f, 1.0f) * 255.0f));
-      }
+      for (int k = 0; k < 3; ++k)
+        rgb.data()[p * 3 + k] =
+            (c == 1 ? px[0] : px[k]) * alpha + background[k] * (1.0f - alpha);
     }
+    const Image reduced = DownsampleBox(rgb, resolution);
+    v.rgb.resize(reduced.size());
+    for (std::size_t p = 0; p < reduced.size(); ++p)
+      v.rgb[p] = static_cast<std::uint8_t>(
+          std::lround(std::clamp(reduced.data()[p], 0.0f, 1.0f) * 255.0f));
   });
   return views;
 }

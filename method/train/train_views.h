@@ -11,6 +11,7 @@
 
 #include "core/camera.h"
 #include "core/dataset.h"
+#include "core/image.h"
 
 namespace hdr4d::method {
 
@@ -39,9 +40,29 @@ struct TrainView {
 // composites D-NeRF's RGBA onto black). Integer images are required (the LDR targets). With
 // load_hdr, frames with an exr_file_path also get their mu-law HDR target (the file must be
 // linear, the size of the LDR image, finite, with a positive maximum).
+// resolution R (>= 1, dividing every image's width and height; else hdr4d::Error naming the
+// file): images reduced R times on load by an R x R box average (LDR in its stored encoding
+// after compositing, HDR in linear radiance) and the intrinsics with them
+// (PinholeIntrinsics::Downscaled).
 std::vector<TrainView> LoadViews(const Dataset& dataset,
                                  Split split,
                                  const float background[3],
-                                 bool load_hdr = false);
+                                 bool load_hdr = false,
+                                 int resolution = 1);
+
+// "" when `resolution` can reduce a width x height image, else the problem.
+std::string ResolutionProblem(int width, int height, int resolution);
+
+// The image reduced by an integer `factor` (>= 1, dividing width and height; checked): each
+// output pixel is the mean of the factor x factor block it covers, per channel, in the image's
+// own encoding. An area filter, exact for integer factors: the output pixel covers exactly
+// those input pixels (no ringing, no neighbour leaking in). factor 1 returns a copy.
+Image DownsampleBox(const Image& image, int factor);
+
+// The intrinsics of an image reduced by an integer `factor` (width and height divisible by it;
+// checked). With pixel centres at i + 0.5 (core/camera.h, PIXEL CONVENTION) output pixel i
+// covers input [i f, (i + 1) f), so every image coordinate, focal lengths and principal point
+// included, is divided by f exactly.
+PinholeIntrinsics DownscaledIntrinsics(const PinholeIntrinsics& intrinsics, int factor);
 
 }  // namespace hdr4d::method
