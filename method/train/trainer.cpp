@@ -300,7 +300,8 @@ void TrainingRun::PickMethodForScene() {
   std::set<double> exposures;
   for (const Frame& f : dataset_->train) exposures.insert(f.exposure);
   if (exposures.size() > 1 || options_.hdr.method == options_.when_nothing_hdr->method) return;
-  spdlog::info(
+  // warn: shown at the CLI's default verbosity, which hides info.
+  spdlog::warn(
       "train: note: every training image has the same exposure and the scene has no HDR ground "
       "truth, so there is no HDR to recover: training the plain LDR model ({}) instead of {} "
       "(ask for --method, --tone-mapper or --supervision to override)",
