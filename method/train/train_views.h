@@ -11,7 +11,7 @@
 
 #include "core/camera.h"
 #include "core/dataset.h"
-#include "core/image.h"
+#include "core/image_resize.h"  // DownsampleBox, ResolutionProblem
 
 namespace hdr4d::method {
 
@@ -49,15 +49,6 @@ std::vector<TrainView> LoadViews(const Dataset& dataset,
                                  const float background[3],
                                  bool load_hdr = false,
                                  int resolution = 1);
-
-// "" when `resolution` can reduce a width x height image, else the problem.
-std::string ResolutionProblem(int width, int height, int resolution);
-
-// The image reduced by an integer `factor` (>= 1, dividing width and height; checked): each
-// output pixel is the mean of the factor x factor block it covers, per channel, in the image's
-// own encoding. An area filter, exact for integer factors: the output pixel covers exactly
-// those input pixels (no ringing, no neighbour leaking in). factor 1 returns a copy.
-Image DownsampleBox(const Image& image, int factor);
 
 // The intrinsics of an image reduced by an integer `factor` (width and height divisible by it;
 // checked). With pixel centres at i + 0.5 (core/camera.h, PIXEL CONVENTION) output pixel i
