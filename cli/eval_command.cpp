@@ -21,6 +21,7 @@ struct EvalOptions {
   bool json = false;
   std::string out;
   std::string data;
+  int resolution = 1;
 };
 
 constexpr const char* kEvalFooter = R"(
@@ -78,6 +79,11 @@ void AddEvalCommand(CLI::App& app) {
                   "Scene of the HDR ground truth: its LDR brackets decide the measured pixels of "
                   "the aligned HDR metrics")
       ->check(Text("a dataset folder"));
+  sub->add_option("--resolution", options->resolution,
+                  "Reduce the ground truth R times (R x R box average) first, as `hdr4d train "
+                  "--resolution R` reduced its targets: scores the renders of such a run")
+      ->check(Integer(1, 1 << 16))
+      ->capture_default_str();
   sub->footer(kEvalFooter);
   sub->callback([options] {
     // The images scored are inputs: --out may not replace them or land among them, and that is
@@ -88,7 +94,8 @@ void AddEvalCommand(CLI::App& app) {
     EvalBrackets brackets;
     if (!options->data.empty()) brackets = DatasetBrackets(options->data);
     const nlohmann::json result =
-        EvaluatePaths(options->pred, options->gt, options->data.empty() ? nullptr : &brackets);
+        EvaluatePaths(options->pred, options->gt, options->data.empty() ? nullptr : &brackets,
+                      options->resolution);
     if (!options->out.empty()) WriteJsonFile(options->out, result);
     if (options->json) {
       fmt::print("{}\n", result.dump(1));

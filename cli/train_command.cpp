@@ -7,9 +7,25 @@
 #include "cli/flags.h"
 #include "core/error.h"
 #include "method/tonemap/tone_mapper_registry.h"
+#include "method/train/train_config.h"
 #include "method/train/trainer.h"
 
 namespace hdr4d::cli {
+namespace {
+
+// `hdr4d train --list-configs`: every preset with its values, then the keys of a file.
+void ListTrainConfigs() {
+  for (const method::TrainPreset& p : method::TrainPresets())
+    fmt::print("{:<20} {}\n{:<20} {}\n", p.name, p.what, "", p.values.dump());
+  std::vector<std::string> keys;
+  for (const method::TrainConfigKey& k : method::TrainConfigKeys())
+    keys.push_back(k.flag.empty() ? k.name : fmt::format("{} ({})", k.name, k.flag));
+  fmt::print("\nA --config FILE is a JSON object with any of these keys (flag that wins over it):\n"
+             "  {}\n",
+             fmt::join(keys, "\n  "));
+}
+
+}  // namespace
 
 void AddTrainCommand(CLI::App& app) {
   auto options = std::make_shared<method::TrainOptions>();
@@ -25,14 +41,18 @@ void AddTrainCommand(CLI::App& app) {
     std::string hdr_target;
   };
   auto flags = std::make_shared<HdrFlags>();
+  auto config = std::make_shared<std::string>();
+  auto list_configs = std::make_shared<bool>(false);
   CLI::App* cmd = app.add_subcommand(
       "train",
       "Train HDR-4DGS (log-HDR 4D Gaussians + the Dynamic Tone Mapper) or one of the paper's "
       "baselines on a scene (a static scene trains without the time axis). Writes "
       "RUN/config.json, RUN/checkpoint.bin and RUN/results.json (test metrics with the keys of "
       "`hdr4d eval`, LDR and HDR, training seconds, iterations, Gaussian count).");
-  cmd->add_option("--data", *data, "Scene folder")->required()->check(Text("a scene folder"));
-  cmd->add_option("--out", *out, "Run folder")->required()->check(Text("a run folder"));
+  CLI::Option* data_flag =
+      cmd->add_option("--data", *data, "Scene folder")->check(Text("a scene folder"));
+  CLI::Option* out_flag =
+      cmd->add_option("--out", *out, "Run folder")->check(Text("a run folder"));
   cmd->add_option("--iterations", options->optimization.iterations,
                   "Training iterations. The schedules (densification window, position "
                   "learning-rate decay, opacity resets) follow it: "
@@ -46,6 +66,35 @@ void AddTrainCommand(CLI::App& app) {
   cmd->add_option("--threads", options->threads, "Threads (0 = all cores)")
       ->check(Integer(0, 4096))
       ->capture_default_str();
+  cmd->add_option("--resolution", options->resolution,
+                  "Train at 1/R of the images' size: every image (LDR and HDR, train and test) "
+                  "is box-averaged over R x R pixels on load and the intrinsics divided by R; "
+                  "R must divide the images' width and height (the reference: 2 for "
+                  "HDR-4D-Syn, 4 for HDR-4D-Real). `hdr4d render` uses the run's R")
+      ->check(Integer(1, 1 << 16))
+      ->capture_default_str();
+  cmd->add_option("--batch-size", options->optimization.batch_size,
+                  "Views per iteration (the reference's batch_size): the loss is their mean, "
+                  "one optimiser step per batch, densification statistics as the reference "
+                  "accumulates them; --iterations counts batches")
+      ->check(Integer(1, 4096))
+      ->capture_default_str();
+  cmd->add_option("--max-gaussians", options->optimization.max_gaussians,
+                  "Gaussian budget (the reference's densify_until_num_points): densification "
+                  "never takes the count past N, keeping the clone/split candidates with the "
+                  "largest gradients; 0 = no budget (default: 2 x the training pixels of one "
+                  "timestamp, at least 10000; BENCHMARKS.md)")
+      ->check(Integer(0, std::int64_t{1} << 40));
+  cmd->add_option("--config", *config,
+                  "Training configuration: a JSON file of option names and values "
+                  "(iterations, batch_size, resolution, max_gaussians, densify_until, ...) or a "
+                  "preset of the reference's per-scene settings (syn/lego, real/bed, dnerf/trex, "
+                  "...; --list-configs). A flag given here wins over it; RUN/config.json keeps "
+                  "the resolved values")
+      ->check(Text("a configuration file or preset name"));
+  cmd->add_flag("--list-configs", *list_configs,
+                "List the presets of --config with their values and the keys a file may hold, "
+                "then exit");
   cmd->add_option("--random-points", options->init.num_random_points,
                   "Initial random points when the scene has no point3d.ply")
       ->check(Integer(4, 100'000'000))
@@ -96,16 +145,19 @@ void AddTrainCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--resume", options->resume,
                 "Continue from RUN/checkpoint.bin (exactly as if never stopped)");
-  cmd->add_option(
+  CLI::Option* method_flag = cmd->add_option(
          "--method", flags->method,
-         fmt::format("Method of the paper's tables: {}", fmt::join(baselines::MethodNames(), ", ")))
+         fmt::format("Method of the paper's tables: {} (default hdr4dgs; 4dgs when every "
+                     "training image has one exposure and the scene has no HDR ground truth, "
+                     "with a note: there is no HDR to recover)",
+                     fmt::join(baselines::MethodNames(), ", ")))
       ->check(OneOf(baselines::MethodNames()))
       ->capture_default_str();
   cmd->add_option("--tone-mapper", flags->tone_mapper,
                   "Tone mapper (Table 4): dtm, mlp, sigmoid, reinhard or durand (default: the "
                   "method's)")
       ->check(OneOf(method::ToneMapperKinds()));
-  cmd->add_option("--supervision", flags->supervision,
+  CLI::Option* supervision_flag = cmd->add_option("--supervision", flags->supervision,
                   "auto (LDR, plus HDR where the scene has HDR ground truth), ldr, hdr or ldr+hdr")
       ->check(OneOf({"auto", "ldr", "hdr", "ldr+hdr"}))
       ->capture_default_str();
@@ -133,7 +185,8 @@ void AddTrainCommand(CLI::App& app) {
                 "log colours learn at --color-lr's default)");
   cmd->add_flag("--direct-tone-curves", flags->direct_curves,
                 "Evaluate the tone-curve MLP per value instead of the per-frame table");
-  cmd->add_option("--hdr-weight", flags->hdr_weight, "Weight of the HDR term (alpha)")
+  CLI::Option* hdr_weight_flag =
+      cmd->add_option("--hdr-weight", flags->hdr_weight, "Weight of the HDR term (alpha)")
       ->check(Real(0, 1e6))
       ->capture_default_str();
   cmd->add_option_function<double>(
@@ -151,7 +204,21 @@ void AddTrainCommand(CLI::App& app) {
                   "image over its own maximum) or scene-log (mu 1e6, one maximum for the whole "
                   "scene: a constant scale over time, dark regions weighed like bright ones)")
       ->check(CLI::IsMember({"image-max", "scene-log"}));
-  cmd->callback([options, data, out, flags, context_window, context_size] {
+  cmd->callback([cmd, options, data, out, flags, context_window, context_size, config,
+                 list_configs, data_flag, out_flag, method_flag, supervision_flag,
+                 hdr_weight_flag] {
+    if (*list_configs) {
+      ListTrainConfigs();
+      return;
+    }
+    if (data_flag->count() == 0) Fail("train: --data is required");
+    if (out_flag->count() == 0) Fail("train: --out is required");
+    if (!config->empty()) {
+      method::ApplyTrainConfig(
+          method::ReadTrainConfig(*config), "--config " + *config,
+          [cmd](const std::string& flag) { return cmd->get_option(flag)->count() > 0; },
+          options.get());
+    }
     options->data = *data;
     options->out = *out;
     method::HdrTrainingOptions& hdr = options->hdr;
@@ -180,6 +247,11 @@ void AddTrainCommand(CLI::App& app) {
     if (!flags->hdr_target.empty())
       hdr.hdr_target = method::ParseHdrTarget(flags->hdr_target, "--hdr-target");
     if (std::string p = hdr.Validate(); !p.empty()) Fail("train: {}", p);
+    // Nothing HDR asked for: a scene with one exposure and no HDR truth trains plain 4DGS.
+    const bool asked_for_hdr = method_flag->count() > 0 || tunes_tone_mapper ||
+                               supervision_flag->count() > 0 || flags->no_pixel_branch ||
+                               flags->no_gaussian_branch || hdr_weight_flag->count() > 0;
+    if (!asked_for_hdr) options->when_nothing_hdr = baselines::MethodPreset("4dgs");
     const method::TrainSummary s = method::Train(*options);
     fmt::print("train: {} iterations in {:.1f} s, {} Gaussians; test {}\n", s.iterations,
                s.train_seconds, s.gaussians, s.test_metrics.dump());

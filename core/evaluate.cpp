@@ -20,6 +20,7 @@
 #include "core/hdr_alignment.h"
 #include "core/image.h"
 #include "core/image_io.h"
+#include "core/image_resize.h"
 #include "core/json_util.h"
 #include "core/metrics.h"
 #include "core/parallel.h"
@@ -52,14 +53,28 @@ const char* KindName(const Image& image) {
   return image.encoding() == Encoding::kLinear ? "HDR, float" : "LDR, integer";
 }
 
+// A ground-truth image as a run trained at --resolution R saw it (train_views.h): R x R box
+// average, LDR then quantised to 8 bits as the training targets are.
+Image ReadGroundTruth(const fs::path& path, int resolution) {
+  Image image = ReadImage(path);
+  if (resolution == 1) return image;
+  if (std::string p = ResolutionProblem(image.width(), image.height(), resolution); !p.empty())
+    Fail("{}: {}", path.string(), p);
+  image = DownsampleBox(image, resolution);
+  if (image.encoding() == Encoding::kSrgb)
+    for (float& v : image.values()) v = std::round(std::clamp(v, 0.0f, 1.0f) * 255.0f) / 255.0f;
+  return image;
+}
+
 // The measured-pixel mask of an HDR ground truth from its LDR brackets, or none.
 std::optional<std::vector<std::uint8_t>> BracketMask(const fs::path& gt_path,
-                                                     const EvalBrackets* brackets) {
+                                                     const EvalBrackets* brackets,
+                                                     int resolution) {
   if (!brackets) return std::nullopt;
   const auto it = brackets->find(gt_path.filename().string());
   if (it == brackets->end() || it->second.empty()) return std::nullopt;
   std::vector<Image> ldr;
-  for (const fs::path& p : it->second) ldr.push_back(ReadImage(p));
+  for (const fs::path& p : it->second) ldr.push_back(ReadGroundTruth(p, resolution));
   try {
     return MeasurableInBrackets(ldr);
   } catch (const Error& e) {
@@ -70,9 +85,10 @@ std::optional<std::vector<std::uint8_t>> BracketMask(const fs::path& gt_path,
 
 PairResult EvaluateFiles(const fs::path& pred_path,
                          const fs::path& gt_path,
-                         const EvalBrackets* brackets) {
+                         const EvalBrackets* brackets,
+                         int resolution) {
   const Image pred = ReadImage(pred_path);
-  const Image gt = ReadImage(gt_path);
+  const Image gt = ReadGroundTruth(gt_path, resolution);
   // ReadImage marks float formats linear and integer formats display-encoded: that is the kind.
   if (pred.encoding() != gt.encoding()) {
     Fail("{} ({}) vs {} ({}): cannot compare an LDR image with an HDR one", pred_path.string(),
@@ -93,7 +109,7 @@ PairResult EvaluateFiles(const fs::path& pred_path,
   result.name = gt_path.filename().string();
   const bool hdr = gt.encoding() == Encoding::kLinear;
   const std::optional<std::vector<std::uint8_t>> mask =
-      hdr ? BracketMask(gt_path, brackets) : std::nullopt;
+      hdr ? BracketMask(gt_path, brackets, resolution) : std::nullopt;
   if (mask && mask->size() != gt.num_pixels()) {
     Fail("{}: its LDR brackets are not the size of the HDR image ({})", gt_path.string(),
          gt.ShapeString());
@@ -244,13 +260,19 @@ EvalBrackets DatasetBrackets(const fs::path& scene) {
   return out;
 }
 
-nlohmann::json EvaluatePair(const fs::path& pred, const fs::path& gt, const EvalBrackets* brackets) {
-  return PairJson(EvaluateFiles(pred, gt, brackets));
+nlohmann::json EvaluatePair(const fs::path& pred,
+                            const fs::path& gt,
+                            const EvalBrackets* brackets,
+                            int gt_resolution) {
+  if (gt_resolution < 1) Fail("eval: --resolution {} must be >= 1", gt_resolution);
+  return PairJson(EvaluateFiles(pred, gt, brackets, gt_resolution));
 }
 
 nlohmann::json EvaluatePaths(const fs::path& pred,
                              const fs::path& gt,
-                             const EvalBrackets* brackets) {
+                             const EvalBrackets* brackets,
+                             int gt_resolution) {
+  if (gt_resolution < 1) Fail("eval: --resolution {} must be >= 1", gt_resolution);
   std::error_code ec;
   for (const fs::path& p : {pred, gt}) {
     const PathProbe probe = ProbePath(p);  // "permission denied" is not "not found"
@@ -281,7 +303,7 @@ nlohmann::json EvaluatePaths(const fs::path& pred,
                     jobs.size() >= kProgressMinPairs);
   ParallelFor(static_cast<std::int64_t>(jobs.size()), 1, [&](std::int64_t i) {
     try {
-      results[i] = EvaluateFiles(jobs[i].first, jobs[i].second, brackets);
+      results[i] = EvaluateFiles(jobs[i].first, jobs[i].second, brackets, gt_resolution);
     } catch (const std::exception& e) {
       errors[i] = e.what();
     }

@@ -42,9 +42,13 @@ EvalBrackets DatasetBrackets(const std::filesystem::path& scene);
 // One pair of image files: {"name": <gt file name>, <metric>: <value or null>, ...}. Throws
 // hdr4d::Error naming both files for a missing/unreadable image, an LDR file paired with an HDR
 // one, different sizes or channel counts, or an HDR image that cannot be normalised.
+// gt_resolution R > 1: the ground truth (and its brackets) reduced as `hdr4d train
+// --resolution R` reduces its targets (R x R box average, LDR quantised to 8 bits), to score the
+// renders of such a run; an R that does not divide a ground truth is an error naming it.
 nlohmann::json EvaluatePair(const std::filesystem::path& pred,
                             const std::filesystem::path& gt,
-                            const EvalBrackets* brackets = nullptr);
+                            const EvalBrackets* brackets = nullptr,
+                            int gt_resolution = 1);
 
 // `pred` and `gt` are both image files (one pair) or both folders. Folders: every image in the
 // pred folder (not recursive; non-image files are ignored) is paired with the ground truth of
@@ -56,7 +60,8 @@ nlohmann::json EvaluatePair(const std::filesystem::path& pred,
 // does not depend on the thread count.
 nlohmann::json EvaluatePaths(const std::filesystem::path& pred,
                              const std::filesystem::path& gt,
-                             const EvalBrackets* brackets = nullptr);
+                             const EvalBrackets* brackets = nullptr,
+                             int gt_resolution = 1);
 
 // A fixed-width text table of an EvaluatePaths result: a header, one line per pair, a "mean"
 // line. A null (non-finite) value is shown as "inf", a key a pair does not have as "-".

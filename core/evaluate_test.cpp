@@ -13,6 +13,7 @@
 #include "core/error.h"
 #include "core/hdr_alignment.h"
 #include "core/image_io.h"
+#include "core/image_resize.h"
 #include "core/metrics.h"
 #include "core/parallel.h"
 #include "tests/testing.h"
@@ -388,6 +389,27 @@ TEST(EvalCommandTest, HelpExplainsTheProtocol) {
   EXPECT_THAT(r.out, HasSubstr("4000"));
   EXPECT_THAT(r.out, HasSubstr("own max"));
   EXPECT_THAT(r.out, HasSubstr("same file name"));
+}
+
+
+// --resolution R scores the renders of a run trained at 1/R: the ground truth is box-averaged
+// (HDR) and, for LDR, quantised as the training targets are; an R that does not divide it names
+// the file.
+TEST(EvaluateTest, ResolutionReducesTheGroundTruthAsTrainingDid) {
+  TempDir dir;
+  WriteHdr(dir / "gt.exr", 8, 6, 1);
+  WriteImage(dir / "pred.exr", DownsampleBox(ReadImage(dir / "gt.exr"), 2),
+             {.format = PixelFormat::kFloat});
+  EXPECT_EQ(EvaluatePair(dir / "pred.exr", dir / "gt.exr", nullptr, 2)["mu_psnr"], nullptr)
+      << "identical after the reduction: infinite PSNR";
+  WriteLdr(dir / "gt.png", 8, 6, 2);
+  Image reduced = DownsampleBox(ReadImage(dir / "gt.png"), 2);
+  WriteImage(dir / "pred.png", reduced);
+  // The same 8-bit values (up to float rounding of k / 255).
+  const nlohmann::json ldr = EvaluatePair(dir / "pred.png", dir / "gt.png", nullptr, 2)["psnr"];
+  EXPECT_TRUE(ldr.is_null() || ldr.get<double>() > 100) << ldr;
+  const std::string m = ErrorOf([&] { EvaluatePair(dir / "pred.png", dir / "gt.png", nullptr, 4); });
+  EXPECT_NE(m.find("gt.png: 8x6 is not divisible by --resolution 4"), std::string::npos) << m;
 }
 
 }  // namespace

@@ -229,6 +229,38 @@ void AccumulateStats(const std::vector<float>& mean2d_grad,
   }
 }
 
+void BatchStats::Begin(std::size_t n) {
+  norm_sum_.assign(n, 0.0f);
+  count_.assign(n, 0.0f);
+  max_radius_.assign(n, 0.0f);
+}
+
+void BatchStats::Add(const std::vector<float>& mean2d_grad,
+                     const std::vector<int>& radius,
+                     int width,
+                     int height) {
+  DensifyStats view;
+  view.grad_accum = std::move(norm_sum_);
+  view.denom = std::move(count_);
+  view.max_radii = std::move(max_radius_);
+  AccumulateStats(mean2d_grad, radius, width, height, &view);
+  norm_sum_ = std::move(view.grad_accum);
+  count_ = std::move(view.denom);
+  max_radius_ = std::move(view.max_radii);
+}
+
+void BatchStats::AddTo(DensifyStats* stats) const {
+  HDR4D_CHECK(stats != nullptr && stats->size() == count_.size() &&
+              stats->grad_accum.size() == count_.size());
+  for (std::size_t i = 0; i < count_.size(); ++i) {
+    if (count_[i] <= 0.0f) continue;
+    // sum over views of |g_v / B|, times B / count: the mean of |g_v| over the views that saw it.
+    stats->grad_accum[i] += norm_sum_[i] / count_[i];
+    stats->denom[i] += 1.0f;
+    stats->max_radii[i] = std::max(stats->max_radii[i], max_radius_[i]);
+  }
+}
+
 // ---- Clone / split / prune -----------------------------------------------------------------
 
 std::string DensifyParams::Validate() const {
@@ -260,11 +292,43 @@ DensifyParams DensifyParamsAt(const OptimizationOptions& unresolved,
   p.percent_dense = static_cast<float>(options.percent_dense);
   p.scene_extent = static_cast<float>(extent);
   p.min_opacity = static_cast<float>(options.prune_opacity);
+  p.max_gaussians = options.max_gaussians > 0 ? static_cast<std::size_t>(options.max_gaussians) : 0;
   const bool late = iteration > options.opacity_reset_interval;
   p.max_screen_size = late ? kMaxScreenSize : 0.0f;
   p.prune_large_world = late;
   return p;
 }
+
+namespace {
+
+// The Gaussian budget: each clone or split adds one Gaussian. When n plus the candidates would
+// pass max_gaussians (> 0), only the max_gaussians - n candidates with the largest mean gradient
+// stay (ties: the earlier index), each list kept in index order.
+void KeepWithinBudget(const std::vector<float>& mean_grad,
+                      std::size_t n,
+                      std::size_t max_gaussians,
+                      std::vector<std::uint32_t>* clones,
+                      std::vector<std::uint32_t>* parents,
+                      std::vector<std::uint8_t>* is_parent) {
+  const std::size_t candidates = clones->size() + parents->size();
+  if (max_gaussians == 0 || n + candidates <= max_gaussians) return;
+  const std::size_t allowed = max_gaussians > n ? max_gaussians - n : 0;
+  std::vector<std::uint32_t> order(clones->begin(), clones->end());
+  order.insert(order.end(), parents->begin(), parents->end());
+  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+    return mean_grad[a] != mean_grad[b] ? mean_grad[a] > mean_grad[b] : a < b;
+  });
+  std::vector<std::uint8_t> keep(n, 0);
+  for (std::size_t k = 0; k < allowed; ++k) keep[order[k]] = 1;
+  auto filter = [&](std::vector<std::uint32_t>* list) {
+    std::erase_if(*list, [&](std::uint32_t i) { return keep[i] == 0; });
+  };
+  filter(clones);
+  filter(parents);
+  for (std::size_t i = 0; i < n; ++i) (*is_parent)[i] &= keep[i];
+}
+
+}  // namespace
 
 DensifyResult DensifyAndPrune(GaussianModel* model,
                               GaussianGradients* grads,
@@ -302,6 +366,8 @@ DensifyResult DensifyAndPrune(GaussianModel* model,
       is_parent[i] = 1;
     }
   }
+
+  KeepWithinBudget(mean_grad, n, params.max_gaussians, &clones, &parents, &is_parent);
 
   // Children, copy-major; every child's offset is drawn whether or not it is pruned later.
   const std::size_t num_children = parents.size() * kSplitChildren;

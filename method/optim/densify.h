@@ -92,8 +92,7 @@ struct DensifyStats {
   std::vector<float> MeanGradient() const;
 };
 
-// One rendered view (batch size 1 only: the reference's batch > 1 path sums the per-view norms
-// and rescales by batch / visibility count, which this does not do). mean2d_grad: N x 2,
+// One rendered view (batch size 1; BatchStats below for larger batches). mean2d_grad: N x 2,
 // dL/d(projected mean) in pixel units; radius: N screen radii (0 = not visible). For radius > 0
 // it adds |(gx W/2, gy H/2)| — the gradient with respect to the NDC mean the reference's
 // rasteriser reports, on which its threshold 2e-4 is defined — and counts the view; max_radii
@@ -103,6 +102,26 @@ void AccumulateStats(const std::vector<float>& mean2d_grad,
                      int width,
                      int height,
                      DensifyStats* stats);
+
+// The statistics of one batch of views (the reference's batch_size > 1 path,
+// add_densification_stats_grad): each view's loss is divided by the batch size B, the per-view
+// NDC gradient norms of a Gaussian are summed and multiplied by B / (the number of views it
+// was visible in), and its denominator grows by one per batch. Add takes the gradient of the
+// view's own loss (not divided by B), so the value added is the mean norm over the views that
+// saw it; with one view it is AccumulateStats exactly. max_radii: the largest radius of the
+// batch.
+class BatchStats {
+ public:
+  void Begin(std::size_t n);  // a new batch over n Gaussians
+  void Add(const std::vector<float>& mean2d_grad,
+           const std::vector<int>& radius,
+           int width,
+           int height);
+  void AddTo(DensifyStats* stats) const;  // sizes must agree (checked)
+
+ private:
+  std::vector<float> norm_sum_, count_, max_radius_;
+};
 
 // ---- Clone / split / prune -----------------------------------------------------------------
 struct DensifyParams {
@@ -116,6 +135,10 @@ struct DensifyParams {
   // prune test of a densification step, so its screen-size test never fires. false (default)
   // reproduces that; true tests the accumulated radii instead (new Gaussians count as 0).
   bool keep_radii_for_prune = false;
+  // Gaussian budget (the reference's densify_until_num_points, 0 = none): a densification step
+  // never takes the count past it. Of the clone / split candidates only the ones with the
+  // largest mean gradient are kept (each adds one Gaussian); at or over the budget none is.
+  std::size_t max_gaussians = 0;
 
   // "" when usable, else the problem: threshold >= 0, percent_dense in (0, 1], extent > 0,
   // min_opacity in [0, 1), max_screen_size >= 0, all finite.
@@ -123,7 +146,7 @@ struct DensifyParams {
 };
 
 // The reference's settings for a densification at `iteration` (counted from 1): the options'
-// threshold, percent_dense and prune opacity, and once iteration > opacity_reset_interval the
+// threshold, percent_dense, prune opacity and Gaussian budget, and once iteration > opacity_reset_interval the
 // 20 px screen size and the world-size prune.
 DensifyParams DensifyParamsAt(const OptimizationOptions& options, double extent, int iteration);
 
@@ -135,6 +158,8 @@ struct DensifyResult {
 };
 
 // One densification step: mean gradient = accum / denom (0 where denom is 0).
+//  BUDGET with max_gaussians > 0, candidates (clone and split alike) beyond max_gaussians - size
+//    are dropped, lowest mean gradient first (ties: the later index); pruning still runs.
 //  CLONE grad >= threshold and max(exp(log_scales xyz)) <= percent_dense x extent: exact copy.
 //  SPLIT grad >= threshold and max spatial scale > percent_dense x extent: 2 children, each at
 //    (xyz, t) + R4 (eps o s4) with eps ~ N(0, I4), s4 = exp(log_scales), R4 = Rotation4D(q_l, q_r)

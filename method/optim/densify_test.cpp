@@ -535,6 +535,39 @@ TEST(Densify, MixedCloneSplitPruneGivesDocumentedCountsAndOrder) {
   EXPECT_NEAR(m.log_scales[4 * 5], std::log(0.15f / 1.6f), 2e-6f);
 }
 
+// The budget keeps the candidates with the largest gradient, clones and splits alike, so a
+// step ends at the budget and never past it; at the budget nothing is added.
+TEST(Densify, BudgetKeepsTheLargestGradientsAndNeverPassesIt) {
+  auto s = MakeSetup(6, true, 11);
+  GaussianModel& m = s->model;
+  for (std::size_t i = 0; i < 6; ++i) m.color_dc[3 * i] = static_cast<float>(i);  // a tag
+  // 0: clone, gradient 3e-3.  1: split, 1e-3.  2: clone, 5e-4.  3: split, 4e-3.  4, 5: low.
+  SetGrad(s->stats, 0, 3e-3f);
+  SetGrad(s->stats, 1, 1e-3f);
+  SetScale(m, 1, 0.05f);
+  SetGrad(s->stats, 2, 5e-4f);
+  SetGrad(s->stats, 3, 4e-3f);
+  SetScale(m, 3, 0.05f);
+  SetGrad(s->stats, 4, 1e-5f);
+  DensifyParams params;
+  params.max_gaussians = 8;  // room for two of the four candidates: 3 (split) and 0 (clone)
+  std::mt19937_64 rng(3);
+  const DensifyResult r = DensifyAndPrune(&m, &s->grads, &s->adam, &s->stats, params, &rng);
+  EXPECT_EQ(r.cloned, 1u);
+  EXPECT_EQ(r.split, 1u);
+  ASSERT_EQ(m.size(), 8u);
+  ExpectConsistent(*s);
+  // Originals without the split parent 3, then the clone of 0, then 3's two children.
+  const float tags[8] = {0, 1, 2, 4, 5, 0, 3, 3};
+  for (std::size_t row = 0; row < 8; ++row) EXPECT_EQ(m.color_dc[3 * row], tags[row]) << row;
+
+  // At the budget: nothing is cloned or split, whatever the gradients.
+  for (std::size_t i = 0; i < m.size(); ++i) SetGrad(s->stats, i, 1.0f);
+  const DensifyResult full = DensifyAndPrune(&m, &s->grads, &s->adam, &s->stats, params, &rng);
+  EXPECT_EQ(full.cloned + full.split, 0u);
+  EXPECT_EQ(m.size(), 8u);
+}
+
 // ---- Determinism, 0-wide groups, Adam after surgery --------------------------------------------
 
 TEST(Densify, SameSeedGivesIdenticalModels) {

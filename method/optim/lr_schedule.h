@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 #include <string>
 
@@ -75,6 +76,19 @@ inline int StepsForRunLength(int reference_steps, int iterations) {
   return std::max(1, static_cast<int>(std::lround(scaled)));
 }
 
+// The default Gaussian budget: kGaussiansPerPixel x the training pixels of one timestamp (the
+// pixels of every training view / the number of distinct times: all cameras of a rig at one
+// time, one frame of a monocular scene), at least kMinGaussianBudget. A dynamic scene needs
+// more Gaussians than a static one of the same images (each lives for a while), so this is a
+// ceiling against runaway growth on small or sparse scenes, not a target; the factor is
+// measured in BENCHMARKS.md ("Gaussian budget (issue 15)").
+inline constexpr double kGaussiansPerPixel = 2.0;
+inline constexpr std::int64_t kMinGaussianBudget = 10000;
+inline std::int64_t DefaultGaussianBudget(double pixels_per_time) {
+  return std::max<std::int64_t>(kMinGaussianBudget,
+                                std::llround(kGaussiansPerPixel * std::max(0.0, pixels_per_time)));
+}
+
 // Optimisation settings with the HDR-4DGS HDR-4D-Syn defaults (which are the 4DGS ones except for
 // iterations, the densification interval and the tone mapper). Learning rates of the 4D mean
 // (xyz and t) are in scene-extent units: the caller multiplies them by the extent (PositionLr,
@@ -133,6 +147,10 @@ struct OptimizationOptions {
   int opacity_reset_interval = kFollowRunLength;
   double prune_opacity = 0.005;
   int sh_increase_interval = 1000;
+  // Gaussian budget (the reference's densify_until_num_points): densification never takes the
+  // count past it. 0 = none; kFollowRunLength (any negative value) = the default budget from
+  // the training images, set by the trainer (DefaultGaussianBudget).
+  std::int64_t max_gaussians = kFollowRunLength;
 
   // The reference's values of the resolved fields (a 20000-iteration run on 400-pixel images).
   static constexpr int kRefPositionLrMaxSteps = 15000;

@@ -21,6 +21,7 @@
 #include "method/tonemap/radiance_bank.h"
 #include "method/tonemap/tone_mapper_registry.h"
 #include "method/train/checkpoint.h"
+#include "method/train/train_views.h"
 #include "method/train/view_outputs.h"
 
 namespace hdr4d::method {
@@ -34,6 +35,16 @@ LoadedRun LoadRun(const fs::path& run) {
   const JsonField config(r.config, config_path.string());
   r.dataset = LoadDataset(config["data"].String(),
                           {.image_check = ImageCheck::kNone, .require_test = false});
+  // A run trained at --resolution R renders every split at it (runs from before: 1).
+  const int resolution = static_cast<int>(config.IntOr("resolution", 1, 1, 1 << 16));
+  for (std::vector<Frame>* frames : {&r.dataset.train, &r.dataset.test, &r.dataset.val}) {
+    for (Frame& f : *frames) {
+      const PinholeIntrinsics& k = f.camera.intrinsics;
+      if (std::string p = ResolutionProblem(k.width, k.height, resolution); !p.empty())
+        config["resolution"].Fail(fmt::format("{}: {}", f.image_path.string(), p));
+      f.camera.intrinsics = DownscaledIntrinsics(k, resolution);
+    }
+  }
   const fs::path checkpoint_path = run / "checkpoint.bin";
   Checkpoint c = LoadCheckpoint(checkpoint_path);
   r.model = std::move(c.model);

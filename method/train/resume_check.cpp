@@ -91,6 +91,7 @@ void KeepSavedSchedules(const nlohmann::json& saved, OptimizationOptions* reques
   keep("densify_until", &requested->densify_until);
   keep("densify_grad_threshold", &requested->densify_grad_threshold);
   keep("opacity_reset_interval", &requested->opacity_reset_interval);
+  keep("max_gaussians", &requested->max_gaussians);
 }
 
 void RequireSameConfig(const nlohmann::json& saved,

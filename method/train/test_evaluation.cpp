@@ -49,7 +49,12 @@ nlohmann::json EvaluateViews(ViewRenderer* renderer, const std::vector<TrainView
     if (!hdr.empty() && v.hdr_path) {
       Image prediction(v.width(), v.height(), 3, Encoding::kLinear);
       std::copy(hdr.begin(), hdr.end(), prediction.data());
-      const Image truth = ReadImage(*v.hdr_path);
+      // A run at --resolution R compares with the truth reduced as its training target was.
+      const Image file = ReadImage(*v.hdr_path);
+      const int factor = file.width() / std::max(1, v.width());
+      const Image truth = factor > 1 && ResolutionProblem(file.width(), file.height(), factor) == ""
+                              ? DownsampleBox(file, factor)
+                              : file;
       add(HdrMetrics(prediction, truth));
       add(AlignedHdrMetrics(prediction, truth, &measured.at(*v.hdr_path)));
     }

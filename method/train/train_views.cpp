@@ -1,11 +1,14 @@
 #include "method/train/train_views.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 
 #include "core/dataset_image_rules.h"
 #include "core/error.h"
 #include "core/image_io.h"
+#include "core/image_resize.h"
 #include "core/parallel.h"
 #include "method/train/hdr_loss.h"
 
@@ -35,19 +38,22 @@ float MaxRgb(const Image& hdr) {
 }
 
 // The HDR target of the training loss, 16 bits per value: mu(gt / divisor), the image's own
-// maximum when divisor is 0.
+// maximum when divisor is 0. At `resolution` the radiance is box-averaged (linear light: the
+// mean a pixel R times larger would integrate) before the maximum and the mu-law.
 std::vector<std::uint16_t> LoadHdrMuTarget(const std::filesystem::path& path,
                                            int width,
                                            int height,
+                                           int resolution,
                                            float divisor,
                                            double mu_law) {
   // The dataset's rules for HDR ground truth (`dataset check` applies the same ones): linear,
   // RGB, finite, non-negative, some light.
-  const Image hdr = ReadHdrGroundTruth(path);
-  if (hdr.width() != width || hdr.height() != height) {
-    Fail("{}: HDR ground truth is {}x{} but the LDR image is {}x{}", path.string(), hdr.width(),
-         hdr.height(), width, height);
+  const Image full = ReadHdrGroundTruth(path);
+  if (full.width() != width || full.height() != height) {
+    Fail("{}: HDR ground truth is {}x{} but the LDR image is {}x{}", path.string(), full.width(),
+         full.height(), width, height);
   }
+  const Image hdr = DownsampleBox(full, resolution);
   const int c = hdr.channels();
   const float max_value = divisor > 0 ? divisor : MaxRgb(hdr);
   std::vector<std::uint16_t> mu(hdr.num_pixels() * 3);
@@ -62,11 +68,25 @@ std::vector<std::uint16_t> LoadHdrMuTarget(const std::filesystem::path& path,
 
 }  // namespace
 
+PinholeIntrinsics DownscaledIntrinsics(const PinholeIntrinsics& intrinsics, int factor) {
+  HDR4D_CHECK(factor >= 1 && intrinsics.width % factor == 0 && intrinsics.height % factor == 0);
+  PinholeIntrinsics k = intrinsics;
+  k.fx /= factor;
+  k.fy /= factor;
+  k.cx /= factor;
+  k.cy /= factor;
+  k.width /= factor;
+  k.height /= factor;
+  return k;
+}
+
 std::vector<TrainView> LoadViews(const Dataset& dataset,
                                  Split split,
                                  const float background[3],
                                  bool load_hdr,
+                                 int resolution,
                                  HdrTarget target) {
+  if (resolution < 1) Fail("train: --resolution {} must be >= 1", resolution);
   const std::vector<Frame>& frames = dataset.FramesOf(split);
   std::vector<TrainView> views(frames.size());
   // scene-log: one divisor, the largest value of the split's HDR ground truth (a first pass).
@@ -74,7 +94,8 @@ std::vector<TrainView> LoadViews(const Dataset& dataset,
   if (load_hdr && target == HdrTarget::kSceneLog) {
     std::vector<float> maxima(frames.size(), 0.0f);
     ParallelFor(static_cast<std::int64_t>(frames.size()), 1, [&](std::int64_t i) {
-      if (frames[i].hdr_path) maxima[i] = MaxRgb(ReadHdrGroundTruth(*frames[i].hdr_path));
+      if (frames[i].hdr_path)
+        maxima[i] = MaxRgb(DownsampleBox(ReadHdrGroundTruth(*frames[i].hdr_path), resolution));
     });
     for (float m : maxima) divisor = std::max(divisor, m);
   }
@@ -88,27 +109,37 @@ std::vector<TrainView> LoadViews(const Dataset& dataset,
       Fail("{}: image is {}x{} but the camera says {}x{}", f.image_path.string(), image.width(),
            image.height(), f.camera.intrinsics.width, f.camera.intrinsics.height);
     }
+    if (std::string problem = ResolutionProblem(image.width(), image.height(), resolution);
+        !problem.empty())
+      Fail("{}: {}", f.image_path.string(), problem);
     TrainView& v = views[i];
     v.camera = f.camera;
+    v.camera.intrinsics = DownscaledIntrinsics(f.camera.intrinsics, resolution);
     v.time = static_cast<float>(f.time);
     v.exposure = f.exposure;
     v.name = f.image_path.filename().string();
     v.image_index = static_cast<int>(i);
     v.hdr_path = f.hdr_path;
     if (load_hdr && f.hdr_path) {
-      v.hdr_mu = LoadHdrMuTarget(*f.hdr_path, v.width(), v.height(), divisor, HdrTargetMu(target));
+      v.hdr_mu = LoadHdrMuTarget(*f.hdr_path, image.width(), image.height(), resolution, divisor,
+                                 HdrTargetMu(target));
     }
-    v.rgb.resize(image.num_pixels() * 3);
+    // Composited at full size, then box-averaged in the stored (display) encoding, as the
+    // reference composites and then resizes the 8-bit image with PIL.
+    Image rgb(image.width(), image.height(), 3, image.encoding());
     const int c = image.channels();
     for (std::size_t p = 0; p < image.num_pixels(); ++p) {
       const float* px = image.data() + p * c;
       const float alpha = c == 4 ? px[3] : 1.0f;
-      for (int k = 0; k < 3; ++k) {
-        const float value = (c == 1 ? px[0] : px[k]) * alpha + background[k] * (1.0f - alpha);
-        v.rgb[p * 3 + k] =
-            static_cast<std::uint8_t>(std::lround(std::clamp(value, 0.0f, 1.0f) * 255.0f));
-      }
+      for (int k = 0; k < 3; ++k)
+        rgb.data()[p * 3 + k] =
+            (c == 1 ? px[0] : px[k]) * alpha + background[k] * (1.0f - alpha);
     }
+    const Image reduced = DownsampleBox(rgb, resolution);
+    v.rgb.resize(reduced.size());
+    for (std::size_t p = 0; p < reduced.size(); ++p)
+      v.rgb[p] = static_cast<std::uint8_t>(
+          std::lround(std::clamp(reduced.data()[p], 0.0f, 1.0f) * 255.0f));
   });
   return views;
 }

@@ -11,6 +11,7 @@
 
 #include "core/camera.h"
 #include "core/dataset.h"
+#include "core/image_resize.h"  // DownsampleBox, ResolutionProblem
 #include "method/train/hdr_training_options.h"
 
 namespace hdr4d::method {
@@ -41,10 +42,21 @@ struct TrainView {
 // composites D-NeRF's RGBA onto black). Integer images are required (the LDR targets). With
 // load_hdr, frames with an exr_file_path also get their mu-law HDR target (the file must be
 // linear, the size of the LDR image, finite, with a positive maximum), encoded as `target` says.
+// resolution R (>= 1, dividing every image's width and height; else hdr4d::Error naming the
+// file): images reduced R times on load by an R x R box average (LDR in its stored encoding
+// after compositing, HDR in linear radiance) and the intrinsics with them
+// (PinholeIntrinsics::Downscaled).
 std::vector<TrainView> LoadViews(const Dataset& dataset,
                                  Split split,
                                  const float background[3],
                                  bool load_hdr = false,
+                                 int resolution = 1,
                                  HdrTarget target = HdrTarget::kImageMax);
+
+// The intrinsics of an image reduced by an integer `factor` (width and height divisible by it;
+// checked). With pixel centres at i + 0.5 (core/camera.h, PIXEL CONVENTION) output pixel i
+// covers input [i f, (i + 1) f), so every image coordinate, focal lengths and principal point
+// included, is divided by f exactly.
+PinholeIntrinsics DownscaledIntrinsics(const PinholeIntrinsics& intrinsics, int factor);
 
 }  // namespace hdr4d::method

@@ -12,6 +12,7 @@
 #include <optional>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include "core/dataset.h"
 #include "core/error.h"
@@ -28,6 +29,7 @@
 #include "method/render/hdr_color_stage.h"
 #include "method/tonemap/radiance_bank.h"
 #include "method/tonemap/tone_mapper_registry.h"
+#include "method/train/batch_gradients.h"
 #include "method/train/checkpoint.h"
 #include "method/train/hdr_loss.h"
 #include "method/train/loop_state.h"
@@ -44,6 +46,7 @@ std::string TrainOptions::Validate() const {
   if (data.empty()) return "data: no scene folder given";
   if (out.empty()) return "out: no run folder given";
   if (threads < 0) return "threads: must be >= 0";
+  if (resolution < 1) return fmt::format("resolution: must be >= 1, got {}", resolution);
   if (test_every < 0 || checkpoint_every < 0) return "test_every / checkpoint_every: must be >= 0";
   if (!(max_seconds >= 0 && std::isfinite(max_seconds))) return "max_seconds: must be >= 0";
   if (!(background >= 0 && background <= 1)) return "background: must be within [0, 1]";
@@ -58,6 +61,7 @@ nlohmann::json TrainOptions::ToJson() const {
       {"data", fs::absolute(data).string()},
       {"seed", seed},
       {"threads", threads},
+      {"resolution", resolution},
       {"test_every", test_every},
       {"checkpoint_every", checkpoint_every},
       {"max_seconds", max_seconds},
@@ -69,6 +73,7 @@ nlohmann::json TrainOptions::ToJson() const {
         {"initial_opacity", init.initial_opacity}}},
       {"optimization",
        {{"iterations", o.iterations},
+        {"batch_size", o.batch_size},
         {"position_lr_init", o.position_lr_init},
         {"position_lr_final", o.position_lr_final},
         {"position_lr_max_steps", o.position_lr_max_steps},
@@ -88,7 +93,8 @@ nlohmann::json TrainOptions::ToJson() const {
         {"percent_dense", o.percent_dense},
         {"opacity_reset_interval", o.opacity_reset_interval},
         {"prune_opacity", o.prune_opacity},
-        {"sh_increase_interval", o.sh_increase_interval}}},
+        {"sh_increase_interval", o.sh_increase_interval},
+        {"max_gaussians", o.max_gaussians}}},
   };
 }
 
@@ -120,6 +126,22 @@ double ImageSize(const std::vector<TrainView>& views) {
   if (sizes.empty()) return kReferenceImageSize;
   std::nth_element(sizes.begin(), sizes.begin() + sizes.size() / 2, sizes.end());
   return sizes[sizes.size() / 2];
+}
+
+// The training pixels of one timestamp: the pixels of the distinct (time, camera) pairs of the
+// training views over the number of distinct times (a rig's cameras at one time, each counted
+// once whatever its exposures; one frame of a monocular scene).
+double PixelsPerTime(const std::vector<TrainView>& views) {
+  std::set<float> times;
+  std::set<std::tuple<float, std::int64_t, std::int64_t, std::int64_t>> shots;
+  double pixels = 0;
+  for (const TrainView& v : views) {
+    times.insert(v.time);
+    const Eigen::Vector3d c = v.camera.Center() * 1e6;
+    if (shots.emplace(v.time, std::llround(c.x()), std::llround(c.y()), std::llround(c.z())).second)
+      pixels += double(v.width()) * v.height();
+  }
+  return times.empty() ? 0.0 : pixels / double(times.size());
 }
 
 // Active colour degrees at an iteration: spatial 0 -> 3 every interval, then temporal 0 -> 2.
@@ -160,9 +182,10 @@ class RemoveIfFailedEmpty {
 // step"). Members are declared in the order they are made.
 class TrainingRun {
  public:
-  explicit TrainingRun(const TrainOptions& options) : options_(options) {}
+  explicit TrainingRun(TrainOptions options) : options_(std::move(options)) {}
 
   void SetUp();
+  void PickMethodForScene();
   void OpenRunFolder();
   void ResumeOrInitialise();
   void PrepareRendering();
@@ -172,15 +195,20 @@ class TrainingRun {
   TrainSummary Finish();
 
  private:
+  double ViewLoss(const TrainView& view, int it, const float** ldr_out, std::size_t* pixels);
   double ForwardAndLoss(const TrainView& view, const float** ldr_out);
+  bool DensifiesAt(int it) const;
+  bool ResetsOpacityAt(int it) const;
   void BackwardAndUpdate(const TrainView& view, int it, double loss_value);
+  double BatchBackwardAndUpdate(int it, const float** ldr_out, std::size_t* pixels);
+  void FinishUpdate(int it, double loss_value);
   void ShowProgress(double loss_value, const float* ldr_out, std::size_t pixels);
   void EvaluateAndCheckpoint(int it);
   nlohmann::json EvaluateTestViews();
   void Save();
   double TrainingSeconds() const;
 
-  const TrainOptions& options_;
+  TrainOptions options_;  // with the method SetUp picks (when_nothing_hdr)
   std::optional<Dataset> dataset_;
   SceneProfile profile_;
   std::vector<TrainView> train_views_, test_views_;
@@ -198,6 +226,8 @@ class TrainingRun {
   fs::path checkpoint_path_;
   GaussianModel model_;
   GaussianGradients grads_;
+  GaussianGradients view_grads_;  // --batch-size > 1: one view's gradient before it is summed
+  BatchStats batch_stats_;
   std::optional<ModelOptimizer> optimizer_;
   DensifyStats stats_;
   LoopState loop_;
@@ -219,11 +249,13 @@ class TrainingRun {
 void TrainingRun::SetUp() {
   dataset_.emplace(LoadDataset(options_.data, {.image_check = ImageCheck::kHeaders}));
   profile_ = ProfileScene(*dataset_);
+  PickMethodForScene();
   const HdrTrainingOptions& hdr = options_.hdr;
   const float background[3] = {options_.background, options_.background, options_.background};
   train_views_ = LoadViews(*dataset_, Split::kTrain, background,
-                           /*load_hdr=*/hdr.color_mode == ColorMode::kLogHdr, hdr.hdr_target);
-  test_views_ = LoadViews(*dataset_, Split::kTest, background);
+                           /*load_hdr=*/hdr.color_mode == ColorMode::kLogHdr, options_.resolution,
+                           hdr.hdr_target);
+  test_views_ = LoadViews(*dataset_, Split::kTest, background, false, options_.resolution);
   num_times_ = DistinctTimes(*dataset_);
   for (auto* views : {&train_views_, &test_views_}) {
     for (TrainView& v : *views) v.time_index = RadianceBank::TimeIndex(v.time, num_times_);
@@ -239,6 +271,7 @@ void TrainingRun::SetUp() {
   }
   // Schedules for this run's length and image size (an explicit value stays as it is).
   opt_ = requested.Resolved(ImageSize(train_views_), hdr.color_mode == ColorMode::kLogHdr);
+  if (opt_.max_gaussians < 0) opt_.max_gaussians = DefaultGaussianBudget(PixelsPerTime(train_views_));
   temporal_ = profile_.dynamic && !hdr.force_static;
   spdlog::info("train: {} train / {} test views, extent {:.3f}, {}, method {}", train_views_.size(),
                test_views_.size(), extent_, temporal_ ? "dynamic" : "static (no time axis)",
@@ -260,6 +293,22 @@ void TrainingRun::SetUp() {
   config_["resolved"] = resolved_.ToJson();
   if (tone_mapper_) config_["tone_mapper"] = tone_mapper_->config().ToJson();
   if (saved_config_) RequireSameConfig(*saved_config_, config_, options_.out / "config.json");
+}
+
+// With when_nothing_hdr: a scene whose training frames share one exposure and that has no HDR
+// ground truth trains those options instead, with a note (ARCHITECTURE §1).
+void TrainingRun::PickMethodForScene() {
+  if (!options_.when_nothing_hdr || profile_.num_hdr_frames > 0) return;
+  std::set<double> exposures;
+  for (const Frame& f : dataset_->train) exposures.insert(f.exposure);
+  if (exposures.size() > 1 || options_.hdr.method == options_.when_nothing_hdr->method) return;
+  // warn: shown at the CLI's default verbosity, which hides info.
+  spdlog::warn(
+      "train: note: every training image has the same exposure and the scene has no HDR ground "
+      "truth, so there is no HDR to recover: training the plain LDR model ({}) instead of {} "
+      "(ask for --method, --tone-mapper or --supervision to override)",
+      options_.when_nothing_hdr->method, options_.hdr.method);
+  options_.hdr = *options_.when_nothing_hdr;
 }
 
 // One writer per run folder; a folder this run made and left with nothing in it on failure is
@@ -354,27 +403,42 @@ bool TrainingRun::OutOfTime() const {
   return options_.max_seconds > 0 && TrainingSeconds() >= options_.max_seconds;
 }
 
-// One iteration: pick a view, render it, the loss, the backward with the fused optimiser step,
-// densification, progress, and the periodic evaluation and checkpoint.
+// One iteration: pick a view (a batch of them with --batch-size), render it, the loss, the
+// backward with the fused optimiser step, densification, progress, and the periodic evaluation
+// and checkpoint.
 void TrainingRun::Step() {
   const int it = ++loop_.iteration;
   optimizer_->SetIteration(it);
   std::tie(render_.sh_degree, render_.time_degree) =
       ColorDegrees(it, model_, opt_.sh_increase_interval);
-  const TrainView& view = train_views_[loop_.NextView(train_views_.size())];
-  const std::size_t pixels = static_cast<std::size_t>(view.width()) * view.height();
-  image_.resize(pixels * raster_channels_);
-  dL_dimage_.resize(pixels * raster_channels_);
+  if (tone_mapper_) tone_mapper_->ZeroGrad();  // a batch adds every view's gradient to it
+  const float* ldr_out = nullptr;  // the final LDR image of the last view, for the PSNR shown
+  std::size_t pixels = 0;
+  if (opt_.batch_size == 1) {
+    const TrainView& view = train_views_[loop_.NextView(train_views_.size())];
+    const double loss_value = ViewLoss(view, it, &ldr_out, &pixels);
+    BackwardAndUpdate(view, it, loss_value);
+    ShowProgress(loss_value, ldr_out, pixels);
+  } else {
+    const double loss_value = BatchBackwardAndUpdate(it, &ldr_out, &pixels);
+    ShowProgress(loss_value, ldr_out, pixels);
+  }
+  EvaluateAndCheckpoint(it);
+}
+
+// The view's buffers, its forward and loss; a non-finite loss stops training.
+double TrainingRun::ViewLoss(const TrainView& view, int it, const float** ldr_out,
+                             std::size_t* pixels) {
+  *pixels = static_cast<std::size_t>(view.width()) * view.height();
+  image_.resize(*pixels * raster_channels_);
+  dL_dimage_.resize(*pixels * raster_channels_);
   view.ToFloat(&gt_);
-  const float* ldr_out = nullptr;  // the final LDR image of this view, for the PSNR shown
-  const double loss_value = ForwardAndLoss(view, &ldr_out);
+  const double loss_value = ForwardAndLoss(view, ldr_out);
   if (!std::isfinite(loss_value)) {
     Fail("train: iteration {}: the loss is {} (view {}); stopped, the last good checkpoint is {}",
          it, loss_value, view.name, checkpoint_path_.string());
   }
-  BackwardAndUpdate(view, it, loss_value);
-  ShowProgress(loss_value, ldr_out, pixels);
-  EvaluateAndCheckpoint(it);
+  return loss_value;
 }
 
 // Renders `view` and returns the loss of every supervision term; *ldr_out is the final LDR
@@ -387,7 +451,6 @@ double TrainingRun::ForwardAndLoss(const TrainView& view, const float** ldr_out)
                            static_cast<float>(opt_.lambda_dssim), dL_dimage_.data())
         .value;
   }
-  if (tone_mapper_) tone_mapper_->ZeroGrad();
   stage_->SetFrame({view.time_index, view.image_index, static_cast<float>(std::log(view.exposure))},
                    /*observe_bank=*/true);
   RenderForward(model_, view.camera, view.time, render_, &state_, image_.data());
@@ -410,18 +473,76 @@ double TrainingRun::ForwardAndLoss(const TrainView& view, const float** ldr_out)
   return loss;
 }
 
+// As in the reference, densification replaces every parameter tensor, so no optimiser step
+// happens on that iteration; an opacity reset replaces only the opacity.
+bool TrainingRun::DensifiesAt(int it) const {
+  return it < opt_.densify_until && it > opt_.densify_from && it % opt_.densification_interval == 0;
+}
+bool TrainingRun::ResetsOpacityAt(int it) const {
+  return it < opt_.densify_until && it % opt_.opacity_reset_interval == 0;
+}
+
 // The backward with the model's optimiser step fused into it, the finite check, densification
 // and the opacity reset on their schedule, and the steps the backward did not take.
 void TrainingRun::BackwardAndUpdate(const TrainView& view, int it, double loss_value) {
-  // As in the reference, densification replaces every parameter tensor, so no optimiser step
-  // happens on that iteration; an opacity reset replaces only the opacity.
-  const bool densify =
-      it < opt_.densify_until && it > opt_.densify_from && it % opt_.densification_interval == 0;
-  const bool reset_opacity = it < opt_.densify_until && it % opt_.opacity_reset_interval == 0;
-  const GradientRowsDone step_rows = optimizer_->Begin(densify, reset_opacity, model_.size());
+  const GradientRowsDone step_rows =
+      optimizer_->Begin(DensifiesAt(it), ResetsOpacityAt(it), model_.size());
   RenderBackward(model_, view.camera, view.time, render_, &state_, dL_dimage_.data(), &grads_,
                  step_rows);
   if (tone_mapper_) tone_mapper_->EndFrameBackward();
+  if (it < opt_.densify_until)
+    AccumulateStats(state_.splat_grads.mean2d, state_.screen_radius, view.width(), view.height(),
+                    &stats_);
+  FinishUpdate(it, loss_value);
+}
+
+// --batch-size B > 1 (the reference's batch): B views, each rendered and back-propagated on its
+// own with its gradient summed into grads_; the sum divided by B (the loss is the batch mean),
+// one optimiser step over all rows, the statistics of the batch (BatchStats). Returns the mean
+// loss.
+double TrainingRun::BatchBackwardAndUpdate(int it, const float** ldr_out, std::size_t* pixels) {
+  const int batch = opt_.batch_size;
+  // Zeroed in place: the optimiser's groups point into grads_.
+  for (std::vector<float>* field : GradientFields(&grads_)) std::fill(field->begin(), field->end(), 0.0f);
+  view_grads_.ZerosLike(model_);
+  batch_stats_.Begin(model_.size());
+  double loss_sum = 0;
+  for (int b = 0; b < batch; ++b) {
+    const TrainView& view = train_views_[loop_.NextView(train_views_.size())];
+    loss_sum += ViewLoss(view, it, ldr_out, pixels);
+    RenderBackward(model_, view.camera, view.time, render_, &state_, dL_dimage_.data(),
+                   &view_grads_);
+    if (tone_mapper_) tone_mapper_->EndFrameBackward();
+    AddGradients(view_grads_, &grads_);
+    if (it < opt_.densify_until)
+      batch_stats_.Add(state_.splat_grads.mean2d, state_.screen_radius, view.width(),
+                       view.height());
+  }
+  const float inverse = 1.0f / static_cast<float>(batch);
+  ScaleGradients(inverse, &grads_);
+  if (tone_mapper_)
+    for (float& g : tone_mapper_->grads()) g *= inverse;
+  const GradientRowsDone step_rows =
+      optimizer_->Begin(DensifiesAt(it), ResetsOpacityAt(it), model_.size());
+  if (step_rows) {
+    const std::size_t channels = static_cast<std::size_t>(model_.channels);
+    const std::size_t stride = model_.rest_stride();
+    ParallelForChunks(static_cast<std::int64_t>(model_.size()), 1024,
+                      [&](std::int64_t b, std::int64_t e) {
+                        step_rows(b, e,
+                                  GradientRows{grads_.color_dc.data() + b * channels,
+                                               grads_.color_rest.data() + b * stride});
+                      });
+  }
+  if (it < opt_.densify_until) batch_stats_.AddTo(&stats_);
+  const double loss_value = loss_sum / batch;
+  FinishUpdate(it, loss_value);
+  return loss_value;
+}
+
+// After the backward: the finite check, densification and the opacity reset on their schedule,
+// and the steps the backward did not take.
+void TrainingRun::FinishUpdate(int it, double loss_value) {
   // A non-finite gradient stops training: the state in memory is partly stepped and dropped,
   // the last checkpoint kept.
   if (const std::string bad = optimizer_->FirstNonFinite(); !bad.empty()) {
@@ -430,16 +551,13 @@ void TrainingRun::BackwardAndUpdate(const TrainView& view, int it, double loss_v
         "good checkpoint is {}",
         it, bad, checkpoint_path_.string());
   }
-  if (it < opt_.densify_until)
-    AccumulateStats(state_.splat_grads.mean2d, state_.screen_radius, view.width(), view.height(),
-                    &stats_);
   loop_.loss_curve.push_back(loss_value);
-  if (densify) {
+  if (DensifiesAt(it)) {
     DensifyAndPrune(&model_, &grads_, &optimizer_->adam(), &stats_,
                     DensifyParamsAt(opt_, extent_, it), &loop_.rng);
   }
   optimizer_->Finish();
-  if (reset_opacity) ResetOpacity(&model_, &optimizer_->adam());
+  if (ResetsOpacityAt(it)) ResetOpacity(&model_, &optimizer_->adam());
 }
 
 // The loss, the training-view PSNR of the final LDR image and the Gaussian count on the

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
 #include "core/dataset.h"
@@ -22,6 +23,9 @@ struct TrainOptions {
   InitOptions init;  // seed, random point count, ...
   std::uint64_t seed = 0;
   int threads = 0;           // 0 = all cores
+  // Images reduced this many times on load, train and test views alike (LoadViews); render and
+  // eval of the run read it from RUN/config.json.
+  int resolution = 1;
   int test_every = 0;        // evaluate the test split every N iterations (0 = only at the end)
   int checkpoint_every = 0;  // save RUN/checkpoint.bin every N iterations (0 = only at the end)
   // Wall-clock budget of the training loop in seconds (0 = none): training stops after the first
@@ -31,6 +35,11 @@ struct TrainOptions {
   bool progress = true;
   float background = 0.0f;  // grey level behind the scene (the reference trains on black)
   HdrTrainingOptions hdr;   // colour mode, tone mapper, supervision branches (plain 4DGS default)
+  // When set: the options trained instead of `hdr` when every training frame has the same
+  // exposure and no frame has HDR ground truth (nothing to recover an HDR from), with a note
+  // saying so. `hdr4d train` sets plain 4DGS here unless the method, tone mapper or
+  // supervision was asked for.
+  std::optional<HdrTrainingOptions> when_nothing_hdr;
   std::string Validate() const;
   nlohmann::json ToJson() const;
 };

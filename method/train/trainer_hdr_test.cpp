@@ -12,6 +12,7 @@
 #include "core/image_io.h"
 #include "core/error.h"
 #include "core/exposure_stack.h"
+#include "core/image_io.h"
 #include "core/json_util.h"
 #include "method/run/render_split.h"
 #include "method/tonemap/dynamic_tone_mapper.h"
@@ -156,6 +157,48 @@ TEST(TrainerHdr, RenderWritesLdrAndHdrNamedLikeTheGroundTruth) {
   EXPECT_NE(message.find("unknown tone mapper kind 'mlp'"), std::string::npos) << message;
 }
 
+// --resolution 2 end to end: LDR and HDR targets reduced on load, the run records it, and the
+// render of the run is at the reduced size; a factor that does not divide the images is an
+// error naming the image and the flag.
+TEST(TrainerHdr, ResolutionTwoTrainsAndRendersAtHalfSize) {
+  TempDir dir;
+  MakeHdrScene(dir / "scene", 24);
+  TrainOptions o = HdrRun(dir / "scene", dir / "run", 10);
+  o.resolution = 2;
+  const TrainSummary s = Train(o);
+  EXPECT_TRUE(std::isfinite(s.test_metrics["psnr"].get<double>()));
+  EXPECT_EQ(ReadJsonFile(dir / "run" / "config.json")["resolution"], 2);
+  RenderRunOptions r;
+  r.run = dir / "run";
+  r.out = dir / "out";
+  ASSERT_GT(RenderRun(r), 0);
+  const Dataset d = LoadDataset(dir / "scene", {.image_check = ImageCheck::kNone});
+  const Image ldr = ReadImage(dir / "out" / d.test[0].image_path.filename());
+  EXPECT_EQ(ldr.width(), 12);
+  EXPECT_EQ(ldr.height(), 12);
+  o = HdrRun(dir / "scene", dir / "bad", 10);
+  o.resolution = 5;
+  const std::string message = ErrorOf([&] { Train(o); });
+  EXPECT_NE(message.find("24x24 is not divisible by --resolution 5"), std::string::npos) << message;
+  EXPECT_NE(message.find(".png"), std::string::npos) << message;
+}
+
+// --batch-size 2 with the tone mapper: trains, counts batches as iterations, records the size.
+TEST(TrainerHdr, BatchOfTwoTrains) {
+  TempDir dir;
+  MakeHdrScene(dir / "scene", 16);
+  TrainOptions o = HdrRun(dir / "scene", dir / "run", 40);
+  o.optimization.batch_size = 2;
+  o.optimization.opacity_reset_interval = 1000;  // no reset to raise the loss near the end
+  const TrainSummary s = Train(o);
+  EXPECT_EQ(s.iterations, 40);
+  ASSERT_EQ(s.loss_curve.size(), 40u);
+  double first = 0, last = 0;
+  for (int i = 0; i < 5; ++i) first += s.loss_curve[i], last += s.loss_curve[39 - i];
+  EXPECT_LT(last, first);
+  EXPECT_EQ(ReadJsonFile(dir / "run" / "config.json")["optimization"]["batch_size"], 2);
+}
+
 TEST(TrainerHdr, ImpossibleCombinationsAreErrors) {
   TempDir dir;
   MakeHdrScene(dir / "scene", 16);
@@ -206,7 +249,7 @@ TEST(TrainerHdr, HdrTargetsDivideByTheImageOrTheSceneMaximum) {
   const float black[3] = {0, 0, 0};
   const std::vector<TrainView> own = LoadViews(data, Split::kTrain, black, true);
   const std::vector<TrainView> scene =
-      LoadViews(data, Split::kTrain, black, true, HdrTarget::kSceneLog);
+      LoadViews(data, Split::kTrain, black, true, 1, HdrTarget::kSceneLog);
   ASSERT_EQ(own.size(), scene.size());
   std::vector<float> maxima;
   for (const TrainView& v : own) {

@@ -105,6 +105,41 @@ TEST(Trainer, LossDecreasesOnTheKnownScene) {
   EXPECT_LT(last, 0.8 * first);
 }
 
+// --max-gaussians: densification never takes the count past the budget.
+TEST(Trainer, GaussianBudgetIsNeverPassed) {
+  TempDir dir;
+  MakeScene(dir / "scene");
+  TrainOptions o = SmallRun(dir / "scene", dir / "run", 60);
+  o.optimization.max_gaussians = 430;
+  const TrainSummary s = Train(o);
+  EXPECT_LE(s.gaussians, 430u);
+  EXPECT_EQ(ReadJsonFile(dir / "run" / "config.json")["optimization"]["max_gaussians"], 430);
+  // Without one it grows past it (the budget did the work above).
+  o = SmallRun(dir / "scene", dir / "free", 60);
+  o.optimization.max_gaussians = 0;
+  EXPECT_GT(Train(o).gaussians, 430u);
+}
+
+// One exposure and no HDR ground truth: with when_nothing_hdr (what `hdr4d train` sets unless
+// the user asks for an HDR method) the run trains the plain LDR model instead of HDR-4DGS.
+TEST(Trainer, OneExposureWithoutHdrTruthTrainsThePlainLdrModel) {
+  TempDir dir;
+  MakeScene(dir / "scene");  // one exposure, no exr_file_path
+  TrainOptions o = SmallRun(dir / "scene", dir / "run", 10);
+  o.hdr.method = "hdr4dgs";
+  o.hdr.color_mode = ColorMode::kLogHdr;
+  o.hdr.tone_mapper = ToneMapperConfig{};
+  o.when_nothing_hdr = HdrTrainingOptions{};  // plain 4DGS
+  Train(o);
+  const nlohmann::json config = ReadJsonFile(dir / "run" / "config.json");
+  EXPECT_EQ(config["hdr"]["method"], "4dgs");
+  EXPECT_FALSE(config["resolved"]["hdr_colors"].get<bool>());
+  o.out = dir / "asked";
+  o.when_nothing_hdr.reset();  // the user asked for HDR-4DGS
+  Train(o);
+  EXPECT_EQ(ReadJsonFile(dir / "asked" / "config.json")["hdr"]["method"], "hdr4dgs");
+}
+
 TEST(Trainer, BadInputsAreErrors) {
   TempDir dir;
   TrainOptions o = SmallRun(dir / "missing", dir / "run", 10);
