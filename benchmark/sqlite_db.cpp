@@ -2,12 +2,17 @@
 
 #include <sqlite3.h>
 
+#include <chrono>
 #include <cmath>
+#include <thread>
 #include <utility>
 
 #include "core/error.h"
 
 namespace hdr4d::bench {
+namespace {
+constexpr int kBusyTimeoutMs = 60000;
+}  // namespace
 
 Database::Database(const std::filesystem::path& path, bool create) : path_(path) {
   if (!create && !std::filesystem::exists(path)) Fail("{}: no such results store", path.string());
@@ -19,11 +24,11 @@ Database::Database(const std::filesystem::path& path, bool create) : path_(path)
     db_ = nullptr;
     Fail("{}: cannot open the results store: {}", path.string(), message);
   }
-  sqlite3_busy_timeout(db_, 60000);  // another harness on the same store: wait, do not fail
+  sqlite3_busy_timeout(db_, kBusyTimeoutMs);  // another harness on the same store: wait
   sqlite3_extended_result_codes(db_, 1);
   Exec("PRAGMA foreign_keys = ON");
   // A file that is not a database fails here, on its first read.
-  Exec("PRAGMA journal_mode = WAL");
+  ExecWhenFree("PRAGMA journal_mode = WAL");
   Exec("PRAGMA synchronous = FULL");
 }
 
@@ -31,6 +36,16 @@ Database::~Database() { sqlite3_close_v2(db_); }
 
 void Database::Throw(const std::string& what) const {
   Fail("{}: {}: {}", path_.string(), what, sqlite3_errmsg(db_));
+}
+
+void Database::ExecWhenFree(const std::string& sql) {
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::milliseconds(kBusyTimeoutMs);
+  for (;;) {
+    const int rc = sqlite3_exec(db_, sql.c_str(), nullptr, nullptr, nullptr);
+    if (rc == SQLITE_OK) return;
+    if ((rc & 0xff) != SQLITE_BUSY || std::chrono::steady_clock::now() > give_up) Throw(sql);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
 }
 
 void Database::Exec(const std::string& sql) {
@@ -112,7 +127,7 @@ double Statement::Double(int column) const {
 
 std::int64_t Statement::Int(int column) const { return sqlite3_column_int64(stmt_, column); }
 
-Transaction::Transaction(Database* db) : db_(db) { db_->Exec("BEGIN IMMEDIATE"); }
+Transaction::Transaction(Database* db) : db_(db) { db_->ExecWhenFree("BEGIN IMMEDIATE"); }
 
 Transaction::~Transaction() {
   if (!done_) sqlite3_exec(db_->handle(), "ROLLBACK", nullptr, nullptr, nullptr);

@@ -26,6 +26,10 @@ class Database {
   Database& operator=(const Database&) = delete;
 
   void Exec(const std::string& sql);
+  // Exec, retrying while SQLite answers busy without calling the busy handler (in WAL mode it
+  // does so when another connection is opening the file or switching its journal), up to the
+  // busy timeout.
+  void ExecWhenFree(const std::string& sql);
   Statement Prepare(const std::string& sql);
   const std::filesystem::path& path() const { return path_; }
   sqlite3* handle() { return db_; }
