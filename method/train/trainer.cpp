@@ -186,6 +186,12 @@ class TrainingRun {
 
   void SetUp();
   void PickMethodForScene();
+  // The note of PickMethodForScene, shown once the run has started (a start that fails says
+  // only what failed).
+  void ShowMethodNote() const {
+    if (!method_note_.empty()) spdlog::warn("{}", method_note_);
+  }
+  std::string method_note_;
   void OpenRunFolder();
   void ResumeOrInitialise();
   void PrepareRendering();
@@ -302,8 +308,8 @@ void TrainingRun::PickMethodForScene() {
   std::set<double> exposures;
   for (const Frame& f : dataset_->train) exposures.insert(f.exposure);
   if (exposures.size() > 1 || options_.hdr.method == options_.when_nothing_hdr->method) return;
-  // warn: shown at the CLI's default verbosity, which hides info.
-  spdlog::warn(
+  // A warning: shown at the CLI's default verbosity, which hides info.
+  method_note_ = fmt::format(
       "train: note: every training image has the same exposure and the scene has no HDR ground "
       "truth, so there is no HDR to recover: training the plain LDR model ({}) instead of {} "
       "(ask for --method, --tone-mapper or --supervision to override)",
@@ -658,6 +664,7 @@ TrainSummary Train(const TrainOptions& options) {
   run.SetUp();
   run.OpenRunFolder();
   run.ResumeOrInitialise();
+  run.ShowMethodNote();
   run.PrepareRendering();
   while (run.StepsLeft() && !run.OutOfTime()) run.Step();
   return run.Finish();
