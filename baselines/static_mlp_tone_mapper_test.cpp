@@ -350,7 +350,7 @@ TEST_P(StaticMlpLearns, ACameraCurveFromItsGradient) {
       {"tone", mapper.params().data(), mapper.grads().data(), mapper.params().size(), 0.01f});
   std::vector<float> ldr(3 * n), dL(3 * n);
   double mse = 0, initial_mse = 0;
-  // 1500 steps: the monotone net (a sigmoid of a convex function) needs more than the free one.
+  // 1500 steps: the monotone net needs more than the free one.
   for (int step = 0; step < 1500; ++step) {
     mapper.BeginFrame({0, -1, 0.f});  // the frame protocol: one frame per step
     mapper.Map(log_hdr.data(), n, ldr.data());
@@ -364,8 +364,11 @@ TEST_P(StaticMlpLearns, ACameraCurveFromItsGradient) {
     mapper.MapBackward(log_hdr.data(), n, dL.data(), nullptr);
     adam.Step();
   }
-  EXPECT_GT(initial_mse, 1e-2);
+  // It learned: from its initial curve (the monotone one starts closer: an S over the range) to
+  // the target, twenty times closer at least.
+  EXPECT_GT(initial_mse, 5e-3);
   EXPECT_LT(mse, 2e-4);
+  EXPECT_LT(mse, initial_mse / 20);
   // Monotonic in radiance (and so in exposure) over the trained range, on a finer grid.
   const std::size_t m = 400;
   std::vector<float> fine(3 * m), out(3 * m);
