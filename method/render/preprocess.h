@@ -6,8 +6,10 @@
 //   - the reference, generic in the scalar type T (float and double), per Gaussian with the
 //     header-only maths of method/gaussian/; every mode (4D and 3D). The finite-difference tests
 //     run it in double.
-//   - the fast path, float and 4D only: the Highway kernels of preprocess_simd.h over batches of
-//     16 Gaussians (runtime dispatch over the compiled targets), the colour sums per Gaussian.
+//   - the fast path, float only, 4D and 3D: the Highway kernels of preprocess_simd.h over batches
+//     of 16 Gaussians (runtime dispatch over the compiled targets), the colour sums per Gaussian.
+//     The 3D mode matters as much as the 4D one: every static scene trains a 3D model, and there
+//     the reference preprocess was a third of a real training iteration (BENCHMARKS.md, issue 15).
 // PreprocessForward / PreprocessBackward pick the fast path where it applies.
 #pragma once
 
@@ -17,10 +19,10 @@
 
 namespace hdr4d::method {
 
-// Whether PreprocessForward / Backward take the fast path: float, 4D, the SIMD blend backend.
+// Whether PreprocessForward / Backward take the fast path: float and the SIMD blend backend.
 template <typename T>
-bool FastPreprocessApplies(const GaussianModelT<T>& model, const RenderOptions& options) {
-  return std::is_same_v<T, float> && model.temporal && options.backend == RasterBackend::kSimd;
+bool FastPreprocessApplies(const GaussianModelT<T>& /*model*/, const RenderOptions& options) {
+  return std::is_same_v<T, float> && options.backend == RasterBackend::kSimd;
 }
 
 // The reference, for any model and options.
@@ -39,7 +41,7 @@ void PreprocessBackwardReference(const GaussianModelT<T>& model,
                                  GaussianGradientsT<T>* grads,
                                  const GradientRowsDoneT<T>& rows_done = {});
 
-// The fast path; the model must be 4D (checked). Same outputs as the reference up to float
+// The fast path, 4D or 3D model. Same outputs as the reference up to float
 // rounding; the backward does not read state.conditionals.
 void PreprocessForwardFast(const GaussianModel& model,
                            const ViewParams<float>& view,
@@ -72,7 +74,7 @@ void PreprocessForward(const GaussianModelT<T>& model,
 // Backward of the preprocess: from state->splat_grads into `grads`, which must have the model's
 // shape (e.g. from ZerosLike). Every Gaussian's rows are overwritten (zeros for a culled one):
 // one frame's gradient, not a sum over calls. Deterministic: each Gaussian owns its rows.
-// With rows_done, the colour rows may instead go only to rows_done (the fast 4D path keeps them
+// With rows_done, the colour rows may instead go only to rows_done (the fast path keeps them
 // in a reused per-thread block, which saves sending ~90% of the gradient to memory and back);
 // grads->color_dc and color_rest are then unspecified.
 template <typename T>

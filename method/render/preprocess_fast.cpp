@@ -1,4 +1,4 @@
-// The fast preprocess (preprocess.h): float, 4D, the Highway kernels of preprocess_simd.h over
+// The fast preprocess (preprocess.h): float, 4D or 3D, the Highway kernels of preprocess_simd.h over
 // batches of Gaussians, the colour sums per Gaussian (preprocess_common.h).
 #include <algorithm>
 #include <vector>
@@ -17,6 +17,7 @@ PreprocessSimdJob MakePreprocessJob(const GaussianModel& model,
                                     float time,
                                     const RenderOptions& options) {
   PreprocessSimdJob job;
+  job.temporal = model.temporal;
   job.xyz = model.xyz.data();
   job.t = model.t.data();
   job.log_scales = model.log_scales.data();
@@ -58,7 +59,6 @@ void PreprocessForwardFast(const GaussianModel& model,
                            float time,
                            const RenderOptions& options,
                            FrameState* state) {
-  HDR4D_CHECK(model.temporal);
   BeginPreprocess(model, options, state);
   const std::size_t n = model.size();
   SplatBuffersT<float>& s = state->splats;
@@ -104,7 +104,6 @@ void PreprocessBackwardFast(const GaussianModel& model,
                             const FrameState& state,
                             GaussianGradients* grads,
                             const GradientRowsDone& rows_done) {
-  HDR4D_CHECK(model.temporal);
   const std::size_t n = model.size();
   HDR4D_CHECK(grads->size() == n && grads->color_rest.size() == model.color_rest.size());
   const int channels = model.channels;

@@ -1,5 +1,5 @@
-// The 4D preprocess vectorised over Gaussians (preprocess_simd.h): one Gaussian per lane, the
-// formulas of rotation4d.h, slice.h, projection.h and sh4d.h written out entry by entry. The
+// The 4D or 3D preprocess vectorised over Gaussians (preprocess_simd.h): one Gaussian per lane,
+// the formulas of rotation4d.h, slice.h, projection.h and sh4d.h written out entry by entry. The
 // backward recomputes the forward's geometry (cheaper than storing 45 floats per Gaussian) with
 // the same code, so both see identical values.
 #undef HWY_TARGET_INCLUDE
@@ -10,7 +10,9 @@
 #include <hwy/highway.h>
 
 #include <cstring>
+#include <initializer_list>
 #include <numbers>
+#include <utility>
 
 #include "method/gaussian/constants.h"
 #include "method/gaussian/sh4d.h"
@@ -57,8 +59,8 @@ void LoadBatch(const PreprocessSimdJob& job, std::int64_t begin, int count, Batc
 struct Geometry {
   V ql[4], qr[4], ql_norm, qr_norm;
   M ql_ok, qr_ok;
-  V R[4][4];  // 4D rotation
-  V var[4];   // exp(2 s)
+  V R[4][4];  // 4D rotation (3D mode: the 3x3 block R[0..2][0..2])
+  V var[4];   // exp(2 s) (3D mode: 0..2)
   V S[4][4];  // Sigma
   M floored;
   V stt_inv, dt;  // 1 / Sigma_tt (floored), t - mu_t
@@ -103,10 +105,49 @@ HWY_INLINE void RightIsoclinic(const V* q, V m[4][4]) {
     for (int j = 0; j < 4; ++j) m[i][j] = rows[i][j];
 }
 
-HWY_INLINE void ComputeGeometry(const PreprocessSimdJob& job,
-                                const BatchIn& in,
-                                int off,
-                                Geometry* g) {
+// 3D mode (rotation4d.h Rotation3D, Covariance3D): the rotation of q_l, Sigma3 = L L^T with
+// L = R diag(exp(s)), the mean as it is and no marginal.
+HWY_INLINE void StaticGeometry(const BatchIn& in, int off, Geometry* g) {
+  const D d;
+  Normalize(in.ql, off, g->ql, &g->ql_norm, &g->ql_ok);
+  const V w = g->ql[0], x = g->ql[1], y = g->ql[2], z = g->ql[3];
+  const V one = hn::Set(d, 1.0f), two = hn::Set(d, 2.0f);
+  const auto twice = [&](V v) { return hn::Mul(two, v); };
+  g->R[0][0] = hn::NegMulAdd(two, hn::MulAdd(y, y, hn::Mul(z, z)), one);
+  g->R[0][1] = twice(hn::NegMulAdd(w, z, hn::Mul(x, y)));
+  g->R[0][2] = twice(hn::MulAdd(w, y, hn::Mul(x, z)));
+  g->R[1][0] = twice(hn::MulAdd(w, z, hn::Mul(x, y)));
+  g->R[1][1] = hn::NegMulAdd(two, hn::MulAdd(x, x, hn::Mul(z, z)), one);
+  g->R[1][2] = twice(hn::NegMulAdd(w, x, hn::Mul(y, z)));
+  g->R[2][0] = twice(hn::NegMulAdd(w, y, hn::Mul(x, z)));
+  g->R[2][1] = twice(hn::MulAdd(w, x, hn::Mul(y, z)));
+  g->R[2][2] = hn::NegMulAdd(two, hn::MulAdd(x, x, hn::Mul(y, y)), one);
+  V L[3][3];
+  for (int k = 0; k < 3; ++k) {
+    const V e = hn::Exp(d, hn::Min(LoadRow(in.scale[k], off), hn::Set(d, 88.0f)));
+    g->var[k] = hn::Mul(e, e);
+    for (int i = 0; i < 3; ++i) L[i][k] = hn::Mul(g->R[i][k], e);
+  }
+  for (int i = 0; i < 3; ++i) {
+    g->mean[i] = LoadRow(in.mean[i], off);
+    for (int j = i; j < 3; ++j) {
+      V acc = hn::Mul(L[i][0], L[j][0]);
+      for (int k = 1; k < 3; ++k) acc = hn::MulAdd(L[i][k], L[j][k], acc);
+      g->cov[i][j] = g->cov[j][i] = acc;
+    }
+  }
+  g->marginal = one;
+  // The unused 4th axis as the identity, so no entry of the Geometry is left unset.
+  for (int k = 0; k < 3; ++k) g->R[3][k] = g->R[k][3] = hn::Zero(d);
+  g->R[3][3] = one;
+  g->var[3] = one;
+}
+
+// 4D mode: the 4D rotation and covariance and the slice at t (rotation4d.h, slice.h).
+HWY_INLINE void SlicedGeometry(const PreprocessSimdJob& job,
+                               const BatchIn& in,
+                               int off,
+                               Geometry* g) {
   const D d;
   Normalize(in.ql, off, g->ql, &g->ql_norm, &g->ql_ok);
   Normalize(in.qr, off, g->qr, &g->qr_norm, &g->qr_ok);
@@ -154,6 +195,18 @@ HWY_INLINE void ComputeGeometry(const PreprocessSimdJob& job,
   // exp(-0.5 dt^2 / stt) >= 0; below -87 it is culled anyway.
   g->marginal =
       hn::Exp(d, hn::Max(hn::Mul(hn::Mul(hn::Set(d, -0.5f), g->dt), dt_inv), hn::Set(d, -100.0f)));
+}
+
+HWY_INLINE void ComputeGeometry(const PreprocessSimdJob& job,
+                                const BatchIn& in,
+                                int off,
+                                Geometry* g) {
+  const D d;
+  if (job.temporal) {
+    SlicedGeometry(job, in, off, g);
+  } else {
+    StaticGeometry(in, off, g);
+  }
 
   // EWA projection (projection.h).
   const float* vr = job.rotation;
@@ -321,6 +374,19 @@ void ForwardBatch(const PreprocessSimdJob& job, std::int64_t begin, int count, f
   }
 }
 
+// Normalize's backward, (g - n (n.g)) / |q|, into out[m][off..]; zero where `keep` is false
+// (culled lanes and the identity fallback).
+HWY_INLINE void NormalizeBackward(const V* n, const V* gr, V norm, M keep, int off,
+                                  float (*out)[kB]) {
+  const D d;
+  V ng = hn::Mul(n[0], gr[0]);
+  for (int m = 1; m < 4; ++m) ng = hn::MulAdd(n[m], gr[m], ng);
+  for (int m = 0; m < 4; ++m) {
+    const V v = hn::Div(hn::NegMulAdd(n[m], ng, gr[m]), norm);
+    hn::Store(hn::IfThenElseZero(keep, v), d, out[m] + off);
+  }
+}
+
 void BackwardBatch(const PreprocessSimdJob& job, std::int64_t begin, int count, float* weights) {
   const D d;
   const DI di;
@@ -413,6 +479,53 @@ void BackwardBatch(const PreprocessSimdJob& job, std::int64_t begin, int count, 
                      hn::MulAdd(hn::Set(d, vr[3 + i]), dpy, hn::Mul(hn::Set(d, vr[i]), dpx)));
     }
 
+    if (!job.temporal) {
+      // Covariance3DBackward, then Rotation3DBackward (rotation4d.h), with G = dR.
+      V dR[3][3], dlog3[3];
+      for (int kk = 0; kk < 3; ++kk) {
+        V diag = hn::Zero(d);
+        for (int i = 0; i < 3; ++i) {
+          V sr = hn::Mul(hn::Add(dcov[i][0], dcov[0][i]), g.R[0][kk]);
+          for (int m = 1; m < 3; ++m)
+            sr = hn::MulAdd(hn::Add(dcov[i][m], dcov[m][i]), g.R[m][kk], sr);
+          dR[i][kk] = hn::Mul(sr, g.var[kk]);
+          diag = hn::MulAdd(g.R[i][kk], sr, diag);
+        }
+        dlog3[kk] = hn::Mul(g.var[kk], diag);
+      }
+      const V w = g.ql[0], x = g.ql[1], y = g.ql[2], z = g.ql[3];
+      const V x2 = hn::Add(x, x), y2 = hn::Add(y, y), z2 = hn::Add(z, z);
+      // sum of p_k q_k minus sum of r_k s_k: one Rotation3DBackward row.
+      const auto row = [](std::initializer_list<std::pair<V, V>> plus,
+                          std::initializer_list<std::pair<V, V>> minus) {
+        V acc = hn::Zero(D());
+        for (const auto& [p, q] : plus) acc = hn::MulAdd(p, q, acc);
+        for (const auto& [p, q] : minus) acc = hn::NegMulAdd(p, q, acc);
+        return acc;
+      };
+      const V dq[4] = {
+          hn::Mul(two, row({{y, dR[0][2]}, {z, dR[1][0]}, {x, dR[2][1]}},
+                           {{z, dR[0][1]}, {x, dR[1][2]}, {y, dR[2][0]}})),
+          hn::Mul(two, row({{y, dR[0][1]}, {z, dR[0][2]}, {y, dR[1][0]}, {z, dR[2][0]}, {w, dR[2][1]}},
+                           {{x2, dR[1][1]}, {w, dR[1][2]}, {x2, dR[2][2]}})),
+          hn::Mul(two, row({{x, dR[0][1]}, {w, dR[0][2]}, {x, dR[1][0]}, {z, dR[1][2]}, {z, dR[2][1]}},
+                           {{y2, dR[0][0]}, {w, dR[2][0]}, {y2, dR[2][2]}})),
+          hn::Mul(two, row({{x, dR[0][2]}, {w, dR[1][0]}, {y, dR[1][2]}, {x, dR[2][0]}, {y, dR[2][1]}},
+                           {{z2, dR[0][0]}, {w, dR[0][1]}, {z2, dR[1][1]}}))};
+      NormalizeBackward(g.ql, dq, g.ql_norm, hn::And(g.ql_ok, on), off, out_ql);
+      for (int i = 0; i < 3; ++i) {
+        hn::Store(hn::IfThenElseZero(on, dmean3[i]), d, out_mean[i] + off);
+        hn::Store(hn::IfThenElseZero(on, dlog3[i]), d, out_scale[i] + off);
+      }
+      // No time axis: t, the 4th scale and q_r get no gradient.
+      hn::Store(hn::Zero(d), d, out_mean[3] + off);
+      hn::Store(hn::Zero(d), d, out_scale[3] + off);
+      for (int k = 0; k < 4; ++k) hn::Store(hn::Zero(d), d, out_qr[k] + off);
+      hn::Store(hn::IfThenElseZero(on, d_logit), d, out_logit + off);
+      if (!hn::AllFalse(d, on)) ColorWeights(job, in, off, g, weights);
+      continue;
+    }
+
     // SliceAtTimeBackward.
     const V dt_inv = hn::Mul(g.dt, g.stt_inv);
     V k[3];
@@ -485,18 +598,8 @@ void BackwardBatch(const PreprocessSimdJob& job, std::int64_t begin, int count, 
                      sum4(H[0][1], hn::Neg(H[1][0]), hn::Neg(H[2][3]), H[3][2]),
                      sum4(H[0][2], H[1][3], hn::Neg(H[2][0]), hn::Neg(H[3][1])),
                      sum4(H[0][3], hn::Neg(H[1][2]), H[2][1], hn::Neg(H[3][0]))};
-    // (g - n (n.g)) / |q|, zero for the identity fallback.
-    const auto normalize_back = [&](const V* n, const V* gr, V norm, M ok, float(*out)[kB]) {
-      V ng = hn::Mul(n[0], gr[0]);
-      for (int m = 1; m < 4; ++m) ng = hn::MulAdd(n[m], gr[m], ng);
-      const M keep = hn::And(ok, on);
-      for (int m = 0; m < 4; ++m) {
-        const V v = hn::Div(hn::NegMulAdd(n[m], ng, gr[m]), norm);
-        hn::Store(hn::IfThenElseZero(keep, v), d, out[m] + off);
-      }
-    };
-    normalize_back(g.ql, dl, g.ql_norm, g.ql_ok, out_ql);
-    normalize_back(g.qr, dr, g.qr_norm, g.qr_ok, out_qr);
+    NormalizeBackward(g.ql, dl, g.ql_norm, hn::And(g.ql_ok, on), off, out_ql);
+    NormalizeBackward(g.qr, dr, g.qr_norm, hn::And(g.qr_ok, on), off, out_qr);
     for (int i = 0; i < 3; ++i) hn::Store(hn::IfThenElseZero(on, dmean3[i]), d, out_mean[i] + off);
     hn::Store(hn::IfThenElseZero(on, dmu_t), d, out_mean[3] + off);
     for (int m = 0; m < 4; ++m) hn::Store(hn::IfThenElseZero(on, dlog[m]), d, out_scale[m] + off);

@@ -1,5 +1,5 @@
 // The Highway kernels of the fast preprocess (preprocess.h, preprocess_fast.cpp): the float
-// preprocess of 4D Gaussians vectorised over Gaussians, runtime dispatch over the compiled
+// preprocess of 4D Gaussians, or of 3D ones (static scenes), vectorised over Gaussians, runtime dispatch over the compiled
 // targets. It computes what the reference (preprocess_reference.cpp) computes per Gaussian with
 // method/gaussian/'s maths, in the same formulas, so results agree up to float rounding; the
 // tests hold the two together on every compiled target. The colour sums over each Gaussian's
@@ -14,7 +14,10 @@ namespace hdr4d::method::detail {
 inline constexpr int kPreprocessBatch = 16;
 
 struct PreprocessSimdJob {
-  // Model (4D mode), N rows each.
+  // 4D mode (rot_right, t and the 4th scale used) or 3D mode (rotation3d.h's quaternion
+  // rotation of rot_left, three scales, no time axis: the model of a static scene).
+  bool temporal = true;
+  // Model, N rows each.
   const float* xyz = nullptr;  // N x 3
   const float* t = nullptr;
   const float* log_scales = nullptr;  // N x 4

@@ -258,6 +258,30 @@ TEST(Preprocess, EdgeCasesAreHandledAlikeAndAsIntended) {
   }
 }
 
+// The same Gaussians as a 3D model (a static scene's): no time axis, no time block of colour.
+GaussianModel Static(GaussianModel m) {
+  m.temporal = false;
+  m.basis.max_time_degree = 0;
+  m.color_rest.resize(m.size() * m.rest_stride());
+  // Distinct values in the slots the 3D mode must ignore, so a read of them shows.
+  for (std::size_t i = 0; i < m.size(); ++i) {
+    m.t[i] = 7.0f;
+    m.log_scales[i * 4 + 3] = 3.0f;
+    for (int k = 0; k < 4; ++k) m.rot_right[i * 4 + k] = 0.5f + 0.1f * k;
+  }
+  return m;
+}
+
+TEST(Preprocess, StaticModelsMatchTheReferenceOnEveryTarget) {
+  const GaussianModel model = Static(Scene(300, /*edge_cases=*/true, 15));
+  const int ran = ForEachCompiledTarget([&] {
+    ExpectPathsAgree(model, 3, 6);
+    ExpectPathsAgree(model, 0, 7);
+  });
+  EXPECT_GE(ran, 2);
+  ForEachCompiledTarget([&] { ExpectPathsAgree(Static(Scene(1, false, 16)), 3, 8); });
+}
+
 TEST(Preprocess, OneGaussianAndNone) {
   ForEachCompiledTarget([&] {
     ExpectPathsAgree(Scene(1, false, 13), 3, 4);
