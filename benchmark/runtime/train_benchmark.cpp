@@ -26,6 +26,16 @@ struct Scene {
   RenderOptions options;
 };
 
+// Counters of the last frame: visible Gaussians, list entries, and n_contrib (1 + list position
+// of a pixel's last contributor: an upper bound on blends) averaged over pixels.
+void ReportRasterCounters(const FrameState& frame, benchmark::State* state) {
+  state->counters["visible"] = static_cast<double>(frame.num_visible);
+  state->counters["entries"] = static_cast<double>(frame.raster.num_entries());
+  double walked = 0;
+  for (int v : frame.raster.n_contrib) walked += v;
+  state->counters["walked_per_px"] = walked / frame.raster.n_contrib.size();
+}
+
 Scene MakeScene(int size, int thousands) {
   Scene s;
   const int n = thousands * 1000;
@@ -58,12 +68,7 @@ void BM_RenderForward(benchmark::State& state) {
   FrameState frame;
   std::vector<float> image(static_cast<std::size_t>(size) * size * 3);
   for (auto _ : state) RenderForward(s.model, s.camera, 0.5f, s.options, &frame, image.data());
-  state.counters["visible"] = static_cast<double>(frame.num_visible);
-  state.counters["entries"] = static_cast<double>(frame.raster.num_entries());
-  // n_contrib: 1 + list position of a pixel's last contributor (an upper bound on blends).
-  double walked = 0;
-  for (int v : frame.raster.n_contrib) walked += v;
-  state.counters["walked_per_px"] = walked / frame.raster.n_contrib.size();
+  ReportRasterCounters(frame, &state);
 }
 BENCHMARK(BM_RenderForward)
     ->Args({200, 20})
@@ -200,11 +205,7 @@ void BM_TrainingIterationSurface(benchmark::State& state) {
                    StepModelRows(groups, &step));
     benchmark::DoNotOptimize(step.FirstNonFinite());
   }
-  state.counters["visible"] = static_cast<double>(frame.num_visible);
-  state.counters["entries"] = static_cast<double>(frame.raster.num_entries());
-  double walked = 0;
-  for (int v : frame.raster.n_contrib) walked += v;
-  state.counters["walked_per_px"] = walked / frame.raster.n_contrib.size();
+  ReportRasterCounters(frame, &state);
 }
 BENCHMARK(BM_TrainingIterationSurface)
     ->Args({200, 20})
