@@ -35,18 +35,6 @@ inline int MonotoneWeightSign(const MlpShape& shape, int l, int r, int i) {
   return MonotoneUnitSign(shape, l, r) * MonotoneUnitSign(shape, l - 1, i);
 }
 
-// Whether flat parameter `index` of `shape` is a constrained (path-to-input-0) weight.
-inline bool IsMonotoneWeight(const MlpShape& shape, std::size_t index) {
-  std::size_t o = 0;
-  for (int l = 0; l < shape.layers(); ++l) {
-    const std::size_t in = shape.widths[l], out = shape.widths[l + 1];
-    if (index < o + out * in) return l > 0 || (index - o) % in == 0;
-    if (index < o + out * in + out) return false;  // a bias
-    o += out * in + out;
-  }
-  return false;
-}
-
 // Calls visit(flat index, sign) for every weight and bias of `shape` (sign 0: unconstrained).
 template <typename Visit>
 void ForEachMonotoneSign(const MlpShape& shape, Visit&& visit) {
@@ -58,6 +46,15 @@ void ForEachMonotoneSign(const MlpShape& shape, Visit&& visit) {
     }
     for (int r = 0; r < out; ++r) visit(o++, 0);
   }
+}
+
+// Whether flat parameter `index` of `shape` is a constrained (path-to-input-0) weight.
+inline bool IsMonotoneWeight(const MlpShape& shape, std::size_t index) {
+  bool constrained = false;
+  ForEachMonotoneSign(shape, [&](std::size_t o, int sign) {
+    if (o == index) constrained = sign != 0;
+  });
+  return constrained;
 }
 
 // eff = raw, with sign * |raw| on the constrained weights (shape.NumParams() values each).
