@@ -53,6 +53,9 @@ a light is that clips at every exposure; the own-max protocol divides by exactly
   hdr_log_slope      least-squares slope of log Y_pred on log Y_gt over the measured pixels
                      (1: the truth's shape; 0.25: the truth to the power 0.25)
   hdr_log_corr       their Pearson correlation
+  hdr_log_contrast   std(log Y_pred) / std(log Y_gt) over the same pixels: the HDR's shape
+                     without the pull of misplaced pixels (slope = corr x contrast; on a
+                     held-out view, geometry errors lower corr and with it the slope)
   hdr_measured_fraction  measured pixels / all pixels
   mu_*_aligned       prediction times hdr_align_scale, then the HDR-NeRF (GT max) protocol
   pu21_*_aligned     prediction times hdr_align_scale, then PU21 as above

@@ -245,7 +245,7 @@ const std::vector<std::string>& KnownKeys() {
       "psnr",           "psnr_channel_mean", "ssim",      "mu_psnr",  "mu_ssim",
       "mu_psnr_gt_max", "mu_ssim_gt_max",    "pu21_psnr", "pu21_ssim", "mu_psnr_aligned",
       "mu_ssim_aligned", "pu21_psnr_aligned", "pu21_ssim_aligned", "hdr_log_slope",
-      "hdr_log_corr", "hdr_align_scale", "hdr_measured_fraction"};
+      "hdr_log_corr", "hdr_log_contrast", "hdr_align_scale", "hdr_measured_fraction"};
   return keys;
 }
 

@@ -83,7 +83,7 @@ HdrAlignment AlignHdr(const Image& pred, const Image& gt, const std::vector<std:
   a.total = std::size_t(w) * h;
   a.pixels = log_gt.size();
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  a.slope = a.corr = nan;
+  a.slope = a.corr = a.contrast = nan;
   if (a.pixels == 0) return a;
 
   std::vector<double> ratio(a.pixels);
@@ -111,6 +111,7 @@ HdrAlignment AlignHdr(const Image& pred, const Image& gt, const std::vector<std:
     sgp += dg * dp;
   }
   if (sgg > 0) a.slope = sgp / sgg;
+  if (sgg > 0) a.contrast = std::sqrt(spp / sgg);
   if (sgg > 0 && spp > 0) a.corr = sgp / std::sqrt(sgg * spp);
   return a;
 }
@@ -130,6 +131,7 @@ MetricList AlignedHdrMetrics(const Image& pred,
       {"hdr_align_scale", a.scale},
       {"hdr_log_slope", a.slope},
       {"hdr_log_corr", a.corr},
+      {"hdr_log_contrast", a.contrast},
       {"hdr_measured_fraction", a.total ? double(a.pixels) / double(a.total) : 0.0},
       {"mu_psnr_aligned", MuPsnr(aligned, gt_rgb, HdrNormalisation::kGtMax)},
       {"mu_ssim_aligned", MuSsim(aligned, gt_rgb, HdrNormalisation::kGtMax)},

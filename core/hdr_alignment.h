@@ -12,7 +12,10 @@
 //      and with PU21 (both images times 4000 / the truth's maximum luminance);
 //   4. report, as diagnostics of the HDR's shape, the least-squares slope of log Y_pred on
 //      log Y_gt over the same pixels (1 for a prediction proportional to the truth, 0.25 for
-//      one that is the truth to the power 0.25) and their Pearson correlation.
+//      one that is the truth to the power 0.25), their Pearson correlation, and the ratio of
+//      their spreads, std(log Y_pred) / std(log Y_gt). slope = corr x contrast: a render whose
+//      pixels are misplaced (held-out geometry, blur) has corr < 1, which pulls the slope below
+//      1 even when the HDR's shape is right; the contrast ratio is not pulled down by that.
 // Results go under stable keys (AlignedHdrMetrics) into `hdr4d eval` and RUN/results.json.
 #pragma once
 
@@ -40,6 +43,7 @@ struct HdrAlignment {
   double scale = 1.0;  // multiplies the prediction (1 when no pixel qualifies)
   double slope = 0.0;  // NaN when fewer than 2 pixels or log Y_gt is constant
   double corr = 0.0;   // NaN likewise, or when log Y_pred is constant
+  double contrast = 0.0;  // std(log Y_pred) / std(log Y_gt); NaN as slope
   std::size_t pixels = 0;
   std::size_t total = 0;  // all pixels of the image
 };
@@ -49,7 +53,8 @@ struct HdrAlignment {
 // mismatched shapes, a mask of the wrong size, or NaN/Inf values.
 HdrAlignment AlignHdr(const Image& pred, const Image& gt, const std::vector<std::uint8_t>* mask);
 
-// In this order: "hdr_align_scale", "hdr_log_slope", "hdr_log_corr", "hdr_measured_fraction"
+// In this order: "hdr_align_scale", "hdr_log_slope", "hdr_log_corr", "hdr_log_contrast",
+// "hdr_measured_fraction"
 // (pixels used / all pixels), "mu_psnr_aligned", "mu_ssim_aligned" (prediction times the scale,
 // both divided by the truth's maximum, clamped, mu-law), "pu21_psnr_aligned", "pu21_ssim_aligned".
 // Throws as AlignHdr, and hdr4d::Error for an all-black truth.

@@ -70,6 +70,30 @@ TEST(HdrAlignment, AlignedMetricsIgnoreTheGlobalScaleButNotTheShape) {
   EXPECT_LT(compressed.at("pu21_psnr_aligned"), 25.0);
   EXPECT_NEAR(compressed.at("hdr_log_slope"), 0.25, 0.02);
   EXPECT_GT(compressed.at("hdr_log_corr"), 0.98);
+  EXPECT_NEAR(compressed.at("hdr_log_contrast"), 0.25, 0.02);
+}
+
+// A held-out render misplaces pixels (geometry error, blur): the slope drops with the
+// correlation, the ratio of log spreads does not. Here a power-law HDR with a quarter of its
+// pixels swapped among themselves: the spread of log Y_pred is exactly that of the power law.
+TEST(HdrAlignment, TheContrastRatioIgnoresMisplacedPixels) {
+  const Image gt = WideRangeHdr(48, 48, 2);
+  for (double p : {1.0, 0.6}) {
+    SCOPED_TRACE(p);
+    Image pred = Power(gt, 5.0, p);
+    const HdrAlignment exact = AlignHdr(pred, gt, nullptr);
+    EXPECT_NEAR(exact.contrast, p, 1e-5);
+    // Reverse the order of every fourth row: the same values in wrong places.
+    for (int y = 0; y < pred.height(); y += 4)
+      for (int x = 0; x < pred.width() / 2; ++x)
+        for (int c = 0; c < pred.channels(); ++c)
+          std::swap(pred.at(x, y, c), pred.at(pred.width() - 1 - x, y, c));
+    const HdrAlignment moved = AlignHdr(pred, gt, nullptr);
+    EXPECT_LT(moved.corr, 0.97);
+    EXPECT_LT(moved.slope, p * 0.97);
+    EXPECT_NEAR(moved.slope, moved.corr * moved.contrast, 1e-9);
+    EXPECT_NEAR(moved.contrast, p, 1e-5);
+  }
 }
 
 // The case the metrics exist for: a lamp clipped in every bracket, whose brightness the
