@@ -38,6 +38,7 @@ void AddTrainCommand(CLI::App& app) {
          monotone_curves = false;
     int context_window = 20, context_size = 2;
     float hdr_weight = 0.6f;
+    float pixel_log_epsilon = 0.0f;
     std::string hdr_target;
   };
   auto flags = std::make_shared<HdrFlags>();
@@ -199,6 +200,13 @@ void AddTrainCommand(CLI::App& app) {
          "colours, 0.04 for log-HDR colours, which span about ten log units where LDR colours "
          "span one: slower, the tone curve squeezes the HDR instead; BENCHMARKS.md, issue 12)")
       ->check(Real(1e-9, 10));
+  CLI::Option* pixel_log_epsilon_flag =
+      cmd->add_option("--pixel-log-epsilon", flags->pixel_log_epsilon,
+                      "Floor of the pixel branch's log(HDR + eps) (default: the reference's 1e-5 "
+                      "under LDR supervision alone, 1e-8 when an HDR term sets the raster's units: "
+                      "at 1e-5 of the target's maximum the darkest pixels the brackets record "
+                      "look black to the pixel branch; BENCHMARKS.md, issue 12)")
+          ->check(Real(1e-30, 1));
   cmd->add_option("--hdr-target", flags->hdr_target,
                   "Target of the HDR term: image-max (the reference: mu-law, mu 5000, of each "
                   "image over its own maximum) or scene-log (mu 1e6, one maximum for the whole "
@@ -206,7 +214,7 @@ void AddTrainCommand(CLI::App& app) {
       ->check(CLI::IsMember({"image-max", "scene-log"}));
   cmd->callback([cmd, options, data, out, flags, context_window, context_size, config,
                  list_configs, data_flag, out_flag, method_flag, supervision_flag,
-                 hdr_weight_flag] {
+                 hdr_weight_flag, pixel_log_epsilon_flag] {
     if (*list_configs) {
       ListTrainConfigs();
       return;
@@ -244,13 +252,15 @@ void AddTrainCommand(CLI::App& app) {
     if (flags->no_pixel_branch) hdr.pixel_branch = false;
     if (flags->no_gaussian_branch) hdr.gaussian_branch = false;
     hdr.hdr_weight = flags->hdr_weight;
+    if (pixel_log_epsilon_flag->count() > 0) hdr.pixel_log_epsilon = flags->pixel_log_epsilon;
     if (!flags->hdr_target.empty())
       hdr.hdr_target = method::ParseHdrTarget(flags->hdr_target, "--hdr-target");
     if (std::string p = hdr.Validate(); !p.empty()) Fail("train: {}", p);
     // Nothing HDR asked for: a scene with one exposure and no HDR truth trains plain 4DGS.
     const bool asked_for_hdr = method_flag->count() > 0 || tunes_tone_mapper ||
                                supervision_flag->count() > 0 || flags->no_pixel_branch ||
-                               flags->no_gaussian_branch || hdr_weight_flag->count() > 0;
+                               flags->no_gaussian_branch || hdr_weight_flag->count() > 0 ||
+                               pixel_log_epsilon_flag->count() > 0;
     if (!asked_for_hdr) options->when_nothing_hdr = baselines::MethodPreset("4dgs");
     const method::TrainSummary s = method::Train(*options);
     fmt::print("train: {} iterations in {:.1f} s, {} Gaussians; test {}\n", s.iterations,

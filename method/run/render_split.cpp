@@ -62,6 +62,10 @@ LoadedRun LoadRun(const fs::path& run) {
   r.resolved.ldr_pixel = resolved["ldr_pixel"].Bool();
   r.resolved.hdr = resolved["hdr"].Bool();
   r.resolved.final_ldr_from_pixels = resolved["final_ldr_from_pixels"].Bool();
+  // Runs from before the key trained with the reference's floor.
+  r.resolved.pixel_log_epsilon = resolved.Has("pixel_log_epsilon")
+                                     ? static_cast<float>(resolved["pixel_log_epsilon"].Number())
+                                     : kReferencePixelLogEpsilon;
   if (r.config.contains("tone_mapper")) {
     r.tone_mapper =
         MakeToneMapper(ToneMapperConfig::FromJson(r.config["tone_mapper"], config_path.string()));

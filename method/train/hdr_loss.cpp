@@ -22,9 +22,9 @@ void ExtractChannels(
   });
 }
 
-void PixelLogImage(const std::vector<float>& hdr, std::vector<float>* x) {
+void PixelLogImage(const std::vector<float>& hdr, float eps, std::vector<float>* x) {
   x->resize(hdr.size());
-  for (std::size_t i = 0; i < hdr.size(); ++i) (*x)[i] = PixelLog(hdr[i]);
+  for (std::size_t i = 0; i < hdr.size(); ++i) (*x)[i] = PixelLog(hdr[i], eps);
 }
 
 FrameLoss HdrFrameLoss(const float* raster,
@@ -65,7 +65,7 @@ FrameLoss HdrFrameLoss(const float* raster,
 
   // 2D branch: the same tone curves per pixel on the HDR raster.
   if (terms.ldr_pixel) {
-    PixelLogImage(s->hdr, &s->x);
+    PixelLogImage(s->hdr, terms.pixel_log_epsilon, &s->x);
     s->pixel_ldr.resize(values);
     tone_mapper->MapImage(s->x.data(), width, height, s->pixel_ldr.data());
     loss.ldr_pixel = PhotometricLoss(s->pixel_ldr.data(), ldr_gt, width, height, 3,
@@ -75,7 +75,7 @@ FrameLoss HdrFrameLoss(const float* raster,
     tone_mapper->MapImageBackward(s->x.data(), width, height, s->grad.data(), s->dx.data());
     ParallelFor(static_cast<std::int64_t>(pixels), kGrain, [&](std::int64_t p) {
       for (int c = 0; c < 3; ++c) {
-        dL_draster[p * channels + c] += PixelLogBackward(s->hdr[p * 3 + c], s->dx[p * 3 + c]);
+        dL_draster[p * channels + c] += PixelLogBackward(s->hdr[p * 3 + c], s->dx[p * 3 + c], terms.pixel_log_epsilon);
       }
     });
   }

@@ -8,6 +8,9 @@
 // the HDR raster enters mu unnormalised (the target is normalised); evaluation normalises each
 // image by its own maximum instead (core/metrics.h).
 //
+// The 2D branch's log takes a floor, log(HDR + eps): ResolvedHdrTraining::pixel_log_epsilon
+// (hdr_training_options.h) says which.
+//
 // The raster holds 3 channels (HDR only) or 6 (HDR, then the 3D branch's LDR), interleaved.
 #pragma once
 
@@ -18,10 +21,10 @@
 #include "core/metrics.h"
 
 #include "method/tonemap/tone_mapper.h"
+#include "method/train/hdr_training_options.h"
 
 namespace hdr4d::method {
 
-inline constexpr float kPixelLogEpsilon = 1e-5f;  // log(HDR + 1e-5) in the 2D branch
 
 // mu-law of the loss, for x >= 0 (negative x is treated as 0: the HDR raster is a sum of
 // non-negative values, so only rounding can make it negative).
@@ -36,21 +39,21 @@ inline T MuLawEncodeBackward(T x, T dL_dy, double mu = kMuLawMu) {
   return dL_dy * T(mu) / ((T(1) + T(mu) * x) * std::log(T(1) + T(mu)));
 }
 
-// The 2D branch's input: log(max(HDR, 0) + 1e-5), and its derivative.
+// The 2D branch's input: log(max(HDR, 0) + eps), and its derivative.
 template <typename T>
-inline T PixelLog(T hdr) {
-  return std::log((hdr > T(0) ? hdr : T(0)) + T(kPixelLogEpsilon));
+inline T PixelLog(T hdr, T eps) {
+  return std::log((hdr > T(0) ? hdr : T(0)) + eps);
 }
 template <typename T>
-inline T PixelLogBackward(T hdr, T dL_dy) {
-  return hdr > T(0) ? dL_dy / (hdr + T(kPixelLogEpsilon)) : T(0);
+inline T PixelLogBackward(T hdr, T dL_dy, T eps) {
+  return hdr > T(0) ? dL_dy / (hdr + eps) : T(0);
 }
 
 // Channels [first, first + 3) of an interleaved H x W x channels buffer as a 3-channel one.
 void ExtractChannels(
     const float* src, int channels, int first, std::size_t pixels, std::vector<float>* dst);
 // The 2D branch's input for every value of a 3-channel HDR image: PixelLog of each.
-void PixelLogImage(const std::vector<float>& hdr, std::vector<float>* x);
+void PixelLogImage(const std::vector<float>& hdr, float eps, std::vector<float>* x);
 
 struct SupervisionTerms {
   bool ldr_gaussian = true;  // L(clamp(LDR_3D), gt): needs a 6-channel raster
@@ -59,6 +62,7 @@ struct SupervisionTerms {
   float hdr_weight = 0.6f;
   float lambda_dssim = 0.2f;
   double hdr_mu = kMuLawMu;  // the mu of the HDR target's encoding (HdrTargetMu)
+  float pixel_log_epsilon = kReferencePixelLogEpsilon;  // the 2D branch's log(HDR + eps)
 };
 
 struct FrameLoss {

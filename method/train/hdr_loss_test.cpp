@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <random>
 #include <sstream>
 
@@ -74,10 +75,13 @@ TEST(HdrLoss, ScalarPiecesMatchFiniteDifferences) {
     ExpectGradientsMatch(
         analytic,
         NumericGradient([](const FdVector& v) { return MuLawEncode(v(0)); }, at, x * 1e-4), 1e-6);
-    analytic << PixelLogBackward(x, 1.0);
-    ExpectGradientsMatch(
-        analytic, NumericGradient([](const FdVector& v) { return PixelLog(v(0)); }, at, x * 1e-4),
-        1e-6);
+    for (double eps : {1e-5, 1e-8}) {
+      analytic << PixelLogBackward(x, 1.0, eps);
+      ExpectGradientsMatch(
+          analytic,
+          NumericGradient([eps](const FdVector& v) { return PixelLog(v(0), eps); }, at, x * 1e-4),
+          1e-6);
+    }
   }
   for (double c : {-20.0, -1.0, 0.0, 3.0, 13.8, 29.0}) {
     FdVector at(1);
@@ -96,9 +100,12 @@ TEST(HdrLoss, GuardsKeepEverythingFinite) {
   EXPECT_EQ(MuLawEncode(-1.0), 0.0);
   EXPECT_EQ(MuLawEncodeBackward(-1.0, 1.0), 0.0);
   EXPECT_TRUE(std::isfinite(MuLawEncode(1e30f)));
-  EXPECT_NEAR(PixelLog(0.0f), std::log(1e-5f), 1e-6);  // log of 0 is guarded
-  EXPECT_TRUE(std::isfinite(PixelLog(-5.0f)));
-  EXPECT_EQ(PixelLogBackward(0.0f, 1.0f), 0.0f);
+  for (float eps : {kReferencePixelLogEpsilon, kHdrUnitsPixelLogEpsilon}) {
+    EXPECT_NEAR(PixelLog(0.0f, eps), std::log(eps), 1e-5);  // log of 0 is guarded
+    EXPECT_TRUE(std::isfinite(PixelLog(-5.0f, eps)));
+    EXPECT_EQ(PixelLogBackward(0.0f, 1.0f, eps), 0.0f);
+    EXPECT_TRUE(std::isfinite(PixelLogBackward(1e-30f, 1.0f, eps)));
+  }
   EXPECT_TRUE(std::isfinite(GuardedExp(1e6f)));
   EXPECT_EQ(GuardedExp(1e6f), GuardedExp(kMaxLogRadiance));
   EXPECT_EQ(GuardedExpBackward(31.0f, 1.0f), 0.0f);
@@ -158,6 +165,35 @@ void ExpectDirectionalDerivatives(LossCase& c,
     EXPECT_NEAR(predicted, numeric, 2e-2 * std::abs(numeric) + 1e-5) << "trial " << trial;
     EXPECT_GT(std::abs(numeric), 1e-4);  // a direction that actually changes the loss
   }
+}
+
+// Which floor the 2D branch's log takes: the reference's under LDR supervision alone, a lower
+// one when an HDR term fixes the raster to the target's units, an explicit value always, and
+// the reference's for a run saved before the setting existed (so it renders as it trained).
+TEST(HdrLoss, PixelLogEpsilonFollowsTheSupervision) {
+  HdrTrainingOptions o;
+  o.method = "hdr4dgs";
+  o.color_mode = ColorMode::kLogHdr;
+  o.tone_mapper = ToneMapperConfig{};
+  o.supervision = Supervision::kLdr;
+  EXPECT_EQ(ResolveHdrTraining(o, true, true).pixel_log_epsilon, kReferencePixelLogEpsilon);
+  o.supervision = Supervision::kLdrHdr;
+  EXPECT_EQ(ResolveHdrTraining(o, true, true).pixel_log_epsilon, kHdrUnitsPixelLogEpsilon);
+  o.supervision = Supervision::kAuto;  // auto: LDR+HDR where the views have HDR truth
+  EXPECT_EQ(ResolveHdrTraining(o, true, true).pixel_log_epsilon, kHdrUnitsPixelLogEpsilon);
+  EXPECT_EQ(ResolveHdrTraining(o, false, true).pixel_log_epsilon, kReferencePixelLogEpsilon);
+  o.pixel_log_epsilon = 1e-6f;
+  EXPECT_EQ(ResolveHdrTraining(o, true, true).pixel_log_epsilon, 1e-6f);
+  EXPECT_EQ(HdrTrainingOptions::FromJson(o.ToJson(), "x").pixel_log_epsilon, 1e-6f);
+  o.pixel_log_epsilon.reset();
+  EXPECT_FALSE(HdrTrainingOptions::FromJson(o.ToJson(), "x").pixel_log_epsilon.has_value());
+  nlohmann::json old = o.ToJson();
+  old.erase("pixel_log_epsilon");
+  EXPECT_EQ(HdrTrainingOptions::FromJson(old, "x").pixel_log_epsilon, kReferencePixelLogEpsilon);
+  o.pixel_log_epsilon = 0.0f;
+  EXPECT_NE(o.Validate(), "");
+  o.pixel_log_epsilon = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_NE(o.Validate(), "");
 }
 
 TEST(HdrLoss, SixChannelGradientMatchesDirectionalDifferences) {

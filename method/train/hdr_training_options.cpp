@@ -39,6 +39,8 @@ HdrTarget ParseHdrTarget(const std::string& name, const std::string& what) {
 
 std::string HdrTrainingOptions::Validate() const {
   if (!(hdr_weight >= 0.0f && hdr_weight < 1e6f)) return "hdr_weight: must be >= 0 and finite";
+  if (pixel_log_epsilon && !(*pixel_log_epsilon >= 1e-30f && *pixel_log_epsilon <= 1.0f))
+    return "pixel_log_epsilon: must be in [1e-30, 1]";
   if (color_mode == ColorMode::kLdr) {
     if (tone_mapper) return "an LDR colour model has no tone mapper";
     if (supervision == Supervision::kHdr || supervision == Supervision::kLdrHdr)
@@ -62,7 +64,9 @@ nlohmann::json HdrTrainingOptions::ToJson() const {
           {"pixel_branch", pixel_branch},
           {"gaussian_branch", gaussian_branch},
           {"hdr_weight", hdr_weight},
-          {"hdr_target", HdrTargetName(hdr_target)}};
+          {"hdr_target", HdrTargetName(hdr_target)},
+          {"pixel_log_epsilon",
+           pixel_log_epsilon ? nlohmann::json(*pixel_log_epsilon) : nlohmann::json(nullptr)}};
 }
 
 HdrTrainingOptions HdrTrainingOptions::FromJson(const nlohmann::json& j,
@@ -87,6 +91,12 @@ HdrTrainingOptions HdrTrainingOptions::FromJson(const nlohmann::json& j,
     // Runs from before the key trained with the reference's target.
     if (const auto it = j.find("hdr_target"); it != j.end())
       o.hdr_target = ParseHdrTarget(it->get<std::string>(), source);
+    // Runs from before the key used the reference's floor whatever the supervision.
+    if (const auto it = j.find("pixel_log_epsilon"); it == j.end()) {
+      o.pixel_log_epsilon = kReferencePixelLogEpsilon;
+    } else if (!it->is_null()) {
+      o.pixel_log_epsilon = it->get<float>();
+    }
   } catch (const nlohmann::json::exception& e) {
     Fail("{}: bad or missing HDR training setting: {}", source, e.what());
   }
@@ -98,7 +108,8 @@ nlohmann::json ResolvedHdrTraining::ToJson() const {
           {"ldr_gaussian", ldr_gaussian},
           {"ldr_pixel", ldr_pixel},
           {"hdr", hdr},
-          {"final_ldr_from_pixels", final_ldr_from_pixels}};
+          {"final_ldr_from_pixels", final_ldr_from_pixels},
+          {"pixel_log_epsilon", pixel_log_epsilon}};
 }
 
 ResolvedHdrTraining ResolveHdrTraining(const HdrTrainingOptions& o,
@@ -120,6 +131,8 @@ ResolvedHdrTraining ResolveHdrTraining(const HdrTrainingOptions& o,
   }
   const bool ldr = s == Supervision::kLdr || s == Supervision::kLdrHdr;
   r.hdr = s == Supervision::kHdr || s == Supervision::kLdrHdr;
+  r.pixel_log_epsilon = o.pixel_log_epsilon.value_or(r.hdr ? kHdrUnitsPixelLogEpsilon
+                                                           : kReferencePixelLogEpsilon);
   if (r.hdr && !train_views_have_hdr) {
     Fail(
         "train: supervision '{}' needs HDR ground truth (exr_file_path) in the training views; "

@@ -23,6 +23,16 @@ enum class Supervision { kAuto, kLdr, kHdr, kLdrHdr };
 //   scene-log  gt / one maximum over all training views, encoded with mu = 1e6 (log-like over
 //              six decades): one consistent scale for the whole scene, dark and bright alike.
 enum class HdrTarget { kImageMax, kSceneLog };
+
+// The floor of the 2D branch's log(HDR + eps). The reference's 1e-5 is harmless under LDR
+// supervision alone, where the model picks its own radiance scale. An HDR term fixes the raster
+// to the target's units (each image, or the scene, over its maximum), where the darkest
+// radiance an LDR bracket still records sits near 1e-5 on a scene of 1e5:1 (two exposures 256x
+// apart record 1/65000 of the top): the 2D branch then cannot tell those pixels from black and
+// fights the HDR term there (issue 12 §3, BENCHMARKS.md: 2.4 dB of held-out LDR on studio).
+// So with an HDR term the floor is 1e-8 of the target's maximum.
+inline constexpr float kReferencePixelLogEpsilon = 1e-5f;
+inline constexpr float kHdrUnitsPixelLogEpsilon = 1e-8f;
 inline constexpr double kSceneLogMu = 1e6;
 inline double HdrTargetMu(HdrTarget t) { return t == HdrTarget::kSceneLog ? kSceneLogMu : kMuLawMu; }
 const char* HdrTargetName(HdrTarget t);
@@ -43,6 +53,8 @@ struct HdrTrainingOptions {
   bool gaussian_branch = true;  // the 3D branch: tone-mapped Gaussians in the raster (6 ch)
   float hdr_weight = 0.6f;      // alpha of the HDR term
   HdrTarget hdr_target = HdrTarget::kImageMax;
+  // The floor of the 2D branch's log(HDR + eps); unset: PixelLogEpsilonFor's choice.
+  std::optional<float> pixel_log_epsilon;
 
   std::string Validate() const;
   nlohmann::json ToJson() const;
@@ -56,6 +68,7 @@ struct ResolvedHdrTraining {
   bool ldr_pixel = false;              // 2D branch LDR term
   bool hdr = false;                    // HDR term (views with HDR ground truth)
   bool final_ldr_from_pixels = false;  // the LDR output is the 2D branch (whole-image mappers)
+  float pixel_log_epsilon = kReferencePixelLogEpsilon;  // the 2D branch's log(HDR + eps)
   nlohmann::json ToJson() const;
 };
 

@@ -394,7 +394,8 @@ void TrainingRun::PrepareRendering() {
             .hdr = resolved_.hdr,
             .hdr_weight = options_.hdr.hdr_weight,
             .lambda_dssim = static_cast<float>(opt_.lambda_dssim),
-            .hdr_mu = HdrTargetMu(options_.hdr.hdr_target)};
+            .hdr_mu = HdrTargetMu(options_.hdr.hdr_target),
+            .pixel_log_epsilon = resolved_.pixel_log_epsilon};
   progress_.emplace("train", opt_.iterations - loop_.iteration, options_.progress);
   start_ = std::chrono::steady_clock::now();
   seconds_before_ = loop_.train_seconds;

@@ -56,7 +56,7 @@ void ViewRenderer::Render(const Camera& camera,
     ExtractChannels(raster_.data(), channels, 3, pixels, ldr);
   } else if (tone_mapper_) {
     ExtractChannels(raster_.data(), channels, 0, pixels, &x_);
-    PixelLogImage(x_, &x_);
+    PixelLogImage(x_, resolved_.pixel_log_epsilon, &x_);
     ldr->resize(pixels * 3);
     tone_mapper_->MapImage(x_.data(), camera.intrinsics.width, camera.intrinsics.height,
                            ldr->data());
