@@ -100,6 +100,7 @@ bool ParetoChart(const std::vector<RunSummary>& runs, const Suite& suite, const 
     PlotSeries s;
     s.name = config;
     s.style = list.size() > 1 ? PlotSeries::kLineMarkers : PlotSeries::kMarkers;
+    s.marker = PaletteMarker(colour);
     s.color = PaletteColor(colour++);
     for (const ParetoPoint* p : list) {
       s.x.push_back(p->seconds);

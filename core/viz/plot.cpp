@@ -219,6 +219,10 @@ void ValidateSeries(const std::vector<PlotSeries>& series) {
         s.style != PlotSeries::kLineMarkers) {
       Fail("plot series {}: unknown style {}", SeriesName(s, i), static_cast<int>(s.style));
     }
+    if (s.marker != PlotSeries::kCircle && s.marker != PlotSeries::kSquare &&
+        s.marker != PlotSeries::kDiamond) {
+      Fail("plot series {}: unknown marker {}", SeriesName(s, i), static_cast<int>(s.marker));
+    }
   }
 }
 
@@ -260,8 +264,27 @@ struct MarkItem {
   Rgb color{};
   double line_width = 2.0;
   double marker_radius = 4.0;
+  PlotSeries::Marker marker = PlotSeries::kCircle;
   std::optional<Rect> clip;
 };
+
+// Half the side of a square marker of radius r, per unit r: sqrt(pi) / 2, the circle's area.
+constexpr double kMarkerHalfSide = 0.886;
+
+// Distance from p to the edge of a marker of radius r centred at m (negative inside). The
+// square and diamond have the circle's area, so no shape dominates the eye.
+double MarkerEdgeDistance(PlotSeries::Marker shape, Point m, double r, double px, double py) {
+  const double dx = std::abs(px - m[0]), dy = std::abs(py - m[1]);
+  switch (shape) {
+    case PlotSeries::kSquare:
+      return std::max(dx, dy) - kMarkerHalfSide * r;
+    case PlotSeries::kDiamond:
+      return (dx + dy) / std::sqrt(2.0) - kMarkerHalfSide * r;  // the square turned 45 degrees
+    case PlotSeries::kCircle:
+      break;
+  }
+  return std::hypot(dx, dy) - r;
+}
 
 struct LabelItem {
   double x = 0, y = 0;  // top-left of the text box (of the turned box when `up`)
@@ -312,6 +335,7 @@ MarkItem SeriesMark(const PlotSeries& s, const PlotFrame& f, const PlotOptions& 
   mark.color = s.color;
   mark.line_width = o.line_width;
   mark.marker_radius = o.marker_radius;
+  mark.marker = s.marker;
   mark.clip = area;
   const bool lines = s.style != PlotSeries::kMarkers;
   const bool markers = s.style != PlotSeries::kLine;
@@ -447,6 +471,7 @@ void AddLegend(const std::vector<PlotSeries>& series,
     mark.color = s.color;
     mark.line_width = o.line_width;
     mark.marker_radius = std::min(o.marker_radius, 0.5 * l.text_height);
+    mark.marker = s.marker;
     if (s.style != PlotSeries::kMarkers) {
       mark.runs.push_back({{x0, center_y}, {x0 + sample_width, center_y}});
     }
@@ -679,7 +704,7 @@ void RasterMark(const MarkItem& mark, Image* image) {
   const double r = mark.marker_radius;
   for (const Point& m : mark.markers) {
     cover(m[0] - r - 1, m[1] - r - 1, m[0] + r + 1, m[1] + r + 1, [&](double x, double y) {
-      return std::clamp(r + 0.5 - std::hypot(x - m[0], y - m[1]), 0.0, 1.0);
+      return std::clamp(0.5 - MarkerEdgeDistance(mark.marker, m, r, x, y), 0.0, 1.0);
     });
   }
   for (int y = 0; y < ch; ++y) {
@@ -832,9 +857,25 @@ std::string SvgBody(const Scene& scene, const std::string& id_prefix) {
             "stroke-linejoin=\"round\" stroke-linecap=\"round\"/>\n",
             points, Hex(mark->color), Num(mark->line_width));
       }
+      const double h = kMarkerHalfSide * mark->marker_radius;  // as MarkerEdgeDistance
+      const double d = h * std::sqrt(2.0);
       for (const Point& m : mark->markers) {
-        out += fmt::format("<circle cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"{}\"/>\n", Num(m[0]),
-                           Num(m[1]), Num(mark->marker_radius), Hex(mark->color));
+        switch (mark->marker) {
+          case PlotSeries::kSquare:
+            out += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"{}\"/>\n",
+                               Num(m[0] - h), Num(m[1] - h), Num(2 * h), Num(2 * h),
+                               Hex(mark->color));
+            break;
+          case PlotSeries::kDiamond:
+            out += fmt::format("<polygon points=\"{},{} {},{} {},{} {},{}\" fill=\"{}\"/>\n",
+                               Num(m[0]), Num(m[1] - d), Num(m[0] + d), Num(m[1]), Num(m[0]),
+                               Num(m[1] + d), Num(m[0] - d), Num(m[1]), Hex(mark->color));
+            break;
+          case PlotSeries::kCircle:
+            out += fmt::format("<circle cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"{}\"/>\n",
+                               Num(m[0]), Num(m[1]), Num(mark->marker_radius), Hex(mark->color));
+            break;
+        }
       }
       out += "</g>\n";
     } else if (const auto* label = std::get_if<LabelItem>(&item)) {
@@ -1102,6 +1143,12 @@ void WritePlotGrid(const std::filesystem::path& path,
   WriteByExtension(
       path, [&] { return RenderPlotGrid(panels, columns); },
       [&] { return RenderPlotGridSvg(panels, columns); });
+}
+
+PlotSeries::Marker PaletteMarker(int index) {
+  constexpr int kColours = 10;  // PaletteColor's cycle
+  const int cycle = (index < 0 ? -index : index) / kColours;
+  return static_cast<PlotSeries::Marker>(cycle % 3);
 }
 
 std::array<float, 3> PaletteColor(int index) {

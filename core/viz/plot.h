@@ -16,11 +16,14 @@ namespace hdr4d {
 
 struct PlotSeries {
   enum Style { kLine, kMarkers, kLineMarkers };
+  // Of the markers: with more series than palette colours, a shape tells two of one colour apart.
+  enum Marker { kCircle, kSquare, kDiamond };
 
   std::string name;  // legend entry; unnamed series are left out of the legend
   std::vector<double> x, y;
   std::array<float, 3> color = {0.12f, 0.35f, 0.70f};  // display (sRGB) values in [0,1]
   Style style = kLine;
+  Marker marker = kCircle;
   // Empty, or one label per point, drawn beside the point ("" draws none).
   std::vector<std::string> point_labels;
 };
@@ -104,8 +107,10 @@ void WritePlotGrid(const std::filesystem::path& path,
                    int columns);
 
 // Distinct colours for categories (cycles after 10) and a dark-to-light ramp for ordered ones
-// such as times (t in [0,1], clamped).
+// such as times (t in [0,1], clamped). PaletteMarker: the marker shape of category `index`,
+// the next shape each time the colours cycle, so the first 30 categories differ in one or both.
 std::array<float, 3> PaletteColor(int index);
+PlotSeries::Marker PaletteMarker(int index);
 std::array<float, 3> SequentialColor(double t);
 
 }  // namespace hdr4d

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -525,6 +526,49 @@ TEST(Plot, LegendNamesSeriesAndAvoidsTheData) {
   options.legend = false;
   EXPECT_EQ(RenderPlotSvg({a, b}, options).find(">red channel</text>"), std::string::npos);
   EXPECT_EQ(RenderPlotSvg({Diagonal()}, PlotOptions{}).find("#b3b3b3"), std::string::npos);
+}
+
+// Past the palette's ten colours a series keeps its colour's hue but changes shape: a square
+// fills the corner of its box that a circle leaves empty, a diamond leaves even the circle's
+// diagonal edge empty, and the SVG draws each with its own element.
+TEST(Plot, MarkerShapesTellSeriesOfOneColourApart) {
+  EXPECT_EQ(PaletteMarker(0), PlotSeries::kCircle);
+  EXPECT_EQ(PaletteMarker(9), PlotSeries::kCircle);
+  EXPECT_EQ(PaletteMarker(10), PlotSeries::kSquare);
+  EXPECT_EQ(PaletteMarker(25), PlotSeries::kDiamond);
+  EXPECT_EQ(PaletteMarker(30), PlotSeries::kCircle);
+  EXPECT_EQ(PaletteColor(3), PaletteColor(13));
+  PlotSeries s = Series("m", {1.0, 2.0}, {1.0, 2.0});
+  s.style = PlotSeries::kMarkers;
+  PlotOptions options;
+  options.legend = false;
+  options.grid = false;
+  options.marker_radius = 8.0;
+  const PlotFrame f = ComputePlotFrame({s}, options);
+  const int px = static_cast<int>(f.PixelX(1.0)), py = static_cast<int>(f.PixelY(1.0));
+  // Inside the square's corner (6, 6 from the centre; half side 7.1) but outside the circle
+  // (distance 8.5) and the diamond (|dx| + |dy| = 12 > 10).
+  std::map<PlotSeries::Marker, bool> corner;
+  for (auto shape : {PlotSeries::kCircle, PlotSeries::kSquare, PlotSeries::kDiamond}) {
+    s.marker = shape;
+    const Image image = RenderPlot({s}, options);
+    EXPECT_TRUE(IsBlue(image, px, py)) << shape;
+    corner[shape] = IsBlue(image, px + 6, py + 6);
+  }
+  EXPECT_FALSE(corner[PlotSeries::kCircle]);
+  EXPECT_TRUE(corner[PlotSeries::kSquare]);
+  EXPECT_FALSE(corner[PlotSeries::kDiamond]);
+  s.marker = PlotSeries::kSquare;
+  std::string svg = RenderPlotSvg({s}, options);
+  EXPECT_NE(svg.find("<rect x="), std::string::npos);
+  EXPECT_TRUE(WellFormedXml(svg));
+  s.marker = PlotSeries::kDiamond;
+  svg = RenderPlotSvg({s}, options);
+  EXPECT_NE(svg.find("<polygon"), std::string::npos);
+  EXPECT_EQ(svg.find("<circle"), std::string::npos);
+  EXPECT_TRUE(WellFormedXml(svg));
+  s.marker = static_cast<PlotSeries::Marker>(7);
+  EXPECT_THROW(RenderPlot({s}, options), Error);
 }
 
 TEST(Plot, SvgIsWellFormedEscapedAndNamesTheSeries) {
