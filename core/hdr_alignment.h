@@ -54,9 +54,9 @@ struct HdrAlignment {
 HdrAlignment AlignHdr(const Image& pred, const Image& gt, const std::vector<std::uint8_t>* mask);
 
 // In this order: "hdr_align_scale", "hdr_log_slope", "hdr_log_corr", "hdr_log_contrast",
-// "hdr_measured_fraction"
-// (pixels used / all pixels), "mu_psnr_aligned", "mu_ssim_aligned" (prediction times the scale,
-// both divided by the truth's maximum, clamped, mu-law), "pu21_psnr_aligned", "pu21_ssim_aligned".
+// "hdr_measured_fraction" (pixels used / all pixels), "mu_psnr_aligned", "mu_ssim_aligned"
+// (prediction times the scale, both divided by the truth's maximum, clamped, mu-law),
+// "pu21_psnr_aligned", "pu21_ssim_aligned".
 // Throws as AlignHdr, and hdr4d::Error for an all-black truth.
 MetricList AlignedHdrMetrics(const Image& pred,
                              const Image& gt,

@@ -75,7 +75,8 @@ FrameLoss HdrFrameLoss(const float* raster,
     tone_mapper->MapImageBackward(s->x.data(), width, height, s->grad.data(), s->dx.data());
     ParallelFor(static_cast<std::int64_t>(pixels), kGrain, [&](std::int64_t p) {
       for (int c = 0; c < 3; ++c) {
-        dL_draster[p * channels + c] += PixelLogBackward(s->hdr[p * 3 + c], s->dx[p * 3 + c], terms.pixel_log_epsilon);
+        dL_draster[p * channels + c] +=
+            PixelLogBackward(s->hdr[p * 3 + c], s->dx[p * 3 + c], terms.pixel_log_epsilon);
       }
     });
   }

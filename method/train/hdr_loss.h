@@ -25,7 +25,6 @@
 
 namespace hdr4d::method {
 
-
 // mu-law of the loss, for x >= 0 (negative x is treated as 0: the HDR raster is a sum of
 // non-negative values, so only rounding can make it negative).
 template <typename T>

@@ -53,7 +53,8 @@ struct HdrTrainingOptions {
   bool gaussian_branch = true;  // the 3D branch: tone-mapped Gaussians in the raster (6 ch)
   float hdr_weight = 0.6f;      // alpha of the HDR term
   HdrTarget hdr_target = HdrTarget::kImageMax;
-  // The floor of the 2D branch's log(HDR + eps); unset: PixelLogEpsilonFor's choice.
+  // The floor of the 2D branch's log(HDR + eps); unset: ResolveHdrTraining picks
+  // kHdrUnitsPixelLogEpsilon with an HDR term, else kReferencePixelLogEpsilon.
   std::optional<float> pixel_log_epsilon;
 
   std::string Validate() const;
