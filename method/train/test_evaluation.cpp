@@ -5,7 +5,10 @@
 #include <cstdint>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "core/hdr_alignment.h"
 #include "core/image_io.h"
@@ -14,49 +17,78 @@
 
 namespace hdr4d::method {
 
+namespace {
+
+// The views in groups that share one HDR ground truth (the brackets of one camera and time), in
+// the order the truths first appear; a view without HDR truth is a group of its own.
+std::vector<std::vector<std::size_t>> GroupByHdrTruth(const std::vector<TrainView>& views) {
+  std::vector<std::vector<std::size_t>> groups;
+  std::map<std::filesystem::path, std::size_t> group_of;
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    if (!views[i].hdr_path) {
+      groups.push_back({i});
+      continue;
+    }
+    auto [it, added] = group_of.try_emplace(*views[i].hdr_path, groups.size());
+    if (added) groups.emplace_back();
+    groups[it->second].push_back(i);
+  }
+  return groups;
+}
+
+}  // namespace
+
 nlohmann::json EvaluateViews(ViewRenderer* renderer, const std::vector<TrainView>& views) {
   nlohmann::json mean = nlohmann::json::object();
   if (views.empty()) return mean;
   std::map<std::string, std::pair<double, int>> sums;
   std::vector<float> ldr, hdr, gt;
-  // The pixels some LDR bracket of the same view and time measures (the views sharing an HDR
-  // ground truth), for the scale-aligned HDR metrics (core/hdr_alignment.h).
-  std::map<std::filesystem::path, std::vector<Image>> brackets;
-  for (const TrainView& v : views) {
-    if (!v.hdr_path) continue;
-    v.ToFloat(&gt);
-    brackets[*v.hdr_path].push_back(DisplayImageFromBuffer(gt.data(), v.width(), v.height(), 3));
-  }
-  std::map<std::filesystem::path, std::vector<std::uint8_t>> measured;
-  for (const auto& [path, images] : brackets) measured[path] = MeasurableInBrackets(images);
-  for (const TrainView& v : views) {
-    const ToneFrame frame{v.time_index, -1, static_cast<float>(std::log(v.exposure))};
-    renderer->Render(v.camera, v.time, frame, &ldr, &hdr);
-    // Means over the views where a metric is defined, as hdr4d eval does: the log-log slope
-    // of a view with no measured pixel (every bracket clipped) is NaN and left out.
-    auto add = [&](const MetricList& metrics) {
-      for (const auto& [key, value] : metrics) {
-        if (!std::isfinite(value)) continue;
-        sums[key].first += value;
-        sums[key].second += 1;
-      }
-    };
-    if (!ldr.empty()) {
-      v.ToFloat(&gt);
-      add(LdrMetrics(DisplayImageFromBuffer(ldr.data(), v.width(), v.height(), 3),
-                     DisplayImageFromBuffer(gt.data(), v.width(), v.height(), 3)));
+  // Means over the views where a metric is defined, as hdr4d eval does: the log-log slope of a
+  // view with no measured pixel (every bracket clipped) is NaN and left out.
+  auto add = [&](const MetricList& metrics) {
+    for (const auto& [key, value] : metrics) {
+      if (!std::isfinite(value)) continue;
+      sums[key].first += value;
+      sums[key].second += 1;
     }
-    if (!hdr.empty() && v.hdr_path) {
+  };
+  // One HDR truth at a time: it is read once for all its brackets, and only one group's images
+  // are held (all of a paper-size test split at once took 1.4 GB at 800x800, issue 15).
+  for (const std::vector<std::size_t>& group : GroupByHdrTruth(views)) {
+    const std::optional<std::filesystem::path>& hdr_path = views[group.front()].hdr_path;
+    std::optional<Image> truth;
+    std::vector<std::uint8_t> measured;  // pixels some bracket of the group measures
+    if (hdr_path) {
+      std::vector<Image> brackets;
+      for (std::size_t i : group) {
+        views[i].ToFloat(&gt);
+        brackets.push_back(
+            DisplayImageFromBuffer(gt.data(), views[i].width(), views[i].height(), 3));
+      }
+      measured = MeasurableInBrackets(brackets);
+    }
+    for (std::size_t i : group) {
+      const TrainView& v = views[i];
+      const ToneFrame frame{v.time_index, -1, static_cast<float>(std::log(v.exposure))};
+      renderer->Render(v.camera, v.time, frame, &ldr, &hdr);
+      if (!ldr.empty()) {
+        v.ToFloat(&gt);
+        add(LdrMetrics(DisplayImageFromBuffer(ldr.data(), v.width(), v.height(), 3),
+                       DisplayImageFromBuffer(gt.data(), v.width(), v.height(), 3)));
+      }
+      if (hdr.empty() || !hdr_path) continue;
+      if (!truth) {
+        // A run at --resolution R compares with the truth reduced as its training target was.
+        Image file = ReadImage(*hdr_path);
+        const int factor = file.width() / std::max(1, v.width());
+        truth = factor > 1 && ResolutionProblem(file.width(), file.height(), factor) == ""
+                    ? DownsampleBox(file, factor)
+                    : std::move(file);
+      }
       Image prediction(v.width(), v.height(), 3, Encoding::kLinear);
       std::copy(hdr.begin(), hdr.end(), prediction.data());
-      // A run at --resolution R compares with the truth reduced as its training target was.
-      const Image file = ReadImage(*v.hdr_path);
-      const int factor = file.width() / std::max(1, v.width());
-      const Image truth = factor > 1 && ResolutionProblem(file.width(), file.height(), factor) == ""
-                              ? DownsampleBox(file, factor)
-                              : file;
-      add(HdrMetrics(prediction, truth));
-      add(AlignedHdrMetrics(prediction, truth, &measured.at(*v.hdr_path)));
+      add(HdrMetrics(prediction, *truth));
+      add(AlignedHdrMetrics(prediction, *truth, &measured));
     }
   }
   for (const auto& [key, sum] : sums) mean[key] = FiniteOrNull(sum.first / sum.second);

@@ -259,7 +259,7 @@ void TrainingRun::SetUp() {
   const HdrTrainingOptions& hdr = options_.hdr;
   const float background[3] = {options_.background, options_.background, options_.background};
   train_views_ = LoadViews(*dataset_, Split::kTrain, background,
-                           /*load_hdr=*/hdr.color_mode == ColorMode::kLogHdr, options_.resolution,
+                           /*load_hdr=*/hdr.MayUseHdrTargets(), options_.resolution,
                            hdr.hdr_target);
   test_views_ = LoadViews(*dataset_, Split::kTest, background, false, options_.resolution);
   num_times_ = DistinctTimes(*dataset_);

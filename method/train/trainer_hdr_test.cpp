@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "core/dataset.h"
 #include "core/dataset_image_rules.h"
@@ -87,6 +88,29 @@ TEST(TrainerHdr, LdrSupervisionTrainsAndReportsHdrMetrics) {
   const Checkpoint c = LoadCheckpoint(dir / "run" / "checkpoint.bin");
   EXPECT_FALSE(c.tone_mapper_state.empty());
   EXPECT_EQ(c.model.color_mode, ColorMode::kLogHdr);
+}
+
+// LDR supervision has no HDR term, so it never reads the training views' HDR ground truth (a
+// paper-size scene's targets cost as much memory as its LDR images, issue 15): a training HDR
+// file with a NaN stops an LDR+HDR run with its name and not an LDR run.
+TEST(TrainerHdr, LdrSupervisionNeverReadsTheTrainingHdr) {
+  TempDir dir;
+  MakeHdrScene(dir / "scene", 16);
+  const Dataset dataset = LoadDataset(dir / "scene", {.image_check = ImageCheck::kNone});
+  ASSERT_TRUE(dataset.train.front().hdr_path.has_value());
+  const fs::path train_hdr = *dataset.train.front().hdr_path;
+  for (const Frame& f : dataset.test) ASSERT_NE(f.hdr_path, train_hdr);  // the test split's are fine
+  Image bad = ReadImage(train_hdr);
+  bad.at(0, 0, 0) = std::numeric_limits<float>::quiet_NaN();
+  WriteImage(train_hdr, bad, {.format = PixelFormat::kFloat});
+  TrainOptions o = HdrRun(dir / "scene", dir / "ldr", 5);
+  o.hdr.supervision = Supervision::kLdr;
+  EXPECT_NO_THROW(Train(o));
+  o = HdrRun(dir / "scene", dir / "ldrhdr", 5);
+  o.hdr.supervision = Supervision::kLdrHdr;
+  const std::string error = ErrorOf([&] { Train(o); });
+  EXPECT_NE(error.find(train_hdr.filename().string()), std::string::npos) << error;
+  EXPECT_NE(error.find("non-finite"), std::string::npos) << error;
 }
 
 TEST(TrainerHdr, ResumeContinuesExactlyWithTheToneMapper) {
