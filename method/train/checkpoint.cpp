@@ -33,12 +33,6 @@ std::uint64_t ReadU64(std::istream& in, const fs::path& path, const char* what) 
   return v;
 }
 
-void WriteFloats(std::ostream& out, const std::vector<float>& v) {
-  WriteU64(out, v.size());
-  out.write(reinterpret_cast<const char*>(v.data()),
-            static_cast<std::streamsize>(v.size() * sizeof(float)));
-}
-
 std::vector<float> ReadFloats(std::istream& in,
                               const fs::path& path,
                               const char* what,
@@ -89,23 +83,27 @@ void SaveCheckpoint(const fs::path& path, const Checkpoint& c) {
       {"gaussians", c.model.size()},
       {"trainer", c.trainer},
   };
-  std::ostringstream out;
-  out.write(kMagic, sizeof(kMagic));
-  const std::string text = header.dump();
-  WriteU64(out, text.size());
-  out.write(text.data(), static_cast<std::streamsize>(text.size()));
-  ForEachBuffer(c.model, [&](const char*, const std::vector<float>& v) { WriteFloats(out, v); });
-  WriteU64(out, c.extra_floats.size());
-  for (const auto& v : c.extra_floats) WriteFloats(out, v);
-  WriteU64(out, c.adam_state.size());
-  out.write(c.adam_state.data(), static_cast<std::streamsize>(c.adam_state.size()));
-  WriteU64(out, c.tone_mapper_state.size());
-  out.write(c.tone_mapper_state.data(), static_cast<std::streamsize>(c.tone_mapper_state.size()));
-  const std::string bytes = out.str();
+  // Streamed into the file with a running checksum: building the bytes in memory first held
+  // two more copies of the whole state at the end of a run (2.1 GB at 220k Gaussians, issue 15).
   WriteFileAtomic(path, [&](std::ostream& file) {
-    file.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    HashingWriter out(file);
+    const auto floats = [&](const std::vector<float>& v) {
+      out.Value<std::uint64_t>(v.size());
+      out.Bytes(v.data(), v.size() * sizeof(float));
+    };
+    out.Bytes(kMagic, sizeof(kMagic));
+    const std::string text = header.dump();
+    out.Value<std::uint64_t>(text.size());
+    out.Bytes(text.data(), text.size());
+    ForEachBuffer(c.model, [&](const char*, const std::vector<float>& v) { floats(v); });
+    out.Value<std::uint64_t>(c.extra_floats.size());
+    for (const auto& v : c.extra_floats) floats(v);
+    out.Value<std::uint64_t>(c.adam_state.size());
+    out.Bytes(c.adam_state.data(), c.adam_state.size());
+    out.Value<std::uint64_t>(c.tone_mapper_state.size());
+    out.Bytes(c.tone_mapper_state.data(), c.tone_mapper_state.size());
     file.write(kTrailerMagic, sizeof(kTrailerMagic));
-    WriteU64(file, Fnv1a(bytes.data(), bytes.size()));
+    WriteU64(file, out.hash());
   });
 }
 
