@@ -83,8 +83,9 @@ void SaveCheckpoint(const fs::path& path, const Checkpoint& c) {
       {"gaussians", c.model.size()},
       {"trainer", c.trainer},
   };
-  // Streamed into the file with a running checksum: building the bytes in memory first held
-  // two more copies of the whole state at the end of a run (2.1 GB at 220k Gaussians, issue 15).
+  // Streamed into the file with a running checksum: building the bytes in memory first (a
+  // growing string stream, then a copy of it) raised the end-of-run peak by 0.8 GB at 220k
+  // Gaussians (BENCHMARKS.md, issue 15).
   WriteFileAtomic(path, [&](std::ostream& file) {
     HashingWriter out(file);
     const auto floats = [&](const std::vector<float>& v) {
