@@ -11,10 +11,11 @@
 //   "mu_ssim" (own-max normalisation), "mu_psnr_gt_max", "mu_ssim_gt_max", "pu21_psnr",
 //   "pu21_ssim", then the AlignedHdrMetrics keys (core/hdr_alignment.h): "hdr_align_scale",
 //   "hdr_log_slope", "hdr_log_corr", "hdr_log_contrast", "hdr_measured_fraction",
-//   "mu_psnr_aligned", "mu_ssim_aligned", "pu21_psnr_aligned", "pu21_ssim_aligned". Their pixels are those an LDR
-//   bracket of the view measures when the brackets are known (EvalBrackets), else every pixel
-//   with positive luminance in both images. A key whose value is undefined for a pair (the
-//   log-log slope of an image with one measured pixel) is left out of that pair.
+//   "mu_psnr_aligned", "mu_ssim_aligned", "pu21_psnr_aligned", "pu21_ssim_aligned". Their
+//   pixels are those an LDR bracket of the view measures when the brackets are known
+//   (EvalBrackets), else every pixel with positive luminance in both images. A key whose value
+//   is undefined for a pair (the log-log slope of an image with one measured pixel) is left
+//   out of that pair.
 // - Pairs are listed in sorted order of the ground-truth file name. "mean" is the arithmetic mean
 //   of the per-pair values of each key over the pairs that have the key (not a metric of the
 //   pooled error).

@@ -57,13 +57,6 @@ struct HdrTrainingOptions {
   // kHdrUnitsPixelLogEpsilon with an HDR term, else kReferencePixelLogEpsilon.
   std::optional<float> pixel_log_epsilon;
 
-  // Whether an HDR term can be on, so the training views' HDR targets must be read: never for
-  // LDR colours or explicit LDR supervision (a paper-size scene's targets would double the
-  // memory and the loading time for nothing, issue 15).
-  bool MayUseHdrTargets() const {
-    return color_mode == ColorMode::kLogHdr && supervision != Supervision::kLdr;
-  }
-
   std::string Validate() const;
   nlohmann::json ToJson() const;
   static HdrTrainingOptions FromJson(const nlohmann::json& json, const std::string& source);

@@ -36,6 +36,30 @@ std::vector<std::vector<std::size_t>> GroupByHdrTruth(const std::vector<TrainVie
   return groups;
 }
 
+// The HDR metrics of `prediction` against the group's truth: raw, and scale-aligned over the
+// pixels some bracket of the group measures (core/hdr_alignment.h). A run at --resolution R
+// compares with the truth reduced as its training target was. `gt`: scratch.
+MetricList GroupHdrMetrics(const std::vector<TrainView>& views,
+                           const std::vector<std::size_t>& group,
+                           const Image& prediction,
+                           const std::filesystem::path& hdr_path,
+                           std::vector<float>* gt) {
+  std::vector<Image> brackets;
+  for (std::size_t i : group) {
+    views[i].ToFloat(gt);
+    brackets.push_back(DisplayImageFromBuffer(gt->data(), views[i].width(), views[i].height(), 3));
+  }
+  const std::vector<std::uint8_t> measured = MeasurableInBrackets(brackets);
+  Image truth = ReadImage(hdr_path);
+  const int factor = truth.width() / std::max(1, prediction.width());
+  if (factor > 1 && ResolutionProblem(truth.width(), truth.height(), factor).empty())
+    truth = DownsampleBox(truth, factor);
+  MetricList metrics = HdrMetrics(prediction, truth);
+  const MetricList aligned = AlignedHdrMetrics(prediction, truth, &measured);
+  metrics.insert(metrics.end(), aligned.begin(), aligned.end());
+  return metrics;
+}
+
 }  // namespace
 
 nlohmann::json EvaluateViews(ViewRenderer* renderer, const std::vector<TrainView>& views) {
@@ -52,21 +76,13 @@ nlohmann::json EvaluateViews(ViewRenderer* renderer, const std::vector<TrainView
       sums[key].second += 1;
     }
   };
-  // One HDR truth at a time: it is read once for all its brackets, and only one group's images
-  // are held (all of a paper-size test split at once took 1.4 GB at 800x800, issue 15).
+  // One HDR truth at a time, with its brackets: only one group's images are held (all of a
+  // paper-size test split at once took 1.4 GB at 800x800, issue 15). The HDR render does not
+  // depend on the exposure, so its metrics are computed once per truth and counted for every
+  // bracket, as a mean over views needs.
   for (const std::vector<std::size_t>& group : GroupByHdrTruth(views)) {
     const std::optional<std::filesystem::path>& hdr_path = views[group.front()].hdr_path;
-    std::optional<Image> truth;
-    std::vector<std::uint8_t> measured;  // pixels some bracket of the group measures
-    if (hdr_path) {
-      std::vector<Image> brackets;
-      for (std::size_t i : group) {
-        views[i].ToFloat(&gt);
-        brackets.push_back(
-            DisplayImageFromBuffer(gt.data(), views[i].width(), views[i].height(), 3));
-      }
-      measured = MeasurableInBrackets(brackets);
-    }
+    std::optional<MetricList> hdr_metrics;
     for (std::size_t i : group) {
       const TrainView& v = views[i];
       const ToneFrame frame{v.time_index, -1, static_cast<float>(std::log(v.exposure))};
@@ -77,18 +93,12 @@ nlohmann::json EvaluateViews(ViewRenderer* renderer, const std::vector<TrainView
                        DisplayImageFromBuffer(gt.data(), v.width(), v.height(), 3)));
       }
       if (hdr.empty() || !hdr_path) continue;
-      if (!truth) {
-        // A run at --resolution R compares with the truth reduced as its training target was.
-        Image file = ReadImage(*hdr_path);
-        const int factor = file.width() / std::max(1, v.width());
-        truth = factor > 1 && ResolutionProblem(file.width(), file.height(), factor) == ""
-                    ? DownsampleBox(file, factor)
-                    : std::move(file);
+      if (!hdr_metrics) {
+        Image prediction(v.width(), v.height(), 3, Encoding::kLinear);
+        std::copy(hdr.begin(), hdr.end(), prediction.data());
+        hdr_metrics = GroupHdrMetrics(views, group, prediction, *hdr_path, &gt);
       }
-      Image prediction(v.width(), v.height(), 3, Encoding::kLinear);
-      std::copy(hdr.begin(), hdr.end(), prediction.data());
-      add(HdrMetrics(prediction, *truth));
-      add(AlignedHdrMetrics(prediction, *truth, &measured));
+      add(*hdr_metrics);
     }
   }
   for (const auto& [key, sum] : sums) mean[key] = FiniteOrNull(sum.first / sum.second);

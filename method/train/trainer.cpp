@@ -258,16 +258,25 @@ void TrainingRun::SetUp() {
   PickMethodForScene();
   const HdrTrainingOptions& hdr = options_.hdr;
   const float background[3] = {options_.background, options_.background, options_.background};
-  train_views_ = LoadViews(*dataset_, Split::kTrain, background,
-                           /*load_hdr=*/hdr.MayUseHdrTargets(), options_.resolution,
-                           hdr.hdr_target);
-  test_views_ = LoadViews(*dataset_, Split::kTest, background, false, options_.resolution);
   num_times_ = DistinctTimes(*dataset_);
+  if (hdr.tone_mapper) {
+    ToneMapperConfig tc = *hdr.tone_mapper;
+    tc.num_times = num_times_;
+    tc.num_images = static_cast<int>(dataset_->train.size());
+    tc.seed = options_.seed;
+    tone_mapper_ = MakeToneMapper(tc);
+  }
+  // What each view computes is decided before the images are read, so the HDR targets are
+  // loaded only when an HDR term uses them (under LDR supervision they would double a
+  // paper-size scene's memory and loading time, issue 15).
+  resolved_ = ResolveHdrTraining(hdr, profile_.hdr_gt_in_train,
+                                 !tone_mapper_ || tone_mapper_->pointwise());
+  train_views_ = LoadViews(*dataset_, Split::kTrain, background, /*load_hdr=*/resolved_.hdr,
+                           options_.resolution, hdr.hdr_target);
+  test_views_ = LoadViews(*dataset_, Split::kTest, background, false, options_.resolution);
   for (auto* views : {&train_views_, &test_views_}) {
     for (TrainView& v : *views) v.time_index = RadianceBank::TimeIndex(v.time, num_times_);
   }
-  const bool train_hdr = std::any_of(train_views_.begin(), train_views_.end(),
-                                     [](const TrainView& v) { return !v.hdr_mu.empty(); });
   extent_ = SceneExtent(train_views_);
   // A resumed run keeps the configuration it was started with: read it before anything else.
   OptimizationOptions requested = options_.optimization;
@@ -282,14 +291,6 @@ void TrainingRun::SetUp() {
   spdlog::info("train: {} train / {} test views, extent {:.3f}, {}, method {}", train_views_.size(),
                test_views_.size(), extent_, temporal_ ? "dynamic" : "static (no time axis)",
                hdr.method);
-  if (hdr.tone_mapper) {
-    ToneMapperConfig tc = *hdr.tone_mapper;
-    tc.num_times = num_times_;
-    tc.num_images = static_cast<int>(train_views_.size());
-    tc.seed = options_.seed;
-    tone_mapper_ = MakeToneMapper(tc);
-  }
-  resolved_ = ResolveHdrTraining(hdr, train_hdr, !tone_mapper_ || tone_mapper_->pointwise());
   TrainOptions recorded = options_;
   recorded.optimization = opt_;
   config_ = recorded.ToJson();
