@@ -341,15 +341,30 @@ void Adam::GatherGroup(const std::string& name,
   State& s = Find(name);
   HDR4D_CHECK(row_width > 0 && s.m.size() % row_width == 0);
   const std::size_t rows = s.m.size() / row_width;
-  std::vector<float> m(keep.size() * row_width), v(keep.size() * row_width);
-  for (std::size_t k = 0; k < keep.size(); ++k) {
-    HDR4D_CHECK(keep[k] < rows);
-    const std::size_t from = static_cast<std::size_t>(keep[k]) * row_width;
-    std::copy_n(s.m.begin() + from, row_width, m.begin() + k * row_width);
-    std::copy_n(s.v.begin() + from, row_width, v.begin() + k * row_width);
+  for (const std::uint32_t r : keep) HDR4D_CHECK(r < rows);
+  if (std::is_sorted(keep.begin(), keep.end()) &&
+      std::adjacent_find(keep.begin(), keep.end()) == keep.end()) {
+    // Densification keeps rows in increasing order: keep[k] >= k, so moving each row forward in
+    // order never overwrites one still to be read, and no second pair of moment buffers (the
+    // size of the whole group) is allocated while the first is alive.
+    for (std::size_t k = 0; k < keep.size(); ++k) {
+      const std::size_t from = static_cast<std::size_t>(keep[k]) * row_width;
+      if (from == k * row_width) continue;
+      std::copy_n(s.m.begin() + from, row_width, s.m.begin() + k * row_width);
+      std::copy_n(s.v.begin() + from, row_width, s.v.begin() + k * row_width);
+    }
+    s.m.resize(keep.size() * row_width);
+    s.v.resize(keep.size() * row_width);
+  } else {
+    std::vector<float> m(keep.size() * row_width), v(keep.size() * row_width);
+    for (std::size_t k = 0; k < keep.size(); ++k) {
+      const std::size_t from = static_cast<std::size_t>(keep[k]) * row_width;
+      std::copy_n(s.m.begin() + from, row_width, m.begin() + k * row_width);
+      std::copy_n(s.v.begin() + from, row_width, v.begin() + k * row_width);
+    }
+    s.m = std::move(m);
+    s.v = std::move(v);
   }
-  s.m = std::move(m);
-  s.v = std::move(v);
   s.group = AdamGroup{s.group.name, nullptr, nullptr, s.m.size(), s.group.lr};
 }
 
@@ -401,6 +416,18 @@ void Adam::Save(std::ostream& out) const {
   }
   const std::uint64_t hash = w.hash();
   w.Value(hash);
+}
+
+std::uint64_t Adam::SavedSize() const {
+  // The fields of Save, in order: magic, version, three f64 options, the group count; per group
+  // the name's length and bytes, size, step, learning rate and both moments; the checksum.
+  std::uint64_t bytes = sizeof(kMagic) + sizeof(kVersion) + 3 * sizeof(double) +
+                        sizeof(std::uint32_t) + sizeof(std::uint64_t);
+  for (const State& s : groups_) {
+    bytes += sizeof(std::uint32_t) + s.group.name.size() + sizeof(std::uint64_t) +
+             sizeof(s.step) + sizeof(s.group.lr) + 2 * s.m.size() * sizeof(float);
+  }
+  return bytes;
 }
 
 void Adam::Load(std::istream& in, const std::string& source) {

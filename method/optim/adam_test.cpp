@@ -203,9 +203,8 @@ TEST(Adam, EmptyGroupsAreAllowed) {
 }
 
 // Rows kept by GatherGroup continue exactly as an optimiser that only ever saw those rows.
-TEST(Adam, GatherKeepsMomentsAlignedWithRows) {
+void ExpectGatherKeepsMomentsAlignedWithRows(const std::vector<std::uint32_t>& keep) {
   constexpr std::size_t kWidth = 3, kRows = 6;
-  const std::vector<std::uint32_t> keep = {5, 0, 2};
   std::vector<float> p = RandomVector(kRows * kWidth, 9), g(kRows * kWidth);
   std::vector<float> q, h(keep.size() * kWidth);  // the kept rows only, from the start
   for (std::uint32_t r : keep)
@@ -250,6 +249,12 @@ TEST(Adam, GatherKeepsMomentsAlignedWithRows) {
     kept.Step();
   }
   EXPECT_EQ(p, q);  // bit-identical: the same float operations on the same values
+}
+
+TEST(Adam, GatherKeepsMomentsAlignedWithRows) {
+  ExpectGatherKeepsMomentsAlignedWithRows({5, 0, 2});     // any order: new buffers
+  ExpectGatherKeepsMomentsAlignedWithRows({1, 2, 4, 5});  // increasing, as densification keeps
+  ExpectGatherKeepsMomentsAlignedWithRows({0, 1, 2});     // the first rows: nothing moves
 }
 
 // Appended rows start with zero moments; the old rows are unaffected.
@@ -352,6 +357,19 @@ struct Fixture {
     return out.str();
   }
 };
+
+// A checkpoint writes SavedSize() as the state's length before streaming Save into the file.
+TEST(AdamState, SavedSizeIsTheLengthSaveWrites) {
+  EXPECT_EQ(Adam().SavedSize(), [] {
+    std::ostringstream out;
+    Adam().Save(out);
+    return out.str().size();
+  }());
+  Fixture a;
+  EXPECT_EQ(a.adam.SavedSize(), a.Saved().size());
+  a.adam.AppendRows("xyz", 3, 4);  // sizes change with densification
+  EXPECT_EQ(a.adam.SavedSize(), a.Saved().size());
+}
 
 TEST(AdamState, SaveLoadRoundTripThenIdenticalSteps) {
   Fixture a;

@@ -50,9 +50,10 @@ class ModelOptimizer {
   // step unless this iteration densifies or resets them. Call after any densification.
   void Finish();
 
-  // The Adam state, for densification (which resizes its groups) and the opacity reset.
+  // The Adam state, for densification (which resizes its groups), the opacity reset and
+  // checkpoints (streamed from it: CheckpointSection::Of).
   Adam& adam() { return adam_; }
-  void Save(std::ostream& out) const { adam_.Save(out); }
+  const Adam& adam() const { return adam_; }
   // Throws hdr4d::Error naming `source`; call BindGroups after it.
   void Load(std::istream& in, const std::string& source) { adam_.Load(in, source); }
 

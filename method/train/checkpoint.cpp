@@ -4,6 +4,7 @@
 #include <cstring>
 #include <fstream>
 #include <sstream>
+#include <streambuf>
 
 #include "core/binary_stream.h"
 #include "core/error.h"
@@ -71,21 +72,75 @@ void ForEachBuffer(Model& m, Fn&& fn) {
 
 }  // namespace
 
-void SaveCheckpoint(const fs::path& path, const Checkpoint& c) {
-  HDR4D_CHECK(c.model.Validate().empty());
+namespace {
+
+// An output stream that appends to a HashingWriter and counts what it took, so a section's
+// writer can use the std::ostream interface of the state formats (Adam::Save).
+class HashingStreamBuf : public std::streambuf {
+ public:
+  explicit HashingStreamBuf(HashingWriter* out) : out_(out) {}
+  std::uint64_t written() const { return written_; }
+
+ protected:
+  std::streamsize xsputn(const char* data, std::streamsize n) override {
+    out_->Bytes(data, static_cast<std::size_t>(n));
+    written_ += static_cast<std::uint64_t>(n);
+    return n;
+  }
+  int_type overflow(int_type c) override {
+    if (traits_type::eq_int_type(c, traits_type::eof())) return traits_type::not_eof(c);
+    const char ch = traits_type::to_char_type(c);
+    return xsputn(&ch, 1) == 1 ? c : traits_type::eof();
+  }
+
+ private:
+  HashingWriter* out_;
+  std::uint64_t written_ = 0;
+};
+
+void WriteSection(const CheckpointSection& section, const char* what, HashingWriter* out) {
+  out->Value<std::uint64_t>(section.size);
+  if (section.size == 0) return;
+  HashingStreamBuf buf(out);
+  std::ostream stream(&buf);
+  section.write(stream);
+  // A size that disagrees with the bytes would make the file unreadable: the write is abandoned
+  // (the previous checkpoint stays).
+  if (buf.written() != section.size) {
+    Fail("checkpoint {} section: {} bytes announced, {} written", what, section.size,
+         buf.written());
+  }
+}
+
+}  // namespace
+
+CheckpointSection CheckpointSection::Of(std::string_view bytes) {
+  return {bytes.size(), [bytes](std::ostream& out) {
+            out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+          }};
+}
+
+CheckpointSection CheckpointSection::Of(const Adam& adam) {
+  return {adam.SavedSize(), [&adam](std::ostream& out) { adam.Save(out); }};
+}
+
+void SaveCheckpoint(const fs::path& path, const CheckpointParts& p) {
+  HDR4D_CHECK(p.model != nullptr && p.trainer != nullptr);
+  const GaussianModel& model = *p.model;
+  HDR4D_CHECK(model.Validate().empty());
   nlohmann::json header = {
       {"version", kVersion},
-      {"temporal", c.model.temporal},
-      {"color_mode", c.model.color_mode == ColorMode::kLdr ? "ldr" : "log_hdr"},
-      {"max_sh_degree", c.model.basis.max_sh_degree},
-      {"max_time_degree", c.model.basis.max_time_degree},
-      {"channels", c.model.channels},
-      {"gaussians", c.model.size()},
-      {"trainer", c.trainer},
+      {"temporal", model.temporal},
+      {"color_mode", model.color_mode == ColorMode::kLdr ? "ldr" : "log_hdr"},
+      {"max_sh_degree", model.basis.max_sh_degree},
+      {"max_time_degree", model.basis.max_time_degree},
+      {"channels", model.channels},
+      {"gaussians", model.size()},
+      {"trainer", *p.trainer},
   };
-  // Streamed into the file with a running checksum: building the bytes in memory first (a
-  // growing string stream, then a copy of it) raised the end-of-run peak by 0.8 GB at 220k
-  // Gaussians (BENCHMARKS.md, issue 15).
+  // Streamed into the file with a running checksum, from the live state: building the bytes in
+  // memory first (a copy of the model, the optimiser state as a string, a growing string stream
+  // of the file) added ~4 KB per Gaussian to the peak of every run (BENCHMARKS.md, issue 15).
   WriteFileAtomic(path, [&](std::ostream& file) {
     HashingWriter out(file);
     const auto floats = [&](const std::vector<float>& v) {
@@ -96,16 +151,23 @@ void SaveCheckpoint(const fs::path& path, const Checkpoint& c) {
     const std::string text = header.dump();
     out.Value<std::uint64_t>(text.size());
     out.Bytes(text.data(), text.size());
-    ForEachBuffer(c.model, [&](const char*, const std::vector<float>& v) { floats(v); });
-    out.Value<std::uint64_t>(c.extra_floats.size());
-    for (const auto& v : c.extra_floats) floats(v);
-    out.Value<std::uint64_t>(c.adam_state.size());
-    out.Bytes(c.adam_state.data(), c.adam_state.size());
-    out.Value<std::uint64_t>(c.tone_mapper_state.size());
-    out.Bytes(c.tone_mapper_state.data(), c.tone_mapper_state.size());
+    ForEachBuffer(model, [&](const char*, const std::vector<float>& v) { floats(v); });
+    out.Value<std::uint64_t>(p.extra_floats.size());
+    for (const std::vector<float>* v : p.extra_floats) floats(*v);
+    WriteSection(p.adam_state, "optimiser", &out);
+    WriteSection(p.tone_mapper_state, "tone mapper", &out);
     file.write(kTrailerMagic, sizeof(kTrailerMagic));
     WriteU64(file, out.hash());
   });
+}
+
+void SaveCheckpoint(const fs::path& path, const Checkpoint& c) {
+  CheckpointParts parts{.model = &c.model,
+                        .trainer = &c.trainer,
+                        .adam_state = CheckpointSection::Of(c.adam_state),
+                        .tone_mapper_state = CheckpointSection::Of(c.tone_mapper_state)};
+  for (const std::vector<float>& v : c.extra_floats) parts.extra_floats.push_back(&v);
+  SaveCheckpoint(path, parts);
 }
 
 Checkpoint LoadCheckpoint(const fs::path& path) {

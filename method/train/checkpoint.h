@@ -6,9 +6,13 @@
 // temporary file and renamed, so an interrupted save never replaces the last good checkpoint.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
+#include <functional>
+#include <iosfwd>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "method/gaussian/gaussian_model.h"
@@ -24,6 +28,26 @@ struct Checkpoint {
   std::string tone_mapper_state;                 // ToneMapper::Save bytes ("" = none)
 };
 
+// A length-prefixed state section (the optimiser's, the tone mapper's): its exact size and what
+// writes those bytes, so a live state is streamed into the file instead of copied first.
+struct CheckpointSection {
+  std::uint64_t size = 0;
+  std::function<void(std::ostream&)> write;  // may be empty when size is 0
+
+  static CheckpointSection Of(std::string_view bytes);
+  static CheckpointSection Of(const Adam& adam);
+};
+
+// What a checkpoint holds, by reference: a training run saves its live model and optimiser
+// (most of its memory) without a copy of either. Every pointer must be set.
+struct CheckpointParts {
+  const GaussianModel* model = nullptr;
+  const nlohmann::json* trainer = nullptr;
+  std::vector<const std::vector<float>*> extra_floats;
+  CheckpointSection adam_state, tone_mapper_state;
+};
+
+void SaveCheckpoint(const std::filesystem::path& path, const CheckpointParts& parts);
 void SaveCheckpoint(const std::filesystem::path& path, const Checkpoint& checkpoint);
 // Throws hdr4d::Error naming the file for a missing, truncated, corrupt (checksum mismatch) or
 // foreign file.

@@ -85,5 +85,43 @@ TEST(Checkpoint, FailedSaveKeepsThePreviousCheckpoint) {
   EXPECT_EQ(testing::ReadTextFile(dir / "ck.bin"), before);
 }
 
+// Training saves its live model and optimiser through CheckpointParts (no copies): the file is
+// byte for byte the one a Checkpoint holding the same state as bytes gives.
+TEST(Checkpoint, StreamedPartsWriteTheSameBytes) {
+  TempDir dir;
+  Checkpoint c = Sample();
+  std::vector<float> p(12, 0.5f), g(12, 0.25f);
+  Adam adam;
+  adam.AddGroup({"xyz", p.data(), g.data(), p.size(), 1e-3f});
+  adam.Step();
+  std::ostringstream adam_bytes;
+  adam.Save(adam_bytes);
+  c.adam_state = adam_bytes.str();
+  SaveCheckpoint(dir / "copied.bin", c);
+  SaveCheckpoint(dir / "streamed.bin",
+                 CheckpointParts{.model = &c.model,
+                                 .trainer = &c.trainer,
+                                 .extra_floats = {&c.extra_floats[0], &c.extra_floats[1],
+                                                  &c.extra_floats[2]},
+                                 .adam_state = CheckpointSection::Of(adam),
+                                 .tone_mapper_state = CheckpointSection::Of("")});
+  EXPECT_EQ(testing::ReadTextFile(dir / "streamed.bin"), testing::ReadTextFile(dir / "copied.bin"));
+  EXPECT_EQ(LoadCheckpoint(dir / "streamed.bin").adam_state, c.adam_state);
+}
+
+// A section that writes other than the size it announced would make an unreadable file: the
+// save fails and the previous checkpoint stays.
+TEST(Checkpoint, SectionOfTheWrongSizeKeepsThePreviousCheckpoint) {
+  TempDir dir;
+  const Checkpoint c = Sample();
+  SaveCheckpoint(dir / "ck.bin", c);
+  const std::string before = testing::ReadTextFile(dir / "ck.bin");
+  CheckpointParts parts{.model = &c.model, .trainer = &c.trainer};
+  parts.adam_state = {12, [](std::ostream& out) { out << "short"; }};
+  const std::string error = ErrorOf([&] { SaveCheckpoint(dir / "ck.bin", parts); });
+  EXPECT_NE(error.find("12 bytes announced, 5 written"), std::string::npos) << error;
+  EXPECT_EQ(testing::ReadTextFile(dir / "ck.bin"), before);
+}
+
 }  // namespace
 }  // namespace hdr4d::method

@@ -212,6 +212,7 @@ class TrainingRun {
   void EvaluateAndCheckpoint(int it);
   nlohmann::json EvaluateTestViews();
   void Save();
+  void ReleaseTrainingState();
   double TrainingSeconds() const;
 
   TrainOptions options_;  // with the method SetUp picks (when_nothing_hdr)
@@ -609,19 +610,33 @@ nlohmann::json TrainingRun::EvaluateTestViews() {
 }
 
 void TrainingRun::Save() {
-  Checkpoint c;
-  c.model = model_;
-  c.trainer = loop_.ToJson();
-  c.extra_floats = {stats_.grad_accum, stats_.denom, stats_.max_radii};
-  std::ostringstream adam_state;
-  optimizer_->Save(adam_state);
-  c.adam_state = adam_state.str();
+  // The live model and optimiser are streamed into the file, not copied (checkpoint.h).
+  const nlohmann::json trainer = loop_.ToJson();
+  std::string tone_mapper_state;
   if (tone_mapper_) {
     std::ostringstream tm_state;
     tone_mapper_->Save(tm_state);
-    c.tone_mapper_state = tm_state.str();
+    tone_mapper_state = tm_state.str();
   }
-  SaveCheckpoint(checkpoint_path_, c);
+  SaveCheckpoint(checkpoint_path_,
+                 CheckpointParts{.model = &model_,
+                                 .trainer = &trainer,
+                                 .extra_floats = {&stats_.grad_accum, &stats_.denom,
+                                                  &stats_.max_radii},
+                                 .adam_state = CheckpointSection::Of(optimizer_->adam()),
+                                 .tone_mapper_state = CheckpointSection::Of(tone_mapper_state)});
+}
+
+// After the last checkpoint nothing needs the optimiser, the gradients or the training frame's
+// buffers (the test renderer has its own): released before the final test evaluation, so the
+// end of a run is not its peak (about 2.6 KB per Gaussian; BENCHMARKS.md, issue 15).
+void TrainingRun::ReleaseTrainingState() {
+  optimizer_.reset();
+  grads_ = GaussianGradients{};
+  view_grads_ = GaussianGradients{};
+  state_ = FrameState{};
+  stats_ = DensifyStats{};
+  batch_stats_ = BatchStats{};
 }
 
 // The last checkpoint, the final test metrics and RUN/results.json.
@@ -629,6 +644,7 @@ TrainSummary TrainingRun::Finish() {
   progress_->Finish();
   loop_.train_seconds = TrainingSeconds();
   Save();
+  ReleaseTrainingState();
   TrainSummary summary;
   summary.stopped_by_time = loop_.iteration < opt_.iterations;
   summary.test_metrics = EvaluateTestViews();
