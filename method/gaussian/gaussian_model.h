@@ -66,8 +66,10 @@ struct GaussianModelT {
     for (std::size_t i = old; i < n; ++i) rot_left[i * 4] = rot_right[i * 4] = T(1);
   }
 
-  // Same shape as `other`, every value zero (a gradient buffer for it).
-  void ZerosLike(const GaussianModelT& other) {
+  // Same shape as `other`, every value zero (a gradient buffer for it). Without `colour` the
+  // colour buffers are left empty: training hands the colour gradient rows straight from the
+  // backward to the optimiser (fused_adam_step.h), so nine tenths of the gradient need no buffer.
+  void ZerosLike(const GaussianModelT& other, bool colour = true) {
     temporal = other.temporal;
     color_mode = other.color_mode;
     basis = other.basis;
@@ -78,8 +80,13 @@ struct GaussianModelT {
     rot_left.assign(other.rot_left.size(), T(0));
     rot_right.assign(other.rot_right.size(), T(0));
     opacity_logit.assign(other.opacity_logit.size(), T(0));
-    color_dc.assign(other.color_dc.size(), T(0));
-    color_rest.assign(other.color_rest.size(), T(0));
+    if (colour) {
+      color_dc.assign(other.color_dc.size(), T(0));
+      color_rest.assign(other.color_rest.size(), T(0));
+    } else {
+      color_dc = {};  // releases the memory (clear would keep it)
+      color_rest = {};
+    }
   }
 
   // "" when the buffers agree in size and the basis is in range, else what is wrong.

@@ -185,7 +185,7 @@ const Adam::State& Adam::Find(const std::string& name) const {
 void Adam::AddGroup(const AdamGroup& group) {
   HDR4D_CHECK(!group.name.empty());
   HDR4D_CHECK(!HasGroup(group.name));
-  HDR4D_CHECK(group.size == 0 || (group.params != nullptr && group.grads != nullptr));
+  HDR4D_CHECK(group.size == 0 || group.params != nullptr);
   State state;
   state.group = group;
   state.m.assign(group.size, 0.0f);
@@ -212,7 +212,7 @@ void Adam::SetBuffers(const std::string& name,
                       std::size_t size) {
   State& s = Find(name);
   HDR4D_CHECK(size == s.m.size());
-  HDR4D_CHECK(size == 0 || (params != nullptr && grads != nullptr));
+  HDR4D_CHECK(size == 0 || params != nullptr);
   s.group.params = params;
   s.group.grads = grads;
   s.group.size = size;
@@ -272,7 +272,7 @@ AdamRowStep Adam::BeginRowStep(const std::vector<std::string>& names, std::size_
     State& s = Find(names[k]);
     const AdamGroup& g = s.group;
     HDR4D_CHECK(g.size == s.m.size());
-    HDR4D_CHECK(g.size == 0 || (g.params != nullptr && g.grads != nullptr));
+    HDR4D_CHECK(g.size == 0 || g.params != nullptr);  // gradients may come only as rows
     HDR4D_CHECK(rows > 0 ? g.size % rows == 0 : g.size == 0);
     step.parts_.push_back({g.name, g.params, g.grads, s.m.data(), s.v.data(),
                            rows > 0 ? g.size / rows : 0, NextStep(s)});
@@ -291,8 +291,11 @@ void AdamRowStep::StepRows(std::int64_t begin,
     const std::size_t first = static_cast<std::size_t>(begin) * part.width;
     const std::size_t n = static_cast<std::size_t>(end - begin) * part.width;
     if (n == 0) continue;
-    const float* g =
-        !grad_rows.empty() && grad_rows[k] != nullptr ? grad_rows[k] : part.grads + first;
+    const float* g = !grad_rows.empty() ? grad_rows[k] : nullptr;
+    if (g == nullptr) {
+      HDR4D_CHECK(part.grads != nullptr);  // neither rows given nor a gradient buffer bound
+      g = part.grads + first;
+    }
     if (!HWY_DYNAMIC_DISPATCH(AdamKernel)(part.params + first, g, part.m + first, part.v + first, n,
                                           part.constants)) {
       bad_[k].store(true, std::memory_order_relaxed);

@@ -52,7 +52,9 @@ struct AdamOptions {
 };
 
 // One named parameter group: `size` floats of parameters updated from `size` floats of
-// gradients with learning rate `lr`. The arrays belong to the caller.
+// gradients with learning rate `lr`. The arrays belong to the caller. `grads` may be null for a
+// group whose gradient rows are only ever passed to AdamRowStep::StepRows (a whole-group Step of
+// it is then an internal error).
 struct AdamGroup {
   std::string name;
   float* params = nullptr;

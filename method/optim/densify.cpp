@@ -46,13 +46,23 @@ std::array<GroupBuffers, kModelGroups.size()> Groups(GaussianModel& m, GaussianG
   return out;
 }
 
-bool SameShape(const GaussianModel& a, const GaussianModel& b) {
+// True when `grads` is a gradient buffer for `model`: the same shape, or the same without the
+// colour buffers (ColourRowsOnly).
+bool FitsModel(const GaussianModel& model, const GaussianGradients& grads) {
+  const GaussianModel& a = model;
+  const GaussianGradients& b = grads;
   return a.channels == b.channels && a.basis.max_sh_degree == b.basis.max_sh_degree &&
          a.basis.max_time_degree == b.basis.max_time_degree && a.xyz.size() == b.xyz.size() &&
          a.t.size() == b.t.size() && a.log_scales.size() == b.log_scales.size() &&
          a.rot_left.size() == b.rot_left.size() && a.rot_right.size() == b.rot_right.size() &&
          a.opacity_logit.size() == b.opacity_logit.size() &&
-         a.color_dc.size() == b.color_dc.size() && a.color_rest.size() == b.color_rest.size();
+         ((a.color_dc.size() == b.color_dc.size() && a.color_rest.size() == b.color_rest.size()) ||
+          ColourRowsOnly(model, grads));
+}
+
+// A group's gradient pointer: null for a colour group whose rows are never stored.
+const float* GradientData(const std::vector<float>& grads, const std::vector<float>& params) {
+  return grads.empty() && !params.empty() ? nullptr : grads.data();
 }
 
 // Standard normals by the Box-Muller transform from 53-bit uniforms, so the draws are the same
@@ -172,18 +182,24 @@ void AddModelGroups(GaussianModel& model,
                     Adam* adam) {
   HDR4D_CHECK(adam != nullptr);
   HDR4D_CHECK(model.Validate().empty());
-  HDR4D_CHECK(SameShape(model, grads));
+  HDR4D_CHECK(FitsModel(model, grads));
   for (const GroupBuffers& g : Groups(model, grads)) {
-    adam->AddGroup(
-        {g.name, g.params->data(), g.grads->data(), g.params->size(), RateOf(rates, g.name)});
+    adam->AddGroup({g.name, g.params->data(), GradientData(*g.grads, *g.params), g.params->size(),
+                    RateOf(rates, g.name)});
   }
+}
+
+bool ColourRowsOnly(const GaussianModel& model, const GaussianGradients& grads) {
+  return grads.color_dc.empty() && grads.color_rest.empty() &&
+         (!model.color_dc.empty() || !model.color_rest.empty());
 }
 
 void BindModelGroups(GaussianModel& model, GaussianGradients& grads, Adam* adam) {
   HDR4D_CHECK(adam != nullptr);
-  HDR4D_CHECK(SameShape(model, grads));
+  HDR4D_CHECK(FitsModel(model, grads));
   for (const GroupBuffers& g : Groups(model, grads)) {
-    adam->SetBuffers(g.name, g.params->data(), g.grads->data(), g.params->size());
+    adam->SetBuffers(g.name, g.params->data(), GradientData(*g.grads, *g.params),
+                     g.params->size());
   }
 }
 
@@ -339,7 +355,8 @@ DensifyResult DensifyAndPrune(GaussianModel* model,
   HDR4D_CHECK(model != nullptr && grads != nullptr && adam != nullptr && stats != nullptr &&
               rng != nullptr);
   HDR4D_CHECK(params.Validate().empty());
-  HDR4D_CHECK(model->Validate().empty());
+  HDR4D_CHECK(model->Validate().empty() && FitsModel(*model, *grads));
+  const bool colour_rows_only = ColourRowsOnly(*model, *grads);
   const std::size_t n = model->size();
   HDR4D_CHECK(n <= UINT32_MAX);  // row indices are 32-bit, as Adam's
   HDR4D_CHECK(stats->grad_accum.size() == n && stats->denom.size() == n &&
@@ -462,7 +479,7 @@ DensifyResult DensifyAndPrune(GaussianModel* model,
     std::copy_n(&child_log_scales[4 * c], 4, &model->log_scales[4 * row]);
   }
 
-  grads->ZerosLike(*model);
+  grads->ZerosLike(*model, /*colour=*/!colour_rows_only);
   BindModelGroups(*model, *grads, adam);
   stats->Reset(new_n);
   return result;

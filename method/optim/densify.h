@@ -63,8 +63,15 @@ struct ModelLearningRates {
 // The rates at `step` (xyz decays; the others are constant) for a scene of the given extent.
 ModelLearningRates LearningRatesAt(const OptimizationOptions& options, double extent, int step);
 
+// True when `grads` has no colour buffers while the model has colour: the colour gradient rows go
+// from the backward straight to the optimiser (fused_adam_step.h) and are never stored, as the
+// trainer does at batch size 1 (~0.6 KB per Gaussian saved). AddModelGroups, BindModelGroups and
+// DensifyAndPrune accept such a buffer (and keep it so); its colour groups have no bound gradient
+// and are stepped only through AdamRowStep.
+bool ColourRowsOnly(const GaussianModel& model, const GaussianGradients& grads);
+
 // First registration of the eight groups (in kModelGroups order) with zero moments. `grads` must
-// have the model's shape (checked); the optimiser keeps pointers into both.
+// have the model's shape, or be ColourRowsOnly (checked); the optimiser keeps pointers into both.
 void AddModelGroups(GaussianModel& model,
                     GaussianGradients& grads,
                     const ModelLearningRates& rates,

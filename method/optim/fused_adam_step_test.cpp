@@ -6,6 +6,7 @@
 #include <random>
 
 #include "method/optim/densify.h"
+#include "method/optim/model_optimizer.h"
 
 namespace hdr4d::method {
 namespace {
@@ -40,10 +41,13 @@ TEST(FusedStep, EqualsBackwardThenStep) {
                       LookAtWorldFromCamGl({0.3, -3.0, 0.4}, {0, 0, 0}, Eigen::Vector3d::UnitZ())};
   RenderOptions options;
   options.background = {0.1f, 0.2f, 0.3f};
-  auto run = [&](bool fused) {
+  // `colour_buffers` false: the trainer's batch-size-1 layout, no colour gradient buffer at all
+  // (ColourRowsOnly); the rows reach the step only through the callback.
+  auto run = [&](bool fused, bool colour_buffers = true) {
     GaussianModel model = RandomModel(2500, 5);
     GaussianGradients grads;
-    grads.ZerosLike(model);
+    grads.ZerosLike(model, colour_buffers);
+    EXPECT_EQ(ColourRowsOnly(model, grads), !colour_buffers);
     Adam adam;
     AddModelGroups(model, grads, LearningRatesAt(OptimizationOptions{}, 3.0, 1), &adam);
     std::vector<std::string> groups;
@@ -68,6 +72,10 @@ TEST(FusedStep, EqualsBackwardThenStep) {
     return model;
   };
   const GaussianModel a = run(true), b = run(false), start = RandomModel(2500, 5);
+  const GaussianModel rows_only = run(true, /*colour_buffers=*/false);
+  EXPECT_TRUE(rows_only.xyz == a.xyz);
+  EXPECT_TRUE(rows_only.color_dc == a.color_dc);
+  EXPECT_TRUE(rows_only.color_rest == a.color_rest);
   EXPECT_TRUE(a.xyz == b.xyz);
   EXPECT_TRUE(a.t == b.t);
   EXPECT_TRUE(a.log_scales == b.log_scales);
@@ -78,6 +86,30 @@ TEST(FusedStep, EqualsBackwardThenStep) {
   EXPECT_TRUE(a.opacity_logit == start.opacity_logit);
   EXPECT_FALSE(a.color_rest == start.color_rest);
   EXPECT_FALSE(a.xyz == start.xyz);
+}
+
+// A densifying iteration steps no model group, but a NaN in its colour rows must still stop
+// training: with no colour gradient buffer (ColourRowsOnly) the rows are checked as they pass.
+TEST(FusedStep, DensifyingStepChecksColourRowsItDoesNotStore) {
+  GaussianModel model = RandomModel(40, 7);
+  const GaussianModel start = model;
+  GaussianGradients grads;
+  grads.ZerosLike(model, /*colour=*/false);
+  ModelOptimizer optimizer(OptimizationOptions{}, 3.0);
+  optimizer.AddGroups(model, grads, nullptr);
+  std::vector<float> dc(model.color_dc.size(), 0.5f), rest(model.color_rest.size(), 0.25f);
+  for (const bool poison : {false, true}) {
+    if (poison) rest[7 * model.rest_stride() + 3] = std::nanf("");
+    const GradientRowsDone rows =
+        optimizer.Begin(/*densify=*/true, /*reset_opacity=*/false, model.size());
+    ASSERT_TRUE(static_cast<bool>(rows));
+    rows(0, 20, GradientRows{dc.data(), rest.data()});
+    rows(20, 40, GradientRows{dc.data() + 20 * 3, rest.data() + 20 * model.rest_stride()});
+    EXPECT_EQ(optimizer.FirstNonFinite(), poison ? kGroupFRest : "");
+    optimizer.Finish();
+  }
+  EXPECT_TRUE(model.color_rest == start.color_rest);  // checked, not stepped
+  EXPECT_TRUE(model.xyz == start.xyz);
 }
 
 TEST(FusedStep, NoGroupsNoCallback) {

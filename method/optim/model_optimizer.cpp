@@ -53,12 +53,32 @@ GradientRowsDone ModelOptimizer::Begin(bool densify,
     if (std::find(fused_.begin(), fused_.end(), group) == fused_.end()) unfused_.push_back(group);
   }
   row_step_.emplace(adam_.BeginRowStep(fused_, num_gaussians));
+  if (densify) return CheckColourRows(num_gaussians);
   return StepModelRows(fused_, &*row_step_);
+}
+
+// A densifying step moves no model group, but its colour rows are still checked for NaN and
+// infinity: they may exist nowhere else (ColourRowsOnly).
+GradientRowsDone ModelOptimizer::CheckColourRows(std::size_t num_gaussians) {
+  dc_bad_ = rest_bad_ = false;
+  if (num_gaussians == 0) return {};
+  const std::size_t dc_width = adam_.group(kGroupFDc).size / num_gaussians;
+  const std::size_t rest_width = adam_.group(kGroupFRest).size / num_gaussians;
+  return [this, dc_width, rest_width](std::int64_t b, std::int64_t e, const GradientRows& rows) {
+    const auto count = static_cast<std::size_t>(e - b);
+    if (!AllFinite(rows.color_dc, count * dc_width)) dc_bad_ = true;
+    if (!AllFinite(rows.color_rest, count * rest_width)) rest_bad_ = true;
+  };
 }
 
 std::string ModelOptimizer::FirstNonFinite() const {
   std::string bad = row_step_ ? row_step_->FirstNonFinite() : "";
   if (bad.empty()) bad = adam_.FirstNonFiniteGradient(unfused_);
+  // The colour groups come after the other model groups and before the tone mapper.
+  if (bad.empty() || bad == kGroupToneMapper) {
+    if (dc_bad_) return kGroupFDc;
+    if (rest_bad_) return kGroupFRest;
+  }
   return bad;
 }
 

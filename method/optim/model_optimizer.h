@@ -7,6 +7,7 @@
 // (docs/ARCHITECTURE.md, "One training step").
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <iosfwd>
 #include <optional>
@@ -39,9 +40,9 @@ class ModelOptimizer {
   void SetIteration(int iteration);
 
   // Begins one step over `num_gaussians` rows. `densify`: this iteration densifies, which
-  // replaces every model tensor, so no model group is stepped (as in the reference);
-  // `reset_opacity`: the opacity is reset instead of stepped. Returns the callback for
-  // RenderBackward (empty when no model group is stepped); this object must outlive the backward.
+  // replaces every model tensor, so no model group is stepped (as in the reference) and the
+  // callback only checks the colour rows; `reset_opacity`: the opacity is reset instead of
+  // stepped. Returns the callback for RenderBackward; this object must outlive the backward.
   GradientRowsDone Begin(bool densify, bool reset_opacity, std::size_t num_gaussians);
   // After the backward: the first group whose gradient held a NaN or an infinity this step, or
   // "". Such a state is partly stepped and must be dropped.
@@ -67,6 +68,10 @@ class ModelOptimizer {
   std::vector<std::string> fused_;       // stepped inside the backward
   std::vector<std::string> unfused_;     // every other registered group
   std::optional<AdamRowStep> row_step_;  // the callback of Begin points at it
+  // A densifying step's colour rows held a NaN or an infinity (CheckColourRows).
+  std::atomic<bool> dc_bad_ = false, rest_bad_ = false;
+
+  GradientRowsDone CheckColourRows(std::size_t num_gaussians);
 };
 
 }  // namespace hdr4d::method

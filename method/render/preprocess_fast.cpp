@@ -105,7 +105,10 @@ void PreprocessBackwardFast(const GaussianModel& model,
                             GaussianGradients* grads,
                             const GradientRowsDone& rows_done) {
   const std::size_t n = model.size();
-  HDR4D_CHECK(grads->size() == n && grads->color_rest.size() == model.color_rest.size());
+  // With rows_done the colour rows go only to it, so `grads` may lack colour buffers.
+  HDR4D_CHECK(grads->size() == n &&
+              (rows_done || (grads->color_rest.size() == model.color_rest.size() &&
+                             grads->color_dc.size() == model.color_dc.size())));
   const int channels = model.channels;
   const SplatBuffersT<float>& s = state.splats;
   const SplatGradientsT<float>& sg = state.splat_grads;

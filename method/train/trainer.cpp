@@ -369,7 +369,11 @@ void TrainingRun::ResumeOrInitialise() {
     model_ = InitialiseGaussians(cloud, init);
     stats_.Reset(model_.size());
   }
-  grads_.ZerosLike(model_);
+  // At batch size 1 the fused step takes the colour gradient rows straight from the backward,
+  // so no colour gradient buffer is kept (~0.6 KB per Gaussian; densify.h, ColourRowsOnly).
+  // A batch sums every view's gradient first and needs them all.
+  grads_.ZerosLike(model_,
+                   /*colour=*/!(opt_.batch_size == 1 && FastPreprocessApplies(model_, render_)));
   if (options_.resume) {
     optimizer_->BindGroups(model_, grads_, tone_mapper_.get());
   } else {
