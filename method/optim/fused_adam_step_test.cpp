@@ -110,6 +110,9 @@ TEST(FusedStep, DensifyingStepChecksColourRowsItDoesNotStore) {
   }
   EXPECT_TRUE(model.color_rest == start.color_rest);  // checked, not stepped
   EXPECT_TRUE(model.xyz == start.xyz);
+  // The next step starts clean: a verdict belongs to the step that made it.
+  optimizer.Begin(/*densify=*/false, /*reset_opacity=*/false, model.size());
+  EXPECT_EQ(optimizer.FirstNonFinite(), "");
 }
 
 TEST(FusedStep, NoGroupsNoCallback) {

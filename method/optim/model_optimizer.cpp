@@ -42,6 +42,7 @@ GradientRowsDone ModelOptimizer::Begin(bool densify,
                                        std::size_t num_gaussians) {
   densify_ = densify;
   reset_opacity_ = reset_opacity;
+  dc_bad_ = rest_bad_ = false;
   fused_.clear();
   if (!densify) {
     for (const char* group : kModelGroups) {
@@ -60,7 +61,6 @@ GradientRowsDone ModelOptimizer::Begin(bool densify,
 // A densifying step moves no model group, but its colour rows are still checked for NaN and
 // infinity: they may exist nowhere else (ColourRowsOnly).
 GradientRowsDone ModelOptimizer::CheckColourRows(std::size_t num_gaussians) {
-  dc_bad_ = rest_bad_ = false;
   if (num_gaussians == 0) return {};
   const std::size_t dc_width = adam_.group(kGroupFDc).size / num_gaussians;
   const std::size_t rest_width = adam_.group(kGroupFRest).size / num_gaussians;
