@@ -59,9 +59,14 @@ GradientRowsDone ModelOptimizer::Begin(bool densify,
 }
 
 // A densifying step moves no model group, but its colour rows are still checked for NaN and
-// infinity: they may exist nowhere else (ColourRowsOnly).
+// infinity. Where they have no gradient buffer (ColourRowsOnly) this callback is the only place
+// they exist; where they have one, the backward writes them there and FirstNonFinite checks it.
 GradientRowsDone ModelOptimizer::CheckColourRows(std::size_t num_gaussians) {
-  if (num_gaussians == 0) return {};
+  const auto stored = [&](const char* name) {
+    const AdamGroup& g = adam_.group(name);
+    return g.size == 0 || g.grads != nullptr;
+  };
+  if (num_gaussians == 0 || (stored(kGroupFDc) && stored(kGroupFRest))) return {};
   const std::size_t dc_width = adam_.group(kGroupFDc).size / num_gaussians;
   const std::size_t rest_width = adam_.group(kGroupFRest).size / num_gaussians;
   return [this, dc_width, rest_width](std::int64_t b, std::int64_t e, const GradientRows& rows) {

@@ -41,8 +41,9 @@ class ModelOptimizer {
 
   // Begins one step over `num_gaussians` rows. `densify`: this iteration densifies, which
   // replaces every model tensor, so no model group is stepped (as in the reference) and the
-  // callback only checks the colour rows; `reset_opacity`: the opacity is reset instead of
-  // stepped. Returns the callback for RenderBackward; this object must outlive the backward.
+  // callback only checks colour rows that have no gradient buffer (empty when they have one);
+  // `reset_opacity`: the opacity is reset instead of stepped. Returns the callback for
+  // RenderBackward; this object must outlive the backward.
   GradientRowsDone Begin(bool densify, bool reset_opacity, std::size_t num_gaussians);
   // After the backward: the first group whose gradient held a NaN or an infinity this step, or
   // "". Such a state is partly stepped and must be dropped.

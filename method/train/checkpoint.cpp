@@ -70,10 +70,6 @@ void ForEachBuffer(Model& m, Fn&& fn) {
   fn("color_rest", m.color_rest);
 }
 
-}  // namespace
-
-namespace {
-
 // An output stream that appends to a HashingWriter and counts what it took, so a section's
 // writer can use the std::ostream interface of the state formats (Adam::Save).
 class HashingStreamBuf : public std::streambuf {
