@@ -98,8 +98,9 @@ TEST(CiOutputs, TablesHaveThePapersShapeAndSaneValues) {
       EXPECT_FALSE(r[col("sd_over_seeds")].empty());  // two seeds: a spread
       if (r[col("best")] == "1") ++best[key];
       // Two seeds on two scenes: every quality column against the reference is testable.
-      if (r[col("label")] != spec.reference && key != "train_minutes" && key != "fps")
+      if (r[col("label")] != spec.reference && key != "train_minutes" && key != "fps") {
         EXPECT_FALSE(r[col("p_vs_reference")].empty()) << spec.id << " " << method << " " << key;
+      }
     }
     for (const auto& [key, n] : best) EXPECT_GE(n, 1) << spec.id << " " << key;
     const std::string md = testing::ReadTextFile(out / (spec.id + ".md"));

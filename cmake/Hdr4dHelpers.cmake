@@ -1,10 +1,11 @@
 # Small wrappers so every module is built the same way and every test is named <folder>/<name>
 # (`ctest -R core/` runs one module).
 
-# hdr4d_add_library(<name> [SOURCES ...] DEPS ...): the library hdr4d_<name>; without SOURCES a
-# header-only (INTERFACE) library.
+# hdr4d_add_library(<name> [SOURCES ...] DEPS ... [PCH header]): the library hdr4d_<name>; without
+# SOURCES a header-only (INTERFACE) library. PCH: its own precompiled header instead of the
+# shared one.
 function(hdr4d_add_library name)
-  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
+  cmake_parse_arguments(ARG "" "PCH" "SOURCES;DEPS" ${ARGN})
   set(target hdr4d_${name})
   if(NOT ARG_SOURCES)
     add_library(${target} INTERFACE)
@@ -16,6 +17,11 @@ function(hdr4d_add_library name)
   target_include_directories(${target} PUBLIC ${PROJECT_SOURCE_DIR})
   target_link_libraries(${target} PUBLIC ${ARG_DEPS})
   target_compile_options(${target} PRIVATE ${HDR4D_WARNINGS})
+  if(HDR4D_PCH AND ARG_PCH)
+    target_precompile_headers(${target} PRIVATE ${ARG_PCH})
+  elseif(HDR4D_PCH)
+    target_precompile_headers(${target} REUSE_FROM hdr4d_lib_pch)
+  endif()
 endfunction()
 
 # hdr4d_add_executable(<name> SOURCES ... DEPS ...)
@@ -26,10 +32,39 @@ function(hdr4d_add_executable name)
   target_compile_options(${name} PRIVATE ${HDR4D_WARNINGS})
 endfunction()
 
+# Builds from scratch (CI's) spend most of their time parsing the same third-party headers and
+# generating code for test files. With HDR4D_PCH every library reuses one precompiled header
+# (cmake/pch/library.h, built once by hdr4d_lib_pch) unless it names its own (PCH), and every
+# test reuses cmake/pch/tests.h (hdr4d_test_pch). Test files are compiled at -O1
+# (HDR4D_TEST_OPT): the code under test is the libraries', built with the build type's flags.
+function(hdr4d_add_pch_targets)
+  if(NOT HDR4D_PCH)
+    return()
+  endif()
+  # The same usage requirements (definitions, include folders) as hdr4d_core, which every
+  # library and test links, so that the precompiled header is valid where it is reused.
+  set(deps Eigen3::Eigen TBB::tbb OpenImageIO::OpenImageIO nlohmann_json::nlohmann_json fmt::fmt
+      spdlog::spdlog Threads::Threads)
+  add_library(hdr4d_lib_pch OBJECT ${PROJECT_SOURCE_DIR}/cmake/pch/anchor.cpp)
+  target_include_directories(hdr4d_lib_pch PRIVATE ${PROJECT_SOURCE_DIR})
+  target_link_libraries(hdr4d_lib_pch PRIVATE ${deps})
+  target_compile_options(hdr4d_lib_pch PRIVATE ${HDR4D_WARNINGS})
+  target_precompile_headers(hdr4d_lib_pch PRIVATE ${PROJECT_SOURCE_DIR}/cmake/pch/library.h)
+  if(HDR4D_BUILD_TESTS)
+    add_library(hdr4d_test_pch OBJECT ${PROJECT_SOURCE_DIR}/cmake/pch/anchor.cpp)
+    target_include_directories(hdr4d_test_pch PRIVATE ${PROJECT_SOURCE_DIR})
+    target_link_libraries(hdr4d_test_pch PRIVATE ${deps} GTest::gtest GTest::gmock)
+    target_compile_options(hdr4d_test_pch PRIVATE ${HDR4D_WARNINGS} ${HDR4D_TEST_OPT})
+    target_precompile_headers(hdr4d_test_pch PRIVATE ${PROJECT_SOURCE_DIR}/cmake/pch/tests.h)
+  endif()
+endfunction()
+
 # hdr4d_add_test(<folder> <name> [NEEDS_CLI] SOURCES ... DEPS ... [PROPERTIES ...]): a GoogleTest
 # binary whose cases are registered as <folder>/<Suite>.<Case> and run from the repository root
 # (tests/testing.h has the helpers: temp folders, shared data, running the hdr4d binary).
-# PROPERTIES are CTest properties of every case (e.g. FIXTURES_SETUP / FIXTURES_REQUIRED).
+# PROPERTIES are CTest properties of every case (e.g. FIXTURES_SETUP / FIXTURES_REQUIRED, or COST:
+# the seconds a case takes, so that a fresh clone, which has no timing history, starts the longest
+# cases first instead of finishing on one of them alone).
 function(hdr4d_add_test folder name)
   if(NOT HDR4D_BUILD_TESTS)
     return()
@@ -38,7 +73,10 @@ function(hdr4d_add_test folder name)
   set(target ${folder}_${name})
   add_executable(${target} ${ARG_SOURCES})
   target_link_libraries(${target} PRIVATE ${ARG_DEPS} hdr4d_testing GTest::gtest GTest::gmock)
-  target_compile_options(${target} PRIVATE ${HDR4D_WARNINGS})
+  target_compile_options(${target} PRIVATE ${HDR4D_WARNINGS} ${HDR4D_TEST_OPT})
+  if(HDR4D_PCH)
+    target_precompile_headers(${target} REUSE_FROM hdr4d_test_pch)
+  endif()
   if(ARG_NEEDS_CLI)
     add_dependencies(${target} hdr4d)  # its cases run the hdr4d binary
   endif()

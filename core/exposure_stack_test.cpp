@@ -61,8 +61,12 @@ TEST(ExposureStack, GainDriftBrightensLateFramesAndDarkensEarlyOnes) {
   for (std::size_t i = 0; i < dataset.train.size(); ++i) {
     const Frame& f = dataset.train[i];
     const double drifted = mean_of(f.image_path);
-    if (f.time > 0.5) EXPECT_GT(drifted, fixed[i]) << f.file_path;  // gain e^(+1)
-    if (f.time < 0.5) EXPECT_LT(drifted, fixed[i]) << f.file_path;  // gain e^(-1)
+    if (f.time > 0.5) {
+      EXPECT_GT(drifted, fixed[i]) << f.file_path;  // gain e^(+1)
+    }
+    if (f.time < 0.5) {
+      EXPECT_LT(drifted, fixed[i]) << f.file_path;  // gain e^(-1)
+    }
   }
   EXPECT_EQ(ReadJsonFile(dir / "synthesis.json")["gain_drift"], 2.0);
   EXPECT_THROW(SynthesizeDatasetLdr(dir.path(), {.gain_drift = 1e9}), Error);

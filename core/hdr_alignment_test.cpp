@@ -53,7 +53,9 @@ TEST(HdrAlignment, SlopeAndScaleOfAPowerOfTheTruth) {
     EXPECT_NEAR(a.slope, p, 1e-5);
     EXPECT_NEAR(a.corr, 1.0, 1e-9);
     EXPECT_EQ(a.pixels, 1200u);
-    if (p == 1.0) EXPECT_NEAR(a.scale, 1.0 / 7.0, 1e-6);
+    if (p == 1.0) {
+      EXPECT_NEAR(a.scale, 1.0 / 7.0, 1e-6);
+    }
   }
 }
 

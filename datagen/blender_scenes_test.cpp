@@ -94,7 +94,9 @@ TEST_F(BlenderScenes, StudioHoldsOutALowCameraAndItsBulbClipsAtEveryExposure) {
   for (const Frame& f : studio.test) {
     EXPECT_EQ(f.camera_id, 3);
     EXPECT_LT(f.camera.Center().z(), lowest_train);
-    if (f.exposure == 0.125) EXPECT_EQ(ReadImage(f.image_path).MaxValue(), 1.0f) << f.file_path;
+    if (f.exposure == 0.125) {
+      EXPECT_EQ(ReadImage(f.image_path).MaxValue(), 1.0f) << f.file_path;
+    }
   }
   const json manifest = ReadJsonFile(Root("studio") / "manifest.json");
   EXPECT_EQ(manifest["ldr_synthesis"]["crf_spec"], "naka-rushton:0.2,2.2");

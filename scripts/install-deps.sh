@@ -5,7 +5,7 @@ set -euo pipefail
 
 PACKAGES=(
   # build
-  cmake ninja-build g++ pkg-config
+  cmake ninja-build g++ pkg-config lld
   # core: images, maths, parallelism, JSON, CLI, logging
   libopenimageio-dev libopenexr-dev openimageio-tools libeigen3-dev libtbb-dev
   nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev

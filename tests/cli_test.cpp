@@ -184,7 +184,7 @@ TEST(Cli, HdrMethodsRenderToneCurvesAndFlagErrors) {
   EXPECT_EQ(LineCount(testing::ReadTextFile(dir / "run" / "tone_curves" / "tone_curves.csv")), 33);
   r = RunHdr4d("export-ply --run " + run + " --time 0.5 --out " + (dir / "hdr.ply").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  for (const std::string& method : {"4dgs-hdr", "hdr-gs"}) {
+  for (const std::string method : {"4dgs-hdr", "hdr-gs"}) {
     r = RunHdr4d("train --data " + scene + " --out " + (dir / method).string() +
                  " --iterations 5 --method " + method);
     EXPECT_EQ(r.exit_code, 0) << method << "\n" << r.err;

@@ -49,7 +49,9 @@ TEST(MonotoneMlp, ConstrainedWeightsAreThePathsFromInputZero) {
   MonotoneEffective(kCurve, p.data(), eff.data());
   for (std::size_t i = 0; i < p.size(); ++i) {
     EXPECT_EQ(std::abs(eff[i]), std::abs(p[i])) << i;
-    if (!IsMonotoneWeight(kCurve, i)) EXPECT_EQ(eff[i], p[i]) << i;
+    if (!IsMonotoneWeight(kCurve, i)) {
+      EXPECT_EQ(eff[i], p[i]) << i;
+    }
   }
   // Signs: W1[1][0] is an odd (falling) unit's; W2[0][1] joins a rising unit to a falling one;
   // W2[1][1] two falling ones; W3[0][1] a falling unit's output weight.
