@@ -14,13 +14,13 @@
 namespace hdr4d::baselines {
 namespace {
 
-constexpr std::int64_t kGrain = 4096;  // pixels per chunk
+constexpr std::int64_t kDurandGrain = 4096;  // pixels per chunk
 constexpr double kSpatialFraction = 0.02;
 
 template <typename T>
-struct Resolved {
+struct DurandResolved {
   T compression, offset, inv_gamma;
-  explicit Resolved(const T* p)
+  explicit DurandResolved(const T* p)
       : compression(std::exp(ClampAbs(p[0], kMaxAbsLogParam))),
         offset(ClampAbs(p[1], kMaxAbsLogParam)),
         inv_gamma(std::exp(-ClampAbs(p[2], kMaxAbsLogParam))) {}
@@ -42,7 +42,7 @@ DurandFilter DefaultDurandFilter(int width, int height) {
 
 template <typename T>
 void DurandLogLuminance(const T* log_hdr, T log_exposure, int width, int height, T* log_lum) {
-  ParallelForChunks(Pixels<T>(width, height), kGrain, [&](std::int64_t b, std::int64_t e) {
+  ParallelForChunks(Pixels<T>(width, height), kDurandGrain, [&](std::int64_t b, std::int64_t e) {
     for (std::int64_t p = b; p < e; ++p) {
       T x[3];
       for (int c = 0; c < 3; ++c)
@@ -66,12 +66,12 @@ void ForwardFromLuminance(const T* params,
                           const T* guide,
                           T* ldr) {
   const std::int64_t pixels = Pixels<T>(width, height);
-  const Resolved<T> r(params);
+  const DurandResolved<T> r(params);
   std::vector<T> base(pixels);
   const BilateralGrid<T> grid(guide ? guide : log_lum, width, height, filter.sigma_space,
                               filter.sigma_range);
   grid.Filter(log_lum, base.data());
-  ParallelForChunks(pixels, kGrain, [&](std::int64_t b, std::int64_t e) {
+  ParallelForChunks(pixels, kDurandGrain, [&](std::int64_t b, std::int64_t e) {
     for (std::int64_t p = b; p < e; ++p) {
       const T shift = (r.compression - T(1)) * base[p] + r.offset;
       for (int c = 0; c < 3; ++c) {
@@ -124,7 +124,7 @@ void DurandBackward(const T* params,
                     T* dL_dlog_hdr,
                     T* dL_dparams) {
   const std::int64_t pixels = Pixels<T>(width, height);
-  const Resolved<T> r(params);
+  const DurandResolved<T> r(params);
   std::vector<T> log_lum(pixels), base(pixels), d_base(pixels), d_log_lum(pixels);
   DurandLogLuminance(log_hdr, log_exposure, width, height, log_lum.data());
   const BilateralGrid<T> grid(log_lum.data(), width, height, filter.sigma_space,
@@ -157,14 +157,14 @@ void DurandBackward(const T* params,
     partial[2] += d_inv_gamma;
   };
   T sums[3] = {T(0), T(0), T(0)};
-  ReduceInChunks<T>(pixels, kGrain, 3, chunk, sums);
+  ReduceInChunks<T>(pixels, kDurandGrain, 3, chunk, sums);
   // d compression / d log compression = compression; d(1/gamma) / d log gamma = -1/gamma.
   dL_dparams[0] += sums[0] * r.compression * ClampAbsSlope(params[0], kMaxAbsLogParam);
   dL_dparams[1] += sums[1] * ClampAbsSlope(params[1], kMaxAbsLogParam);
   dL_dparams[2] += sums[2] * -r.inv_gamma * ClampAbsSlope(params[2], kMaxAbsLogParam);
   if (!dL_dlog_hdr) return;
   grid.FilterBackward(d_base.data(), d_log_lum.data());
-  ParallelForChunks(pixels, kGrain, [&](std::int64_t b, std::int64_t e) {
+  ParallelForChunks(pixels, kDurandGrain, [&](std::int64_t b, std::int64_t e) {
     for (std::int64_t p = b; p < e; ++p) {
       T x[3], share[3];
       for (int c = 0; c < 3; ++c)

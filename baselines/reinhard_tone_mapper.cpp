@@ -10,13 +10,13 @@
 namespace hdr4d::baselines {
 namespace {
 
-constexpr std::int64_t kGrain = 2048;  // pixels per chunk
+constexpr std::int64_t kReinhardGrain = 2048;  // pixels per chunk
 
 // The parameters as used: clamped logs, and 1/gamma.
 template <typename T>
-struct Resolved {
+struct ReinhardResolved {
   T log_key, log_white, inv_gamma;
-  explicit Resolved(const T* p)
+  explicit ReinhardResolved(const T* p)
       : log_key(ClampAbs(p[0], kMaxAbsLogParam)),
         log_white(ClampAbs(p[1], kMaxAbsLogParam)),
         inv_gamma(std::exp(-ClampAbs(p[2], kMaxAbsLogParam))) {}
@@ -32,7 +32,7 @@ struct Pixel {
   T log_c[3];  // log of the colour before the display encoding
   T y[3];
 
-  Pixel(const Resolved<T>& r, T log_exposure, const T* log_hdr) {
+  Pixel(const ReinhardResolved<T>& r, T log_exposure, const T* log_hdr) {
     for (int c = 0; c < 3; ++c) x[c] = ClampAbs(log_hdr[c], kMaxAbsLogInput) + log_exposure;
     log_lum = LogLuminance(x, share);
     l = r.log_key + log_lum;
@@ -49,8 +49,8 @@ struct Pixel {
 
 template <typename T>
 void ReinhardForward(const T* params, T log_exposure, const T* log_hdr, std::size_t n, T* ldr) {
-  const Resolved<T> r(params);
-  ParallelForChunks(std::int64_t(n), kGrain, [&](std::int64_t begin, std::int64_t end) {
+  const ReinhardResolved<T> r(params);
+  ParallelForChunks(std::int64_t(n), kReinhardGrain, [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t i = begin; i < end; ++i) {
       const Pixel<T> px(r, log_exposure, log_hdr + 3 * i);
       for (int c = 0; c < 3; ++c) ldr[3 * i + c] = px.y[c];
@@ -66,7 +66,7 @@ void ReinhardBackward(const T* params,
                       const T* dL_dldr,
                       T* dL_dlog_hdr,
                       T* dL_dparams) {
-  const Resolved<T> r(params);
+  const ReinhardResolved<T> r(params);
   auto chunk = [&](std::int64_t begin, std::int64_t end, T* partial) {
     T d_log_key = T(0), d_log_white = T(0), d_inv_gamma = T(0);
     for (std::int64_t i = begin; i < end; ++i) {
@@ -98,7 +98,7 @@ void ReinhardBackward(const T* params,
     partial[2] += d_inv_gamma;
   };
   T sums[3] = {T(0), T(0), T(0)};
-  ReduceInChunks<T>(std::int64_t(n), kGrain, 3, chunk, sums);
+  ReduceInChunks<T>(std::int64_t(n), kReinhardGrain, 3, chunk, sums);
   dL_dparams[0] += sums[0] * ClampAbsSlope(params[0], kMaxAbsLogParam);
   dL_dparams[1] += sums[1] * ClampAbsSlope(params[1], kMaxAbsLogParam);
   // d(1/gamma)/d(log gamma) = -1/gamma

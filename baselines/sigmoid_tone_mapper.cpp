@@ -10,14 +10,14 @@
 namespace hdr4d::baselines {
 namespace {
 
-constexpr std::int64_t kGrain = 4096;  // values per chunk
+constexpr std::int64_t kSigmoidGrain = 4096;  // values per chunk
 
 }  // namespace
 
 template <typename T>
 void SigmoidForward(T offset, T log_exposure, const T* log_hdr, std::size_t n, T* ldr) {
   const T shift = log_exposure + offset;
-  ParallelForChunks(std::int64_t(3 * n), kGrain, [&](std::int64_t begin, std::int64_t end) {
+  ParallelForChunks(std::int64_t(3 * n), kSigmoidGrain, [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t k = begin; k < end; ++k) {
       ldr[k] = Logistic(ClampAbs(log_hdr[k], kMaxAbsLogInput) + shift);
     }
@@ -43,7 +43,7 @@ void SigmoidBackward(T offset,
     }
     partial[0] += sum;
   };
-  ReduceInChunks<T>(std::int64_t(3 * n), kGrain, 1, chunk, dL_doffset);
+  ReduceInChunks<T>(std::int64_t(3 * n), kSigmoidGrain, 1, chunk, dL_doffset);
 }
 
 template void SigmoidForward<float>(float, float, const float*, std::size_t, float*);

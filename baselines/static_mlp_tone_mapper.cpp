@@ -13,7 +13,7 @@
 namespace hdr4d::baselines {
 namespace {
 
-constexpr std::int64_t kGrain = 1024;           // values per chunk, direct path
+constexpr std::int64_t kStaticMlpGrain = 1024;  // values per chunk, direct path
 constexpr std::int64_t kPiecewiseGrain = 4096;  // values per chunk, piecewise-linear path
 
 template <typename T>
@@ -38,7 +38,7 @@ template <typename T>
 void StaticMlpForward(const T* params, T log_exposure, const T* log_hdr, std::size_t n, T* ldr) {
   const method::MlpShape& shape = StaticMlpShape();
   const std::size_t per_channel = shape.NumParams();
-  ParallelForChunks(std::int64_t(n), kGrain, [&](std::int64_t begin, std::int64_t end) {
+  ParallelForChunks(std::int64_t(n), kStaticMlpGrain, [&](std::int64_t begin, std::int64_t end) {
     std::vector<T> cache(shape.CacheSize());
     for (std::int64_t i = begin; i < end; ++i) {
       for (int c = 0; c < 3; ++c) {
@@ -77,7 +77,7 @@ void StaticMlpBackward(const T* params,
       }
     }
   };
-  ReduceInChunks<T>(std::int64_t(n), kGrain, 3 * per_channel, chunk, dL_dparams);
+  ReduceInChunks<T>(std::int64_t(n), kStaticMlpGrain, 3 * per_channel, chunk, dL_dparams);
 }
 
 template <typename T>

@@ -17,6 +17,19 @@ function(hdr4d_add_library name)
   target_include_directories(${target} PUBLIC ${PROJECT_SOURCE_DIR})
   target_link_libraries(${target} PUBLIC ${ARG_DEPS})
   target_compile_options(${target} PRIVATE ${HDR4D_WARNINGS})
+  if(HDR4D_UNITY)
+    # Batches of 8 sources compile as one file, so the headers and templates they share are
+    # compiled once per batch. Highway's per-target files re-include themselves
+    # (HWY_TARGET_INCLUDE) and stay alone.
+    set_target_properties(${target} PROPERTIES UNITY_BUILD ON UNITY_BUILD_BATCH_SIZE 8)
+    foreach(src IN LISTS ARG_SOURCES)
+      file(STRINGS ${CMAKE_CURRENT_SOURCE_DIR}/${src} hwy REGEX "HWY_TARGET_INCLUDE")
+      if(hwy)
+        set_source_files_properties(${src} TARGET_DIRECTORY ${target}
+                                    PROPERTIES SKIP_UNITY_BUILD_INCLUSION ON)
+      endif()
+    endforeach()
+  endif()
   if(HDR4D_PCH AND ARG_PCH)
     target_precompile_headers(${target} PRIVATE ${ARG_PCH})
   elseif(HDR4D_PCH)

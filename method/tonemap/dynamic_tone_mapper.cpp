@@ -12,8 +12,8 @@
 namespace hdr4d::method {
 namespace {
 
-constexpr char kMagic[8] = {'H', 'D', 'R', '4', 'D', 'D', 'T', 'M'};
-constexpr std::uint32_t kVersion = 1;
+constexpr char kDtmMagic[8] = {'H', 'D', 'R', '4', 'D', 'D', 'T', 'M'};
+constexpr std::uint32_t kDtmVersion = 1;
 constexpr std::uint32_t kMaxConfigBytes = 1u << 20;
 
 const ToneMapperConfig& Checked(const ToneMapperConfig& config) {
@@ -80,8 +80,8 @@ void DynamicToneMapper::ObserveMeanLogHdr(int time_index, const float* mean_log_
 
 void DynamicToneMapper::Save(std::ostream& out) const {
   HashingWriter w(out);
-  w.Bytes(kMagic, sizeof(kMagic));
-  w.Value(kVersion);
+  w.Bytes(kDtmMagic, sizeof(kDtmMagic));
+  w.Value(kDtmVersion);
   w.ResetHash();
   const std::string json = config_.ToJson().dump();
   w.Value(static_cast<std::uint32_t>(json.size()));
@@ -95,15 +95,15 @@ void DynamicToneMapper::Save(std::ostream& out) const {
 
 void DynamicToneMapper::Load(std::istream& in, const std::string& source) {
   HashingReader r(in, source, "tone mapper state");
-  char magic[sizeof(kMagic)];
+  char magic[sizeof(kDtmMagic)];
   r.Bytes(magic, sizeof(magic), "the header");
-  if (std::memcmp(magic, kMagic, sizeof(kMagic)) != 0) {
+  if (std::memcmp(magic, kDtmMagic, sizeof(kDtmMagic)) != 0) {
     Fail("{}: not a Dynamic Tone Mapper state (bad magic; expected \"HDR4DDTM\")", source);
   }
   const auto version = r.Value<std::uint32_t>("the version");
-  if (version != kVersion) {
+  if (version != kDtmVersion) {
     Fail("{}: tone mapper state version {} is not supported (this build reads version {})", source,
-         version, kVersion);
+         version, kDtmVersion);
   }
   r.ResetHash();
   const auto json_size = r.Value<std::uint32_t>("the configuration size");

@@ -12,8 +12,8 @@
 namespace hdr4d::method {
 namespace {
 
-constexpr char kMagic[8] = {'H', 'D', 'R', '4', 'D', 'B', 'N', 'K'};
-constexpr std::uint32_t kVersion = 1;
+constexpr char kBankMagic[8] = {'H', 'D', 'R', '4', 'D', 'B', 'N', 'K'};
+constexpr std::uint32_t kBankVersion = 1;
 
 }  // namespace
 
@@ -76,8 +76,8 @@ void RadianceBank::SetRows(const std::vector<float>& rows) {
 
 void RadianceBank::Save(std::ostream& out) const {
   HashingWriter w(out);
-  w.Bytes(kMagic, sizeof(kMagic));
-  w.Value(kVersion);
+  w.Bytes(kBankMagic, sizeof(kBankMagic));
+  w.Value(kBankVersion);
   w.ResetHash();
   w.Value(static_cast<std::uint32_t>(num_times_));
   w.Bytes(rows_.data(), rows_.size() * sizeof(float));
@@ -86,15 +86,15 @@ void RadianceBank::Save(std::ostream& out) const {
 
 void RadianceBank::Load(std::istream& in, const std::string& source) {
   HashingReader r(in, source, "radiance bank");
-  char magic[sizeof(kMagic)];
+  char magic[sizeof(kBankMagic)];
   r.Bytes(magic, sizeof(magic), "the header");
-  if (std::memcmp(magic, kMagic, sizeof(kMagic)) != 0) {
+  if (std::memcmp(magic, kBankMagic, sizeof(kBankMagic)) != 0) {
     Fail("{}: not a radiance bank (bad magic; expected \"HDR4DBNK\")", source);
   }
   const auto version = r.Value<std::uint32_t>("the version");
-  if (version != kVersion) {
+  if (version != kBankVersion) {
     Fail("{}: radiance bank version {} is not supported (this build reads version {})", source,
-         version, kVersion);
+         version, kBankVersion);
   }
   r.ResetHash();
   const auto count = r.Value<std::uint32_t>("the row count");
