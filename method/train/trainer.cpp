@@ -272,6 +272,8 @@ void TrainingRun::SetUp() {
   // paper-size scene's memory and loading time, issue 15).
   resolved_ = ResolveHdrTraining(hdr, profile_.hdr_gt_in_train,
                                  !tone_mapper_ || tone_mapper_->pointwise());
+  if (const std::string note = MeasuredToFailNote(resolved_); !note.empty())
+    method_note_ += (method_note_.empty() ? "" : "\n") + note;
   train_views_ = LoadViews(*dataset_, Split::kTrain, background, /*load_hdr=*/resolved_.hdr,
                            options_.resolution, hdr.hdr_target);
   test_views_ = LoadViews(*dataset_, Split::kTest, background, false, options_.resolution);
