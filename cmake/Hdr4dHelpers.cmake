@@ -54,22 +54,21 @@ function(hdr4d_add_pch_targets)
   if(NOT HDR4D_PCH)
     return()
   endif()
-  # The same usage requirements (definitions, include folders) as hdr4d_core, which every
-  # library and test links, so that the precompiled header is valid where it is reused.
-  set(deps Eigen3::Eigen TBB::tbb OpenImageIO::OpenImageIO nlohmann_json::nlohmann_json fmt::fmt
-      spdlog::spdlog Threads::Threads)
-  add_library(hdr4d_lib_pch OBJECT ${PROJECT_SOURCE_DIR}/cmake/pch/anchor.cpp)
-  target_include_directories(hdr4d_lib_pch PRIVATE ${PROJECT_SOURCE_DIR})
-  target_link_libraries(hdr4d_lib_pch PRIVATE ${deps})
-  target_compile_options(hdr4d_lib_pch PRIVATE ${HDR4D_WARNINGS})
-  target_precompile_headers(hdr4d_lib_pch PRIVATE ${PROJECT_SOURCE_DIR}/cmake/pch/library.h)
+  _hdr4d_add_pch_target(hdr4d_lib_pch library.h "" "")
   if(HDR4D_BUILD_TESTS)
-    add_library(hdr4d_test_pch OBJECT ${PROJECT_SOURCE_DIR}/cmake/pch/anchor.cpp)
-    target_include_directories(hdr4d_test_pch PRIVATE ${PROJECT_SOURCE_DIR})
-    target_link_libraries(hdr4d_test_pch PRIVATE ${deps} GTest::gtest GTest::gmock)
-    target_compile_options(hdr4d_test_pch PRIVATE ${HDR4D_WARNINGS} ${HDR4D_TEST_OPT})
-    target_precompile_headers(hdr4d_test_pch PRIVATE ${PROJECT_SOURCE_DIR}/cmake/pch/tests.h)
+    _hdr4d_add_pch_target(hdr4d_test_pch tests.h "GTest::gtest;GTest::gmock" "${HDR4D_TEST_OPT}")
   endif()
+endfunction()
+
+# A target that only builds cmake/pch/<header> for others to reuse: built with hdr4d_core's usage
+# requirements (HDR4D_CORE_DEPS, which every library and test links) and the same options as its
+# users, so that the precompiled header is valid where it is reused.
+function(_hdr4d_add_pch_target target header extra_deps extra_options)
+  add_library(${target} OBJECT ${PROJECT_SOURCE_DIR}/cmake/pch/anchor.cpp)
+  target_include_directories(${target} PRIVATE ${PROJECT_SOURCE_DIR})
+  target_link_libraries(${target} PRIVATE ${HDR4D_CORE_DEPS} ${extra_deps})
+  target_compile_options(${target} PRIVATE ${HDR4D_WARNINGS} ${extra_options})
+  target_precompile_headers(${target} PRIVATE ${PROJECT_SOURCE_DIR}/cmake/pch/${header})
 endfunction()
 
 # hdr4d_add_test(<folder> <name> [NEEDS_CLI] SOURCES ... DEPS ... [PROPERTIES ...]): a GoogleTest

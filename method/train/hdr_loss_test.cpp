@@ -167,14 +167,20 @@ void ExpectDirectionalDerivatives(LossCase& c,
   }
 }
 
-// The one combination measured to collapse (issue 12: the pixel branch as the only LDR term
-// under an HDR term) gets a note at the start of the run; its neighbours do not.
-TEST(HdrLoss, OnlyThePixelBranchUnderAnHdrTermGetsANote) {
+// HDR-4DGS with the Dynamic Tone Mapper under `supervision`, before resolving against a scene.
+HdrTrainingOptions Hdr4dgsOptions(Supervision supervision) {
   HdrTrainingOptions o;
   o.method = "hdr4dgs";
   o.color_mode = ColorMode::kLogHdr;
   o.tone_mapper = ToneMapperConfig{};
-  o.supervision = Supervision::kLdrHdr;
+  o.supervision = supervision;
+  return o;
+}
+
+// The one combination measured to collapse (issue 12: the pixel branch as the only LDR term
+// under an HDR term) gets a note at the start of the run; its neighbours do not.
+TEST(HdrLoss, OnlyThePixelBranchUnderAnHdrTermGetsANote) {
+  HdrTrainingOptions o = Hdr4dgsOptions(Supervision::kLdrHdr);
   EXPECT_EQ(MeasuredToFailNote(ResolveHdrTraining(o, true, true)), "");  // both branches
   o.gaussian_branch = false;
   EXPECT_NE(MeasuredToFailNote(ResolveHdrTraining(o, true, true)).find("--no-gaussian-branch"),
@@ -189,11 +195,7 @@ TEST(HdrLoss, OnlyThePixelBranchUnderAnHdrTermGetsANote) {
 // one when an HDR term fixes the raster to the target's units, an explicit value always, and
 // the reference's for a run saved before the setting existed (so it renders as it trained).
 TEST(HdrLoss, PixelLogEpsilonFollowsTheSupervision) {
-  HdrTrainingOptions o;
-  o.method = "hdr4dgs";
-  o.color_mode = ColorMode::kLogHdr;
-  o.tone_mapper = ToneMapperConfig{};
-  o.supervision = Supervision::kLdr;
+  HdrTrainingOptions o = Hdr4dgsOptions(Supervision::kLdr);
   EXPECT_EQ(ResolveHdrTraining(o, true, true).pixel_log_epsilon, kReferencePixelLogEpsilon);
   o.supervision = Supervision::kLdrHdr;
   EXPECT_EQ(ResolveHdrTraining(o, true, true).pixel_log_epsilon, kHdrUnitsPixelLogEpsilon);
