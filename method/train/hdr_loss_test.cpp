@@ -177,20 +177,6 @@ HdrTrainingOptions Hdr4dgsOptions(Supervision supervision) {
   return o;
 }
 
-// The one combination measured to collapse (issue 12: the pixel branch as the only LDR term
-// under an HDR term) gets a note at the start of the run; its neighbours do not.
-TEST(HdrLoss, OnlyThePixelBranchUnderAnHdrTermGetsANote) {
-  HdrTrainingOptions o = Hdr4dgsOptions(Supervision::kLdrHdr);
-  EXPECT_EQ(MeasuredToFailNote(ResolveHdrTraining(o, true, true)), "");  // both branches
-  o.gaussian_branch = false;
-  EXPECT_NE(MeasuredToFailNote(ResolveHdrTraining(o, true, true)).find("--no-gaussian-branch"),
-            std::string::npos);
-  o.supervision = Supervision::kLdr;
-  EXPECT_EQ(MeasuredToFailNote(ResolveHdrTraining(o, true, true)), "");
-  o.supervision = Supervision::kAuto;  // auto without HDR truth: LDR only
-  EXPECT_EQ(MeasuredToFailNote(ResolveHdrTraining(o, false, true)), "");
-}
-
 // Which floor the 2D branch's log takes: the reference's under LDR supervision alone, a lower
 // one when an HDR term fixes the raster to the target's units, an explicit value always, and
 // the reference's for a run saved before the setting existed (so it renders as it trained).

@@ -157,11 +157,4 @@ ResolvedHdrTraining ResolveHdrTraining(const HdrTrainingOptions& o,
   return r;
 }
 
-std::string MeasuredToFailNote(const ResolvedHdrTraining& resolved) {
-  if (!(resolved.hdr && resolved.ldr_pixel && !resolved.ldr_gaussian)) return "";
-  return "train: note: the pixel branch as the only LDR term (--no-gaussian-branch) with an HDR "
-         "term collapsed on a multi-view test scene (most Gaussians pruned, dim regions black; "
-         "BENCHMARKS.md, issue 12): check its renders, or keep both branches";
-}
-
 }  // namespace hdr4d::method

@@ -80,9 +80,4 @@ ResolvedHdrTraining ResolveHdrTraining(const HdrTrainingOptions& options,
                                        bool train_views_have_hdr,
                                        bool pointwise);
 
-// A warning for a combination that trains but was measured to fail, or "" (shown at the start
-// of a run). The pixel branch as the only LDR term under an HDR term collapsed on a multi-view
-// datagen scene (12.5 dB held-out LDR against 24.5 without the HDR term; BENCHMARKS.md, issue 12).
-std::string MeasuredToFailNote(const ResolvedHdrTraining& resolved);
-
 }  // namespace hdr4d::method

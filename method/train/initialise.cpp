@@ -181,4 +181,19 @@ GaussianModel InitialiseGaussians(const std::optional<PointCloud>& cloud,
   return model;
 }
 
+float ShiftLogColoursToLevel(GaussianModel* model, float log_level) {
+  HDR4D_CHECK(model->color_mode == ColorMode::kLogHdr && std::isfinite(log_level));
+  const int channels = model->channels;
+  const std::size_t n = model->size();
+  if (n == 0) return 0.0f;
+  std::vector<float> logs(n * channels);
+  for (std::size_t i = 0; i < logs.size(); ++i)
+    logs[i] = kShC0 * model->color_dc[i] + kColorOffset;
+  auto mid = logs.begin() + static_cast<std::ptrdiff_t>(logs.size() / 2);
+  std::nth_element(logs.begin(), mid, logs.end());
+  const float shift = log_level - *mid;
+  for (std::size_t i = 0; i < n * channels; ++i) model->color_dc[i] += shift / kShC0;
+  return shift;
+}
+
 }  // namespace hdr4d::method

@@ -90,5 +90,34 @@ TEST(Initialise, BadOptionsAreErrors) {
   EXPECT_THROW(InitialiseGaussians(std::nullopt, options), Error);
 }
 
+// Under an HDR term the log colours start at the targets' level: one constant added to every DC
+// colour, so the median lands on the level and the points' colour differences are kept.
+TEST(Initialise, LogColoursShiftToALevelKeepingTheirDifferences) {
+  PointCloud cloud;
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<float> u(0.05f, 0.95f);
+  for (int i = 0; i < 101; ++i) {
+    cloud.positions.push_back({u(rng), u(rng), u(rng)});
+    cloud.colors.push_back({u(rng), u(rng), u(rng)});
+  }
+  InitOptions options;
+  options.color_mode = ColorMode::kLogHdr;
+  GaussianModel m = InitialiseGaussians(cloud, options);
+  const GaussianModel before = m;
+  const float shift = ShiftLogColoursToLevel(&m, -4.5f);
+  std::vector<float> logs;
+  for (std::size_t i = 0; i < m.color_dc.size(); ++i) {
+    const float was = kShC0 * before.color_dc[i] + kColorOffset;
+    const float now = kShC0 * m.color_dc[i] + kColorOffset;
+    ASSERT_NEAR(now - was, shift, 1e-4f) << i;
+    logs.push_back(now);
+  }
+  std::nth_element(logs.begin(), logs.begin() + logs.size() / 2, logs.end());
+  EXPECT_NEAR(logs[logs.size() / 2], -4.5f, 1e-4f);
+  EXPECT_LT(shift, -3.0f);  // the points' colours are 0.05-0.95: log levels of -3 to 0
+  EXPECT_EQ(m.xyz, before.xyz);
+  EXPECT_EQ(m.opacity_logit, before.opacity_logit);
+}
+
 }  // namespace
 }  // namespace hdr4d::method

@@ -68,6 +68,24 @@ std::vector<std::uint16_t> LoadHdrMuTarget(const std::filesystem::path& path,
 
 }  // namespace
 
+std::optional<float> MedianLogHdrTarget(const std::vector<TrainView>& views, double mu_law) {
+  // Every 7th value (prime to 3, so every channel is sampled): a paper-size scene has 1e8.
+  constexpr std::size_t kStride = 7;
+  const double log1p_mu = std::log1p(mu_law);
+  std::vector<float> logs;
+  for (const TrainView& v : views) {
+    for (std::size_t i = 0; i < v.hdr_mu.size(); i += kStride) {
+      if (v.hdr_mu[i] == 0) continue;  // below the 16-bit target's first step: no level
+      const double y = v.hdr_mu[i] / 65535.0;
+      logs.push_back(static_cast<float>(std::log(std::expm1(y * log1p_mu) / mu_law)));
+    }
+  }
+  if (logs.empty()) return std::nullopt;
+  auto mid = logs.begin() + static_cast<std::ptrdiff_t>(logs.size() / 2);
+  std::nth_element(logs.begin(), mid, logs.end());
+  return *mid;
+}
+
 PinholeIntrinsics DownscaledIntrinsics(const PinholeIntrinsics& intrinsics, int factor) {
   HDR4D_CHECK(factor >= 1 && intrinsics.width % factor == 0 && intrinsics.height % factor == 0);
   PinholeIntrinsics k = intrinsics;

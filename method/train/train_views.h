@@ -53,6 +53,10 @@ std::vector<TrainView> LoadViews(const Dataset& dataset,
                                  int resolution = 1,
                                  HdrTarget target = HdrTarget::kImageMax);
 
+// The median of log(HDR target) in the loss's units (hdr_mu decoded with `mu_law`) over a
+// regular sample of the views' positive target values; nullopt when no view has an HDR target.
+std::optional<float> MedianLogHdrTarget(const std::vector<TrainView>& views, double mu_law);
+
 // The intrinsics of an image reduced by an integer `factor` (width and height divisible by it;
 // checked). With pixel centres at i + 0.5 (core/camera.h, PIXEL CONVENTION) output pixel i
 // covers input [i f, (i + 1) f), so every image coordinate, focal lengths and principal point

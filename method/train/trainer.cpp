@@ -272,8 +272,6 @@ void TrainingRun::SetUp() {
   // paper-size scene's memory and loading time, issue 15).
   resolved_ = ResolveHdrTraining(hdr, profile_.hdr_gt_in_train,
                                  !tone_mapper_ || tone_mapper_->pointwise());
-  if (const std::string note = MeasuredToFailNote(resolved_); !note.empty())
-    method_note_ += (method_note_.empty() ? "" : "\n") + note;
   train_views_ = LoadViews(*dataset_, Split::kTrain, background, /*load_hdr=*/resolved_.hdr,
                            options_.resolution, hdr.hdr_target);
   test_views_ = LoadViews(*dataset_, Split::kTest, background, false, options_.resolution);
@@ -369,6 +367,14 @@ void TrainingRun::ResumeOrInitialise() {
     std::optional<PointCloud> cloud;
     if (dataset_->point_cloud_path) cloud = ReadPly(*dataset_->point_cloud_path);
     model_ = InitialiseGaussians(cloud, init);
+    if (resolved_.hdr && model_.color_mode == ColorMode::kLogHdr) {
+      if (const auto level =
+              MedianLogHdrTarget(train_views_, HdrTargetMu(options_.hdr.hdr_target))) {
+        const float shift = ShiftLogColoursToLevel(&model_, *level);
+        spdlog::info("train: log-HDR colours start at the HDR targets' median {:.3g} (x{:.3g})",
+                     std::exp(*level), std::exp(shift));
+      }
+    }
     stats_.Reset(model_.size());
   }
   // At batch size 1 the fused step takes the colour gradient rows straight from the backward,

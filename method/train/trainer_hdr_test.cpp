@@ -15,6 +15,7 @@
 #include "core/exposure_stack.h"
 #include "core/image_io.h"
 #include "core/json_util.h"
+#include "method/gaussian/constants.h"
 #include "method/run/render_split.h"
 #include "method/tonemap/dynamic_tone_mapper.h"
 #include "method/train/checkpoint.h"
@@ -294,6 +295,51 @@ TEST(TrainerHdr, HdrTargetsDivideByTheImageOrTheSceneMaximum) {
       }
     }
   }
+}
+
+// The HDR term's raster is in its target's units; the log colours start at the targets' median
+// level there (issue 12: started at the points' LDR colours, 30-100x too bright, the first steps
+// went into opacity and pruned the geometry; the pixel branch alone collapsed). Without an HDR
+// term the units are free and the colours start where the points say.
+TEST(TrainerHdr, LogColoursStartAtTheHdrTargetsLevelUnderAnHdrTerm) {
+  TempDir dir;
+  MakeHdrScene(dir / "scene", 16);
+  const Dataset data = LoadDataset(dir / "scene");
+  const float black[3] = {0, 0, 0};
+  const std::vector<TrainView> views = LoadViews(data, Split::kTrain, black, true);
+  // The level from the ground truth itself: the median of log(gt / the image's maximum).
+  std::vector<double> logs;
+  for (const TrainView& v : views) {
+    const Image gt = ReadHdrGroundTruth(*v.hdr_path);
+    const float max_value = gt.MaxValue();
+    for (std::size_t p = 0; p < gt.num_pixels(); ++p)
+      for (int c = 0; c < 3; ++c)
+        if (const float g = gt.data()[p * gt.channels() + c]; g > 0)
+          logs.push_back(std::log(g / max_value));
+  }
+  std::nth_element(logs.begin(), logs.begin() + logs.size() / 2, logs.end());
+  const double level = logs[logs.size() / 2];
+  const std::optional<float> measured = MedianLogHdrTarget(views, kMuLawMu);
+  ASSERT_TRUE(measured.has_value());
+  EXPECT_NEAR(*measured, level, 0.05);
+  EXPECT_FALSE(MedianLogHdrTarget(LoadViews(data, Split::kTrain, black, false), kMuLawMu));
+
+  auto median_log_colour = [](const fs::path& run) {
+    const GaussianModel m = LoadCheckpoint(run / "checkpoint.bin").model;
+    std::vector<float> v;
+    for (float dc : m.color_dc) v.push_back(kShC0 * dc + kColorOffset);
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  TrainOptions o = HdrRun(dir / "scene", dir / "lh", 1);
+  o.hdr.supervision = Supervision::kLdrHdr;
+  Train(o);
+  EXPECT_NEAR(median_log_colour(dir / "lh"), level, 0.1);  // one step moves a colour < 0.02
+  o = HdrRun(dir / "scene", dir / "ldr", 1);
+  o.hdr.supervision = Supervision::kLdr;
+  Train(o);
+  // The point cloud's own colours, more than a factor e from the targets' level on this scene.
+  EXPECT_GT(std::abs(median_log_colour(dir / "ldr") - level), 1.0);
 }
 
 }  // namespace
