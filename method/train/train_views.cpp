@@ -69,12 +69,16 @@ std::vector<std::uint16_t> LoadHdrMuTarget(const std::filesystem::path& path,
 }  // namespace
 
 std::optional<float> MedianLogHdrTarget(const std::vector<TrainView>& views, double mu_law) {
-  // Every 7th value (prime to 3, so every channel is sampled): a paper-size scene has 1e8.
-  constexpr std::size_t kStride = 7;
+  // A regular sample of at most ~1e6 values (a paper-size scene has 1e8), its stride prime to
+  // 3 so that every channel is sampled.
+  std::size_t total = 0;
+  for (const TrainView& v : views) total += v.hdr_mu.size();
+  std::size_t stride = std::max<std::size_t>(7, total / 1'000'000);
+  if (stride % 3 == 0) ++stride;
   const double log1p_mu = std::log1p(mu_law);
   std::vector<float> logs;
   for (const TrainView& v : views) {
-    for (std::size_t i = 0; i < v.hdr_mu.size(); i += kStride) {
+    for (std::size_t i = 0; i < v.hdr_mu.size(); i += stride) {
       if (v.hdr_mu[i] == 0) continue;  // below the 16-bit target's first step: no level
       const double y = v.hdr_mu[i] / 65535.0;
       logs.push_back(static_cast<float>(std::log(std::expm1(y * log1p_mu) / mu_law)));
