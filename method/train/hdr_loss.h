@@ -32,6 +32,11 @@ inline T MuLawEncode(T x, double mu = kMuLawMu) {
   const T y = x > T(0) ? x : T(0);
   return std::log1p(T(mu) * y) / std::log(T(1) + T(mu));
 }
+// Its inverse, for a stored target y in [0, 1]: the value in the loss's units.
+template <typename T>
+inline T MuLawDecode(T y, double mu = kMuLawMu) {
+  return std::expm1(y * std::log1p(T(mu))) / T(mu);
+}
 template <typename T>
 inline T MuLawEncodeBackward(T x, T dL_dy, double mu = kMuLawMu) {
   if (!(x > T(0))) return T(0);

@@ -100,6 +100,8 @@ TEST(HdrLoss, GuardsKeepEverythingFinite) {
   EXPECT_EQ(MuLawEncode(-1.0), 0.0);
   EXPECT_EQ(MuLawEncodeBackward(-1.0, 1.0), 0.0);
   EXPECT_TRUE(std::isfinite(MuLawEncode(1e30f)));
+  for (double x : {1e-9, 1e-4, 0.3, 1.0})  // the inverse, at both targets' mu
+    for (double mu : {5000.0, 1e6}) EXPECT_NEAR(MuLawDecode(MuLawEncode(x, mu), mu), x, 1e-12 * mu);
   for (float eps : {kReferencePixelLogEpsilon, kHdrUnitsPixelLogEpsilon}) {
     EXPECT_NEAR(PixelLog(0.0f, eps), std::log(eps), 1e-5);  // log of 0 is guarded
     EXPECT_TRUE(std::isfinite(PixelLog(-5.0f, eps)));

@@ -75,13 +75,11 @@ std::optional<float> MedianLogHdrTarget(const std::vector<TrainView>& views, dou
   for (const TrainView& v : views) total += v.hdr_mu.size();
   std::size_t stride = std::max<std::size_t>(7, total / 1'000'000);
   if (stride % 3 == 0) ++stride;
-  const double log1p_mu = std::log1p(mu_law);
   std::vector<float> logs;
   for (const TrainView& v : views) {
     for (std::size_t i = 0; i < v.hdr_mu.size(); i += stride) {
       if (v.hdr_mu[i] == 0) continue;  // below the 16-bit target's first step: no level
-      const double y = v.hdr_mu[i] / 65535.0;
-      logs.push_back(static_cast<float>(std::log(std::expm1(y * log1p_mu) / mu_law)));
+      logs.push_back(static_cast<float>(std::log(MuLawDecode(v.hdr_mu[i] / 65535.0, mu_law))));
     }
   }
   if (logs.empty()) return std::nullopt;
