@@ -210,8 +210,10 @@ void AddTrainCommand(CLI::App& app) {
   cmd->add_option("--hdr-target", flags->hdr_target,
                   "Target of the HDR term: image-max (the reference: mu-law, mu 5000, of each "
                   "image over its own maximum) or scene-log (mu 1e6, one maximum for the whole "
-                  "scene: a constant scale over time, dark regions weighed like bright ones)")
-      ->check(CLI::IsMember({"image-max", "scene-log"}));
+                  "scene: a constant scale over time, dark regions weighed like bright ones) or aligned "
+                  "(the reference's target, the render scaled to it per image by the median "
+                  "ratio first: the term fixes the HDR's shape, the LDR terms its scale)")
+      ->check(CLI::IsMember({"image-max", "scene-log", "aligned"}));
   cmd->callback([cmd, options, data, out, flags, context_window, context_size, config,
                  list_configs, data_flag, out_flag, method_flag, supervision_flag,
                  hdr_weight_flag, pixel_log_epsilon_flag] {

@@ -1,6 +1,7 @@
 #include "method/train/hdr_loss.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "core/error.h"
 #include "core/parallel.h"
@@ -11,6 +12,8 @@ namespace hdr4d::method {
 namespace {
 
 constexpr std::int64_t kGrain = 8192;
+constexpr std::size_t kAlignSample = 1 << 16;  // values in the median of HdrAlignScale
+constexpr double kMaxLogAlign = 30.0;           // |log scale| at most: e^30 ~ 1e13
 
 }  // namespace
 
@@ -25,6 +28,56 @@ void ExtractChannels(
 void PixelLogImage(const std::vector<float>& hdr, float eps, std::vector<float>* x) {
   x->resize(hdr.size());
   for (std::size_t i = 0; i < hdr.size(); ++i) (*x)[i] = PixelLog(hdr[i], eps);
+}
+
+double HdrAlignScale(const std::vector<float>& hdr, const float* hdr_mu_gt, double mu) {
+  // A regular sample keeps the median's cost bounded on large images; 3 is avoided in the stride
+  // so that every channel is sampled.
+  const std::size_t stride = std::max<std::size_t>(1, hdr.size() / kAlignSample) | 1;
+  const std::size_t step = stride % 3 == 0 ? stride + 2 : stride;
+  std::vector<double> ratios;
+  ratios.reserve(hdr.size() / step + 1);
+  for (std::size_t i = 0; i < hdr.size(); i += step) {
+    const double target = MuLawDecode(static_cast<double>(hdr_mu_gt[i]), mu);
+    // Values the encoding resolves and the render has: the black of a target (or a render that
+    // has not reached a pixel yet) says nothing about the scale.
+    if (target > 1.0 / mu && hdr[i] > 0.0f && std::isfinite(hdr[i]))
+      ratios.push_back(std::log(target) - std::log(static_cast<double>(hdr[i])));
+  }
+  if (ratios.empty()) return 1.0;
+  auto mid = ratios.begin() + static_cast<std::ptrdiff_t>(ratios.size() / 2);
+  std::nth_element(ratios.begin(), mid, ratios.end());
+  // Clamped so that one bad view cannot send the term to an overflow.
+  return std::exp(std::clamp(*mid, -kMaxLogAlign, kMaxLogAlign));
+}
+
+double AddHdrTerm(const std::vector<float>& hdr,
+                  const float* hdr_mu_gt,
+                  int width,
+                  int height,
+                  int channels,
+                  const SupervisionTerms& terms,
+                  double scale,
+                  HdrLossScratch* s,
+                  float* dL_draster) {
+  const std::size_t pixels = static_cast<std::size_t>(width) * height;
+  const std::size_t values = pixels * 3;
+  const float k = static_cast<float>(scale);
+  s->target.resize(values);
+  s->grad.resize(values);
+  for (std::size_t i = 0; i < values; ++i) s->target[i] = MuLawEncode(k * hdr[i], terms.hdr_mu);
+  const double loss = PhotometricLoss(s->target.data(), hdr_mu_gt, width, height, 3,
+                                      terms.lambda_dssim, s->grad.data())
+                          .value;
+  // The scale is a constant of the view (a stop-gradient): d mu(k x) / dx = k mu'(k x).
+  const float w = terms.hdr_weight * k;
+  ParallelFor(static_cast<std::int64_t>(pixels), kGrain, [&](std::int64_t p) {
+    for (int c = 0; c < 3; ++c) {
+      dL_draster[p * channels + c] +=
+          w * MuLawEncodeBackward(k * hdr[p * 3 + c], s->grad[p * 3 + c], terms.hdr_mu);
+    }
+  });
+  return loss;
 }
 
 FrameLoss HdrFrameLoss(const float* raster,
@@ -81,20 +134,11 @@ FrameLoss HdrFrameLoss(const float* raster,
     });
   }
 
-  // HDR term on the mu-law of the raw HDR raster.
+  // HDR term on the mu-law of the raw HDR raster (scaled per view under --hdr-target aligned).
   if (terms.hdr && hdr_mu_gt) {
-    s->target.resize(values);
-    for (std::size_t i = 0; i < values; ++i) s->target[i] = MuLawEncode(s->hdr[i], terms.hdr_mu);
-    loss.hdr = PhotometricLoss(s->target.data(), hdr_mu_gt, width, height, 3, terms.lambda_dssim,
-                               s->grad.data())
-                   .value;
-    const float w = terms.hdr_weight;
-    ParallelFor(static_cast<std::int64_t>(pixels), kGrain, [&](std::int64_t p) {
-      for (int c = 0; c < 3; ++c) {
-        dL_draster[p * channels + c] +=
-            w * MuLawEncodeBackward(s->hdr[p * 3 + c], s->grad[p * 3 + c], terms.hdr_mu);
-      }
-    });
+    loss.hdr_scale = terms.hdr_align ? HdrAlignScale(s->hdr, hdr_mu_gt, terms.hdr_mu) : 1.0;
+    loss.hdr = AddHdrTerm(s->hdr, hdr_mu_gt, width, height, channels, terms, loss.hdr_scale, s,
+                          dL_draster);
   }
   loss.total = loss.ldr_gaussian + loss.ldr_pixel + terms.hdr_weight * loss.hdr;
   return loss;

@@ -66,11 +66,13 @@ struct SupervisionTerms {
   float hdr_weight = 0.6f;
   float lambda_dssim = 0.2f;
   double hdr_mu = kMuLawMu;  // the mu of the HDR target's encoding (HdrTargetMu)
+  bool hdr_align = false;    // scale the render to the target per view first (HdrTarget::kAligned)
   float pixel_log_epsilon = kReferencePixelLogEpsilon;  // the 2D branch's log(HDR + eps)
 };
 
 struct FrameLoss {
   double total = 0, ldr_gaussian = 0, ldr_pixel = 0, hdr = 0;
+  double hdr_scale = 1;  // the factor the HDR term applied to the render (1 unless aligned)
 };
 
 // Working buffers, reused from view to view. After HdrFrameLoss, `ldr` holds the clamped 3D
@@ -78,6 +80,25 @@ struct FrameLoss {
 struct HdrLossScratch {
   std::vector<float> hdr, ldr, grad, target, x, pixel_ldr, dpixel, dx;
 };
+
+// --hdr-target aligned: the factor k that brings the HDR render to the target's units, exp of the
+// median over values of log(target) - log(render), on a regular sample of at most ~65k values
+// where the target is above 1/mu (resolved by the encoding) and the render positive; 1 when none
+// is. hdr: H x W x 3 linear render; hdr_mu_gt: its mu-law target.
+double HdrAlignScale(const std::vector<float>& hdr, const float* hdr_mu_gt, double mu);
+
+// The HDR term alone: L(mu(scale * hdr), hdr_mu_gt), its weighted gradient added to channels
+// 0-2 of dL_draster, the scale held constant (a stop-gradient, as the median's pixel would
+// otherwise pull the whole view). Returns the unweighted term.
+double AddHdrTerm(const std::vector<float>& hdr,
+                  const float* hdr_mu_gt,
+                  int width,
+                  int height,
+                  int channels,
+                  const SupervisionTerms& terms,
+                  double scale,
+                  HdrLossScratch* scratch,
+                  float* dL_draster);
 
 // The loss of one view and dL/draster (same layout as `raster`, overwritten). ldr_gt: H x W x 3
 // in [0,1]; hdr_mu_gt: mu(gt_hdr / max gt_hdr), H x W x 3, or null when the view has no HDR

@@ -247,6 +247,76 @@ TEST(HdrLoss, HdrTermNeedsGroundTruthAndTermsAddUp) {
   EXPECT_NEAR(perfect.hdr, 0.0, 1e-6);
 }
 
+// --hdr-target aligned: the median ratio recovers one global factor between render and target,
+// after which the term sees a perfect render; a target the encoding cannot resolve (or a render
+// with nothing in it) leaves the factor at 1.
+TEST(HdrLoss, AlignScaleRecoversAGlobalFactorAndTheTermIgnoresIt) {
+  LossCase c = MakeCase(3, 9);
+  const std::size_t values = c.hdr_mu.size();
+  std::vector<float> render(values);
+  for (std::size_t i = 0; i < values; ++i) render[i] = MuLawDecode(c.hdr_mu[i], kMuLawMu) / 40.0f;
+  render[7] = std::numeric_limits<float>::quiet_NaN();  // skipped, not propagated
+  EXPECT_NEAR(HdrAlignScale(render, c.hdr_mu.data(), kMuLawMu), 40.0, 40.0 * 1e-4);
+  render[7] = render[8];
+  AffineSigmoid tm;
+  tm.BeginFrame({});
+  HdrLossScratch scratch;
+  std::vector<float> grad(values);
+  const SupervisionTerms hdr_only{.ldr_gaussian = false, .ldr_pixel = false};
+  SupervisionTerms aligned = hdr_only;
+  aligned.hdr_align = true;
+  std::vector<float> truth = render;
+  for (float& v : truth) v *= 40.0f;
+  std::vector<float> mu(values);
+  for (std::size_t i = 0; i < values; ++i) mu[i] = MuLawEncode(truth[i]);
+  const FrameLoss plain = HdrFrameLoss(render.data(), 3, c.w, c.h, c.ldr_gt.data(), mu.data(),
+                                       &tm, hdr_only, &scratch, grad.data());
+  const FrameLoss fitted = HdrFrameLoss(render.data(), 3, c.w, c.h, c.ldr_gt.data(), mu.data(),
+                                        &tm, aligned, &scratch, grad.data());
+  EXPECT_GT(plain.hdr, 0.1);
+  EXPECT_EQ(plain.hdr_scale, 1.0);
+  EXPECT_NEAR(fitted.hdr_scale, 40.0, 40.0 * 1e-4);
+  EXPECT_NEAR(fitted.hdr, 0.0, 1e-4);
+  std::vector<float> dark(values, MuLawEncode(0.5f / kMuLawMu));
+  EXPECT_EQ(HdrAlignScale(render, dark.data(), kMuLawMu), 1.0);
+  EXPECT_EQ(HdrAlignScale(std::vector<float>(values, 0.0f), mu.data(), kMuLawMu), 1.0);
+  // Extreme factors are clamped, not overflowed.
+  std::vector<float> tiny(values, 1e-30f);
+  EXPECT_TRUE(std::isfinite(HdrAlignScale(tiny, mu.data(), kMuLawMu)));
+}
+
+// The aligned term's gradient with the view's factor held constant (the stop-gradient the
+// trainer applies), along random directions.
+TEST(HdrLoss, AlignedTermGradientAtAFixedScaleMatchesDirectionalDifferences) {
+  LossCase c = MakeCase(3, 10);
+  std::vector<float> hdr = c.raster;
+  for (float& v : hdr) v *= 0.01f;
+  const SupervisionTerms terms{.ldr_gaussian = false, .ldr_pixel = false, .hdr_weight = 0.6f};
+  const double scale = 37.5;
+  HdrLossScratch scratch;
+  std::vector<float> grad(hdr.size(), 0.0f), unused(hdr.size());
+  AddHdrTerm(hdr, c.hdr_mu.data(), c.w, c.h, 3, terms, scale, &scratch, grad.data());
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 3; ++trial) {
+    std::vector<float> v(hdr.size());
+    double predicted = 0;
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      v[i] = std::uniform_real_distribution<float>(-1, 1)(rng) * hdr[i];  // relative steps
+      predicted += double(grad[i]) * v[i];
+    }
+    auto loss_at = [&](float h) {
+      std::vector<float> r = hdr;
+      for (std::size_t i = 0; i < r.size(); ++i) r[i] += h * v[i];
+      return 0.6 * AddHdrTerm(r, c.hdr_mu.data(), c.w, c.h, 3, terms, scale, &scratch,
+                              unused.data());
+    };
+    const float h = 2e-2f;
+    const double numeric = (loss_at(h) - loss_at(-h)) / (2 * h);
+    EXPECT_NEAR(predicted, numeric, 2e-2 * std::abs(numeric) + 1e-5) << "trial " << trial;
+    EXPECT_GT(std::abs(numeric), 1e-4);
+  }
+}
+
 TEST(HdrLoss, ToneMapperParametersReceiveTheirGradient) {
   LossCase c = MakeCase(6, 9);
   AffineSigmoid tm;

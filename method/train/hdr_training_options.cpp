@@ -27,14 +27,22 @@ Supervision ParseSupervision(const std::string& name, const std::string& what) {
 }
 
 const char* HdrTargetName(HdrTarget t) {
-  return t == HdrTarget::kSceneLog ? "scene-log" : "image-max";
+  switch (t) {
+    case HdrTarget::kImageMax:
+      return "image-max";
+    case HdrTarget::kSceneLog:
+      return "scene-log";
+    case HdrTarget::kAligned:
+      return "aligned";
+  }
+  return "?";
 }
 
 HdrTarget ParseHdrTarget(const std::string& name, const std::string& what) {
-  for (HdrTarget t : {HdrTarget::kImageMax, HdrTarget::kSceneLog}) {
+  for (HdrTarget t : {HdrTarget::kImageMax, HdrTarget::kSceneLog, HdrTarget::kAligned}) {
     if (name == HdrTargetName(t)) return t;
   }
-  Fail("{}: unknown HDR target '{}' (image-max or scene-log)", what, name);
+  Fail("{}: unknown HDR target '{}' (image-max, scene-log or aligned)", what, name);
 }
 
 std::string HdrTrainingOptions::Validate() const {

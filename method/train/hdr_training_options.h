@@ -21,8 +21,12 @@ enum class Supervision { kAuto, kLdr, kHdr, kLdrHdr };
 //              time changes every other pixel's target, and the dark half of the range is
 //              almost flat under mu = 5000;
 //   scene-log  gt / one maximum over all training views, encoded with mu = 1e6 (log-like over
-//              six decades): one consistent scale for the whole scene, dark and bright alike.
-enum class HdrTarget { kImageMax, kSceneLog };
+//              six decades): one consistent scale for the whole scene, dark and bright alike;
+//   aligned    the reference's target, compared after scaling each view's render by one factor
+//              (the median ratio of target to render, a constant of the step): the term then
+//              constrains the HDR's shape and leaves its scale, which changes from image to image
+//              under per-image maxima, to the LDR terms and their known exposures.
+enum class HdrTarget { kImageMax, kSceneLog, kAligned };
 
 // The floor of the 2D branch's log(HDR + eps). The reference's 1e-5 is harmless under LDR
 // supervision alone, where the model picks its own radiance scale. An HDR term fixes the raster

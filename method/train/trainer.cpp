@@ -409,6 +409,7 @@ void TrainingRun::PrepareRendering() {
             .hdr_weight = options_.hdr.hdr_weight,
             .lambda_dssim = static_cast<float>(opt_.lambda_dssim),
             .hdr_mu = HdrTargetMu(options_.hdr.hdr_target),
+            .hdr_align = options_.hdr.hdr_target == HdrTarget::kAligned,
             .pixel_log_epsilon = resolved_.pixel_log_epsilon};
   progress_.emplace("train", opt_.iterations - loop_.iteration, options_.progress);
   start_ = std::chrono::steady_clock::now();

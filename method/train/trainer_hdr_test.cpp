@@ -157,6 +157,26 @@ TEST(TrainerHdr, EveryModeAndSwitchTrains) {
   EXPECT_FALSE(LoadCheckpoint(dir / "static" / "checkpoint.bin").model.temporal);
   r = run("lstm", [](TrainOptions& o) { o.hdr.tone_mapper->context_learner = "lstm"; });
   r = run("direct", [](TrainOptions& o) { o.hdr.tone_mapper->tabulated = false; });
+  run("aligned", [](TrainOptions& o) {
+    o.hdr.supervision = Supervision::kLdrHdr;
+    o.hdr.hdr_target = HdrTarget::kAligned;
+  });
+  EXPECT_EQ(ReadJsonFile(dir / "aligned" / "config.json")["hdr"]["hdr_target"], "aligned");
+}
+
+// Every HDR target by name, through the saved configuration and back; an unknown name names
+// where it came from.
+TEST(TrainerHdr, HdrTargetsRoundTripByName) {
+  for (HdrTarget t : {HdrTarget::kImageMax, HdrTarget::kSceneLog, HdrTarget::kAligned}) {
+    EXPECT_EQ(ParseHdrTarget(HdrTargetName(t), "test"), t);
+    HdrTrainingOptions o;
+    o.hdr_target = t;
+    EXPECT_EQ(HdrTrainingOptions::FromJson(o.ToJson(), "config.json").hdr_target, t);
+  }
+  EXPECT_EQ(HdrTargetMu(HdrTarget::kAligned), kMuLawMu);  // the reference's encoding
+  const std::string e = ErrorOf([] { ParseHdrTarget("median", "run/config.json"); });
+  EXPECT_NE(e.find("run/config.json"), std::string::npos) << e;
+  EXPECT_NE(e.find("aligned"), std::string::npos) << e;
 }
 
 TEST(TrainerHdr, RenderWritesLdrAndHdrNamedLikeTheGroundTruth) {
