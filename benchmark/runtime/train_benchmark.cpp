@@ -14,6 +14,8 @@
 #include "method/optim/densify.h"
 #include "method/optim/fused_adam_step.h"
 #include "method/render/frame_render.h"
+#include "method/render/hdr_color_stage.h"
+#include "method/tonemap/dynamic_tone_mapper.h"
 #include "method/train/initialise.h"
 #include "method/train/loss.h"
 
@@ -88,6 +90,27 @@ void BM_RenderBackward(benchmark::State& state) {
     RenderBackward(s.model, s.camera, 0.5f, s.options, &frame, dL.data(), &grads);
 }
 BENCHMARK(BM_RenderBackward)->Args({200, 20})->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// What `hdr4d render` does for HDR-4DGS at each view: log-HDR colours through the Dynamic Tone
+// Mapper's colour stage (radiance bank, context learner, curves per visible Gaussian) and one
+// 6-channel blend giving the HDR image and the 3D branch's LDR image together: the "HDR + LDR
+// render" of issue 15's 40 fps target. Same random Gaussians as RenderForward, colours read as
+// log radiance.
+void BM_RenderHdrLdr(benchmark::State& state) {
+  const int size = static_cast<int>(state.range(0));
+  Scene s = MakeScene(size, static_cast<int>(state.range(1)));
+  s.model.color_mode = ColorMode::kLogHdr;
+  DynamicToneMapper dtm(ToneMapperConfig{});
+  HdrColorStage stage(&dtm, /*map_gaussians=*/true);
+  stage.SetFrame({.time_index = 0, .log_exposure = std::log(0.5f)}, /*observe_bank=*/true);
+  s.options.color_stage = &stage;
+  s.options.background.assign(stage.feature_channels(), 0.0f);
+  FrameState frame;
+  std::vector<float> image(static_cast<std::size_t>(size) * size * stage.feature_channels());
+  for (auto _ : state) RenderForward(s.model, s.camera, 0.5f, s.options, &frame, image.data());
+  ReportRasterCounters(frame, &state);
+}
+BENCHMARK(BM_RenderHdrLdr)->Args({800, 100})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // Forward + loss + backward (which writes every gradient row) + Adam step with the finite check,
 // as the trainer runs it: fused into the backward, block by block of Gaussians (AdamRowStep).
