@@ -30,13 +30,16 @@ void PixelLogImage(const std::vector<float>& hdr, float eps, std::vector<float>*
   for (std::size_t i = 0; i < hdr.size(); ++i) (*x)[i] = PixelLog(hdr[i], eps);
 }
 
-double HdrAlignScale(const std::vector<float>& hdr, const float* hdr_mu_gt, double mu) {
+double HdrAlignScale(const std::vector<float>& hdr,
+                     const float* hdr_mu_gt,
+                     double mu,
+                     std::vector<double>* ratios_buffer) {
   // A regular sample keeps the median's cost bounded on large images; 3 is avoided in the stride
   // so that every channel is sampled.
   const std::size_t stride = std::max<std::size_t>(1, hdr.size() / kAlignSample) | 1;
   const std::size_t step = stride % 3 == 0 ? stride + 2 : stride;
-  std::vector<double> ratios;
-  ratios.reserve(hdr.size() / step + 1);
+  std::vector<double>& ratios = *ratios_buffer;
+  ratios.clear();
   for (std::size_t i = 0; i < hdr.size(); i += step) {
     const double target = MuLawDecode(static_cast<double>(hdr_mu_gt[i]), mu);
     // Values the encoding resolves and the render has: the black of a target (or a render that
@@ -136,7 +139,8 @@ FrameLoss HdrFrameLoss(const float* raster,
 
   // HDR term on the mu-law of the raw HDR raster (scaled per view under --hdr-target aligned).
   if (terms.hdr && hdr_mu_gt) {
-    loss.hdr_scale = terms.hdr_align ? HdrAlignScale(s->hdr, hdr_mu_gt, terms.hdr_mu) : 1.0;
+    loss.hdr_scale =
+        terms.hdr_align ? HdrAlignScale(s->hdr, hdr_mu_gt, terms.hdr_mu, &s->ratios) : 1.0;
     loss.hdr = AddHdrTerm(s->hdr, hdr_mu_gt, width, height, channels, terms, loss.hdr_scale, s,
                           dL_draster);
   }

@@ -79,13 +79,18 @@ struct FrameLoss {
 // branch (when that term ran) and `pixel_ldr` the 2D branch (when it ran).
 struct HdrLossScratch {
   std::vector<float> hdr, ldr, grad, target, x, pixel_ldr, dpixel, dx;
+  std::vector<double> ratios;  // HdrAlignScale's sample
 };
 
 // --hdr-target aligned: the factor k that brings the HDR render to the target's units, exp of the
 // median over values of log(target) - log(render), on a regular sample of at most ~65k values
 // where the target is above 1/mu (resolved by the encoding) and the render positive; 1 when none
-// is. hdr: H x W x 3 linear render; hdr_mu_gt: its mu-law target.
-double HdrAlignScale(const std::vector<float>& hdr, const float* hdr_mu_gt, double mu);
+// is. hdr: H x W x 3 linear render; hdr_mu_gt: its mu-law target; ratios_buffer: working memory
+// reused from step to step (a fresh ~1 MB vector each training step would be page-faulted in).
+double HdrAlignScale(const std::vector<float>& hdr,
+                     const float* hdr_mu_gt,
+                     double mu,
+                     std::vector<double>* ratios_buffer);
 
 // The HDR term alone: L(mu(scale * hdr), hdr_mu_gt), its weighted gradient added to channels
 // 0-2 of dL_draster, the scale held constant (a stop-gradient, as the median's pixel would

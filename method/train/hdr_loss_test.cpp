@@ -256,7 +256,8 @@ TEST(HdrLoss, AlignScaleRecoversAGlobalFactorAndTheTermIgnoresIt) {
   std::vector<float> render(values);
   for (std::size_t i = 0; i < values; ++i) render[i] = MuLawDecode(c.hdr_mu[i], kMuLawMu) / 40.0f;
   render[7] = std::numeric_limits<float>::quiet_NaN();  // skipped, not propagated
-  EXPECT_NEAR(HdrAlignScale(render, c.hdr_mu.data(), kMuLawMu), 40.0, 40.0 * 1e-4);
+  std::vector<double> ratios;
+  EXPECT_NEAR(HdrAlignScale(render, c.hdr_mu.data(), kMuLawMu, &ratios), 40.0, 40.0 * 1e-4);
   render[7] = render[8];
   AffineSigmoid tm;
   tm.BeginFrame({});
@@ -278,11 +279,11 @@ TEST(HdrLoss, AlignScaleRecoversAGlobalFactorAndTheTermIgnoresIt) {
   EXPECT_NEAR(fitted.hdr_scale, 40.0, 40.0 * 1e-4);
   EXPECT_NEAR(fitted.hdr, 0.0, 1e-4);
   std::vector<float> dark(values, MuLawEncode(0.5f / kMuLawMu));
-  EXPECT_EQ(HdrAlignScale(render, dark.data(), kMuLawMu), 1.0);
-  EXPECT_EQ(HdrAlignScale(std::vector<float>(values, 0.0f), mu.data(), kMuLawMu), 1.0);
+  EXPECT_EQ(HdrAlignScale(render, dark.data(), kMuLawMu, &ratios), 1.0);
+  EXPECT_EQ(HdrAlignScale(std::vector<float>(values, 0.0f), mu.data(), kMuLawMu, &ratios), 1.0);
   // Extreme factors are clamped, not overflowed.
   std::vector<float> tiny(values, 1e-30f);
-  EXPECT_TRUE(std::isfinite(HdrAlignScale(tiny, mu.data(), kMuLawMu)));
+  EXPECT_TRUE(std::isfinite(HdrAlignScale(tiny, mu.data(), kMuLawMu, &ratios)));
 }
 
 // The aligned term's gradient with the view's factor held constant (the stop-gradient the
