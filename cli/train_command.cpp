@@ -144,6 +144,11 @@ void AddTrainCommand(CLI::App& app) {
   cmd->add_option("--background", options->background, "Background grey level in [0,1]")
       ->check(Real(0, 1))
       ->capture_default_str();
+  cmd->add_flag("--learn-background", options->learn_background,
+                "Learn one background colour with the scene (not in the paper, which trains on "
+                "a fixed black background): a uniform sky or backdrop is then explained behind "
+                "the Gaussians instead of by Gaussians floating at any depth; for HDR colours a "
+                "radiance, tone mapped like the Gaussians'");
   cmd->add_flag("--resume", options->resume,
                 "Continue from RUN/checkpoint.bin (exactly as if never stopped)");
   CLI::Option* method_flag = cmd->add_option(

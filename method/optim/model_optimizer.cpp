@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "core/error.h"
 #include "method/optim/densify.h"
 #include "method/optim/fused_adam_step.h"
 
@@ -31,6 +32,26 @@ void ModelOptimizer::BindGroups(GaussianModel& model,
   if (!tone_mapper_group_) return;
   adam_.SetBuffers(kGroupToneMapper, tone_mapper->params().data(), tone_mapper->grads().data(),
                    tone_mapper->params().size());
+}
+
+void ModelOptimizer::AddBackgroundGroup(std::vector<float>& params, std::vector<float>& grads,
+                                        float lr) {
+  adam_.AddGroup({.name = kGroupBackground,
+                  .params = params.data(),
+                  .grads = grads.data(),
+                  .size = params.size(),
+                  .lr = lr});
+  background_group_ = true;
+}
+
+void ModelOptimizer::BindBackgroundGroup(std::vector<float>& params, std::vector<float>& grads,
+                                         const std::string& source) {
+  const std::vector<std::string> names = adam_.GroupNames();
+  if (std::find(names.begin(), names.end(), kGroupBackground) == names.end())
+    Fail("{}: the checkpoint has no learned background (the run was started without "
+         "--learn-background)", source);
+  adam_.SetBuffers(kGroupBackground, params.data(), grads.data(), params.size());
+  background_group_ = true;
 }
 
 void ModelOptimizer::SetIteration(int iteration) {
@@ -79,8 +100,9 @@ GradientRowsDone ModelOptimizer::CheckColourRows(std::size_t num_gaussians) {
 std::string ModelOptimizer::FirstNonFinite() const {
   std::string bad = row_step_ ? row_step_->FirstNonFinite() : "";
   if (bad.empty()) bad = adam_.FirstNonFiniteGradient(unfused_);
-  // The colour groups come after the other model groups and before the tone mapper.
-  if (bad.empty() || bad == kGroupToneMapper) {
+  // The colour groups come after the other model groups and before the tone mapper and the
+  // background.
+  if (bad.empty() || bad == kGroupToneMapper || bad == kGroupBackground) {
     if (dc_bad_) return kGroupFDc;
     if (rest_bad_) return kGroupFRest;
   }
@@ -93,6 +115,7 @@ void ModelOptimizer::Finish() {
     // Densification replaced the model tensors (they have no gradient now), but the reference's
     // step after it still moves the tone mapper, which densification leaves alone.
     if (tone_mapper_group_) adam_.StepGroup(kGroupToneMapper);
+    if (background_group_) adam_.StepGroup(kGroupBackground);
     return;
   }
   for (const std::string& group : unfused_) {

@@ -23,6 +23,7 @@
 namespace hdr4d::method {
 
 inline constexpr const char* kGroupToneMapper = "tone_mapper";
+inline constexpr const char* kGroupBackground = "background";
 
 class ModelOptimizer {
  public:
@@ -35,6 +36,13 @@ class ModelOptimizer {
   void AddGroups(GaussianModel& model, GaussianGradients& grads, ToneMapper* tone_mapper);
   // A resumed run, after Load: points the loaded groups at the buffers.
   void BindGroups(GaussianModel& model, GaussianGradients& grads, ToneMapper* tone_mapper);
+
+  // A learned background (learned_background.h): its own group at a fixed rate, registered after
+  // the others, stepped at every iteration like the tone mapper (densification leaves it alone).
+  void AddBackgroundGroup(std::vector<float>& params, std::vector<float>& grads, float lr);
+  // A resumed run's, after Load; throws hdr4d::Error naming `source` when the state has none.
+  void BindBackgroundGroup(std::vector<float>& params, std::vector<float>& grads,
+                           const std::string& source);
 
   // The model's learning rates at `iteration` (position decays with the run's schedule).
   void SetIteration(int iteration);
@@ -64,6 +72,7 @@ class ModelOptimizer {
   double extent_;
   Adam adam_;
   bool tone_mapper_group_ = false;
+  bool background_group_ = false;
   bool densify_ = false;
   bool reset_opacity_ = false;
   std::vector<std::string> fused_;       // stepped inside the backward

@@ -28,8 +28,12 @@ void RenderForward(const GaussianModel& model,
                    float* image) {
   const ViewParams<float> view = ViewParams<float>::FromCamera(camera);
   PreprocessForward(model, view, time, options, state);
-  RasterizeForward(state->splats, SettingsFor(camera, options, state->splats.channels),
-                   &state->raster, image);
+  RasterSettings settings = SettingsFor(camera, options, state->splats.channels);
+  if (BackgroundSource* source = options.background_source) {
+    source->Forward(state->splats.channels, &state->background);
+    settings.background = state->background;
+  }
+  RasterizeForward(state->splats, settings, &state->raster, image);
 }
 
 void RenderBackward(const GaussianModel& model,
@@ -42,8 +46,17 @@ void RenderBackward(const GaussianModel& model,
                     const GradientRowsDone& rows_done) {
   const int features = state->splats.channels;
   state->splat_grads.SetZero(model.size(), features);
-  BlendBackward(state->splats, SettingsFor(camera, options, features), &state->raster, dL_dimage,
-                nullptr, &state->splat_grads, nullptr);
+  RasterSettings settings = SettingsFor(camera, options, features);
+  float* dL_dbackground = nullptr;
+  if (options.background_source) {
+    settings.background = state->background;  // what the forward blended
+    state->background_grad.assign(features, 0.0f);
+    dL_dbackground = state->background_grad.data();
+  }
+  BlendBackward(state->splats, settings, &state->raster, dL_dimage, nullptr, &state->splat_grads,
+                dL_dbackground);
+  if (BackgroundSource* source = options.background_source)
+    source->Backward(features, state->background_grad.data());
   if (ColorStage* stage = options.color_stage) {
     state->color_grads.resize(model.size() * model.channels);
     stage->Backward(state->colors.data(), model.channels, state->visible,

@@ -35,6 +35,18 @@ class ColorStage {
                         float* dL_dcolors) = 0;
 };
 
+// An optional learned background (method/render/learned_background.h): the values blended behind
+// the Gaussians (image = colour + T background), made per frame after the colour stage (whose
+// frame, e.g. the tone mapper's, it may use) and given dL/dbackground by the backward.
+class BackgroundSource {
+ public:
+  virtual ~BackgroundSource() = default;
+  // Writes `channels` values (the rasteriser's feature channels).
+  virtual void Forward(int channels, std::vector<float>* background) = 0;
+  // dL_dbackground: `channels` values; adds to the source's own gradient.
+  virtual void Backward(int channels, const float* dL_dbackground) = 0;
+};
+
 struct RenderOptions {
   int sh_degree = 3;              // active spatial SH degree (grows during training)
   int time_degree = 2;            // active temporal degree (0 in 3D mode)
@@ -42,6 +54,7 @@ struct RenderOptions {
   std::vector<float> background;  // one value per channel (empty: zeros)
   RasterBackend backend = RasterBackend::kSimd;
   ColorStage* color_stage = nullptr;  // null: the colours are the features
+  BackgroundSource* background_source = nullptr;  // set: replaces `background` (float path only)
 };
 
 // The 3D Gaussian a 4D one (or a 3D one in static mode) presents at the frame's time, with the
@@ -70,6 +83,8 @@ struct FrameStateT {
   // With a colour stage only: the colours before it, their gradients, the visible rows.
   std::vector<T> colors, color_grads;
   std::vector<std::uint32_t> visible;
+  // With a background source only: the background the forward blended and its gradient.
+  std::vector<float> background, background_grad;
   // Reference (scalar, any T) path only: the forward's outputs the backward needs.
   std::vector<T> final_T;
   std::vector<std::int32_t> n_contrib;

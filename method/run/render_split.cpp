@@ -52,6 +52,24 @@ LoadedRun LoadRun(const fs::path& run) {
   if (!(r.background >= 0 && r.background <= 1))
     config["background"].Fail(fmt::format("must be within [0, 1], got {}", r.background));
   r.num_times = static_cast<int>(config.IntOr("num_times", 1, 1, 10'000'000));
+  if (config.Has("learn_background") && config["learn_background"].Bool()) {
+    const auto it = c.trainer.find("learned_background");
+    if (it == c.trainer.end() || !it->is_array())
+      Fail("{}: the run learned a background but the checkpoint has none",
+           checkpoint_path.string());
+    std::vector<float> values;
+    for (const auto& v : *it) {
+      if (!v.is_number() || !std::isfinite(v.get<double>()))
+        Fail("{}: learned_background holds a value that is not a finite number",
+             checkpoint_path.string());
+      values.push_back(v.get<float>());
+    }
+    const std::size_t expected = r.model.color_mode == ColorMode::kLogHdr ? 3 : r.model.channels;
+    if (values.size() != expected)
+      Fail("{}: learned_background has {} values, the model needs {}", checkpoint_path.string(),
+           values.size(), expected);
+    r.learned_background = std::move(values);
+  }
   if (!config.Has("resolved")) {  // runs of plain 4DGS from before HDR training existed
     r.resolved.hdr_colors = r.model.color_mode == ColorMode::kLogHdr;
     return r;
@@ -156,7 +174,8 @@ int RenderRun(const RenderRunOptions& options) {
   RenderOptions render;
   render.sh_degree = model.basis.max_sh_degree;
   render.time_degree = model.temporal ? model.basis.max_time_degree : 0;
-  ViewRenderer renderer(model, run.tone_mapper.get(), run.resolved, render, run.background);
+  ViewRenderer renderer(model, run.tone_mapper.get(), run.resolved, render, run.background,
+                        run.learned_background ? &*run.learned_background : nullptr);
   const std::vector<Frame>& frames = dataset.FramesOf(split);
   if (frames.empty()) Fail("{}: the {} split has no frames", dataset.root.string(), options.split);
   const double default_exposure = options.exposure.value_or(MedianExposure(dataset));

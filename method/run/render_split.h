@@ -58,6 +58,7 @@ struct LoadedRun {
   ResolvedHdrTraining resolved;
   int num_times = 1;
   float background = 0;
+  std::optional<std::vector<float>> learned_background;  // runs trained with --learn-background
   // The method's name from the configuration, or "?" (for messages).
   std::string MethodName() const;
 };

@@ -23,10 +23,12 @@
 #include "core/ply.h"
 #include "core/progress.h"
 #include "core/scene_profile.h"
+#include "method/gaussian/constants.h"
 #include "method/optim/densify.h"
 #include "method/optim/model_optimizer.h"
 #include "method/render/frame_render.h"
 #include "method/render/hdr_color_stage.h"
+#include "method/render/learned_background.h"
 #include "method/tonemap/radiance_bank.h"
 #include "method/tonemap/tone_mapper_registry.h"
 #include "method/train/batch_gradients.h"
@@ -57,7 +59,7 @@ std::string TrainOptions::Validate() const {
 
 nlohmann::json TrainOptions::ToJson() const {
   const OptimizationOptions& o = optimization;
-  return {
+  nlohmann::json json = {
       {"data", fs::absolute(data).string()},
       {"seed", seed},
       {"threads", threads},
@@ -96,6 +98,9 @@ nlohmann::json TrainOptions::ToJson() const {
         {"sh_increase_interval", o.sh_increase_interval},
         {"max_gaussians", o.max_gaussians}}},
   };
+  // Only when on: a run started before the option existed resumes with the same configuration.
+  if (learn_background) json["learn_background"] = true;
+  return json;
 }
 
 int DistinctTimes(const Dataset& dataset) {
@@ -212,6 +217,7 @@ class TrainingRun {
   void EvaluateAndCheckpoint(int it);
   nlohmann::json EvaluateTestViews();
   void Save();
+  void StartLearnedBackground(const nlohmann::json* trainer);
   void ReleaseTrainingState();
   double TrainingSeconds() const;
 
@@ -240,6 +246,7 @@ class TrainingRun {
   LoopState loop_;
   RenderOptions render_;
   std::optional<HdrColorStage> stage_;
+  std::optional<LearnedBackground> background_;  // --learn-background
   int raster_channels_ = 3;
   SupervisionTerms terms_;
   FrameState state_;
@@ -358,6 +365,7 @@ void TrainingRun::ResumeOrInitialise() {
       std::istringstream tm_state(c.tone_mapper_state);
       tone_mapper_->Load(tm_state, checkpoint_path_.string());
     }
+    StartLearnedBackground(&c.trainer);
     spdlog::info("train: resuming {} at iteration {}", checkpoint_path_.string(), loop_.iteration);
   } else {
     InitOptions init = options_.init;
@@ -376,6 +384,7 @@ void TrainingRun::ResumeOrInitialise() {
       }
     }
     stats_.Reset(model_.size());
+    StartLearnedBackground(nullptr);
   }
   // At batch size 1 the fused step takes the colour gradient rows straight from the backward,
   // so no colour gradient buffer is kept (~0.6 KB per Gaussian; densify.h, ColourRowsOnly).
@@ -384,10 +393,49 @@ void TrainingRun::ResumeOrInitialise() {
                    /*colour=*/!(opt_.batch_size == 1 && FastPreprocessApplies(model_, render_)));
   if (options_.resume) {
     optimizer_->BindGroups(model_, grads_, tone_mapper_.get());
+    if (background_)
+      optimizer_->BindBackgroundGroup(background_->params(), background_->grads(),
+                                      checkpoint_path_.string());
   } else {
     optimizer_->AddGroups(model_, grads_, tone_mapper_.get());
+    // The rate of a Gaussian's DC colour in colour units (colour = kShC0 x coefficient + ...).
+    if (background_)
+      optimizer_->AddBackgroundGroup(background_->params(), background_->grads(),
+                                     static_cast<float>(opt_.f_dc_lr) * kShC0);
   }
   WriteJsonFile(options_.out / "config.json", config_);
+}
+
+// --learn-background: the values saved in the checkpoint's trainer state when resuming, else
+// the start. Log-HDR colours start at the median of the Gaussians' initial log colours (the
+// level the colours start at, so the backdrop is neither black nor a glare at the start); LDR
+// colours at the grey of --background.
+void TrainingRun::StartLearnedBackground(const nlohmann::json* trainer) {
+  if (!options_.learn_background) return;
+  const bool log_hdr = model_.color_mode == ColorMode::kLogHdr;
+  const int channels = log_hdr ? 3 : model_.channels;
+  std::vector<float> values(channels, options_.background);
+  if (trainer) {
+    const auto it = trainer->find("learned_background");
+    if (it == trainer->end() || !it->is_array() || it->size() != values.size())
+      Fail("{}: the checkpoint has no learned background of {} values (the run was started "
+           "without --learn-background?)", checkpoint_path_.string(), values.size());
+    for (int c = 0; c < channels; ++c) {
+      const auto& v = (*it)[c];
+      if (!v.is_number() || !std::isfinite(v.get<double>()))
+        Fail("{}: learned_background[{}] is not a finite number", checkpoint_path_.string(), c);
+      values[c] = v.get<float>();
+    }
+  } else if (log_hdr && model_.size() > 0) {
+    for (int c = 0; c < channels; ++c) {
+      std::vector<float> logs(model_.size());
+      for (std::size_t i = 0; i < logs.size(); ++i)
+        logs[i] = kShC0 * model_.color_dc[i * channels + c] + kColorOffset;
+      std::nth_element(logs.begin(), logs.begin() + logs.size() / 2, logs.end());
+      values[c] = logs[logs.size() / 2];
+    }
+  }
+  background_.emplace(std::move(values), log_hdr, tone_mapper_.get());
 }
 
 // The render options of the training views (with the HDR colour stage for log-HDR colours),
@@ -403,6 +451,7 @@ void TrainingRun::PrepareRendering() {
     render_.background.assign(model_.channels, options_.background);
   }
   raster_channels_ = static_cast<int>(render_.background.size());
+  if (background_) render_.background_source = &*background_;
   terms_ = {.ldr_gaussian = resolved_.ldr_gaussian,
             .ldr_pixel = resolved_.ldr_pixel,
             .hdr = resolved_.hdr,
@@ -434,6 +483,7 @@ void TrainingRun::Step() {
   std::tie(render_.sh_degree, render_.time_degree) =
       ColorDegrees(it, model_, opt_.sh_increase_interval);
   if (tone_mapper_) tone_mapper_->ZeroGrad();  // a batch adds every view's gradient to it
+  if (background_) background_->ZeroGrad();
   const float* ldr_out = nullptr;  // the final LDR image of the last view, for the PSNR shown
   std::size_t pixels = 0;
   if (opt_.batch_size == 1) {
@@ -544,6 +594,8 @@ double TrainingRun::BatchBackwardAndUpdate(int it, const float** ldr_out, std::s
   ScaleGradients(inverse, &grads_);
   if (tone_mapper_)
     for (float& g : tone_mapper_->grads()) g *= inverse;
+  if (background_)
+    for (float& g : background_->grads()) g *= inverse;
   const GradientRowsDone step_rows =
       optimizer_->Begin(DensifiesAt(it), ResetsOpacityAt(it), model_.size());
   if (step_rows) {
@@ -618,13 +670,16 @@ void TrainingRun::EvaluateAndCheckpoint(int it) {
 nlohmann::json TrainingRun::EvaluateTestViews() {
   RenderOptions base = render_;
   base.color_stage = nullptr;
-  ViewRenderer renderer(model_, tone_mapper_.get(), resolved_, base, options_.background);
+  base.background_source = nullptr;
+  ViewRenderer renderer(model_, tone_mapper_.get(), resolved_, base, options_.background,
+                        background_ ? &background_->params() : nullptr);
   return EvaluateViews(&renderer, test_views_);
 }
 
 void TrainingRun::Save() {
   // The live model and optimiser are streamed into the file, not copied (checkpoint.h).
-  const nlohmann::json trainer = loop_.ToJson();
+  nlohmann::json trainer = loop_.ToJson();
+  if (background_) trainer["learned_background"] = background_->params();
   std::string tone_mapper_state;
   if (tone_mapper_) {
     std::ostringstream tm_state;

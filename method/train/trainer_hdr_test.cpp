@@ -179,6 +179,64 @@ TEST(TrainerHdr, HdrTargetsRoundTripByName) {
   EXPECT_NE(e.find("aligned"), std::string::npos) << e;
 }
 
+// --learn-background: the backdrop is learned (it leaves its start), kept in the checkpoint,
+// resumed exactly, rendered by `hdr4d render`, and a checkpoint without it is a clear error.
+TEST(TrainerHdr, LearnedBackgroundResumesExactlyAndRenders) {
+  TempDir dir;
+  MakeHdrScene(dir / "scene", 16);
+  TrainOptions whole = HdrRun(dir / "scene", dir / "whole", 40);
+  whole.learn_background = true;
+  const TrainSummary a = Train(whole);
+  TrainOptions first = whole;
+  first.out = dir / "split";
+  first.optimization.iterations = 20;
+  Train(first);
+  TrainOptions rest = whole;
+  rest.out = dir / "split";
+  rest.resume = true;
+  EXPECT_EQ(Train(rest).loss_curve, a.loss_curve);
+  const Checkpoint ca = LoadCheckpoint(dir / "whole" / "checkpoint.bin");
+  const Checkpoint cb = LoadCheckpoint(dir / "split" / "checkpoint.bin");
+  ASSERT_TRUE(ca.trainer.contains("learned_background"));
+  EXPECT_EQ(ca.trainer["learned_background"], cb.trainer["learned_background"]);
+  EXPECT_EQ(ca.trainer["learned_background"].size(), 3u);
+  EXPECT_TRUE(ReadJsonFile(dir / "whole" / "config.json")["learn_background"].get<bool>());
+
+  // Resuming with or without the flag against how the run started is a configuration error.
+  TrainOptions without = HdrRun(dir / "scene", dir / "split", 50);
+  without.resume = true;
+  EXPECT_NE(ErrorOf([&] { Train(without); }).find("learn_background"), std::string::npos);
+
+  RenderRunOptions r;
+  r.run = dir / "whole";
+  r.out = dir / "out";
+  EXPECT_GT(RenderRun(r), 0);
+  // The checkpoint's trainer state without the values: render names the file.
+  Checkpoint broken = ca;
+  broken.trainer.erase("learned_background");
+  SaveCheckpoint(dir / "whole" / "checkpoint.bin", broken);
+  r.out = dir / "out2";
+  const std::string message = ErrorOf([&] { RenderRun(r); });
+  EXPECT_NE(message.find("checkpoint.bin"), std::string::npos) << message;
+  EXPECT_NE(message.find("background"), std::string::npos) << message;
+}
+
+// The plain LDR model learns an LDR backdrop: on the demo scene, whose sky is dim blue, it
+// moves from black towards blue within a short run.
+TEST(TrainerHdr, PlainModelLearnsAnLdrBackdrop) {
+  TempDir dir;
+  MakeHdrScene(dir / "scene", 16);
+  TrainOptions o = HdrRun(dir / "scene", dir / "run", 60);
+  o.hdr = HdrTrainingOptions{};  // plain 4DGS
+  o.learn_background = true;
+  Train(o);
+  const Checkpoint c = LoadCheckpoint(dir / "run" / "checkpoint.bin");
+  const auto values = c.trainer["learned_background"].get<std::vector<float>>();
+  ASSERT_EQ(values.size(), 3u);
+  for (float v : values) EXPECT_TRUE(std::isfinite(v));
+  EXPECT_GT(values[2], 0.0f);  // left black it would have no gradient to follow
+}
+
 TEST(TrainerHdr, RenderWritesLdrAndHdrNamedLikeTheGroundTruth) {
   TempDir dir;
   MakeHdrScene(dir / "scene", 16);

@@ -10,8 +10,14 @@ ViewRenderer::ViewRenderer(const GaussianModel& model,
                            ToneMapper* tone_mapper,
                            const ResolvedHdrTraining& resolved,
                            const RenderOptions& base,
-                           float background)
+                           float background,
+                           const std::vector<float>* learned_background)
     : model_(model), tone_mapper_(tone_mapper), resolved_(resolved), options_(base) {
+  options_.background_source = nullptr;
+  if (learned_background) {
+    learned_.emplace(*learned_background, resolved_.hdr_colors, tone_mapper);
+    options_.background_source = &*learned_;
+  }
   if (!resolved_.hdr_colors) {
     options_.color_stage = nullptr;
     options_.background.assign(model.channels, background);

@@ -11,6 +11,7 @@
 #include "core/camera.h"
 #include "method/render/frame_render.h"
 #include "method/render/hdr_color_stage.h"
+#include "method/render/learned_background.h"
 #include "method/train/hdr_training_options.h"
 
 namespace hdr4d::method {
@@ -18,12 +19,14 @@ namespace hdr4d::method {
 class ViewRenderer {
  public:
   // The model and tone mapper (may be null) must outlive the renderer. `base` gives the colour
-  // degrees, time span, backend and the LDR background (one value, repeated).
+  // degrees, time span, backend and the LDR background (one value, repeated). learned_background:
+  // the run's learned background (learned_background.h) when it has one; it replaces the grey.
   ViewRenderer(const GaussianModel& model,
                ToneMapper* tone_mapper,
                const ResolvedHdrTraining& resolved,
                const RenderOptions& base,
-               float background);
+               float background,
+               const std::vector<float>* learned_background = nullptr);
 
   // ldr: H x W x 3 in [0,1]; hdr: H x W x 3 linear radiance (left empty for an LDR model).
   // Either may be null.
@@ -42,6 +45,7 @@ class ViewRenderer {
   ResolvedHdrTraining resolved_;
   RenderOptions options_;
   std::optional<HdrColorStage> stage_;
+  std::optional<LearnedBackground> learned_;
   FrameState state_;
   std::vector<float> raster_, x_;
 };

@@ -1,0 +1,42 @@
+#include "method/render/learned_background.h"
+
+#include <algorithm>
+
+#include "core/error.h"
+#include "method/render/hdr_color_stage.h"
+
+namespace hdr4d::method {
+
+LearnedBackground::LearnedBackground(std::vector<float> values, bool log_hdr,
+                                     ToneMapper* tone_mapper)
+    : values_(std::move(values)), grads_(values_.size(), 0.0f), log_hdr_(log_hdr),
+      tm_(tone_mapper) {
+  HDR4D_CHECK(!log_hdr_ || values_.size() == 3);
+}
+
+void LearnedBackground::ZeroGrad() { std::fill(grads_.begin(), grads_.end(), 0.0f); }
+
+void LearnedBackground::Forward(int channels, std::vector<float>* background) {
+  background->assign(channels, 0.0f);
+  if (!log_hdr_) {
+    HDR4D_CHECK(channels == static_cast<int>(values_.size()));
+    std::copy(values_.begin(), values_.end(), background->begin());
+    return;
+  }
+  HDR4D_CHECK(channels == 3 || (channels == 6 && tm_ && tm_->pointwise()));
+  for (int c = 0; c < 3; ++c) (*background)[c] = GuardedExp(values_[c]);
+  if (channels == 6) tm_->Map(values_.data(), 1, background->data() + 3);
+}
+
+void LearnedBackground::Backward(int channels, const float* dL_dbackground) {
+  if (!log_hdr_) {
+    for (int c = 0; c < channels; ++c) grads_[c] += dL_dbackground[c];
+    return;
+  }
+  for (int c = 0; c < 3; ++c) grads_[c] += GuardedExpBackward(values_[c], dL_dbackground[c]);
+  if (channels != 6) return;
+  tm_->MapBackward(values_.data(), 1, dL_dbackground + 3, dlog_);
+  for (int c = 0; c < 3; ++c) grads_[c] += dlog_[c];
+}
+
+}  // namespace hdr4d::method

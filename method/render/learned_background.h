@@ -1,0 +1,46 @@
+// A background learned with the scene (`hdr4d train --learn-background`; not in the paper, whose
+// reference trains on a fixed black background): one colour behind every Gaussian, the same in
+// every view and at every time. Why: a uniform sky or backdrop on a fixed background has to be
+// built from Gaussians, and with few, widely spaced cameras nothing fixes their depth, so they
+// float in front of the scene from a held-out camera (BENCHMARKS.md, issues 12 and 15). One
+// learned value per channel explains such a backdrop at infinity instead.
+//
+// For log-HDR colours the value b is a log radiance, blended the way a Gaussian's colour is
+// (hdr_color_stage.h): [exp(b)] on 3 channels, or [exp(b), TM(b + log e)] on 6, through the tone
+// mapper's frame that the colour stage began. The 2D branch then maps the blended HDR, backdrop
+// included, like any pixel. For LDR colours b is the blended colour itself, not clamped (the loss
+// keeps it where the images put it; the rendered LDR image is clamped to [0, 1] as always).
+//
+// Backward: dL/db = exp(b) dL/dbg_hdr + TM'(b + log e) dL/dbg_ldr (the mapper's own parameter
+// gradient gathered by its MapBackward), or dL/dbg for LDR colours; added to grads().
+#pragma once
+
+#include <vector>
+
+#include "method/render/frame_state.h"
+#include "method/tonemap/tone_mapper.h"
+
+namespace hdr4d::method {
+
+class LearnedBackground final : public BackgroundSource {
+ public:
+  // values: 3 for log-HDR colours, else one per model channel. tone_mapper may be null (HDR only,
+  // or LDR colours); it must map pointwise when a 6-channel background is asked for.
+  LearnedBackground(std::vector<float> values, bool log_hdr, ToneMapper* tone_mapper);
+
+  void Forward(int channels, std::vector<float>* background) override;
+  void Backward(int channels, const float* dL_dbackground) override;
+
+  std::vector<float>& params() { return values_; }
+  const std::vector<float>& params() const { return values_; }
+  std::vector<float>& grads() { return grads_; }
+  void ZeroGrad();
+
+ private:
+  std::vector<float> values_, grads_;
+  bool log_hdr_;
+  ToneMapper* tm_;
+  float dlog_[3] = {0, 0, 0};
+};
+
+}  // namespace hdr4d::method
