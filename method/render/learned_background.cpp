@@ -35,8 +35,18 @@ void LearnedBackground::Backward(int channels, const float* dL_dbackground) {
   }
   for (int c = 0; c < 3; ++c) grads_[c] += GuardedExpBackward(values_[c], dL_dbackground[c]);
   if (channels != 6) return;
-  tm_->MapBackward(values_.data(), 1, dL_dbackground + 3, dlog_);
-  for (int c = 0; c < 3; ++c) grads_[c] += dlog_[c];
+  // The slope of the mapper at b by central differences of Map, so that the backdrop moves b
+  // and gives the tone curve no share of its gradient (header). Channels map independently.
+  constexpr float kStep = 1e-3f;  // in log radiance
+  float up[3], down[3], high[3], low[3];
+  for (int c = 0; c < 3; ++c) {
+    up[c] = values_[c] + kStep;
+    down[c] = values_[c] - kStep;
+  }
+  tm_->Map(up, 1, high);
+  tm_->Map(down, 1, low);
+  for (int c = 0; c < 3; ++c)
+    grads_[c] += (high[c] - low[c]) / (2 * kStep) * dL_dbackground[3 + c];
 }
 
 }  // namespace hdr4d::method
