@@ -14,8 +14,8 @@
 // branch alone: 12.5 against 25.3 dB on standup). One run cannot hold it to "no worse": on
 // studio LDR+HDR is 0.49 dB below LDR alone on average with a per-seed spread of about 0.6 dB
 // (8 seeds, BENCHMARKS.md, "A scale-invariant HDR term"), and which seed is unlucky depends on
-// the CPU (SIMD rounding changes the trajectory): on one host this run gave 21.69 against 21.50
-// dB, on the 2026-11-26 sixth-pass host 19.67 against 21.42, with identical binaries. So the
+// the host as well (likely the SIMD kernels' per-CPU rounding): on one host this run gave 21.69
+// against 21.50 dB, on the 2026-11-26 sixth-pass host 19.67 against 21.42, with the same code. So the
 // test guards against a collapse (more than 3 dB) and checks that the HDR term shows in the HDR.
 #include <gtest/gtest.h>
 
