@@ -1,11 +1,31 @@
 #include "method/render/learned_background.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "core/error.h"
 #include "method/render/hdr_color_stage.h"
 
 namespace hdr4d::method {
+
+int LearnedBackgroundChannels(const GaussianModel& model) {
+  return model.color_mode == ColorMode::kLogHdr ? 3 : model.channels;
+}
+
+std::vector<float> ReadLearnedBackground(const nlohmann::json& trainer, int channels,
+                                         const std::string& source) {
+  const auto it = trainer.find(kLearnedBackgroundKey);
+  if (it == trainer.end() || !it->is_array() || it->size() != std::size_t(channels))
+    Fail("{}: the checkpoint has no learned background of {} values (the run was started "
+         "without --learn-background?)", source, channels);
+  std::vector<float> values;
+  for (const auto& v : *it) {
+    if (!v.is_number() || !std::isfinite(v.get<double>()))
+      Fail("{}: {} holds a value that is not a finite number", source, kLearnedBackgroundKey);
+    values.push_back(v.get<float>());
+  }
+  return values;
+}
 
 LearnedBackground::LearnedBackground(std::vector<float> values, bool log_hdr,
                                      ToneMapper* tone_mapper)

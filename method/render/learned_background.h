@@ -22,12 +22,26 @@
 // the curve with its full gradient, as it maps a fixed background's pixels.
 #pragma once
 
+#include <nlohmann/json.hpp>
+#include <string>
 #include <vector>
 
 #include "method/render/frame_state.h"
 #include "method/tonemap/tone_mapper.h"
 
 namespace hdr4d::method {
+
+// The key of a checkpoint's trainer state that holds the values.
+inline constexpr const char* kLearnedBackgroundKey = "learned_background";
+
+// Values a model's learned background has: 3 (a log radiance) for log-HDR colours, else one per
+// colour channel.
+int LearnedBackgroundChannels(const GaussianModel& model);
+
+// The values saved under kLearnedBackgroundKey in `trainer` (a checkpoint's trainer state).
+// Throws hdr4d::Error naming `source` when they are missing, not `channels` many, or not finite.
+std::vector<float> ReadLearnedBackground(const nlohmann::json& trainer, int channels,
+                                         const std::string& source);
 
 class LearnedBackground final : public BackgroundSource {
  public:

@@ -18,6 +18,7 @@
 #include "core/parallel.h"
 #include "core/progress.h"
 #include "method/render/frame_render.h"
+#include "method/render/learned_background.h"
 #include "method/tonemap/radiance_bank.h"
 #include "method/tonemap/tone_mapper_registry.h"
 #include "method/train/checkpoint.h"
@@ -53,22 +54,8 @@ LoadedRun LoadRun(const fs::path& run) {
     config["background"].Fail(fmt::format("must be within [0, 1], got {}", r.background));
   r.num_times = static_cast<int>(config.IntOr("num_times", 1, 1, 10'000'000));
   if (config.Has("learn_background") && config["learn_background"].Bool()) {
-    const auto it = c.trainer.find("learned_background");
-    if (it == c.trainer.end() || !it->is_array())
-      Fail("{}: the run learned a background but the checkpoint has none",
-           checkpoint_path.string());
-    std::vector<float> values;
-    for (const auto& v : *it) {
-      if (!v.is_number() || !std::isfinite(v.get<double>()))
-        Fail("{}: learned_background holds a value that is not a finite number",
-             checkpoint_path.string());
-      values.push_back(v.get<float>());
-    }
-    const std::size_t expected = r.model.color_mode == ColorMode::kLogHdr ? 3 : r.model.channels;
-    if (values.size() != expected)
-      Fail("{}: learned_background has {} values, the model needs {}", checkpoint_path.string(),
-           values.size(), expected);
-    r.learned_background = std::move(values);
+    r.learned_background = ReadLearnedBackground(c.trainer, LearnedBackgroundChannels(r.model),
+                                                 checkpoint_path.string());
   }
   if (!config.Has("resolved")) {  // runs of plain 4DGS from before HDR training existed
     r.resolved.hdr_colors = r.model.color_mode == ColorMode::kLogHdr;

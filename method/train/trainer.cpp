@@ -413,19 +413,10 @@ void TrainingRun::ResumeOrInitialise() {
 void TrainingRun::StartLearnedBackground(const nlohmann::json* trainer) {
   if (!options_.learn_background) return;
   const bool log_hdr = model_.color_mode == ColorMode::kLogHdr;
-  const int channels = log_hdr ? 3 : model_.channels;
+  const int channels = LearnedBackgroundChannels(model_);
   std::vector<float> values(channels, options_.background);
   if (trainer) {
-    const auto it = trainer->find("learned_background");
-    if (it == trainer->end() || !it->is_array() || it->size() != values.size())
-      Fail("{}: the checkpoint has no learned background of {} values (the run was started "
-           "without --learn-background?)", checkpoint_path_.string(), values.size());
-    for (int c = 0; c < channels; ++c) {
-      const auto& v = (*it)[c];
-      if (!v.is_number() || !std::isfinite(v.get<double>()))
-        Fail("{}: learned_background[{}] is not a finite number", checkpoint_path_.string(), c);
-      values[c] = v.get<float>();
-    }
+    values = ReadLearnedBackground(*trainer, channels, checkpoint_path_.string());
   } else if (log_hdr && model_.size() > 0) {
     for (int c = 0; c < channels; ++c) {
       std::vector<float> logs(model_.size());
@@ -670,7 +661,6 @@ void TrainingRun::EvaluateAndCheckpoint(int it) {
 nlohmann::json TrainingRun::EvaluateTestViews() {
   RenderOptions base = render_;
   base.color_stage = nullptr;
-  base.background_source = nullptr;
   ViewRenderer renderer(model_, tone_mapper_.get(), resolved_, base, options_.background,
                         background_ ? &background_->params() : nullptr);
   return EvaluateViews(&renderer, test_views_);
@@ -679,7 +669,7 @@ nlohmann::json TrainingRun::EvaluateTestViews() {
 void TrainingRun::Save() {
   // The live model and optimiser are streamed into the file, not copied (checkpoint.h).
   nlohmann::json trainer = loop_.ToJson();
-  if (background_) trainer["learned_background"] = background_->params();
+  if (background_) trainer[kLearnedBackgroundKey] = background_->params();
   std::string tone_mapper_state;
   if (tone_mapper_) {
     std::ostringstream tm_state;
