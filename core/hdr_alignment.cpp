@@ -67,33 +67,55 @@ std::vector<std::uint8_t> MeasurableInBrackets(const std::vector<Image>& bracket
 HdrAlignment AlignHdr(const Image& pred, const Image& gt, const std::vector<std::uint8_t>* mask) {
   CheckHdrPair(pred, gt, mask);
   const int w = gt.width(), h = gt.height();
-  std::vector<double> log_gt, log_pred;
+  // Positive and normal: the log of a denormal or of 0 says nothing about the shape.
+  const auto normal = [](double v) { return v >= std::numeric_limits<float>::min(); };
+  std::vector<double> g_lum, p_lum;
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
       if (mask && !(*mask)[std::size_t(y) * w + x]) continue;
-      const double g = PixelLuminance(gt, x, y), p = PixelLuminance(pred, x, y);
-      // Positive and normal: log of a denormal or of 0 says nothing about the shape.
-      if (!(g >= std::numeric_limits<float>::min() && p >= std::numeric_limits<float>::min()))
-        continue;
-      log_gt.push_back(std::log(g));
-      log_pred.push_back(std::log(p));
+      const double g = PixelLuminance(gt, x, y);
+      if (!normal(g)) continue;
+      g_lum.push_back(g);
+      p_lum.push_back(PixelLuminance(pred, x, y));
     }
   }
   HdrAlignment a;
   a.total = std::size_t(w) * h;
-  a.pixels = log_gt.size();
+  a.pixels = g_lum.size();
   const double nan = std::numeric_limits<double>::quiet_NaN();
   a.slope = a.corr = a.contrast = nan;
   if (a.pixels == 0) return a;
 
-  std::vector<double> ratio(a.pixels);
-  for (std::size_t i = 0; i < a.pixels; ++i) ratio[i] = log_gt[i] - log_pred[i];
-  // Median (the mean of the two middle values for an even count).
-  const std::size_t mid = a.pixels / 2;
-  std::nth_element(ratio.begin(), ratio.begin() + mid, ratio.end());
-  double median = ratio[mid];
-  if (a.pixels % 2 == 0) median = 0.5 * (median + *std::max_element(ratio.begin(), ratio.begin() + mid));
-  a.scale = std::exp(std::clamp(median, -700.0, 700.0));
+  // The factor: the median log ratio over the pixels where the prediction is positive too.
+  std::vector<double> ratio;
+  ratio.reserve(a.pixels);
+  double darkest_gt = g_lum[0];
+  for (std::size_t i = 0; i < a.pixels; ++i) {
+    darkest_gt = std::min(darkest_gt, g_lum[i]);
+    if (normal(p_lum[i])) ratio.push_back(std::log(g_lum[i]) - std::log(p_lum[i]));
+  }
+  if (!ratio.empty()) {
+    // Median (the mean of the two middle values for an even count).
+    const std::size_t mid = ratio.size() / 2;
+    std::nth_element(ratio.begin(), ratio.begin() + mid, ratio.end());
+    double median = ratio[mid];
+    if (ratio.size() % 2 == 0)
+      median = 0.5 * (median + *std::max_element(ratio.begin(), ratio.begin() + mid));
+    a.scale = std::exp(std::clamp(median, -700.0, 700.0));
+  }
+  // A measured pixel the prediction renders more than kHoleFactor below the darkest measured
+  // truth (after the factor) is a hole in the model and counts at that floor: a hole rendered
+  // exactly black (a fixed black backdrop) and one rendered e^-15 (a learned dark backdrop) are
+  // the same error, and neither may drop out of the diagnostics, which would flatter the black
+  // one. Three decades below anything the brackets measured leaves room for a prediction with
+  // more contrast than the truth (slope > 1), which stays as it is.
+  constexpr double kHoleFactor = 1e-3;
+  const double floor_log = std::log(darkest_gt * kHoleFactor) - std::log(a.scale);
+  std::vector<double> log_gt(a.pixels), log_pred(a.pixels);
+  for (std::size_t i = 0; i < a.pixels; ++i) {
+    log_gt[i] = std::log(g_lum[i]);
+    log_pred[i] = normal(p_lum[i]) ? std::max(std::log(p_lum[i]), floor_log) : floor_log;
+  }
 
   if (a.pixels < 2) return a;
   double mean_g = 0, mean_p = 0;
@@ -112,7 +134,10 @@ HdrAlignment AlignHdr(const Image& pred, const Image& gt, const std::vector<std:
   }
   if (sgg > 0) a.slope = sgp / sgg;
   if (sgg > 0) a.contrast = std::sqrt(spp / sgg);
-  if (sgg > 0 && spp > 0) a.corr = sgp / std::sqrt(sgg * spp);
+  // All at one value (every pixel a hole): no correlation, whatever the rounding of the mean.
+  const bool flat = std::all_of(log_pred.begin(), log_pred.end(),
+                                [&](double v) { return v == log_pred[0]; });
+  if (sgg > 0 && spp > 0 && !flat) a.corr = sgp / std::sqrt(sgg * spp);
   return a;
 }
 

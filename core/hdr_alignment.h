@@ -4,10 +4,15 @@
 // a light is that clips in every bracket. The reference's own-maximum mu-law protocol divides the
 // prediction by its brightest value, i.e. by exactly that guess. These metrics instead:
 //   1. keep the pixels an LDR bracket measures: unclipped and not black in at least one
-//      exposure of the view (MeasurableInBrackets), or, without brackets, every pixel whose
-//      luminance is positive in both images;
+//      exposure of the view (MeasurableInBrackets), or, without brackets, every pixel; of those,
+//      the ones whose true luminance is positive;
 //   2. align the prediction to the truth by one robust factor per image,
-//        scale = exp(median over those pixels of (log Y_gt - log Y_pred)),   Y = luminance;
+//        scale = exp(median of (log Y_gt - log Y_pred)),   Y = luminance,
+//      the median over the kept pixels where Y_pred is positive too; a kept pixel where the
+//      prediction is more than 1000x darker than the darkest kept truth (after the factor),
+//      zero included, counts at that floor in the diagnostics of 4: a hole in the model is an
+//      error whether it renders black or e^-15, and dropping the black ones flattered a black
+//      backdrop;
 //   3. score the aligned prediction with the truth's maximum (mu-law, as the HDR-NeRF protocol)
 //      and with PU21 (both images times 4000 / the truth's maximum luminance);
 //   4. report, as diagnostics of the HDR's shape, the least-squares slope of log Y_pred on
@@ -49,7 +54,7 @@ struct HdrAlignment {
 };
 
 // The alignment of `pred` to `gt` (linear HDR, same size; RGB or grey) over the pixels `mask`
-// keeps (W x H; null keeps all) whose luminance is positive in both. Throws hdr4d::Error for
+// keeps (W x H; null keeps all) whose true luminance is positive (see 1, 2 above). Throws hdr4d::Error for
 // mismatched shapes, a mask of the wrong size, or NaN/Inf values.
 HdrAlignment AlignHdr(const Image& pred, const Image& gt, const std::vector<std::uint8_t>* mask);
 

@@ -156,15 +156,55 @@ TEST(HdrAlignment, NoMeasuredPixelGivesNoDiagnosticsAndUnitScale) {
   EXPECT_EQ(a.scale, 1.0);
   EXPECT_TRUE(std::isnan(a.slope));
   EXPECT_TRUE(std::isnan(a.corr));
-  // A black prediction has no positive pixel either; a constant one has no correlation.
+  // A black prediction counts every pixel, all at the hole floor: no factor, slope 0, no
+  // correlation; a constant one has no correlation either.
   Image black = gt;
   for (float& x : black.values()) x = 0;
-  EXPECT_EQ(AlignHdr(black, gt, nullptr).pixels, 0u);
+  const HdrAlignment b = AlignHdr(black, gt, nullptr);
+  EXPECT_EQ(b.pixels, 64u);
+  EXPECT_EQ(b.scale, 1.0);
+  EXPECT_NEAR(b.slope, 0.0, 1e-12);
+  EXPECT_TRUE(std::isnan(b.corr));
   Image flat = gt;
   for (float& x : flat.values()) x = 2;
   const HdrAlignment f = AlignHdr(flat, gt, nullptr);
   EXPECT_NEAR(f.slope, 0.0, 1e-12);
   EXPECT_TRUE(std::isnan(f.corr));
+}
+
+// A hole in the model (measured pixels it renders far too dark) is the same error whether the
+// hole is exactly black (a fixed black backdrop) or a tiny positive value (a learned dark
+// backdrop): both count, at 1000x below the darkest measured truth. Dropping the black pixels, as an
+// earlier version did, scored the black hole as no error at all.
+TEST(HdrAlignment, AHoleCountsTheSameBlackOrDark) {
+  const Image gt = WideRangeHdr(48, 48, 7);
+  const Image right = Power(gt, 4.0, 1.0);
+  Image black = right, dark = right;
+  for (int y = 10; y < 16; ++y) {
+    for (int x = 20; x < 26; ++x) {
+      for (int c = 0; c < 3; ++c) {
+        black.at(x, y, c) = 0.0f;
+        dark.at(x, y, c) = float(4.0 * 1e-9);  // ~1e-6 of the darkest truth, after the factor
+      }
+    }
+  }
+  const HdrAlignment exact = AlignHdr(right, gt, nullptr);
+  const HdrAlignment with_black = AlignHdr(black, gt, nullptr);
+  const HdrAlignment with_dark = AlignHdr(dark, gt, nullptr);
+  EXPECT_EQ(with_black.pixels, exact.pixels);
+  EXPECT_EQ(with_dark.pixels, exact.pixels);
+  EXPECT_NEAR(exact.corr, 1.0, 1e-9);
+  EXPECT_LT(with_black.corr, 0.97);
+  EXPECT_NEAR(with_black.corr, with_dark.corr, 1e-12);
+  EXPECT_NEAR(with_black.slope, with_dark.slope, 1e-12);
+  // The factor comes from the pixels both render: the hole does not move it.
+  EXPECT_NEAR(with_black.scale, 0.25, 1e-6);
+  // A prediction a little darker than the truth, but above its darkest value, is kept as it is.
+  Image dim = right;
+  dim.at(3, 3, 0) *= 0.5f;
+  dim.at(3, 3, 1) *= 0.5f;
+  dim.at(3, 3, 2) *= 0.5f;
+  EXPECT_LT(AlignHdr(dim, gt, nullptr).corr, 1.0 - 1e-9);
 }
 
 TEST(HdrAlignment, ExtremesStayFinite) {

@@ -7,6 +7,10 @@
 // at the reference's 2.5e-3: the tone curve learned one branch per exposure and squeezed the
 // HDR. At the log-HDR rate (lr_schedule.h, f_dc_lr_log_hdr) it is 0.69 (BENCHMARKS.md, "Why the
 // learned HDR had the wrong shape"); held-out geometry error alone keeps it below 1 here.
+// The log correlation counts the held-out camera's holes (measured pixels the model renders
+// black) since the metric stopped dropping them (core/hdr_alignment.h): 0.70 on the 2026-11-27
+// host, where dropping them gave more than 0.75; hence 0.5, with room for the host spread
+// (the slope check is what catches a squeezed HDR).
 //
 // Adding HDR supervision must not wreck the held-out LDR (issue 12 §3). It did while the pixel
 // branch took log(HDR + 1e-5) in the HDR target's units, where this scene's darkest recorded
@@ -58,7 +62,7 @@ TEST(HdrShape, LdrTrainingRecoversTheSlopeOfTheTruth) {
   const auto test = TrainStudio(dir / "data", dir / "run", "ldr");
   ASSERT_FALSE(test.is_null());
   EXPECT_GT(test["hdr_log_slope"].get<double>(), 0.55) << test.dump();
-  EXPECT_GT(test["hdr_log_corr"].get<double>(), 0.75) << test.dump();
+  EXPECT_GT(test["hdr_log_corr"].get<double>(), 0.5) << test.dump();
   EXPECT_GT(test["psnr"].get<double>(), 20.0) << test.dump();
 }
 
