@@ -58,6 +58,12 @@ void AddRenderCommand(CLI::App& app) {
                   "Write each view's render time and the fps after a one-view warm-up to this "
                   "JSON file (split renders)")
       ->check(Text("a timing file"));
+  cmd->add_option("--resolution", options->resolution,
+                  "Render at the scene's images reduced R times (1: full size) instead of the "
+                  "run's own training resolution (0); scores against the truth with `hdr4d eval "
+                  "--resolution R`")
+      ->check(Integer(0, 65536))
+      ->capture_default_str();
   auto no_hdr = std::make_shared<bool>(false);
   cmd->add_flag("--no-hdr", *no_hdr, "Do not write the HDR (EXR) renders");
   cmd->callback([options, run, out, time, time_option, exposure, exposure_option, no_hdr, timing] {

@@ -28,7 +28,7 @@
 namespace hdr4d::method {
 namespace fs = std::filesystem;
 
-LoadedRun LoadRun(const fs::path& run) {
+LoadedRun LoadRun(const fs::path& run, int resolution_override) {
   LoadedRun r;
   const fs::path config_path = run / "config.json";
   r.config = ReadJsonFile(config_path);
@@ -36,13 +36,20 @@ LoadedRun LoadRun(const fs::path& run) {
   const JsonField config(r.config, config_path.string());
   r.dataset = LoadDataset(config["data"].String(),
                           {.image_check = ImageCheck::kNone, .require_test = false});
-  // A run trained at --resolution R renders every split at it (runs from before: 1).
-  const int resolution = static_cast<int>(config.IntOr("resolution", 1, 1, 1 << 16));
+  // A run trained at --resolution R renders every split at it (runs from before: 1), unless
+  // the caller asks for another.
+  const int run_resolution = static_cast<int>(config.IntOr("resolution", 1, 1, 1 << 16));
+  if (resolution_override < 0 || resolution_override > (1 << 16))
+    Fail("{}: resolution {} must be within [1, 65536] (0: the run's own)", run.string(),
+         resolution_override);
+  const int resolution = resolution_override > 0 ? resolution_override : run_resolution;
   for (std::vector<Frame>* frames : {&r.dataset.train, &r.dataset.test, &r.dataset.val}) {
     for (Frame& f : *frames) {
       const PinholeIntrinsics& k = f.camera.intrinsics;
-      if (std::string p = ResolutionProblem(k.width, k.height, resolution); !p.empty())
+      if (std::string p = ResolutionProblem(k.width, k.height, resolution); !p.empty()) {
+        if (resolution_override > 0) Fail("{}: {}", f.image_path.string(), p);
         config["resolution"].Fail(fmt::format("{}: {}", f.image_path.string(), p));
+      }
       f.camera.intrinsics = DownscaledIntrinsics(k, resolution);
     }
   }
@@ -154,7 +161,7 @@ int RenderRun(const RenderRunOptions& options) {
   if (options.exposure && !(*options.exposure > 0 && std::isfinite(*options.exposure)))
     Fail("render: --exposure {} must be a positive number of seconds", *options.exposure);
   const Split split = ParseSplit(options.split, "render");
-  LoadedRun run = LoadRun(options.run);
+  LoadedRun run = LoadRun(options.run, options.resolution);
   const Dataset& dataset = run.dataset;
   const GaussianModel& model = run.model;
   const fs::path out = options.out.empty() ? options.run / "renders" / options.split : options.out;

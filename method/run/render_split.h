@@ -39,6 +39,10 @@ struct RenderRunOptions {
   // mapping, rasterisation; not the file writes) and the frames per second over every view but
   // the first (the warm-up; with one view, that view).
   std::filesystem::path timing;
+  // Render at this reduction of the scene's images instead of the run's own (0): a run trained
+  // at --resolution 2 renders its full-size views with 1. The same check as training: each
+  // image's size must be divisible by it.
+  int resolution = 0;
 };
 
 // Returns the number of images written.
@@ -68,7 +72,8 @@ double MedianExposure(const Dataset& dataset);
 // Throws hdr4d::Error naming the file when the run is incomplete or inconsistent.
 // The run's tone mapper is rebuilt by kind (tone_mapper_registry.h): a baseline's kind needs
 // baselines::RegisterToneMappers() first.
-LoadedRun LoadRun(const std::filesystem::path& run);
+// resolution: 0 renders at the run's own (config.json "resolution"), R > 0 at R instead.
+LoadedRun LoadRun(const std::filesystem::path& run, int resolution = 0);
 
 // For commands that only read a run (render, export-ply, tone-curves): its configuration and
 // checkpoint become protected inputs (core/output_guard.h), so no output of theirs replaces them.

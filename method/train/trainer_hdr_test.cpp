@@ -279,6 +279,23 @@ TEST(TrainerHdr, ResolutionTwoTrainsAndRendersAtHalfSize) {
   const Image ldr = ReadImage(dir / "out" / d.test[0].image_path.filename());
   EXPECT_EQ(ldr.width(), 12);
   EXPECT_EQ(ldr.height(), 12);
+  // The same run rendered at full size (render --resolution 1), HDR included; a factor that does
+  // not divide the images is an error naming the image and writes nothing.
+  r.out = dir / "full";
+  r.resolution = 1;
+  ASSERT_GT(RenderRun(r), 0);
+  const Image full = ReadImage(dir / "full" / d.test[0].image_path.filename());
+  EXPECT_EQ(full.width(), 24);
+  EXPECT_EQ(full.height(), 24);
+  const Image full_hdr = ReadImage(dir / "full" / d.test[0].hdr_path->filename());
+  EXPECT_EQ(full_hdr.width(), 24);
+  r.out = dir / "third";
+  r.resolution = 5;
+  const std::string render_message = ErrorOf([&] { RenderRun(r); });
+  EXPECT_NE(render_message.find("24x24 is not divisible by --resolution 5"), std::string::npos)
+      << render_message;
+  EXPECT_NE(render_message.find(".png"), std::string::npos) << render_message;
+  EXPECT_FALSE(fs::exists(dir / "third" / d.test[0].image_path.filename()));
   o = HdrRun(dir / "scene", dir / "bad", 10);
   o.resolution = 5;
   const std::string message = ErrorOf([&] { Train(o); });
