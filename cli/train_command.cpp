@@ -144,11 +144,13 @@ void AddTrainCommand(CLI::App& app) {
   cmd->add_option("--background", options->background, "Background grey level in [0,1]")
       ->check(Real(0, 1))
       ->capture_default_str();
-  cmd->add_flag("--learn-background", options->learn_background,
-                "Learn one background colour with the scene (not in the paper, which trains on "
-                "a fixed black background): a uniform sky or backdrop is then explained behind "
-                "the Gaussians instead of by Gaussians floating at any depth; for HDR colours a "
-                "radiance, tone mapped like the Gaussians'");
+  auto learn_background = std::make_shared<bool>(true);
+  CLI::Option* learn_background_flag = cmd->add_flag(
+      "--learn-background,!--no-learn-background", *learn_background,
+      "Learn one background colour with the scene (the default for a new run; a resumed run keeps "
+      "what it started with): a sky or backdrop is explained behind the Gaussians instead of by "
+      "Gaussians floating at any depth, for HDR colours as a radiance tone mapped like theirs. "
+      "--no-learn-background trains on the fixed --background, as the paper does");
   cmd->add_flag("--resume", options->resume,
                 "Continue from RUN/checkpoint.bin (exactly as if never stopped)");
   CLI::Option* method_flag = cmd->add_option(
@@ -221,7 +223,8 @@ void AddTrainCommand(CLI::App& app) {
       ->check(CLI::IsMember({"image-max", "scene-log", "aligned"}));
   cmd->callback([cmd, options, data, out, flags, context_window, context_size, config,
                  list_configs, data_flag, out_flag, method_flag, supervision_flag,
-                 hdr_weight_flag, pixel_log_epsilon_flag] {
+                 hdr_weight_flag, pixel_log_epsilon_flag, learn_background,
+                 learn_background_flag] {
     if (*list_configs) {
       ListTrainConfigs();
       return;
@@ -236,6 +239,7 @@ void AddTrainCommand(CLI::App& app) {
     }
     options->data = *data;
     options->out = *out;
+    if (learn_background_flag->count() > 0) options->learn_background = *learn_background;
     method::HdrTrainingOptions& hdr = options->hdr;
     hdr = baselines::MethodPreset(flags->method);
     const bool window_given = context_window->count() > 0, size_given = context_size->count() > 0;

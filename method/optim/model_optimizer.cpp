@@ -48,8 +48,9 @@ void ModelOptimizer::BindBackgroundGroup(std::vector<float>& params, std::vector
                                          const std::string& source) {
   const std::vector<std::string> names = adam_.GroupNames();
   if (std::find(names.begin(), names.end(), kGroupBackground) == names.end())
-    Fail("{}: the checkpoint has no learned background (the run was started without "
-         "--learn-background)", source);
+    Fail("{}: the checkpoint has no learned background (the run was started with "
+         "--no-learn-background, or before the option existed: resume it with "
+         "--no-learn-background)", source);
   adam_.SetBuffers(kGroupBackground, params.data(), grads.data(), params.size());
   background_group_ = true;
 }

@@ -17,7 +17,7 @@ std::vector<float> ReadLearnedBackground(const nlohmann::json& trainer, int chan
   const auto it = trainer.find(kLearnedBackgroundKey);
   if (it == trainer.end() || !it->is_array() || it->size() != std::size_t(channels))
     Fail("{}: the checkpoint has no learned background of {} values (the run was started "
-         "without --learn-background?)", source, channels);
+         "with --no-learn-background, or before the option existed?)", source, channels);
   std::vector<float> values;
   for (const auto& v : *it) {
     if (!v.is_number() || !std::isfinite(v.get<double>()))

@@ -98,8 +98,9 @@ nlohmann::json TrainOptions::ToJson() const {
         {"sh_increase_interval", o.sh_increase_interval},
         {"max_gaussians", o.max_gaussians}}},
   };
-  // Only when on: a run started before the option existed resumes with the same configuration.
-  if (learn_background) json["learn_background"] = true;
+  // Resolved by the run before it is recorded (TrainingRun::SetUp); unset only for a caller's
+  // own look at the options.
+  if (learn_background) json["learn_background"] = *learn_background;
   return json;
 }
 
@@ -299,6 +300,17 @@ void TrainingRun::SetUp() {
   spdlog::info("train: {} train / {} test views, extent {:.3f}, {}, method {}", train_views_.size(),
                test_views_.size(), extent_, temporal_ ? "dynamic" : "static (no time axis)",
                hdr.method);
+  // The learned background: as asked, else as the resumed run started (runs from before the
+  // option recorded nothing and trained without it), else on.
+  if (!options_.learn_background) {
+    options_.learn_background = true;
+    if (saved_config_) {
+      const auto saved = saved_config_->find("learn_background");
+      if (saved != saved_config_->end() && !saved->is_boolean())
+        Fail("{}: learn_background must be true or false", (options_.out / "config.json").string());
+      options_.learn_background = saved != saved_config_->end() && saved->get<bool>();
+    }
+  }
   TrainOptions recorded = options_;
   recorded.optimization = opt_;
   config_ = recorded.ToJson();
@@ -411,7 +423,7 @@ void TrainingRun::ResumeOrInitialise() {
 // level the colours start at, so the backdrop is neither black nor a glare at the start); LDR
 // colours at the grey of --background.
 void TrainingRun::StartLearnedBackground(const nlohmann::json* trainer) {
-  if (!options_.learn_background) return;
+  if (!options_.learn_background.value_or(false)) return;
   const bool log_hdr = model_.color_mode == ColorMode::kLogHdr;
   const int channels = LearnedBackgroundChannels(model_);
   std::vector<float> values(channels, options_.background);

@@ -202,10 +202,15 @@ TEST(TrainerHdr, LearnedBackgroundResumesExactlyAndRenders) {
   EXPECT_EQ(ca.trainer["learned_background"].size(), 3u);
   EXPECT_TRUE(ReadJsonFile(dir / "whole" / "config.json")["learn_background"].get<bool>());
 
-  // Resuming with or without the flag against how the run started is a configuration error.
+  // Resuming against how the run started is a configuration error; left unset, a resumed run
+  // keeps what it started with.
   TrainOptions without = HdrRun(dir / "scene", dir / "split", 50);
   without.resume = true;
+  without.learn_background = false;
   EXPECT_NE(ErrorOf([&] { Train(without); }).find("learn_background"), std::string::npos);
+  without.learn_background.reset();
+  Train(without);
+  EXPECT_TRUE(ReadJsonFile(dir / "split" / "config.json")["learn_background"].get<bool>());
 
   RenderRunOptions r;
   r.run = dir / "whole";
@@ -219,6 +224,52 @@ TEST(TrainerHdr, LearnedBackgroundResumesExactlyAndRenders) {
   const std::string message = ErrorOf([&] { RenderRun(r); });
   EXPECT_NE(message.find("checkpoint.bin"), std::string::npos) << message;
   EXPECT_NE(message.find("background"), std::string::npos) << message;
+}
+
+// The default is the learned background for a new run; --no-learn-background trains on the
+// fixed one, records it, and a resume left unset keeps it. A run from before the option (no key
+// in config.json) resumes without it, and asking for it then is an error naming the checkpoint.
+TEST(TrainerHdr, LearnedBackgroundIsTheDefaultAndResumesKeepTheirs) {
+  TempDir dir;
+  MakeHdrScene(dir / "scene", 16);
+  TrainOptions o = HdrRun(dir / "scene", dir / "new", 10);
+  Train(o);
+  EXPECT_TRUE(ReadJsonFile(dir / "new" / "config.json")["learn_background"].get<bool>());
+  EXPECT_TRUE(LoadCheckpoint(dir / "new" / "checkpoint.bin").trainer.contains("learned_background"));
+
+  TrainOptions fixed = HdrRun(dir / "scene", dir / "fixed", 10);
+  fixed.learn_background = false;
+  Train(fixed);
+  EXPECT_FALSE(ReadJsonFile(dir / "fixed" / "config.json")["learn_background"].get<bool>());
+  EXPECT_FALSE(
+      LoadCheckpoint(dir / "fixed" / "checkpoint.bin").trainer.contains("learned_background"));
+  TrainOptions more = HdrRun(dir / "scene", dir / "fixed", 20);
+  more.resume = true;
+  Train(more);
+  EXPECT_FALSE(ReadJsonFile(dir / "fixed" / "config.json")["learn_background"].get<bool>());
+
+  // As a run from before the option: no key.
+  nlohmann::json config = ReadJsonFile(dir / "fixed" / "config.json");
+  config.erase("learn_background");
+  WriteJsonFile(dir / "fixed" / "config.json", config);
+  more.optimization.iterations = 30;
+  Train(more);
+  EXPECT_FALSE(ReadJsonFile(dir / "fixed" / "config.json")["learn_background"].get<bool>());
+  config = ReadJsonFile(dir / "fixed" / "config.json");
+  config.erase("learn_background");
+  WriteJsonFile(dir / "fixed" / "config.json", config);
+  more.optimization.iterations = 40;
+  more.learn_background = true;
+  const std::string message = ErrorOf([&] { Train(more); });
+  EXPECT_NE(message.find("checkpoint.bin"), std::string::npos) << message;
+  EXPECT_NE(message.find("no learned background"), std::string::npos) << message;
+  // A value that is not a boolean names the file.
+  config["learn_background"] = "yes";
+  WriteJsonFile(dir / "fixed" / "config.json", config);
+  more.learn_background.reset();
+  const std::string bad = ErrorOf([&] { Train(more); });
+  EXPECT_NE(bad.find("config.json"), std::string::npos) << bad;
+  EXPECT_NE(bad.find("learn_background"), std::string::npos) << bad;
 }
 
 // The plain LDR model learns an LDR backdrop: on the demo scene, whose sky is dim blue, it
