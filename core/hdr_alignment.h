@@ -54,8 +54,8 @@ struct HdrAlignment {
 };
 
 // The alignment of `pred` to `gt` (linear HDR, same size; RGB or grey) over the pixels `mask`
-// keeps (W x H; null keeps all) whose true luminance is positive (see 1, 2 above). Throws hdr4d::Error for
-// mismatched shapes, a mask of the wrong size, or NaN/Inf values.
+// keeps (W x H; null keeps all) whose true luminance is positive (see 1, 2 above). Throws
+// hdr4d::Error for mismatched shapes, a mask of the wrong size, or NaN/Inf values.
 HdrAlignment AlignHdr(const Image& pred, const Image& gt, const std::vector<std::uint8_t>* mask);
 
 // In this order: "hdr_align_scale", "hdr_log_slope", "hdr_log_corr", "hdr_log_contrast",

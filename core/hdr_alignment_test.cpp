@@ -174,8 +174,8 @@ TEST(HdrAlignment, NoMeasuredPixelGivesNoDiagnosticsAndUnitScale) {
 
 // A hole in the model (measured pixels it renders far too dark) is the same error whether the
 // hole is exactly black (a fixed black backdrop) or a tiny positive value (a learned dark
-// backdrop): both count, at 1000x below the darkest measured truth. Dropping the black pixels, as an
-// earlier version did, scored the black hole as no error at all.
+// backdrop): both count, at 1000x below the darkest measured truth. Dropping the black pixels,
+// as an earlier version did, scored the black hole as no error at all.
 TEST(HdrAlignment, AHoleCountsTheSameBlackOrDark) {
   const Image gt = WideRangeHdr(48, 48, 7);
   const Image right = Power(gt, 4.0, 1.0);

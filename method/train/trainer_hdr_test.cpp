@@ -235,7 +235,8 @@ TEST(TrainerHdr, LearnedBackgroundIsTheDefaultAndResumesKeepTheirs) {
   TrainOptions o = HdrRun(dir / "scene", dir / "new", 10);
   Train(o);
   EXPECT_TRUE(ReadJsonFile(dir / "new" / "config.json")["learn_background"].get<bool>());
-  EXPECT_TRUE(LoadCheckpoint(dir / "new" / "checkpoint.bin").trainer.contains("learned_background"));
+  EXPECT_TRUE(
+      LoadCheckpoint(dir / "new" / "checkpoint.bin").trainer.contains("learned_background"));
 
   TrainOptions fixed = HdrRun(dir / "scene", dir / "fixed", 10);
   fixed.learn_background = false;
