@@ -9,8 +9,9 @@
 // learned HDR had the wrong shape"); held-out geometry error alone keeps it below 1 here.
 // The log correlation counts the held-out camera's holes (measured pixels the model renders
 // black) since the metric stopped dropping them (core/hdr_alignment.h): 0.70 on the 2026-11-27
-// host, where dropping them gave more than 0.75; hence 0.5, with room for the host spread
-// (the slope check is what catches a squeezed HDR).
+// host with the fixed background of the time, where dropping them gave more than 0.75; hence
+// 0.5, with room for the host spread and the learned background, the default since (the slope
+// check is what catches a squeezed HDR).
 //
 // Adding HDR supervision must not wreck the held-out LDR (issue 12 §3). It did while the pixel
 // branch took log(HDR + 1e-5) in the HDR target's units, where this scene's darkest recorded
