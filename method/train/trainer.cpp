@@ -303,13 +303,15 @@ void TrainingRun::SetUp() {
   // The learned background: as asked, else as the resumed run started (runs from before the
   // option recorded nothing and trained without it), else on.
   if (!options_.learn_background) {
-    options_.learn_background = true;
+    bool learn = true;
     if (saved_config_) {
       const auto saved = saved_config_->find("learn_background");
-      if (saved != saved_config_->end() && !saved->is_boolean())
+      const bool recorded = saved != saved_config_->end();
+      if (recorded && !saved->is_boolean())
         Fail("{}: learn_background must be true or false", (options_.out / "config.json").string());
-      options_.learn_background = saved != saved_config_->end() && saved->get<bool>();
+      learn = recorded && saved->get<bool>();
     }
+    options_.learn_background = learn;
   }
   TrainOptions recorded = options_;
   recorded.optimization = opt_;

@@ -232,33 +232,38 @@ TEST(TrainerHdr, LearnedBackgroundResumesExactlyAndRenders) {
 TEST(TrainerHdr, LearnedBackgroundIsTheDefaultAndResumesKeepTheirs) {
   TempDir dir;
   MakeHdrScene(dir / "scene", 16);
-  TrainOptions o = HdrRun(dir / "scene", dir / "new", 10);
-  Train(o);
-  EXPECT_TRUE(ReadJsonFile(dir / "new" / "config.json")["learn_background"].get<bool>());
-  EXPECT_TRUE(
-      LoadCheckpoint(dir / "new" / "checkpoint.bin").trainer.contains("learned_background"));
+  const auto learns = [&](const char* run) {
+    return ReadJsonFile(dir / run / "config.json")["learn_background"].get<bool>();
+  };
+  const auto has_values = [&](const char* run) {
+    return LoadCheckpoint(dir / run / "checkpoint.bin").trainer.contains("learned_background");
+  };
+  // Makes "fixed" look like a run from before the option: no key in its config.json.
+  const auto drop_key = [&] {
+    nlohmann::json config = ReadJsonFile(dir / "fixed" / "config.json");
+    config.erase("learn_background");
+    WriteJsonFile(dir / "fixed" / "config.json", config);
+    return config;
+  };
+  Train(HdrRun(dir / "scene", dir / "new", 10));
+  EXPECT_TRUE(learns("new"));
+  EXPECT_TRUE(has_values("new"));
 
   TrainOptions fixed = HdrRun(dir / "scene", dir / "fixed", 10);
   fixed.learn_background = false;
   Train(fixed);
-  EXPECT_FALSE(ReadJsonFile(dir / "fixed" / "config.json")["learn_background"].get<bool>());
-  EXPECT_FALSE(
-      LoadCheckpoint(dir / "fixed" / "checkpoint.bin").trainer.contains("learned_background"));
+  EXPECT_FALSE(learns("fixed"));
+  EXPECT_FALSE(has_values("fixed"));
   TrainOptions more = HdrRun(dir / "scene", dir / "fixed", 20);
   more.resume = true;
   Train(more);
-  EXPECT_FALSE(ReadJsonFile(dir / "fixed" / "config.json")["learn_background"].get<bool>());
+  EXPECT_FALSE(learns("fixed"));
 
-  // As a run from before the option: no key.
-  nlohmann::json config = ReadJsonFile(dir / "fixed" / "config.json");
-  config.erase("learn_background");
-  WriteJsonFile(dir / "fixed" / "config.json", config);
+  drop_key();
   more.optimization.iterations = 30;
   Train(more);
-  EXPECT_FALSE(ReadJsonFile(dir / "fixed" / "config.json")["learn_background"].get<bool>());
-  config = ReadJsonFile(dir / "fixed" / "config.json");
-  config.erase("learn_background");
-  WriteJsonFile(dir / "fixed" / "config.json", config);
+  EXPECT_FALSE(learns("fixed"));
+  nlohmann::json config = drop_key();
   more.optimization.iterations = 40;
   more.learn_background = true;
   const std::string message = ErrorOf([&] { Train(more); });
