@@ -40,6 +40,7 @@ void AddTrainCommand(CLI::App& app) {
     float hdr_weight = 0.6f;
     float pixel_log_epsilon = 0.0f;
     std::string hdr_target;
+    bool no_hdr_geometry = false;
   };
   auto flags = std::make_shared<HdrFlags>();
   auto config = std::make_shared<std::string>();
@@ -221,10 +222,16 @@ void AddTrainCommand(CLI::App& app) {
                   "(the reference's target, the render scaled to it per image by the median "
                   "ratio first: the term fixes the HDR's shape, the LDR terms its scale)")
       ->check(CLI::IsMember({"image-max", "scene-log", "aligned"}));
+  CLI::Option* no_hdr_geometry_flag = cmd->add_flag(
+      "--no-hdr-geometry", flags->no_hdr_geometry,
+      "The HDR term trains the colours only: its gradient does not reach the means, covariances "
+      "and opacities (nor the densification statistics), which follow the LDR terms alone. "
+      "Under LDR+HDR it keeps most of the held-out LDR the HDR term otherwise costs "
+      "(BENCHMARKS.md, issue 12 §3). Needs an LDR term");
   cmd->callback([cmd, options, data, out, flags, context_window, context_size, config,
                  list_configs, data_flag, out_flag, method_flag, supervision_flag,
                  hdr_weight_flag, pixel_log_epsilon_flag, learn_background,
-                 learn_background_flag] {
+                 learn_background_flag, no_hdr_geometry_flag] {
     if (*list_configs) {
       ListTrainConfigs();
       return;
@@ -266,12 +273,14 @@ void AddTrainCommand(CLI::App& app) {
     if (pixel_log_epsilon_flag->count() > 0) hdr.pixel_log_epsilon = flags->pixel_log_epsilon;
     if (!flags->hdr_target.empty())
       hdr.hdr_target = method::ParseHdrTarget(flags->hdr_target, "--hdr-target");
+    if (flags->no_hdr_geometry) hdr.hdr_geometry = false;
     if (std::string p = hdr.Validate(); !p.empty()) Fail("train: {}", p);
     // Nothing HDR asked for: a scene with one exposure and no HDR truth trains plain 4DGS.
     const bool asked_for_hdr = method_flag->count() > 0 || tunes_tone_mapper ||
                                supervision_flag->count() > 0 || flags->no_pixel_branch ||
                                flags->no_gaussian_branch || hdr_weight_flag->count() > 0 ||
-                               pixel_log_epsilon_flag->count() > 0;
+                               pixel_log_epsilon_flag->count() > 0 ||
+                               no_hdr_geometry_flag->count() > 0;
     if (!asked_for_hdr) options->when_nothing_hdr = baselines::MethodPreset("4dgs");
     const method::TrainSummary s = method::Train(*options);
     fmt::print("train: {} iterations in {:.1f} s, {} Gaussians; test {}\n", s.iterations,

@@ -116,6 +116,7 @@ void BackwardTileReference(const SplatBuffersT<T>& splats,
                            const T* final_T,
                            const std::int32_t* n_contrib,
                            const T* dL_dimage,
+                           const T* dL_dgeometry,
                            const T* dL_dfinal_T,
                            T* slots,
                            T* tile_bg,
@@ -140,11 +141,12 @@ void BackwardTileReference(const SplatBuffersT<T>& splats,
       const T px = static_cast<T>(x) + T(0.5);
       const T py = static_cast<T>(y) + T(0.5);
       const T* dpix = dL_dimage + pix * channels;
+      const T* gpix = dL_dgeometry + pix * channels;  // what dL/dalpha takes
       const T T_final = final_T[pix];
       // Everything the final transmittance multiplies: the background and its own gradient.
       T dL_dT_final = dL_dfinal_T != nullptr ? dL_dfinal_T[pix] : T(0);
       for (int c = 0; c < channels; ++c) {
-        dL_dT_final += background[c] * dpix[c];
+        dL_dT_final += background[c] * gpix[c];
         if (tile_bg != nullptr) tile_bg[c] += T_final * dpix[c];
         accum[c] = T(0);
         last_color[c] = T(0);
@@ -169,7 +171,7 @@ void BackwardTileReference(const SplatBuffersT<T>& splats,
         for (int c = 0; c < channels; ++c) {
           accum[c] = last_alpha * last_color[c] + (T(1) - last_alpha) * accum[c];
           last_color[c] = f[c];
-          dL_dalpha += (f[c] - accum[c]) * dpix[c];
+          dL_dalpha += (f[c] - accum[c]) * gpix[c];
           slot[detail::kSlotFeatures + c] += dchannel_dcolor * dpix[c];
         }
         dL_dalpha *= transmittance;
@@ -275,6 +277,7 @@ void BackwardReferenceWithScratch(const SplatBuffersT<T>& splats,
                                   const T* final_T,
                                   const std::int32_t* n_contrib,
                                   const T* dL_dimage,
+                                  const T* dL_dgeometry,
                                   const T* dL_dfinal_T,
                                   SplatGradientsT<T>* grads,
                                   T* dL_dbackground,
@@ -285,7 +288,8 @@ void BackwardReferenceWithScratch(const SplatBuffersT<T>& splats,
   tile_bg.resize(static_cast<std::size_t>(bins.num_tiles()) * channels);
   T* bg_partials = dL_dbackground != nullptr ? tile_bg.data() : nullptr;
   ParallelFor(bins.num_tiles(), 1, [&](std::int64_t tile) {
-    BackwardTileReference(splats, bins, background, final_T, n_contrib, dL_dimage, dL_dfinal_T,
+    BackwardTileReference(splats, bins, background, final_T, n_contrib, dL_dimage,
+                          dL_dgeometry != nullptr ? dL_dgeometry : dL_dimage, dL_dfinal_T,
                           slots.data(), bg_partials ? bg_partials + tile * channels : nullptr,
                           static_cast<int>(tile));
   });
@@ -378,7 +382,8 @@ void BlendBackwardReference(const SplatBuffersT<T>& splats,
                             const T* dL_dimage,
                             const T* dL_dfinal_T,
                             SplatGradientsT<T>* grads,
-                            T* dL_dbackground) {
+                            T* dL_dbackground,
+                            const T* dL_dimage_geometry) {
   HDR4D_CHECK(splats.Validate().empty());
   CheckBinned(bins, splats.size());
   HDR4D_CHECK(final_T != nullptr && n_contrib != nullptr && dL_dimage != nullptr);
@@ -390,8 +395,9 @@ void BlendBackwardReference(const SplatBuffersT<T>& splats,
   }
   std::vector<T> slots;
   std::vector<T> tile_bg;
-  BackwardReferenceWithScratch(splats, bins, background, final_T, n_contrib, dL_dimage, dL_dfinal_T,
-                               grads, dL_dbackground, slots, tile_bg);
+  BackwardReferenceWithScratch(splats, bins, background, final_T, n_contrib, dL_dimage,
+                               dL_dimage_geometry, dL_dfinal_T, grads, dL_dbackground, slots,
+                               tile_bg);
 }
 
 void BlendForward(const SplatBuffers& splats,
@@ -431,7 +437,8 @@ void BlendBackward(const SplatBuffers& splats,
                    const float* dL_dimage,
                    const float* dL_dfinal_T,
                    SplatGradients* grads,
-                   float* dL_dbackground) {
+                   float* dL_dbackground,
+                   const float* dL_dimage_geometry) {
   HDR4D_CHECK(state != nullptr && dL_dimage != nullptr);
   CheckCall(splats, settings, *state);
   const std::size_t pixels = static_cast<std::size_t>(state->width) * state->height;
@@ -441,8 +448,9 @@ void BlendBackward(const SplatBuffers& splats,
   if (settings.backend == RasterBackend::kScalar) {
     BackwardReferenceWithScratch<float>(splats, *state, background,
                                         state->final_transmittance.data(), state->n_contrib.data(),
-                                        dL_dimage, dL_dfinal_T, grads, dL_dbackground,
-                                        state->entry_gradients, state->tile_background_grad);
+                                        dL_dimage, dL_dimage_geometry, dL_dfinal_T, grads,
+                                        dL_dbackground, state->entry_gradients,
+                                        state->tile_background_grad);
     return;
   }
   const int channels = splats.channels;
@@ -451,6 +459,7 @@ void BlendBackward(const SplatBuffers& splats,
   detail::TileJob job = MakeJob(splats, settings, state);
   job.dL_dimage = dL_dimage;
   job.dL_dfinal_T = dL_dfinal_T;
+  job.dL_dimage_geometry = dL_dimage_geometry;
   job.entry_gradients = state->entry_gradients.data();
   job.entry_slots = state->entry_slots.data();
   job.tile_background_grad =
@@ -482,7 +491,8 @@ template void BlendBackwardReference<float>(const SplatBuffersT<float>&,
                                             const float*,
                                             const float*,
                                             SplatGradientsT<float>*,
-                                            float*);
+                                            float*,
+                                            const float*);
 template void BlendBackwardReference<double>(const SplatBuffersT<double>&,
                                              const RasterState&,
                                              const double*,
@@ -491,6 +501,7 @@ template void BlendBackwardReference<double>(const SplatBuffersT<double>&,
                                              const double*,
                                              const double*,
                                              SplatGradientsT<double>*,
-                                             double*);
+                                             double*,
+                                             const double*);
 
 }  // namespace hdr4d::method

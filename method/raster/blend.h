@@ -66,13 +66,20 @@ void RasterizeForward(const SplatBuffers& splats,
 // dL_dfinal_T: H x W or nullptr (no loss on the transmittance map). Accumulates into `grads`
 // (empty buffers are first sized and zeroed) and, when non-null, into dL_dbackground[channels].
 // Uses the state's scratch, hence the non-const state.
+//
+// dL_dimage_geometry (H x W x channels, nullable): when given, dL/dalpha, and with it the
+// gradients of the means, conics and opacities, is computed from this image instead of
+// dL_dimage, while the features and the background still take dL_dimage. That is the backward of
+// a loss some of whose terms reach the colours only (a stop-gradient on alpha for them): the HDR
+// term under --no-hdr-geometry (method/train/hdr_training_options.h). Null: dL_dimage for both.
 void BlendBackward(const SplatBuffers& splats,
                    const RasterSettings& settings,
                    RasterState* state,
                    const float* dL_dimage,
                    const float* dL_dfinal_T,
                    SplatGradients* grads,
-                   float* dL_dbackground);
+                   float* dL_dbackground,
+                   const float* dL_dimage_geometry = nullptr);
 
 // The scalar reference in any floating type (float and double are instantiated). `bins` needs
 // only its binning part. background: `channels` values or nullptr (zeros). Writes image
@@ -95,7 +102,8 @@ void BlendBackwardReference(const SplatBuffersT<T>& splats,
                             const T* dL_dimage,
                             const T* dL_dfinal_T,
                             SplatGradientsT<T>* grads,
-                            T* dL_dbackground);
+                            T* dL_dbackground,
+                            const T* dL_dimage_geometry = nullptr);
 
 // The exp of the fast path, exposed so tests can bound its error: out[i] ~ exp(x[i]) for x in
 // [-87, 0] (x is clamped to that range) with relative error <= 1e-6. Range reduction
@@ -130,6 +138,7 @@ struct TileJob {
   // Backward.
   const float* dL_dimage = nullptr;
   const float* dL_dfinal_T = nullptr;         // nullable
+  const float* dL_dimage_geometry = nullptr;  // nullable: dL/dalpha from dL_dimage
   float* entry_gradients = nullptr;           // SlotStride(channels) per entry
   const std::int32_t* entry_slots = nullptr;  // where each entry's slot goes (RasterState)
   float* tile_background_grad = nullptr;      // channels per tile; nullable

@@ -640,17 +640,21 @@ void BackwardTileImpl(const TileJob& job, int tile) {
   const int count = job.tile_ranges[tile + 1] - start;
   const int num_vectors = kTilePixels / lanes;
 
-  // Per-pixel planes: T, behind colour (channels), dL/dimage (channels), T_final g_T, n_contrib.
+  // Per-pixel planes: T, behind colour (channels), dL/dimage (channels), T_final g_T, n_contrib,
+  // and with a geometry image its dL/dimage (channels), which dL/dalpha and g_T take instead.
+  const bool split = job.dL_dimage_geometry != nullptr;
   thread_local Scratch<float> plane_scratch;
   thread_local Scratch<float> rec_scratch;
-  float* planes = plane_scratch.Get(static_cast<std::size_t>(kTilePixels) * (3 + 2 * channels) +
-                                    static_cast<std::size_t>(channels) * lanes);
+  float* planes = plane_scratch.Get(
+      static_cast<std::size_t>(kTilePixels) * (3 + (split ? 3 : 2) * channels) +
+      static_cast<std::size_t>(channels) * lanes);
   float* T_plane = planes;
   float* behind = T_plane + kTilePixels;
   float* dpix = behind + static_cast<std::size_t>(kTilePixels) * channels;
   float* tfb = dpix + static_cast<std::size_t>(kTilePixels) * channels;
   auto* nc_plane = reinterpret_cast<std::int32_t*>(tfb + kTilePixels);
   float* gf_mem = tfb + 2 * kTilePixels;  // feature gradients, run-time channel count only
+  float* dgeo = split ? gf_mem + static_cast<std::size_t>(channels) * lanes : dpix;
   HWY_ALIGN std::int32_t vector_max[kTilePixels];
 
   float* tile_bg = job.tile_background_grad != nullptr
@@ -671,18 +675,21 @@ void BackwardTileImpl(const TileJob& job, int tile) {
         for (int c = 0; c < channels; ++c) {
           behind[c * kTilePixels + p] = 0.0f;
           dpix[c * kTilePixels + p] = 0.0f;
+          dgeo[c * kTilePixels + p] = 0.0f;
         }
         continue;
       }
       const std::size_t pix = static_cast<std::size_t>(y) * job.width + x;
       const float T_final = job.final_T[pix];
       const float* dL = job.dL_dimage + pix * channels;
+      const float* dG = split ? job.dL_dimage_geometry + pix * channels : dL;
       float g_T = job.dL_dfinal_T != nullptr ? job.dL_dfinal_T[pix] : 0.0f;
       for (int c = 0; c < channels; ++c) {
-        g_T += job.background[c] * dL[c];
+        g_T += job.background[c] * dG[c];
         if (tile_bg != nullptr) tile_bg[c] += T_final * dL[c];
         behind[c * kTilePixels + p] = 0.0f;
         dpix[c * kTilePixels + p] = dL[c];
+        dgeo[c * kTilePixels + p] = dG[c];
       }
       T_plane[p] = T_final;
       tfb[p] = T_final * g_T;
@@ -770,7 +777,8 @@ void BackwardTileImpl(const TileJob& job, int tile) {
         const V b = hn::Load(d, bp);
         const V dp = hn::Load(d, dpix + c * kTilePixels + off);
         const V diff = hn::Sub(hn::Set(d, r[kRecFeatures + c]), b);
-        dL_dalpha = hn::MulAdd(diff, dp, dL_dalpha);
+        dL_dalpha = hn::MulAdd(diff, split ? hn::Load(d, dgeo + c * kTilePixels + off) : dp,
+                               dL_dalpha);
         if constexpr (kC > 0) {
           grad[kSlotFeatures + c] = hn::MulAdd(w, dp, grad[kSlotFeatures + c]);
         } else {

@@ -43,7 +43,8 @@ void RenderBackward(const GaussianModel& model,
                     FrameState* state,
                     const float* dL_dimage,
                     GaussianGradients* grads,
-                    const GradientRowsDone& rows_done) {
+                    const GradientRowsDone& rows_done,
+                    const float* dL_dimage_geometry) {
   const int features = state->splats.channels;
   state->splat_grads.SetZero(model.size(), features);
   RasterSettings settings = SettingsFor(camera, options, features);
@@ -54,7 +55,7 @@ void RenderBackward(const GaussianModel& model,
     dL_dbackground = state->background_grad.data();
   }
   BlendBackward(state->splats, settings, &state->raster, dL_dimage, nullptr, &state->splat_grads,
-                dL_dbackground);
+                dL_dbackground, dL_dimage_geometry);
   if (BackgroundSource* source = options.background_source)
     source->Backward(features, state->background_grad.data());
   if (ColorStage* stage = options.color_stage) {

@@ -21,7 +21,8 @@ void RenderForward(const GaussianModel& model,
                    const RenderOptions& options,
                    FrameState* state,
                    float* image);
-// dL_dimage: H x W x channels. Overwrites `grads` (see PreprocessBackward).
+// dL_dimage: H x W x channels. Overwrites `grads` (see PreprocessBackward). dL_dimage_geometry:
+// nullable, the image the geometry's gradients take instead (BlendBackward).
 void RenderBackward(const GaussianModel& model,
                     const Camera& camera,
                     float time,
@@ -29,7 +30,8 @@ void RenderBackward(const GaussianModel& model,
                     FrameState* state,
                     const float* dL_dimage,
                     GaussianGradients* grads,
-                    const GradientRowsDone& rows_done = {});
+                    const GradientRowsDone& rows_done = {},
+                    const float* dL_dimage_geometry = nullptr);
 
 // The same in any floating type with the reference preprocess and the scalar reference blend
 // (float and double are instantiated): what the whole-render finite-difference test runs in

@@ -92,7 +92,8 @@ FrameLoss HdrFrameLoss(const float* raster,
                        ToneMapper* tone_mapper,
                        const SupervisionTerms& terms,
                        HdrLossScratch* s,
-                       float* dL_draster) {
+                       float* dL_draster,
+                       float* dL_draster_geometry) {
   HDR4D_CHECK(channels == 3 || channels == 6);
   HDR4D_CHECK(!terms.ldr_gaussian || channels == 6);
   HDR4D_CHECK(!terms.ldr_pixel || tone_mapper != nullptr);
@@ -139,6 +140,10 @@ FrameLoss HdrFrameLoss(const float* raster,
 
   // HDR term on the mu-law of the raw HDR raster (scaled per view under --hdr-target aligned).
   if (terms.hdr && hdr_mu_gt) {
+    if (!terms.hdr_geometry && dL_draster_geometry != nullptr) {
+      std::copy(dL_draster, dL_draster + pixels * channels, dL_draster_geometry);
+      loss.geometry_split = true;
+    }
     loss.hdr_scale =
         terms.hdr_align ? HdrAlignScale(s->hdr, hdr_mu_gt, terms.hdr_mu, &s->ratios) : 1.0;
     loss.hdr = AddHdrTerm(s->hdr, hdr_mu_gt, width, height, channels, terms, loss.hdr_scale, s,

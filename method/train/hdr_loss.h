@@ -68,11 +68,15 @@ struct SupervisionTerms {
   double hdr_mu = kMuLawMu;  // the mu of the HDR target's encoding (HdrTargetMu)
   bool hdr_align = false;    // scale the render to the target per view first (HdrTarget::kAligned)
   float pixel_log_epsilon = kReferencePixelLogEpsilon;  // the 2D branch's log(HDR + eps)
+  // false (--no-hdr-geometry): the HDR term's gradient reaches the colours only; HdrFrameLoss
+  // then also returns the gradient without it, which the blend's geometry takes.
+  bool hdr_geometry = true;
 };
 
 struct FrameLoss {
   double total = 0, ldr_gaussian = 0, ldr_pixel = 0, hdr = 0;
   double hdr_scale = 1;  // the factor the HDR term applied to the render (1 unless aligned)
+  bool geometry_split = false;  // dL_draster_geometry was written (HdrFrameLoss)
 };
 
 // Working buffers, reused from view to view. After HdrFrameLoss, `ldr` holds the clamped 3D
@@ -108,7 +112,9 @@ double AddHdrTerm(const std::vector<float>& hdr,
 // The loss of one view and dL/draster (same layout as `raster`, overwritten). ldr_gt: H x W x 3
 // in [0,1]; hdr_mu_gt: mu(gt_hdr / max gt_hdr), H x W x 3, or null when the view has no HDR
 // ground truth. The tone mapper must have begun this view's frame (HdrColorStage does); its
-// parameter gradients are added to.
+// parameter gradients are added to. With !terms.hdr_geometry, when the HDR term runs and
+// dL_draster_geometry is non-null, that buffer (same layout) gets dL/draster of the LDR terms
+// alone (the geometry's gradient, BlendBackward) and the result says geometry_split.
 FrameLoss HdrFrameLoss(const float* raster,
                        int channels,
                        int width,
@@ -118,6 +124,7 @@ FrameLoss HdrFrameLoss(const float* raster,
                        ToneMapper* tone_mapper,
                        const SupervisionTerms& terms,
                        HdrLossScratch* scratch,
-                       float* dL_draster);
+                       float* dL_draster,
+                       float* dL_draster_geometry = nullptr);
 
 }  // namespace hdr4d::method

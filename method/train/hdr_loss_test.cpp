@@ -318,6 +318,42 @@ TEST(HdrLoss, AlignedTermGradientAtAFixedScaleMatchesDirectionalDifferences) {
   }
 }
 
+// --no-hdr-geometry: the loss and its dL/draster are those of the full loss; the geometry buffer
+// holds dL/draster of the LDR terms alone, and is written only when the HDR term runs.
+TEST(HdrLoss, WithoutHdrGeometryTheGeometryBufferHoldsTheLdrTermsAlone) {
+  LossCase c = MakeCase(6, 9);
+  AffineSigmoid tm;
+  tm.BeginFrame({.time_index = 0, .log_exposure = 0.3f});
+  HdrLossScratch scratch;
+  const std::size_t n = c.raster.size();
+  const SupervisionTerms full{};
+  SupervisionTerms split = full;
+  split.hdr_geometry = false;
+  SupervisionTerms ldr_only = full;
+  ldr_only.hdr = false;
+  std::vector<float> g_full(n), g_split(n), g_ldr(n), geometry(n, -9.0f);
+  const FrameLoss a = HdrFrameLoss(c.raster.data(), 6, c.w, c.h, c.ldr_gt.data(), c.hdr_mu.data(),
+                                   &tm, full, &scratch, g_full.data(), geometry.data());
+  EXPECT_FALSE(a.geometry_split);  // the HDR term reaches the geometry: nothing written
+  EXPECT_EQ(geometry, std::vector<float>(n, -9.0f));
+  const FrameLoss b = HdrFrameLoss(c.raster.data(), 6, c.w, c.h, c.ldr_gt.data(), c.hdr_mu.data(),
+                                   &tm, split, &scratch, g_split.data(), geometry.data());
+  HdrFrameLoss(c.raster.data(), 6, c.w, c.h, c.ldr_gt.data(), c.hdr_mu.data(), &tm, ldr_only,
+               &scratch, g_ldr.data());
+  EXPECT_TRUE(b.geometry_split);
+  EXPECT_EQ(a.total, b.total);
+  EXPECT_GT(b.hdr, 0.0);
+  EXPECT_EQ(g_split, g_full);
+  EXPECT_EQ(geometry, g_ldr);
+  EXPECT_NE(geometry, g_full);  // the HDR term moved channels 0-2
+  // A view without HDR truth has no HDR term to keep off the geometry.
+  std::vector<float> untouched(n, -9.0f);
+  const FrameLoss d = HdrFrameLoss(c.raster.data(), 6, c.w, c.h, c.ldr_gt.data(), nullptr, &tm,
+                                   split, &scratch, g_split.data(), untouched.data());
+  EXPECT_FALSE(d.geometry_split);
+  EXPECT_EQ(untouched, std::vector<float>(n, -9.0f));
+}
+
 TEST(HdrLoss, ToneMapperParametersReceiveTheirGradient) {
   LossCase c = MakeCase(6, 9);
   AffineSigmoid tm;

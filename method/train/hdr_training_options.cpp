@@ -73,6 +73,7 @@ nlohmann::json HdrTrainingOptions::ToJson() const {
           {"gaussian_branch", gaussian_branch},
           {"hdr_weight", hdr_weight},
           {"hdr_target", HdrTargetName(hdr_target)},
+          {"hdr_geometry", hdr_geometry},
           {"pixel_log_epsilon",
            pixel_log_epsilon ? nlohmann::json(*pixel_log_epsilon) : nlohmann::json(nullptr)}};
 }
@@ -99,6 +100,8 @@ HdrTrainingOptions HdrTrainingOptions::FromJson(const nlohmann::json& j,
     // Runs from before the key trained with the reference's target.
     if (const auto it = j.find("hdr_target"); it != j.end())
       o.hdr_target = ParseHdrTarget(it->get<std::string>(), source);
+    // Runs from before the key let the HDR term reach the geometry.
+    if (const auto it = j.find("hdr_geometry"); it != j.end()) o.hdr_geometry = it->get<bool>();
     // Runs from before the key used the reference's floor whatever the supervision.
     if (const auto it = j.find("pixel_log_epsilon"); it == j.end()) {
       o.pixel_log_epsilon = kReferencePixelLogEpsilon;
@@ -145,6 +148,12 @@ ResolvedHdrTraining ResolveHdrTraining(const HdrTrainingOptions& o,
     Fail(
         "train: supervision '{}' needs HDR ground truth (exr_file_path) in the training views; "
         "this scene has none (use --supervision ldr)",
+        SupervisionName(s));
+  }
+  if (r.hdr && !ldr && !o.hdr_geometry) {
+    Fail(
+        "train: --no-hdr-geometry keeps the HDR term off the geometry, which then needs an LDR "
+        "term; supervision '{}' has none (use --supervision ldr+hdr)",
         SupervisionName(s));
   }
   if (ldr && !o.tone_mapper) {

@@ -57,6 +57,10 @@ struct HdrTrainingOptions {
   bool gaussian_branch = true;  // the 3D branch: tone-mapped Gaussians in the raster (6 ch)
   float hdr_weight = 0.6f;      // alpha of the HDR term
   HdrTarget hdr_target = HdrTarget::kImageMax;
+  // Whether the HDR term's gradient reaches the geometry (means, covariances, opacities, hence
+  // the densification statistics) or, false (--no-hdr-geometry), the colours only, the geometry
+  // then following the LDR terms alone (issue 12 §3, BENCHMARKS.md). Needs an LDR term.
+  bool hdr_geometry = true;
   // The floor of the 2D branch's log(HDR + eps); unset: ResolveHdrTraining picks
   // kHdrUnitsPixelLogEpsilon with an HDR term, else kReferencePixelLogEpsilon.
   std::optional<float> pixel_log_epsilon;

@@ -209,6 +209,10 @@ class TrainingRun {
  private:
   double ViewLoss(const TrainView& view, int it, const float** ldr_out, std::size_t* pixels);
   double ForwardAndLoss(const TrainView& view, const float** ldr_out);
+  // The image the blend's geometry gradient takes for the current view (null: dL/dimage).
+  const float* GeometryGradient() const {
+    return geometry_split_ ? dL_dgeometry_.data() : nullptr;
+  }
   bool DensifiesAt(int it) const;
   bool ResetsOpacityAt(int it) const;
   void BackwardAndUpdate(const TrainView& view, int it, double loss_value);
@@ -253,6 +257,10 @@ class TrainingRun {
   FrameState state_;
   HdrLossScratch scratch_;
   std::vector<float> image_, gt_, hdr_mu_, dL_dimage_;
+  // --no-hdr-geometry: dL/dimage without the HDR term, which the geometry's gradient takes, and
+  // whether the current view's loss wrote it.
+  std::vector<float> dL_dgeometry_;
+  bool geometry_split_ = false;
   std::optional<Progress> progress_;
   std::chrono::steady_clock::time_point start_;
   double seconds_before_ = 0;
@@ -464,7 +472,8 @@ void TrainingRun::PrepareRendering() {
             .lambda_dssim = static_cast<float>(opt_.lambda_dssim),
             .hdr_mu = HdrTargetMu(options_.hdr.hdr_target),
             .hdr_align = options_.hdr.hdr_target == HdrTarget::kAligned,
-            .pixel_log_epsilon = resolved_.pixel_log_epsilon};
+            .pixel_log_epsilon = resolved_.pixel_log_epsilon,
+            .hdr_geometry = options_.hdr.hdr_geometry};
   progress_.emplace("train", opt_.iterations - loop_.iteration, options_.progress);
   start_ = std::chrono::steady_clock::now();
   seconds_before_ = loop_.train_seconds;
@@ -521,6 +530,7 @@ double TrainingRun::ViewLoss(const TrainView& view, int it, const float** ldr_ou
 // Renders `view` and returns the loss of every supervision term; *ldr_out is the final LDR
 // image the loss made (null under HDR-only supervision).
 double TrainingRun::ForwardAndLoss(const TrainView& view, const float** ldr_out) {
+  geometry_split_ = false;
   if (!resolved_.hdr_colors) {
     RenderForward(model_, view.camera, view.time, render_, &state_, image_.data());
     *ldr_out = image_.data();
@@ -536,10 +546,15 @@ double TrainingRun::ForwardAndLoss(const TrainView& view, const float** ldr_out)
     view.HdrMuToFloat(&hdr_mu_);
     mu = hdr_mu_.data();
   }
-  const double loss =
+  float* geometry = nullptr;
+  if (!terms_.hdr_geometry) {
+    dL_dgeometry_.resize(dL_dimage_.size());
+    geometry = dL_dgeometry_.data();
+  }
+  const FrameLoss loss =
       HdrFrameLoss(image_.data(), raster_channels_, view.width(), view.height(), gt_.data(), mu,
-                   tone_mapper_.get(), terms_, &scratch_, dL_dimage_.data())
-          .total;
+                   tone_mapper_.get(), terms_, &scratch_, dL_dimage_.data(), geometry);
+  geometry_split_ = loss.geometry_split;
   // The loss already made the final LDR image: the 2D branch for whole-image mappers, else the
   // clamped 3D branch (none under HDR-only supervision).
   if (resolved_.final_ldr_from_pixels && terms_.ldr_pixel) {
@@ -547,7 +562,7 @@ double TrainingRun::ForwardAndLoss(const TrainView& view, const float** ldr_out)
   } else if (terms_.ldr_gaussian) {
     *ldr_out = scratch_.ldr.data();
   }
-  return loss;
+  return loss.total;
 }
 
 // As in the reference, densification replaces every parameter tensor, so no optimiser step
@@ -565,7 +580,7 @@ void TrainingRun::BackwardAndUpdate(const TrainView& view, int it, double loss_v
   const GradientRowsDone step_rows =
       optimizer_->Begin(DensifiesAt(it), ResetsOpacityAt(it), model_.size());
   RenderBackward(model_, view.camera, view.time, render_, &state_, dL_dimage_.data(), &grads_,
-                 step_rows);
+                 step_rows, GeometryGradient());
   if (tone_mapper_) tone_mapper_->EndFrameBackward();
   if (it < opt_.densify_until)
     AccumulateStats(state_.splat_grads.mean2d, state_.screen_radius, view.width(), view.height(),
@@ -588,7 +603,7 @@ double TrainingRun::BatchBackwardAndUpdate(int it, const float** ldr_out, std::s
     const TrainView& view = train_views_[loop_.NextView(train_views_.size())];
     loss_sum += ViewLoss(view, it, ldr_out, pixels);
     RenderBackward(model_, view.camera, view.time, render_, &state_, dL_dimage_.data(),
-                   &view_grads_);
+                   &view_grads_, {}, GeometryGradient());
     if (tone_mapper_) tone_mapper_->EndFrameBackward();
     AddGradients(view_grads_, &grads_);
     if (it < opt_.densify_until)

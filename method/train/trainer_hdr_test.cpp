@@ -278,6 +278,46 @@ TEST(TrainerHdr, LearnedBackgroundIsTheDefaultAndResumesKeepTheirs) {
   EXPECT_NE(bad.find("learn_background"), std::string::npos) << bad;
 }
 
+// --no-hdr-geometry (issue 12 §3): recorded in config.json and kept on resume (a run from before
+// the key let the HDR term reach the geometry), changes the training (the geometry no longer
+// follows the HDR term) with one view or a batch, and needs an LDR term.
+TEST(TrainerHdr, NoHdrGeometryIsRecordedResumesAndNeedsAnLdrTerm) {
+  TempDir dir;
+  MakeHdrScene(dir / "scene", 16);
+  const auto positions = [&](const char* run) {
+    return LoadCheckpoint(dir / run / "checkpoint.bin").model.xyz;
+  };
+  TrainOptions full = HdrRun(dir / "scene", dir / "full", 20);
+  full.hdr.supervision = Supervision::kLdrHdr;
+  Train(full);
+  TrainOptions split = full;
+  split.out = dir / "split";
+  split.hdr.hdr_geometry = false;
+  const TrainSummary s = Train(split);
+  for (double l : s.loss_curve) EXPECT_TRUE(std::isfinite(l));
+  EXPECT_EQ(ReadJsonFile(dir / "split" / "config.json")["hdr"]["hdr_geometry"], false);
+  EXPECT_EQ(ReadJsonFile(dir / "full" / "config.json")["hdr"]["hdr_geometry"], true);
+  EXPECT_NE(positions("split"), positions("full"));
+  TrainOptions more = split;
+  more.optimization.iterations = 30;
+  more.resume = true;
+  Train(more);
+  EXPECT_EQ(ReadJsonFile(dir / "split" / "config.json")["hdr"]["hdr_geometry"], false);
+  nlohmann::json old = HdrTrainingOptions{}.ToJson();
+  old.erase("hdr_geometry");
+  EXPECT_TRUE(HdrTrainingOptions::FromJson(old, "config.json").hdr_geometry);
+  TrainOptions batch = split;
+  batch.out = dir / "batch";
+  batch.optimization.batch_size = 2;
+  for (double l : Train(batch).loss_curve) EXPECT_TRUE(std::isfinite(l));
+  TrainOptions hdr_only = split;
+  hdr_only.out = dir / "hdr_only";
+  hdr_only.hdr.supervision = Supervision::kHdr;
+  const std::string e = ErrorOf([&] { Train(hdr_only); });
+  EXPECT_NE(e.find("--no-hdr-geometry"), std::string::npos) << e;
+  EXPECT_NE(e.find("LDR term"), std::string::npos) << e;
+}
+
 // The plain LDR model learns an LDR backdrop: on the demo scene, whose sky is dim blue, it
 // moves from black towards blue within a short run.
 TEST(TrainerHdr, PlainModelLearnsAnLdrBackdrop) {
