@@ -153,6 +153,31 @@ void BM_RasterForward(benchmark::State& state) {
   SetCounters(state, scene, c.threads);
 }
 
+// The backward with a separate geometry image (train --no-hdr-geometry), or without (range
+// argument 5 = 0), on the same 6-channel scene: the cost of the split.
+void BM_RasterBackwardGeometry(benchmark::State& state) {
+  const Config c = ConfigOf(state);
+  const bool split = state.range(5) != 0;
+  ThreadLimit limit(c.threads);
+  const Scene& scene = GetScene(c.size, c.count, c.channels);
+  RasterSettings settings = scene.settings;
+  settings.backend = c.backend;
+  RasterState raster;
+  std::vector<float> image(static_cast<std::size_t>(c.size) * c.size * c.channels);
+  RasterizeForward(scene.splats, settings, &raster, image.data());
+  std::vector<float> geometry = scene.dL_dimage;
+  for (float& v : geometry) v *= 0.5f;
+  SplatGradients grads;
+  std::vector<float> dbg(c.channels);
+  for (auto _ : state) {
+    grads.SetZero(scene.splats.size(), c.channels);
+    BlendBackward(scene.splats, settings, &raster, scene.dL_dimage.data(), nullptr, &grads,
+                  dbg.data(), split ? geometry.data() : nullptr);
+    benchmark::DoNotOptimize(grads.opacity.data());
+  }
+  SetCounters(state, scene, c.threads);
+}
+
 void BM_RasterBackward(benchmark::State& state) {
   const Config c = ConfigOf(state);
   ThreadLimit limit(c.threads);
@@ -232,6 +257,11 @@ BENCHMARK(BM_RasterForward)->Apply(BlendArgs);
 BENCHMARK(BM_RasterBackward)->Apply(BlendArgs);
 BENCHMARK(BM_RasterBinning)->Apply(BinningArgs);
 BENCHMARK(BM_RasterTrainStep)->Apply(TrainStepArgs);
+BENCHMARK(BM_RasterBackwardGeometry)->Apply([](benchmark::internal::Benchmark* b) {
+  for (int size : {200, 400})
+    for (int split : {0, 1}) b->Args({size, 20000, 2, 1, 6, split});
+  b->Unit(benchmark::kMillisecond)->UseRealTime();
+});
 
 }  // namespace
 }  // namespace hdr4d::method
