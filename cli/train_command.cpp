@@ -226,8 +226,8 @@ void AddTrainCommand(CLI::App& app) {
       "--no-hdr-geometry", flags->no_hdr_geometry,
       "The HDR term trains the colours only: its gradient does not reach the means, covariances "
       "and opacities (nor the densification statistics), which follow the LDR terms alone. "
-      "Under LDR+HDR it keeps most of the held-out LDR the HDR term otherwise costs "
-      "(BENCHMARKS.md, issue 12 §3). Needs an LDR term");
+      "Under LDR+HDR it recovers about half of the held-out LDR the HDR term otherwise costs, "
+      "and gives up part of its HDR gain (BENCHMARKS.md, issue 12 §3). Needs an LDR term");
   cmd->callback([cmd, options, data, out, flags, context_window, context_size, config,
                  list_configs, data_flag, out_flag, method_flag, supervision_flag,
                  hdr_weight_flag, pixel_log_epsilon_flag, learn_background,
