@@ -153,11 +153,10 @@ void BM_RasterForward(benchmark::State& state) {
   SetCounters(state, scene, c.threads);
 }
 
-// The backward with a separate geometry image (train --no-hdr-geometry), or without (range
-// argument 5 = 0), on the same 6-channel scene: the cost of the split.
-void BM_RasterBackwardGeometry(benchmark::State& state) {
+// The blend's backward on one scene; with `split`, with a separate geometry image as
+// train --no-hdr-geometry passes (BlendBackward), to time the split against the plain backward.
+void RunBackward(benchmark::State& state, bool split) {
   const Config c = ConfigOf(state);
-  const bool split = state.range(5) != 0;
   ThreadLimit limit(c.threads);
   const Scene& scene = GetScene(c.size, c.count, c.channels);
   RasterSettings settings = scene.settings;
@@ -165,8 +164,11 @@ void BM_RasterBackwardGeometry(benchmark::State& state) {
   RasterState raster;
   std::vector<float> image(static_cast<std::size_t>(c.size) * c.size * c.channels);
   RasterizeForward(scene.splats, settings, &raster, image.data());
-  std::vector<float> geometry = scene.dL_dimage;
-  for (float& v : geometry) v *= 0.5f;
+  std::vector<float> geometry;
+  if (split) {
+    geometry = scene.dL_dimage;
+    for (float& v : geometry) v *= 0.5f;
+  }
   SplatGradients grads;
   std::vector<float> dbg(c.channels);
   for (auto _ : state) {
@@ -178,25 +180,10 @@ void BM_RasterBackwardGeometry(benchmark::State& state) {
   SetCounters(state, scene, c.threads);
 }
 
-void BM_RasterBackward(benchmark::State& state) {
-  const Config c = ConfigOf(state);
-  ThreadLimit limit(c.threads);
-  const Scene& scene = GetScene(c.size, c.count, c.channels);
-  RasterSettings settings = scene.settings;
-  settings.backend = c.backend;
-  RasterState raster;
-  std::vector<float> image(static_cast<std::size_t>(c.size) * c.size * c.channels);
-  RasterizeForward(scene.splats, settings, &raster, image.data());
-  SplatGradients grads;
-  std::vector<float> dbg(c.channels);
-  for (auto _ : state) {
-    grads.SetZero(scene.splats.size(), c.channels);
-    BlendBackward(scene.splats, settings, &raster, scene.dL_dimage.data(), nullptr, &grads,
-                  dbg.data());
-    benchmark::DoNotOptimize(grads.opacity.data());
-  }
-  SetCounters(state, scene, c.threads);
-}
+void BM_RasterBackward(benchmark::State& state) { RunBackward(state, false); }
+
+// Range argument 5: 0 without the geometry image, 1 with it (the same 6-channel scene).
+void BM_RasterBackwardGeometry(benchmark::State& state) { RunBackward(state, state.range(5) != 0); }
 
 // What one training iteration asks of the rasteriser: bin, blend, back-propagate.
 void BM_RasterTrainStep(benchmark::State& state) {

@@ -675,7 +675,7 @@ void BackwardTileImpl(const TileJob& job, int tile) {
         for (int c = 0; c < channels; ++c) {
           behind[c * kTilePixels + p] = 0.0f;
           dpix[c * kTilePixels + p] = 0.0f;
-          dgeo[c * kTilePixels + p] = 0.0f;
+          if (split) dgeo[c * kTilePixels + p] = 0.0f;
         }
         continue;
       }
@@ -689,7 +689,7 @@ void BackwardTileImpl(const TileJob& job, int tile) {
         if (tile_bg != nullptr) tile_bg[c] += T_final * dL[c];
         behind[c * kTilePixels + p] = 0.0f;
         dpix[c * kTilePixels + p] = dL[c];
-        dgeo[c * kTilePixels + p] = dG[c];
+        if (split) dgeo[c * kTilePixels + p] = dG[c];  // else dgeo is dpix
       }
       T_plane[p] = T_final;
       tfb[p] = T_final * g_T;
