@@ -84,8 +84,8 @@ void AddTrainCommand(CLI::App& app) {
   cmd->add_option("--max-gaussians", options->optimization.max_gaussians,
                   "Gaussian budget (the reference's densify_until_num_points): densification "
                   "never takes the count past N, keeping the clone/split candidates with the "
-                  "largest gradients; 0 = no budget (default: 2 x the training pixels of one "
-                  "timestamp, at least 10000; BENCHMARKS.md)")
+                  "largest gradients; 0 = no budget (default: 2 x the pixels of one training "
+                  "view, of every view for a static scene, at least 32768; BENCHMARKS.md)")
       ->check(Integer(0, std::int64_t{1} << 40));
   cmd->add_option("--config", *config,
                   "Training configuration: a JSON file of option names and values "

@@ -189,5 +189,15 @@ TEST(OptimizationOptions, ValidateNamesTheBadField) {
   EXPECT_EQ(frozen.Validate(), "");
 }
 
+// The default budget: 2 x the pixels of one view, at least 2 x 128 x 128.
+TEST(GaussianBudget, TwiceOneViewsPixelsWithAFloor) {
+  EXPECT_EQ(DefaultGaussianBudget(400.0 * 400.0), 320000);  // the paper's Syn resolution
+  EXPECT_EQ(DefaultGaussianBudget(200.0 * 200.0), 80000);
+  EXPECT_EQ(DefaultGaussianBudget(128.0 * 128.0), 32768);
+  EXPECT_EQ(DefaultGaussianBudget(64.0 * 64.0), 32768);  // the floor
+  EXPECT_EQ(DefaultGaussianBudget(0.0), 32768);
+  EXPECT_EQ(DefaultGaussianBudget(-5.0), 32768);
+}
+
 }  // namespace
 }  // namespace hdr4d::method

@@ -136,7 +136,7 @@ double ImageSize(const std::vector<TrainView>& views) {
 
 // The training pixels of one timestamp: the pixels of the distinct (time, camera) pairs of the
 // training views over the number of distinct times (a rig's cameras at one time, each counted
-// once whatever its exposures; one frame of a monocular scene).
+// once whatever its exposures; one frame of a monocular scene; every view of a static scene).
 double PixelsPerTime(const std::vector<TrainView>& views) {
   std::set<float> times;
   std::set<std::tuple<float, std::int64_t, std::int64_t, std::int64_t>> shots;
@@ -303,7 +303,13 @@ void TrainingRun::SetUp() {
   }
   // Schedules for this run's length and image size (an explicit value stays as it is).
   opt_ = requested.Resolved(ImageSize(train_views_), hdr.color_mode == ColorMode::kLogHdr);
-  if (opt_.max_gaussians < 0) opt_.max_gaussians = DefaultGaussianBudget(PixelsPerTime(train_views_));
+  if (opt_.max_gaussians < 0) {
+    // Dynamic: one view's pixels (a rig's cameras film one performance from around it). Static:
+    // every view's (a capture's views are its one time, usually spread over the scene).
+    const double size = ImageSize(train_views_);
+    opt_.max_gaussians =
+        DefaultGaussianBudget(profile_.dynamic ? size * size : PixelsPerTime(train_views_));
+  }
   temporal_ = profile_.dynamic && !hdr.force_static;
   spdlog::info("train: {} train / {} test views, extent {:.3f}, {}, method {}", train_views_.size(),
                test_views_.size(), extent_, temporal_ ? "dynamic" : "static (no time axis)",

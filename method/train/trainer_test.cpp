@@ -120,6 +120,32 @@ TEST(Trainer, GaussianBudgetIsNeverPassed) {
   EXPECT_GT(Train(o).gaussians, 430u);
 }
 
+// The default budget of a dynamic scene follows one view's pixels, not the rig's: four 160 px
+// cameras record 2 x 160 x 160, not four times that. A static scene counts every view.
+TEST(Trainer, DefaultGaussianBudgetFollowsOneView) {
+  TempDir dir;
+  GaussianSceneOptions scene;
+  scene.size = 160;
+  scene.num_gaussians = 12;
+  scene.num_cameras = 4;
+  scene.num_timestamps = 2;
+  MakeGaussianScene(scene, dir / "scene");
+  TrainOptions o = SmallRun(dir / "scene", dir / "run", 2);
+  ASSERT_LT(o.optimization.max_gaussians, 0) << "the default must be the derived budget";
+  Train(o);
+  EXPECT_EQ(ReadJsonFile(dir / "run" / "config.json")["optimization"]["max_gaussians"],
+            2 * 160 * 160);
+  for (const char* split : {"transforms_train.json", "transforms_test.json"}) {
+    nlohmann::json j = ReadJsonFile(dir / "scene" / split);
+    for (auto& frame : j["frames"]) frame["time"] = 0.0;  // one instant: a static capture
+    WriteJsonFile(dir / "scene" / split, j);
+  }
+  Train(SmallRun(dir / "scene", dir / "static_run", 2));
+  // Cameras 0-2 train (every 4th is held out); the two shots of each are one view when static.
+  EXPECT_EQ(ReadJsonFile(dir / "static_run" / "config.json")["optimization"]["max_gaussians"],
+            2 * 160 * 160 * 3);
+}
+
 // One exposure and no HDR ground truth: with when_nothing_hdr (what `hdr4d train` sets unless
 // the user asks for an HDR method) the run trains the plain LDR model instead of HDR-4DGS.
 TEST(Trainer, OneExposureWithoutHdrTruthTrainsThePlainLdrModel) {
