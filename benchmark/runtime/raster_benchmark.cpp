@@ -155,7 +155,7 @@ void BM_RasterForward(benchmark::State& state) {
 
 // The blend's backward on one scene; with `split`, with a separate geometry image as
 // train --no-hdr-geometry passes (BlendBackward), to time the split against the plain backward.
-void RunBackward(benchmark::State& state, bool split) {
+void BenchBlendGradients(benchmark::State& state, bool split) {
   const Config c = ConfigOf(state);
   ThreadLimit limit(c.threads);
   const Scene& scene = GetScene(c.size, c.count, c.channels);
@@ -180,10 +180,12 @@ void RunBackward(benchmark::State& state, bool split) {
   SetCounters(state, scene, c.threads);
 }
 
-void BM_RasterBackward(benchmark::State& state) { RunBackward(state, false); }
+void BM_RasterBackward(benchmark::State& state) { BenchBlendGradients(state, false); }
 
 // Range argument 5: 0 without the geometry image, 1 with it (the same 6-channel scene).
-void BM_RasterBackwardGeometry(benchmark::State& state) { RunBackward(state, state.range(5) != 0); }
+void BM_RasterBackwardGeometry(benchmark::State& state) {
+  BenchBlendGradients(state, state.range(5) != 0);
+}
 
 // What one training iteration asks of the rasteriser: bin, blend, back-propagate.
 void BM_RasterTrainStep(benchmark::State& state) {

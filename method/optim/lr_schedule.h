@@ -83,7 +83,7 @@ inline int StepsForRunLength(int reference_steps, int iterations) {
 // 1 to 10 cameras, 3000 iterations). For a static scene it is every view's pixels (its views are
 // its one time). Small images need more Gaussians per pixel (a 64 px rig reaches 4.4 per pixel
 // of one view), hence the floor, 2 x 128 x 128. It is a ceiling against runaway growth in long
-// runs: capped there, a four-camera rig was better on held-out views than growing freely and a
+// runs: capped there, a four-camera rig was better on held-out views than growing freely and an
 // eight-camera one 0.36 dB worse; 2 x keeps the paper's Syn configuration (four 400 px cameras)
 // under 2 GB (BENCHMARKS.md, "Gaussian budget (issue 15)").
 inline constexpr double kGaussiansPerPixel = 2.0;

@@ -302,13 +302,13 @@ void TrainingRun::SetUp() {
     KeepSavedSchedules(*saved_config_, &requested);
   }
   // Schedules for this run's length and image size (an explicit value stays as it is).
-  opt_ = requested.Resolved(ImageSize(train_views_), hdr.color_mode == ColorMode::kLogHdr);
+  const double image_size = ImageSize(train_views_);
+  opt_ = requested.Resolved(image_size, hdr.color_mode == ColorMode::kLogHdr);
   if (opt_.max_gaussians < 0) {
     // Dynamic: one view's pixels (a rig's cameras film one performance from around it). Static:
     // every view's (a capture's views are its one time, usually spread over the scene).
-    const double size = ImageSize(train_views_);
-    opt_.max_gaussians =
-        DefaultGaussianBudget(profile_.dynamic ? size * size : PixelsPerTime(train_views_));
+    opt_.max_gaussians = DefaultGaussianBudget(
+        profile_.dynamic ? image_size * image_size : PixelsPerTime(train_views_));
   }
   temporal_ = profile_.dynamic && !hdr.force_static;
   spdlog::info("train: {} train / {} test views, extent {:.3f}, {}, method {}", train_views_.size(),

@@ -43,6 +43,15 @@ void MakeScene(const fs::path& root) {
   MakeGaussianScene(s, root);
 }
 
+// Puts every frame of a scene at one instant: a static capture.
+void MakeStatic(const fs::path& root) {
+  for (const char* split : {"transforms_train.json", "transforms_test.json"}) {
+    nlohmann::json j = ReadJsonFile(root / split);
+    for (auto& frame : j["frames"]) frame["time"] = 0.0;
+    WriteJsonFile(root / split, j);
+  }
+}
+
 TEST(Trainer, SameSeedSameRun) {
   TempDir dir;
   MakeScene(dir / "scene");
@@ -81,11 +90,7 @@ TEST(Trainer, ResumeContinuesExactly) {
 TEST(Trainer, StaticSceneTrainsWithoutTheTimeAxis) {
   TempDir dir;
   MakeScene(dir / "scene");
-  for (const char* split : {"transforms_train.json", "transforms_test.json"}) {
-    nlohmann::json j = ReadJsonFile(dir / "scene" / split);
-    for (auto& frame : j["frames"]) frame["time"] = 0.0;  // one instant: a static capture
-    WriteJsonFile(dir / "scene" / split, j);
-  }
+  MakeStatic(dir / "scene");
   const TrainSummary s = Train(SmallRun(dir / "scene", dir / "run", 20));
   const Checkpoint c = LoadCheckpoint(dir / "run" / "checkpoint.bin");
   EXPECT_FALSE(c.model.temporal);
@@ -135,11 +140,7 @@ TEST(Trainer, DefaultGaussianBudgetFollowsOneView) {
   Train(o);
   EXPECT_EQ(ReadJsonFile(dir / "run" / "config.json")["optimization"]["max_gaussians"],
             2 * 160 * 160);
-  for (const char* split : {"transforms_train.json", "transforms_test.json"}) {
-    nlohmann::json j = ReadJsonFile(dir / "scene" / split);
-    for (auto& frame : j["frames"]) frame["time"] = 0.0;  // one instant: a static capture
-    WriteJsonFile(dir / "scene" / split, j);
-  }
+  MakeStatic(dir / "scene");
   Train(SmallRun(dir / "scene", dir / "static_run", 2));
   // Cameras 0-2 train (every 4th is held out); the two shots of each are one view when static.
   EXPECT_EQ(ReadJsonFile(dir / "static_run" / "config.json")["optimization"]["max_gaussians"],
