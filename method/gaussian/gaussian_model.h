@@ -84,8 +84,9 @@ struct GaussianModelT {
       color_dc.assign(other.color_dc.size(), T(0));
       color_rest.assign(other.color_rest.size(), T(0));
     } else {
-      color_dc = {};  // releases the memory (clear would keep it)
-      color_rest = {};
+      // Swapped with empty buffers to release the memory (`= {}` and clear keep the capacity).
+      std::vector<T>().swap(color_dc);
+      std::vector<T>().swap(color_rest);
     }
   }
 
