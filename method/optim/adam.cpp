@@ -377,6 +377,12 @@ void Adam::AppendRows(const std::string& name, std::size_t count, std::size_t ro
   ResizeGroup(name, s.m.size() + count * row_width);
 }
 
+void Adam::ReserveGroup(const std::string& name, std::size_t size) {
+  State& s = Find(name);
+  s.m.reserve(size);
+  s.v.reserve(size);
+}
+
 void Adam::ResetMoments(const std::string& name) {
   State& s = Find(name);
   std::fill(s.m.begin(), s.m.end(), 0.0f);

@@ -148,6 +148,10 @@ class Adam {
                    std::size_t row_width);
   // Appends `count` rows of `row_width` floats with zero moments.
   void AppendRows(const std::string& name, std::size_t count, std::size_t row_width);
+  // Capacity for `size` floats of moments, so that growing up to it never reallocates (a
+  // reallocation holds the old and the new moments at once). Untouched capacity costs address
+  // space only. Keeps the binding.
+  void ReserveGroup(const std::string& name, std::size_t size);
   // Zeroes the moments of the whole group (as 3DGS's opacity reset does), or of the given rows.
   void ResetMoments(const std::string& name);
   void ResetMoments(const std::string& name,

@@ -208,6 +208,22 @@ void SetModelLearningRates(const ModelLearningRates& rates, Adam* adam) {
   for (const char* name : kModelGroups) adam->SetLearningRate(name, RateOf(rates, name));
 }
 
+void ReserveModelRows(GaussianModel& model,
+                      GaussianGradients& grads,
+                      Adam* adam,
+                      DensifyStats* stats,
+                      std::size_t rows) {
+  HDR4D_CHECK(adam != nullptr && stats != nullptr);
+  for (const GroupBuffers& g : Groups(model, grads)) {
+    if (g.width == 0) continue;
+    g.params->reserve(rows * g.width);
+    if (!g.grads->empty()) g.grads->reserve(rows * g.width);
+    adam->ReserveGroup(g.name, rows * g.width);
+  }
+  for (auto* v : {&stats->grad_accum, &stats->denom, &stats->max_radii}) v->reserve(rows);
+  BindModelGroups(model, grads, adam);
+}
+
 // ---- Statistics ----------------------------------------------------------------------------
 
 void DensifyStats::Reset(std::size_t n) {

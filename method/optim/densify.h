@@ -81,6 +81,17 @@ void AddModelGroups(GaussianModel& model,
 void BindModelGroups(GaussianModel& model, GaussianGradients& grads, Adam* adam);
 // Sets every group's learning rate.
 void SetModelLearningRates(const ModelLearningRates& rates, Adam* adam);
+// Capacity for `rows` Gaussians in every model buffer, gradient buffer (those that exist), Adam
+// moment and densification statistic, then BindModelGroups. Densification up to that count then
+// rebuilds the buffers in place: growing past a buffer's capacity holds its old and new contents
+// at once (with the moments' doubling, up to three times the largest group: 0.7 GB per copy of
+// the colour group at 1.28M Gaussians). Capacity never written costs address space, not memory.
+struct DensifyStats;
+void ReserveModelRows(GaussianModel& model,
+                      GaussianGradients& grads,
+                      Adam* adam,
+                      DensifyStats* stats,
+                      std::size_t rows);
 
 // ---- Statistics ----------------------------------------------------------------------------
 // Per Gaussian, over the iterations since the last densification: the summed screen-space

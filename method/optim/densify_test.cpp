@@ -568,6 +568,49 @@ TEST(Densify, BudgetKeepsTheLargestGradientsAndNeverPassesIt) {
   EXPECT_EQ(m.size(), 8u);
 }
 
+// Where every group's parameters and moments, and the statistics, are stored.
+std::vector<const float*> Storage(Setup& s) {
+  std::vector<const float*> out;
+  for (const char* name : kModelGroups) {
+    out.push_back(s.adam.FirstMoment(name).data());
+    out.push_back(s.adam.SecondMoment(name).data());
+    out.push_back(s.adam.group(name).params);
+  }
+  out.push_back(s.stats.grad_accum.data());
+  return out;
+}
+
+// Capacity reserved for the budget: densification rebuilds every buffer where it is (no
+// reallocation, so no second copy of a group alive at once) and gives the same result.
+TEST(Densify, ReservedRowsGrowInPlaceWithTheSameResult) {
+  auto plain = MakeSetup(40, true, 12);
+  auto reserved = MakeSetup(40, true, 12);
+  ReserveModelRows(reserved->model, reserved->grads, &reserved->adam, &reserved->stats, 70);
+  ExpectConsistent(*reserved);
+  const std::vector<const float*> where = Storage(*reserved);
+  for (auto* s : {plain.get(), reserved.get()}) {
+    for (std::size_t i = 0; i < 40; ++i) {
+      SetGrad(s->stats, i, i % 4 == 0 ? 0.0f : 1e-3f);
+      if (i % 2 == 0) SetScale(s->model, i, 0.05f);
+    }
+    DensifyParams params;
+    params.max_gaussians = 70;
+    std::mt19937_64 rng(5);
+    const DensifyResult r = DensifyAndPrune(&s->model, &s->grads, &s->adam, &s->stats, params, &rng);
+    EXPECT_GT(r.cloned + r.split, 0u);
+    ExpectConsistent(*s);
+  }
+  ASSERT_EQ(reserved->model.size(), plain->model.size());
+  EXPECT_GT(reserved->model.size(), 40u);
+  for (std::size_t i = 0; i < plain->model.size(); ++i)
+    ExpectSameGaussian(reserved->model, i, plain->model, i);
+  for (const char* name : kModelGroups) {
+    EXPECT_EQ(reserved->adam.FirstMoment(name), plain->adam.FirstMoment(name)) << name;
+    EXPECT_EQ(reserved->adam.SecondMoment(name), plain->adam.SecondMoment(name)) << name;
+  }
+  EXPECT_EQ(Storage(*reserved), where) << "a buffer was reallocated within the reserve";
+}
+
 // ---- Determinism, 0-wide groups, Adam after surgery --------------------------------------------
 
 TEST(Densify, SameSeedGivesIdenticalModels) {

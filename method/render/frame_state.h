@@ -88,6 +88,32 @@ struct FrameStateT {
   // Reference (scalar, any T) path only: the forward's outputs the backward needs.
   std::vector<T> final_T;
   std::vector<std::int32_t> n_contrib;
+
+  // Capacity for n Gaussians in the buffers sized per Gaussian, for a model of `channels` colour
+  // channels blended as `features` channels (more with a colour stage, which also keeps the
+  // colours). A buffer that grows past its capacity holds its old and new contents at once, so
+  // the trainer reserves its Gaussian budget; capacity never written costs address space, not
+  // memory. (The buffers sized per tile entry follow the views' overlaps and are not reserved.)
+  void ReserveGaussians(std::size_t n, int channels, int features) {
+    const std::size_t c = static_cast<std::size_t>(channels);
+    const std::size_t f = static_cast<std::size_t>(features);
+    for (auto* v : {&splats.mean2d, &splat_grads.mean2d}) v->reserve(2 * n);
+    for (auto* v : {&splats.conic, &splat_grads.conic}) v->reserve(3 * n);
+    for (auto* v : {&splats.opacity, &splats.depth, &splat_grads.opacity}) v->reserve(n);
+    for (auto* v : {&splats.features, &splat_grads.features}) v->reserve(f * n);
+    splats.radius.reserve(n);
+    screen_radius.reserve(n);
+    clamped.reserve(c * n);
+    conditionals.reserve(n);
+    if (f != c) {
+      for (auto* v : {&colors, &color_grads}) v->reserve(c * n);
+      visible.reserve(n);
+    }
+    for (auto* v : {&raster.rects, &raster.sorted_rects}) v->reserve(4 * n);
+    for (auto* v : {&raster.depth_order, &raster.entry_ranges}) v->reserve(n + 1);
+    for (auto* v : {&raster.sort_keys, &raster.sort_keys_tmp}) v->reserve(n);
+    raster.sort_ids_tmp.reserve(n);
+  }
 };
 using FrameState = FrameStateT<float>;
 

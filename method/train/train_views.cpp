@@ -14,10 +14,55 @@
 
 namespace hdr4d::method {
 
+namespace {
+
+// One LDR frame as the views keep it: read, checked (an integer LDR image of the camera's size,
+// divisible by the resolution; else hdr4d::Error naming the file), composited over `background`
+// at full size, then box-averaged in the stored (display) encoding, as the reference composites
+// and then resizes the 8-bit image with PIL.
+std::vector<std::uint8_t> ReadViewPixels(const std::filesystem::path& path,
+                                         int width,
+                                         int height,
+                                         const std::array<float, 3>& background,
+                                         int resolution) {
+  const Image image = ReadImage(path);
+  if (std::string problem = LdrImageProblem(image); !problem.empty())
+    Fail("{}: {}", path.string(), problem);
+  if (image.width() != width || image.height() != height) {
+    Fail("{}: image is {}x{} but the camera says {}x{}", path.string(), image.width(),
+         image.height(), width, height);
+  }
+  if (std::string problem = ResolutionProblem(image.width(), image.height(), resolution);
+      !problem.empty())
+    Fail("{}: {}", path.string(), problem);
+  Image rgb(image.width(), image.height(), 3, image.encoding());
+  const int c = image.channels();
+  for (std::size_t p = 0; p < image.num_pixels(); ++p) {
+    const float* px = image.data() + p * c;
+    const float alpha = c == 4 ? px[3] : 1.0f;
+    for (int k = 0; k < 3; ++k)
+      rgb.data()[p * 3 + k] = (c == 1 ? px[0] : px[k]) * alpha + background[k] * (1.0f - alpha);
+  }
+  const Image reduced = DownsampleBox(rgb, resolution);
+  std::vector<std::uint8_t> out(reduced.size());
+  for (std::size_t p = 0; p < reduced.size(); ++p)
+    out[p] = static_cast<std::uint8_t>(
+        std::lround(std::clamp(reduced.data()[p], 0.0f, 1.0f) * 255.0f));
+  return out;
+}
+
+}  // namespace
+
 void TrainView::ToFloat(std::vector<float>* out) const {
-  out->resize(rgb.size());
+  std::vector<std::uint8_t> read;
+  if (rgb.empty()) {
+    read = ReadViewPixels(image_path, width() * resolution, height() * resolution, background,
+                          resolution);
+  }
+  const std::vector<std::uint8_t>& pixels = rgb.empty() ? read : rgb;
+  out->resize(pixels.size());
   constexpr float kScale = 1.0f / 255.0f;
-  for (std::size_t i = 0; i < rgb.size(); ++i) (*out)[i] = rgb[i] * kScale;
+  for (std::size_t i = 0; i < pixels.size(); ++i) (*out)[i] = pixels[i] * kScale;
 }
 
 void TrainView::HdrMuToFloat(std::vector<float>* out) const {
@@ -100,12 +145,15 @@ PinholeIntrinsics DownscaledIntrinsics(const PinholeIntrinsics& intrinsics, int 
   return k;
 }
 
-std::vector<TrainView> LoadViews(const Dataset& dataset,
+namespace {
+
+std::vector<TrainView> ReadViews(const Dataset& dataset,
                                  Split split,
                                  const float background[3],
                                  bool load_hdr,
                                  int resolution,
-                                 HdrTarget target) {
+                                 HdrTarget target,
+                                 bool keep_pixels) {
   if (resolution < 1) Fail("train: --resolution {} must be >= 1", resolution);
   const std::vector<Frame>& frames = dataset.FramesOf(split);
   std::vector<TrainView> views(frames.size());
@@ -121,18 +169,14 @@ std::vector<TrainView> LoadViews(const Dataset& dataset,
   }
   ParallelFor(static_cast<std::int64_t>(frames.size()), 1, [&](std::int64_t i) {
     const Frame& f = frames[i];
-    const Image image = ReadImage(f.image_path);
-    if (std::string problem = LdrImageProblem(image); !problem.empty())
-      Fail("{}: {}", f.image_path.string(), problem);
-    if (image.width() != f.camera.intrinsics.width ||
-        image.height() != f.camera.intrinsics.height) {
-      Fail("{}: image is {}x{} but the camera says {}x{}", f.image_path.string(), image.width(),
-           image.height(), f.camera.intrinsics.width, f.camera.intrinsics.height);
-    }
-    if (std::string problem = ResolutionProblem(image.width(), image.height(), resolution);
-        !problem.empty())
-      Fail("{}: {}", f.image_path.string(), problem);
     TrainView& v = views[i];
+    v.image_path = f.image_path;
+    v.resolution = resolution;
+    v.background = {background[0], background[1], background[2]};
+    std::vector<std::uint8_t> pixels = ReadViewPixels(
+        f.image_path, f.camera.intrinsics.width, f.camera.intrinsics.height, v.background,
+        resolution);
+    if (keep_pixels) v.rgb = std::move(pixels);
     v.camera = f.camera;
     v.camera.intrinsics = DownscaledIntrinsics(f.camera.intrinsics, resolution);
     v.time = static_cast<float>(f.time);
@@ -141,27 +185,30 @@ std::vector<TrainView> LoadViews(const Dataset& dataset,
     v.image_index = static_cast<int>(i);
     v.hdr_path = f.hdr_path;
     if (load_hdr && f.hdr_path) {
-      v.hdr_mu = LoadHdrMuTarget(*f.hdr_path, image.width(), image.height(), resolution, divisor,
+      v.hdr_mu = LoadHdrMuTarget(*f.hdr_path, f.camera.intrinsics.width,
+                                 f.camera.intrinsics.height, resolution, divisor,
                                  HdrTargetMu(target));
     }
-    // Composited at full size, then box-averaged in the stored (display) encoding, as the
-    // reference composites and then resizes the 8-bit image with PIL.
-    Image rgb(image.width(), image.height(), 3, image.encoding());
-    const int c = image.channels();
-    for (std::size_t p = 0; p < image.num_pixels(); ++p) {
-      const float* px = image.data() + p * c;
-      const float alpha = c == 4 ? px[3] : 1.0f;
-      for (int k = 0; k < 3; ++k)
-        rgb.data()[p * 3 + k] =
-            (c == 1 ? px[0] : px[k]) * alpha + background[k] * (1.0f - alpha);
-    }
-    const Image reduced = DownsampleBox(rgb, resolution);
-    v.rgb.resize(reduced.size());
-    for (std::size_t p = 0; p < reduced.size(); ++p)
-      v.rgb[p] = static_cast<std::uint8_t>(
-          std::lround(std::clamp(reduced.data()[p], 0.0f, 1.0f) * 255.0f));
   });
   return views;
+}
+
+}  // namespace
+
+std::vector<TrainView> LoadViews(const Dataset& dataset,
+                                 Split split,
+                                 const float background[3],
+                                 bool load_hdr,
+                                 int resolution,
+                                 HdrTarget target) {
+  return ReadViews(dataset, split, background, load_hdr, resolution, target, true);
+}
+
+std::vector<TrainView> CheckViews(const Dataset& dataset,
+                                  Split split,
+                                  const float background[3],
+                                  int resolution) {
+  return ReadViews(dataset, split, background, false, resolution, HdrTarget::kImageMax, false);
 }
 
 }  // namespace hdr4d::method

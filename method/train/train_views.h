@@ -3,6 +3,7 @@
 // converted to float one view at a time when it is used.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <optional>
@@ -23,7 +24,11 @@ struct TrainView {
   int image_index = 0;  // position in its split
   double exposure = 1;
   std::string name;               // the image's file name (renders are written under it)
-  std::vector<std::uint8_t> rgb;  // H x W x 3, display-encoded as stored
+  std::vector<std::uint8_t> rgb;  // H x W x 3, display-encoded as stored; empty: not held
+  // Where rgb comes from and how it is made (LoadViews): read again by ToFloat when not held.
+  std::filesystem::path image_path;
+  int resolution = 1;
+  std::array<float, 3> background{};
   // HDR ground truth, when the frame has one: its file (renders are written under its name) and,
   // when loaded for training, the loss's target mu(gt / max) in 16 bits (quantisation 1.5e-5;
   // the maximum and mu as HdrTarget says).
@@ -32,7 +37,8 @@ struct TrainView {
   bool has_hdr() const { return hdr_path.has_value(); }
   int width() const { return camera.intrinsics.width; }
   int height() const { return camera.intrinsics.height; }
-  // The image as floats in [0,1] (H x W x 3) into `out` (resized).
+  // The image as floats in [0,1] (H x W x 3) into `out` (resized); read from image_path (and
+  // checked again) when rgb is not held.
   void ToFloat(std::vector<float>* out) const;
   // The HDR target mu(gt / max gt) as floats (H x W x 3); requires loaded hdr_mu.
   void HdrMuToFloat(std::vector<float>* out) const;
@@ -53,6 +59,13 @@ std::vector<TrainView> LoadViews(const Dataset& dataset,
                                  int resolution = 1,
                                  HdrTarget target = HdrTarget::kImageMax);
 
+// LoadViews without the HDR targets that keeps no pixels: every image is read and checked now
+// (a bad file stops the run before it trains), and each view's ToFloat reads it again. For the
+// test split, used once per evaluation: held, it is 345 MB of a paper-size scene at 800x800.
+std::vector<TrainView> CheckViews(const Dataset& dataset,
+                                  Split split,
+                                  const float background[3],
+                                  int resolution = 1);
 // The median of log(HDR target) in the loss's units (hdr_mu decoded with `mu_law`) over a
 // regular sample of the views' positive target values; nullopt when no view has an HDR target.
 std::optional<float> MedianLogHdrTarget(const std::vector<TrainView>& views, double mu_law);

@@ -2,8 +2,15 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
+
 #include "core/camera.h"
+#include "core/dataset.h"
+#include "core/error.h"
 #include "core/image.h"
+#include "method/run/gaussian_scene.h"
+#include "tests/testing.h"
 
 namespace hdr4d::method {
 namespace {
@@ -55,6 +62,69 @@ TEST(ResolutionProblem, NamesTheSizeAndTheFactor) {
   const std::string p = ResolutionProblem(64, 48, 5);
   EXPECT_NE(p.find("64x48"), std::string::npos) << p;
   EXPECT_NE(p.find("--resolution 5"), std::string::npos) << p;
+}
+
+// The test split is checked when training starts and read again at each evaluation
+// (CheckViews): the views hold no pixels, and the images they read are those LoadViews keeps.
+TEST(CheckViews, HoldsNoPixelsAndReadsWhatLoadViewsKeeps) {
+  hdr4d::testing::TempDir dir;
+  GaussianSceneOptions s;
+  s.size = 24;
+  s.num_gaussians = 12;
+  s.num_cameras = 4;
+  s.num_timestamps = 2;
+  const Dataset dataset = MakeGaussianScene(s, dir / "scene");
+  const float background[3] = {0.2f, 0.3f, 0.4f};
+  for (int resolution : {1, 2}) {
+    const std::vector<TrainView> held =
+        LoadViews(dataset, Split::kTest, background, false, resolution);
+    const std::vector<TrainView> checked =
+        CheckViews(dataset, Split::kTest, background, resolution);
+    ASSERT_EQ(held.size(), checked.size());
+    ASSERT_FALSE(held.empty());
+    for (std::size_t i = 0; i < held.size(); ++i) {
+      EXPECT_EQ(checked[i].rgb.capacity(), 0u) << "the pixels are held";
+      EXPECT_EQ(checked[i].width(), held[i].width());
+      EXPECT_EQ(checked[i].name, held[i].name);
+      std::vector<float> a, b;
+      held[i].ToFloat(&a);
+      checked[i].ToFloat(&b);
+      ASSERT_EQ(a.size(), static_cast<std::size_t>(24 / resolution) * (24 / resolution) * 3);
+      EXPECT_EQ(a, b) << held[i].name << " at resolution " << resolution;
+    }
+  }
+}
+
+// A test image broken after the check is reported with its file when it is read again.
+TEST(CheckViews, AnImageBrokenAfterTheCheckIsNamedWhenRead) {
+  hdr4d::testing::TempDir dir;
+  GaussianSceneOptions s;
+  s.size = 16;
+  s.num_gaussians = 6;
+  s.num_cameras = 4;
+  s.num_timestamps = 2;
+  const Dataset dataset = MakeGaussianScene(s, dir / "scene");
+  const float background[3] = {0, 0, 0};
+  const std::vector<TrainView> views = CheckViews(dataset, Split::kTest, background);
+  ASSERT_FALSE(views.empty());
+  const std::filesystem::path file = dataset.FramesOf(Split::kTest).front().image_path;
+  std::ofstream(file, std::ios::binary | std::ios::trunc) << "not a png";
+  std::vector<float> out;
+  try {
+    views.front().ToFloat(&out);
+    FAIL() << "a broken image was read";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(file.filename().string()), std::string::npos)
+        << e.what();
+  }
+  // And a broken image stops the check itself, naming the file.
+  try {
+    CheckViews(dataset, Split::kTest, background);
+    FAIL() << "the check passed a broken image";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(file.filename().string()), std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

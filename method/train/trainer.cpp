@@ -17,6 +17,7 @@
 #include "core/dataset.h"
 #include "core/error.h"
 #include "core/folder_lock.h"
+#include "core/free_memory.h"
 #include "core/json_util.h"
 #include "core/output_guard.h"
 #include "core/parallel.h"
@@ -290,10 +291,12 @@ void TrainingRun::SetUp() {
                                  !tone_mapper_ || tone_mapper_->pointwise());
   train_views_ = LoadViews(*dataset_, Split::kTrain, background, /*load_hdr=*/resolved_.hdr,
                            options_.resolution, hdr.hdr_target);
-  test_views_ = LoadViews(*dataset_, Split::kTest, background, false, options_.resolution);
+  // Checked now, read again at each evaluation (train_views.h: not held while training).
+  test_views_ = CheckViews(*dataset_, Split::kTest, background, options_.resolution);
   for (auto* views : {&train_views_, &test_views_}) {
     for (TrainView& v : *views) v.time_index = RadianceBank::TimeIndex(v.time, num_times_);
   }
+  ReturnFreedMemory();  // the checked test images and the decoding buffers (core/free_memory.h)
   extent_ = SceneExtent(train_views_);
   // A resumed run keeps the configuration it was started with: read it before anything else.
   OptimizationOptions requested = options_.optimization;
@@ -471,6 +474,22 @@ void TrainingRun::PrepareRendering() {
   }
   raster_channels_ = static_cast<int>(render_.background.size());
   if (background_) render_.background_source = &*background_;
+  // Densification grows the model, its optimiser state and the frame's per-Gaussian buffers up
+  // to the budget in place: no buffer's old and new copies alive at once (densify.h). Only while
+  // densifying: a run past it never grows.
+  // Not past what the machine's memory could hold (parameters and both moments per Gaussian):
+  // such a budget (a static scene's default counts every view's pixels) is never reached, and a
+  // reservation larger than memory and swap may be refused.
+  // xyz 3, t 1, scaling 4, rotations 8, opacity 1, then the colour.
+  const std::size_t model_floats = 17 + model_.channels + model_.rest_stride();
+  const std::size_t fits = PhysicalMemoryBytes() / (3 * sizeof(float) * model_floats);
+  if (opt_.max_gaussians > 0 && loop_.iteration < opt_.densify_until &&
+      static_cast<std::size_t>(opt_.max_gaussians) <= fits) {
+    const std::size_t budget =
+        std::max<std::size_t>(model_.size(), static_cast<std::size_t>(opt_.max_gaussians));
+    ReserveModelRows(model_, grads_, &optimizer_->adam(), &stats_, budget);
+    state_.ReserveGaussians(budget, model_.channels, raster_channels_);
+  }
   terms_ = {.ldr_gaussian = resolved_.ldr_gaussian,
             .ldr_pixel = resolved_.ldr_pixel,
             .hdr = resolved_.hdr,
@@ -655,6 +674,7 @@ void TrainingRun::FinishUpdate(int it, double loss_value) {
   if (DensifiesAt(it)) {
     DensifyAndPrune(&model_, &grads_, &optimizer_->adam(), &stats_,
                     DensifyParamsAt(opt_, extent_, it), &loop_.rng);
+    ReturnFreedMemory();  // its temporaries (core/free_memory.h)
   }
   optimizer_->Finish();
   if (ResetsOpacityAt(it)) ResetOpacity(&model_, &optimizer_->adam());
@@ -730,6 +750,7 @@ void TrainingRun::ReleaseTrainingState() {
   state_ = FrameState{};
   stats_ = DensifyStats{};
   batch_stats_ = BatchStats{};
+  ReturnFreedMemory();
 }
 
 // The last checkpoint, the final test metrics and RUN/results.json.

@@ -147,6 +147,21 @@ TEST(Trainer, DefaultGaussianBudgetFollowsOneView) {
             2 * 160 * 160 * 3);
 }
 
+// The buffers get capacity for the budget when it fits the machine's memory, and a budget far
+// beyond it (the largest --max-gaussians accepts) trains as any other: nothing is reserved.
+TEST(Trainer, ABudgetBeyondMemoryIsNotReserved) {
+  TempDir dir;
+  MakeScene(dir / "scene");
+  TrainOptions reserved = SmallRun(dir / "scene", dir / "reserved", 30);
+  reserved.optimization.max_gaussians = 100000;
+  TrainOptions huge = SmallRun(dir / "scene", dir / "huge", 30);
+  huge.optimization.max_gaussians = std::int64_t{1} << 40;
+  const TrainSummary a = Train(reserved);
+  const TrainSummary b = Train(huge);
+  EXPECT_EQ(a.loss_curve, b.loss_curve);  // the run reaches neither budget
+  EXPECT_EQ(a.gaussians, b.gaussians);
+}
+
 // One exposure and no HDR ground truth: with when_nothing_hdr (what `hdr4d train` sets unless
 // the user asks for an HDR method) the run trains the plain LDR model instead of HDR-4DGS.
 TEST(Trainer, OneExposureWithoutHdrTruthTrainsThePlainLdrModel) {
