@@ -10,6 +10,7 @@
 
 #include "core/error.h"
 #include "core/parallel.h"
+#include "core/scratch_vector.h"
 #include "method/gaussian/constants.h"
 
 namespace hdr4d::method {
@@ -219,9 +220,9 @@ void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, R
   }
   s.tile_ranges[num_tiles] = running;
   HDR4D_CHECK(running == total);
-  s.point_list.resize(total + 1);  // + the spare slot
-  s.point_entries.resize(total + 1);
-  s.entry_slots.resize(total + 1);
+  ResizeScratch(&s.point_list, total + 1);  // + the spare slot
+  ResizeScratch(&s.point_entries, total + 1);
+  ResizeScratch(&s.entry_slots, total + 1);
   std::int32_t* points = s.point_list.data();
   std::int32_t* entries = s.point_entries.data();
   std::int32_t* slots_of = s.entry_slots.data();

@@ -10,6 +10,7 @@
 
 #include "core/error.h"
 #include "core/parallel.h"
+#include "core/scratch_vector.h"
 #include "method/gaussian/constants.h"
 #include "method/raster/binning.h"
 
@@ -334,7 +335,7 @@ detail::TileJob MakeJob(const SplatBuffers& splats,
 void PackSplats(detail::TileJob& job, RasterState* state) {
   const std::size_t stride = detail::PackedStride(job.channels);
   const std::size_t per_gaussian = static_cast<std::size_t>(state->num_gaussians) * stride;
-  state->packed_splats.resize(per_gaussian + state->num_entries() * stride + 1);
+  ResizeScratch(&state->packed_splats, per_gaussian + state->num_entries() * stride + 1);
   state->packed_splats.back() = 0.0f;
   job.packed = state->packed_splats.data();
   job.tile_records = job.packed + per_gaussian;
@@ -454,7 +455,7 @@ void BlendBackward(const SplatBuffers& splats,
     return;
   }
   const int channels = splats.channels;
-  state->entry_gradients.resize(state->num_entries() * SlotStride(channels));
+  ResizeScratch(&state->entry_gradients, state->num_entries() * SlotStride(channels));
   state->tile_background_grad.resize(static_cast<std::size_t>(state->num_tiles()) * channels);
   detail::TileJob job = MakeJob(splats, settings, state);
   job.dL_dimage = dL_dimage;
