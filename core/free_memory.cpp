@@ -1,5 +1,6 @@
 #include "core/free_memory.h"
 
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <fstream>
@@ -22,6 +23,12 @@ std::size_t ResidentBytes() {
   if (!(statm >> pages_total >> pages_resident)) return 0;
   const long page = sysconf(_SC_PAGESIZE);
   return page > 0 ? pages_resident * static_cast<std::size_t>(page) : 0;
+}
+
+std::size_t PeakResidentBytes() {
+  rusage usage{};
+  if (getrusage(RUSAGE_SELF, &usage) != 0 || usage.ru_maxrss <= 0) return 0;
+  return static_cast<std::size_t>(usage.ru_maxrss) * 1024;  // Linux reports kilobytes
 }
 
 std::size_t PhysicalMemoryBytes() {

@@ -19,6 +19,9 @@ void ReturnFreedMemory();
 // The process's resident memory in bytes (Linux /proc/self/statm), 0 where unknown.
 std::size_t ResidentBytes();
 
+// The process's peak resident memory so far in bytes (getrusage), 0 where unknown.
+std::size_t PeakResidentBytes();
+
 // The machine's physical memory in bytes (sysconf), 0 where unknown.
 std::size_t PhysicalMemoryBytes();
 

@@ -772,6 +772,9 @@ TrainSummary TrainingRun::Finish() {
       {"train_seconds", summary.train_seconds},
       {"iterations", summary.iterations},
       {"gaussians", summary.gaussians},
+      // The process's peak resident memory up to the final scores, in MiB as the benchmark
+      // harness records its children's (getrusage).
+      {"peak_rss_mb", static_cast<double>(PeakResidentBytes()) / (1024.0 * 1024.0)},
       {"test_views", test_views_.size()},
       {"final_loss",
        loop_.loss_curve.empty() ? nlohmann::json(nullptr) : FiniteOrNull(loop_.loss_curve.back())},

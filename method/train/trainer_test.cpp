@@ -71,6 +71,7 @@ TEST(Trainer, SameSeedSameRun) {
   for (const char* key : {"psnr", "psnr_channel_mean", "ssim"})
     EXPECT_TRUE(results["test"].contains(key)) << key;
   EXPECT_EQ(results["iterations"], 60);
+  EXPECT_GT(results["peak_rss_mb"].get<double>(), 1.0);
   EXPECT_TRUE(fs::exists(dir / "a" / "config.json"));
 }
 
