@@ -35,8 +35,9 @@ TEST(ReturnFreedMemory, GivesBackFreedBlocksTheHeapKept) {
 TEST(PhysicalMemoryBytes, HoldsWhatTheProcessHolds) {
 #if defined(__linux__)
   EXPECT_GT(PhysicalMemoryBytes(), ResidentBytes());
-  // The peak is at least what the process holds now (allowing the page the read may fault in).
-  EXPECT_GE(PeakResidentBytes() + 64 * 1024, ResidentBytes());
+  // The peak is at least what the process holds now, up to the kernel's per-thread counters,
+  // which reach the two readings at different times (up to 64 pages a thread; 4 MiB allowed).
+  EXPECT_GE(PeakResidentBytes() + 4 * 1024 * 1024, ResidentBytes());
   EXPECT_GT(PhysicalMemoryBytes(), PeakResidentBytes());
 #else
   GTEST_SKIP() << "Linux";
