@@ -202,6 +202,7 @@ class TrainingRun {
   void OpenRunFolder();
   void ResumeOrInitialise();
   void PrepareRendering();
+  void ReserveForBudget();
   bool StepsLeft() const { return loop_.iteration < opt_.iterations; }
   bool OutOfTime() const;
   void Step();
@@ -462,6 +463,22 @@ void TrainingRun::StartLearnedBackground(const nlohmann::json* trainer) {
 
 // The render options of the training views (with the HDR colour stage for log-HDR colours),
 // the loss terms, and the clock.
+// Densification grows the model, its optimiser state and the frame's per-Gaussian buffers up to
+// the budget in place: no buffer's old and new copies alive at once (densify.h). Only while
+// densifying (a run past it never grows), and only when the budget's parameters and both moments
+// fit the machine's memory: a larger budget (a static scene's default counts every view's
+// pixels) is never reached, and a reservation beyond memory and swap may be refused.
+void TrainingRun::ReserveForBudget() {
+  if (opt_.max_gaussians <= 0 || loop_.iteration >= opt_.densify_until) return;
+  const std::size_t budget = static_cast<std::size_t>(opt_.max_gaussians);
+  std::size_t floats = 0;  // per Gaussian
+  for (const char* group : kModelGroups) floats += GroupRowWidth(model_, group);
+  if (budget > PhysicalMemoryBytes() / (3 * sizeof(float) * floats)) return;
+  const std::size_t rows = std::max(model_.size(), budget);
+  ReserveModelRows(model_, grads_, &optimizer_->adam(), &stats_, rows);
+  state_.ReserveGaussians(rows, model_.channels, raster_channels_);
+}
+
 void TrainingRun::PrepareRendering() {
   if (resolved_.hdr_colors) {
     stage_.emplace(tone_mapper_.get(), resolved_.ldr_gaussian);
@@ -474,22 +491,7 @@ void TrainingRun::PrepareRendering() {
   }
   raster_channels_ = static_cast<int>(render_.background.size());
   if (background_) render_.background_source = &*background_;
-  // Densification grows the model, its optimiser state and the frame's per-Gaussian buffers up
-  // to the budget in place: no buffer's old and new copies alive at once (densify.h). Only while
-  // densifying: a run past it never grows.
-  // Not past what the machine's memory could hold (parameters and both moments per Gaussian):
-  // such a budget (a static scene's default counts every view's pixels) is never reached, and a
-  // reservation larger than memory and swap may be refused.
-  // xyz 3, t 1, scaling 4, rotations 8, opacity 1, then the colour.
-  const std::size_t model_floats = 17 + model_.channels + model_.rest_stride();
-  const std::size_t fits = PhysicalMemoryBytes() / (3 * sizeof(float) * model_floats);
-  if (opt_.max_gaussians > 0 && loop_.iteration < opt_.densify_until &&
-      static_cast<std::size_t>(opt_.max_gaussians) <= fits) {
-    const std::size_t budget =
-        std::max<std::size_t>(model_.size(), static_cast<std::size_t>(opt_.max_gaussians));
-    ReserveModelRows(model_, grads_, &optimizer_->adam(), &stats_, budget);
-    state_.ReserveGaussians(budget, model_.channels, raster_channels_);
-  }
+  ReserveForBudget();
   terms_ = {.ldr_gaussian = resolved_.ldr_gaussian,
             .ldr_pixel = resolved_.ldr_pixel,
             .hdr = resolved_.hdr,
