@@ -335,7 +335,8 @@ detail::TileJob MakeJob(const SplatBuffers& splats,
 void PackSplats(detail::TileJob& job, RasterState* state) {
   const std::size_t stride = detail::PackedStride(job.channels);
   const std::size_t per_gaussian = static_cast<std::size_t>(state->num_gaussians) * stride;
-  ResizeScratch(&state->packed_splats, per_gaussian + state->num_entries() * stride + 1);
+  ResizeScratch(&state->packed_splats,
+                per_gaussian + state->num_entries() * detail::TileRecordStride(job.channels) + 1);
   state->packed_splats.back() = 0.0f;
   job.packed = state->packed_splats.data();
   job.tile_records = job.packed + per_gaussian;

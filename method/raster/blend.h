@@ -146,14 +146,18 @@ struct TileJob {
   // written by PackSplatsSimd for the Gaussians listed in some tile (depth_order).
   float* packed = nullptr;
   const std::int32_t* depth_order = nullptr;
-  // Per-entry records (PackedStride(channels) per point_list entry, reach turned into tile
-  // rows/columns): written by the forward, read by the backward when non-null and
-  // tile_records_ready (else the backward gathers its own).
+  // Per-entry records (TileRecordStride(channels) per point_list entry: the per-Gaussian record
+  // with its reach turned into tile rows/columns packed in one slot): written by the forward,
+  // read by the backward when non-null and tile_records_ready (else the backward gathers its
+  // own). They are the largest per-entry buffer, hence the compact form.
   float* tile_records = nullptr;
   bool tile_records_ready = false;
 };
-inline constexpr int kPackedFields = 13;
-inline int PackedStride(int channels) { return kPackedFields + channels; }
+// Per Gaussian: 7 scalar fields, the features, then the reach box as 4 floats (absolute pixel
+// indices); per tile entry: the same 7 fields and features, then the box in one 4-byte slot.
+inline constexpr int kRecordScalars = 7;
+inline int PackedStride(int channels) { return kRecordScalars + channels + 4; }
+inline int TileRecordStride(int channels) { return kRecordScalars + channels + 1; }
 // Packs the records of depth_order[begin .. end).
 void PackSplatsSimd(const TileJob& job, std::int64_t begin, std::int64_t end);
 void ForwardTileSimd(const TileJob& job, int tile);

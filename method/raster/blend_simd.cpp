@@ -69,16 +69,35 @@ constexpr int kRecNegB = 3;      // -b log2(e)
 constexpr int kRecHalfNegC = 4;  // -c / 2 log2(e)
 constexpr int kRecOpacity = 5;
 constexpr int kRecLogThreshold = 6;  // log2 power below this cannot reach kMinAlpha
-constexpr int kRecNegA = 7;
-constexpr int kRecNegC = 8;
-// Tile rows and columns (0..15, inclusive) of pixel centres the Gaussian can reach; row0 > row1
-// when it reaches none.
-constexpr int kRecRow0 = 9;
-constexpr int kRecRow1 = 10;
-constexpr int kRecCol0 = 11;
-constexpr int kRecCol1 = 12;
-constexpr int kRecFeatures = kPackedFields;
-static_assert(kRecCol1 + 1 == kRecFeatures);
+constexpr int kRecFeatures = kRecordScalars;
+static_assert(kRecLogThreshold + 1 == kRecFeatures);
+// After the features: the reach box. In the per-Gaussian records, 4 floats: the first and last
+// pixel row and column (absolute, inclusive) of pixel centres the Gaussian can reach. In the
+// per-entry tile records, the tile rows and columns (0..15, inclusive; row0 > row1 when it
+// reaches none) as 4 bytes, each value + 1, in one slot (tile_records are the biggest per-entry
+// buffer: 4 bytes instead of 16). The a and c of the conic (the backward's factors, and the
+// forward's row test) are read from the splats instead of stored.
+struct TileBox {
+  int row0, row1, col0, col1;
+};
+HWY_INLINE const unsigned char* BoxBytes(const float* r, int channels) {
+  return reinterpret_cast<const unsigned char*>(r + kRecFeatures + channels);
+}
+HWY_INLINE int BoxRow0(const float* r, int channels) { return BoxBytes(r, channels)[0] - 1; }
+HWY_INLINE int BoxRow1(const float* r, int channels) { return BoxBytes(r, channels)[1] - 1; }
+HWY_INLINE int BoxCol0(const float* r, int channels) { return BoxBytes(r, channels)[2] - 1; }
+HWY_INLINE int BoxCol1(const float* r, int channels) { return BoxBytes(r, channels)[3] - 1; }
+HWY_INLINE void SetBoxRows(float* r, int channels, int row0, int row1) {
+  auto* b = reinterpret_cast<unsigned char*>(r + kRecFeatures + channels);
+  b[0] = static_cast<unsigned char>(row0 + 1);
+  b[1] = static_cast<unsigned char>(row1 + 1);
+}
+HWY_INLINE void SetBox(float* r, int channels, const TileBox& box) {
+  SetBoxRows(r, channels, box.row0, box.row1);
+  auto* b = reinterpret_cast<unsigned char*>(r + kRecFeatures + channels);
+  b[2] = static_cast<unsigned char>(box.col0 + 1);
+  b[3] = static_cast<unsigned char>(box.col1 + 1);
+}
 
 // Pixel centre offsets within a tile, in vector order (row-major).
 struct PixelOffsets {
@@ -161,7 +180,7 @@ HWY_INLINE V FastExp2V(D d, V x) {
 }
 
 // Packs the per-Gaussian part of the records of job.depth_order[begin, end) into job.packed
-// (stride kRecFeatures + channels), once per frame, one vector of Gaussians at a time. The reach
+// (stride PackedStride(channels)), once per frame, one vector of Gaussians at a time. The reach
 // box bounds the ellipse power >= log threshold: for a positive definite conic Q, max |dy| over
 // d^T Q d <= 2t is sqrt(2t a / det Q) (and sqrt(2t c / det Q) for dx), widened by 1e-4 relative
 // + 1e-3 px + one ulp of the mean, far beyond the float error of `power`, of this float
@@ -175,14 +194,15 @@ void PackSplats(const TileJob& job, std::int64_t begin, std::int64_t end) {
   const DI di;
   const int lanes = static_cast<int>(hn::Lanes(d));
   const int channels = job.channels;
-  const int stride = kRecFeatures + channels;
+  const int stride = PackedStride(channels);
   const V inf = hn::Set(d, std::numeric_limits<float>::infinity());
   const V zero = hn::Zero(d);
   const V log2e = hn::Set(d, kLog2E);
   const V neg_half_log2e = hn::Set(d, -0.5f * kLog2E);
   const V bound = hn::Set(d, 8388608.0f);  // +-2^23: whole floats stay exact
   HWY_ALIGN std::int32_t ids[kTileSize];
-  HWY_ALIGN float fields[kRecFeatures * kTileSize];
+  constexpr int kBox = kRecFeatures;  // the 4 box fields follow the scalars in `fields`
+  HWY_ALIGN float fields[(kRecFeatures + 4) * kTileSize];
   for (std::int64_t i = begin; i < end; i += lanes) {
     const int n = static_cast<int>(std::min<std::int64_t>(lanes, end - i));
     for (int k = 0; k < lanes; ++k) ids[k] = job.depth_order[i + (k < n ? k : 0)];
@@ -232,27 +252,29 @@ void PackSplats(const TileJob& job, std::int64_t begin, std::int64_t end) {
     put(kRecHalfNegC, hn::Mul(neg_half_log2e, c));
     put(kRecOpacity, o);
     put(kRecLogThreshold, hn::Mul(threshold, log2e));
-    put(kRecNegA, hn::Neg(a));
-    put(kRecNegC, hn::Neg(c));
-    put(kRecRow0, lo(cy, ey));
-    put(kRecRow1, hi(cy, ey));
-    put(kRecCol0, lo(cx, ex));
-    put(kRecCol1, hi(cx, ex));
+    put(kBox, lo(cy, ey));
+    put(kBox + 1, hi(cy, ey));
+    put(kBox + 2, lo(cx, ex));
+    put(kBox + 3, hi(cx, ex));
     for (int k = 0; k < n; ++k) {
       const std::size_t id = static_cast<std::size_t>(ids[k]);
       float* r = job.packed + id * stride;
       for (int f = 0; f < kRecFeatures; ++f) r[f] = fields[f * lanes + k];
       const float* feat = job.features + id * channels;
       for (int ch = 0; ch < channels; ++ch) r[kRecFeatures + ch] = feat[ch];
+      for (int f = 0; f < 4; ++f) r[kRecFeatures + channels + f] = fields[(kBox + f) * lanes + k];
     }
   }
 }
 
-// Copies the packed records of tile entries [start, start + count) into `rec` and replaces the
-// reach extents with the tile rows and columns they cover.
+// Copies the packed records of tile entries [start, start + count) into `rec` (tile records)
+// and replaces the reach box with the tile rows and columns it covers.
 template <int kC>
 void GatherRecords(const TileJob& job, int tile, int start, int count, float* rec) {
-  const int stride = kRecFeatures + (kC > 0 ? kC : job.channels);
+  const int channels = kC > 0 ? kC : job.channels;
+  const int in_stride = PackedStride(channels);
+  const int out_stride = TileRecordStride(channels);
+  const int copied = kRecFeatures + channels;  // the scalars and the features
   const int x0 = (tile % job.tiles_x) * kTileSize;
   const int y0 = (tile / job.tiles_x) * kTileSize;
   const float fx0 = static_cast<float>(x0);
@@ -264,29 +286,35 @@ void GatherRecords(const TileJob& job, int tile, int start, int count, float* re
   for (int j = 0; j < count; ++j) {
     if (j + kAhead < count) {
       const float* ahead =
-          job.packed + static_cast<std::size_t>(job.point_list[start + j + kAhead]) * stride;
+          job.packed + static_cast<std::size_t>(job.point_list[start + j + kAhead]) * in_stride;
       __builtin_prefetch(ahead);
-      __builtin_prefetch(ahead + stride - 1);
+      __builtin_prefetch(ahead + in_stride - 1);
     }
     const int g = job.point_list[start + j];
-    float* r = rec + static_cast<std::size_t>(j) * stride;
-    const float* src = job.packed + static_cast<std::size_t>(g) * stride;
-    int k = 0;
-    for (; k + lanes <= stride; k += lanes) hn::StoreU(hn::LoadU(d, src + k), d, r + k);
-    for (; k < stride; ++k) r[k] = src[k];
+    float* r = rec + static_cast<std::size_t>(j) * out_stride;
+    const float* src = job.packed + static_cast<std::size_t>(g) * in_stride;
+    if (copied >= lanes) {
+      // Whole vectors, the last one overlapping the one before (never past the record).
+      int k = 0;
+      for (; k + lanes < copied; k += lanes) hn::StoreU(hn::LoadU(d, src + k), d, r + k);
+      hn::StoreU(hn::LoadU(d, src + copied - lanes), d, r + copied - lanes);
+    } else {
+      for (int k = 0; k < copied; ++k) r[k] = src[k];
+    }
     // The packed bounds are absolute pixel indices: shift to the tile and clamp (whole numbers
     // below 2^24, so exact). One-lane vector min/max: no branches (ternaries compile to some).
     const auto clamp = [](float v, float lo, float hi) {
       const hn::CappedTag<float, 1> d1;
-      return hn::GetLane(hn::Min(hn::Max(hn::Set(d1, v), hn::Set(d1, lo)), hn::Set(d1, hi)));
+      return static_cast<int>(
+          hn::GetLane(hn::Min(hn::Max(hn::Set(d1, v), hn::Set(d1, lo)), hn::Set(d1, hi))));
     };
     const float last = static_cast<float>(kTileSize - 1);
     const float size = static_cast<float>(kTileSize);
-    r[kRecRow0] = clamp(src[kRecRow0] - fy0, 0.0f, size);
-    r[kRecRow1] = clamp(src[kRecRow1] - fy0, -1.0f, last);
-    r[kRecCol0] = clamp(src[kRecCol0] - fx0, 0.0f, size);
-    r[kRecCol1] = clamp(src[kRecCol1] - fx0, -1.0f, last);
-    if (r[kRecCol0] > r[kRecCol1]) r[kRecRow1] = -1.0f;  // no column: nothing
+    const float* box = src + copied;
+    TileBox b{clamp(box[0] - fy0, 0.0f, size), clamp(box[1] - fy0, -1.0f, last),
+              clamp(box[2] - fx0, 0.0f, size), clamp(box[3] - fx0, -1.0f, last)};
+    if (b.col0 > b.col1) b.row1 = -1;  // no column: nothing
+    SetBox(r, channels, b);
   }
 }
 
@@ -390,7 +418,7 @@ void ForwardTileImpl(const TileJob& job, int tile) {
   const DI di;
   const int lanes = static_cast<int>(hn::Lanes(d));
   const int channels = kC > 0 ? kC : job.channels;
-  const int stride = kRecFeatures + channels;
+  const int stride = TileRecordStride(channels);
   const int x0 = (tile % job.tiles_x) * kTileSize;
   const int y0 = (tile / job.tiles_x) * kTileSize;
   const int start = job.tile_ranges[tile];
@@ -430,8 +458,8 @@ void ForwardTileImpl(const TileJob& job, int tile) {
   float* s_thr = s_k + padded;  // log threshold; -inf: never pruned
   for (int j = 0; j < padded; ++j) {
     const float* r = rec + static_cast<std::size_t>(j) * stride;
-    row0[j] = j < count ? static_cast<std::int32_t>(r[kRecRow0]) : kTileSize;
-    row1[j] = j < count ? static_cast<std::int32_t>(r[kRecRow1]) : -1;
+    row0[j] = j < count ? BoxRow0(r, channels) : kTileSize;
+    row1[j] = j < count ? BoxRow1(r, channels) : -1;
     // Only when a > 0 (power concave in dx on a row) and the reach box is not the whole tile
     // because of an indefinite conic; otherwise all zeros, which the test never prunes.
     const bool exact = j < count && r[kRecHalfNegA] < 0.0f && std::isfinite(r[kRecHalfNegA]) &&
@@ -441,7 +469,9 @@ void ForwardTileImpl(const TileJob& job, int tile) {
     s_ha[j] = exact ? r[kRecHalfNegA] : 0.0f;
     s_nb[j] = exact ? r[kRecNegB] : 0.0f;
     s_hc[j] = exact ? r[kRecHalfNegC] : 0.0f;
-    s_k[j] = exact ? r[kRecNegB] * kLn2 / r[kRecNegA] * -1.0f : 0.0f;
+    // -a from the splats, exactly as PackSplats negated it.
+    s_k[j] = exact ? r[kRecNegB] * kLn2 / -job.conic[3 * job.point_list[start + j]] * -1.0f
+                   : 0.0f;
     s_thr[j] = exact && std::isfinite(s_k[j]) ? r[kRecLogThreshold]
                                               : -std::numeric_limits<float>::infinity();
   }
@@ -515,9 +545,7 @@ void ForwardTileImpl(const TileJob& job, int tile) {
   // reads only the columns). Rows cut here hold no pixel the Gaussian reaches.
   if (job.tile_records != nullptr) {
     for (int j = 0; j < count; ++j) {
-      float* r = rec + static_cast<std::size_t>(j) * stride;
-      r[kRecRow0] = static_cast<float>(tight_lo[j]);
-      r[kRecRow1] = static_cast<float>(tight_hi[j]);
+      SetBoxRows(rec + static_cast<std::size_t>(j) * stride, channels, tight_lo[j], tight_hi[j]);
     }
   }
 
@@ -583,12 +611,14 @@ void ForwardTileImpl(const TileJob& job, int tile) {
         b.acc_mem = acc_mem + static_cast<std::size_t>(channels) * lanes;
         for (int c = 0; c < 2 * channels; ++c) hn::Store(hn::Zero(d), d, acc_mem + c * lanes);
       }
-      const float col0 = static_cast<float>(segment * lanes);
-      const float col1 = col0 + static_cast<float>(lanes - 1);
+      const int col0 = segment * lanes;
+      const int col1 = col0 + lanes - 1;
       for (int i = 0; i < list_length[pair]; ++i) {
         const int j = list[i];
         const float* r = rec + static_cast<std::size_t>(j) * stride;
-        if (vectors_per_row > 1 && (r[kRecCol1] < col0 || r[kRecCol0] > col1)) continue;
+        if (vectors_per_row > 1 &&
+            (BoxCol1(r, channels) < col0 || BoxCol0(r, channels) > col1))
+          continue;
         const M stop_a = BlendStep<kC>(r, j, channels, px, py_a, a);
         const M stop_b = BlendStep<kC>(r, j, channels, px, py_b, b);
         if (!hn::AllFalse(d, hn::Or(stop_a, stop_b)) && hn::AllTrue(d, hn::And(a.done, b.done)))
@@ -611,11 +641,10 @@ constexpr int kSumU = kSlotOpacity;
 
 // With power = -a dx^2 / 2 - b dx dy - c dy^2 / 2 (natural units), alpha = o G:
 // dL/dopacity = sum u, dL/dmean = o sum u dpower/dmean, dL/dconic = o sum u dpower/dconic.
-HWY_INLINE void FinishSlot(const float* r, float* slot) {
+// neg_a and neg_c: the natural -a and -c (from the splats' conic).
+HWY_INLINE void FinishSlot(const float* r, float neg_a, float neg_c, float* slot) {
   const float o = r[kRecOpacity];
-  const float neg_a = r[kRecNegA];
   const float neg_b = r[kRecNegB] * kLn2;  // the natural -b
-  const float neg_c = r[kRecNegC];
   const float sx = slot[kSumUdx], sy = slot[kSumUdy];
   const float sxx = slot[kSumUdxdx], sxy = slot[kSumUdxdy], syy = slot[kSumUdydy];
   slot[kSlotMean] = o * (neg_a * sx + neg_b * sy);
@@ -632,7 +661,7 @@ void BackwardTileImpl(const TileJob& job, int tile) {
   const DI di;
   const int lanes = static_cast<int>(hn::Lanes(d));
   const int channels = kC > 0 ? kC : job.channels;
-  const int stride = kRecFeatures + channels;
+  const int stride = TileRecordStride(channels);
   const int slot_stride = SlotStride(channels);
   const int x0 = (tile % job.tiles_x) * kTileSize;
   const int y0 = (tile / job.tiles_x) * kTileSize;
@@ -745,13 +774,15 @@ void BackwardTileImpl(const TileJob& job, int tile) {
     bool any = false;
     // Only the pixel vectors of the rows (and, for narrow vectors, columns) it can reach.
     const int vectors_per_row = kTileSize / lanes;
-    const int v_end = (static_cast<int>(r[kRecRow1]) + 1) * vectors_per_row;
-    for (int vi = static_cast<int>(r[kRecRow0]) * vectors_per_row; vi < v_end; ++vi) {
+    const int v_end = (BoxRow1(r, channels) + 1) * vectors_per_row;
+    const int box_col0 = BoxCol0(r, channels);
+    const int box_col1 = BoxCol1(r, channels);
+    for (int vi = BoxRow0(r, channels) * vectors_per_row; vi < v_end; ++vi) {
       if (vector_max[vi] <= j) continue;
       const int off = vi * lanes;
       if (vectors_per_row > 1) {
-        const float col0 = static_cast<float>(off % kTileSize);
-        if (r[kRecCol1] < col0 || r[kRecCol0] > col0 + static_cast<float>(lanes - 1)) continue;
+        const int col0 = off % kTileSize;
+        if (box_col1 < col0 || box_col0 > col0 + lanes - 1) continue;
       }
       const V dx = hn::Sub(mean_x, hn::Load(d, pixel_x + off));
       const V dy = hn::Sub(mean_y, hn::Load(d, pixel_y + off));
@@ -808,7 +839,8 @@ void BackwardTileImpl(const TileJob& job, int tile) {
       continue;
     }
     ReduceLanes<kGradCount>(grad, slot);
-    FinishSlot(r, slot);
+    const float* conic = job.conic + 3 * static_cast<std::size_t>(job.point_list[start + j]);
+    FinishSlot(r, -conic[0], -conic[2], slot);
     if constexpr (kC == 0) {
       for (int c = 0; c < channels; ++c)
         slot[kSlotFeatures + c] = hn::GetLane(hn::SumOfLanes(d, hn::Load(d, gf_mem + c * lanes)));
