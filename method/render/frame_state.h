@@ -75,7 +75,8 @@ struct FrameStateT {
   SplatGradientsT<T> splat_grads;
   RasterState raster;
   std::vector<std::uint8_t> clamped;  // N x channels: LDR colour clamped at 0 (no gradient)
-  std::vector<ConditionalGaussian<T>> conditionals;  // N: valid where splats.radius > 0
+  // Reference preprocess only (N, valid where splats.radius > 0); empty on the fast path.
+  std::vector<ConditionalGaussian<T>> conditionals;
   // N: the reference's 3-sigma screen radius (0 = culled), what densification statistics use;
   // splats.radius is the tighter radius the tiles are binned with (preprocess_common.h).
   std::vector<int> screen_radius;
@@ -104,7 +105,6 @@ struct FrameStateT {
     splats.radius.reserve(n);
     screen_radius.reserve(n);
     clamped.reserve(c * n);
-    conditionals.reserve(n);
     if (f != c) {
       for (auto* v : {&colors, &color_grads}) v->reserve(c * n);
       visible.reserve(n);

@@ -231,7 +231,6 @@ void BeginPreprocess(const GaussianModelT<T>& model,
   state->splats.Resize(n);
   if (stage) state->colors.resize(n * channels);
   state->clamped.assign(n * channels, 0);
-  state->conditionals.resize(n);  // written for visible Gaussians only
   state->screen_radius.assign(n, 0);
 }
 

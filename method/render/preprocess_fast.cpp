@@ -60,6 +60,10 @@ void PreprocessForwardFast(const GaussianModel& model,
                            const RenderOptions& options,
                            FrameState* state) {
   BeginPreprocess(model, options, state);
+  // The fast path keeps no conditional Gaussians (216 bytes each, resident once written): its
+  // backward recomputes what it needs. Give back what a reference frame left.
+  if (!state->conditionals.empty())
+    std::vector<ConditionalGaussian<float>>().swap(state->conditionals);
   const std::size_t n = model.size();
   SplatBuffersT<float>& s = state->splats;
   const int time_degree = TimeDegree(model, options);

@@ -19,6 +19,7 @@ void PreprocessForwardReference(const GaussianModelT<T>& model,
                                 FrameStateT<T>* state) {
   BeginPreprocess(model, options, state);
   const std::size_t n = model.size();
+  state->conditionals.resize(n);  // written for visible Gaussians only
   SplatBuffersT<T>& s = state->splats;
   const Vec3<T> center = view.Center();
   const int time_degree = TimeDegree(model, options);

@@ -289,6 +289,20 @@ TEST(Preprocess, OneGaussianAndNone) {
   });
 }
 
+// The conditional Gaussians are the reference backward's cache (216 bytes each): the fast path
+// neither fills nor keeps them, even in a state a reference frame used before.
+TEST(Preprocess, TheFastPathHoldsNoConditionalGaussians) {
+  const GaussianModel model = Scene(500, false, 21);
+  const ViewParams<float> view = ViewParams<float>::FromCamera(TestCamera());
+  RenderOptions options;
+  FrameState state;
+  PreprocessForwardReference(model, view, kTime, options, &state);
+  EXPECT_EQ(state.conditionals.size(), model.size());
+  PreprocessForwardFast(model, view, kTime, options, &state);
+  EXPECT_EQ(state.conditionals.capacity(), 0u);
+  EXPECT_GT(state.num_visible, 0u);
+}
+
 // NormalizeBackward (preprocess_simd.cpp), the fast path's backward through the normalisation
 // of both quaternions: its gradient with respect to the stored, unnormalised quaternions against
 // central differences in double of the reference forward, on every compiled target. The loss
