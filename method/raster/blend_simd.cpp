@@ -75,28 +75,18 @@ static_assert(kRecLogThreshold + 1 == kRecFeatures);
 // pixel row and column (absolute, inclusive) of pixel centres the Gaussian can reach. In the
 // per-entry tile records, the tile rows and columns (0..15, inclusive; row0 > row1 when it
 // reaches none) as 4 bytes, each value + 1, in one slot (tile_records are the biggest per-entry
-// buffer: 4 bytes instead of 16). The a and c of the conic (the backward's factors, and the
-// forward's row test) are read from the splats instead of stored.
-struct TileBox {
-  int row0, row1, col0, col1;
-};
-HWY_INLINE const unsigned char* BoxBytes(const float* r, int channels) {
-  return reinterpret_cast<const unsigned char*>(r + kRecFeatures + channels);
+// buffer: 4 bytes instead of 16). The backward's natural -a and -c are read from the splats'
+// conic instead of stored.
+constexpr int kBoxRow0 = 0;
+constexpr int kBoxRow1 = 1;
+constexpr int kBoxCol0 = 2;
+constexpr int kBoxCol1 = 3;
+HWY_INLINE int Box(const float* r, int channels, int k) {
+  return reinterpret_cast<const unsigned char*>(r + kRecFeatures + channels)[k] - 1;
 }
-HWY_INLINE int BoxRow0(const float* r, int channels) { return BoxBytes(r, channels)[0] - 1; }
-HWY_INLINE int BoxRow1(const float* r, int channels) { return BoxBytes(r, channels)[1] - 1; }
-HWY_INLINE int BoxCol0(const float* r, int channels) { return BoxBytes(r, channels)[2] - 1; }
-HWY_INLINE int BoxCol1(const float* r, int channels) { return BoxBytes(r, channels)[3] - 1; }
-HWY_INLINE void SetBoxRows(float* r, int channels, int row0, int row1) {
-  auto* b = reinterpret_cast<unsigned char*>(r + kRecFeatures + channels);
-  b[0] = static_cast<unsigned char>(row0 + 1);
-  b[1] = static_cast<unsigned char>(row1 + 1);
-}
-HWY_INLINE void SetBox(float* r, int channels, const TileBox& box) {
-  SetBoxRows(r, channels, box.row0, box.row1);
-  auto* b = reinterpret_cast<unsigned char*>(r + kRecFeatures + channels);
-  b[2] = static_cast<unsigned char>(box.col0 + 1);
-  b[3] = static_cast<unsigned char>(box.col1 + 1);
+HWY_INLINE void SetBox(float* r, int channels, int k, int value) {
+  reinterpret_cast<unsigned char*>(r + kRecFeatures + channels)[k] =
+      static_cast<unsigned char>(value + 1);
 }
 
 // Pixel centre offsets within a tile, in vector order (row-major).
@@ -252,10 +242,10 @@ void PackSplats(const TileJob& job, std::int64_t begin, std::int64_t end) {
     put(kRecHalfNegC, hn::Mul(neg_half_log2e, c));
     put(kRecOpacity, o);
     put(kRecLogThreshold, hn::Mul(threshold, log2e));
-    put(kBox, lo(cy, ey));
-    put(kBox + 1, hi(cy, ey));
-    put(kBox + 2, lo(cx, ex));
-    put(kBox + 3, hi(cx, ex));
+    put(kBox + kBoxRow0, lo(cy, ey));
+    put(kBox + kBoxRow1, hi(cy, ey));
+    put(kBox + kBoxCol0, lo(cx, ex));
+    put(kBox + kBoxCol1, hi(cx, ex));
     for (int k = 0; k < n; ++k) {
       const std::size_t id = static_cast<std::size_t>(ids[k]);
       float* r = job.packed + id * stride;
@@ -311,10 +301,13 @@ void GatherRecords(const TileJob& job, int tile, int start, int count, float* re
     const float last = static_cast<float>(kTileSize - 1);
     const float size = static_cast<float>(kTileSize);
     const float* box = src + copied;
-    TileBox b{clamp(box[0] - fy0, 0.0f, size), clamp(box[1] - fy0, -1.0f, last),
-              clamp(box[2] - fx0, 0.0f, size), clamp(box[3] - fx0, -1.0f, last)};
-    if (b.col0 > b.col1) b.row1 = -1;  // no column: nothing
-    SetBox(r, channels, b);
+    const int col0 = clamp(box[kBoxCol0] - fx0, 0.0f, size);
+    const int col1 = clamp(box[kBoxCol1] - fx0, -1.0f, last);
+    SetBox(r, channels, kBoxRow0, clamp(box[kBoxRow0] - fy0, 0.0f, size));
+    // No column: nothing.
+    SetBox(r, channels, kBoxRow1, col0 > col1 ? -1 : clamp(box[kBoxRow1] - fy0, -1.0f, last));
+    SetBox(r, channels, kBoxCol0, col0);
+    SetBox(r, channels, kBoxCol1, col1);
   }
 }
 
@@ -458,8 +451,8 @@ void ForwardTileImpl(const TileJob& job, int tile) {
   float* s_thr = s_k + padded;  // log threshold; -inf: never pruned
   for (int j = 0; j < padded; ++j) {
     const float* r = rec + static_cast<std::size_t>(j) * stride;
-    row0[j] = j < count ? BoxRow0(r, channels) : kTileSize;
-    row1[j] = j < count ? BoxRow1(r, channels) : -1;
+    row0[j] = j < count ? Box(r, channels, kBoxRow0) : kTileSize;
+    row1[j] = j < count ? Box(r, channels, kBoxRow1) : -1;
     // Only when a > 0 (power concave in dx on a row) and the reach box is not the whole tile
     // because of an indefinite conic; otherwise all zeros, which the test never prunes.
     const bool exact = j < count && r[kRecHalfNegA] < 0.0f && std::isfinite(r[kRecHalfNegA]) &&
@@ -469,9 +462,8 @@ void ForwardTileImpl(const TileJob& job, int tile) {
     s_ha[j] = exact ? r[kRecHalfNegA] : 0.0f;
     s_nb[j] = exact ? r[kRecNegB] : 0.0f;
     s_hc[j] = exact ? r[kRecHalfNegC] : 0.0f;
-    // -a from the splats, exactly as PackSplats negated it.
-    s_k[j] = exact ? r[kRecNegB] * kLn2 / -job.conic[3 * job.point_list[start + j]] * -1.0f
-                   : 0.0f;
+    // -b / a from the record's log2-unit terms: the row test's margin covers their rounding.
+    s_k[j] = exact ? r[kRecNegB] / (-2.0f * r[kRecHalfNegA]) : 0.0f;
     s_thr[j] = exact && std::isfinite(s_k[j]) ? r[kRecLogThreshold]
                                               : -std::numeric_limits<float>::infinity();
   }
@@ -545,7 +537,9 @@ void ForwardTileImpl(const TileJob& job, int tile) {
   // reads only the columns). Rows cut here hold no pixel the Gaussian reaches.
   if (job.tile_records != nullptr) {
     for (int j = 0; j < count; ++j) {
-      SetBoxRows(rec + static_cast<std::size_t>(j) * stride, channels, tight_lo[j], tight_hi[j]);
+      float* r = rec + static_cast<std::size_t>(j) * stride;
+      SetBox(r, channels, kBoxRow0, tight_lo[j]);
+      SetBox(r, channels, kBoxRow1, tight_hi[j]);
     }
   }
 
@@ -617,7 +611,7 @@ void ForwardTileImpl(const TileJob& job, int tile) {
         const int j = list[i];
         const float* r = rec + static_cast<std::size_t>(j) * stride;
         if (vectors_per_row > 1 &&
-            (BoxCol1(r, channels) < col0 || BoxCol0(r, channels) > col1))
+            (Box(r, channels, kBoxCol1) < col0 || Box(r, channels, kBoxCol0) > col1))
           continue;
         const M stop_a = BlendStep<kC>(r, j, channels, px, py_a, a);
         const M stop_b = BlendStep<kC>(r, j, channels, px, py_b, b);
@@ -774,10 +768,10 @@ void BackwardTileImpl(const TileJob& job, int tile) {
     bool any = false;
     // Only the pixel vectors of the rows (and, for narrow vectors, columns) it can reach.
     const int vectors_per_row = kTileSize / lanes;
-    const int v_end = (BoxRow1(r, channels) + 1) * vectors_per_row;
-    const int box_col0 = BoxCol0(r, channels);
-    const int box_col1 = BoxCol1(r, channels);
-    for (int vi = BoxRow0(r, channels) * vectors_per_row; vi < v_end; ++vi) {
+    const int v_end = (Box(r, channels, kBoxRow1) + 1) * vectors_per_row;
+    const int box_col0 = Box(r, channels, kBoxCol0);
+    const int box_col1 = Box(r, channels, kBoxCol1);
+    for (int vi = Box(r, channels, kBoxRow0) * vectors_per_row; vi < v_end; ++vi) {
       if (vector_max[vi] <= j) continue;
       const int off = vi * lanes;
       if (vectors_per_row > 1) {
