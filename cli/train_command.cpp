@@ -2,11 +2,17 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+
 #include "baselines/scene_baselines.h"
 #include "cli/commands.h"
 #include "cli/flags.h"
 #include "core/error.h"
 #include "method/tonemap/tone_mapper_registry.h"
+#include "method/train/resume_check.h"
 #include "method/train/train_config.h"
 #include "method/train/trainer.h"
 
@@ -23,6 +29,77 @@ void ListTrainConfigs() {
   fmt::print("\nA --config FILE is a JSON object with any of these keys (flag that wins over it):\n"
              "  {}\n",
              fmt::join(keys, "\n  "));
+}
+
+// `hdr4d train --resume`: the options the run recorded (saved), with every option given on the
+// command line (in `flags`, as parsed) put over them. What differs from the run's configuration
+// is then refused by the trainer, before the scene is read, except what may change on a resume
+// (the run length, threads, test and checkpoint cadence, time budget). Threads are never taken
+// from the record: a resumed run uses this machine's cores unless told.
+method::TrainOptions ResumedOptions(const method::TrainOptions& saved,
+                                    const method::TrainOptions& flags,
+                                    const std::function<bool(const std::string&)>& given) {
+  using O = method::TrainOptions;
+  struct Field {
+    const char* flag;
+    void (*take)(const O& from, O* to);
+  };
+  static const Field fields[] = {
+      {"--data", [](const O& f, O* t) { t->data = f.data; }},
+      {"--iterations",
+       [](const O& f, O* t) { t->optimization.iterations = f.optimization.iterations; }},
+      {"--seed", [](const O& f, O* t) { t->seed = f.seed; }},
+      {"--resolution", [](const O& f, O* t) { t->resolution = f.resolution; }},
+      {"--batch-size",
+       [](const O& f, O* t) { t->optimization.batch_size = f.optimization.batch_size; }},
+      {"--max-gaussians",
+       [](const O& f, O* t) { t->optimization.max_gaussians = f.optimization.max_gaussians; }},
+      {"--random-points",
+       [](const O& f, O* t) { t->init.num_random_points = f.init.num_random_points; }},
+      {"--densify-from",
+       [](const O& f, O* t) { t->optimization.densify_from = f.optimization.densify_from; }},
+      {"--densify-until",
+       [](const O& f, O* t) { t->optimization.densify_until = f.optimization.densify_until; }},
+      {"--densification-interval",
+       [](const O& f, O* t) {
+         t->optimization.densification_interval = f.optimization.densification_interval;
+       }},
+      {"--densify-grad-threshold",
+       [](const O& f, O* t) {
+         t->optimization.densify_grad_threshold = f.optimization.densify_grad_threshold;
+       }},
+      {"--position-lr-steps",
+       [](const O& f, O* t) {
+         t->optimization.position_lr_max_steps = f.optimization.position_lr_max_steps;
+       }},
+      {"--opacity-reset-interval",
+       [](const O& f, O* t) {
+         t->optimization.opacity_reset_interval = f.optimization.opacity_reset_interval;
+       }},
+      {"--sh-increase-interval",
+       [](const O& f, O* t) {
+         t->optimization.sh_increase_interval = f.optimization.sh_increase_interval;
+       }},
+      {"--color-lr",
+       [](const O& f, O* t) {
+         t->optimization.f_dc_lr = f.optimization.f_dc_lr;
+         t->optimization.f_dc_lr_log_hdr = f.optimization.f_dc_lr_log_hdr;
+       }},
+      {"--test-every", [](const O& f, O* t) { t->test_every = f.test_every; }},
+      {"--max-seconds", [](const O& f, O* t) { t->max_seconds = f.max_seconds; }},
+      {"--checkpoint-every", [](const O& f, O* t) { t->checkpoint_every = f.checkpoint_every; }},
+      {"--background", [](const O& f, O* t) { t->background = f.background; }},
+      {"--learn-background", [](const O& f, O* t) { t->learn_background = f.learn_background; }},
+  };
+  O run = saved;
+  for (const Field& field : fields)
+    if (given(field.flag)) field.take(flags, &run);
+  run.out = flags.out;
+  run.resume = true;
+  run.threads = flags.threads;
+  run.progress = flags.progress;
+  run.hdr = flags.hdr;  // the run's own, with the HDR flags given (AddTrainCommand)
+  return run;
 }
 
 }  // namespace
@@ -52,7 +129,7 @@ void AddTrainCommand(CLI::App& app) {
       "RUN/config.json, RUN/checkpoint.bin and RUN/results.json (test metrics with the keys of "
       "`hdr4d eval`, LDR and HDR, training seconds, iterations, Gaussian count).");
   CLI::Option* data_flag =
-      cmd->add_option("--data", *data, "Scene folder")->check(Text("a scene folder"));
+      cmd->add_option("--data", *data, "Scene folder (with --resume: the run's own by default)")->check(Text("a scene folder"));
   CLI::Option* out_flag =
       cmd->add_option("--out", *out, "Run folder")->check(Text("a run folder"));
   cmd->add_option("--iterations", options->optimization.iterations,
@@ -153,7 +230,11 @@ void AddTrainCommand(CLI::App& app) {
       "Gaussians floating at any depth, for HDR colours as a radiance tone mapped like theirs. "
       "--no-learn-background trains on the fixed --background, as the paper does");
   cmd->add_flag("--resume", options->resume,
-                "Continue from RUN/checkpoint.bin (exactly as if never stopped)");
+                "Continue from RUN/checkpoint.bin, exactly as if never stopped, with the run's "
+                "own configuration (RUN/config.json): --data and every option not given come "
+                "from it; an option given that differs from it is refused before the scene is "
+                "read, except --iterations, --threads, --test-every, --checkpoint-every and "
+                "--max-seconds");
   CLI::Option* method_flag = cmd->add_option(
          "--method", flags->method,
          fmt::format("Method of the paper's tables: {} (default hdr4dgs; 4dgs when every "
@@ -236,25 +317,33 @@ void AddTrainCommand(CLI::App& app) {
       ListTrainConfigs();
       return;
     }
-    if (data_flag->count() == 0) Fail("train: --data is required");
     if (out_flag->count() == 0) Fail("train: --out is required");
+    // --resume: the run's recorded options, the flags given now over them (ResumedOptions).
+    std::optional<method::TrainOptions> saved;
+    if (options->resume) {
+      saved = method::TrainOptions::FromJson(method::ReadSavedRunConfig(*out),
+                                             (std::filesystem::path(*out) / "config.json").string());
+    }
+    if (data_flag->count() == 0 && !saved)
+      Fail("train: --data is required (a resumed run takes its own from RUN/config.json)");
+    const auto given = [cmd](const std::string& flag) { return cmd->get_option(flag)->count() > 0; };
     if (!config->empty()) {
-      method::ApplyTrainConfig(
-          method::ReadTrainConfig(*config), "--config " + *config,
-          [cmd](const std::string& flag) { return cmd->get_option(flag)->count() > 0; },
-          options.get());
+      method::ApplyTrainConfig(method::ReadTrainConfig(*config), "--config " + *config, given,
+                               saved ? &*saved : options.get());
     }
     options->data = *data;
     options->out = *out;
     if (learn_background_flag->count() > 0) options->learn_background = *learn_background;
-    method::HdrTrainingOptions& hdr = options->hdr;
-    hdr = baselines::MethodPreset(flags->method);
+    // The colour model and supervision: the method's preset (a resumed run's own), then the
+    // flags given.
+    method::HdrTrainingOptions hdr =
+        saved && method_flag->count() == 0 ? saved->hdr : baselines::MethodPreset(flags->method);
     const bool window_given = context_window->count() > 0, size_given = context_size->count() > 0;
     const bool tunes_tone_mapper = !flags->tone_mapper.empty() || window_given ||
                                    !flags->context_learner.empty() || size_given ||
                                    flags->direct_curves || flags->monotone_curves;
     if (tunes_tone_mapper && !hdr.tone_mapper) {
-      Fail("--method {} has no tone mapper, so tone-mapper options do not apply", flags->method);
+      Fail("--method {} has no tone mapper, so tone-mapper options do not apply", hdr.method);
     }
     if (hdr.tone_mapper) {
       if (!flags->tone_mapper.empty()) hdr.tone_mapper->kind = flags->tone_mapper;
@@ -265,24 +354,28 @@ void AddTrainCommand(CLI::App& app) {
       if (flags->direct_curves) hdr.tone_mapper->tabulated = false;
       if (flags->monotone_curves) hdr.tone_mapper->monotone_curves = true;
     }
-    if (flags->supervision != "auto" || hdr.supervision == method::Supervision::kAuto)
+    if ((!saved || supervision_flag->count() > 0) &&
+        (flags->supervision != "auto" || hdr.supervision == method::Supervision::kAuto))
       hdr.supervision = method::ParseSupervision(flags->supervision, "--supervision");
     if (flags->no_pixel_branch) hdr.pixel_branch = false;
     if (flags->no_gaussian_branch) hdr.gaussian_branch = false;
-    hdr.hdr_weight = flags->hdr_weight;
+    if (hdr_weight_flag->count() > 0) hdr.hdr_weight = flags->hdr_weight;
     if (pixel_log_epsilon_flag->count() > 0) hdr.pixel_log_epsilon = flags->pixel_log_epsilon;
     if (!flags->hdr_target.empty())
       hdr.hdr_target = method::ParseHdrTarget(flags->hdr_target, "--hdr-target");
     if (flags->no_hdr_geometry) hdr.hdr_geometry = false;
     if (std::string p = hdr.Validate(); !p.empty()) Fail("train: {}", p);
-    // Nothing HDR asked for: a scene with one exposure and no HDR truth trains plain 4DGS.
+    options->hdr = hdr;
+    // Nothing HDR asked for: a scene with one exposure and no HDR truth trains plain 4DGS (a
+    // resumed run trains what it started with).
     const bool asked_for_hdr = method_flag->count() > 0 || tunes_tone_mapper ||
                                supervision_flag->count() > 0 || flags->no_pixel_branch ||
                                flags->no_gaussian_branch || hdr_weight_flag->count() > 0 ||
                                pixel_log_epsilon_flag->count() > 0 ||
                                no_hdr_geometry_flag->count() > 0;
-    if (!asked_for_hdr) options->when_nothing_hdr = baselines::MethodPreset("4dgs");
-    const method::TrainSummary s = method::Train(*options);
+    if (!asked_for_hdr && !saved) options->when_nothing_hdr = baselines::MethodPreset("4dgs");
+    const method::TrainSummary s =
+        method::Train(saved ? ResumedOptions(*saved, *options, given) : *options);
     fmt::print("train: {} iterations in {:.1f} s, {} Gaussians; test {}\n", s.iterations,
                s.train_seconds, s.gaussians, s.test_metrics.dump());
   });

@@ -13,6 +13,7 @@
 #include <cstring>
 #include <limits>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -325,6 +326,38 @@ TEST_F(Hostile, Case08ResumeRefusesAnotherConfigurationBeforeWritingAnything) {
   fs::remove(fs::path(R()) / "config.json");
   const std::string lost = "train --data " + S() + base;
   ExpectOneLineError(RunHdr4d(lost), lost, {"config.json", "no run here to resume"});
+}
+
+// Case 8b: a long run is resumed with the run folder alone: its own scene and options (not the
+// defaults), and another option is refused before the scene is read.
+TEST_F(Hostile, Case08bResumeNeedsOnlyTheRunFolderAndChecksBeforeReadingTheScene) {
+  auto r = RunHdr4d("train --data " + S() + " --out " + R() +
+                    " --iterations 20 --threads 1 --seed 3 --supervision ldr --hdr-weight 0.5 "
+                    "--densify-grad-threshold 0.01 --no-learn-background");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json started = json::parse(ReadTextFile(fs::path(R()) / "config.json"));
+  r = RunHdr4d("train --out " + R() + " --resume --iterations 30 --threads 1");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  json resumed = json::parse(ReadTextFile(fs::path(R()) / "config.json"));
+  EXPECT_EQ(resumed.at("optimization").at("iterations"), 30);
+  resumed["optimization"]["iterations"] = started.at("optimization").at("iterations");
+  EXPECT_EQ(resumed, started);  // seed, supervision, weights, schedules, background: the run's own
+  // With the scene's images gone, a different option is still named first: nothing was read.
+  fs::remove_all(fs::path(S()) / "images");
+  const auto before = Snapshot(R());
+  for (const std::string& flag : {std::string(" --seed 4"), std::string(" --learn-background"),
+                                  std::string(" --method 4dgs")}) {
+    const std::string args = "train --out " + R() + " --resume --iterations 40" + flag;
+    ExpectOneLineError(RunHdr4d(args), args,
+                       {(fs::path(R()) / "config.json").string(), "a resumed run keeps"});
+    EXPECT_EQ(Snapshot(R()), before) << args;
+  }
+  // A damaged record is named with the key at fault.
+  json bad = started;
+  bad["optimization"].erase("densify_until");
+  std::ofstream(fs::path(R()) / "config.json") << bad.dump();
+  const std::string args = "train --out " + R() + " --resume";
+  ExpectOneLineError(RunHdr4d(args), args, {"config.json", "optimization.densify_until is missing"});
 }
 
 // Case 9: flags silently replaced by defaults, wrapped or ignored.

@@ -33,22 +33,24 @@ fs::path Canonical(const std::string& path) {
 }
 
 // Depth is bounded by the configuration's own shape (a few levels): it is our file.
+// given_only: compare the keys `requested` holds, never asking for the others.
 void Compare(const nlohmann::json& saved,
              const nlohmann::json& requested,
              const std::string& key,
-             const fs::path& config_file) {
+             const fs::path& config_file,
+             bool given_only) {
   if (MayDiffer(key)) return;
   if (saved.is_object() && requested.is_object()) {
     for (const auto& [name, value] : saved.items()) {
       const std::string sub = key.empty() ? name : key + "." + name;
       const auto it = requested.find(name);
       if (it == requested.end()) {
-        if (MayDiffer(sub)) continue;
+        if (MayDiffer(sub) || given_only) continue;
         Fail("{}: --resume would drop the run's {} = {} (start a new run folder to change the "
              "configuration)",
              config_file.string(), sub, Short(value));
       }
-      Compare(value, *it, sub, config_file);
+      Compare(value, *it, sub, config_file, given_only);
     }
     return;
   }
@@ -97,7 +99,13 @@ void KeepSavedSchedules(const nlohmann::json& saved, OptimizationOptions* reques
 void RequireSameConfig(const nlohmann::json& saved,
                        const nlohmann::json& requested,
                        const fs::path& config_file) {
-  Compare(saved, requested, "", config_file);
+  Compare(saved, requested, "", config_file, /*given_only=*/false);
+}
+
+void RequireSameGivenConfig(const nlohmann::json& saved,
+                            const nlohmann::json& requested,
+                            const fs::path& config_file) {
+  Compare(saved, requested, "", config_file, /*given_only=*/true);
 }
 
 }  // namespace hdr4d::method

@@ -26,5 +26,11 @@ void KeepSavedSchedules(const nlohmann::json& saved, OptimizationOptions* reques
 void RequireSameConfig(const nlohmann::json& saved,
                        const nlohmann::json& requested,
                        const std::filesystem::path& config_file);
+// The same check over the keys `requested` holds only (the options as given, before the scene is
+// read and the schedules resolved): a resume that asks for another configuration is refused
+// before the scene's images are loaded.
+void RequireSameGivenConfig(const nlohmann::json& saved,
+                            const nlohmann::json& requested,
+                            const std::filesystem::path& config_file);
 
 }  // namespace hdr4d::method

@@ -13,6 +13,10 @@
 #include <set>
 #include <sstream>
 #include <tuple>
+#include <type_traits>
+#include <utility>
+#include <variant>
+#include <vector>
 
 #include "core/dataset.h"
 #include "core/error.h"
@@ -58,8 +62,59 @@ std::string TrainOptions::Validate() const {
   return "";
 }
 
+namespace {
+
+// The optimisation fields RUN/config.json records, read back by TrainOptions::FromJson.
+using OptimizationField = std::variant<int OptimizationOptions::*, double OptimizationOptions::*,
+                                       std::int64_t OptimizationOptions::*>;
+const std::vector<std::pair<const char*, OptimizationField>>& RecordedOptimizationFields() {
+  using O = OptimizationOptions;
+  static const std::vector<std::pair<const char*, OptimizationField>> fields = {
+      {"iterations", &O::iterations},
+      {"batch_size", &O::batch_size},
+      {"position_lr_init", &O::position_lr_init},
+      {"position_lr_final", &O::position_lr_final},
+      {"position_lr_max_steps", &O::position_lr_max_steps},
+      {"t_lr_init", &O::t_lr_init},
+      {"f_dc_lr", &O::f_dc_lr},
+      {"f_dc_lr_log_hdr", &O::f_dc_lr_log_hdr},
+      {"f_rest_lr", &O::f_rest_lr},
+      {"opacity_lr", &O::opacity_lr},
+      {"scaling_lr", &O::scaling_lr},
+      {"rotation_lr", &O::rotation_lr},
+      {"adam_eps", &O::adam_eps},
+      {"lambda_dssim", &O::lambda_dssim},
+      {"densify_from", &O::densify_from},
+      {"densify_until", &O::densify_until},
+      {"densification_interval", &O::densification_interval},
+      {"densify_grad_threshold", &O::densify_grad_threshold},
+      {"percent_dense", &O::percent_dense},
+      {"opacity_reset_interval", &O::opacity_reset_interval},
+      {"prune_opacity", &O::prune_opacity},
+      {"sh_increase_interval", &O::sh_increase_interval},
+      {"max_gaussians", &O::max_gaussians}};
+  return fields;
+}
+
+// json.at(key) as T, or hdr4d::Error naming the source and the key.
+template <typename T>
+T Field(const nlohmann::json& json, const char* key, const std::string& source,
+        const std::string& where) {
+  const auto it = json.find(key);
+  if (it == json.end()) Fail("{}: {}{} is missing", source, where, key);
+  try {
+    return it->get<T>();
+  } catch (const nlohmann::json::exception&) {
+    Fail("{}: {}{} = {} is not a valid value", source, where, key, it->dump());
+  }
+}
+
+}  // namespace
+
 nlohmann::json TrainOptions::ToJson() const {
-  const OptimizationOptions& o = optimization;
+  nlohmann::json optimization = nlohmann::json::object();
+  for (const auto& [name, field] : RecordedOptimizationFields())
+    std::visit([&](auto member) { optimization[name] = this->optimization.*member; }, field);
   nlohmann::json json = {
       {"data", fs::absolute(data).string()},
       {"seed", seed},
@@ -74,35 +129,48 @@ nlohmann::json TrainOptions::ToJson() const {
        {{"num_random_points", init.num_random_points},
         {"random_half_extent", init.random_half_extent},
         {"initial_opacity", init.initial_opacity}}},
-      {"optimization",
-       {{"iterations", o.iterations},
-        {"batch_size", o.batch_size},
-        {"position_lr_init", o.position_lr_init},
-        {"position_lr_final", o.position_lr_final},
-        {"position_lr_max_steps", o.position_lr_max_steps},
-        {"t_lr_init", o.t_lr_init},
-        {"f_dc_lr", o.f_dc_lr},
-        {"f_dc_lr_log_hdr", o.f_dc_lr_log_hdr},
-        {"f_rest_lr", o.f_rest_lr},
-        {"opacity_lr", o.opacity_lr},
-        {"scaling_lr", o.scaling_lr},
-        {"rotation_lr", o.rotation_lr},
-        {"adam_eps", o.adam_eps},
-        {"lambda_dssim", o.lambda_dssim},
-        {"densify_from", o.densify_from},
-        {"densify_until", o.densify_until},
-        {"densification_interval", o.densification_interval},
-        {"densify_grad_threshold", o.densify_grad_threshold},
-        {"percent_dense", o.percent_dense},
-        {"opacity_reset_interval", o.opacity_reset_interval},
-        {"prune_opacity", o.prune_opacity},
-        {"sh_increase_interval", o.sh_increase_interval},
-        {"max_gaussians", o.max_gaussians}}},
+      {"optimization", std::move(optimization)},
   };
   // Resolved by the run before it is recorded (TrainingRun::SetUp); unset only for a caller's
   // own look at the options.
   if (learn_background) json["learn_background"] = *learn_background;
   return json;
+}
+
+TrainOptions TrainOptions::FromJson(const nlohmann::json& j, const std::string& source) {
+  if (!j.is_object()) Fail("{}: not a run configuration (expected a JSON object)", source);
+  TrainOptions o;
+  o.data = Field<std::string>(j, "data", source, "");
+  o.seed = Field<std::uint64_t>(j, "seed", source, "");
+  o.resolution = Field<int>(j, "resolution", source, "");
+  o.test_every = Field<int>(j, "test_every", source, "");
+  o.checkpoint_every = Field<int>(j, "checkpoint_every", source, "");
+  o.max_seconds = Field<double>(j, "max_seconds", source, "");
+  o.background = Field<float>(j, "background", source, "");
+  o.hdr = HdrTrainingOptions::FromJson(Field<nlohmann::json>(j, "hdr", source, ""), source);
+  const auto init = Field<nlohmann::json>(j, "init", source, "");
+  o.init.num_random_points = Field<int>(init, "num_random_points", source, "init.");
+  o.init.random_half_extent = Field<float>(init, "random_half_extent", source, "init.");
+  o.init.initial_opacity = Field<float>(init, "initial_opacity", source, "init.");
+  const auto optimization = Field<nlohmann::json>(j, "optimization", source, "");
+  for (const auto& [name, field] : RecordedOptimizationFields()) {
+    std::visit(
+        [&](auto member) {
+          using T = std::remove_reference_t<decltype(o.optimization.*member)>;
+          o.optimization.*member = Field<T>(optimization, name, source, "optimization.");
+        },
+        field);
+  }
+  // Runs from before the option recorded nothing and trained without it.
+  if (const auto it = j.find("learn_background"); it != j.end()) {
+    if (!it->is_boolean()) Fail("{}: learn_background must be true or false", source);
+    o.learn_background = it->get<bool>();
+  } else {
+    o.learn_background = false;
+  }
+  o.out = fs::path(source).parent_path();  // the run folder the file belongs to
+  if (std::string p = o.Validate(); !p.empty()) Fail("{}: {}", source, p);
+  return o;
 }
 
 int DistinctTimes(const Dataset& dataset) {
@@ -272,6 +340,21 @@ class TrainingRun {
 // The data, the schedules for this run's length and image size, the tone mapper and the
 // configuration to record (a resumed run must match the one it continues).
 void TrainingRun::SetUp() {
+  // A resumed run keeps the configuration it was started with: an option given now that
+  // differs is refused before the scene is read (a paper-size scene takes a minute to load);
+  // what only the scene resolves is compared once it is (end of SetUp).
+  if (options_.resume) {
+    saved_config_ = ReadSavedRunConfig(options_.out);
+    nlohmann::json given = options_.ToJson();
+    nlohmann::json& o = given["optimization"];
+    for (auto it = o.begin(); it != o.end();) {
+      // kFollowRunLength (negative) fields and t_lr_init's "as position_lr_init" are resolved
+      // with the scene.
+      if (it->is_number() && it->get<double>() < 0) it = o.erase(it); else ++it;
+    }
+    if (options_.when_nothing_hdr) given.erase("hdr");  // picked with the scene
+    RequireSameGivenConfig(*saved_config_, given, options_.out / "config.json");
+  }
   dataset_.emplace(LoadDataset(options_.data, {.image_check = ImageCheck::kHeaders}));
   profile_ = ProfileScene(*dataset_);
   PickMethodForScene();
@@ -299,12 +382,8 @@ void TrainingRun::SetUp() {
   }
   ReturnFreedMemory();  // the checked test images and the decoding buffers (core/free_memory.h)
   extent_ = SceneExtent(train_views_);
-  // A resumed run keeps the configuration it was started with: read it before anything else.
   OptimizationOptions requested = options_.optimization;
-  if (options_.resume) {
-    saved_config_ = ReadSavedRunConfig(options_.out);
-    KeepSavedSchedules(*saved_config_, &requested);
-  }
+  if (saved_config_) KeepSavedSchedules(*saved_config_, &requested);
   // Schedules for this run's length and image size (an explicit value stays as it is).
   const double image_size = ImageSize(train_views_);
   opt_ = requested.Resolved(image_size, hdr.color_mode == ColorMode::kLogHdr);

@@ -49,6 +49,11 @@ struct TrainOptions {
   std::optional<HdrTrainingOptions> when_nothing_hdr;
   std::string Validate() const;
   nlohmann::json ToJson() const;
+  // The options RUN/config.json recorded (ToJson's keys, schedules as the run resolved them;
+  // `out` is the folder of `source`, threads keep the default): what `hdr4d train --resume`
+  // trains unless a flag says otherwise.
+  // Throws hdr4d::Error naming `source` and the missing or bad key.
+  static TrainOptions FromJson(const nlohmann::json& json, const std::string& source);
 };
 
 struct TrainSummary {

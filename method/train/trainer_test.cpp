@@ -11,6 +11,7 @@
 namespace hdr4d::method {
 namespace {
 namespace fs = std::filesystem;
+using hdr4d::testing::ErrorOf;
 using hdr4d::testing::TempDir;
 
 // A tiny known scene and options that reach densification, opacity reset and the SH schedule
@@ -86,6 +87,36 @@ TEST(Trainer, ResumeContinuesExactly) {
   ASSERT_EQ(resumed.loss_curve.size(), straight.loss_curve.size());
   EXPECT_EQ(resumed.loss_curve, straight.loss_curve);
   EXPECT_EQ(resumed.gaussians, straight.gaussians);
+}
+
+// RUN/config.json reads back into the options it recorded (what --resume trains), and a damaged
+// record is refused by key.
+TEST(Trainer, OptionsReadBackFromTheirRecord) {
+  TrainOptions o = SmallRun("/scene", "/runs/a", 77);
+  o.seed = 11;
+  o.resolution = 2;
+  o.background = 0.25f;
+  o.learn_background = true;
+  o.optimization.max_gaussians = 1234;
+  o.optimization.f_rest_lr = 3e-4;
+  o.hdr.hdr_weight = 0.3f;
+  const nlohmann::json record = o.ToJson();
+  const TrainOptions back = TrainOptions::FromJson(record, "/runs/a/config.json");
+  EXPECT_EQ(back.ToJson(), record);
+  EXPECT_EQ(back.out, fs::path("/runs/a"));
+  nlohmann::json bad = record;
+  bad["optimization"]["batch_size"] = "two";
+  EXPECT_NE(ErrorOf([&] { TrainOptions::FromJson(bad, "c.json"); })
+                .find("c.json: optimization.batch_size = \"two\" is not a valid value"),
+            std::string::npos);
+  bad = record;
+  bad.erase("seed");
+  EXPECT_NE(ErrorOf([&] { TrainOptions::FromJson(bad, "c.json"); }).find("c.json: seed is missing"),
+            std::string::npos);
+  bad = record;
+  bad["optimization"]["iterations"] = 0;
+  EXPECT_NE(ErrorOf([&] { TrainOptions::FromJson(bad, "c.json"); }).find("c.json: "),
+            std::string::npos);
 }
 
 TEST(Trainer, StaticSceneTrainsWithoutTheTimeAxis) {
