@@ -352,7 +352,14 @@ void TrainingRun::SetUp() {
       // with the scene.
       if (it->is_number() && it->get<double>() < 0) it = o.erase(it); else ++it;
     }
-    if (options_.when_nothing_hdr) given.erase("hdr");  // picked with the scene
+    // Log-HDR colours take their own DC rate (OptimizationOptions::Resolved); the method, and
+    // with it the colours, is picked with the scene when when_nothing_hdr is set.
+    if (options_.when_nothing_hdr) {
+      given.erase("hdr");
+      o.erase("f_dc_lr");
+    } else if (options_.hdr.color_mode == ColorMode::kLogHdr) {
+      o["f_dc_lr"] = options_.optimization.f_dc_lr_log_hdr;
+    }
     RequireSameGivenConfig(*saved_config_, given, options_.out / "config.json");
   }
   dataset_.emplace(LoadDataset(options_.data, {.image_check = ImageCheck::kHeaders}));
