@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Two hdr4d binaries (before and after a refactor) give bit-identical results: the same seeded
 # training runs and renders with both, then the checkpoints, the renders and results.json
-# compared by SHA-256, all without their wall-clock fields.
+# compared by SHA-256, all without their wall-clock fields and the measured peak memory.
 #   bash benchmark/proofs/same_results.sh OLD_HDR4D NEW_HDR4D WORKDIR [ITERATIONS]
 # Runs: HDR-4DGS and HDR-GS on the built-in demo scene (LDR supervision, 8 cameras), and 4DGS
 # on ../shared/data/dnerf_lego_tiny when it is there. Exit status 1 when anything differs.
@@ -17,7 +17,7 @@ strip_times() {
   python3 -c 'import json,sys
 def drop(x):
     if isinstance(x, dict):
-        return {k: drop(v) for k, v in x.items() if "seconds" not in k and k != "fps"}
+        return {k: drop(v) for k, v in x.items() if "seconds" not in k and k not in ("fps", "peak_rss_mb")}
     if isinstance(x, list):
         return [drop(v) for v in x]
     return x

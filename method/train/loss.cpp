@@ -157,6 +157,49 @@ double SumAbsDiffRow(const T* a, const T* b, std::size_t len) {
   return sum;
 }
 
+// The five per-pixel quantities of SSIM's window sums. Restrict-qualified parameters: GCC does
+// not apply __restrict to local pointers for its alias analysis, and with five output rows the
+// loop needs more run-time overlap checks than it will emit, so it stayed scalar.
+template <typename T>
+void WindowProducts(const T* __restrict a, const T* __restrict b, T* __restrict qx,
+                    T* __restrict qy, T* __restrict qxx, T* __restrict qyy, T* __restrict qxy,
+                    std::size_t len) {
+  for (std::size_t j = 0; j < len; ++j) {
+    qx[j] = a[j];
+    qy[j] = b[j];
+    qxx[j] = a[j] * a[j];
+    qyy[j] = b[j] * b[j];
+    qxy[j] = a[j] * b[j];
+  }
+}
+
+// One row of the SSIM map from the filtered sums, and its partials with respect to the sums of
+// the prediction (mu_x, E[x^2], E[xy]) scaled by `scale`: dS/dmu_x (directly and through
+// var_x = E[x^2] - mu_x^2 and cov = E[xy] - mu_x mu_y), dS/dE[x^2] = -S / b2 and
+// dS/dE[xy] = 2 a1 / (b1 b2). A function of its own for the reason of WindowProducts.
+template <typename T>
+void SsimRowWithPartials(const T* __restrict mu_x, const T* __restrict mu_y,
+                         const T* __restrict e_xx, const T* __restrict e_yy,
+                         const T* __restrict e_xy, T* __restrict ssim, T* __restrict p_mu,
+                         T* __restrict p_xx, T* __restrict p_xy, std::size_t len, T c1, T c2,
+                         T scale) {
+  for (std::size_t j = 0; j < len; ++j) {
+    const T mx = mu_x[j], my = mu_y[j];
+    const T a1 = T(2) * mx * my + c1;
+    const T a2 = T(2) * (e_xy[j] - mx * my) + c2;
+    const T b1 = mx * mx + my * my + c1;
+    const T b2 = (e_xx[j] - mx * mx) + (e_yy[j] - my * my) + c2;
+    const T inv = T(1) / (b1 * b2);
+    const T s = a1 * a2 * inv;
+    ssim[j] = s;
+    const T inv_b1 = b2 * inv;
+    const T inv_b2 = b1 * inv;
+    p_mu[j] = scale * (T(2) * my * (a2 - a1) * inv + T(2) * mx * s * (inv_b2 - inv_b1));
+    p_xx[j] = scale * (-s * inv_b2);
+    p_xy[j] = scale * (T(2) * a1 * inv);
+  }
+}
+
 template <typename T>
 LossResult LossImpl(
     const T* pred, const T* gt, int width, int height, int channels, T lambda, T* grad) {
@@ -199,13 +242,7 @@ LossResult LossImpl(
       const std::size_t base = static_cast<std::size_t>(y) * row_len;
       const T* __restrict a = pred + base;
       const T* __restrict b = gt + base;
-      for (std::size_t j = 0; j < row_len; ++j) {
-        qx[j] = a[j];
-        qy[j] = b[j];
-        qxx[j] = a[j] * a[j];
-        qyy[j] = b[j] * b[j];
-        qxy[j] = a[j] * b[j];
-      }
+      WindowProducts(a, b, qx, qy, qxx, qyy, qxy, row_len);
       l1_rows[y] = SumAbsDiffRow(a, b, row_len);
       for (int q = 0; q < 5; ++q) {
         FilterPaddedRow(scratch + q * pitch, map(q) + base, row_len, stride);
@@ -236,26 +273,8 @@ LossResult LossImpl(
           std::fill(r + pad + row_len, r + pitch, T(0));
           row[q] = r + pad;
         }
-        T* __restrict p_mu = row[0];
-        T* __restrict p_xx = row[1];
-        T* __restrict p_xy = row[2];
-        for (std::size_t j = 0; j < row_len; ++j) {
-          const T mx = mu_x[j], my = mu_y[j];
-          const T a1 = T(2) * mx * my + c1;
-          const T a2 = T(2) * (e_xy[j] - mx * my) + c2;
-          const T b1 = mx * mx + my * my + c1;
-          const T b2 = (e_xx[j] - mx * mx) + (e_yy[j] - my * my) + c2;
-          const T inv = T(1) / (b1 * b2);
-          const T s = a1 * a2 * inv;
-          ssim[j] = s;
-          // dS/dmu_x (directly and through var_x = E[x^2] - mu_x^2 and cov = E[xy] - mu_x mu_y),
-          // dS/dE[x^2] = -S / b2 and dS/dE[xy] = 2 a1 / (b1 b2).
-          const T inv_b1 = b2 * inv;
-          const T inv_b2 = b1 * inv;
-          p_mu[j] = scale * (T(2) * my * (a2 - a1) * inv + T(2) * mx * s * (inv_b2 - inv_b1));
-          p_xx[j] = scale * (-s * inv_b2);
-          p_xy[j] = scale * (T(2) * a1 * inv);
-        }
+        SsimRowWithPartials(mu_x, mu_y, e_xx, e_yy, e_xy, ssim, row[0], row[1], row[2], row_len,
+                            c1, c2, scale);
       } else {
         for (std::size_t j = 0; j < row_len; ++j) {
           const T mx = mu_x[j], my = mu_y[j];
