@@ -129,7 +129,8 @@ void AddTrainCommand(CLI::App& app) {
       "RUN/config.json, RUN/checkpoint.bin and RUN/results.json (test metrics with the keys of "
       "`hdr4d eval`, LDR and HDR, training seconds, iterations, Gaussian count).");
   CLI::Option* data_flag =
-      cmd->add_option("--data", *data, "Scene folder (with --resume: the run's own by default)")->check(Text("a scene folder"));
+      cmd->add_option("--data", *data, "Scene folder (with --resume: the run's own by default)")
+          ->check(Text("a scene folder"));
   CLI::Option* out_flag =
       cmd->add_option("--out", *out, "Run folder")->check(Text("a run folder"));
   cmd->add_option("--iterations", options->optimization.iterations,
@@ -321,12 +322,14 @@ void AddTrainCommand(CLI::App& app) {
     // --resume: the run's recorded options, the flags given now over them (ResumedOptions).
     std::optional<method::TrainOptions> saved;
     if (options->resume) {
-      saved = method::TrainOptions::FromJson(method::ReadSavedRunConfig(*out),
-                                             (std::filesystem::path(*out) / "config.json").string());
+      const std::string record = (std::filesystem::path(*out) / "config.json").string();
+      saved = method::TrainOptions::FromJson(method::ReadSavedRunConfig(*out), record);
     }
     if (data_flag->count() == 0 && !saved)
       Fail("train: --data is required (a resumed run takes its own from RUN/config.json)");
-    const auto given = [cmd](const std::string& flag) { return cmd->get_option(flag)->count() > 0; };
+    const auto given = [cmd](const std::string& flag) {
+      return cmd->get_option(flag)->count() > 0;
+    };
     if (!config->empty()) {
       method::ApplyTrainConfig(method::ReadTrainConfig(*config), "--config " + *config, given,
                                saved ? &*saved : options.get());
