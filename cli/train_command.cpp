@@ -39,61 +39,37 @@ void ListTrainConfigs() {
 method::TrainOptions ResumedOptions(const method::TrainOptions& saved,
                                     const method::TrainOptions& flags,
                                     const std::function<bool(const std::string&)>& given) {
-  using O = method::TrainOptions;
-  struct Field {
-    const char* flag;
-    void (*take)(const O& from, O* to);
+  method::TrainOptions run = saved;
+  // The field an option sets, taken from `flags` when the option was given.
+  const auto take = [&](const char* flag, auto field) {
+    if (given(flag)) field(run) = field(flags);
   };
-  static const Field fields[] = {
-      {"--data", [](const O& f, O* t) { t->data = f.data; }},
-      {"--iterations",
-       [](const O& f, O* t) { t->optimization.iterations = f.optimization.iterations; }},
-      {"--seed", [](const O& f, O* t) { t->seed = f.seed; }},
-      {"--resolution", [](const O& f, O* t) { t->resolution = f.resolution; }},
-      {"--batch-size",
-       [](const O& f, O* t) { t->optimization.batch_size = f.optimization.batch_size; }},
-      {"--max-gaussians",
-       [](const O& f, O* t) { t->optimization.max_gaussians = f.optimization.max_gaussians; }},
-      {"--random-points",
-       [](const O& f, O* t) { t->init.num_random_points = f.init.num_random_points; }},
-      {"--densify-from",
-       [](const O& f, O* t) { t->optimization.densify_from = f.optimization.densify_from; }},
-      {"--densify-until",
-       [](const O& f, O* t) { t->optimization.densify_until = f.optimization.densify_until; }},
-      {"--densification-interval",
-       [](const O& f, O* t) {
-         t->optimization.densification_interval = f.optimization.densification_interval;
-       }},
-      {"--densify-grad-threshold",
-       [](const O& f, O* t) {
-         t->optimization.densify_grad_threshold = f.optimization.densify_grad_threshold;
-       }},
-      {"--position-lr-steps",
-       [](const O& f, O* t) {
-         t->optimization.position_lr_max_steps = f.optimization.position_lr_max_steps;
-       }},
-      {"--opacity-reset-interval",
-       [](const O& f, O* t) {
-         t->optimization.opacity_reset_interval = f.optimization.opacity_reset_interval;
-       }},
-      {"--sh-increase-interval",
-       [](const O& f, O* t) {
-         t->optimization.sh_increase_interval = f.optimization.sh_increase_interval;
-       }},
-      {"--color-lr",
-       [](const O& f, O* t) {
-         t->optimization.f_dc_lr = f.optimization.f_dc_lr;
-         t->optimization.f_dc_lr_log_hdr = f.optimization.f_dc_lr_log_hdr;
-       }},
-      {"--test-every", [](const O& f, O* t) { t->test_every = f.test_every; }},
-      {"--max-seconds", [](const O& f, O* t) { t->max_seconds = f.max_seconds; }},
-      {"--checkpoint-every", [](const O& f, O* t) { t->checkpoint_every = f.checkpoint_every; }},
-      {"--background", [](const O& f, O* t) { t->background = f.background; }},
-      {"--learn-background", [](const O& f, O* t) { t->learn_background = f.learn_background; }},
-  };
-  O run = saved;
-  for (const Field& field : fields)
-    if (given(field.flag)) field.take(flags, &run);
+  take("--data", [](auto& o) -> auto& { return o.data; });
+  take("--iterations", [](auto& o) -> auto& { return o.optimization.iterations; });
+  take("--seed", [](auto& o) -> auto& { return o.seed; });
+  take("--resolution", [](auto& o) -> auto& { return o.resolution; });
+  take("--batch-size", [](auto& o) -> auto& { return o.optimization.batch_size; });
+  take("--max-gaussians", [](auto& o) -> auto& { return o.optimization.max_gaussians; });
+  take("--random-points", [](auto& o) -> auto& { return o.init.num_random_points; });
+  take("--densify-from", [](auto& o) -> auto& { return o.optimization.densify_from; });
+  take("--densify-until", [](auto& o) -> auto& { return o.optimization.densify_until; });
+  take("--densification-interval",
+       [](auto& o) -> auto& { return o.optimization.densification_interval; });
+  take("--densify-grad-threshold",
+       [](auto& o) -> auto& { return o.optimization.densify_grad_threshold; });
+  take("--position-lr-steps",
+       [](auto& o) -> auto& { return o.optimization.position_lr_max_steps; });
+  take("--opacity-reset-interval",
+       [](auto& o) -> auto& { return o.optimization.opacity_reset_interval; });
+  take("--sh-increase-interval",
+       [](auto& o) -> auto& { return o.optimization.sh_increase_interval; });
+  take("--color-lr", [](auto& o) -> auto& { return o.optimization.f_dc_lr; });
+  take("--color-lr", [](auto& o) -> auto& { return o.optimization.f_dc_lr_log_hdr; });
+  take("--test-every", [](auto& o) -> auto& { return o.test_every; });
+  take("--max-seconds", [](auto& o) -> auto& { return o.max_seconds; });
+  take("--checkpoint-every", [](auto& o) -> auto& { return o.checkpoint_every; });
+  take("--background", [](auto& o) -> auto& { return o.background; });
+  take("--learn-background", [](auto& o) -> auto& { return o.learn_background; });
   run.out = flags.out;
   run.resume = true;
   run.threads = flags.threads;

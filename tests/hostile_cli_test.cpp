@@ -357,7 +357,7 @@ TEST_F(Hostile, Case08bResumeNeedsOnlyTheRunFolderAndChecksBeforeReadingTheScene
   bad["optimization"].erase("densify_until");
   std::ofstream(fs::path(R()) / "config.json") << bad.dump();
   const std::string args = "train --out " + R() + " --resume";
-  ExpectOneLineError(RunHdr4d(args), args, {"config.json", "optimization.densify_until is missing"});
+  ExpectOneLineError(RunHdr4d(args), args, {"config.json", "key 'optimization.densify_until' is missing"});
 }
 
 // Case 9: flags silently replaced by defaults, wrapped or ignored.

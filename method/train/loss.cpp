@@ -173,6 +173,18 @@ void WindowProducts(const T* __restrict a, const T* __restrict b, T* __restrict 
   }
 }
 
+// The SSIM of one value from its window sums: S = (a1 a2) / (b1 b2), with the luminance (a1, b1)
+// and contrast-structure (a2, b2) terms kept for the partials.
+template <typename T>
+struct SsimTerms {
+  T a1, a2, b1, b2;
+};
+template <typename T>
+inline SsimTerms<T> WindowSsim(T mx, T my, T e_xx, T e_yy, T e_xy, T c1, T c2) {
+  return {T(2) * mx * my + c1, T(2) * (e_xy - mx * my) + c2, mx * mx + my * my + c1,
+          (e_xx - mx * mx) + (e_yy - my * my) + c2};
+}
+
 // One row of the SSIM map from the filtered sums, and its partials with respect to the sums of
 // the prediction (mu_x, E[x^2], E[xy]) scaled by `scale`: dS/dmu_x (directly and through
 // var_x = E[x^2] - mu_x^2 and cov = E[xy] - mu_x mu_y), dS/dE[x^2] = -S / b2 and
@@ -185,10 +197,7 @@ void SsimRowWithPartials(const T* __restrict mu_x, const T* __restrict mu_y,
                          T scale) {
   for (std::size_t j = 0; j < len; ++j) {
     const T mx = mu_x[j], my = mu_y[j];
-    const T a1 = T(2) * mx * my + c1;
-    const T a2 = T(2) * (e_xy[j] - mx * my) + c2;
-    const T b1 = mx * mx + my * my + c1;
-    const T b2 = (e_xx[j] - mx * mx) + (e_yy[j] - my * my) + c2;
+    const auto [a1, a2, b1, b2] = WindowSsim(mx, my, e_xx[j], e_yy[j], e_xy[j], c1, c2);
     const T inv = T(1) / (b1 * b2);
     const T s = a1 * a2 * inv;
     ssim[j] = s;
@@ -277,11 +286,8 @@ LossResult LossImpl(
                             c1, c2, scale);
       } else {
         for (std::size_t j = 0; j < row_len; ++j) {
-          const T mx = mu_x[j], my = mu_y[j];
-          const T a1 = T(2) * mx * my + c1;
-          const T a2 = T(2) * (e_xy[j] - mx * my) + c2;
-          const T b1 = mx * mx + my * my + c1;
-          const T b2 = (e_xx[j] - mx * mx) + (e_yy[j] - my * my) + c2;
+          const auto [a1, a2, b1, b2] =
+              WindowSsim(mu_x[j], mu_y[j], e_xx[j], e_yy[j], e_xy[j], c1, c2);
           ssim[j] = a1 * a2 * (T(1) / (b1 * b2));
         }
       }

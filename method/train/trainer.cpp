@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <set>
@@ -96,19 +97,6 @@ const std::vector<std::pair<const char*, OptimizationField>>& RecordedOptimizati
   return fields;
 }
 
-// json.at(key) as T, or hdr4d::Error naming the source and the key.
-template <typename T>
-T Field(const nlohmann::json& json, const char* key, const std::string& source,
-        const std::string& where) {
-  const auto it = json.find(key);
-  if (it == json.end()) Fail("{}: {}{} is missing", source, where, key);
-  try {
-    return it->get<T>();
-  } catch (const nlohmann::json::exception&) {
-    Fail("{}: {}{} = {} is not a valid value", source, where, key, it->dump());
-  }
-}
-
 }  // namespace
 
 nlohmann::json TrainOptions::ToJson() const {
@@ -138,36 +126,41 @@ nlohmann::json TrainOptions::ToJson() const {
 }
 
 TrainOptions TrainOptions::FromJson(const nlohmann::json& j, const std::string& source) {
-  if (!j.is_object()) Fail("{}: not a run configuration (expected a JSON object)", source);
+  constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
+  constexpr std::int64_t kIntMin = std::numeric_limits<int>::min();
+  const JsonField record = JsonField(j, source).Object();
   TrainOptions o;
-  o.data = Field<std::string>(j, "data", source, "");
-  o.seed = Field<std::uint64_t>(j, "seed", source, "");
-  o.resolution = Field<int>(j, "resolution", source, "");
-  o.test_every = Field<int>(j, "test_every", source, "");
-  o.checkpoint_every = Field<int>(j, "checkpoint_every", source, "");
-  o.max_seconds = Field<double>(j, "max_seconds", source, "");
-  o.background = Field<float>(j, "background", source, "");
-  o.hdr = HdrTrainingOptions::FromJson(Field<nlohmann::json>(j, "hdr", source, ""), source);
-  const auto init = Field<nlohmann::json>(j, "init", source, "");
-  o.init.num_random_points = Field<int>(init, "num_random_points", source, "init.");
-  o.init.random_half_extent = Field<float>(init, "random_half_extent", source, "init.");
-  o.init.initial_opacity = Field<float>(init, "initial_opacity", source, "init.");
-  const auto optimization = Field<nlohmann::json>(j, "optimization", source, "");
+  o.data = record["data"].String();
+  o.seed = record["seed"].Uint64();
+  o.resolution = static_cast<int>(record["resolution"].Int(1, kIntMax));
+  o.test_every = static_cast<int>(record["test_every"].Int(0, kIntMax));
+  o.checkpoint_every = static_cast<int>(record["checkpoint_every"].Int(0, kIntMax));
+  o.max_seconds = record["max_seconds"].Number();
+  o.background = static_cast<float>(record["background"].Number());
+  o.hdr = HdrTrainingOptions::FromJson(record["hdr"].Object().json(), source);
+  const JsonField init = record["init"].Object();
+  o.init.num_random_points = static_cast<int>(init["num_random_points"].Int(0, kIntMax));
+  o.init.random_half_extent = static_cast<float>(init["random_half_extent"].Number());
+  o.init.initial_opacity = static_cast<float>(init["initial_opacity"].Number());
+  const JsonField optimization = record["optimization"].Object();
   for (const auto& [name, field] : RecordedOptimizationFields()) {
     std::visit(
         [&](auto member) {
           using T = std::remove_reference_t<decltype(o.optimization.*member)>;
-          o.optimization.*member = Field<T>(optimization, name, source, "optimization.");
+          const JsonField value = optimization[name];
+          if constexpr (std::is_same_v<T, double>) {
+            o.optimization.*member = value.Number();
+          } else if constexpr (std::is_same_v<T, int>) {
+            o.optimization.*member = static_cast<int>(value.Int(kIntMin, kIntMax));
+          } else {
+            o.optimization.*member = value.Int(std::numeric_limits<std::int64_t>::min(),
+                                               std::numeric_limits<std::int64_t>::max());
+          }
         },
         field);
   }
   // Runs from before the option recorded nothing and trained without it.
-  if (const auto it = j.find("learn_background"); it != j.end()) {
-    if (!it->is_boolean()) Fail("{}: learn_background must be true or false", source);
-    o.learn_background = it->get<bool>();
-  } else {
-    o.learn_background = false;
-  }
+  o.learn_background = record.Has("learn_background") && record["learn_background"].Bool();
   o.out = fs::path(source).parent_path();  // the run folder the file belongs to
   if (std::string p = o.Validate(); !p.empty()) Fail("{}: {}", source, p);
   return o;
