@@ -94,6 +94,8 @@ void AddTrainCommand(CLI::App& app) {
     float pixel_log_epsilon = 0.0f;
     std::string hdr_target;
     bool no_hdr_geometry = false;
+    bool hdr_head = false;
+    int hdr_head_iterations = 0;
   };
   auto flags = std::make_shared<HdrFlags>();
   auto config = std::make_shared<std::string>();
@@ -286,10 +288,23 @@ void AddTrainCommand(CLI::App& app) {
       "and opacities (nor the densification statistics), which follow the LDR terms alone. "
       "Under LDR+HDR it recovers about half of the held-out LDR the HDR term otherwise costs, "
       "and gives up part of its HDR gain (BENCHMARKS.md, issue 12 §3). Needs an LDR term");
+  CLI::Option* hdr_head_flag = cmd->add_flag(
+      "--hdr-head", flags->hdr_head,
+      "LDR+HDR as an HDR head (not the paper's joint training): train on the LDR images exactly "
+      "as --supervision ldr does, then fit a log-radiance offset per Gaussian, used by the HDR "
+      "output only, to the HDR ground truth with everything else frozen. The LDR output is LDR "
+      "alone's bit for bit, the HDR gains most of the joint term's accuracy (BENCHMARKS.md, "
+      "issue 12 §3). Needs --supervision ldr+hdr (or auto on a scene with HDR ground truth)");
+  CLI::Option* hdr_head_iterations_flag =
+      cmd->add_option("--hdr-head-iterations", flags->hdr_head_iterations,
+                      "Steps of the HDR head's fit (one training view each; default: half of "
+                      "--iterations)")
+          ->check(Integer(1, 100000000));
   cmd->callback([cmd, options, data, out, flags, context_window, context_size, config,
                  list_configs, data_flag, out_flag, method_flag, supervision_flag,
                  hdr_weight_flag, pixel_log_epsilon_flag, learn_background,
-                 learn_background_flag, no_hdr_geometry_flag] {
+                 learn_background_flag, no_hdr_geometry_flag, hdr_head_flag,
+                 hdr_head_iterations_flag] {
     if (*list_configs) {
       ListTrainConfigs();
       return;
@@ -343,6 +358,11 @@ void AddTrainCommand(CLI::App& app) {
     if (!flags->hdr_target.empty())
       hdr.hdr_target = method::ParseHdrTarget(flags->hdr_target, "--hdr-target");
     if (flags->no_hdr_geometry) hdr.hdr_geometry = false;
+    if (flags->hdr_head) hdr.hdr_head = true;
+    if (hdr_head_iterations_flag->count() > 0) {
+      if (!hdr.hdr_head) Fail("train: --hdr-head-iterations needs --hdr-head");
+      hdr.hdr_head_iterations = flags->hdr_head_iterations;
+    }
     if (std::string p = hdr.Validate(); !p.empty()) Fail("train: {}", p);
     options->hdr = hdr;
     // Nothing HDR asked for: a scene with one exposure and no HDR truth trains plain 4DGS (a
@@ -351,7 +371,7 @@ void AddTrainCommand(CLI::App& app) {
                                supervision_flag->count() > 0 || flags->no_pixel_branch ||
                                flags->no_gaussian_branch || hdr_weight_flag->count() > 0 ||
                                pixel_log_epsilon_flag->count() > 0 ||
-                               no_hdr_geometry_flag->count() > 0;
+                               no_hdr_geometry_flag->count() > 0 || hdr_head_flag->count() > 0;
     if (!asked_for_hdr && !saved) options->when_nothing_hdr = baselines::MethodPreset("4dgs");
     const method::TrainSummary s =
         method::Train(saved ? ResumedOptions(*saved, *options, given) : *options);

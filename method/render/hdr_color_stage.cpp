@@ -28,7 +28,8 @@ void HdrColorStage::Forward(const float* colors,
       for (int c = 0; c < 3; ++c) {
         const float v = colors[i * 3 + c];
         packed_[j * 3 + c] = v;
-        features[std::size_t(i) * out + c] = GuardedExp(v);
+        features[std::size_t(i) * out + c] =
+            GuardedExp(offset_ ? v + offset_[std::size_t(i) * 3 + c] : v);
       }
     }
   });
@@ -72,7 +73,9 @@ void HdrColorStage::Backward(const float* colors,
     for (std::int64_t j = b; j < e; ++j) {
       const std::size_t i = visible[j];
       for (int c = 0; c < 3; ++c) {
-        float d = GuardedExpBackward(colors[i * 3 + c], dL_dfeatures[i * out + c]);
+        const float c_hdr = offset_ ? colors[i * 3 + c] + offset_[i * 3 + c] : colors[i * 3 + c];
+        float d = GuardedExpBackward(c_hdr, dL_dfeatures[i * out + c]);
+        if (offset_grad_) offset_grad_[i * 3 + c] = d;  // d(c + offset)/d(offset) = 1
         if (map_) d += dlog_[j * 3 + c];
         dL_dcolors[i * 3 + c] = d;
       }

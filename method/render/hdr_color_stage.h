@@ -11,6 +11,10 @@
 // temporal marginal or the frustum), not over every Gaussian as the reference does: a culled
 // Gaussian then costs nothing, and the mean describes what the frame shows. Said in README.
 //
+// With an HDR head (method/train/hdr_head.h) the HDR channels are exp(c + d) for the Gaussian's
+// log-radiance offset d, and the tone-mapped channels stay TM(c + log e): the head changes the
+// HDR output and nothing the LDR output shows.
+//
 // exp is evaluated at min(c, kMaxLogRadiance) (radiance up to e^30 ~ 1e13) so no blended value
 // can overflow; beyond it the gradient is 0.
 #pragma once
@@ -48,6 +52,12 @@ class HdrColorStage final : public ColorStage {
     observe_bank_ = observe_bank;
   }
   bool maps_gaussians() const { return map_; }
+  // The HDR head's offsets (N x 3 in the model's order; null: none) and, for fitting it, where
+  // Backward writes dL/d(offset) of the visible Gaussians (null: not written).
+  void SetHdrOffset(const float* offset, float* offset_grad) {
+    offset_ = offset;
+    offset_grad_ = offset_grad;
+  }
 
   int feature_channels() const override { return map_ ? 6 : 3; }
   void Forward(const float* colors,
@@ -65,6 +75,8 @@ class HdrColorStage final : public ColorStage {
   bool map_;
   ToneFrame frame_;
   bool observe_bank_ = true;
+  const float* offset_ = nullptr;
+  float* offset_grad_ = nullptr;
   std::vector<float> packed_, ldr_, dldr_, dlog_;  // compact rows of the visible Gaussians
 };
 

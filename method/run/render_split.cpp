@@ -56,6 +56,7 @@ LoadedRun LoadRun(const fs::path& run, int resolution_override) {
   const fs::path checkpoint_path = run / "checkpoint.bin";
   Checkpoint c = LoadCheckpoint(checkpoint_path);
   r.model = std::move(c.model);
+  r.hdr_head = ReadHdrHead(c, r.model.size(), checkpoint_path.string());
   r.background = static_cast<float>(config.NumberOr("background", 0.0));
   if (!(r.background >= 0 && r.background <= 1))
     config["background"].Fail(fmt::format("must be within [0, 1], got {}", r.background));
@@ -73,6 +74,7 @@ LoadedRun LoadRun(const fs::path& run, int resolution_override) {
   r.resolved.ldr_gaussian = resolved["ldr_gaussian"].Bool();
   r.resolved.ldr_pixel = resolved["ldr_pixel"].Bool();
   r.resolved.hdr = resolved["hdr"].Bool();
+  r.resolved.hdr_head = resolved.Has("hdr_head") && resolved["hdr_head"].Bool();
   r.resolved.final_ldr_from_pixels = resolved["final_ldr_from_pixels"].Bool();
   // Runs from before the key trained with the reference's floor.
   r.resolved.pixel_log_epsilon = resolved.Has("pixel_log_epsilon")
@@ -169,7 +171,8 @@ int RenderRun(const RenderRunOptions& options) {
   render.sh_degree = model.basis.max_sh_degree;
   render.time_degree = model.temporal ? model.basis.max_time_degree : 0;
   ViewRenderer renderer(model, run.tone_mapper.get(), run.resolved, render, run.background,
-                        run.learned_background ? &*run.learned_background : nullptr);
+                        run.learned_background ? &*run.learned_background : nullptr,
+                        &run.hdr_head);
   const std::vector<Frame>& frames = dataset.FramesOf(split);
   if (frames.empty()) Fail("{}: the {} split has no frames", dataset.root.string(), options.split);
   const double default_exposure = options.exposure.value_or(MedianExposure(dataset));

@@ -15,6 +15,7 @@
 #include "core/dataset.h"
 #include "method/gaussian/gaussian_model.h"
 #include "method/tonemap/tone_mapper.h"
+#include "method/train/hdr_head.h"
 #include "method/train/hdr_training_options.h"
 
 namespace hdr4d::method {
@@ -63,6 +64,7 @@ struct LoadedRun {
   int num_times = 1;
   float background = 0;
   std::optional<std::vector<float>> learned_background;  // runs trained with --learn-background
+  HdrHead hdr_head;                                        // runs trained with --hdr-head
   // The method's name from the configuration, or "?" (for messages).
   std::string MethodName() const;
 };

@@ -49,7 +49,9 @@ std::string HdrTrainingOptions::Validate() const {
   if (!(hdr_weight >= 0.0f && hdr_weight < 1e6f)) return "hdr_weight: must be >= 0 and finite";
   if (pixel_log_epsilon && !(*pixel_log_epsilon >= 1e-30f && *pixel_log_epsilon <= 1.0f))
     return "pixel_log_epsilon: must be in [1e-30, 1]";
+  if (hdr_head_iterations < 0) return "hdr_head_iterations: must be >= 0";
   if (color_mode == ColorMode::kLdr) {
+    if (hdr_head) return "an LDR colour model has no HDR output for an HDR head";
     if (tone_mapper) return "an LDR colour model has no tone mapper";
     if (supervision == Supervision::kHdr || supervision == Supervision::kLdrHdr)
       return "an LDR colour model cannot be supervised with HDR";
@@ -74,6 +76,8 @@ nlohmann::json HdrTrainingOptions::ToJson() const {
           {"hdr_weight", hdr_weight},
           {"hdr_target", HdrTargetName(hdr_target)},
           {"hdr_geometry", hdr_geometry},
+          {"hdr_head", hdr_head},
+          {"hdr_head_iterations", hdr_head_iterations},
           {"pixel_log_epsilon",
            pixel_log_epsilon ? nlohmann::json(*pixel_log_epsilon) : nlohmann::json(nullptr)}};
 }
@@ -102,6 +106,10 @@ HdrTrainingOptions HdrTrainingOptions::FromJson(const nlohmann::json& j,
       o.hdr_target = ParseHdrTarget(it->get<std::string>(), source);
     // Runs from before the key let the HDR term reach the geometry.
     if (const auto it = j.find("hdr_geometry"); it != j.end()) o.hdr_geometry = it->get<bool>();
+    // Runs from before the keys had no HDR head.
+    if (const auto it = j.find("hdr_head"); it != j.end()) o.hdr_head = it->get<bool>();
+    if (const auto it = j.find("hdr_head_iterations"); it != j.end())
+      o.hdr_head_iterations = it->get<int>();
     // Runs from before the key used the reference's floor whatever the supervision.
     if (const auto it = j.find("pixel_log_epsilon"); it == j.end()) {
       o.pixel_log_epsilon = kReferencePixelLogEpsilon;
@@ -119,6 +127,7 @@ nlohmann::json ResolvedHdrTraining::ToJson() const {
           {"ldr_gaussian", ldr_gaussian},
           {"ldr_pixel", ldr_pixel},
           {"hdr", hdr},
+          {"hdr_head", hdr_head},
           {"final_ldr_from_pixels", final_ldr_from_pixels},
           {"pixel_log_epsilon", pixel_log_epsilon}};
 }
@@ -142,9 +151,20 @@ ResolvedHdrTraining ResolveHdrTraining(const HdrTrainingOptions& o,
   }
   const bool ldr = s == Supervision::kLdr || s == Supervision::kLdrHdr;
   r.hdr = s == Supervision::kHdr || s == Supervision::kLdrHdr;
+  if (o.hdr_head) {
+    // The loop is LDR alone's; the HDR ground truth goes to the head after it.
+    if (s != Supervision::kLdrHdr) {
+      Fail(
+          "train: --hdr-head fits the HDR output to HDR ground truth after training on the LDR "
+          "images, so it needs supervision ldr+hdr (this run resolves to '{}'{})",
+          SupervisionName(s), train_views_have_hdr ? "" : ": the scene has no HDR ground truth");
+    }
+    r.hdr = false;
+    r.hdr_head = true;
+  }
   r.pixel_log_epsilon = o.pixel_log_epsilon.value_or(r.hdr ? kHdrUnitsPixelLogEpsilon
                                                            : kReferencePixelLogEpsilon);
-  if (r.hdr && !train_views_have_hdr) {
+  if ((r.hdr || r.hdr_head) && !train_views_have_hdr) {
     Fail(
         "train: supervision '{}' needs HDR ground truth (exr_file_path) in the training views; "
         "this scene has none (use --supervision ldr)",
@@ -169,6 +189,12 @@ ResolvedHdrTraining ResolveHdrTraining(const HdrTrainingOptions& o,
           "train: the '{}' tone mapper works on whole images only, so it needs the pixel "
           "branch (drop --no-pixel-branch)",
           o.tone_mapper->kind);
+    }
+    if (r.hdr_head && r.final_ldr_from_pixels) {
+      Fail(
+          "train: --hdr-head keeps the LDR output apart from the HDR one, which needs the LDR "
+          "from the tone-mapped Gaussians (the '{}' mapper{} makes it from the HDR pixels)",
+          o.tone_mapper->kind, o.gaussian_branch ? "" : " with --no-gaussian-branch");
     }
   }
   return r;

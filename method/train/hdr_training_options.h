@@ -61,6 +61,12 @@ struct HdrTrainingOptions {
   // the densification statistics) or, false (--no-hdr-geometry), the colours only, the geometry
   // then following the LDR terms alone (issue 12 §3, BENCHMARKS.md). Needs an LDR term.
   bool hdr_geometry = true;
+  // --hdr-head: LDR+HDR supervision as an HDR head (method/train/hdr_head.h, issue 12 §3): the
+  // run trains on the LDR terms exactly as LDR alone (no HDR term in the loop), then fits a
+  // per-Gaussian log-radiance offset that only the HDR output uses to the HDR ground truth,
+  // everything else frozen. The LDR output is LDR alone's, bit for bit.
+  bool hdr_head = false;
+  int hdr_head_iterations = 0;  // 0: half of the run's iterations
   // The floor of the 2D branch's log(HDR + eps); unset: ResolveHdrTraining picks
   // kHdrUnitsPixelLogEpsilon with an HDR term, else kReferencePixelLogEpsilon.
   std::optional<float> pixel_log_epsilon;
@@ -76,6 +82,7 @@ struct ResolvedHdrTraining {
   bool ldr_gaussian = false;           // 3D branch LDR term (6-channel raster)
   bool ldr_pixel = false;              // 2D branch LDR term
   bool hdr = false;                    // HDR term (views with HDR ground truth)
+  bool hdr_head = false;               // an HDR head fitted after the last iteration
   bool final_ldr_from_pixels = false;  // the LDR output is the 2D branch (whole-image mappers)
   float pixel_log_epsilon = kReferencePixelLogEpsilon;  // the 2D branch's log(HDR + eps)
   nlohmann::json ToJson() const;

@@ -39,6 +39,7 @@
 #include "method/tonemap/tone_mapper_registry.h"
 #include "method/train/batch_gradients.h"
 #include "method/train/checkpoint.h"
+#include "method/train/hdr_head.h"
 #include "method/train/hdr_loss.h"
 #include "method/train/loop_state.h"
 #include "method/train/loss.h"
@@ -267,6 +268,9 @@ class TrainingRun {
   bool StepsLeft() const { return loop_.iteration < opt_.iterations; }
   bool OutOfTime() const;
   void Step();
+  // --hdr-head: fits the HDR head after the last iteration (unless the checkpoint's head was
+  // fitted to this very model).
+  void FitHdrHeadIfAsked();
   TrainSummary Finish();
 
  private:
@@ -284,6 +288,7 @@ class TrainingRun {
   void ShowProgress(double loss_value, const float* ldr_out, std::size_t pixels);
   void EvaluateAndCheckpoint(int it);
   nlohmann::json EvaluateTestViews();
+  std::vector<const std::vector<float>*> ExtraFloats() const;
   void Save();
   void StartLearnedBackground(const nlohmann::json* trainer);
   void ReleaseTrainingState();
@@ -324,6 +329,10 @@ class TrainingRun {
   // whether the current view's loss wrote it.
   std::vector<float> dL_dgeometry_;
   bool geometry_split_ = false;
+  // --hdr-head: the head, valid for the model while head_current_ (no step since it was fitted
+  // or read).
+  HdrHead head_;
+  bool head_current_ = false;
   std::optional<Progress> progress_;
   std::chrono::steady_clock::time_point start_;
   double seconds_before_ = 0;
@@ -373,7 +382,7 @@ void TrainingRun::SetUp() {
   // paper-size scene's memory and loading time, issue 15).
   resolved_ = ResolveHdrTraining(hdr, profile_.hdr_gt_in_train,
                                  !tone_mapper_ || tone_mapper_->pointwise());
-  train_views_ = LoadViews(*dataset_, Split::kTrain, background, /*load_hdr=*/resolved_.hdr,
+  train_views_ = LoadViews(*dataset_, Split::kTrain, background, /*load_hdr=*/resolved_.hdr || resolved_.hdr_head,
                            options_.resolution, hdr.hdr_target);
   // Checked now, read again at each evaluation (train_views.h: not held while training).
   test_views_ = CheckViews(*dataset_, Split::kTest, background, options_.resolution);
@@ -461,8 +470,10 @@ void TrainingRun::ResumeOrInitialise() {
     std::istringstream adam_state(c.adam_state);
     optimizer_->Load(adam_state, checkpoint_path_.string());
     loop_.FromJson(c.trainer, checkpoint_path_, train_views_.size());
-    if (c.extra_floats.size() != 3)
+    if (c.extra_floats.size() < 3)
       Fail("{}: checkpoint has no densification statistics", checkpoint_path_.string());
+    head_ = ReadHdrHead(c, model_.size(), checkpoint_path_.string());
+    head_current_ = !head_.empty();
     stats_.grad_accum = std::move(c.extra_floats[0]);
     stats_.denom = std::move(c.extra_floats[1]);
     stats_.max_radii = std::move(c.extra_floats[2]);
@@ -599,6 +610,7 @@ bool TrainingRun::OutOfTime() const {
 // and checkpoint.
 void TrainingRun::Step() {
   const int it = ++loop_.iteration;
+  head_current_ = false;
   optimizer_->SetIteration(it);
   std::tie(render_.sh_degree, render_.time_degree) =
       ColorDegrees(it, model_, opt_.sh_increase_interval);
@@ -798,14 +810,54 @@ nlohmann::json TrainingRun::EvaluateTestViews() {
   RenderOptions base = render_;
   base.color_stage = nullptr;
   ViewRenderer renderer(model_, tone_mapper_.get(), resolved_, base, options_.background,
-                        background_ ? &background_->params() : nullptr);
+                        background_ ? &background_->params() : nullptr,
+                        head_current_ ? &head_ : nullptr);
   return EvaluateViews(&renderer, test_views_);
+}
+
+std::vector<const std::vector<float>*> TrainingRun::ExtraFloats() const {
+  std::vector<const std::vector<float>*> extra = {&stats_.grad_accum, &stats_.denom,
+                                                  &stats_.max_radii};
+  if (head_current_) extra.push_back(&head_.offset);  // at kHdrHeadSection
+  return extra;
+}
+
+void TrainingRun::FitHdrHeadIfAsked() {
+  if (!resolved_.hdr_head || head_current_) return;
+  // The colour degrees of the last iteration, as the test evaluation renders with.
+  std::tie(render_.sh_degree, render_.time_degree) =
+      ColorDegrees(loop_.iteration, model_, opt_.sh_increase_interval);
+  // The trained model is saved first: a head that fails leaves a run that resumes to fit it.
+  loop_.train_seconds = TrainingSeconds();
+  Save();
+  HdrHeadFit fit;
+  fit.model = &model_;
+  fit.views = &train_views_;
+  fit.render = render_;
+  fit.stage = &*stage_;
+  fit.tone_mapper = tone_mapper_.get();
+  fit.terms = terms_;
+  fit.raster_channels = raster_channels_;
+  fit.iterations = options_.hdr.hdr_head_iterations > 0 ? options_.hdr.hdr_head_iterations
+                                                        : std::max(1, opt_.iterations / 2);
+  fit.seed = options_.seed;
+  const auto start = std::chrono::steady_clock::now();
+  {
+    Progress progress("hdr head", fit.iterations, options_.progress);
+    head_ = FitHdrHead(fit, &progress);
+  }
+  head_current_ = true;
+  spdlog::info("train: HDR head fitted in {} steps ({:.1f} s), output factor {:.4g}",
+               fit.iterations,
+               std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+               std::exp(head_.log_scale));
 }
 
 void TrainingRun::Save() {
   // The live model and optimiser are streamed into the file, not copied (checkpoint.h).
   nlohmann::json trainer = loop_.ToJson();
   if (background_) trainer[kLearnedBackgroundKey] = background_->params();
+  if (head_current_) trainer[kHdrHeadScaleKey] = head_.log_scale;
   std::string tone_mapper_state;
   if (tone_mapper_) {
     std::ostringstream tm_state;
@@ -815,8 +867,7 @@ void TrainingRun::Save() {
   SaveCheckpoint(checkpoint_path_,
                  CheckpointParts{.model = &model_,
                                  .trainer = &trainer,
-                                 .extra_floats = {&stats_.grad_accum, &stats_.denom,
-                                                  &stats_.max_radii},
+                                 .extra_floats = ExtraFloats(),
                                  .adam_state = CheckpointSection::Of(optimizer_->adam()),
                                  .tone_mapper_state = CheckpointSection::Of(tone_mapper_state)});
 }
@@ -883,6 +934,7 @@ TrainSummary Train(const TrainOptions& options) {
   run.ShowMethodNote();
   run.PrepareRendering();
   while (run.StepsLeft() && !run.OutOfTime()) run.Step();
+  run.FitHdrHeadIfAsked();
   return run.Finish();
 }
 

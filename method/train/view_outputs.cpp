@@ -1,7 +1,9 @@
 #include "method/train/view_outputs.h"
 
 #include <algorithm>
+#include <cmath>
 
+#include "core/error.h"
 #include "method/train/hdr_loss.h"
 
 namespace hdr4d::method {
@@ -11,7 +13,8 @@ ViewRenderer::ViewRenderer(const GaussianModel& model,
                            const ResolvedHdrTraining& resolved,
                            const RenderOptions& base,
                            float background,
-                           const std::vector<float>* learned_background)
+                           const std::vector<float>* learned_background,
+                           const HdrHead* hdr_head)
     : model_(model), tone_mapper_(tone_mapper), resolved_(resolved), options_(base) {
   options_.background_source = nullptr;
   if (learned_background) {
@@ -27,6 +30,11 @@ ViewRenderer::ViewRenderer(const GaussianModel& model,
   const bool map = tone_mapper && tone_mapper->pointwise() && !resolved_.final_ldr_from_pixels;
   stage_.emplace(tone_mapper, map);
   options_.color_stage = &*stage_;
+  if (hdr_head && !hdr_head->empty()) {
+    HDR4D_CHECK(hdr_head->offset.size() == model.size() * 3 && stage_->feature_channels() == 6);
+    stage_->SetHdrOffset(hdr_head->offset.data(), nullptr);
+    hdr_scale_ = std::exp(hdr_head->log_scale);
+  }
   options_.background.assign(stage_->feature_channels(), 0.0f);
   for (int c = 3; c < stage_->feature_channels(); ++c) options_.background[c] = background;
 }
@@ -55,7 +63,7 @@ void ViewRenderer::Render(const Camera& camera,
   RenderForward(model_, camera, time, options_, &state_, raster_.data());
   if (hdr) {
     ExtractChannels(raster_.data(), channels, 0, pixels, hdr);
-    for (float& v : *hdr) v = std::max(v, 0.0f);
+    for (float& v : *hdr) v = std::max(v, 0.0f) * hdr_scale_;
   }
   if (!ldr) return;
   if (channels == 6) {

@@ -12,6 +12,7 @@
 #include "method/render/frame_render.h"
 #include "method/render/hdr_color_stage.h"
 #include "method/render/learned_background.h"
+#include "method/train/hdr_head.h"
 #include "method/train/hdr_training_options.h"
 
 namespace hdr4d::method {
@@ -21,12 +22,15 @@ class ViewRenderer {
   // The model and tone mapper (may be null) must outlive the renderer. `base` gives the colour
   // degrees, time span, backend and the LDR background (one value, repeated). learned_background:
   // the run's learned background (learned_background.h) when it has one; it replaces the grey.
+  // hdr_head: the run's HDR head (hdr_head.h; null or empty: none), which must outlive it; it
+  // changes the HDR output only, which needs the LDR from the tone-mapped Gaussians.
   ViewRenderer(const GaussianModel& model,
                ToneMapper* tone_mapper,
                const ResolvedHdrTraining& resolved,
                const RenderOptions& base,
                float background,
-               const std::vector<float>* learned_background = nullptr);
+               const std::vector<float>* learned_background = nullptr,
+               const HdrHead* hdr_head = nullptr);
 
   // ldr: H x W x 3 in [0,1]; hdr: H x W x 3 linear radiance (left empty for an LDR model).
   // Either may be null.
@@ -48,6 +52,7 @@ class ViewRenderer {
   std::optional<LearnedBackground> learned_;
   FrameState state_;
   std::vector<float> raster_, x_;
+  float hdr_scale_ = 1.0f;  // the HDR head's factor
 };
 
 }  // namespace hdr4d::method

@@ -1,0 +1,112 @@
+#include "method/train/hdr_head.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <random>
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+#include "method/train/checkpoint.h"
+
+namespace hdr4d::method {
+
+HdrHead ReadHdrHead(const Checkpoint& c, std::size_t gaussians, const std::string& path) {
+  HdrHead head;
+  if (c.extra_floats.size() <= kHdrHeadSection) return head;
+  head.offset = c.extra_floats[kHdrHeadSection];
+  if (head.offset.size() != gaussians * 3) {
+    Fail("{}: the HDR head has {} offsets for {} Gaussians (expected 3 per Gaussian)", path,
+         head.offset.size(), gaussians);
+  }
+  for (float d : head.offset)
+    if (!std::isfinite(d)) Fail("{}: the HDR head has a non-finite offset", path);
+  const auto it = c.trainer.find(kHdrHeadScaleKey);
+  if (it == c.trainer.end() || !it->is_number())
+    Fail("{}: the HDR head has no {} in the trainer state", path, kHdrHeadScaleKey);
+  head.log_scale = it->get<float>();
+  if (!std::isfinite(head.log_scale) || std::abs(head.log_scale) > 80.0f)
+    Fail("{}: {} is {}, not a finite log factor", path, kHdrHeadScaleKey, head.log_scale);
+  return head;
+}
+
+HdrHead FitHdrHead(const HdrHeadFit& fit, Progress* progress) {
+  HDR4D_CHECK(fit.model && fit.views && fit.stage && fit.render.color_stage == fit.stage);
+  HDR4D_CHECK(fit.raster_channels == fit.stage->feature_channels());
+  const GaussianModel& model = *fit.model;
+  std::vector<std::size_t> order;
+  for (std::size_t v = 0; v < fit.views->size(); ++v)
+    if (!(*fit.views)[v].hdr_mu.empty()) order.push_back(v);
+  if (order.empty()) Fail("train: --hdr-head: no training view has HDR ground truth");
+
+  HdrHead head;
+  const std::size_t values = model.size() * 3;
+  head.offset.assign(values, 0.0f);
+  std::vector<float> grad(values, 0.0f), m(values, 0.0f), v(values, 0.0f);
+  fit.stage->SetHdrOffset(head.offset.data(), grad.data());
+
+  SupervisionTerms terms = fit.terms;  // the HDR term alone, on the render's shape
+  terms.ldr_gaussian = false;
+  terms.ldr_pixel = false;
+  terms.hdr = true;
+  terms.hdr_align = true;
+  terms.hdr_geometry = true;
+
+  std::mt19937_64 rng(fit.seed ^ 0x68647268656164ull);  // its own stream: the run's is untouched
+  std::size_t next = order.size();
+  FrameState state;
+  GaussianGradients unused;  // RenderBackward writes every field; only the offsets step
+  unused.ZerosLike(model);
+  HdrLossScratch scratch;
+  std::vector<float> raster, dL_draster, ldr_gt, hdr_gt;
+  std::vector<double> log_scales;
+  constexpr float kBeta1 = 0.9f, kBeta2 = 0.999f, kEps = 1e-15f;  // the reference's Adam
+  for (int k = 1; k <= fit.iterations; ++k) {
+    if (next == order.size()) {
+      std::shuffle(order.begin(), order.end(), rng);
+      next = 0;
+    }
+    const TrainView& view = (*fit.views)[order[next++]];
+    const std::size_t pixels = static_cast<std::size_t>(view.width()) * view.height();
+    raster.resize(pixels * fit.raster_channels);
+    dL_draster.resize(pixels * fit.raster_channels);
+    view.ToFloat(&ldr_gt);
+    view.HdrMuToFloat(&hdr_gt);
+    // The radiance bank is not written: the tone mapper's state stays the trained one.
+    fit.stage->SetFrame(
+        {view.time_index, view.image_index, static_cast<float>(std::log(view.exposure))},
+        /*observe_bank=*/false);
+    RenderForward(model, view.camera, view.time, fit.render, &state, raster.data());
+    const FrameLoss loss =
+        HdrFrameLoss(raster.data(), fit.raster_channels, view.width(), view.height(),
+                     ldr_gt.data(), hdr_gt.data(), fit.tone_mapper, terms, &scratch,
+                     dL_draster.data(), nullptr);
+    if (!std::isfinite(loss.total))
+      Fail("train: --hdr-head: step {}: the HDR loss is {} (view {})", k, loss.total, view.name);
+    if (2 * k > fit.iterations && loss.hdr_scale > 0) log_scales.push_back(std::log(loss.hdr_scale));
+    RenderBackward(model, view.camera, view.time, fit.render, &state, dL_draster.data(),
+                   &unused);
+    // Adam on the offsets of the Gaussians this view shows (their gradient rows were written).
+    const float c1 = 1.0f - std::pow(kBeta1, static_cast<float>(k));
+    const float c2 = 1.0f - std::pow(kBeta2, static_cast<float>(k));
+    for (const std::uint32_t i : state.visible) {
+      for (std::size_t q = std::size_t(i) * 3; q < std::size_t(i) * 3 + 3; ++q) {
+        const float g = grad[q];
+        m[q] = kBeta1 * m[q] + (1.0f - kBeta1) * g;
+        v[q] = kBeta2 * v[q] + (1.0f - kBeta2) * g * g;
+        head.offset[q] -= kHdrHeadLearningRate * (m[q] / c1) / (std::sqrt(v[q] / c2) + kEps);
+      }
+    }
+    if (progress) progress->Advance(1, fmt::format("HDR head loss {:.4f}", loss.hdr));
+  }
+  fit.stage->SetHdrOffset(nullptr, nullptr);
+  if (!log_scales.empty()) {
+    auto mid = log_scales.begin() + static_cast<std::ptrdiff_t>(log_scales.size() / 2);
+    std::nth_element(log_scales.begin(), mid, log_scales.end());
+    head.log_scale = static_cast<float>(*mid);
+  }
+  return head;
+}
+
+}  // namespace hdr4d::method
