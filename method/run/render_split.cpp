@@ -74,7 +74,6 @@ LoadedRun LoadRun(const fs::path& run, int resolution_override) {
   r.resolved.ldr_gaussian = resolved["ldr_gaussian"].Bool();
   r.resolved.ldr_pixel = resolved["ldr_pixel"].Bool();
   r.resolved.hdr = resolved["hdr"].Bool();
-  r.resolved.hdr_head = resolved.Has("hdr_head") && resolved["hdr_head"].Bool();
   r.resolved.final_ldr_from_pixels = resolved["final_ldr_from_pixels"].Bool();
   // Runs from before the key trained with the reference's floor.
   r.resolved.pixel_log_epsilon = resolved.Has("pixel_log_epsilon")

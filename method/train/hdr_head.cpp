@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 #include <random>
 
 #include <fmt/format.h>
@@ -59,7 +58,7 @@ HdrHead FitHdrHead(const HdrHeadFit& fit, Progress* progress) {
   GaussianGradients unused;  // RenderBackward writes every field; only the offsets step
   unused.ZerosLike(model);
   HdrLossScratch scratch;
-  std::vector<float> raster, dL_draster, ldr_gt, hdr_gt;
+  std::vector<float> raster, dL_draster, hdr_gt;
   std::vector<double> log_scales;
   constexpr float kBeta1 = 0.9f, kBeta2 = 0.999f, kEps = 1e-15f;  // the reference's Adam
   for (int k = 1; k <= fit.iterations; ++k) {
@@ -71,8 +70,7 @@ HdrHead FitHdrHead(const HdrHeadFit& fit, Progress* progress) {
     const std::size_t pixels = static_cast<std::size_t>(view.width()) * view.height();
     raster.resize(pixels * fit.raster_channels);
     dL_draster.resize(pixels * fit.raster_channels);
-    view.ToFloat(&ldr_gt);
-    view.HdrMuToFloat(&hdr_gt);
+    view.HdrMuToFloat(&hdr_gt);  // no LDR term runs: the LDR image is not needed
     // The radiance bank is not written: the tone mapper's state stays the trained one.
     fit.stage->SetFrame(
         {view.time_index, view.image_index, static_cast<float>(std::log(view.exposure))},
@@ -80,7 +78,7 @@ HdrHead FitHdrHead(const HdrHeadFit& fit, Progress* progress) {
     RenderForward(model, view.camera, view.time, fit.render, &state, raster.data());
     const FrameLoss loss =
         HdrFrameLoss(raster.data(), fit.raster_channels, view.width(), view.height(),
-                     ldr_gt.data(), hdr_gt.data(), fit.tone_mapper, terms, &scratch,
+                     /*ldr_gt=*/nullptr, hdr_gt.data(), fit.tone_mapper, terms, &scratch,
                      dL_draster.data(), nullptr);
     if (!std::isfinite(loss.total))
       Fail("train: --hdr-head: step {}: the HDR loss is {} (view {})", k, loss.total, view.name);

@@ -110,7 +110,7 @@ double AddHdrTerm(const std::vector<float>& hdr,
                   float* dL_draster);
 
 // The loss of one view and dL/draster (same layout as `raster`, overwritten). ldr_gt: H x W x 3
-// in [0,1]; hdr_mu_gt: mu(gt_hdr / max gt_hdr), H x W x 3, or null when the view has no HDR
+// in [0,1] (read only by the LDR terms: may be null without them); hdr_mu_gt: mu(gt_hdr / max gt_hdr), H x W x 3, or null when the view has no HDR
 // ground truth. The tone mapper must have begun this view's frame (HdrColorStage does); its
 // parameter gradients are added to. With !terms.hdr_geometry, when the HDR term runs and
 // dL_draster_geometry is non-null, that buffer (same layout) gets dL/draster of the LDR terms

@@ -382,8 +382,9 @@ void TrainingRun::SetUp() {
   // paper-size scene's memory and loading time, issue 15).
   resolved_ = ResolveHdrTraining(hdr, profile_.hdr_gt_in_train,
                                  !tone_mapper_ || tone_mapper_->pointwise());
-  train_views_ = LoadViews(*dataset_, Split::kTrain, background, /*load_hdr=*/resolved_.hdr || resolved_.hdr_head,
-                           options_.resolution, hdr.hdr_target);
+  train_views_ = LoadViews(*dataset_, Split::kTrain, background,
+                           /*load_hdr=*/resolved_.hdr || resolved_.hdr_head, options_.resolution,
+                           hdr.hdr_target);
   // Checked now, read again at each evaluation (train_views.h: not held while training).
   test_views_ = CheckViews(*dataset_, Split::kTest, background, options_.resolution);
   for (auto* views : {&train_views_, &test_views_}) {
