@@ -294,7 +294,9 @@ void AddTrainCommand(CLI::App& app) {
       "as --supervision ldr does, then fit a log-radiance offset per Gaussian, used by the HDR "
       "output only, to the HDR ground truth with everything else frozen. The LDR output is LDR "
       "alone's bit for bit, the HDR gains most of the joint term's accuracy (BENCHMARKS.md, "
-      "issue 12 §3). Needs --supervision ldr+hdr (or auto on a scene with HDR ground truth)");
+      "issue 12 §3). Needs --supervision ldr+hdr (or auto on a scene with HDR ground truth). "
+      "With --resume it also turns a --supervision ldr run into such a run, whose loop it has "
+      "already trained, and fits the head");
   CLI::Option* hdr_head_iterations_flag =
       cmd->add_option("--hdr-head-iterations", flags->hdr_head_iterations,
                       "Steps of the HDR head's fit (one training view each; default: half of "
@@ -358,7 +360,14 @@ void AddTrainCommand(CLI::App& app) {
     if (!flags->hdr_target.empty())
       hdr.hdr_target = method::ParseHdrTarget(flags->hdr_target, "--hdr-target");
     if (flags->no_hdr_geometry) hdr.hdr_geometry = false;
-    if (flags->hdr_head) hdr.hdr_head = true;
+    if (flags->hdr_head) {
+      // A finished LDR-alone run given --hdr-head becomes the ldr+hdr run with a head whose loop
+      // it already trained (AcceptAddedHdrHead).
+      if (saved && !saved->hdr.hdr_head && supervision_flag->count() == 0 &&
+          hdr.supervision == method::Supervision::kLdr)
+        hdr.supervision = method::Supervision::kLdrHdr;
+      hdr.hdr_head = true;
+    }
     if (hdr_head_iterations_flag->count() > 0) {
       if (!hdr.hdr_head) Fail("train: --hdr-head-iterations needs --hdr-head");
       hdr.hdr_head_iterations = flags->hdr_head_iterations;

@@ -184,6 +184,13 @@ TEST(Cli, HdrMethodsRenderToneCurvesAndFlagErrors) {
   EXPECT_EQ(LineCount(testing::ReadTextFile(dir / "run" / "tone_curves" / "tone_curves.csv")), 33);
   r = RunHdr4d("export-ply --run " + run + " --time 0.5 --out " + (dir / "hdr.ply").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
+  // The finished LDR-alone run takes an HDR head on resume, and becomes an ldr+hdr head run.
+  r = RunHdr4d("train --out " + run + " --resume --hdr-head --hdr-head-iterations 5");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto head_config =
+      nlohmann::json::parse(testing::ReadTextFile(dir / "run" / "config.json"));
+  EXPECT_EQ(head_config["hdr"]["supervision"], "ldr+hdr");
+  EXPECT_EQ(head_config["resolved"]["hdr_head"], true);
   for (const std::string method : {"4dgs-hdr", "hdr-gs"}) {
     r = RunHdr4d("train --data " + scene + " --out " + (dir / method).string() +
                  " --iterations 5 --method " + method);

@@ -96,6 +96,25 @@ void KeepSavedSchedules(const nlohmann::json& saved, OptimizationOptions* reques
   keep("max_gaussians", &requested->max_gaussians);
 }
 
+bool AcceptAddedHdrHead(nlohmann::json* saved, const nlohmann::json& requested_hdr) {
+  const auto hdr = saved->find("hdr");
+  if (hdr == saved->end() || !hdr->is_object()) return false;
+  const auto is = [](const nlohmann::json& j, const char* key, const nlohmann::json& value) {
+    const auto it = j.find(key);
+    return it != j.end() && *it == value;
+  };
+  if (!is(*hdr, "supervision", "ldr") || is(*hdr, "hdr_head", true)) return false;
+  if (!is(requested_hdr, "hdr_head", true) || !is(requested_hdr, "supervision", "ldr+hdr"))
+    return false;
+  (*hdr)["supervision"] = requested_hdr["supervision"];
+  (*hdr)["hdr_head"] = true;
+  if (const auto it = requested_hdr.find("hdr_head_iterations"); it != requested_hdr.end())
+    (*hdr)["hdr_head_iterations"] = *it;
+  if (const auto r = saved->find("resolved"); r != saved->end() && r->is_object())
+    (*r)["hdr_head"] = true;
+  return true;
+}
+
 void RequireSameConfig(const nlohmann::json& saved,
                        const nlohmann::json& requested,
                        const fs::path& config_file) {

@@ -18,6 +18,13 @@ nlohmann::json ReadSavedRunConfig(const std::filesystem::path& run);
 // says now; a schedule given explicitly stays as given (and must then match, below).
 void KeepSavedSchedules(const nlohmann::json& saved, OptimizationOptions* requested);
 
+// A run trained with supervision ldr and resumed with --hdr-head (supervision ldr+hdr): the head's
+// training loop is LDR alone's exactly (ResolveHdrTraining), so the run continues as such a run
+// and fits the head once its steps are done. Rewrites `saved` (the record, in memory) to what the
+// head run records, so that every other option must still match; returns whether it did. Any
+// other change of supervision or of the head is left to RequireSame*Config to refuse.
+bool AcceptAddedHdrHead(nlohmann::json* saved, const nlohmann::json& requested_hdr);
+
 // Throws hdr4d::Error naming `config_file` and the first key (a dotted path) whose value differs
 // between the saved and the requested configuration. Allowed to differ: what decides how long
 // and how fast the run goes and how often it reports, not what it learns (threads, test_every,

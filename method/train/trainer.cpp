@@ -348,6 +348,12 @@ void TrainingRun::SetUp() {
   if (options_.resume) {
     saved_config_ = ReadSavedRunConfig(options_.out);
     nlohmann::json given = options_.ToJson();
+    if (AcceptAddedHdrHead(&*saved_config_, given["hdr"])) {
+      spdlog::info("train: {} was trained with supervision ldr; it continues as an ldr+hdr run "
+                   "with --hdr-head, whose training loop is the same, and fits the HDR head when "
+                   "its steps are done",
+                   options_.out.string());
+    }
     nlohmann::json& o = given["optimization"];
     for (auto it = o.begin(); it != o.end();) {
       // kFollowRunLength (negative) fields and t_lr_init's "as position_lr_init" are resolved

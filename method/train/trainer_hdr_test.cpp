@@ -622,6 +622,36 @@ TEST(TrainerHdr, HdrHeadKeepsLdrAloneAndFitsTheHdr) {
   const Checkpoint cc = LoadCheckpoint(dir / "head" / "checkpoint.bin");
   EXPECT_EQ(ReadHdrHead(cc, cc.model.size(), "head").offset.size(), cc.model.size() * 3);
 
+  // A finished LDR-alone run resumed with the head: the run --hdr-head would have made, bit for
+  // bit (its loop is LDR alone's and the head's fit draws from its own stream).
+  TrainOptions added = head;
+  added.out = dir / "ldr";
+  added.resume = true;
+  EXPECT_EQ(Train(added).test_metrics, b.test_metrics);
+  const Checkpoint cd = LoadCheckpoint(dir / "ldr" / "checkpoint.bin");
+  EXPECT_EQ(ReadHdrHead(cd, cd.model.size(), "ldr").offset, h.offset);
+  EXPECT_EQ(cd.model.xyz, ca.model.xyz);
+  const nlohmann::json recorded = ReadJsonFile(dir / "ldr" / "config.json");
+  EXPECT_EQ(recorded["hdr"]["supervision"], "ldr+hdr");
+  EXPECT_EQ(recorded["resolved"]["hdr_head"], true);
+  // Only LDR alone's loop is the head's: a joint LDR+HDR run, or another option changed with it,
+  // is refused before anything is written.
+  TrainOptions joint = HdrRun(dir / "scene", dir / "joint", 20);
+  joint.hdr.supervision = Supervision::kLdrHdr;
+  Train(joint);
+  const std::string joint_before = hdr4d::testing::ReadTextFile(dir / "joint" / "checkpoint.bin");
+  TrainOptions joint_head = joint;
+  joint_head.resume = true;
+  joint_head.hdr.hdr_head = true;
+  std::string e = ErrorOf([&] { Train(joint_head); });
+  EXPECT_NE(e.find("config.json"), std::string::npos) << e;
+  EXPECT_NE(e.find("hdr.hdr_head"), std::string::npos) << e;
+  EXPECT_EQ(hdr4d::testing::ReadTextFile(dir / "joint" / "checkpoint.bin"), joint_before);
+  TrainOptions changed = added;
+  changed.hdr.pixel_branch = false;
+  e = ErrorOf([&] { Train(changed); });
+  EXPECT_NE(e.find("hdr.pixel_branch"), std::string::npos) << e;
+
   for (const auto& [supervision, gaussian_branch, expect] :
        {std::tuple{Supervision::kLdr, true, "needs supervision ldr+hdr"},
         std::tuple{Supervision::kHdr, true, "needs supervision ldr+hdr"},
