@@ -63,6 +63,7 @@ void RenderBackward(const GaussianModel& model,
     stage->Backward(state->colors.data(), model.channels, state->visible,
                     state->splat_grads.features.data(), state->color_grads.data());
   }
+  if (grads == nullptr) return;
   PreprocessBackward(model, ViewParams<float>::FromCamera(camera), time, options, *state, grads,
                      rows_done);
 }

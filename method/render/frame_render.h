@@ -22,7 +22,9 @@ void RenderForward(const GaussianModel& model,
                    FrameState* state,
                    float* image);
 // dL_dimage: H x W x channels. Overwrites `grads` (see PreprocessBackward). dL_dimage_geometry:
-// nullable, the image the geometry's gradients take instead (BlendBackward).
+// nullable, the image the geometry's gradients take instead (BlendBackward). grads null: the
+// model's gradients are not wanted, only what the colour stage and the background source take
+// from the blend (the HDR head's offsets), so the preprocess backward is skipped.
 void RenderBackward(const GaussianModel& model,
                     const Camera& camera,
                     float time,

@@ -44,7 +44,8 @@ void LearnedBackground::Forward(int channels, std::vector<float>* background) {
     return;
   }
   HDR4D_CHECK(channels == 3 || (channels == 6 && tm_ && tm_->pointwise()));
-  for (int c = 0; c < 3; ++c) (*background)[c] = GuardedExp(values_[c]);
+  for (int c = 0; c < 3; ++c)
+    (*background)[c] = GuardedExp(values_[c] + (offset_ ? offset_[c] : 0.0f));
   if (channels == 6) tm_->Map(values_.data(), 1, background->data() + 3);
 }
 
@@ -53,7 +54,12 @@ void LearnedBackground::Backward(int channels, const float* dL_dbackground) {
     for (int c = 0; c < channels; ++c) grads_[c] += dL_dbackground[c];
     return;
   }
-  for (int c = 0; c < 3; ++c) grads_[c] += GuardedExpBackward(values_[c], dL_dbackground[c]);
+  for (int c = 0; c < 3; ++c) {
+    const float g =
+        GuardedExpBackward(values_[c] + (offset_ ? offset_[c] : 0.0f), dL_dbackground[c]);
+    grads_[c] += g;
+    if (offset_grad_) offset_grad_[c] += g;
+  }
   if (channels != 6) return;
   // The slope of the mapper at b by central differences of Map, so that the backdrop moves b
   // and gives the tone curve no share of its gradient (header). Channels map independently.

@@ -52,6 +52,14 @@ class LearnedBackground final : public BackgroundSource {
   void Forward(int channels, std::vector<float>* background) override;
   void Backward(int channels, const float* dL_dbackground) override;
 
+  // The HDR head's offset (method/train/hdr_head.h): the HDR channels show exp(b + offset), the
+  // tone-mapped ones keep TM(b + log e). offset_grad (may be null) gets dL/d(offset), added, as b
+  // does. Both arrays hold 3 values and must outlive their use; null: no offset.
+  void SetHdrOffset(const float* offset, float* offset_grad) {
+    offset_ = offset;
+    offset_grad_ = offset_grad;
+  }
+
   std::vector<float>& params() { return values_; }
   const std::vector<float>& params() const { return values_; }
   std::vector<float>& grads() { return grads_; }
@@ -61,6 +69,8 @@ class LearnedBackground final : public BackgroundSource {
   std::vector<float> values_, grads_;
   bool log_hdr_;
   ToneMapper* tm_;
+  const float* offset_ = nullptr;
+  float* offset_grad_ = nullptr;
 };
 
 }  // namespace hdr4d::method

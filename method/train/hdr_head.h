@@ -4,8 +4,9 @@
 // run trains on the LDR brackets exactly as LDR alone does, then a log-radiance offset d per
 // Gaussian and channel, used only by the HDR channels (exp(c + d); the tone-mapped channels stay
 // TM(c + log e), method/render/hdr_color_stage.h), is fitted to the HDR ground truth with the
-// model, the tone mapper and the learned background frozen. One factor exp(log_scale) then
-// scales the whole HDR output, background included. Not the paper's joint LDR+HDR training
+// model, the tone mapper and the learned background frozen; with a learned background, a log
+// offset per channel moves the backdrop's HDR the same way (its LDR stays TM(b + log e)). One
+// factor exp(log_scale) then scales the whole HDR output, background included. Not the paper's joint LDR+HDR training
 // (which stays the default); the LDR output is LDR alone's bit for bit.
 #pragma once
 
@@ -17,6 +18,7 @@
 #include "method/gaussian/gaussian_model.h"
 #include "method/render/frame_render.h"
 #include "method/render/hdr_color_stage.h"
+#include "method/render/learned_background.h"
 #include "method/train/hdr_loss.h"
 #include "method/train/train_views.h"
 
@@ -24,6 +26,7 @@ namespace hdr4d::method {
 
 struct HdrHead {
   std::vector<float> offset;  // N x 3, the model's order; empty: no head
+  std::vector<float> background;  // 3: the learned background's HDR offset; empty: none
   float log_scale = 0.0f;     // the whole HDR output is multiplied by exp(log_scale)
   bool empty() const { return offset.empty(); }
 };
@@ -39,6 +42,7 @@ inline constexpr float kHdrHeadLearningRate = 0.002f;
 // (after the three densification statistics) and the scale a key of the trainer state.
 inline constexpr std::size_t kHdrHeadSection = 3;
 inline constexpr const char* kHdrHeadScaleKey = "hdr_head_log_scale";
+inline constexpr const char* kHdrHeadBackgroundKey = "hdr_head_background";  // optional
 struct Checkpoint;
 // The head stored in checkpoint `c` of a model of `gaussians` Gaussians (empty if it has none);
 // throws hdr4d::Error naming `path` when the stored head does not fit the model.
@@ -47,11 +51,12 @@ HdrHead ReadHdrHead(const Checkpoint& c, std::size_t gaussians, const std::strin
 struct HdrHeadFit {
   const GaussianModel* model = nullptr;
   const std::vector<TrainView>* views = nullptr;  // with HDR targets (TrainView::hdr_mu)
-  RenderOptions render;                           // color_stage: `stage`
-  HdrColorStage* stage = nullptr;
+  // The run's render options; the fit renders the HDR channels alone (its own colour stage, no
+  // tone-mapped channels: the loss reads none), which blend exactly as in the run's 6 channels.
+  RenderOptions render;
+  LearnedBackground* background = nullptr;  // the run's (render.background_source), or null
   ToneMapper* tone_mapper = nullptr;
   SupervisionTerms terms;  // the run's; the fit keeps only the HDR term, scale-aligned
-  int raster_channels = 6;
   int iterations = 0;
   std::uint64_t seed = 0;
 };
@@ -59,7 +64,7 @@ struct HdrHeadFit {
 // Fits the head: `iterations` steps, one training view each (a shuffled cycle of the views with
 // HDR targets), the HDR term with the render scaled by its per-image factor (--hdr-target
 // aligned's loss: the offsets learn the radiance's shape), Adam on the offsets of the visible
-// Gaussians; log_scale is the median of the per-image factors over the second half. `progress`
+// Gaussians and on the background's (every step); log_scale is the median of the per-image factors over the second half. `progress`
 // may be null.
 HdrHead FitHdrHead(const HdrHeadFit& fit, Progress* progress);
 

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "method/render/hdr_color_stage.h"
+#include "method/render/learned_background.h"
 #include "method/tonemap/tone_mapper_registry.h"
 #include "method/train/checkpoint.h"
 #include "method/train/hdr_head.h"
@@ -84,6 +85,39 @@ TEST(HdrHead, OffsetGradientMatchesFiniteDifferences) {
   for (int c = 0; c < 3; ++c) EXPECT_EQ(grad[3 + c], -5.0f);  // not in view: not written
 }
 
+// The learned background's HDR offset: the HDR channels show exp(b + d), the tone-mapped ones
+// TM(b + log e) unchanged; dL/dd against central differences in double.
+TEST(HdrHead, BackgroundOffsetMovesOnlyTheHdrAndMatchesFiniteDifferences) {
+  StageCase k;  // its tone mapper, at the stage's frame (begun by a forward)
+  k.Forward(nullptr);
+  LearnedBackground bg({-1.0f, 0.5f, 2.0f}, /*log_hdr=*/true, k.tm.get());
+  std::vector<float> plain, moved;
+  bg.Forward(6, &plain);
+  const std::vector<float> d{0.3f, -0.7f, 1.1f};
+  std::vector<float> grad(3, 0.0f);
+  bg.SetHdrOffset(d.data(), grad.data());
+  bg.Forward(6, &moved);
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_FLOAT_EQ(moved[c], std::exp(bg.params()[c] + d[c]));
+    EXPECT_EQ(moved[3 + c], plain[3 + c]);
+  }
+  const std::vector<float> dL{0.4f, -1.3f, 0.25f, 0.9f, -0.6f, 0.2f};
+  bg.Backward(6, dL.data());
+  const auto loss = [&](const std::vector<double>& x) {  // the HDR channels' part, in double
+    double l = 0;
+    for (int c = 0; c < 3; ++c) l += dL[c] * std::exp(double(bg.params()[c]) + x[c]);
+    return l;
+  };
+  for (int c = 0; c < 3; ++c) {
+    std::vector<double> up(d.begin(), d.end()), down = up;
+    const double h = 1e-6;
+    up[c] += h;
+    down[c] -= h;
+    const double fd = (loss(up) - loss(down)) / (2 * h);
+    EXPECT_NEAR(grad[c], fd, 1e-5 * std::max(1.0, std::abs(fd))) << c;
+  }
+}
+
 TEST(HdrHead, CheckpointReaderNamesTheFileAndTheProblem) {
   Checkpoint c;
   c.extra_floats = {{}, {}, {}};
@@ -106,6 +140,19 @@ TEST(HdrHead, CheckpointReaderNamesTheFileAndTheProblem) {
   c.trainer[kHdrHeadScaleKey] = 1e9;
   e = ErrorOf([&] { ReadHdrHead(c, 2, "run/checkpoint.bin"); });
   EXPECT_NE(e.find("not a finite log factor"), std::string::npos) << e;
+  // The background offset: optional, 3 finite numbers, only beside a learned background.
+  c.trainer[kHdrHeadScaleKey] = 0.5;
+  c.trainer[kHdrHeadBackgroundKey] = {0.1, -0.2, 0.3};
+  e = ErrorOf([&] { ReadHdrHead(c, 2, "run/checkpoint.bin"); });
+  EXPECT_NE(e.find("no learned background"), std::string::npos) << e;
+  c.trainer[kLearnedBackgroundKey] = {-1.0, -1.0, -1.0};
+  EXPECT_EQ(ReadHdrHead(c, 2, "run/checkpoint.bin").background.size(), 3u);
+  c.trainer[kHdrHeadBackgroundKey] = {0.1, -0.2};
+  e = ErrorOf([&] { ReadHdrHead(c, 2, "run/checkpoint.bin"); });
+  EXPECT_NE(e.find("must hold 3 numbers"), std::string::npos) << e;
+  c.trainer[kHdrHeadBackgroundKey] = {0.1, -0.2, "x"};
+  e = ErrorOf([&] { ReadHdrHead(c, 2, "run/checkpoint.bin"); });
+  EXPECT_NE(e.find("not a finite log offset"), std::string::npos) << e;
 }
 
 }  // namespace

@@ -841,10 +841,9 @@ void TrainingRun::FitHdrHeadIfAsked() {
   fit.model = &model_;
   fit.views = &train_views_;
   fit.render = render_;
-  fit.stage = &*stage_;
+  fit.background = background_ ? &*background_ : nullptr;
   fit.tone_mapper = tone_mapper_.get();
   fit.terms = terms_;
-  fit.raster_channels = raster_channels_;
   fit.iterations = options_.hdr.hdr_head_iterations > 0 ? options_.hdr.hdr_head_iterations
                                                         : std::max(1, opt_.iterations / 2);
   fit.seed = options_.seed;
@@ -865,6 +864,8 @@ void TrainingRun::Save() {
   nlohmann::json trainer = loop_.ToJson();
   if (background_) trainer[kLearnedBackgroundKey] = background_->params();
   if (head_current_) trainer[kHdrHeadScaleKey] = head_.log_scale;
+  if (head_current_ && !head_.background.empty())
+    trainer[kHdrHeadBackgroundKey] = head_.background;
   std::string tone_mapper_state;
   if (tone_mapper_) {
     std::ostringstream tm_state;

@@ -568,6 +568,10 @@ TEST(TrainerHdr, HdrHeadKeepsLdrAloneAndFitsTheHdr) {
   const HdrHead h = ReadHdrHead(cb, cb.model.size(), "head");
   ASSERT_EQ(h.offset.size(), cb.model.size() * 3);
   EXPECT_TRUE(std::any_of(h.offset.begin(), h.offset.end(), [](float d) { return d != 0.0f; }));
+  // The run learns its background (the default), so the head moves the backdrop's HDR too.
+  ASSERT_EQ(h.background.size(), 3u);
+  EXPECT_TRUE(std::any_of(h.background.begin(), h.background.end(),
+                          [](float d) { return d != 0.0f; }));
   EXPECT_EQ(ReadJsonFile(dir / "head" / "config.json")["resolved"]["hdr_head"], true);
   EXPECT_EQ(ReadJsonFile(dir / "head" / "config.json")["resolved"]["hdr"], false);
 
@@ -630,6 +634,7 @@ TEST(TrainerHdr, HdrHeadKeepsLdrAloneAndFitsTheHdr) {
   EXPECT_EQ(Train(added).test_metrics, b.test_metrics);
   const Checkpoint cd = LoadCheckpoint(dir / "ldr" / "checkpoint.bin");
   EXPECT_EQ(ReadHdrHead(cd, cd.model.size(), "ldr").offset, h.offset);
+  EXPECT_EQ(ReadHdrHead(cd, cd.model.size(), "ldr").background, h.background);
   EXPECT_EQ(cd.model.xyz, ca.model.xyz);
   const nlohmann::json recorded = ReadJsonFile(dir / "ldr" / "config.json");
   EXPECT_EQ(recorded["hdr"]["supervision"], "ldr+hdr");

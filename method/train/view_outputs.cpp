@@ -34,6 +34,10 @@ ViewRenderer::ViewRenderer(const GaussianModel& model,
     HDR4D_CHECK(hdr_head->offset.size() == model.size() * 3 && stage_->feature_channels() == 6);
     stage_->SetHdrOffset(hdr_head->offset.data(), nullptr);
     hdr_scale_ = std::exp(hdr_head->log_scale);
+    if (!hdr_head->background.empty()) {
+      HDR4D_CHECK(learned_.has_value() && hdr_head->background.size() == 3);  // ReadHdrHead
+      learned_->SetHdrOffset(hdr_head->background.data(), nullptr);
+    }
   }
   options_.background.assign(stage_->feature_channels(), 0.0f);
   for (int c = 3; c < stage_->feature_channels(); ++c) options_.background[c] = background;
