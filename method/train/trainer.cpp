@@ -598,7 +598,9 @@ void TrainingRun::PrepareRendering() {
             .hdr_align = options_.hdr.hdr_target == HdrTarget::kAligned,
             .pixel_log_epsilon = resolved_.pixel_log_epsilon,
             .hdr_geometry = options_.hdr.hdr_geometry};
-  progress_.emplace("train", opt_.iterations - loop_.iteration, options_.progress);
+  // A resume with no step left (e.g. to fit an HDR head) shows no empty training bar.
+  if (opt_.iterations > loop_.iteration)
+    progress_.emplace("train", opt_.iterations - loop_.iteration, options_.progress);
   start_ = std::chrono::steady_clock::now();
   seconds_before_ = loop_.train_seconds;
 }
@@ -895,7 +897,7 @@ void TrainingRun::ReleaseTrainingState() {
 
 // The last checkpoint, the final test metrics and RUN/results.json.
 TrainSummary TrainingRun::Finish() {
-  progress_->Finish();
+  if (progress_) progress_->Finish();
   loop_.train_seconds = TrainingSeconds();
   Save();
   ReleaseTrainingState();
