@@ -136,6 +136,18 @@ TEST(Cli, TrainRenderEvalExport) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(testing::ReadTextFile(dir / "slice.ply").rfind("ply\nformat binary_little_endian", 0),
             0u);
+  // An HDR head for an LDR-alone run of a scene without HDR truth: refused, the run untouched.
+  const std::string ldr_run = (dir / "ldr").string();
+  r = RunHdr4d("train --data " + scene + " --out " + ldr_run +
+               " --iterations 5 --random-points 300 --supervision ldr");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string checkpoint = testing::ReadTextFile(dir / "ldr" / "checkpoint.bin");
+  r = RunHdr4d("train --out " + ldr_run + " --resume --hdr-head");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_EQ(LineCount(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("--hdr-head fits the HDR output to HDR ground truth"), std::string::npos)
+      << r.err;
+  EXPECT_EQ(testing::ReadTextFile(dir / "ldr" / "checkpoint.bin"), checkpoint);
   // User mistakes: one line, exit 1.
   for (const std::string& bad :
        {"render --run " + run + " --time 2", "render --run " + run + " --time 0.5 --camera 99",

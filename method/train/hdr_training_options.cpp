@@ -164,7 +164,11 @@ ResolvedHdrTraining ResolveHdrTraining(const HdrTrainingOptions& o,
   }
   r.pixel_log_epsilon = o.pixel_log_epsilon.value_or(r.hdr ? kHdrUnitsPixelLogEpsilon
                                                            : kReferencePixelLogEpsilon);
-  if ((r.hdr || r.hdr_head) && !train_views_have_hdr) {
+  if (r.hdr_head && !train_views_have_hdr) {
+    Fail("train: --hdr-head fits the HDR output to HDR ground truth (exr_file_path), which this "
+         "scene's training views do not have");
+  }
+  if (r.hdr && !train_views_have_hdr) {
     Fail(
         "train: supervision '{}' needs HDR ground truth (exr_file_path) in the training views; "
         "this scene has none (use --supervision ldr)",
