@@ -636,6 +636,14 @@ TEST(TrainerHdr, HdrHeadKeepsLdrAloneAndFitsTheHdr) {
   EXPECT_EQ(ReadHdrHead(cd, cd.model.size(), "ldr").offset, h.offset);
   EXPECT_EQ(ReadHdrHead(cd, cd.model.size(), "ldr").background, h.background);
   EXPECT_EQ(cd.model.xyz, ca.model.xyz);
+  // An LDR-alone run stopped early (here: fewer iterations asked) continues its LDR steps first.
+  TrainOptions short_ldr = ldr;
+  short_ldr.out = dir / "short";
+  short_ldr.optimization.iterations = 120;
+  Train(short_ldr);
+  TrainOptions finish = added;
+  finish.out = dir / "short";
+  EXPECT_EQ(Train(finish).test_metrics, b.test_metrics);
   const nlohmann::json recorded = ReadJsonFile(dir / "ldr" / "config.json");
   EXPECT_EQ(recorded["hdr"]["supervision"], "ldr+hdr");
   EXPECT_EQ(recorded["resolved"]["hdr_head"], true);
