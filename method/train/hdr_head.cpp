@@ -72,6 +72,13 @@ HdrHead FitHdrHead(const HdrHeadFit& fit, Progress* progress) {
     bg_v.assign(3, 0.0f);
     fit.background->SetHdrOffset(head.background.data(), bg_grad.data());
   }
+  // The run's background must not keep pointers into this fit's arrays, even if a step throws.
+  struct Detach {
+    LearnedBackground* background;
+    ~Detach() {
+      if (background) background->SetHdrOffset(nullptr, nullptr);
+    }
+  } detach{fit.background};
 
   SupervisionTerms terms = fit.terms;  // the HDR term alone, on the render's shape
   terms.ldr_gaussian = false;
@@ -108,7 +115,8 @@ HdrHead FitHdrHead(const HdrHeadFit& fit, Progress* progress) {
                      dL_draster.data(), nullptr);
     if (!std::isfinite(loss.total))
       Fail("train: --hdr-head: step {}: the HDR loss is {} (view {})", k, loss.total, view.name);
-    if (2 * k > fit.iterations && loss.hdr_scale > 0) log_scales.push_back(std::log(loss.hdr_scale));
+    if (2 * k > fit.iterations && loss.hdr_scale > 0)
+      log_scales.push_back(std::log(loss.hdr_scale));
     std::fill(bg_grad.begin(), bg_grad.end(), 0.0f);  // the background adds to it
     // The model's own gradients are not needed: only the offsets' (written by the stage and the
     // background as the blend's backward reaches them).
@@ -129,8 +137,6 @@ HdrHead FitHdrHead(const HdrHeadFit& fit, Progress* progress) {
       adam(q, bg_grad, bg_m, bg_v, head.background);
     if (progress) progress->Advance(1, fmt::format("HDR head loss {:.4f}", loss.hdr));
   }
-  stage.SetHdrOffset(nullptr, nullptr);
-  if (fit.background) fit.background->SetHdrOffset(nullptr, nullptr);
   if (!log_scales.empty()) {
     auto mid = log_scales.begin() + static_cast<std::ptrdiff_t>(log_scales.size() / 2);
     std::nth_element(log_scales.begin(), mid, log_scales.end());

@@ -6,8 +6,8 @@
 // TM(c + log e), method/render/hdr_color_stage.h), is fitted to the HDR ground truth with the
 // model, the tone mapper and the learned background frozen; with a learned background, a log
 // offset per channel moves the backdrop's HDR the same way (its LDR stays TM(b + log e)). One
-// factor exp(log_scale) then scales the whole HDR output, background included. Not the paper's joint LDR+HDR training
-// (which stays the default); the LDR output is LDR alone's bit for bit.
+// factor exp(log_scale) then scales the whole HDR output, background included. Not the paper's
+// joint LDR+HDR training (which stays the default); the LDR output is LDR alone's bit for bit.
 #pragma once
 
 #include <cstdint>
@@ -33,9 +33,10 @@ struct HdrHead {
 
 // Adam's step size on the offsets (log-radiance units), measured on 20 scene-seed pairs of nine
 // families (BENCHMARKS.md): at 0.002 the head improved aligned mu-PSNR over LDR alone on all 20
-// (+0.80 dB on the mean; +0.91 once the backdrop's offset was added); at 0.005 more on the mean (+0.85) and on the reference's own-max
-// protocol, but below LDR alone on 6 of 20 (airplane, mutant, hook) with a lower slope. The
-// slower rate never made the HDR worse, so it is the one used.
+// (+0.80 dB on the mean; +0.91 once the backdrop's offset was added); at 0.005 more on the mean
+// (+0.85) and on the reference's own-max protocol, but below LDR alone on 6 of 20 (airplane,
+// mutant, hook) with a lower slope. The slower rate never made the HDR worse, so it is the one
+// used.
 inline constexpr float kHdrHeadLearningRate = 0.002f;
 
 // In a checkpoint (method/train/checkpoint.h): the offsets are the fourth extra float section
@@ -64,8 +65,8 @@ struct HdrHeadFit {
 // Fits the head: `iterations` steps, one training view each (a shuffled cycle of the views with
 // HDR targets), the HDR term with the render scaled by its per-image factor (--hdr-target
 // aligned's loss: the offsets learn the radiance's shape), Adam on the offsets of the visible
-// Gaussians and on the background's (every step); log_scale is the median of the per-image factors over the second half. `progress`
-// may be null.
+// Gaussians and on the background's (every step); log_scale is the median of the per-image
+// factors over the second half. `progress` may be null.
 HdrHead FitHdrHead(const HdrHeadFit& fit, Progress* progress);
 
 }  // namespace hdr4d::method

@@ -633,8 +633,9 @@ TEST(TrainerHdr, HdrHeadKeepsLdrAloneAndFitsTheHdr) {
   added.resume = true;
   EXPECT_EQ(Train(added).test_metrics, b.test_metrics);
   const Checkpoint cd = LoadCheckpoint(dir / "ldr" / "checkpoint.bin");
-  EXPECT_EQ(ReadHdrHead(cd, cd.model.size(), "ldr").offset, h.offset);
-  EXPECT_EQ(ReadHdrHead(cd, cd.model.size(), "ldr").background, h.background);
+  const HdrHead hd = ReadHdrHead(cd, cd.model.size(), "ldr");
+  EXPECT_EQ(hd.offset, h.offset);
+  EXPECT_EQ(hd.background, h.background);
   EXPECT_EQ(cd.model.xyz, ca.model.xyz);
   // An LDR-alone run stopped early (here: fewer iterations asked) continues its LDR steps first.
   TrainOptions short_ldr = ldr;
