@@ -12,6 +12,7 @@
 #include "core/parallel.h"
 #include "method/optim/adam.h"
 #include "method/tonemap/monotone_mlp.h"
+#include "method/tonemap/tone_curve_samples.h"
 
 namespace hdr4d::baselines {
 namespace {
@@ -379,6 +380,30 @@ TEST_P(StaticMlpLearns, ACameraCurveFromItsGradient) {
   for (std::size_t i = 1; i < m; ++i) {
     for (int c = 0; c < 3; ++c) EXPECT_GE(out[3 * i + c], out[3 * (i - 1) + c] - 1e-3f) << i;
   }
+}
+
+// The trainer's check for a dead curve (method/train/tone_curve_watch.h): HDR-GS's free network
+// with one channel's sigmoid driven far into saturation (every weight 0, the output bias 60) is
+// flat at 1 over any range; a fresh network, free or monotone, is not.
+TEST(StaticMlpToneMapper, FindFlatToneCurveFindsASaturatedChannelOnly) {
+  for (bool monotone : {false, true}) {
+    StaticMlpToneMapper fresh(Config(3, true, monotone));
+    EXPECT_FALSE(method::FindFlatToneCurve(&fresh, 1, -8.0, 6.0).has_value()) << monotone;
+  }
+  StaticMlpToneMapper mapper(FreeConfig());
+  const std::size_t block = StaticMlpShape().NumParams();
+  std::fill_n(mapper.params().begin() + block, block, 0.0f);  // green
+  mapper.params()[2 * block - 1] = 60.0f;  // its last parameter: the output bias
+  const std::optional<method::FlatToneCurve> flat =
+      method::FindFlatToneCurve(&mapper, 1, -8.0, 6.0);
+  ASSERT_TRUE(flat.has_value());
+  EXPECT_EQ(flat->channel, 1);
+  EXPECT_EQ(flat->time, 0.0);
+  EXPECT_NEAR(flat->level, 1.0, 1e-6);
+  EXPECT_LT(flat->spread, 1e-6);
+  // An empty or reversed range judges nothing.
+  EXPECT_FALSE(method::FindFlatToneCurve(&mapper, 1, 2.0, 2.0).has_value());
+  EXPECT_FALSE(method::FindFlatToneCurve(nullptr, 1, -8.0, 6.0).has_value());
 }
 
 INSTANTIATE_TEST_SUITE_P(FreeAndMonotone, StaticMlpLearns, ::testing::Bool());

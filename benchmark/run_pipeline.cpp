@@ -1,6 +1,7 @@
 #include "benchmark/run_pipeline.h"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <chrono>
 #include <fstream>
@@ -144,6 +145,9 @@ std::optional<RunRecord> ExecuteRun(const RunSpec& run, const PipelineOptions& o
   }
   const nlohmann::json results = ReadJsonFile(train_dir / "results.json");
   const nlohmann::json config = ReadJsonFile(train_dir / "config.json");
+  // The trainer's warnings went to the run's log; the harness's user sees them here too.
+  for (const nlohmann::json& w : results.value("warnings", nlohmann::json::array()))
+    if (w.is_string()) spdlog::warn("bench: run {}: {}", run.id, w.get<std::string>());
 
   // 2. Render the test split, timed.
   stage("render");
@@ -189,6 +193,8 @@ std::optional<RunRecord> ExecuteRun(const RunSpec& run, const PipelineOptions& o
                 {"train_command", shown(train)},
                 {"render_command", shown(render)},
                 {"train_config", config},
+                // What the trainer found wrong with its run (a flat tone curve), kept with it.
+                {"train_warnings", results.value("warnings", nlohmann::json::array())},
                 {"scoring",
                  {{"region", scored.region},
                   {"region_camera", scored.region_camera},

@@ -10,42 +10,9 @@
 #include "core/output_guard.h"
 #include "core/viz/plot.h"
 #include "method/run/render_split.h"
-#include "method/tonemap/radiance_bank.h"
 
 namespace hdr4d::method {
 namespace fs = std::filesystem;
-
-ToneCurveSamples SampleToneCurves(ToneMapper* tone_mapper,
-                                  const std::vector<double>& times,
-                                  int num_times,
-                                  double x_min,
-                                  double x_max,
-                                  int samples) {
-  HDR4D_CHECK(tone_mapper && samples >= 2 && x_max > x_min && num_times >= 1);
-  if (!tone_mapper->pointwise()) {
-    Fail(
-        "tone-curves: the '{}' tone mapper works on whole images (a local operator), so it has "
-        "no single curve to plot",
-        tone_mapper->config().kind);
-  }
-  ToneCurveSamples s;
-  s.times = times;
-  s.x.resize(samples);
-  for (int i = 0; i < samples; ++i) s.x[i] = x_min + (x_max - x_min) * i / (samples - 1);
-  // The curve is g(log_hdr + log e): sample log_hdr = x at log e = 0, all channels at once.
-  std::vector<float> in(std::size_t(samples) * 3), out(in.size());
-  for (int i = 0; i < samples; ++i)
-    for (int c = 0; c < 3; ++c) in[i * 3 + c] = static_cast<float>(s.x[i]);
-  for (double t : times) {
-    tone_mapper->BeginFrame({RadianceBank::TimeIndex(t, num_times), -1, 0.0f});
-    tone_mapper->Map(in.data(), samples, out.data());
-    std::vector<std::vector<double>> per_channel(3, std::vector<double>(samples));
-    for (int i = 0; i < samples; ++i)
-      for (int c = 0; c < 3; ++c) per_channel[c][i] = out[i * 3 + c];
-    s.ldr.push_back(std::move(per_channel));
-  }
-  return s;
-}
 
 std::string ToneCurvesOptions::Validate() const {
   if (run.empty()) return "--run: no run folder given";

@@ -8,25 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "method/tonemap/tone_mapper.h"
+#include "method/tonemap/tone_curve_samples.h"
 
 namespace hdr4d::method {
-
-struct ToneCurveSamples {
-  std::vector<double> x;      // log radiance + log exposure
-  std::vector<double> times;  // normalised times
-  // ldr[t][c][i]: channel c at time t and x[i].
-  std::vector<std::vector<std::vector<double>>> ldr;
-};
-
-// Samples a pointwise tone mapper (throws hdr4d::Error for a whole-image one) at `samples`
-// values of x in [x_min, x_max] for each time. Leaves the mapper's radiance bank unchanged.
-ToneCurveSamples SampleToneCurves(ToneMapper* tone_mapper,
-                                  const std::vector<double>& times,
-                                  int num_times,
-                                  double x_min,
-                                  double x_max,
-                                  int samples);
 
 struct ToneCurvesOptions {
   std::filesystem::path run;

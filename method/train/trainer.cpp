@@ -45,6 +45,7 @@
 #include "method/train/loss.h"
 #include "method/train/resume_check.h"
 #include "method/train/test_evaluation.h"
+#include "method/train/tone_curve_watch.h"
 #include "method/train/train_views.h"
 #include "method/train/view_outputs.h"
 
@@ -287,6 +288,7 @@ class TrainingRun {
   void FinishUpdate(int it, double loss_value);
   void ShowProgress(double loss_value, const float* ldr_out, std::size_t pixels);
   void EvaluateAndCheckpoint(int it);
+  std::string FlatToneCurveCheck(int it);
   nlohmann::json EvaluateTestViews();
   std::vector<const std::vector<float>*> ExtraFloats() const;
   void Save();
@@ -334,6 +336,9 @@ class TrainingRun {
   HdrHead head_;
   bool head_current_ = false;
   std::optional<Progress> progress_;
+  // Shown once, when a tone curve is first found flat (tone_curve_watch.h); results.json lists
+  // the end of the run's.
+  bool flat_curve_shown_ = false;
   std::chrono::steady_clock::time_point start_;
   double seconds_before_ = 0;
   double eval_seconds_ = 0;  // periodic test evaluations: not training time
@@ -637,6 +642,7 @@ void TrainingRun::Step() {
     ShowProgress(loss_value, ldr_out, pixels);
   }
   EvaluateAndCheckpoint(it);
+  if (it % kToneCurveCheckEvery == 0) FlatToneCurveCheck(it);
 }
 
 // The view's buffers, its forward and loss; a non-finite loss stops training.
@@ -815,6 +821,21 @@ void TrainingRun::EvaluateAndCheckpoint(int it) {
   }
 }
 
+// Warns, once, when a learned tone curve has gone flat over the scene's inputs; returns the
+// warning ("" when none is flat).
+std::string TrainingRun::FlatToneCurveCheck(int it) {
+  if (!tone_mapper_ || !tone_mapper_->pointwise() || model_.color_mode != ColorMode::kLogHdr)
+    return "";
+  const std::pair<double, double> range = ToneCurveInputRange(model_, train_views_);
+  const std::optional<FlatToneCurve> flat =
+      FindFlatToneCurve(tone_mapper_.get(), num_times_, range.first, range.second);
+  if (!flat) return "";
+  std::string warning = FlatToneCurveWarning(*flat, tone_mapper_->config().kind, range, it);
+  if (!flat_curve_shown_) spdlog::warn("{}", warning);
+  flat_curve_shown_ = true;
+  return warning;
+}
+
 nlohmann::json TrainingRun::EvaluateTestViews() {
   RenderOptions base = render_;
   base.color_stage = nullptr;
@@ -908,6 +929,9 @@ TrainSummary TrainingRun::Finish() {
   summary.iterations = loop_.iteration;
   summary.gaussians = model_.size();
   summary.loss_curve = loop_.loss_curve;
+  nlohmann::json warnings = nlohmann::json::array();
+  if (std::string flat = FlatToneCurveCheck(loop_.iteration); !flat.empty())
+    warnings.push_back(std::move(flat));
   nlohmann::json results = {
       {"method", options_.hdr.method},
       {"test", summary.test_metrics},
@@ -922,7 +946,9 @@ TrainSummary TrainingRun::Finish() {
        loop_.loss_curve.empty() ? nlohmann::json(nullptr) : FiniteOrNull(loop_.loss_curve.back())},
       {"stopped_by_time", summary.stopped_by_time},
       {"curve", CurveBlocks(loop_.loss_curve, loop_.psnr_curve, 256)},
-      {"test_curve", loop_.test_curve}};
+      {"test_curve", loop_.test_curve},
+      // What the run found wrong with itself at its end (a flat tone curve); empty when nothing.
+      {"warnings", std::move(warnings)}};
   if (options_.test_every > 0) {
     nlohmann::json last = summary.test_metrics;
     last["iteration"] = loop_.iteration;

@@ -93,6 +93,10 @@ TEST(TrainerHdr, LdrSupervisionTrainsAndReportsHdrMetrics) {
   const Checkpoint c = LoadCheckpoint(dir / "run" / "checkpoint.bin");
   EXPECT_FALSE(c.tone_mapper_state.empty());
   EXPECT_EQ(c.model.color_mode, ColorMode::kLogHdr);
+  // The Dynamic Tone Mapper's curves rise: no flat-curve warning (tone_curve_watch.h).
+  const nlohmann::json results = ReadJsonFile(dir / "run" / "results.json");
+  ASSERT_TRUE(results.contains("warnings"));
+  EXPECT_EQ(results["warnings"], nlohmann::json::array());
 }
 
 // LDR supervision has no HDR term, so it never reads the training views' HDR ground truth (a
