@@ -107,12 +107,16 @@ void BM_RenderHdrLdr(benchmark::State& state) {
   stage.SetFrame({.time_index = 0, .log_exposure = std::log(0.5f)}, /*observe_bank=*/true);
   s.options.color_stage = &stage;
   s.options.background.assign(stage.feature_channels(), 0.0f);
+  s.options.backward_follows = state.range(2) != 0;  // 0: as hdr4d render (ViewRenderer)
   FrameState frame;
   std::vector<float> image(static_cast<std::size_t>(size) * size * stage.feature_channels());
   for (auto _ : state) RenderForward(s.model, s.camera, 0.5f, s.options, &frame, image.data());
   ReportRasterCounters(frame, &state);
 }
-BENCHMARK(BM_RenderHdrLdr)->Args({800, 100})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RenderHdrLdr)
+    ->Args({800, 100, 0})
+    ->Args({800, 100, 1})
+    ->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // Forward + loss + backward (which writes every gradient row) + Adam step with the finite check,
 // as the trainer runs it: fused into the backward, block by block of Gaussians (AdamRowStep).

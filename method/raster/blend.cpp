@@ -332,14 +332,17 @@ detail::TileJob MakeJob(const SplatBuffers& splats,
 // The SIMD kernels' per-Gaussian records, for the Gaussians listed in some tile (in parallel).
 // packed_splats holds the per-Gaussian records, then the forward's per-entry records, then a
 // marker that is 1 once the forward has written the latter for the current packing.
-void PackSplats(detail::TileJob& job, RasterState* state) {
+// With_records false (a forward no backward follows): no room for the per-entry records, and
+// job.tile_records null so the forward gathers into its scratch.
+void PackSplats(detail::TileJob& job, RasterState* state, bool with_records = true) {
   const std::size_t stride = detail::PackedStride(job.channels);
   const std::size_t per_gaussian = static_cast<std::size_t>(state->num_gaussians) * stride;
-  ResizeScratch(&state->packed_splats,
-                per_gaussian + state->num_entries() * detail::TileRecordStride(job.channels) + 1);
+  const std::size_t per_entry =
+      with_records ? state->num_entries() * detail::TileRecordStride(job.channels) : 0;
+  ResizeScratch(&state->packed_splats, per_gaussian + per_entry + 1);
   state->packed_splats.back() = 0.0f;
   job.packed = state->packed_splats.data();
-  job.tile_records = job.packed + per_gaussian;
+  job.tile_records = with_records ? job.packed + per_gaussian : nullptr;
   ParallelForChunks(
       static_cast<std::int64_t>(state->depth_order.size()), 4096,
       [&](std::int64_t begin, std::int64_t end) { detail::PackSplatsSimd(job, begin, end); });
@@ -419,10 +422,11 @@ void BlendForward(const SplatBuffers& splats,
   }
   detail::TileJob job = MakeJob(splats, settings, state);
   job.image = image;
-  PackSplats(job, state);
+  PackSplats(job, state, settings.keep_records);
   ParallelFor(state->num_tiles(), 1,
               [&](std::int64_t tile) { detail::ForwardTileSimd(job, static_cast<int>(tile)); });
-  state->packed_splats.back() = 1.0f;  // the per-entry records are there for the backward
+  // The per-entry records are there for the backward (else it gathers its own).
+  if (settings.keep_records) state->packed_splats.back() = 1.0f;
 }
 
 void RasterizeForward(const SplatBuffers& splats,

@@ -961,6 +961,34 @@ TEST(RasterBlendSimd, DeterministicAcrossThreadCounts) {
   }
 }
 
+// A forward no backward follows (RasterSettings::keep_records false, what `hdr4d render` does)
+// keeps no per-entry records: the same image, transmittance and n_contrib bit for bit, a
+// smaller state, and a backward after it still gives the same gradients (it gathers its own).
+TEST(RasterBlendSimd, ForwardWithoutRecordsIsIdenticalAndStillDifferentiable) {
+  SceneOptions o;
+  o.count = 3000;
+  o.width = 160;
+  o.height = 120;
+  o.channels = 6;
+  o.max_sigma = 8;
+  const SplatBuffers s = Convert<float>(RandomScene(o, 9));
+  const std::vector<double> w64 = RandomValues(static_cast<std::size_t>(160) * 120 * 6, 10);
+  const std::vector<float> w(w64.begin(), w64.end());
+  RasterSettings settings = Settings(160, 120, std::vector<float>(6, 0.25f));
+  const FloatRun kept = RunFloat(s, settings, w, nullptr);
+  settings.keep_records = false;
+  const FloatRun lean = RunFloat(s, settings, w, nullptr);
+  EXPECT_EQ(kept.image, lean.image);
+  EXPECT_EQ(kept.state.final_transmittance, lean.state.final_transmittance);
+  EXPECT_EQ(kept.state.n_contrib, lean.state.n_contrib);
+  EXPECT_LT(lean.state.packed_splats.size(), kept.state.packed_splats.size() / 2);
+  EXPECT_EQ(kept.grads.mean2d, lean.grads.mean2d);
+  EXPECT_EQ(kept.grads.conic, lean.grads.conic);
+  EXPECT_EQ(kept.grads.opacity, lean.grads.opacity);
+  EXPECT_EQ(kept.grads.features, lean.grads.features);
+  EXPECT_EQ(kept.dL_dbackground, lean.dL_dbackground);
+}
+
 TEST(RasterBlendSimd, StateIsReusedAcrossFrames) {
   SceneOptions big;
   big.count = 500;

@@ -92,6 +92,12 @@ struct RasterSettings {
   // One value per channel, composited as colour + T_final * background. Empty means zeros.
   std::vector<float> background;
   RasterBackend backend = RasterBackend::kSimd;
+  // kSimd: keep the forward's per-entry records in the state for a backward of the same frame
+  // (the largest per-entry buffer: ~50 bytes per tile entry at 6 channels, written and read
+  // back once per frame). false, for a render no backward follows, gathers each tile's records
+  // into per-thread scratch that stays in cache; a backward after it gathers its own (same
+  // results either way).
+  bool keep_records = true;
 };
 
 // Everything the backward needs from the forward, kept between the calls. One object is meant

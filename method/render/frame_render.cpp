@@ -15,6 +15,7 @@ RasterSettings SettingsFor(const Camera& camera, const RenderOptions& options, i
   settings.background =
       options.background.empty() ? std::vector<float>(channels, 0.0f) : options.background;
   settings.backend = options.backend;
+  settings.keep_records = options.backward_follows;
   return settings;
 }
 

@@ -55,6 +55,9 @@ struct RenderOptions {
   RasterBackend backend = RasterBackend::kSimd;
   ColorStage* color_stage = nullptr;  // null: the colours are the features
   BackgroundSource* background_source = nullptr;  // set: replaces `background` (float path only)
+  // false for a render no backward follows (ViewRenderer): the blend then keeps no per-entry
+  // records for one (RasterSettings::keep_records); a backward still works, only slower.
+  bool backward_follows = true;
 };
 
 // The 3D Gaussian a 4D one (or a 3D one in static mode) presents at the frame's time, with the

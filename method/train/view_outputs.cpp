@@ -17,6 +17,7 @@ ViewRenderer::ViewRenderer(const GaussianModel& model,
                            const HdrHead* hdr_head)
     : model_(model), tone_mapper_(tone_mapper), resolved_(resolved), options_(base) {
   options_.background_source = nullptr;
+  options_.backward_follows = false;  // outputs only: the blend keeps nothing for a backward
   if (learned_background) {
     learned_.emplace(*learned_background, resolved_.hdr_colors, tone_mapper);
     options_.background_source = &*learned_;
