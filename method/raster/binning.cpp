@@ -221,8 +221,10 @@ void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, R
   s.tile_ranges[num_tiles] = running;
   HDR4D_CHECK(running == total);
   ResizeScratch(&s.point_list, total + 1);  // + the spare slot
-  ResizeScratch(&s.point_entries, total + 1);
-  ResizeScratch(&s.entry_slots, total + 1);
+  // The backward's entry slots, not built for a render no backward follows.
+  const bool slots = settings.keep_records;
+  ResizeScratch(&s.point_entries, slots ? total + 1 : 1);
+  ResizeScratch(&s.entry_slots, slots ? total + 1 : 1);
   std::int32_t* points = s.point_list.data();
   std::int32_t* entries = s.point_entries.data();
   std::int32_t* slots_of = s.entry_slots.data();
@@ -236,7 +238,8 @@ void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, R
       const int w = rect[2] - rect[0];
       const int h = rect[3] - rect[1];
       const int t = rect[1] * tiles_x + rect[0];
-      std::int32_t* own = entries + s.entry_ranges[i];  // this Gaussian's tiles, row-major
+      // This Gaussian's tiles, row-major (only written with slots; else the spare slot).
+      std::int32_t* own = entries + (slots ? s.entry_ranges[i] : 0);
       if (w <= 2 && h <= 2) {
         // A missing tile uses its own spare counter (num_tiles + 0..2), so it neither waits on
         // nor delays the counter of a real tile; its entry goes to the spare slot.
@@ -246,6 +249,7 @@ void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, R
           const std::int32_t pos = valid ? next[counter] : spare;
           next[counter] += valid;
           points[pos] = g;
+          if (!slots) return;
           (valid ? own[k] : entries[spare]) = pos;
           slots_of[pos] = valid ? s.entry_ranges[i] + k : spare;
         };
@@ -260,6 +264,7 @@ void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, R
         for (int tx = 0; tx < w; ++tx) {
           const std::int32_t pos = next[t + ty * tiles_x + tx]++;
           points[pos] = g;
+          if (!slots) continue;
           slots_of[pos] = s.entry_ranges[i] + k;
           own[k++] = pos;
         }
@@ -267,8 +272,8 @@ void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, R
     }
   });
   s.point_list.resize(total);
-  s.point_entries.resize(total);
-  s.entry_slots.resize(total);
+  s.point_entries.resize(slots ? total : 0);
+  s.entry_slots.resize(slots ? total : 0);
 }
 
 template TileRect GaussianTileRect<float>(float, float, int, int, int);

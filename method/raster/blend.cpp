@@ -57,6 +57,13 @@ void CheckBinned(const RasterState& bins, std::size_t n) {
   HDR4D_CHECK(bins.entry_ranges.size() == bins.depth_order.size() + 1);
 }
 
+// A backward needs the entry slots that a binning without keep_records leaves out.
+void CheckBinnedForBackward(const RasterState& bins, std::size_t n) {
+  CheckBinned(bins, n);
+  HDR4D_CHECK(bins.entry_slots.size() == bins.point_list.size() &&
+              bins.point_entries.size() == bins.point_list.size());
+}
+
 template <typename T>
 void ForwardTileReference(const SplatBuffersT<T>& splats,
                           const RasterState& bins,
@@ -390,7 +397,7 @@ void BlendBackwardReference(const SplatBuffersT<T>& splats,
                             T* dL_dbackground,
                             const T* dL_dimage_geometry) {
   HDR4D_CHECK(splats.Validate().empty());
-  CheckBinned(bins, splats.size());
+  CheckBinnedForBackward(bins, splats.size());
   HDR4D_CHECK(final_T != nullptr && n_contrib != nullptr && dL_dimage != nullptr);
   PrepareGradients(splats.size(), splats.channels, grads);
   std::vector<T> zeros;
@@ -447,6 +454,7 @@ void BlendBackward(const SplatBuffers& splats,
                    const float* dL_dimage_geometry) {
   HDR4D_CHECK(state != nullptr && dL_dimage != nullptr);
   CheckCall(splats, settings, *state);
+  CheckBinnedForBackward(*state, splats.size());
   const std::size_t pixels = static_cast<std::size_t>(state->width) * state->height;
   HDR4D_CHECK(state->final_transmittance.size() == pixels && state->n_contrib.size() == pixels);
   PrepareGradients(splats.size(), splats.channels, grads);

@@ -961,10 +961,7 @@ TEST(RasterBlendSimd, DeterministicAcrossThreadCounts) {
   }
 }
 
-// A forward no backward follows (RasterSettings::keep_records false, what `hdr4d render` does)
-// keeps no per-entry records: the same image, transmittance and n_contrib bit for bit, a
-// smaller state, and a backward after it still gives the same gradients (it gathers its own).
-TEST(RasterBlendSimd, ForwardWithoutRecordsIsIdenticalAndStillDifferentiable) {
+TEST(RasterBlendSimd, ForwardWithoutRecordsIsIdenticalAndKeepsLess) {
   SceneOptions o;
   o.count = 3000;
   o.width = 160;
@@ -972,21 +969,23 @@ TEST(RasterBlendSimd, ForwardWithoutRecordsIsIdenticalAndStillDifferentiable) {
   o.channels = 6;
   o.max_sigma = 8;
   const SplatBuffers s = Convert<float>(RandomScene(o, 9));
-  const std::vector<double> w64 = RandomValues(static_cast<std::size_t>(160) * 120 * 6, 10);
-  const std::vector<float> w(w64.begin(), w64.end());
-  RasterSettings settings = Settings(160, 120, std::vector<float>(6, 0.25f));
-  const FloatRun kept = RunFloat(s, settings, w, nullptr);
-  settings.keep_records = false;
-  const FloatRun lean = RunFloat(s, settings, w, nullptr);
-  EXPECT_EQ(kept.image, lean.image);
-  EXPECT_EQ(kept.state.final_transmittance, lean.state.final_transmittance);
-  EXPECT_EQ(kept.state.n_contrib, lean.state.n_contrib);
-  EXPECT_LT(lean.state.packed_splats.size(), kept.state.packed_splats.size() / 2);
-  EXPECT_EQ(kept.grads.mean2d, lean.grads.mean2d);
-  EXPECT_EQ(kept.grads.conic, lean.grads.conic);
-  EXPECT_EQ(kept.grads.opacity, lean.grads.opacity);
-  EXPECT_EQ(kept.grads.features, lean.grads.features);
-  EXPECT_EQ(kept.dL_dbackground, lean.dL_dbackground);
+  for (RasterBackend backend : {RasterBackend::kScalar, RasterBackend::kSimd}) {
+    RasterSettings settings = Settings(160, 120, std::vector<float>(6, 0.25f), backend);
+    std::vector<float> kept_image(static_cast<std::size_t>(160) * 120 * 6), lean_image(
+                                                                             kept_image.size());
+    RasterState kept, lean;
+    RasterizeForward(s, settings, &kept, kept_image.data());
+    settings.keep_records = false;
+    RasterizeForward(s, settings, &lean, lean_image.data());
+    EXPECT_EQ(kept_image, lean_image);
+    EXPECT_EQ(kept.final_transmittance, lean.final_transmittance);
+    EXPECT_EQ(kept.n_contrib, lean.n_contrib);
+    EXPECT_EQ(kept.point_list, lean.point_list);
+    EXPECT_EQ(kept.entry_slots.size(), kept.point_list.size());
+    EXPECT_TRUE(lean.entry_slots.empty() && lean.point_entries.empty());
+    if (backend == RasterBackend::kSimd)
+      EXPECT_LT(lean.packed_splats.size(), kept.packed_splats.size() / 2);
+  }
 }
 
 TEST(RasterBlendSimd, StateIsReusedAcrossFrames) {
@@ -1022,6 +1021,24 @@ TEST(RasterBlendSimd, StateIsReusedAcrossFrames) {
 
 // ---------------------------------------------------------------------------------------------
 // Caller bugs abort with a check.
+
+// A backward of a frame rendered without keep_records has no entry slots to write: caught.
+TEST(RasterBlendDeathTest, BackwardAfterAForwardWithoutRecordsIsCaught) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  SceneOptions o;
+  o.count = 50;
+  const SplatBuffers s = Convert<float>(RandomScene(o, 4));
+  const std::vector<float> dL(static_cast<std::size_t>(o.width) * o.height * 3, 0.5f);
+  std::vector<float> image(dL.size());
+  for (RasterBackend backend : {RasterBackend::kScalar, RasterBackend::kSimd}) {
+    RasterSettings settings = Settings(o.width, o.height, {}, backend);
+    settings.keep_records = false;
+    RasterState state;
+    RasterizeForward(s, settings, &state, image.data());
+    SplatGradients g;
+    EXPECT_DEATH(BlendBackward(s, settings, &state, dL.data(), nullptr, &g, nullptr), "entry_slots");
+  }
+}
 
 TEST(RasterBlendDeathTest, MisuseIsCaught) {
   GTEST_FLAG_SET(death_test_style, "threadsafe");

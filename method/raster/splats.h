@@ -92,11 +92,12 @@ struct RasterSettings {
   // One value per channel, composited as colour + T_final * background. Empty means zeros.
   std::vector<float> background;
   RasterBackend backend = RasterBackend::kSimd;
-  // kSimd: keep the forward's per-entry records in the state for a backward of the same frame
-  // (the largest per-entry buffer: ~50 bytes per tile entry at 6 channels, written and read
-  // back once per frame). false, for a render no backward follows, gathers each tile's records
-  // into per-thread scratch that stays in cache; a backward after it gathers its own (same
-  // results either way).
+  // Keep what a backward of the same frame needs. false, for a render no backward follows:
+  // binning skips the backward's entry slots (point_entries, entry_slots) and the kSimd forward
+  // gathers each tile's records into per-thread scratch that stays in cache instead of the
+  // state's per-entry records (~50 bytes per tile entry at 6 channels, written and read back
+  // once per frame). The images are the same bit for bit; a backward of such a frame is a
+  // caller bug (checked).
   bool keep_records = true;
 };
 

@@ -55,8 +55,8 @@ struct RenderOptions {
   RasterBackend backend = RasterBackend::kSimd;
   ColorStage* color_stage = nullptr;  // null: the colours are the features
   BackgroundSource* background_source = nullptr;  // set: replaces `background` (float path only)
-  // false for a render no backward follows (ViewRenderer): the blend then keeps no per-entry
-  // records for one (RasterSettings::keep_records); a backward still works, only slower.
+  // false for a render no backward follows (ViewRenderer): binning and blend then keep
+  // nothing for one (RasterSettings::keep_records); RenderBackward of such a frame is a bug.
   bool backward_follows = true;
 };
 
