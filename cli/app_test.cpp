@@ -58,6 +58,7 @@ TEST(App, BadValuesAreRefusedWhileParsingNamingTheFlag) {
       {{"render", "--run", "r", "--video", "0"}, "--video"},
       {{"render", "--run", "r", "--threads", "-2"}, "--threads"},
       {{"render", "--run", "r", "--video", "3", "--fps", "0"}, "--fps"},
+      {{"render", "--run", "r", "--png-compression", "10"}, "--png-compression"},
       {{"tone-curves", "--run", "r", "--times", "a,b"}, "--times"},
       {{"synth-ldr", "--data", "d", "--bits", "12"}, "--bits"},
   };

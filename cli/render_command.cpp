@@ -64,6 +64,11 @@ void AddRenderCommand(CLI::App& app) {
                   "--resolution R`")
       ->check(Integer(0, 65536))
       ->capture_default_str();
+  cmd->add_option("--png-compression", options->png_compression,
+                  "zlib level of the LDR PNGs, 0 (none) to 9 (smallest): 1, the default, writes "
+                  "an 800x800 render about 3x faster than PNG's usual 6 for files ~40% larger")
+      ->check(Integer(0, 9))
+      ->capture_default_str();
   auto no_hdr = std::make_shared<bool>(false);
   cmd->add_flag("--no-hdr", *no_hdr, "Do not write the HDR (EXR) renders");
   cmd->callback([options, run, out, time, time_option, exposure, exposure_option, no_hdr, timing] {

@@ -147,6 +147,8 @@ void WriteImage(const fs::path& path, const Image& image, const ImageWriteOption
   OIIO::ImageSpec spec(image.width(), image.height(), image.channels(), type);
   if (jpeg) spec.attribute("Compression", "jpeg:" + std::to_string(options.jpeg_quality));
   if (exr) spec.attribute("compression", "zip");
+  if (png && options.png_compression >= 0)
+    spec.attribute("png:compressionLevel", std::min(options.png_compression, 9));
   // No capture date in the header: OpenImageIO would stamp the current time, and equal images
   // written at different times would differ byte for byte (reproducible datasets need them equal).
   spec.attribute("DateTime", "");

@@ -4,6 +4,7 @@
 #include <benchmark/benchmark.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <random>
 
@@ -55,6 +56,24 @@ void BM_ReadPng8(benchmark::State& state) {
   fs::remove_all(path.parent_path());
 }
 BENCHMARK(BM_ReadPng8)->Unit(benchmark::kMillisecond);
+
+// An 8-bit PNG of smooth content, as a render is (noise would be incompressible at any level),
+// at zlib level state.range(0) (-1: OpenImageIO's default, 6); the file size is a counter.
+void BM_WritePng8(benchmark::State& state) {
+  Image hdr(kSize, kSize, 3);
+  for (int y = 0; y < kSize; ++y)
+    for (int x = 0; x < kSize; ++x)
+      for (int c = 0; c < 3; ++c)
+        hdr.at(x, y, c) = std::exp(2.0f * std::sin(0.013f * x + c) * std::cos(0.021f * y) +
+                                   0.5f * std::sin(0.1f * (x + y)));
+  const Image ldr = SynthesizeLdr(hdr, *ParseCrf("srgb"), {.exposure = 0.5});
+  const fs::path path = ScratchDir() / "w.png";
+  const ImageWriteOptions options{.png_compression = static_cast<int>(state.range(0))};
+  for (auto _ : state) WriteImage(path, ldr, options);
+  state.counters["bytes"] = static_cast<double>(fs::file_size(path));
+  fs::remove_all(path.parent_path());
+}
+BENCHMARK(BM_WritePng8)->Arg(-1)->Arg(3)->Arg(1)->Unit(benchmark::kMillisecond);
 
 void BM_SynthesizeLdrWithNoise(benchmark::State& state) {
   const Image hdr = RandomHdr(4);

@@ -54,7 +54,7 @@ LoadedRun LoadRun(const fs::path& run, int resolution_override) {
     }
   }
   const fs::path checkpoint_path = run / "checkpoint.bin";
-  Checkpoint c = LoadCheckpoint(checkpoint_path);
+  Checkpoint c = LoadCheckpoint(checkpoint_path, {.optimizer_state = false});  // looked at only
   r.model = std::move(c.model);
   r.hdr_head = ReadHdrHead(c, r.model.size(), checkpoint_path.string());
   r.background = static_cast<float>(config.NumberOr("background", 0.0));
@@ -157,6 +157,8 @@ int RenderRun(const RenderRunOptions& options) {
   if (options.video_frames < 0) Fail("render: video frames {} must be >= 1", options.video_frames);
   if (options.fps < 1 || options.fps > 1000)
     Fail("render: fps {} must be within [1, 1000]", options.fps);
+  if (options.png_compression < 0 || options.png_compression > 9)
+    Fail("render: PNG compression {} must be within [0, 9]", options.png_compression);
   if (options.camera_index < 0) Fail("render: camera {} must be >= 0", options.camera_index);
   const ThreadLimit limit(options.threads);
   if (options.exposure && !(*options.exposure > 0 && std::isfinite(*options.exposure)))
@@ -193,7 +195,8 @@ int RenderRun(const RenderRunOptions& options) {
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     int written = 0;
     if (!ldr.empty() && !ldr_path.empty()) {
-      WriteImage(ldr_path, DisplayImageFromBuffer(ldr.data(), w, h, 3), {.batch = &batch});
+      WriteImage(ldr_path, DisplayImageFromBuffer(ldr.data(), w, h, 3),
+                 {.png_compression = options.png_compression, .batch = &batch});
       ++written;
     }
     if (options.write_hdr && !hdr.empty() && !hdr_path.empty()) {

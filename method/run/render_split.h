@@ -44,6 +44,10 @@ struct RenderRunOptions {
   // at --resolution 2 renders its full-size views with 1. The same check as training: each
   // image's size must be divisible by it.
   int resolution = 0;
+  // zlib level of the LDR PNGs: 1 writes an 800x800 render ~3x faster than the usual 6, which
+  // took ~4x the render itself (BENCHMARKS.md, issue 15); renders are remade at will, so speed
+  // wins over ~40% of file size.
+  int png_compression = 1;
 };
 
 // Returns the number of images written.

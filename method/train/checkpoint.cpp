@@ -173,7 +173,7 @@ void SaveCheckpoint(const fs::path& path, const Checkpoint& c) {
   SaveCheckpoint(path, parts);
 }
 
-Checkpoint LoadCheckpoint(const fs::path& path) {
+Checkpoint LoadCheckpoint(const fs::path& path, const CheckpointLoadOptions& options) {
   std::error_code ec;
   if (!fs::exists(path, ec)) Fail("{}: checkpoint not found", path.string());
   std::ifstream file(path, std::ios::binary);
@@ -244,10 +244,14 @@ Checkpoint LoadCheckpoint(const fs::path& path) {
     c.extra_floats.push_back(ReadFloats(in, path, "an extra buffer", limit));
   const std::uint64_t adam_size = ReadU64(in, path, "the optimiser state size");
   if (adam_size > file_size) Fail("{}: corrupt checkpoint (optimiser state size)", path.string());
-  c.adam_state.resize(adam_size);
-  if (!in.read(c.adam_state.data(), static_cast<std::streamsize>(adam_size))) {
-    Fail("{}: truncated checkpoint (while reading the optimiser state)", path.string());
+  if (options.optimizer_state) {
+    c.adam_state.resize(adam_size);
+    in.read(c.adam_state.data(), static_cast<std::streamsize>(adam_size));
+  } else {
+    in.ignore(static_cast<std::streamsize>(adam_size));
   }
+  if (!in || static_cast<std::uint64_t>(in.gcount()) != adam_size)
+    Fail("{}: truncated checkpoint (while reading the optimiser state)", path.string());
   if (version >= 2) {
     const std::uint64_t tm_size = ReadU64(in, path, "the tone mapper state size");
     if (tm_size > file_size) Fail("{}: corrupt checkpoint (tone mapper state size)", path.string());

@@ -49,8 +49,16 @@ struct CheckpointParts {
 
 void SaveCheckpoint(const std::filesystem::path& path, const CheckpointParts& parts);
 void SaveCheckpoint(const std::filesystem::path& path, const Checkpoint& checkpoint);
+// What to load besides the model, the trainer state and the extra buffers.
+struct CheckpointLoadOptions {
+  // false: skip the optimiser's state (adam_state stays empty; it is still checksummed). A run
+  // that is only looked at (render, export) needs no Adam moments: two thirds of the file.
+  bool optimizer_state = true;
+};
+
 // Throws hdr4d::Error naming the file for a missing, truncated, corrupt (checksum mismatch) or
 // foreign file.
-Checkpoint LoadCheckpoint(const std::filesystem::path& path);
+Checkpoint LoadCheckpoint(const std::filesystem::path& path,
+                          const CheckpointLoadOptions& options = {});
 
 }  // namespace hdr4d::method

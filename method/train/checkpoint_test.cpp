@@ -46,6 +46,31 @@ TEST(Checkpoint, RoundTripIsExact) {
   EXPECT_EQ(back.adam_state, c.adam_state);
 }
 
+// A run only looked at skips the optimiser's state: everything else as saved, and the checksum
+// still covers the skipped bytes.
+TEST(Checkpoint, LoadWithoutTheOptimiserStateKeepsTheRestAndTheChecks) {
+  TempDir dir;
+  const Checkpoint c = Sample();
+  ASSERT_FALSE(c.adam_state.empty());
+  SaveCheckpoint(dir / "ck.bin", c);
+  const Checkpoint back = LoadCheckpoint(dir / "ck.bin", {.optimizer_state = false});
+  EXPECT_TRUE(back.adam_state.empty());
+  EXPECT_EQ(back.model.xyz, c.model.xyz);
+  EXPECT_EQ(back.model.color_rest, c.model.color_rest);
+  EXPECT_EQ(back.trainer, c.trainer);
+  EXPECT_EQ(back.extra_floats, c.extra_floats);
+  EXPECT_EQ(back.tone_mapper_state, c.tone_mapper_state);
+  std::string bytes = testing::ReadTextFile(dir / "ck.bin");
+  const std::size_t in_adam = bytes.find(c.adam_state);
+  ASSERT_NE(in_adam, std::string::npos);
+  bytes[in_adam + c.adam_state.size() / 2] ^= 0x01;
+  testing::WriteTextFile(dir / "adam_flipped.bin", bytes);
+  EXPECT_NE(ErrorOf([&] {
+              LoadCheckpoint(dir / "adam_flipped.bin", {.optimizer_state = false});
+            }).find("checksum mismatch"),
+            std::string::npos);
+}
+
 TEST(Checkpoint, BadFilesAreErrorsNamingTheFile) {
   TempDir dir;
   EXPECT_NE(ErrorOf([&] { LoadCheckpoint(dir / "none.bin"); }).find("not found"),
@@ -60,6 +85,9 @@ TEST(Checkpoint, BadFilesAreErrorsNamingTheFile) {
     testing::WriteTextFile(dir / "cut.bin", bytes.substr(0, cut));
     const std::string error = ErrorOf([&] { LoadCheckpoint(dir / "cut.bin"); });
     EXPECT_NE(error.find((dir / "cut.bin").string()), std::string::npos) << cut << ": " << error;
+    const std::string skipping =
+        ErrorOf([&] { LoadCheckpoint(dir / "cut.bin", {.optimizer_state = false}); });
+    EXPECT_NE(skipping.find((dir / "cut.bin").string()), std::string::npos) << cut;
   }
 }
 

@@ -356,6 +356,16 @@ TEST(TrainerHdr, RenderWritesLdrAndHdrNamedLikeTheGroundTruth) {
     EXPECT_TRUE(fs::exists(dir / "out" / f.image_path.filename())) << f.image_path;
     EXPECT_TRUE(fs::exists(dir / "out" / f.hdr_path->filename())) << *f.hdr_path;
   }
+  // The PNG level changes the bytes, never the pixels; a level outside zlib's is refused.
+  RenderRunOptions smallest = r;
+  smallest.out = dir / "out9";
+  smallest.png_compression = 9;
+  RenderRun(smallest);
+  const fs::path png = d.test[0].image_path.filename();
+  EXPECT_EQ(ReadImage(dir / "out" / png).values(), ReadImage(dir / "out9" / png).values());
+  smallest.png_compression = 10;
+  EXPECT_NE(ErrorOf([&] { RenderRun(smallest); }).find("PNG compression 10 must be within"),
+            std::string::npos);
   // A run whose tone mapper kind is not registered in this program (a baseline's, here set by
   // hand; this test does not link baselines/) is a clear error naming the kind, not a crash.
   nlohmann::json config = ReadJsonFile(dir / "run" / "config.json");
