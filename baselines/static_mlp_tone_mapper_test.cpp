@@ -385,25 +385,29 @@ TEST_P(StaticMlpLearns, ACameraCurveFromItsGradient) {
 // The trainer's check for a dead curve (method/train/tone_curve_watch.h): HDR-GS's free network
 // with one channel's sigmoid driven far into saturation (every weight 0, the output bias 60) is
 // flat at 1 over any range; a fresh network, free or monotone, is not.
-TEST(StaticMlpToneMapper, FindFlatToneCurveFindsASaturatedChannelOnly) {
+TEST(StaticMlpToneMapper, FindFlatToneCurvesFindsTheSaturatedChannelsOnly) {
   for (bool monotone : {false, true}) {
     StaticMlpToneMapper fresh(Config(3, true, monotone));
-    EXPECT_FALSE(method::FindFlatToneCurve(&fresh, 1, -8.0, 6.0).has_value()) << monotone;
+    EXPECT_TRUE(method::FindFlatToneCurves(&fresh, 1, -8.0, 6.0).empty()) << monotone;
   }
   StaticMlpToneMapper mapper(FreeConfig());
   const std::size_t block = StaticMlpShape().NumParams();
-  std::fill_n(mapper.params().begin() + block, block, 0.0f);  // green
-  mapper.params()[2 * block - 1] = 60.0f;  // its last parameter: the output bias
-  const std::optional<method::FlatToneCurve> flat =
-      method::FindFlatToneCurve(&mapper, 1, -8.0, 6.0);
-  ASSERT_TRUE(flat.has_value());
-  EXPECT_EQ(flat->channel, 1);
-  EXPECT_EQ(flat->time, 0.0);
-  EXPECT_NEAR(flat->level, 1.0, 1e-6);
-  EXPECT_LT(flat->spread, 1e-6);
+  for (int c : {1, 2}) {  // green driven to 1, blue to 0
+    std::fill_n(mapper.params().begin() + c * block, block, 0.0f);
+    mapper.params()[(c + 1) * block - 1] = c == 1 ? 60.0f : -60.0f;  // the output bias
+  }
+  const std::vector<method::FlatToneCurve> flat =
+      method::FindFlatToneCurves(&mapper, 1, -8.0, 6.0);
+  ASSERT_EQ(flat.size(), 2u);
+  EXPECT_EQ(flat[0].channel, 1);
+  EXPECT_EQ(flat[0].time, 0.0);
+  EXPECT_NEAR(flat[0].level, 1.0, 1e-6);
+  EXPECT_LT(flat[0].spread, 1e-6);
+  EXPECT_EQ(flat[1].channel, 2);
+  EXPECT_NEAR(flat[1].level, 0.0, 1e-6);
   // An empty or reversed range judges nothing.
-  EXPECT_FALSE(method::FindFlatToneCurve(&mapper, 1, 2.0, 2.0).has_value());
-  EXPECT_FALSE(method::FindFlatToneCurve(nullptr, 1, -8.0, 6.0).has_value());
+  EXPECT_TRUE(method::FindFlatToneCurves(&mapper, 1, 2.0, 2.0).empty());
+  EXPECT_TRUE(method::FindFlatToneCurves(nullptr, 1, -8.0, 6.0).empty());
 }
 
 INSTANTIATE_TEST_SUITE_P(FreeAndMonotone, StaticMlpLearns, ::testing::Bool());

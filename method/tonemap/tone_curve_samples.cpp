@@ -39,25 +39,27 @@ ToneCurveSamples SampleToneCurves(ToneMapper* tone_mapper,
   return s;
 }
 
-std::optional<FlatToneCurve> FindFlatToneCurve(ToneMapper* tone_mapper,
-                                               int num_times,
-                                               double x_min,
-                                               double x_max,
-                                               double tolerance) {
-  if (tone_mapper == nullptr || !tone_mapper->pointwise() || !(x_max > x_min)) return std::nullopt;
+std::vector<FlatToneCurve> FindFlatToneCurves(ToneMapper* tone_mapper,
+                                              int num_times,
+                                              double x_min,
+                                              double x_max,
+                                              double tolerance) {
+  std::vector<FlatToneCurve> flat;
+  if (tone_mapper == nullptr || !tone_mapper->pointwise() || !(x_max > x_min)) return flat;
   const ToneCurveSamples s =
       SampleToneCurves(tone_mapper, {0.0, 0.5, 1.0}, num_times, x_min, x_max, 64);
-  for (std::size_t k = 0; k < s.times.size(); ++k) {
-    for (int c = 0; c < 3; ++c) {
+  for (int c = 0; c < 3; ++c) {
+    for (std::size_t k = 0; k < s.times.size(); ++k) {
       const std::vector<double>& y = s.ldr[k][c];
       const auto [lo, hi] = std::minmax_element(y.begin(), y.end());
       if (*hi - *lo >= tolerance) continue;
       double mean = 0;
       for (double v : y) mean += v / y.size();
-      return FlatToneCurve{.channel = c, .time = s.times[k], .level = mean, .spread = *hi - *lo};
+      flat.push_back({.channel = c, .time = s.times[k], .level = mean, .spread = *hi - *lo});
+      break;
     }
   }
-  return std::nullopt;
+  return flat;
 }
 
 }  // namespace hdr4d::method

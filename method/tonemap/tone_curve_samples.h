@@ -1,10 +1,9 @@
 // A pointwise tone mapper read as curves: each channel's LDR value as a function of
 // x = log radiance + log exposure at chosen times, with the context the mapper has for that time.
 // `hdr4d tone-curves` plots them (the analysis of the paper's Fig. 3); the trainer checks them
-// for a curve that has gone flat (FindFlatToneCurve).
+// for a curve that has gone flat (FindFlatToneCurves).
 #pragma once
 
-#include <optional>
 #include <vector>
 
 #include "method/tonemap/tone_mapper.h"
@@ -35,14 +34,15 @@ struct FlatToneCurve {
   double spread = 0;   // max - min of its LDR values over the range
 };
 
-// The first channel and time (of 0, 1/2 and 1) whose curve varies by less than `tolerance`
-// (LDR units) over [x_min, x_max], sampled at 64 points; nullopt when every curve rises or
-// falls by more, or when the mapper is not pointwise. Such a curve passes no gradient from an
-// LDR loss to anything, itself included: the LDR images stay that colour for good.
-std::optional<FlatToneCurve> FindFlatToneCurve(ToneMapper* tone_mapper,
-                                               int num_times,
-                                               double x_min,
-                                               double x_max,
-                                               double tolerance = 0.01);
+// The channels whose curve, at some time of 0, 1/2 and 1, varies by less than `tolerance` (LDR
+// units) over [x_min, x_max], sampled at 64 points: one entry per such channel (its first flat
+// time), in channel order; empty when every curve rises or falls by more, or when the mapper is
+// not pointwise. Such a curve passes no gradient from an LDR loss to anything, itself included:
+// the LDR images stay that colour for good.
+std::vector<FlatToneCurve> FindFlatToneCurves(ToneMapper* tone_mapper,
+                                              int num_times,
+                                              double x_min,
+                                              double x_max,
+                                              double tolerance = 0.01);
 
 }  // namespace hdr4d::method

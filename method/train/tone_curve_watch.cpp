@@ -49,20 +49,25 @@ std::pair<double, double> ToneCurveInputRange(const GaussianModel& model,
   return {x_min, x_max};
 }
 
-std::string FlatToneCurveWarning(const FlatToneCurve& flat,
+std::string FlatToneCurveWarning(const std::vector<FlatToneCurve>& flat,
                                  const std::string& tone_mapper_kind,
                                  std::pair<double, double> range,
                                  int iteration) {
   static const char* const kChannel[3] = {"red", "green", "blue"};
+  std::string which;
+  for (std::size_t i = 0; i < flat.size(); ++i) {
+    which += fmt::format("{}{} at {:.3f} (varies by {:.1e} at time {:.1f})",
+                         i == 0 ? "" : (i + 1 == flat.size() ? " and " : ", "),
+                         kChannel[flat[i].channel], flat[i].level, flat[i].spread, flat[i].time);
+  }
   return fmt::format(
-      "train: iteration {}: the {} tone curve ({}) at time {:.1f} is flat at {:.3f} "
-      "(it varies by {:.1e}) over the inputs this scene gives it (log radiance + log exposure in "
-      "[{:.1f}, {:.1f}]): no LDR loss has a gradient through it any more, so the LDR images "
-      "will keep that value. The unconstrained curve of HDR-GS does this under the joint "
-      "LDR+HDR term on some scenes; --monotone-tone-curves keeps it rising, and `hdr4d "
-      "tone-curves --run RUN` draws it",
-      iteration, kChannel[flat.channel], tone_mapper_kind, flat.time, flat.level, flat.spread,
-      range.first, range.second);
+      "train: iteration {}: the {} tone curve{} {} flat over the inputs this scene gives {} (log "
+      "radiance + log exposure in [{:.1f}, {:.1f}]): {}. No LDR loss has a gradient through a "
+      "flat curve, so those LDR channels will keep that value. The unconstrained curve of "
+      "HDR-GS does this under the joint LDR+HDR term on some scenes; --monotone-tone-curves "
+      "keeps it rising, and `hdr4d tone-curves --run RUN` draws it",
+      iteration, tone_mapper_kind, flat.size() > 1 ? "s" : "", flat.size() > 1 ? "are" : "is",
+      flat.size() > 1 ? "them" : "it", range.first, range.second, which);
 }
 
 }  // namespace hdr4d::method

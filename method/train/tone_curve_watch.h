@@ -1,5 +1,5 @@
 // The trainer's check for a learned tone curve that has gone flat over the inputs the scene
-// gives it (FindFlatToneCurve): every LDR value the same, so no LDR loss can bring it back and
+// gives it (FindFlatToneCurves): every LDR value the same, so no LDR loss can bring it back and
 // training would go on to the end with LDR images of one colour. Found with HDR-GS's
 // unconstrained static MLP under the joint LDR+HDR term on the `studio` scene (its sigmoid
 // saturated at 1 everywhere: 2.25 dB held out; BENCHMARKS.md, issue 12); the run is kept as it
@@ -25,8 +25,9 @@ inline constexpr int kToneCurveCheckEvery = 500;
 std::pair<double, double> ToneCurveInputRange(const GaussianModel& model,
                                               const std::vector<TrainView>& views);
 
-// The warning shown and recorded in results.json for a flat curve found after `iteration`.
-std::string FlatToneCurveWarning(const FlatToneCurve& flat,
+// The warning shown and recorded in results.json for the flat curves (at least one) found after
+// `iteration`.
+std::string FlatToneCurveWarning(const std::vector<FlatToneCurve>& flat,
                                  const std::string& tone_mapper_kind,
                                  std::pair<double, double> range,
                                  int iteration);

@@ -53,14 +53,25 @@ TEST(ToneCurveWatch, InputRangeSkipsBadValuesAndIsNeverEmpty) {
 }
 
 TEST(ToneCurveWatch, WarningSaysWhatIsFlatWhereAndTheWayOut) {
-  const std::string w = FlatToneCurveWarning(
-      FlatToneCurve{.channel = 1, .time = 0.5, .level = 0.99997, .spread = 2e-5}, "mlp",
+  const std::string one = FlatToneCurveWarning(
+      {FlatToneCurve{.channel = 1, .time = 0.5, .level = 0.99997, .spread = 2e-5}}, "mlp",
       {-7.25, 6.5}, 1500);
-  for (const char* part : {"iteration 1500", "green tone curve (mlp)", "time 0.5",
-                           "flat at 1.000", "[-7.2, 6.5]", "--monotone-tone-curves",
-                           "hdr4d tone-curves"}) {
-    EXPECT_NE(w.find(part), std::string::npos) << part << " in: " << w;
+  for (const char* part : {"iteration 1500", "the mlp tone curve is flat", "[-7.2, 6.5]",
+                           "green at 1.000 (varies by 2.0e-05 at time 0.5)",
+                           "--monotone-tone-curves", "hdr4d tone-curves"}) {
+    EXPECT_NE(one.find(part), std::string::npos) << part << " in: " << one;
   }
+  const std::string all = FlatToneCurveWarning(
+      {FlatToneCurve{.channel = 0, .level = 1.0}, FlatToneCurve{.channel = 1, .level = 1.0},
+       FlatToneCurve{.channel = 2, .time = 1.0, .level = 0.0}},
+      "dtm", {-1, 1}, 500);
+  EXPECT_NE(all.find("the dtm tone curves are flat over the inputs this scene gives them"),
+            std::string::npos)
+      << all;
+  EXPECT_NE(all.find("red at 1.000 (varies by 0.0e+00 at time 0.0), green at 1.000"),
+            std::string::npos)
+      << all;
+  EXPECT_NE(all.find(" and blue at 0.000"), std::string::npos) << all;
 }
 
 }  // namespace

@@ -827,10 +827,10 @@ std::string TrainingRun::FlatToneCurveCheck(int it) {
   if (!tone_mapper_ || !tone_mapper_->pointwise() || model_.color_mode != ColorMode::kLogHdr)
     return "";
   const std::pair<double, double> range = ToneCurveInputRange(model_, train_views_);
-  const std::optional<FlatToneCurve> flat =
-      FindFlatToneCurve(tone_mapper_.get(), num_times_, range.first, range.second);
-  if (!flat) return "";
-  std::string warning = FlatToneCurveWarning(*flat, tone_mapper_->config().kind, range, it);
+  const std::vector<FlatToneCurve> flat =
+      FindFlatToneCurves(tone_mapper_.get(), num_times_, range.first, range.second);
+  if (flat.empty()) return "";
+  std::string warning = FlatToneCurveWarning(flat, tone_mapper_->config().kind, range, it);
   if (!flat_curve_shown_) spdlog::warn("{}", warning);
   flat_curve_shown_ = true;
   return warning;
