@@ -983,8 +983,9 @@ TEST(RasterBlendSimd, ForwardWithoutRecordsIsIdenticalAndKeepsLess) {
     EXPECT_EQ(kept.point_list, lean.point_list);
     EXPECT_EQ(kept.entry_slots.size(), kept.point_list.size());
     EXPECT_TRUE(lean.entry_slots.empty() && lean.point_entries.empty());
-    if (backend == RasterBackend::kSimd)
+    if (backend == RasterBackend::kSimd) {
       EXPECT_LT(lean.packed_splats.size(), kept.packed_splats.size() / 2);
+    }
   }
 }
 

@@ -6,7 +6,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdlib>
+#include <future>
 #include <numbers>
+#include <optional>
 #include <sstream>
 
 #include "core/atomic_file.h"
@@ -181,6 +183,15 @@ int RenderRun(const RenderRunOptions& options) {
   // A command's renders are moved into place together once all are made: a failure or a kill
   // halfway never leaves new renders mixed with an earlier run's (core/atomic_file.h).
   FileBatch batch;
+  // A view's files are written on another thread while the next view renders (writing took
+  // several times the render: BENCHMARKS.md, issue 15), one view at a time; not with one
+  // thread, nor with --timing, whose render times must not share the cores with a writer.
+  // Declared after the batch: an unfinished write ends before the batch drops its files.
+  const bool overlap_writes = MaxThreads() > 1 && options.timing.empty();
+  std::future<void> writing;
+  const auto finish_writing = [&] {
+    if (writing.valid()) writing.get();  // rethrows the writer's error
+  };
   std::vector<double> render_seconds;  // per view, the Render call alone
   // Renders one view; writes the LDR image to ldr_path and the HDR one to hdr_path (each when
   // the model has that output and the path is not empty). Returns the number of files written.
@@ -193,19 +204,30 @@ int RenderRun(const RenderRunOptions& options) {
     renderer.Render(camera, time, frame, &ldr, options.write_hdr ? &hdr : nullptr);
     render_seconds.push_back(
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-    int written = 0;
-    if (!ldr.empty() && !ldr_path.empty()) {
-      WriteImage(ldr_path, DisplayImageFromBuffer(ldr.data(), w, h, 3),
-                 {.png_compression = options.png_compression, .batch = &batch});
-      ++written;
-    }
+    // Copies: the renderer reuses its buffers for the next view.
+    std::optional<Image> ldr_image, hdr_image;
+    if (!ldr.empty() && !ldr_path.empty()) ldr_image = DisplayImageFromBuffer(ldr.data(), w, h, 3);
     if (options.write_hdr && !hdr.empty() && !hdr_path.empty()) {
-      Image image(w, h, 3, Encoding::kLinear);
-      std::copy(hdr.begin(), hdr.end(), image.data());
+      hdr_image.emplace(w, h, 3, Encoding::kLinear);
+      std::copy(hdr.begin(), hdr.end(), hdr_image->data());
+    }
+    auto write = [&batch, &options, ldr_path, hdr_path, ldr_image = std::move(ldr_image),
+                  hdr_image = std::move(hdr_image)] {
+      if (ldr_image) {
+        WriteImage(ldr_path, *ldr_image,
+                   {.png_compression = options.png_compression, .batch = &batch});
+      }
       // Float, not half: radiance in physical units passes half's 65504 (the stress suite's
       // 1e6 scene) and falls below its normal range (1e-6).
-      WriteImage(hdr_path, image, {.format = PixelFormat::kFloat, .batch = &batch});
-      ++written;
+      if (hdr_image)
+        WriteImage(hdr_path, *hdr_image, {.format = PixelFormat::kFloat, .batch = &batch});
+    };
+    const int written = (ldr_image ? 1 : 0) + (hdr_image ? 1 : 0);
+    finish_writing();  // the previous view's
+    if (overlap_writes) {
+      writing = std::async(std::launch::async, std::move(write));
+    } else {
+      write();
     }
     return written;
   };
@@ -224,6 +246,7 @@ int RenderRun(const RenderRunOptions& options) {
     const Frame& f = frames[options.camera_index];
     const int written = render_to(f.camera, *options.time, options.exposure.value_or(f.exposure),
                                   dir / (stem + ".png"), dir / (stem + ".exr"));
+    finish_writing();
     batch.Commit();
     fmt::print("render: {} ({} file{})\n", (dir / stem).string(), written, written == 1 ? "" : "s");
     return written;
@@ -246,6 +269,7 @@ int RenderRun(const RenderRunOptions& options) {
       render_to(path[k], time, default_exposure, dir / fmt::format("frame_{:04d}.png", k), {});
       progress.Advance();
     }
+    finish_writing();
     progress.Finish();
     batch.Commit();
     if (HaveFfmpeg()) {
@@ -283,6 +307,7 @@ int RenderRun(const RenderRunOptions& options) {
                          options.exposure.value_or(f.exposure), out / name, out / hdr_name);
     progress.Advance();
   }
+  finish_writing();
   progress.Finish();
   batch.Commit();
   if (!options.timing.empty()) {

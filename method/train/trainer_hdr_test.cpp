@@ -356,6 +356,17 @@ TEST(TrainerHdr, RenderWritesLdrAndHdrNamedLikeTheGroundTruth) {
     EXPECT_TRUE(fs::exists(dir / "out" / f.image_path.filename())) << f.image_path;
     EXPECT_TRUE(fs::exists(dir / "out" / f.hdr_path->filename())) << *f.hdr_path;
   }
+  // Files are written while the next view renders (two threads): a write that fails there is
+  // still the command's error, naming the file, with no render of this command left in place.
+  ASSERT_GE(d.test.size(), 2u);
+  RenderRunOptions blocked = r;
+  blocked.out = dir / "blocked";
+  blocked.threads = 2;
+  fs::create_directories(blocked.out / d.test[1].hdr_path->filename());  // a folder in the way
+  const std::string write_error = ErrorOf([&] { RenderRun(blocked); });
+  EXPECT_NE(write_error.find(d.test[1].hdr_path->filename().string()), std::string::npos)
+      << write_error;
+  EXPECT_FALSE(fs::exists(blocked.out / d.test[0].image_path.filename()));
   // The PNG level changes the bytes, never the pixels; a level outside zlib's is refused.
   RenderRunOptions smallest = r;
   smallest.out = dir / "out9";
