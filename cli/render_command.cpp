@@ -66,7 +66,7 @@ void AddRenderCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--png-compression", options->png_compression,
                   "zlib level of the LDR PNGs, 0 (none) to 9 (smallest): 1, the default, writes "
-                  "an 800x800 render about 3x faster than PNG's usual 6 for files ~40% larger")
+                  "an 800x800 render about 3x faster than PNG's usual 6 for files 30-45% larger")
       ->check(Integer(0, 9))
       ->capture_default_str();
   auto no_hdr = std::make_shared<bool>(false);

@@ -928,14 +928,20 @@ TEST(RasterBlendSimd, FloatPathsAgreeWithDoubleReference) {
   }
 }
 
-TEST(RasterBlendSimd, DeterministicAcrossThreadCounts) {
+// 3000 splats of up to 8 px sigma on 160x120 with 6 channels (HDR + LDR): many overlaps per
+// tile, for the tests that compare whole frames.
+SceneOptions DenseSixChannelScene() {
   SceneOptions o;
   o.count = 3000;
   o.width = 160;
   o.height = 120;
   o.channels = 6;
   o.max_sigma = 8;
-  const SplatBuffers s = Convert<float>(RandomScene(o, 5));
+  return o;
+}
+
+TEST(RasterBlendSimd, DeterministicAcrossThreadCounts) {
+  const SplatBuffers s = Convert<float>(RandomScene(DenseSixChannelScene(), 5));
   const std::vector<double> w64 = RandomValues(static_cast<std::size_t>(160) * 120 * 6, 6);
   const std::vector<float> w(w64.begin(), w64.end());
   const std::vector<double> v64 = RandomValues(static_cast<std::size_t>(160) * 120, 7);
@@ -962,13 +968,7 @@ TEST(RasterBlendSimd, DeterministicAcrossThreadCounts) {
 }
 
 TEST(RasterBlendSimd, ForwardWithoutRecordsIsIdenticalAndKeepsLess) {
-  SceneOptions o;
-  o.count = 3000;
-  o.width = 160;
-  o.height = 120;
-  o.channels = 6;
-  o.max_sigma = 8;
-  const SplatBuffers s = Convert<float>(RandomScene(o, 9));
+  const SplatBuffers s = Convert<float>(RandomScene(DenseSixChannelScene(), 9));
   for (RasterBackend backend : {RasterBackend::kScalar, RasterBackend::kSimd}) {
     RasterSettings settings = Settings(160, 120, std::vector<float>(6, 0.25f), backend);
     std::vector<float> kept_image(static_cast<std::size_t>(160) * 120 * 6), lean_image(
@@ -1023,7 +1023,9 @@ TEST(RasterBlendSimd, StateIsReusedAcrossFrames) {
 // ---------------------------------------------------------------------------------------------
 // Caller bugs abort with a check.
 
-// A backward of a frame rendered without keep_records has no entry slots to write: caught.
+// A backward of a frame rendered without keep_records has no entry slots to write: caught by
+// CheckBinnedForBackward (blend.cpp), which every backward runs first. Its passing side is every
+// backward test of this file, the finite-difference ones (RasterBlendFd) included.
 TEST(RasterBlendDeathTest, BackwardAfterAForwardWithoutRecordsIsCaught) {
   GTEST_FLAG_SET(death_test_style, "threadsafe");
   SceneOptions o;

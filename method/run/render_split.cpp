@@ -192,6 +192,10 @@ int RenderRun(const RenderRunOptions& options) {
   const auto finish_writing = [&] {
     if (writing.valid()) writing.get();  // rethrows the writer's error
   };
+  const auto commit_files = [&] {
+    finish_writing();
+    batch.Commit();
+  };
   std::vector<double> render_seconds;  // per view, the Render call alone
   // Renders one view; writes the LDR image to ldr_path and the HDR one to hdr_path (each when
   // the model has that output and the path is not empty). Returns the number of files written.
@@ -246,8 +250,7 @@ int RenderRun(const RenderRunOptions& options) {
     const Frame& f = frames[options.camera_index];
     const int written = render_to(f.camera, *options.time, options.exposure.value_or(f.exposure),
                                   dir / (stem + ".png"), dir / (stem + ".exr"));
-    finish_writing();
-    batch.Commit();
+    commit_files();
     fmt::print("render: {} ({} file{})\n", (dir / stem).string(), written, written == 1 ? "" : "s");
     return written;
   }
@@ -269,9 +272,8 @@ int RenderRun(const RenderRunOptions& options) {
       render_to(path[k], time, default_exposure, dir / fmt::format("frame_{:04d}.png", k), {});
       progress.Advance();
     }
-    finish_writing();
     progress.Finish();
-    batch.Commit();
+    commit_files();
     if (HaveFfmpeg()) {
       const fs::path mp4 = dir / "video.mp4";
       // Through the atomic writer like every output (a killed ffmpeg leaves no half video);
@@ -307,9 +309,8 @@ int RenderRun(const RenderRunOptions& options) {
                          options.exposure.value_or(f.exposure), out / name, out / hdr_name);
     progress.Advance();
   }
-  finish_writing();
   progress.Finish();
-  batch.Commit();
+  commit_files();
   if (!options.timing.empty()) {
     const std::size_t warmup = render_seconds.size() > 1 ? 1 : 0;
     double timed = 0;

@@ -46,7 +46,7 @@ struct RenderRunOptions {
   int resolution = 0;
   // zlib level of the LDR PNGs: 1 writes an 800x800 render ~3x faster than the usual 6, which
   // took ~4x the render itself (BENCHMARKS.md, issue 15); renders are remade at will, so speed
-  // wins over ~40% of file size.
+  // wins over 30-45% of file size.
   int png_compression = 1;
 };
 
