@@ -227,7 +227,10 @@ void ReduceGradients(const RasterState& bins,
   const int stride = SlotStride(channels);
   const std::int64_t visible = static_cast<std::int64_t>(bins.depth_order.size());
   // The slots are read in an order unrelated to their layout (tile-major): prefetch the slots of
-  // the Gaussian kAhead places on, and let a compile-time stride unroll the common case.
+  // the Gaussian kAhead places on, and let a compile-time stride unroll the common case. The
+  // gradient rows are updated in depth order, i.e. at random: prefetch those of the Gaussian
+  // kAhead places on too (without it, the load of mean2d's row was 40% of this loop's time in
+  // a real 200x200 run).
   const auto reduce = [&]<int kStride>(std::int64_t begin, std::int64_t end) {
     const int n = kStride > 0 ? kStride : stride;
     constexpr int kAhead = 6;
@@ -240,6 +243,13 @@ void ReduceGradients(const RasterState& bins,
           __builtin_prefetch(ahead);
           __builtin_prefetch(ahead + n - 1);
         }
+      }
+      if (i + kAhead < visible_end) {
+        const std::int64_t ahead = bins.depth_order[i + kAhead];
+        __builtin_prefetch(&grads->mean2d[2 * ahead], 1);
+        __builtin_prefetch(&grads->conic[3 * ahead], 1);
+        __builtin_prefetch(&grads->opacity[ahead], 1);
+        __builtin_prefetch(&grads->features[ahead * channels], 1);
       }
       const std::int64_t g = bins.depth_order[i];
       const int k0 = bins.entry_ranges[i];
