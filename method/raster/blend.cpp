@@ -343,10 +343,12 @@ detail::TileJob MakeJob(const SplatBuffers& splats,
   job.final_T = state->final_transmittance.data();
   job.n_contrib = state->n_contrib.data();
   job.depth_order = state->depth_order.data();
+  job.rects = state->rects.data();
   return job;
 }
 
-// The SIMD kernels' per-Gaussian records, for the Gaussians listed in some tile (in parallel).
+// The SIMD kernels' per-Gaussian records, for the Gaussians listed in some tile (in parallel,
+// in id order).
 // packed_splats holds the per-Gaussian records, then the forward's per-entry records, then a
 // marker that is 1 once the forward has written the latter for the current packing.
 // With_records false (a forward no backward follows): no room for the per-entry records, and
@@ -361,7 +363,7 @@ void PackSplats(detail::TileJob& job, RasterState* state, bool with_records = tr
   job.packed = state->packed_splats.data();
   job.tile_records = with_records ? job.packed + per_gaussian : nullptr;
   ParallelForChunks(
-      static_cast<std::int64_t>(state->depth_order.size()), 4096,
+      static_cast<std::int64_t>(state->num_gaussians), 4096,
       [&](std::int64_t begin, std::int64_t end) { detail::PackSplatsSimd(job, begin, end); });
   state->packed_ready = true;
 }

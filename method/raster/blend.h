@@ -146,9 +146,11 @@ struct TileJob {
   const std::int32_t* entry_slots = nullptr;  // where each entry's slot goes (RasterState)
   float* tile_background_grad = nullptr;      // channels per tile; nullable
   // Per-Gaussian records of the SIMD kernels (PackedStride(channels) floats per Gaussian),
-  // written by PackSplatsSimd for the Gaussians listed in some tile (depth_order).
+  // written by PackSplatsSimd for the Gaussians listed in some tile (a non-empty rectangle in
+  // rects, RasterState::rects).
   float* packed = nullptr;
   const std::int32_t* depth_order = nullptr;
+  const std::int32_t* rects = nullptr;
   // Per-entry records (TileRecordStride(channels) per point_list entry: the per-Gaussian record
   // with its reach turned into tile rows/columns packed in one slot): written by the forward,
   // read by the backward when non-null and tile_records_ready (else the backward gathers its
@@ -161,7 +163,7 @@ struct TileJob {
 inline constexpr int kRecordScalars = 7;
 inline int PackedStride(int channels) { return kRecordScalars + channels + 4; }
 inline int TileRecordStride(int channels) { return kRecordScalars + channels + 1; }
-// Packs the records of depth_order[begin .. end).
+// Packs the records of the listed Gaussians among ids [begin .. end).
 void PackSplatsSimd(const TileJob& job, std::int64_t begin, std::int64_t end);
 void ForwardTileSimd(const TileJob& job, int tile);
 void BackwardTileSimd(const TileJob& job, int tile);

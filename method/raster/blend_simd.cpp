@@ -169,8 +169,10 @@ HWY_INLINE V FastExp2V(D d, V x) {
   return FastExp2UnclampedV(d, hn::Min(hn::Max(x, hn::Set(d, -125.5f)), hn::Zero(d)));
 }
 
-// Packs the per-Gaussian part of the records of job.depth_order[begin, end) into job.packed
-// (stride PackedStride(channels)), once per frame, one vector of Gaussians at a time. The reach
+// Packs the per-Gaussian part of the records of the listed Gaussians among ids [begin, end) into
+// job.packed (stride PackedStride(channels)), once per frame, one vector of consecutive ids at a
+// time: reads and writes stream (in depth order both were at random, and the record stores
+// waited on their lines). The reach
 // box bounds the ellipse power >= log threshold: for a positive definite conic Q, max |dy| over
 // d^T Q d <= 2t is sqrt(2t a / det Q) (and sqrt(2t c / det Q) for dx), widened by 1e-4 relative
 // + 1e-3 px + one ulp of the mean, far beyond the float error of `power`, of this float
@@ -195,7 +197,7 @@ void PackSplats(const TileJob& job, std::int64_t begin, std::int64_t end) {
   HWY_ALIGN float fields[(kRecFeatures + 4) * kTileSize];
   for (std::int64_t i = begin; i < end; i += lanes) {
     const int n = static_cast<int>(std::min<std::int64_t>(lanes, end - i));
-    for (int k = 0; k < lanes; ++k) ids[k] = job.depth_order[i + (k < n ? k : 0)];
+    for (int k = 0; k < lanes; ++k) ids[k] = static_cast<std::int32_t>(i + (k < n ? k : 0));
     const VI g = hn::Load(di, ids);
     const VI g2 = hn::Add(g, g);
     const VI g3 = hn::Add(g2, g);
@@ -248,6 +250,7 @@ void PackSplats(const TileJob& job, std::int64_t begin, std::int64_t end) {
     put(kBox + kBoxCol1, hi(cx, ex));
     for (int k = 0; k < n; ++k) {
       const std::size_t id = static_cast<std::size_t>(ids[k]);
+      if (job.rects[4 * id + 2] == job.rects[4 * id]) continue;  // in no tile: never read
       float* r = job.packed + id * stride;
       for (int f = 0; f < kRecFeatures; ++f) r[f] = fields[f * lanes + k];
       const float* feat = job.features + id * channels;
