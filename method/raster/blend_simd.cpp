@@ -756,7 +756,16 @@ void BackwardTileImpl(const TileJob& job, int tile) {
   }
   constexpr int kGradCount = kSlotFeatures + (kC > 0 ? kC : 0);
 
+  // The conic row (read after the pixels) and the gradient slot (written then) of each Gaussian
+  // are at random places: prefetch them a few Gaussians ahead (the conic load was a tenth of this
+  // kernel's time in a 200x200 run).
+  constexpr int kAhead = 4;
   for (int j = tile_max - 1; j >= 0; --j) {
+    if (j >= kAhead) {
+      __builtin_prefetch(job.conic +
+                         3 * static_cast<std::size_t>(job.point_list[start + j - kAhead]));
+      __builtin_prefetch(slot_of(j - kAhead), 1);
+    }
     const float* r = rec + static_cast<std::size_t>(j) * stride;
     const VI jv = hn::Set(di, j);
     const V mean_x = hn::Set(d, r[kRecMeanX]);
