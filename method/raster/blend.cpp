@@ -235,37 +235,47 @@ void ReduceGradients(const RasterState& bins,
     const int n = kStride > 0 ? kStride : stride;
     constexpr int kAhead = 6;
     const std::int64_t visible_end = visible;
-    SmallBuffer<T> sum(n);
-    for (std::int64_t i = begin; i < end; ++i) {
-      if (!streamed && i + kAhead < visible_end) {
-        for (int k = bins.entry_ranges[i + kAhead]; k < bins.entry_ranges[i + kAhead + 1]; ++k) {
-          const T* ahead = slots + static_cast<std::size_t>(bins.point_entries[k]) * n;
-          __builtin_prefetch(ahead);
-          __builtin_prefetch(ahead + n - 1);
+    // With a compile-time stride the sums are a local array the compiler keeps in registers
+    // (in a buffer behind a pointer, each add reloaded a sum just stored, stalling on the store).
+    const auto run = [&](auto& sum) {
+      for (std::int64_t i = begin; i < end; ++i) {
+        if (!streamed && i + kAhead < visible_end) {
+          for (int k = bins.entry_ranges[i + kAhead]; k < bins.entry_ranges[i + kAhead + 1]; ++k) {
+            const T* ahead = slots + static_cast<std::size_t>(bins.point_entries[k]) * n;
+            __builtin_prefetch(ahead);
+            __builtin_prefetch(ahead + n - 1);
+          }
         }
+        if (i + kAhead < visible_end) {
+          const std::int64_t ahead = bins.depth_order[i + kAhead];
+          __builtin_prefetch(&grads->mean2d[2 * ahead], 1);
+          __builtin_prefetch(&grads->conic[3 * ahead], 1);
+          __builtin_prefetch(&grads->opacity[ahead], 1);
+          __builtin_prefetch(&grads->features[ahead * channels], 1);
+        }
+        const std::int64_t g = bins.depth_order[i];
+        const int k0 = bins.entry_ranges[i];
+        const int k1 = bins.entry_ranges[i + 1];
+        for (int s = 0; s < n; ++s) sum[s] = T(0);
+        for (int k = k0; k < k1; ++k) {
+          const std::size_t at = streamed ? static_cast<std::size_t>(k) : bins.point_entries[k];
+          const T* slot = slots + at * n;
+          for (int s = 0; s < n; ++s) sum[s] += slot[s];
+        }
+        grads->mean2d[2 * g] += sum[detail::kSlotMean];
+        grads->mean2d[2 * g + 1] += sum[detail::kSlotMean + 1];
+        for (int i = 0; i < 3; ++i) grads->conic[3 * g + i] += sum[detail::kSlotConic + i];
+        grads->opacity[g] += sum[detail::kSlotOpacity];
+        T* gf = grads->features.data() + g * channels;
+        for (int c = 0; c < channels; ++c) gf[c] += sum[detail::kSlotFeatures + c];
       }
-      if (i + kAhead < visible_end) {
-        const std::int64_t ahead = bins.depth_order[i + kAhead];
-        __builtin_prefetch(&grads->mean2d[2 * ahead], 1);
-        __builtin_prefetch(&grads->conic[3 * ahead], 1);
-        __builtin_prefetch(&grads->opacity[ahead], 1);
-        __builtin_prefetch(&grads->features[ahead * channels], 1);
-      }
-      const std::int64_t g = bins.depth_order[i];
-      const int k0 = bins.entry_ranges[i];
-      const int k1 = bins.entry_ranges[i + 1];
-      for (int s = 0; s < n; ++s) sum[s] = T(0);
-      for (int k = k0; k < k1; ++k) {
-        const std::size_t at = streamed ? static_cast<std::size_t>(k) : bins.point_entries[k];
-        const T* slot = slots + at * n;
-        for (int s = 0; s < n; ++s) sum[s] += slot[s];
-      }
-      grads->mean2d[2 * g] += sum[detail::kSlotMean];
-      grads->mean2d[2 * g + 1] += sum[detail::kSlotMean + 1];
-      for (int i = 0; i < 3; ++i) grads->conic[3 * g + i] += sum[detail::kSlotConic + i];
-      grads->opacity[g] += sum[detail::kSlotOpacity];
-      T* gf = grads->features.data() + g * channels;
-      for (int c = 0; c < channels; ++c) gf[c] += sum[detail::kSlotFeatures + c];
+    };
+    if constexpr (kStride > 0) {
+      std::array<T, kStride> sum;
+      run(sum);
+    } else {
+      SmallBuffer<T> sum(n);
+      run(sum);
     }
   };
   ParallelForChunks(visible, 2048, [&](std::int64_t begin, std::int64_t end) {
