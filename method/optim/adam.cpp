@@ -274,8 +274,9 @@ AdamRowStep Adam::BeginRowStep(const std::vector<std::string>& names, std::size_
     HDR4D_CHECK(g.size == s.m.size());
     HDR4D_CHECK(g.size == 0 || g.params != nullptr);  // gradients may come only as rows
     HDR4D_CHECK(rows > 0 ? g.size % rows == 0 : g.size == 0);
-    step.parts_.push_back({g.name, g.params, g.grads, s.m.data(), s.v.data(),
-                           rows > 0 ? g.size / rows : 0, NextStep(s)});
+    const std::size_t width = rows > 0 ? g.size / rows : 0;
+    step.parts_.push_back(
+        {g.name, g.params, g.grads, s.m.data(), s.v.data(), width, width, NextStep(s)});
     step.bad_[k] = false;
   }
   return step;
@@ -296,10 +297,25 @@ void AdamRowStep::StepRows(std::int64_t begin,
       HDR4D_CHECK(part.grads != nullptr);  // neither rows given nor a gradient buffer bound
       g = part.grads + first;
     }
-    if (!HWY_DYNAMIC_DISPATCH(AdamKernel)(part.params + first, g, part.m + first, part.v + first, n,
-                                          part.constants)) {
-      bad_[k].store(true, std::memory_order_relaxed);
+    bool finite = true;
+    if (part.columns >= part.width) {
+      finite = HWY_DYNAMIC_DISPATCH(AdamKernel)(part.params + first, g, part.m + first,
+                                                part.v + first, n, part.constants);
+    } else if (part.columns > 0) {
+      for (std::size_t row = 0; row < static_cast<std::size_t>(end - begin); ++row) {
+        const std::size_t at = first + row * part.width;
+        finite &= HWY_DYNAMIC_DISPATCH(AdamKernel)(part.params + at, g + row * part.width,
+                                                   part.m + at, part.v + at, part.columns,
+                                                   part.constants);
+      }
     }
+    if (!finite) bad_[k].store(true, std::memory_order_relaxed);
+  }
+}
+
+void AdamRowStep::LimitColumns(const std::string& group, std::size_t columns) {
+  for (Part& part : parts_) {
+    if (part.name == group) part.columns = std::min(columns, part.width);
   }
 }
 

@@ -84,6 +84,13 @@ class AdamRowStep {
   // per group, in the order of BeginRowStep), a non-null grad_rows[k] holds group k's gradient
   // of these rows (row `begin` first) in place of its bound gradient buffer.
   void StepRows(std::int64_t begin, std::int64_t end, std::span<const float* const> grad_rows = {});
+  // From now on steps only the first `columns` floats of each row of `group` (no-op for a group
+  // not in the step or columns >= its width). The caller guarantees that every other column has
+  // a zero gradient and zero moments, i.e. has never had a gradient: Adam's update of such a
+  // value is exactly nothing (m and v stay 0 and the parameter moves by 0), so skipping it
+  // changes no bit. (The colour coefficients above the active degrees, most of each colour row
+  // in a run's first thousands of iterations.)
+  void LimitColumns(const std::string& group, std::size_t columns);
   // The first group (in the order given to BeginRowStep) whose gradient held a NaN or an
   // infinity in the rows stepped so far, or "". Such a group is partly stepped: its state must
   // be discarded (the trainer stops and keeps its last checkpoint).
@@ -97,7 +104,8 @@ class AdamRowStep {
     const float* grads;
     float* m;
     float* v;
-    std::size_t width;  // floats per row
+    std::size_t width;    // floats per row
+    std::size_t columns;  // the first floats of each row that are stepped (LimitColumns)
     detail::StepConstants constants;
   };
   std::vector<Part> parts_;

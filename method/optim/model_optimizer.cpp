@@ -61,7 +61,8 @@ void ModelOptimizer::SetIteration(int iteration) {
 
 GradientRowsDone ModelOptimizer::Begin(bool densify,
                                        bool reset_opacity,
-                                       std::size_t num_gaussians) {
+                                       std::size_t num_gaussians,
+                                       std::size_t rest_columns) {
   densify_ = densify;
   reset_opacity_ = reset_opacity;
   dc_bad_ = rest_bad_ = false;
@@ -76,6 +77,7 @@ GradientRowsDone ModelOptimizer::Begin(bool densify,
     if (std::find(fused_.begin(), fused_.end(), group) == fused_.end()) unfused_.push_back(group);
   }
   row_step_.emplace(adam_.BeginRowStep(fused_, num_gaussians));
+  row_step_->LimitColumns(kGroupFRest, rest_columns);
   if (densify) return CheckColourRows(num_gaussians);
   return StepModelRows(fused_, &*row_step_);
 }

@@ -51,8 +51,13 @@ class ModelOptimizer {
   // replaces every model tensor, so no model group is stepped (as in the reference) and the
   // callback only checks colour rows that have no gradient buffer (empty when they have one);
   // `reset_opacity`: the opacity is reset instead of stepped. Returns the callback for
-  // RenderBackward; this object must outlive the backward.
-  GradientRowsDone Begin(bool densify, bool reset_opacity, std::size_t num_gaussians);
+  // RenderBackward; this object must outlive the backward. `rest_columns`: the leading floats
+  // of each colour_rest row that can have had a gradient so far (the coefficients of the active
+  // degrees, which only grow); the others are skipped, exactly (AdamRowStep::LimitColumns).
+  GradientRowsDone Begin(bool densify,
+                         bool reset_opacity,
+                         std::size_t num_gaussians,
+                         std::size_t rest_columns = SIZE_MAX);
   // After the backward: the first group whose gradient held a NaN or an infinity this step, or
   // "". Such a state is partly stepped and must be dropped.
   std::string FirstNonFinite() const;

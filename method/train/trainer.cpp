@@ -215,6 +215,8 @@ double PixelsPerTime(const std::vector<TrainView>& views) {
 }
 
 // Active colour degrees at an iteration: spatial 0 -> 3 every interval, then temporal 0 -> 2.
+// Both only grow, so a colour_rest float beyond those of the active coefficients has never had
+// a gradient (ActiveRestColumns).
 std::pair<int, int> ColorDegrees(int iteration, const GaussianModel& model, int interval) {
   const int steps = iteration / interval;
   const int sh = std::min(model.basis.max_sh_degree, steps);
@@ -283,6 +285,7 @@ class TrainingRun {
   }
   bool DensifiesAt(int it) const;
   bool ResetsOpacityAt(int it) const;
+  std::size_t ActiveRestColumns() const;
   void BackwardAndUpdate(const TrainView& view, int it, double loss_value);
   double BatchBackwardAndUpdate(int it, const float** ldr_out, std::size_t* pixels);
   void FinishUpdate(int it, double loss_value);
@@ -707,11 +710,20 @@ bool TrainingRun::ResetsOpacityAt(int it) const {
   return it < opt_.densify_until && it % opt_.opacity_reset_interval == 0;
 }
 
+// The leading floats of a colour_rest row that the active colour degrees use: the coefficients
+// k = n F + lm with n <= time degree and lm < (sh degree + 1)^2 (row index (k - 1) channels).
+std::size_t TrainingRun::ActiveRestColumns() const {
+  const int functions = model_.basis.sh_functions();
+  const int active = (render_.sh_degree + 1) * (render_.sh_degree + 1);
+  const auto coefficients = static_cast<std::size_t>(render_.time_degree * functions + active - 1);
+  return std::min(model_.rest_stride(), coefficients * static_cast<std::size_t>(model_.channels));
+}
+
 // The backward with the model's optimiser step fused into it, the finite check, densification
 // and the opacity reset on their schedule, and the steps the backward did not take.
 void TrainingRun::BackwardAndUpdate(const TrainView& view, int it, double loss_value) {
   const GradientRowsDone step_rows =
-      optimizer_->Begin(DensifiesAt(it), ResetsOpacityAt(it), model_.size());
+      optimizer_->Begin(DensifiesAt(it), ResetsOpacityAt(it), model_.size(), ActiveRestColumns());
   RenderBackward(model_, view.camera, view.time, render_, &state_, dL_dimage_.data(), &grads_,
                  step_rows, GeometryGradient());
   if (tone_mapper_) tone_mapper_->EndFrameBackward();
@@ -750,7 +762,7 @@ double TrainingRun::BatchBackwardAndUpdate(int it, const float** ldr_out, std::s
   if (background_)
     for (float& g : background_->grads()) g *= inverse;
   const GradientRowsDone step_rows =
-      optimizer_->Begin(DensifiesAt(it), ResetsOpacityAt(it), model_.size());
+      optimizer_->Begin(DensifiesAt(it), ResetsOpacityAt(it), model_.size(), ActiveRestColumns());
   if (step_rows) {
     const std::size_t channels = static_cast<std::size_t>(model_.channels);
     const std::size_t stride = model_.rest_stride();
