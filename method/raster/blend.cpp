@@ -352,7 +352,6 @@ detail::TileJob MakeJob(const SplatBuffers& splats,
   job.tiles_x = state->tiles_x;
   job.final_T = state->final_transmittance.data();
   job.n_contrib = state->n_contrib.data();
-  job.depth_order = state->depth_order.data();
   job.rects = state->rects.data();
   return job;
 }

@@ -149,7 +149,6 @@ struct TileJob {
   // written by PackSplatsSimd for the Gaussians listed in some tile (a non-empty rectangle in
   // rects, RasterState::rects).
   float* packed = nullptr;
-  const std::int32_t* depth_order = nullptr;
   const std::int32_t* rects = nullptr;
   // Per-entry records (TileRecordStride(channels) per point_list entry: the per-Gaussian record
   // with its reach turned into tile rows/columns packed in one slot): written by the forward,
