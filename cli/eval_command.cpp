@@ -21,6 +21,7 @@ struct EvalOptions {
   bool json = false;
   std::string out;
   std::string data;
+  bool ldr_fit = false;
   int resolution = 1;
 };
 
@@ -57,6 +58,14 @@ a light is that clips at every exposure; the own-max protocol divides by exactly
                      without the pull of misplaced pixels (slope = corr x contrast; on a
                      held-out view, geometry errors lower corr and with it the slope)
   hdr_measured_fraction  measured pixels / all pixels
+  hdr_log_slope_ldr_fit, hdr_log_corr_ldr_fit
+                     with --data SCENE --ldr-fit and the LDR renders of the brackets in the
+                     prediction's folder (as hdr4d render writes them): slope and correlation over the measured
+                     pixels that a rendered bracket reproduces (every channel within 0.05 of a
+                     bracket that measures the pixel). The geometry is right there, so this is
+                     the tone curve's shape: a squeezed HDR behind a right LDR keeps its low
+                     slope, misplaced pixels drop out
+  hdr_ldr_fit_fraction   those pixels / the measured pixels
   mu_*_aligned       prediction times hdr_align_scale, then the HDR-NeRF (GT max) protocol
   pu21_*_aligned     prediction times hdr_align_scale, then PU21 as above
 Metrics use the first three channels (alpha is ignored). "mean" is the mean of the
@@ -82,6 +91,10 @@ void AddEvalCommand(CLI::App& app) {
                   "Scene of the HDR ground truth: its LDR brackets decide the measured pixels of "
                   "the aligned HDR metrics")
       ->check(Text("a dataset folder"));
+  sub->add_flag("--ldr-fit", options->ldr_fit,
+                "With --data: the prediction folder's LDR images are renders of the brackets at "
+                "their own exposures (hdr4d render without --exposure); adds the HDR's shape "
+                "where they reproduce the brackets (hdr_log_slope_ldr_fit, see below)");
   sub->add_option("--resolution", options->resolution,
                   "Reduce the ground truth R times (R x R box average) first, as `hdr4d train "
                   "--resolution R` reduced its targets: scores the renders of such a run")
@@ -94,11 +107,13 @@ void AddEvalCommand(CLI::App& app) {
     ProtectInput(options->pred, "the predictions eval scores");
     ProtectInput(options->gt, "the ground truth eval scores against");
     if (!options->out.empty()) CheckOutput(options->out);
+    if (options->ldr_fit && options->data.empty())
+      Fail("eval: --ldr-fit needs --data SCENE (the LDR brackets the renders are compared with)");
     EvalBrackets brackets;
     if (!options->data.empty()) brackets = DatasetBrackets(options->data);
     const nlohmann::json result =
         EvaluatePaths(options->pred, options->gt, options->data.empty() ? nullptr : &brackets,
-                      options->resolution);
+                      options->resolution, options->ldr_fit);
     if (!options->out.empty()) WriteJsonFile(options->out, result);
     if (options->json) {
       fmt::print("{}\n", result.dump(1));

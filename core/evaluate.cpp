@@ -66,27 +66,47 @@ Image ReadGroundTruth(const fs::path& path, int resolution) {
   return image;
 }
 
-// The measured-pixel mask of an HDR ground truth from its LDR brackets, or none.
-std::optional<std::vector<std::uint8_t>> BracketMask(const fs::path& gt_path,
-                                                     const EvalBrackets* brackets,
-                                                     int resolution) {
+// The pixel masks of an HDR ground truth from its LDR brackets (core/hdr_alignment.h): the
+// measured pixels, and, with `ldr_fit` and renders named like some of the brackets in the
+// prediction's folder, the pixels those renders reproduce.
+struct BracketMasks {
+  std::vector<std::uint8_t> measured;
+  std::optional<std::vector<std::uint8_t>> reproduced;
+};
+
+std::optional<BracketMasks> ReadBracketMasks(const fs::path& gt_path,
+                                             const fs::path& pred_path,
+                                             const EvalBrackets* brackets,
+                                             int resolution,
+                                             bool ldr_fit) {
   if (!brackets) return std::nullopt;
   const auto it = brackets->find(gt_path.filename().string());
   if (it == brackets->end() || it->second.empty()) return std::nullopt;
-  std::vector<Image> ldr;
-  for (const fs::path& p : it->second) ldr.push_back(ReadGroundTruth(p, resolution));
-  try {
-    return MeasurableInBrackets(ldr);
-  } catch (const Error& e) {
-    Fail("{}: its LDR brackets ({}, ...): {}", gt_path.string(), it->second[0].string(),
-         e.what());
+  std::vector<Image> ldr, truth_rendered, rendered;
+  for (const fs::path& p : it->second) {
+    ldr.push_back(ReadGroundTruth(p, resolution));
+    const fs::path render = pred_path.parent_path() / p.filename();
+    if (ldr_fit && render != p && fs::is_regular_file(render)) {
+      rendered.push_back(ReadImage(render));
+      truth_rendered.push_back(ldr.back());
+    }
   }
+  BracketMasks masks;
+  try {
+    masks.measured = MeasurableInBrackets(ldr);
+    if (!rendered.empty()) masks.reproduced = ReproducedInBrackets(truth_rendered, rendered);
+  } catch (const Error& e) {
+    Fail("{}: its LDR brackets ({}, ...) or their renders in {}: {}", gt_path.string(),
+         it->second[0].string(), pred_path.parent_path().string(), e.what());
+  }
+  return masks;
 }
 
 PairResult EvaluateFiles(const fs::path& pred_path,
                          const fs::path& gt_path,
                          const EvalBrackets* brackets,
-                         int resolution) {
+                         int resolution,
+                         bool ldr_fit) {
   const Image pred = ReadImage(pred_path);
   const Image gt = ReadGroundTruth(gt_path, resolution);
   // ReadImage marks float formats linear and integer formats display-encoded: that is the kind.
@@ -108,8 +128,9 @@ PairResult EvaluateFiles(const fs::path& pred_path,
   PairResult result;
   result.name = gt_path.filename().string();
   const bool hdr = gt.encoding() == Encoding::kLinear;
-  const std::optional<std::vector<std::uint8_t>> mask =
-      hdr ? BracketMask(gt_path, brackets, resolution) : std::nullopt;
+  const std::optional<BracketMasks> masks =
+      hdr ? ReadBracketMasks(gt_path, pred_path, brackets, resolution, ldr_fit) : std::nullopt;
+  const std::vector<std::uint8_t>* mask = masks ? &masks->measured : nullptr;
   if (mask && mask->size() != gt.num_pixels()) {
     Fail("{}: its LDR brackets are not the size of the HDR image ({})", gt_path.string(),
          gt.ShapeString());
@@ -118,7 +139,12 @@ PairResult EvaluateFiles(const fs::path& pred_path,
     const Image pred_rgb = pred.Rgb(), gt_rgb = gt.Rgb();
     if (hdr) {
       result.metrics = HdrMetrics(pred_rgb, gt_rgb);
-      for (auto& m : AlignedHdrMetrics(pred_rgb, gt_rgb, mask ? &*mask : nullptr)) {
+      MetricList aligned = AlignedHdrMetrics(pred_rgb, gt_rgb, mask);
+      if (masks && masks->reproduced) {
+        const MetricList fit = LdrFitHdrShape(pred_rgb, gt_rgb, *mask, *masks->reproduced);
+        aligned.insert(aligned.end(), fit.begin(), fit.end());
+      }
+      for (auto& m : aligned) {
         if (!std::isnan(m.second)) result.metrics.push_back(std::move(m));
       }
     } else {
@@ -245,7 +271,8 @@ const std::vector<std::string>& KnownKeys() {
       "psnr",           "psnr_channel_mean", "ssim",      "mu_psnr",  "mu_ssim",
       "mu_psnr_gt_max", "mu_ssim_gt_max",    "pu21_psnr", "pu21_ssim", "mu_psnr_aligned",
       "mu_ssim_aligned", "pu21_psnr_aligned", "pu21_ssim_aligned", "hdr_log_slope",
-      "hdr_log_corr", "hdr_log_contrast", "hdr_align_scale", "hdr_measured_fraction"};
+      "hdr_log_corr", "hdr_log_contrast", "hdr_align_scale", "hdr_measured_fraction",
+      "hdr_log_slope_ldr_fit", "hdr_log_corr_ldr_fit", "hdr_ldr_fit_fraction"};
   return keys;
 }
 
@@ -265,13 +292,14 @@ nlohmann::json EvaluatePair(const fs::path& pred,
                             const EvalBrackets* brackets,
                             int gt_resolution) {
   if (gt_resolution < 1) Fail("eval: --resolution {} must be >= 1", gt_resolution);
-  return PairJson(EvaluateFiles(pred, gt, brackets, gt_resolution));
+  return PairJson(EvaluateFiles(pred, gt, brackets, gt_resolution, false));
 }
 
 nlohmann::json EvaluatePaths(const fs::path& pred,
                              const fs::path& gt,
                              const EvalBrackets* brackets,
-                             int gt_resolution) {
+                             int gt_resolution,
+                             bool ldr_fit) {
   if (gt_resolution < 1) Fail("eval: --resolution {} must be >= 1", gt_resolution);
   std::error_code ec;
   for (const fs::path& p : {pred, gt}) {
@@ -303,7 +331,7 @@ nlohmann::json EvaluatePaths(const fs::path& pred,
                     jobs.size() >= kProgressMinPairs);
   ParallelFor(static_cast<std::int64_t>(jobs.size()), 1, [&](std::int64_t i) {
     try {
-      results[i] = EvaluateFiles(jobs[i].first, jobs[i].second, brackets, gt_resolution);
+      results[i] = EvaluateFiles(jobs[i].first, jobs[i].second, brackets, gt_resolution, ldr_fit);
     } catch (const std::exception& e) {
       errors[i] = e.what();
     }

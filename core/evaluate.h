@@ -13,7 +13,13 @@
 //   "hdr_log_slope", "hdr_log_corr", "hdr_log_contrast", "hdr_measured_fraction",
 //   "mu_psnr_aligned", "mu_ssim_aligned", "pu21_psnr_aligned", "pu21_ssim_aligned". Their
 //   pixels are those an LDR bracket of the view measures when the brackets are known
-//   (EvalBrackets), else every pixel with positive luminance in both images. A key whose value
+//   (EvalBrackets), else every pixel with positive luminance in both images. When the brackets
+//   are known, `ldr_fit` is set and the prediction's folder holds renders named like some of
+//   them at their exposures (as `hdr4d render` writes them without --exposure), also the
+//   LdrFitHdrShape keys: "hdr_log_slope_ldr_fit", "hdr_log_corr_ldr_fit",
+//   "hdr_ldr_fit_fraction" (the HDR's shape where those renders reproduce their bracket; a
+//   render that cannot be read is an error naming it; `ldr_fit` because only the caller knows
+//   that the renders are at their brackets' exposures). A key whose value
 //   is undefined for a pair (the log-log slope of an image with one measured pixel) is left
 //   out of that pair.
 // - Pairs are listed in sorted order of the ground-truth file name. "mean" is the arithmetic mean
@@ -62,7 +68,8 @@ nlohmann::json EvaluatePair(const std::filesystem::path& pred,
 nlohmann::json EvaluatePaths(const std::filesystem::path& pred,
                              const std::filesystem::path& gt,
                              const EvalBrackets* brackets = nullptr,
-                             int gt_resolution = 1);
+                             int gt_resolution = 1,
+                             bool ldr_fit = false);
 
 // A fixed-width text table of an EvaluatePaths result: a header, one line per pair, a "mean"
 // line. A null (non-finite) value is shown as "inf", a key a pair does not have as "-".

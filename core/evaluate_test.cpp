@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -143,6 +144,57 @@ TEST(EvaluateTest, BracketsDecideTheMeasuredPixels) {
   const EvalBrackets wrong = {{"x.exr", {dir / "small.png"}}};
   EXPECT_THAT(ErrorOf([&] { EvaluatePaths(dir / "pred", dir / "gt", &wrong); }),
               HasSubstr("x.exr: its LDR brackets are not the size"));
+}
+
+// With ldr_fit and the renders of the brackets beside the HDR prediction, the HDR's shape where
+// they reproduce their bracket; without either, no such keys.
+TEST(EvaluateTest, RenderedBracketsGiveTheShapeWhereTheLdrFits) {
+  TempDir dir;
+  const int w = 16, h = 8;
+  Image gt(w, h, 3, Encoding::kLinear), pred(w, h, 3, Encoding::kLinear);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 3; ++c) {
+        gt.at(x, y, c) = float(std::pow(10.0, -2.0 + 3.0 * (x + w * y) / (w * h)));
+        pred.at(x, y, c) = float(std::sqrt(gt.at(x, y, c)));  // the truth to the power 0.5
+      }
+  WriteImage(dir / "gt" / "x.exr", gt);
+  WriteImage(dir / "pred" / "x.exr", pred);
+  // Two brackets; the render of the first is right on the top half only, the second is absent.
+  Image e0(w, h, 3, Encoding::kSrgb), e1(w, h, 3, Encoding::kSrgb);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 3; ++c) {
+        e0.at(x, y, c) = std::min(1.0f, std::pow(gt.at(x, y, c) * 0.1f, 1 / 2.2f));
+        e1.at(x, y, c) = std::min(1.0f, std::pow(gt.at(x, y, c) * 10.0f, 1 / 2.2f));
+      }
+  WriteImage(dir / "x_e0.png", e0);
+  WriteImage(dir / "x_e1.png", e1);
+  Image render = e0;
+  for (int y = h / 2; y < h; ++y)
+    for (int x = 0; x < w; ++x) render.at(x, y, 1) = 0.0f;
+  WriteImage(dir / "pred" / "x_e0.png", render);
+  const EvalBrackets brackets = {{"x.exr", {dir / "x_e0.png", dir / "x_e1.png"}}};
+  const nlohmann::json fit = EvaluatePaths(dir / "pred", dir / "gt", &brackets, 1, true);
+  const nlohmann::json plain = EvaluatePaths(dir / "pred", dir / "gt", &brackets);
+  ASSERT_EQ(fit["pairs"].size(), 1u) << fit.dump();  // the LDR render has no LDR truth to pair
+  const nlohmann::json& pair = fit["pairs"][0];
+  ASSERT_TRUE(pair.contains("hdr_log_slope_ldr_fit")) << fit.dump();
+  EXPECT_NEAR(pair["hdr_log_slope_ldr_fit"].get<double>(), 0.5, 1e-3);
+  const std::vector<std::uint8_t> measured =
+      MeasurableInBrackets({ReadImage(dir / "x_e0.png"), ReadImage(dir / "x_e1.png")});
+  const std::vector<std::uint8_t> reproduced =
+      ReproducedInBrackets({ReadImage(dir / "x_e0.png")}, {ReadImage(dir / "pred" / "x_e0.png")});
+  for (const auto& [key, value] :
+       LdrFitHdrShape(ReadImage(dir / "pred" / "x.exr"), ReadImage(dir / "gt" / "x.exr"),
+                      measured, reproduced))
+    EXPECT_DOUBLE_EQ(pair[key].get<double>(), value) << key;
+  EXPECT_LT(pair["hdr_ldr_fit_fraction"].get<double>(), 0.5);  // only the top half fits
+  EXPECT_FALSE(plain["pairs"][0].contains("hdr_log_slope_ldr_fit")) << plain.dump();
+  // A render that cannot be read is an error naming it.
+  testing::WriteTextFile(dir / "pred" / "x_e0.png", "not a png");
+  EXPECT_THAT(ErrorOf([&] { EvaluatePaths(dir / "pred", dir / "gt", &brackets, 1, true); }),
+              HasSubstr("x_e0.png"));
 }
 
 TEST(EvaluateTest, MixedFolderMeansEachKeyOverItsPairs) {

@@ -37,6 +37,17 @@ void CheckHdrPair(const Image& pred, const Image& gt, const std::vector<std::uin
   }
 }
 
+// Whether one bracket measures pixel (x, y): no colour channel clipped, one above black.
+bool BracketMeasures(const Image& ldr, int x, int y) {
+  bool clipped = false, lit = false;
+  for (int c = 0; c < std::min(ldr.channels(), 3); ++c) {
+    const float v = ldr.at(x, y, c);
+    clipped = clipped || !(v < kBracketClipped);  // NaN counts as clipped
+    lit = lit || v > kBracketBlack;
+  }
+  return !clipped && lit;
+}
+
 }  // namespace
 
 std::vector<std::uint8_t> MeasurableInBrackets(const std::vector<Image>& brackets) {
@@ -48,16 +59,45 @@ std::vector<std::uint8_t> MeasurableInBrackets(const std::vector<Image>& bracket
       Fail("measurable pixels: bracket images differ in size ({} vs {}x{})", ldr.ShapeString(), w,
            h);
     }
-    const int colours = std::min(ldr.channels(), 3);
     for (int y = 0; y < h; ++y) {
       for (int x = 0; x < w; ++x) {
-        bool clipped = false, lit = false;
+        if (BracketMeasures(ldr, x, y)) mask[std::size_t(y) * w + x] = 1;
+      }
+    }
+  }
+  return mask;
+}
+
+std::vector<std::uint8_t> ReproducedInBrackets(const std::vector<Image>& truth,
+                                               const std::vector<Image>& rendered) {
+  if (truth.empty() || truth.size() != rendered.size()) {
+    Fail("reproduced pixels: {} truth brackets and {} rendered ones (need the same, at least one)",
+         truth.size(), rendered.size());
+  }
+  const int w = truth[0].width(), h = truth[0].height();
+  std::vector<std::uint8_t> mask(std::size_t(w) * h, 0);
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    const Image& gt = truth[i];
+    const Image& pred = rendered[i];
+    for (const Image* image : {&gt, &pred}) {
+      if (image->width() != w || image->height() != h) {
+        Fail("reproduced pixels: bracket images differ in size ({} vs {}x{})",
+             image->ShapeString(), w, h);
+      }
+    }
+    const int colours = std::min(std::min(gt.channels(), pred.channels()), 3);
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        if (!BracketMeasures(gt, x, y)) continue;
+        double brightest = 0;
+        for (int c = 0; c < colours; ++c) brightest = std::max(brightest, double(gt.at(x, y, c)));
+        if (brightest < kLdrFitLevel) continue;
+        bool close = true;  // NaN in the render is not close
         for (int c = 0; c < colours; ++c) {
-          const float v = ldr.at(x, y, c);
-          clipped = clipped || !(v < kBracketClipped);  // NaN counts as clipped
-          lit = lit || v > kBracketBlack;
+          close = close && std::fabs(double(pred.at(x, y, c)) - gt.at(x, y, c)) <=
+                               kLdrFitRelative * brightest;
         }
-        if (!clipped && lit) mask[std::size_t(y) * w + x] = 1;
+        if (close) mask[std::size_t(y) * w + x] = 1;
       }
     }
   }
@@ -162,6 +202,21 @@ MetricList AlignedHdrMetrics(const Image& pred,
       {"mu_ssim_aligned", MuSsim(aligned, gt_rgb, HdrNormalisation::kGtMax)},
       {"pu21_psnr_aligned", Pu21Psnr(aligned, gt_rgb)},
       {"pu21_ssim_aligned", Pu21Ssim(aligned, gt_rgb)},
+  };
+}
+
+MetricList LdrFitHdrShape(const Image& pred,
+                          const Image& gt,
+                          const std::vector<std::uint8_t>& measured,
+                          const std::vector<std::uint8_t>& reproduced) {
+  const HdrAlignment fit = AlignHdr(pred, gt, &reproduced);
+  const HdrAlignment all = AlignHdr(pred, gt, &measured);
+  return {
+      {"hdr_log_slope_ldr_fit", fit.slope},
+      {"hdr_log_corr_ldr_fit", fit.corr},
+      {"hdr_ldr_fit_fraction",
+       all.pixels ? double(fit.pixels) / double(all.pixels)
+                  : std::numeric_limits<double>::quiet_NaN()},
   };
 }
 

@@ -20,7 +20,12 @@
 //      one that is the truth to the power 0.25), their Pearson correlation, and the ratio of
 //      their spreads, std(log Y_pred) / std(log Y_gt). slope = corr x contrast: a render whose
 //      pixels are misplaced (held-out geometry, blur) has corr < 1, which pulls the slope below
-//      1 even when the HDR's shape is right; the contrast ratio is not pulled down by that.
+//      1 even when the HDR's shape is right; the contrast ratio is not pulled down by that;
+//   5. when the rendered LDR brackets are known, the slope and correlation again over the measured
+//      pixels whose LDR the model reproduces in a bracket that measures them
+//      (ReproducedInBrackets). There the geometry is right, so what is left is the tone curve's
+//      inverse: a squeezed HDR (truth^0.25 behind a right LDR) keeps its slope of 0.25 here,
+//      while misplaced pixels, whose LDR is wrong too, drop out.
 // Results go under stable keys (AlignedHdrMetrics) into `hdr4d eval` and RUN/results.json.
 #pragma once
 
@@ -44,6 +49,22 @@ inline constexpr double kBracketBlack = 0.5 / 255.0;
 // images of different sizes.
 std::vector<std::uint8_t> MeasurableInBrackets(const std::vector<Image>& brackets);
 
+// When a rendered LDR bracket reproduces the truth's pixel: the truth's brightest colour channel
+// is at least kLdrFitLevel (a dim pixel's display value pins its radiance loosely: through a
+// gamma-2.2 response, 0.05 of display at 0.05 spans three decades) and every channel of the
+// render is within kLdrFitRelative of that brightest value. Through a gamma response that is
+// about +-25% of radiance; the floor keeps the tolerance above 8-bit quantisation and the
+// datasets' sensor noise (>= 0.015, four codes).
+inline constexpr double kLdrFitLevel = 0.15;
+inline constexpr double kLdrFitRelative = 0.1;
+
+// Per pixel (W x H; 1 = reproduced): some bracket measures the pixel (as MeasurableInBrackets)
+// and its render reproduces it (kLdrFitLevel, kLdrFitRelative). truth[i] and rendered[i] are the
+// same bracket. Throws hdr4d::Error for empty or unequal lists and for images of different
+// sizes.
+std::vector<std::uint8_t> ReproducedInBrackets(const std::vector<Image>& truth,
+                                               const std::vector<Image>& rendered);
+
 struct HdrAlignment {
   double scale = 1.0;  // multiplies the prediction (1 when no pixel qualifies)
   double slope = 0.0;  // NaN when fewer than 2 pixels or log Y_gt is constant
@@ -66,5 +87,14 @@ HdrAlignment AlignHdr(const Image& pred, const Image& gt, const std::vector<std:
 MetricList AlignedHdrMetrics(const Image& pred,
                              const Image& gt,
                              const std::vector<std::uint8_t>* mask);
+
+// The HDR's shape where the LDR is right (5 above): "hdr_log_slope_ldr_fit" and
+// "hdr_log_corr_ldr_fit" (AlignHdr over the pixels `reproduced` keeps), and
+// "hdr_ldr_fit_fraction" (those pixels over the ones `measured` keeps; `reproduced` is a subset
+// of `measured` when both come from the same brackets). Throws as AlignHdr.
+MetricList LdrFitHdrShape(const Image& pred,
+                          const Image& gt,
+                          const std::vector<std::uint8_t>& measured,
+                          const std::vector<std::uint8_t>& reproduced);
 
 }  // namespace hdr4d

@@ -3,6 +3,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <random>
@@ -217,6 +218,79 @@ TEST(HdrAlignment, ExtremesStayFinite) {
   EXPECT_NEAR(m.at("hdr_log_slope"), 1.0, 1e-4);
 }
 
+// LDR brackets of a linear HDR image through a gamma-2.2 response, clipped (display values).
+Image Bracket(const Image& hdr, double exposure) {
+  Image out(hdr.width(), hdr.height(), 3, Encoding::kSrgb);
+  for (int y = 0; y < hdr.height(); ++y)
+    for (int x = 0; x < hdr.width(); ++x)
+      for (int c = 0; c < 3; ++c)
+        out.at(x, y, c) = float(std::min(1.0, std::pow(hdr.at(x, y, c) * exposure, 1 / 2.2)));
+  return out;
+}
+
+TEST(HdrAlignment, ReproducedPixelsAreMeasuredBrightEnoughAndCloseInSomeBracket) {
+  // Truth 0.4 grey: the tolerance is kLdrFitRelative x 0.4. Pixel 0: off by just under it
+  // (kept). 1: off by just over it. 2: clipped in the truth, so not measured, whatever the
+  // render. 3: off in one bracket, right in the other. 4: a NaN render. 5: right but too dim
+  // (just under kLdrFitLevel) in its only measured bracket. 6: a red pixel whose other channels
+  // are black: the tolerance follows its brightest channel.
+  constexpr int n = 7;
+  Image gt_a(n, 1, 3, Encoding::kSrgb), gt_b(n, 1, 3, Encoding::kSrgb);
+  for (int x = 0; x < n; ++x)
+    for (int c = 0; c < 3; ++c) gt_a.at(x, 0, c) = 0.4f, gt_b.at(x, 0, c) = 1.0f;
+  Image pred_a = gt_a, pred_b = gt_b;
+  const float tolerance = float(kLdrFitRelative) * 0.4f;
+  pred_a.at(0, 0, 1) = 0.4f + tolerance * 0.99f;
+  pred_a.at(1, 0, 2) = 0.4f - tolerance * 1.01f;
+  gt_a.at(2, 0, 0) = pred_a.at(2, 0, 0) = 1.0f;
+  pred_a.at(3, 0, 0) = 0.9f;
+  for (int c = 0; c < 3; ++c) gt_b.at(3, 0, c) = pred_b.at(3, 0, c) = 0.2f;
+  pred_a.at(4, 0, 0) = std::nanf("");
+  for (int c = 0; c < 3; ++c) gt_a.at(5, 0, c) = pred_a.at(5, 0, c) = float(kLdrFitLevel) * 0.99f;
+  gt_a.at(6, 0, 1) = gt_a.at(6, 0, 2) = 0.0f;
+  pred_a.at(6, 0, 1) = tolerance * 0.99f;
+  pred_a.at(6, 0, 2) = 0.0f;
+  EXPECT_EQ(ReproducedInBrackets({gt_a, gt_b}, {pred_a, pred_b}),
+            (std::vector<std::uint8_t>{1, 0, 0, 1, 0, 0, 1}));
+}
+
+// The shape where the LDR is right: misplaced pixels (LDR wrong too) drop out, a squeezed HDR
+// behind a right LDR (what issue 12 found: the truth to the power 0.25 at 29 dB of LDR) does not.
+TEST(HdrAlignment, TheLdrFitShapeDropsMisplacedPixelsButKeepsASqueeze) {
+  const Image gt = WideRangeHdr(48, 48, 4);
+  const std::vector<double> exposures = {1e-3, 0.1, 10.0};
+  std::vector<Image> brackets;
+  for (double e : exposures) brackets.push_back(Bracket(gt, e));
+  const std::vector<std::uint8_t> measured = MeasurableInBrackets(brackets);
+
+  // Right shape (3x the truth: its LDR is the truth's at exposures / 3), every fourth row
+  // reversed: the same values in wrong places, and the renders show them there.
+  Image moved = Power(gt, 3.0, 1.0);
+  for (int y = 0; y < moved.height(); y += 4)
+    for (int x = 0; x < moved.width() / 2; ++x)
+      for (int c = 0; c < 3; ++c) std::swap(moved.at(x, y, c), moved.at(moved.width() - 1 - x, y, c));
+  std::vector<Image> moved_renders;
+  for (double e : exposures) moved_renders.push_back(Bracket(moved, e / 3.0));
+  const auto all_moved = AsMap(AlignedHdrMetrics(moved, gt, &measured));
+  const auto fit_moved = AsMap(
+      LdrFitHdrShape(moved, gt, measured, ReproducedInBrackets(brackets, moved_renders)));
+  EXPECT_LT(all_moved.at("hdr_log_slope"), 0.9);
+  EXPECT_NEAR(fit_moved.at("hdr_log_slope_ldr_fit"), 1.0, 0.01);
+  EXPECT_GT(fit_moved.at("hdr_log_corr_ldr_fit"), 0.99);
+  const double moved_fraction = fit_moved.at("hdr_ldr_fit_fraction");
+
+  // Squeezed: the truth to the power 0.25, with a tone curve that undoes it, so every rendered
+  // bracket is the truth's own. The LDR cannot tell; the shape still says 0.25.
+  const Image squeezed = Power(gt, 2.0, 0.25);
+  const auto fit_squeezed =
+      AsMap(LdrFitHdrShape(squeezed, gt, measured, ReproducedInBrackets(brackets, brackets)));
+  EXPECT_NEAR(fit_squeezed.at("hdr_log_slope_ldr_fit"), 0.25, 0.01);
+  // Every measured pixel bright enough in some bracket; the reversed rows (a quarter) are not.
+  const double fraction = fit_squeezed.at("hdr_ldr_fit_fraction");
+  EXPECT_GT(fraction, 0.9);
+  EXPECT_NEAR(moved_fraction, 0.75 * fraction, 0.05);
+}
+
 TEST(HdrAlignment, BadInputsNameTheProblem) {
   const Image a = WideRangeHdr(8, 8, 5), b = WideRangeHdr(8, 9, 6);
   EXPECT_THAT(ErrorOf([&] { AlignHdr(a, b, nullptr); }), HasSubstr("differ in shape"));
@@ -227,6 +301,10 @@ TEST(HdrAlignment, BadInputsNameTheProblem) {
   EXPECT_THAT(ErrorOf([&] { AlignHdr(nan, a, nullptr); }), HasSubstr("prediction holds a non-finite"));
   EXPECT_THAT(ErrorOf([&] { MeasurableInBrackets({}); }), HasSubstr("no bracket images"));
   EXPECT_THAT(ErrorOf([&] { MeasurableInBrackets({a, b}); }), HasSubstr("differ in size"));
+  EXPECT_THAT(ErrorOf([&] { ReproducedInBrackets({}, {}); }), HasSubstr("0 truth brackets"));
+  EXPECT_THAT(ErrorOf([&] { ReproducedInBrackets({a}, {a, a}); }),
+              HasSubstr("1 truth brackets and 2 rendered"));
+  EXPECT_THAT(ErrorOf([&] { ReproducedInBrackets({a}, {b}); }), HasSubstr("differ in size"));
 }
 
 }  // namespace

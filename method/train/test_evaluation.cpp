@@ -36,11 +36,13 @@ std::vector<std::vector<std::size_t>> GroupByHdrTruth(const std::vector<TrainVie
   return groups;
 }
 
-// The HDR metrics of `prediction` against the group's truth: raw, and scale-aligned over the
-// pixels some bracket of the group measures (core/hdr_alignment.h). A run at --resolution R
-// compares with the truth reduced as its training target was. `gt`: scratch.
+// The HDR metrics of `prediction` against the group's truth: raw, scale-aligned over the pixels
+// some bracket of the group measures, and the shape where the rendered brackets `rendered` (one
+// per view of the group, in its order) reproduce the truth's (core/hdr_alignment.h). A run at
+// --resolution R compares with the truth reduced as its training target was. `gt`: scratch.
 MetricList GroupHdrMetrics(const std::vector<TrainView>& views,
                            const std::vector<std::size_t>& group,
+                           const std::vector<Image>& rendered,
                            const Image& prediction,
                            const std::filesystem::path& hdr_path,
                            std::vector<float>* gt) {
@@ -57,6 +59,11 @@ MetricList GroupHdrMetrics(const std::vector<TrainView>& views,
   MetricList metrics = HdrMetrics(prediction, truth);
   const MetricList aligned = AlignedHdrMetrics(prediction, truth, &measured);
   metrics.insert(metrics.end(), aligned.begin(), aligned.end());
+  if (rendered.size() == brackets.size()) {
+    const MetricList fit =
+        LdrFitHdrShape(prediction, truth, measured, ReproducedInBrackets(brackets, rendered));
+    metrics.insert(metrics.end(), fit.begin(), fit.end());
+  }
   return metrics;
 }
 
@@ -82,24 +89,27 @@ nlohmann::json EvaluateViews(ViewRenderer* renderer, const std::vector<TrainView
   // bracket, as a mean over views needs.
   for (const std::vector<std::size_t>& group : GroupByHdrTruth(views)) {
     const std::optional<std::filesystem::path>& hdr_path = views[group.front()].hdr_path;
-    std::optional<MetricList> hdr_metrics;
+    std::vector<Image> rendered;  // the group's LDR renders, for the HDR's shape where they fit
+    std::optional<Image> prediction;
     for (std::size_t i : group) {
       const TrainView& v = views[i];
       const ToneFrame frame{v.time_index, -1, static_cast<float>(std::log(v.exposure))};
       renderer->Render(v.camera, v.time, frame, &ldr, &hdr);
       if (!ldr.empty()) {
         v.ToFloat(&gt);
-        add(LdrMetrics(DisplayImageFromBuffer(ldr.data(), v.width(), v.height(), 3),
-                       DisplayImageFromBuffer(gt.data(), v.width(), v.height(), 3)));
+        Image render = DisplayImageFromBuffer(ldr.data(), v.width(), v.height(), 3);
+        add(LdrMetrics(render, DisplayImageFromBuffer(gt.data(), v.width(), v.height(), 3)));
+        if (hdr_path) rendered.push_back(std::move(render));
       }
-      if (hdr.empty() || !hdr_path) continue;
-      if (!hdr_metrics) {
-        Image prediction(v.width(), v.height(), 3, Encoding::kLinear);
-        std::copy(hdr.begin(), hdr.end(), prediction.data());
-        hdr_metrics = GroupHdrMetrics(views, group, prediction, *hdr_path, &gt);
+      if (!hdr.empty() && hdr_path && !prediction) {
+        prediction.emplace(v.width(), v.height(), 3, Encoding::kLinear);
+        std::copy(hdr.begin(), hdr.end(), prediction->data());
       }
-      add(*hdr_metrics);
     }
+    if (!prediction) continue;
+    const MetricList hdr_metrics =
+        GroupHdrMetrics(views, group, rendered, *prediction, *hdr_path, &gt);
+    for (std::size_t k = 0; k < group.size(); ++k) add(hdr_metrics);
   }
   for (const auto& [key, sum] : sums) mean[key] = FiniteOrNull(sum.first / sum.second);
   return mean;
