@@ -66,6 +66,9 @@ a light is that clips at every exposure; the own-max protocol divides by exactly
                      the tone curve's shape: a squeezed HDR behind a right LDR keeps its low
                      slope, misplaced pixels drop out
   hdr_ldr_fit_fraction   those pixels / the measured pixels
+                     In "mean" the two shape keys are pooled within images (the sums about
+                     each image's own means added), not means of per-image values: one image
+                     with a narrow range of reproduced truth would swing a mean of slopes
   mu_*_aligned       prediction times hdr_align_scale, then the HDR-NeRF (GT max) protocol
   pu21_*_aligned     prediction times hdr_align_scale, then PU21 as above
 Metrics use the first three channels (alpha is ignored). "mean" is the mean of the

@@ -35,6 +35,7 @@ struct PairResult {
   std::string name;
   MetricList metrics;
   bool identical = false;  // equal pixel values: every PSNR is +inf
+  std::optional<LogShapeSums> fit_sums;  // behind the shape where the LDR fits (--ldr-fit)
 };
 
 std::string Lower(std::string s) {
@@ -141,7 +142,9 @@ PairResult EvaluateFiles(const fs::path& pred_path,
       result.metrics = HdrMetrics(pred_rgb, gt_rgb);
       MetricList aligned = AlignedHdrMetrics(pred_rgb, gt_rgb, mask);
       if (masks && masks->reproduced) {
-        const MetricList fit = LdrFitHdrShape(pred_rgb, gt_rgb, *mask, *masks->reproduced);
+        result.fit_sums.emplace();
+        const MetricList fit =
+            LdrFitHdrShape(pred_rgb, gt_rgb, *mask, *masks->reproduced, &*result.fit_sums);
         aligned.insert(aligned.end(), fit.begin(), fit.end());
       }
       for (auto& m : aligned) {
@@ -365,6 +368,11 @@ nlohmann::json EvaluatePaths(const fs::path& pred,
   out["mean"] = nlohmann::json::object();
   for (const auto& [key, sc] : sums)
     out["mean"][key] = sc.second > 0 ? FiniteOrNull(sc.first / sc.second) : nlohmann::json(nullptr);
+  // The shape where the LDR fits: pooled within images, not the mean of per-pair slopes.
+  std::vector<LogShapeSums> fit_sums;
+  for (const auto& r : results)
+    if (r->fit_sums) fit_sums.push_back(*r->fit_sums);
+  if (!fit_sums.empty()) SetPooledLdrFitShape(fit_sums, &out["mean"]);
   out["identical_pairs"] = identical;
   return out;
 }

@@ -24,7 +24,9 @@
 //   out of that pair.
 // - Pairs are listed in sorted order of the ground-truth file name. "mean" is the arithmetic mean
 //   of the per-pair values of each key over the pairs that have the key (not a metric of the
-//   pooled error).
+//   pooled error), except "hdr_log_slope_ldr_fit" and "hdr_log_corr_ldr_fit", which are pooled
+//   within images (PoolLogShape: a view with a narrow range of measured truth would swing a mean
+//   of slopes).
 // - Non-finite numbers are written as null (identical images have PSNR +inf). "mean" is over the
 //   finite values of each key (null when there is none), so one identical pair does not hide
 //   the others; "identical_pairs" counts the pairs whose images are equal.

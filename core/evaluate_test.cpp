@@ -187,8 +187,10 @@ TEST(EvaluateTest, RenderedBracketsGiveTheShapeWhereTheLdrFits) {
       ReproducedInBrackets({ReadImage(dir / "x_e0.png")}, {ReadImage(dir / "pred" / "x_e0.png")});
   for (const auto& [key, value] :
        LdrFitHdrShape(ReadImage(dir / "pred" / "x.exr"), ReadImage(dir / "gt" / "x.exr"),
-                      measured, reproduced))
+                      measured, reproduced)) {
     EXPECT_DOUBLE_EQ(pair[key].get<double>(), value) << key;
+    EXPECT_NEAR(fit["mean"][key].get<double>(), value, 1e-12) << key;  // one image: pooled = it
+  }
   EXPECT_LT(pair["hdr_ldr_fit_fraction"].get<double>(), 0.5);  // only the top half fits
   EXPECT_FALSE(plain["pairs"][0].contains("hdr_log_slope_ldr_fit")) << plain.dump();
   // A render that cannot be read is an error naming it.

@@ -172,6 +172,7 @@ HdrAlignment AlignHdr(const Image& pred, const Image& gt, const std::vector<std:
     spp += dp * dp;
     sgp += dg * dp;
   }
+  a.sums = {sgg, spp, sgp};
   if (sgg > 0) a.slope = sgp / sgg;
   if (sgg > 0) a.contrast = std::sqrt(spp / sgg);
   // All at one value (every pixel a hole): no correlation, whatever the rounding of the mean.
@@ -205,12 +206,28 @@ MetricList AlignedHdrMetrics(const Image& pred,
   };
 }
 
+PooledShape PoolLogShape(const std::vector<LogShapeSums>& images) {
+  LogShapeSums total;
+  for (const LogShapeSums& s : images) {
+    total.gg += s.gg;
+    total.pp += s.pp;
+    total.gp += s.gp;
+  }
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  PooledShape pooled{nan, nan};
+  if (total.gg > 0) pooled.slope = total.gp / total.gg;
+  if (total.gg > 0 && total.pp > 0) pooled.corr = total.gp / std::sqrt(total.gg * total.pp);
+  return pooled;
+}
+
 MetricList LdrFitHdrShape(const Image& pred,
                           const Image& gt,
                           const std::vector<std::uint8_t>& measured,
-                          const std::vector<std::uint8_t>& reproduced) {
+                          const std::vector<std::uint8_t>& reproduced,
+                          LogShapeSums* sums) {
   const HdrAlignment fit = AlignHdr(pred, gt, &reproduced);
   const HdrAlignment all = AlignHdr(pred, gt, &measured);
+  if (sums) *sums = fit.sums;
   return {
       {"hdr_log_slope_ldr_fit", fit.slope},
       {"hdr_log_corr_ldr_fit", fit.corr},
@@ -218,6 +235,19 @@ MetricList LdrFitHdrShape(const Image& pred,
        all.pixels ? double(fit.pixels) / double(all.pixels)
                   : std::numeric_limits<double>::quiet_NaN()},
   };
+}
+
+void SetPooledLdrFitShape(const std::vector<LogShapeSums>& images, nlohmann::json* mean) {
+  const PooledShape pooled = PoolLogShape(images);
+  const auto set = [&](const char* key, double value) {
+    if (std::isfinite(value)) {
+      (*mean)[key] = value;
+    } else {
+      mean->erase(key);
+    }
+  };
+  set("hdr_log_slope_ldr_fit", pooled.slope);
+  set("hdr_log_corr_ldr_fit", pooled.corr);
 }
 
 }  // namespace hdr4d

@@ -31,6 +31,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <vector>
 
 #include "core/image.h"
@@ -65,6 +66,23 @@ inline constexpr double kLdrFitRelative = 0.1;
 std::vector<std::uint8_t> ReproducedInBrackets(const std::vector<Image>& truth,
                                                const std::vector<Image>& rendered);
 
+// Sums of squares and products of log Y_gt (g) and log Y_pred (p) about their means over one
+// image's pixels: what AlignHdr's slope (gp / gg) and correlation come from.
+struct LogShapeSums {
+  double gg = 0, pp = 0, gp = 0;
+};
+
+// The slope and correlation of several images pooled within each image (each centred on its
+// own means, so each image's scale drops out): sum gp / sum gg and sum gp / sqrt(sum gg sum pp).
+// Each image weighs by its spread of log truth, so a view whose measured pixels span a narrow
+// range (one bracket, mostly clipped) does not swing the result as it swings a mean of slopes.
+// NaN when the truth has no spread.
+struct PooledShape {
+  double slope = 0.0;
+  double corr = 0.0;
+};
+PooledShape PoolLogShape(const std::vector<LogShapeSums>& images);
+
 struct HdrAlignment {
   double scale = 1.0;  // multiplies the prediction (1 when no pixel qualifies)
   double slope = 0.0;  // NaN when fewer than 2 pixels or log Y_gt is constant
@@ -72,6 +90,7 @@ struct HdrAlignment {
   double contrast = 0.0;  // std(log Y_pred) / std(log Y_gt); NaN as slope
   std::size_t pixels = 0;
   std::size_t total = 0;  // all pixels of the image
+  LogShapeSums sums;
 };
 
 // The alignment of `pred` to `gt` (linear HDR, same size; RGB or grey) over the pixels `mask`
@@ -91,10 +110,17 @@ MetricList AlignedHdrMetrics(const Image& pred,
 // The HDR's shape where the LDR is right (5 above): "hdr_log_slope_ldr_fit" and
 // "hdr_log_corr_ldr_fit" (AlignHdr over the pixels `reproduced` keeps), and
 // "hdr_ldr_fit_fraction" (those pixels over the ones `measured` keeps; `reproduced` is a subset
-// of `measured` when both come from the same brackets). Throws as AlignHdr.
+// of `measured` when both come from the same brackets). `sums` (optional) receives the sums
+// behind the slope, for PoolLogShape over a split: the figure results.json and hdr4d eval's mean
+// give for the two shape keys. Throws as AlignHdr.
 MetricList LdrFitHdrShape(const Image& pred,
                           const Image& gt,
                           const std::vector<std::uint8_t>& measured,
-                          const std::vector<std::uint8_t>& reproduced);
+                          const std::vector<std::uint8_t>& reproduced,
+                          LogShapeSums* sums = nullptr);
+
+// Replaces `mean`'s "hdr_log_slope_ldr_fit" and "hdr_log_corr_ldr_fit" with the pooled
+// statistics of `images` (removes them when there are none).
+void SetPooledLdrFitShape(const std::vector<LogShapeSums>& images, nlohmann::json* mean);
 
 }  // namespace hdr4d

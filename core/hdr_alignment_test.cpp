@@ -291,6 +291,35 @@ TEST(HdrAlignment, TheLdrFitShapeDropsMisplacedPixelsButKeepsASqueeze) {
   EXPECT_NEAR(moved_fraction, 0.75 * fraction, 0.05);
 }
 
+// A split's shape pools the images within each: one image whose few measured pixels span a
+// narrow range swings a mean of slopes, not the pooled slope; per-image scales drop out.
+TEST(HdrAlignment, PooledShapeWeighsImagesByTheirSpread) {
+  const Image wide = WideRangeHdr(32, 32, 7);
+  const HdrAlignment a = AlignHdr(Power(wide, 4.0, 0.9), wide, nullptr);
+  // A narrow image: truth within 1.01x, the prediction's noise spread at random against it.
+  Image narrow(8, 1, 3, Encoding::kLinear), noisy(8, 1, 3, Encoding::kLinear);
+  for (int x = 0; x < 8; ++x)
+    for (int c = 0; c < 3; ++c) {
+      narrow.at(x, 0, c) = 1.0f + 0.001f * float(x);
+      noisy.at(x, 0, c) = 1.0f + 0.01f * float((x * 5) % 8);
+    }
+  const HdrAlignment b = AlignHdr(noisy, narrow, nullptr);
+  EXPECT_GT(std::fabs(b.slope - 0.9), 1.0);  // the narrow image's own slope is far off
+  const PooledShape pooled = PoolLogShape({a.sums, b.sums});
+  EXPECT_NEAR(pooled.slope, 0.9, 0.01);
+  EXPECT_NEAR(PoolLogShape({a.sums}).slope, a.slope, 1e-12);
+  EXPECT_NEAR(PoolLogShape({a.sums}).corr, a.corr, 1e-12);
+  EXPECT_TRUE(std::isnan(PoolLogShape({}).slope));
+  // Written into a mean in place of the mean of slopes; removed when undefined.
+  nlohmann::json mean = {{"hdr_log_slope_ldr_fit", 0.5}, {"psnr", 20.0}};
+  SetPooledLdrFitShape({a.sums, b.sums}, &mean);
+  EXPECT_NEAR(mean["hdr_log_slope_ldr_fit"].get<double>(), pooled.slope, 1e-12);
+  EXPECT_NEAR(mean["hdr_log_corr_ldr_fit"].get<double>(), pooled.corr, 1e-12);
+  SetPooledLdrFitShape({LogShapeSums{}}, &mean);
+  EXPECT_FALSE(mean.contains("hdr_log_slope_ldr_fit"));
+  EXPECT_EQ(mean["psnr"], 20.0);
+}
+
 TEST(HdrAlignment, BadInputsNameTheProblem) {
   const Image a = WideRangeHdr(8, 8, 5), b = WideRangeHdr(8, 9, 6);
   EXPECT_THAT(ErrorOf([&] { AlignHdr(a, b, nullptr); }), HasSubstr("differ in shape"));

@@ -39,13 +39,15 @@ std::vector<std::vector<std::size_t>> GroupByHdrTruth(const std::vector<TrainVie
 // The HDR metrics of `prediction` against the group's truth: raw, scale-aligned over the pixels
 // some bracket of the group measures, and the shape where the rendered brackets `rendered` (one
 // per view of the group, in its order) reproduce the truth's (core/hdr_alignment.h). A run at
-// --resolution R compares with the truth reduced as its training target was. `gt`: scratch.
+// --resolution R compares with the truth reduced as its training target was. `gt`: scratch;
+// `fit_sums` receives the sums behind the shape where the LDR fits, for the split's pooled figure.
 MetricList GroupHdrMetrics(const std::vector<TrainView>& views,
                            const std::vector<std::size_t>& group,
                            const std::vector<Image>& rendered,
                            const Image& prediction,
                            const std::filesystem::path& hdr_path,
-                           std::vector<float>* gt) {
+                           std::vector<float>* gt,
+                           std::vector<LogShapeSums>* fit_sums) {
   std::vector<Image> brackets;
   for (std::size_t i : group) {
     views[i].ToFloat(gt);
@@ -60,8 +62,9 @@ MetricList GroupHdrMetrics(const std::vector<TrainView>& views,
   const MetricList aligned = AlignedHdrMetrics(prediction, truth, &measured);
   metrics.insert(metrics.end(), aligned.begin(), aligned.end());
   if (rendered.size() == brackets.size()) {
-    const MetricList fit =
-        LdrFitHdrShape(prediction, truth, measured, ReproducedInBrackets(brackets, rendered));
+    fit_sums->emplace_back();
+    const MetricList fit = LdrFitHdrShape(
+        prediction, truth, measured, ReproducedInBrackets(brackets, rendered), &fit_sums->back());
     metrics.insert(metrics.end(), fit.begin(), fit.end());
   }
   return metrics;
@@ -74,6 +77,7 @@ nlohmann::json EvaluateViews(ViewRenderer* renderer, const std::vector<TrainView
   if (views.empty()) return mean;
   std::map<std::string, std::pair<double, int>> sums;
   std::vector<float> ldr, hdr, gt;
+  std::vector<LogShapeSums> fit_sums;  // one per HDR truth with rendered brackets
   // Means over the views where a metric is defined, as hdr4d eval does: the log-log slope of a
   // view with no measured pixel (every bracket clipped) is NaN and left out.
   auto add = [&](const MetricList& metrics) {
@@ -108,10 +112,12 @@ nlohmann::json EvaluateViews(ViewRenderer* renderer, const std::vector<TrainView
     }
     if (!prediction) continue;
     const MetricList hdr_metrics =
-        GroupHdrMetrics(views, group, rendered, *prediction, *hdr_path, &gt);
+        GroupHdrMetrics(views, group, rendered, *prediction, *hdr_path, &gt, &fit_sums);
     for (std::size_t k = 0; k < group.size(); ++k) add(hdr_metrics);
   }
   for (const auto& [key, sum] : sums) mean[key] = FiniteOrNull(sum.first / sum.second);
+  // The shape where the LDR fits is pooled within views, not a mean of per-view slopes.
+  if (!fit_sums.empty()) SetPooledLdrFitShape(fit_sums, &mean);
   return mean;
 }
 
