@@ -60,10 +60,11 @@ a light is that clips at every exposure; the own-max protocol divides by exactly
   hdr_measured_fraction  measured pixels / all pixels
   hdr_log_slope_ldr_fit, hdr_log_corr_ldr_fit
                      with --data SCENE --ldr-fit and the LDR renders of the brackets in the
-                     prediction's folder (as hdr4d render writes them): slope and correlation over the measured
-                     pixels that a rendered bracket reproduces (every channel within 0.05 of a
-                     bracket that measures the pixel). The geometry is right there, so this is
-                     the tone curve's shape: a squeezed HDR behind a right LDR keeps its low
+                     prediction's folder (as hdr4d render writes them): slope and correlation
+                     over the measured pixels that a rendered bracket reproduces (in a bracket
+                     where the truth's brightest channel is >= 0.15, every channel of the
+                     render within 10% of that value). The geometry is right there, so this
+                     is the tone curve's shape: a squeezed HDR behind a right LDR keeps its low
                      slope, misplaced pixels drop out
   hdr_ldr_fit_fraction   those pixels / the measured pixels
                      In "mean" the two shape keys are pooled within images (the sums about
