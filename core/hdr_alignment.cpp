@@ -37,6 +37,21 @@ void CheckHdrPair(const Image& pred, const Image& gt, const std::vector<std::uin
   }
 }
 
+// Positive and normal: the log of a denormal or of 0 says nothing about the shape.
+bool NormalLuminance(double v) { return v >= std::numeric_limits<float>::min(); }
+
+// The pixels AlignHdr keeps under `mask` (W x H, checked): true luminance positive and normal.
+std::size_t KeptPixels(const Image& gt, const std::vector<std::uint8_t>& mask) {
+  const int w = gt.width(), h = gt.height();
+  if (mask.size() != std::size_t(w) * h)
+    Fail("HDR alignment: the mask has {} entries for {} pixels", mask.size(), std::size_t(w) * h);
+  std::size_t kept = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      kept += mask[std::size_t(y) * w + x] && NormalLuminance(PixelLuminance(gt, x, y)) ? 1 : 0;
+  return kept;
+}
+
 // Whether one bracket measures pixel (x, y): no colour channel clipped, one above black.
 bool BracketMeasures(const Image& ldr, int x, int y) {
   bool clipped = false, lit = false;
@@ -107,8 +122,7 @@ std::vector<std::uint8_t> ReproducedInBrackets(const std::vector<Image>& truth,
 HdrAlignment AlignHdr(const Image& pred, const Image& gt, const std::vector<std::uint8_t>* mask) {
   CheckHdrPair(pred, gt, mask);
   const int w = gt.width(), h = gt.height();
-  // Positive and normal: the log of a denormal or of 0 says nothing about the shape.
-  const auto normal = [](double v) { return v >= std::numeric_limits<float>::min(); };
+  const auto normal = NormalLuminance;
   std::vector<double> g_lum, p_lum;
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
@@ -226,14 +240,15 @@ MetricList LdrFitHdrShape(const Image& pred,
                           const std::vector<std::uint8_t>& reproduced,
                           LogShapeSums* sums) {
   const HdrAlignment fit = AlignHdr(pred, gt, &reproduced);
-  const HdrAlignment all = AlignHdr(pred, gt, &measured);
+  // Only the count of the measured pixels: their alignment is AlignedHdrMetrics' own.
+  const std::size_t measured_pixels = KeptPixels(gt, measured);
   if (sums) *sums = fit.sums;
   return {
       {"hdr_log_slope_ldr_fit", fit.slope},
       {"hdr_log_corr_ldr_fit", fit.corr},
       {"hdr_ldr_fit_fraction",
-       all.pixels ? double(fit.pixels) / double(all.pixels)
-                  : std::numeric_limits<double>::quiet_NaN()},
+       measured_pixels ? double(fit.pixels) / double(measured_pixels)
+                       : std::numeric_limits<double>::quiet_NaN()},
   };
 }
 

@@ -330,6 +330,9 @@ TEST(HdrAlignment, BadInputsNameTheProblem) {
   EXPECT_THAT(ErrorOf([&] { AlignHdr(nan, a, nullptr); }), HasSubstr("prediction holds a non-finite"));
   EXPECT_THAT(ErrorOf([&] { MeasurableInBrackets({}); }), HasSubstr("no bracket images"));
   EXPECT_THAT(ErrorOf([&] { MeasurableInBrackets({a, b}); }), HasSubstr("differ in size"));
+  const std::vector<std::uint8_t> all(64, 1);
+  EXPECT_THAT(ErrorOf([&] { LdrFitHdrShape(a, a, small, all); }),
+              HasSubstr("10 entries for 64 pixels"));
   EXPECT_THAT(ErrorOf([&] { ReproducedInBrackets({}, {}); }), HasSubstr("0 truth brackets"));
   EXPECT_THAT(ErrorOf([&] { ReproducedInBrackets({a}, {a, a}); }),
               HasSubstr("1 truth brackets and 2 rendered"));
