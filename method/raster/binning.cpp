@@ -70,32 +70,34 @@ constexpr int kMinBinChunk = 4096;
 int TileCount(int pixels) { return (pixels + kTileSize - 1) / kTileSize; }
 
 template <typename T>
-TileRect GaussianTileRect(T mean_x, T mean_y, int radius, int tiles_x, int tiles_y) {
+TileRect GaussianTileRect(T mean_x, T mean_y, int radius_x, int radius_y, int tiles_x, int tiles_y) {
   TileRect rect;
-  if (radius <= 0 || !std::isfinite(mean_x) || !std::isfinite(mean_y)) return rect;
-  const T r = static_cast<T>(radius);
+  if (radius_x <= 0 || radius_y <= 0 || !std::isfinite(mean_x) || !std::isfinite(mean_y))
+    return rect;
   const T size = static_cast<T>(kTileSize);
   // floor / ceil by truncation after clamping to [-1, n + 1], so far-away means cannot overflow
   // the int conversion (and no libm call: the x86-64 baseline has no rounding instruction).
   const auto clamped = [](T v, int n) {
     return std::min(std::max(v, T(-1)), static_cast<T>(n + 1));
   };
-  const auto lo = [&](T m, int n) {
+  const auto lo = [&](T m, T r, int n) {
     const T v = clamped((m - r) / size, n);
     int i = static_cast<int>(v);
     i -= v < static_cast<T>(i);  // floor
     return std::min(std::max(i, 0), n);
   };
-  const auto hi = [&](T m, int n) {
+  const auto hi = [&](T m, T r, int n) {
     const T v = clamped((m + r) / size, n);
     int i = static_cast<int>(v);
     i += v > static_cast<T>(i);  // ceil
     return std::min(std::max(i, 0), n);
   };
-  rect.x0 = lo(mean_x, tiles_x);
-  rect.x1 = hi(mean_x, tiles_x);
-  rect.y0 = lo(mean_y, tiles_y);
-  rect.y1 = hi(mean_y, tiles_y);
+  const T rx = static_cast<T>(radius_x);
+  const T ry = static_cast<T>(radius_y);
+  rect.x0 = lo(mean_x, rx, tiles_x);
+  rect.x1 = hi(mean_x, rx, tiles_x);
+  rect.y0 = lo(mean_y, ry, tiles_y);
+  rect.y1 = hi(mean_y, ry, tiles_y);
   return rect;
 }
 
@@ -118,6 +120,7 @@ void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, R
   const int num_tiles = s.num_tiles();
   const T* mean = splats.mean2d.data();
   const int* radius = splats.radius.data();
+  const int* reach = splats.reach.empty() ? nullptr : splats.reach.data();
 
   // 1. Each Gaussian's tile rectangle, then the visible ones in index order with their depth
   //    keys, both in parallel over fixed chunks (so the order does not depend on threads).
@@ -130,8 +133,11 @@ void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, R
   ParallelForChunks(n, kChunk, [&](std::int64_t begin, std::int64_t end) {
     int count = 0;
     for (std::int64_t g = begin; g < end; ++g) {
-      const TileRect r =
-          GaussianTileRect<T>(mean[2 * g], mean[2 * g + 1], radius[g], tiles_x, tiles_y);
+      const int rx = reach ? reach[2 * g] : radius[g];
+      const int ry = reach ? reach[2 * g + 1] : radius[g];
+      const TileRect r = radius[g] <= 0 ? TileRect{}
+                                        : GaussianTileRect<T>(mean[2 * g], mean[2 * g + 1], rx,
+                                                              ry, tiles_x, tiles_y);
       const bool empty = r.empty();
       rects[4 * g] = r.x0;
       rects[4 * g + 1] = r.y0;
@@ -288,8 +294,8 @@ void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, R
   s.entry_slots.resize(slots ? total : 0);
 }
 
-template TileRect GaussianTileRect<float>(float, float, int, int, int);
-template TileRect GaussianTileRect<double>(double, double, int, int, int);
+template TileRect GaussianTileRect<float>(float, float, int, int, int, int);
+template TileRect GaussianTileRect<double>(double, double, int, int, int, int);
 template void BinSplats<float>(const SplatBuffersT<float>&, const RasterSettings&, RasterState*);
 template void BinSplats<double>(const SplatBuffersT<double>&, const RasterSettings&, RasterState*);
 

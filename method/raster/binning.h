@@ -11,6 +11,13 @@
 // 16k + 0.5, is already outside. A Gaussian with radius <= 0, a non-finite mean or an empty
 // clipped rectangle is not listed at all (its cost is one test).
 //
+// With SplatBuffers::reach the half-widths are per axis (rx, ry), each at most the radius: the
+// rectangle of the ellipse where alpha can reach 1/255 instead of the square of its widest axis
+// (the "SnugBox" of Speedy-Splat, Hanson et al., CVPR 2025). The tiles it leaves out hold no
+// pixel that blends, so images and gradients are unchanged. It drops 39% of the entries of a
+// trained 800x800 model (large, tilted splats) and 4% at 200x200 / 20k (small splats, where the
+// reach's one-pixel rounding margin is most of the rectangle).
+//
 // Order. Entries are sorted by (tile, depth, Gaussian id): the visible Gaussians are first
 // radix-sorted by depth (stable, so equal depths keep id order; depths compare by the total order
 // of floats), then distributed to tiles with a counting sort that keeps that order. This equals
@@ -29,7 +36,11 @@ struct TileRect {
   int area() const { return empty() ? 0 : (x1 - x0) * (y1 - y0); }
 };
 template <typename T>
-TileRect GaussianTileRect(T mean_x, T mean_y, int radius, int tiles_x, int tiles_y);
+TileRect GaussianTileRect(T mean_x, T mean_y, int radius_x, int radius_y, int tiles_x, int tiles_y);
+template <typename T>
+TileRect GaussianTileRect(T mean_x, T mean_y, int radius, int tiles_x, int tiles_y) {
+  return GaussianTileRect(mean_x, mean_y, radius, radius, tiles_x, tiles_y);
+}
 
 // Number of tiles along an image side of `pixels` pixels.
 int TileCount(int pixels);

@@ -41,15 +41,30 @@ SplatBuffers RandomSplats(int n, int width, int height, unsigned seed, int max_r
 }
 
 // Brute force: Gaussian g is in tile (tx, ty) iff the open interval (m - r, m + r) meets the
-// tile's span [16 t, 16 t + 16) on both axes.
+// tile's span [16 t, 16 t + 16) on both axes; r per axis from `reach` when the splats have it.
 bool Overlaps(const SplatBuffers& s, int g, int tx, int ty) {
   if (s.radius[g] <= 0) return false;
-  const double r = s.radius[g];
+  const bool snug = !s.reach.empty();
+  const double rx = snug ? s.reach[2 * g] : s.radius[g];
+  const double ry = snug ? s.reach[2 * g + 1] : s.radius[g];
+  if (rx <= 0 || ry <= 0) return false;  // reaches no pixel on one axis
   const double mx = s.mean2d[2 * g], my = s.mean2d[2 * g + 1];
-  const auto meets = [&](double m, int t) {
+  const auto meets = [&](double m, double r, int t) {
     return kTileSize * t < m + r && kTileSize * (t + 1) > m - r;
   };
-  return meets(mx, tx) && meets(my, ty);
+  return meets(mx, rx, tx) && meets(my, ry, ty);
+}
+
+// Per-axis reaches of at most the radius, some 0 (reaching no pixel), some the radius.
+void AddRandomReach(SplatBuffers* s, unsigned seed) {
+  std::mt19937 rng(seed);
+  s->reach.resize(2 * s->size());
+  for (std::size_t g = 0; g < s->size(); ++g) {
+    for (int k = 0; k < 2; ++k) {
+      std::uniform_int_distribution<int> u(s->radius[g] > 5 ? -1 : 0, s->radius[g]);
+      s->reach[2 * g + k] = std::max(0, u(rng));
+    }
+  }
 }
 
 // Every structural invariant of a binning against brute force.
@@ -130,6 +145,26 @@ TEST(RasterBinning, MatchesBruteForceWithPartialTiles) {
   RasterState b;
   BinSplats(s, Size(200, 130), &b);
   ExpectConsistent(s, b);
+}
+
+TEST(RasterBinning, PerAxisReachListsTheTilesOfItsRectangle) {
+  for (unsigned seed : {4u, 5u}) {
+    SplatBuffers s = RandomSplats(2000, 200, 130, seed, 50);
+    RasterState square;
+    BinSplats(s, Size(200, 130), &square);
+    AddRandomReach(&s, seed);
+    RasterState snug;
+    BinSplats(s, Size(200, 130), &snug);
+    ExpectConsistent(s, snug);
+    EXPECT_LT(snug.num_entries(), square.num_entries() * 9 / 10);
+  }
+  // The rectangle takes each axis's radius.
+  const TileRect wide = GaussianTileRect(40.0f, 40.0f, 20, 3, 8, 8);
+  EXPECT_EQ(wide.x0, 1);
+  EXPECT_EQ(wide.x1, 4);
+  EXPECT_EQ(wide.y0, 2);
+  EXPECT_EQ(wide.y1, 3);
+  EXPECT_TRUE(GaussianTileRect(40.0f, 40.0f, 20, 0, 8, 8).empty());
 }
 
 TEST(RasterBinning, TileRectangleRule) {
@@ -259,6 +294,9 @@ TEST(RasterSplats, ValidateNamesTheInconsistentBuffer) {
   EXPECT_EQ(broken([](SplatBuffers& s) { s.features.pop_back(); }),
             "features must hold `channels` values per Gaussian");
   EXPECT_EQ(broken([](SplatBuffers& s) { s.channels = 0; }), "channels must be >= 1");
+  EXPECT_EQ(broken([](SplatBuffers& s) { s.reach.assign(5, 1); }),
+            "reach must be empty or hold 2 values per Gaussian");
+  EXPECT_EQ(broken([](SplatBuffers& s) { s.reach.assign(6, 1); }), "");
   // Resize keeps every buffer consistent; SetZero sizes gradients.
   SplatBuffers resized = good;
   resized.Resize(7);

@@ -36,6 +36,11 @@ struct SplatBuffersT {
   std::vector<T> depth;     // N: camera z, the sort key within a tile (front = small)
   std::vector<int> radius;  // N: screen radius in pixels; 0 = culled (costs nothing)
   std::vector<T> features;  // N x channels: the values blended (colours)
+  // Optional, N x 2: per-axis binning radii (x, y), each <= radius, bounding where alpha can
+  // reach 1/255 on that axis; the binning lists the tiles of that rectangle instead of the
+  // square of `radius`. Empty: the square. Not touched by Resize (a producer that does not fill
+  // it leaves it empty).
+  std::vector<int> reach;
 
   std::size_t size() const { return opacity.size(); }
   // Resizes every buffer for n Gaussians (new entries zero, i.e. culled).
@@ -57,6 +62,7 @@ struct SplatBuffersT {
     if (radius.size() != n) return "radius must hold 1 value per Gaussian";
     if (features.size() != n * static_cast<std::size_t>(channels))
       return "features must hold `channels` values per Gaussian";
+    if (!reach.empty() && reach.size() != 2 * n) return "reach must be empty or hold 2 values per Gaussian";
     return "";
   }
 };

@@ -73,6 +73,23 @@ int BinningRadius(const Splat2D<T>& splat, T opacity) {
   return std::min(splat.radius, static_cast<int>(std::ceil(r)) + 1);  // +1: rounding margin
 }
 
+// The same reach per axis, for the binning's rectangle (SplatBuffers::reach): on the ellipse
+// d^T Sigma^-1 d <= 2 ln(255 opacity), |dx| is at most sqrt(2 ln(255 opacity) Sigma_xx) (and
+// |dy| with Sigma_yy), which for an elongated or tilted splat is well inside the square of the
+// widest axis. Each at most `radius` (BinningRadius), so the binning never lists a tile the
+// square would not: it only drops tiles whose pixels all have alpha < 1/255.
+template <typename T>
+void BinningReach(const Splat2D<T>& splat, T opacity, int radius, int* reach) {
+  reach[0] = reach[1] = 0;
+  const T level = opacity * T(255);
+  if (radius <= 0 || !(level > T(1))) return;
+  const T t2 = T(2) * std::log(level);
+  for (int axis = 0; axis < 2; ++axis) {
+    const T r = std::sqrt(t2 * std::max(splat.cov2d[2 * axis], T(0)));
+    reach[axis] = std::min(radius, static_cast<int>(std::ceil(r)) + 1);  // +1: rounding margin
+  }
+}
+
 // Clears Gaussian i's gradient rows; the colour rows only when asked (a visible Gaussian's
 // colour rows are overwritten in full by the backward).
 template <typename T>
@@ -229,6 +246,7 @@ void BeginPreprocess(const GaussianModelT<T>& model,
               (std::is_same_v<T, float> && model.color_mode == ColorMode::kLogHdr));
   state->splats.channels = stage ? stage->feature_channels() : channels;
   state->splats.Resize(n);
+  state->splats.reach.resize(2 * n);  // each preprocess writes every Gaussian's pair
   if (stage) state->colors.resize(n * channels);
   state->clamped.assign(n * channels, 0);
   state->screen_radius.assign(n, 0);

@@ -75,6 +75,7 @@ void PreprocessForwardFast(const GaussianModel& model,
   job.depth = s.depth.data();
   job.opacity = s.opacity.data();
   job.radius = s.radius.data();
+  job.reach = s.reach.data();
   job.screen_radius = state->screen_radius.data();
   const int coefficients = job.coefficients;
   ParallelForChunks(

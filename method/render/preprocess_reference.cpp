@@ -36,6 +36,7 @@ void PreprocessForwardReference(const GaussianModelT<T>& model,
                         if (stride > 0 && g + kColorAhead < e)
                           PrefetchRow(&model.color_rest[(i + kColorAhead) * stride], stride);
                         s.radius[i] = 0;
+                        s.reach[2 * i] = s.reach[2 * i + 1] = 0;
                         const ConditionalGaussian<T> c = ConditionAt(model, i, time);
                         if (model.temporal && !TemporallyVisible(c.marginal))
                           continue;  // culled: costs nothing
@@ -48,6 +49,7 @@ void PreprocessForwardReference(const GaussianModelT<T>& model,
                         s.opacity[i] = Sigmoid(model.opacity_logit[i]) * c.marginal;
                         state->screen_radius[i] = splat.radius;
                         s.radius[i] = BinningRadius(splat, s.opacity[i]);
+                        BinningReach(splat, s.opacity[i], s.radius[i], &s.reach[2 * i]);
                         state->conditionals[i] = c;  // the backward reuses it
                         // Colour is linear in the coefficients: weights . (DC, rest) + 0.5.
                         T w[kMaxColorCoefficients];

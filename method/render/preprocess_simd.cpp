@@ -332,7 +332,7 @@ void ForwardBatch(const PreprocessSimdJob& job, std::int64_t begin, int count, f
   BatchIn in;
   LoadBatch(job, begin, count, &in);
   HWY_ALIGN float mx[kB], my[kB], ca[kB], cb[kB], cc[kB], depth[kB], opacity[kB];
-  HWY_ALIGN std::int32_t screen[kB], bin[kB];
+  HWY_ALIGN std::int32_t screen[kB], bin[kB], reach_x[kB], reach_y[kB];
   for (int off = 0; off < count; off += lanes) {
     Geometry g;
     ComputeGeometry(job, in, off, &g);
@@ -356,12 +356,24 @@ void ForwardBatch(const PreprocessSimdJob& job, std::int64_t begin, int count, f
     const V rb =
         hn::Add(hn::Ceil(hn::Sqrt(hn::Mul(hn::Mul(hn::Set(d, 2.0f), log_reach), g.lambda))),
                 hn::Set(d, 1.0f));
-    hn::Store(hn::ConvertTo(di, hn::IfThenElseZero(reaches, hn::Min(rb, g.radius))), di, bin + off);
+    const V bin_radius = hn::IfThenElseZero(reaches, hn::Min(rb, g.radius));
+    hn::Store(hn::ConvertTo(di, bin_radius), di, bin + off);
+    // Per axis (preprocess_common.h BinningReach): sqrt(2 ln(255 o) Sigma_xx), Sigma_yy.
+    const V t2 = hn::Mul(hn::Set(d, 2.0f), log_reach);
+    const auto axis = [&](V sigma) {
+      const V r = hn::Add(hn::Ceil(hn::Sqrt(hn::Mul(t2, hn::Max(sigma, hn::Zero(d))))),
+                          hn::Set(d, 1.0f));
+      return hn::ConvertTo(di, hn::Min(r, bin_radius));
+    };
+    hn::Store(axis(g.a), di, reach_x + off);
+    hn::Store(axis(g.c), di, reach_y + off);
     if (!hn::AllFalse(d, g.visible)) ColorWeights(job, in, off, g, weights);
   }
   for (int l = 0; l < count; ++l) {
     const std::size_t i = static_cast<std::size_t>(begin + l);
     job.radius[i] = bin[l];
+    job.reach[2 * i] = reach_x[l];
+    job.reach[2 * i + 1] = reach_y[l];
     job.screen_radius[i] = screen[l];
     if (screen[l] == 0) continue;
     job.mean2d[2 * i] = mx[l];

@@ -41,6 +41,7 @@ struct PreprocessSimdJob {
   float* depth = nullptr;
   float* opacity = nullptr;
   int* radius = nullptr;         // binning radius, 0: culled or unreachable
+  int* reach = nullptr;          // N x 2, per-axis binning radii (BinningReach)
   int* screen_radius = nullptr;  // 3-sigma radius, 0: culled
   // Backward inputs.
   const int* radius_in = nullptr;  // the forward's binning radius: > 0 gets gradients

@@ -147,6 +147,32 @@ void ExpectPathsAgree(const GaussianModel& model, int sh_degree, unsigned seed) 
     radius_off += a != b;
   }
   EXPECT_LE(radius_off, static_cast<int>(n / 50 + 1));
+  // The per-axis binning radii: within the radius, zero only with it, and tighter than the
+  // square for some; they bound the ellipse where alpha reaches 1/255 (Sigma from the conic).
+  ASSERT_EQ(fast.splats.reach.size(), 2 * n);
+  ASSERT_EQ(ref.splats.reach.size(), 2 * n);
+  int tighter = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    for (const FrameState* st : {&fast, &ref}) {
+      const SplatBuffers& sp = st->splats;
+      for (int k = 0; k < 2; ++k) {
+        const int r = sp.reach[2 * i + k];
+        EXPECT_LE(r, sp.radius[i]) << "reach of Gaussian " << i;
+        EXPECT_EQ(r > 0, sp.radius[i] > 0) << "reach of Gaussian " << i;
+        if (r == 0) continue;
+        tighter += r < sp.radius[i];
+        const double a = sp.conic[3 * i], b = sp.conic[3 * i + 1], c = sp.conic[3 * i + 2];
+        const double sigma = (k == 0 ? c : a) / (a * c - b * b);
+        const double extent = std::sqrt(2.0 * std::log(255.0 * sp.opacity[i]) * sigma);
+        if (r < sp.radius[i]) EXPECT_GE(r, extent) << "reach of Gaussian " << i;
+      }
+    }
+    for (int k = 0; k < 2; ++k) {
+      EXPECT_LE(std::abs(fast.splats.reach[2 * i + k] - ref.splats.reach[2 * i + k]), 1)
+          << "reach of Gaussian " << i;
+    }
+  }
+  if (n >= 100) EXPECT_GT(tighter, 0) << "no Gaussian binned tighter than its square";
   EXPECT_EQ(fast.num_visible, ref.num_visible);
   // Outputs of the visible Gaussians (the rest are unspecified).
   auto visible_rows = [&](const std::vector<float>& v, int width) {
