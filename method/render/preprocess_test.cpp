@@ -164,7 +164,9 @@ void ExpectPathsAgree(const GaussianModel& model, int sh_degree, unsigned seed) 
         const double a = sp.conic[3 * i], b = sp.conic[3 * i + 1], c = sp.conic[3 * i + 2];
         const double sigma = (k == 0 ? c : a) / (a * c - b * b);
         const double extent = std::sqrt(2.0 * std::log(255.0 * sp.opacity[i]) * sigma);
-        if (r < sp.radius[i]) EXPECT_GE(r, extent) << "reach of Gaussian " << i;
+        if (r < sp.radius[i]) {
+          EXPECT_GE(r, extent) << "reach of Gaussian " << i;
+        }
       }
     }
     for (int k = 0; k < 2; ++k) {
@@ -172,7 +174,9 @@ void ExpectPathsAgree(const GaussianModel& model, int sh_degree, unsigned seed) 
           << "reach of Gaussian " << i;
     }
   }
-  if (n >= 100) EXPECT_GT(tighter, 0) << "no Gaussian binned tighter than its square";
+  if (n >= 100) {
+    EXPECT_GT(tighter, 0) << "no Gaussian binned tighter than its square";
+  }
   EXPECT_EQ(fast.num_visible, ref.num_visible);
   // Outputs of the visible Gaussians (the rest are unspecified).
   auto visible_rows = [&](const std::vector<float>& v, int width) {
