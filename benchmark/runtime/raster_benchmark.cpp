@@ -11,6 +11,7 @@
 // `threads` = the ThreadLimit used (1 gives per-thread speed).
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <map>
@@ -61,8 +62,17 @@ SplatBuffers MakeSplats(int size, int count, int channels, unsigned seed) {
     s.conic[3 * g + 2] = static_cast<float>(xx / det);
     const double mid = 0.5 * (xx + yy);
     const double lambda_max = mid + std::sqrt(std::max(0.1, mid * mid - det));
-    s.radius[g] = static_cast<int>(std::ceil(kRadiusSigmas * std::sqrt(lambda_max)));
     s.opacity[g] = static_cast<float>(0.05 + 0.55 * u(rng));
+    // As the preprocess bins them (preprocess_common.h BinningRadius, BinningReach): the 3-sigma
+    // radius cut to where alpha reaches 1/255, and that reach per axis.
+    const double t2 = 2.0 * std::log(255.0 * s.opacity[g]);
+    const auto reach = [&](double variance) {
+      return static_cast<int>(std::ceil(std::sqrt(t2 * variance))) + 1;
+    };
+    s.radius[g] = std::min(static_cast<int>(std::ceil(kRadiusSigmas * std::sqrt(lambda_max))),
+                           reach(lambda_max));
+    s.reach.push_back(std::min(s.radius[g], reach(xx)));
+    s.reach.push_back(std::min(s.radius[g], reach(yy)));
     s.depth[g] = static_cast<float>(1.0 + 10.0 * u(rng));
     for (int ch = 0; ch < channels; ++ch)
       s.features[g * channels + ch] = static_cast<float>(u(rng));
