@@ -91,6 +91,12 @@ std::vector<double> RandomValues(std::size_t n, unsigned seed, double lo = -1.0,
   return v;
 }
 
+// The same values as float, for dL/dimage and dL/dT.
+std::vector<float> RandomFloats(std::size_t n, unsigned seed) {
+  const std::vector<double> v = RandomValues(n, seed);
+  return std::vector<float>(v.begin(), v.end());
+}
+
 RasterSettings Settings(int width,
                         int height,
                         std::vector<float> background,
@@ -122,6 +128,16 @@ FloatRun RunFloat(const SplatBuffers& splats,
   BlendBackward(splats, settings, &r.state, dL_dimage.data(), dL_dT ? dL_dT->data() : nullptr,
                 &r.grads, r.dL_dbackground.data());
   return r;
+}
+
+// Two runs' image and every gradient equal bit for bit.
+void ExpectSameImageAndGradients(const FloatRun& a, const FloatRun& b) {
+  EXPECT_EQ(a.image, b.image);
+  EXPECT_EQ(a.grads.mean2d, b.grads.mean2d);
+  EXPECT_EQ(a.grads.conic, b.grads.conic);
+  EXPECT_EQ(a.grads.opacity, b.grads.opacity);
+  EXPECT_EQ(a.grads.features, b.grads.features);
+  EXPECT_EQ(a.dL_dbackground, b.dL_dbackground);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -656,10 +672,8 @@ Comparison CompareSplats(
   RasterizeForward(s, scalar_settings, &scalar, scalar_image.data());
   RasterizeForward(s, simd_settings, &simd, simd_image.data());
 
-  const std::vector<double> w64 = RandomValues(pixels * ch, seed + 1);
-  std::vector<float> w(w64.begin(), w64.end());
-  const std::vector<double> v64 = RandomValues(pixels, seed + 2);
-  std::vector<float> v(v64.begin(), v64.end());
+  std::vector<float> w = RandomFloats(pixels * ch, seed + 1);
+  std::vector<float> v = RandomFloats(pixels, seed + 2);
   Comparison c;
   for (std::size_t p = 0; p < pixels; ++p) {
     const float dT = std::abs(scalar.final_transmittance[p] - simd.final_transmittance[p]);
@@ -942,10 +956,8 @@ SceneOptions DenseSixChannelScene() {
 
 TEST(RasterBlendSimd, DeterministicAcrossThreadCounts) {
   const SplatBuffers s = Convert<float>(RandomScene(DenseSixChannelScene(), 5));
-  const std::vector<double> w64 = RandomValues(static_cast<std::size_t>(160) * 120 * 6, 6);
-  const std::vector<float> w(w64.begin(), w64.end());
-  const std::vector<double> v64 = RandomValues(static_cast<std::size_t>(160) * 120, 7);
-  const std::vector<float> v(v64.begin(), v64.end());
+  const std::vector<float> w = RandomFloats(static_cast<std::size_t>(160) * 120 * 6, 6);
+  const std::vector<float> v = RandomFloats(static_cast<std::size_t>(160) * 120, 7);
   for (RasterBackend backend : {RasterBackend::kScalar, RasterBackend::kSimd}) {
     const RasterSettings settings = Settings(160, 120, std::vector<float>(6, 0.25f), backend);
     FloatRun one, two;
@@ -957,13 +969,8 @@ TEST(RasterBlendSimd, DeterministicAcrossThreadCounts) {
       ThreadLimit limit(2);
       two = RunFloat(s, settings, w, &v);
     }
-    EXPECT_EQ(one.image, two.image);
+    ExpectSameImageAndGradients(one, two);
     EXPECT_EQ(one.state.point_list, two.state.point_list);
-    EXPECT_EQ(one.grads.mean2d, two.grads.mean2d);
-    EXPECT_EQ(one.grads.conic, two.grads.conic);
-    EXPECT_EQ(one.grads.opacity, two.grads.opacity);
-    EXPECT_EQ(one.grads.features, two.grads.features);
-    EXPECT_EQ(one.dL_dbackground, two.dL_dbackground);
   }
 }
 
@@ -1002,22 +1009,16 @@ TEST(RasterBlend, PerAxisReachChangesNoPixelAndNoGradient) {
     SplatBuffers snug = square;
     AddPreprocessReach(&snug);
     const std::size_t pixels = static_cast<std::size_t>(o.width) * o.height;
-    const std::vector<double> w64 = RandomValues(pixels * channels, 22);
-    const std::vector<float> w(w64.begin(), w64.end());
-    const std::vector<double> v64 = RandomValues(pixels, 23);
-    const std::vector<float> v(v64.begin(), v64.end());
+    const std::vector<float> w = RandomFloats(pixels * channels, 22);
+    const std::vector<float> v = RandomFloats(pixels, 23);
     for (RasterBackend backend : {RasterBackend::kScalar, RasterBackend::kSimd}) {
       const RasterSettings settings =
           Settings(o.width, o.height, std::vector<float>(channels, 0.25f), backend);
       const FloatRun a = RunFloat(square, settings, w, &v);
       const FloatRun b = RunFloat(snug, settings, w, &v);
-      EXPECT_EQ(a.image, b.image) << channels;
+      SCOPED_TRACE(channels);
+      ExpectSameImageAndGradients(a, b);
       EXPECT_EQ(a.state.final_transmittance, b.state.final_transmittance);
-      EXPECT_EQ(a.grads.mean2d, b.grads.mean2d);
-      EXPECT_EQ(a.grads.conic, b.grads.conic);
-      EXPECT_EQ(a.grads.opacity, b.grads.opacity);
-      EXPECT_EQ(a.grads.features, b.grads.features);
-      EXPECT_EQ(a.dL_dbackground, b.dL_dbackground);
       EXPECT_LT(b.state.num_entries(), a.state.num_entries() * 9 / 10);
     }
   }
