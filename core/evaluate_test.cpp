@@ -186,8 +186,8 @@ TEST(EvaluateTest, RenderedBracketsGiveTheShapeWhereTheLdrFits) {
   const std::vector<std::uint8_t> reproduced =
       ReproducedInBrackets({ReadImage(dir / "x_e0.png")}, {ReadImage(dir / "pred" / "x_e0.png")});
   for (const auto& [key, value] :
-       LdrFitHdrShape(ReadImage(dir / "pred" / "x.exr"), ReadImage(dir / "gt" / "x.exr"),
-                      measured, reproduced)) {
+       LdrFitHdrShape(ReadImage(dir / "pred" / "x.exr"), ReadImage(dir / "gt" / "x.exr"), measured,
+                      reproduced)) {
     EXPECT_DOUBLE_EQ(pair[key].get<double>(), value) << key;
     EXPECT_NEAR(fit["mean"][key].get<double>(), value, 1e-12) << key;  // one image: pooled = it
   }

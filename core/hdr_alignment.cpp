@@ -246,9 +246,8 @@ MetricList LdrFitHdrShape(const Image& pred,
   return {
       {"hdr_log_slope_ldr_fit", fit.slope},
       {"hdr_log_corr_ldr_fit", fit.corr},
-      {"hdr_ldr_fit_fraction",
-       measured_pixels ? double(fit.pixels) / double(measured_pixels)
-                       : std::numeric_limits<double>::quiet_NaN()},
+      {"hdr_ldr_fit_fraction", measured_pixels ? double(fit.pixels) / double(measured_pixels)
+                                               : std::numeric_limits<double>::quiet_NaN()},
   };
 }
 

@@ -70,7 +70,8 @@ constexpr int kMinBinChunk = 4096;
 int TileCount(int pixels) { return (pixels + kTileSize - 1) / kTileSize; }
 
 template <typename T>
-TileRect GaussianTileRect(T mean_x, T mean_y, int radius_x, int radius_y, int tiles_x, int tiles_y) {
+TileRect GaussianTileRect(
+    T mean_x, T mean_y, int radius_x, int radius_y, int tiles_x, int tiles_y) {
   TileRect rect;
   if (radius_x <= 0 || radius_y <= 0 || !std::isfinite(mean_x) || !std::isfinite(mean_y))
     return rect;
@@ -136,8 +137,8 @@ void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, R
       const int rx = reach ? reach[2 * g] : radius[g];
       const int ry = reach ? reach[2 * g + 1] : radius[g];
       const TileRect r = radius[g] <= 0 ? TileRect{}
-                                        : GaussianTileRect<T>(mean[2 * g], mean[2 * g + 1], rx,
-                                                              ry, tiles_x, tiles_y);
+                                        : GaussianTileRect<T>(mean[2 * g], mean[2 * g + 1], rx, ry,
+                                                              tiles_x, tiles_y);
       const bool empty = r.empty();
       rects[4 * g] = r.x0;
       rects[4 * g + 1] = r.y0;

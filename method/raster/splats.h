@@ -62,7 +62,8 @@ struct SplatBuffersT {
     if (radius.size() != n) return "radius must hold 1 value per Gaussian";
     if (features.size() != n * static_cast<std::size_t>(channels))
       return "features must hold `channels` values per Gaussian";
-    if (!reach.empty() && reach.size() != 2 * n) return "reach must be empty or hold 2 values per Gaussian";
+    if (!reach.empty() && reach.size() != 2 * n)
+      return "reach must be empty or hold 2 values per Gaussian";
     return "";
   }
 };

@@ -361,8 +361,8 @@ void ForwardBatch(const PreprocessSimdJob& job, std::int64_t begin, int count, f
     // Per axis (preprocess_common.h BinningReach): sqrt(2 ln(255 o) Sigma_xx), Sigma_yy.
     const V t2 = hn::Mul(hn::Set(d, 2.0f), log_reach);
     const auto axis = [&](V sigma) {
-      const V r = hn::Add(hn::Ceil(hn::Sqrt(hn::Mul(t2, hn::Max(sigma, hn::Zero(d))))),
-                          hn::Set(d, 1.0f));
+      const V r =
+          hn::Add(hn::Ceil(hn::Sqrt(hn::Mul(t2, hn::Max(sigma, hn::Zero(d))))), hn::Set(d, 1.0f));
       return hn::ConvertTo(di, hn::Min(r, bin_radius));
     };
     hn::Store(axis(g.a), di, reach_x + off);
