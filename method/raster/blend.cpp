@@ -441,12 +441,20 @@ void BlendForward(const SplatBuffers& splats,
   CheckCall(splats, settings, *state);
   const std::size_t pixels = static_cast<std::size_t>(state->width) * state->height;
   state->final_transmittance.resize(pixels);
-  state->n_contrib.resize(pixels);
+  // n_contrib is only for a backward: a forward without keep_records leaves it empty (the SIMD
+  // kernel then does not track it).
   if (settings.backend == RasterBackend::kScalar) {
+    state->n_contrib.resize(pixels);
     state->packed_ready = false;  // a later kSimd backward must pack these splats
     BlendForwardReference<float>(splats, *state, BackgroundOf(settings, splats.channels), image,
                                  state->final_transmittance.data(), state->n_contrib.data());
+    if (!settings.keep_records) state->n_contrib.clear();
     return;
+  }
+  if (settings.keep_records) {
+    state->n_contrib.resize(pixels);
+  } else {
+    state->n_contrib.clear();
   }
   detail::TileJob job = MakeJob(splats, settings, state);
   job.image = image;

@@ -33,9 +33,9 @@
 //   for each Gaussian (back to front) the pixel vectors it reaches, per-pixel state in L1,
 //   gradients summed over the tile in registers. The forward packs per-Gaussian records into the
 //   state; the backward reuses them (so it must get the same splats, as it must anyway). With
-//   RasterSettings::keep_records false (a render no backward follows) the forward's per-tile
-//   records stay in per-thread scratch instead of the state, saving their memory traffic, and
-//   binning leaves out the backward's entry slots.
+//   RasterSettings::keep_records false (a render no backward follows) the forward reads the
+//   per-Gaussian records in place instead of copying them per tile entry into the state, keeps
+//   no n_contrib, and binning leaves out the backward's entry slots.
 //   Differences from kScalar: the exp below (relative error <= 1e-6 on [-87, 0], FastExp; the
 //   kernels take the same polynomial as exp2 of the power in log2 units), fused
 //   multiply-adds, 1/(1 - alpha) multiplied instead of divided, and the behind colour updated

@@ -260,6 +260,29 @@ void PackSplats(const TileJob& job, std::int64_t begin, std::int64_t end) {
   }
 }
 
+// The tile rows and columns (0..15, inclusive; row0 > row1 when none) that a packed record's
+// absolute reach box covers in the tile at (x0, y0), stored + 1 as 4 bytes (SetBox's form).
+HWY_INLINE void TileBox(const float* box, float fx0, float fy0, unsigned char* out) {
+  // The packed bounds are absolute pixel indices: shift to the tile and clamp (whole numbers
+  // below 2^24, so exact). One-lane vector min/max: no branches (ternaries compile to some).
+  const auto clamp = [](float v, float lo, float hi) {
+    const hn::CappedTag<float, 1> d1;
+    return static_cast<int>(
+        hn::GetLane(hn::Min(hn::Max(hn::Set(d1, v), hn::Set(d1, lo)), hn::Set(d1, hi))));
+  };
+  const float last = static_cast<float>(kTileSize - 1);
+  const float size = static_cast<float>(kTileSize);
+  const int col0 = clamp(box[kBoxCol0] - fx0, 0.0f, size);
+  const int col1 = clamp(box[kBoxCol1] - fx0, -1.0f, last);
+  const int row0 = clamp(box[kBoxRow0] - fy0, 0.0f, size);
+  // No column: nothing.
+  const int row1 = col0 > col1 ? -1 : clamp(box[kBoxRow1] - fy0, -1.0f, last);
+  out[kBoxRow0] = static_cast<unsigned char>(row0 + 1);
+  out[kBoxRow1] = static_cast<unsigned char>(row1 + 1);
+  out[kBoxCol0] = static_cast<unsigned char>(col0 + 1);
+  out[kBoxCol1] = static_cast<unsigned char>(col1 + 1);
+}
+
 // Copies the packed records of tile entries [start, start + count) into `rec` (tile records)
 // and replaces the reach box with the tile rows and columns it covers.
 template <int kC>
@@ -294,23 +317,7 @@ void GatherRecords(const TileJob& job, int tile, int start, int count, float* re
     } else {
       for (int k = 0; k < copied; ++k) r[k] = src[k];
     }
-    // The packed bounds are absolute pixel indices: shift to the tile and clamp (whole numbers
-    // below 2^24, so exact). One-lane vector min/max: no branches (ternaries compile to some).
-    const auto clamp = [](float v, float lo, float hi) {
-      const hn::CappedTag<float, 1> d1;
-      return static_cast<int>(
-          hn::GetLane(hn::Min(hn::Max(hn::Set(d1, v), hn::Set(d1, lo)), hn::Set(d1, hi))));
-    };
-    const float last = static_cast<float>(kTileSize - 1);
-    const float size = static_cast<float>(kTileSize);
-    const float* box = src + copied;
-    const int col0 = clamp(box[kBoxCol0] - fx0, 0.0f, size);
-    const int col1 = clamp(box[kBoxCol1] - fx0, -1.0f, last);
-    SetBox(r, channels, kBoxRow0, clamp(box[kBoxRow0] - fy0, 0.0f, size));
-    // No column: nothing.
-    SetBox(r, channels, kBoxRow1, col0 > col1 ? -1 : clamp(box[kBoxRow1] - fy0, -1.0f, last));
-    SetBox(r, channels, kBoxCol0, col0);
-    SetBox(r, channels, kBoxCol1, col1);
+    TileBox(src + copied, fx0, fy0, reinterpret_cast<unsigned char*>(r + copied));
   }
 }
 
@@ -370,10 +377,11 @@ struct PixelState {
 };
 
 // One Gaussian (record r, list position j) blended into one pixel vector; the 3DGS rules.
-template <int kC>
+// kTrack: keep n_contrib (only a backward reads it).
+template <int kC, bool kTrack>
 HWY_INLINE M BlendStep(const float* r, int j, int channels, V px, V py, PixelState<kC>& st) {
   const D d;
-  const DI di;
+  [[maybe_unused]] const DI di;
   const V dx = hn::Sub(hn::Set(d, r[kRecMeanX]), px);
   const V dy = hn::Sub(hn::Set(d, r[kRecMeanY]), py);
   const V power = Power(r, dx, dy);
@@ -400,7 +408,8 @@ HWY_INLINE M BlendStep(const float* r, int j, int channels, V px, V py, PixelSta
     }
   }
   st.T = hn::IfThenElse(contrib, test_T, st.T);
-  st.last = hn::IfThenElse(hn::RebindMask(di, contrib), hn::Set(di, j + 1), st.last);
+  if constexpr (kTrack)
+    st.last = hn::IfThenElse(hn::RebindMask(di, contrib), hn::Set(di, j + 1), st.last);
   st.done = hn::Or(st.done, stop);
   return stop;
 }
@@ -408,7 +417,12 @@ HWY_INLINE M BlendStep(const float* r, int j, int channels, V px, V py, PixelSta
 // Forward of one tile. Pixel vectors are processed in pairs, a vector and the one below it,
 // whose blend chains are independent (the T -> test_T -> T recurrence is latency-bound), each
 // pair walking the list of Gaussians whose reach box covers its two rows.
-template <int kC>
+// kKeep (job.tile_records set: a backward follows): the records are gathered into the state's
+// per-entry array, their rows narrowed for the backward, and n_contrib kept. Otherwise (a render)
+// the kernel reads the per-Gaussian records where they are, through a pointer per entry, with the
+// tile box beside it: no copy of the records (14% of the forward's samples went to it) and no
+// n_contrib.
+template <int kC, bool kKeep>
 void ForwardTileImpl(const TileJob& job, int tile) {
   const D d;
   const DI di;
@@ -421,15 +435,46 @@ void ForwardTileImpl(const TileJob& job, int tile) {
   const int count = job.tile_ranges[tile + 1] - start;
   const int vectors_per_row = kTileSize / lanes;
 
-  thread_local Scratch<float> rec_scratch;
   thread_local Scratch<float> acc_scratch;  // run-time channel count only
   thread_local Scratch<std::int32_t> list_scratch;
   thread_local Scratch<std::int32_t> list_scratch2;
-  // Into the state's per-entry records when there are some, so the backward can reuse them.
-  float* rec = job.tile_records != nullptr
-                   ? job.tile_records + static_cast<std::size_t>(start) * stride
-                   : rec_scratch.Get(static_cast<std::size_t>(count) * stride + 1);
-  GatherRecords<kC>(job, tile, start, count, rec);
+  thread_local Scratch<const float*> pointer_scratch;  // without kKeep
+  thread_local Scratch<unsigned char> box_scratch;     // without kKeep
+  // kKeep: into the state's per-entry records, so the backward can reuse them.
+  float* rec = nullptr;
+  const float** records = nullptr;
+  unsigned char* boxes = nullptr;
+  if constexpr (kKeep) {
+    rec = job.tile_records + static_cast<std::size_t>(start) * stride;
+    GatherRecords<kC>(job, tile, start, count, rec);
+  } else {
+    records = pointer_scratch.Get(static_cast<std::size_t>(count) + 1);
+    boxes = box_scratch.Get(4 * static_cast<std::size_t>(count) + 4);
+    const int in_stride = PackedStride(channels);
+    const float fx0 = static_cast<float>(x0), fy0 = static_cast<float>(y0);
+    constexpr int kAhead = 8;  // records in Gaussian order, entries in depth order: prefetch
+    for (int j = 0; j < count; ++j) {
+      if (j + kAhead < count) {
+        const float* ahead =
+            job.packed + static_cast<std::size_t>(job.point_list[start + j + kAhead]) * in_stride;
+        __builtin_prefetch(ahead);
+        __builtin_prefetch(ahead + in_stride - 1);
+      }
+      const float* src =
+          job.packed + static_cast<std::size_t>(job.point_list[start + j]) * in_stride;
+      records[j] = src;
+      TileBox(src + kRecFeatures + channels, fx0, fy0, boxes + 4 * j);
+    }
+  }
+  // Record j (scalars, then features) and its tile box field k.
+  const auto record = [&](int j) -> const float* {
+    if constexpr (kKeep) return rec + static_cast<std::size_t>(j) * stride;
+    return records[j];
+  };
+  const auto box = [&](int j, int k) -> int {
+    if constexpr (kKeep) return Box(record(j), channels, k);
+    return boxes[4 * j + k] - 1;
+  };
   float* acc_mem =
       kC > 0 ? nullptr : acc_scratch.Get(2 * static_cast<std::size_t>(channels) * lanes);
 
@@ -453,9 +498,9 @@ void ForwardTileImpl(const TileJob& job, int tile) {
   float* s_k = s_hc + padded;   // -b / a: the dx maximising power on a row is k dy
   float* s_thr = s_k + padded;  // log threshold; -inf: never pruned
   for (int j = 0; j < padded; ++j) {
-    const float* r = rec + static_cast<std::size_t>(j) * stride;
-    row0[j] = j < count ? Box(r, channels, kBoxRow0) : kTileSize;
-    row1[j] = j < count ? Box(r, channels, kBoxRow1) : -1;
+    const float* r = j < count ? record(j) : nullptr;
+    row0[j] = j < count ? box(j, kBoxRow0) : kTileSize;
+    row1[j] = j < count ? box(j, kBoxRow1) : -1;
     // Only when a > 0 (power concave in dx on a row) and the reach box is not the whole tile
     // because of an indefinite conic; otherwise all zeros, which the test never prunes.
     const bool exact = j < count && r[kRecHalfNegA] < 0.0f && std::isfinite(r[kRecHalfNegA]) &&
@@ -500,12 +545,15 @@ void ForwardTileImpl(const TileJob& job, int tile) {
     return hn::Not(hn::Lt(hn::Add(power, margin), hn::Load(d, s_thr + j)));
   };
   // The first and last row each Gaussian reaches by both tests, for the backward.
-  std::int32_t* tight = list_scratch2.Get(2 * static_cast<std::size_t>(padded));
-  std::int32_t* tight_lo = tight;
-  std::int32_t* tight_hi = tight + padded;
-  for (int j = 0; j < padded; j += lanes) {
-    hn::Store(hn::Set(di, kTileSize), di, tight_lo + j);
-    hn::Store(hn::Set(di, -1), di, tight_hi + j);
+  std::int32_t* tight_lo = nullptr;
+  std::int32_t* tight_hi = nullptr;
+  if constexpr (kKeep) {
+    tight_lo = list_scratch2.Get(2 * static_cast<std::size_t>(padded));
+    tight_hi = tight_lo + padded;
+    for (int j = 0; j < padded; j += lanes) {
+      hn::Store(hn::Set(di, kTileSize), di, tight_lo + j);
+      hn::Store(hn::Set(di, -1), di, tight_hi + j);
+    }
   }
   // Iota once (Highway 1.0.3 builds it through memory: a store-forwarding stall per call).
   const VI iota = hn::Iota(di, 0);
@@ -527,18 +575,20 @@ void ForwardTileImpl(const TileJob& job, int tile) {
       const auto m = hn::Or(in_a, in_b);
       hn::StoreU(hn::Compress(hn::Add(iota, hn::Set(di, j)), m), di, out + n);
       n += static_cast<int>(hn::CountTrue(di, m));
-      const VI lo = hn::Load(di, tight_lo + j);
-      hn::Store(hn::Min(lo, hn::IfThenElse(in_a, row_a, hn::IfThenElse(in_b, row_b, lo))), di,
-                tight_lo + j);
-      const VI hi = hn::Load(di, tight_hi + j);
-      hn::Store(hn::Max(hi, hn::IfThenElse(in_b, row_b, hn::IfThenElse(in_a, row_a, hi))), di,
-                tight_hi + j);
+      if constexpr (kKeep) {
+        const VI lo = hn::Load(di, tight_lo + j);
+        hn::Store(hn::Min(lo, hn::IfThenElse(in_a, row_a, hn::IfThenElse(in_b, row_b, lo))), di,
+                  tight_lo + j);
+        const VI hi = hn::Load(di, tight_hi + j);
+        hn::Store(hn::Max(hi, hn::IfThenElse(in_b, row_b, hn::IfThenElse(in_a, row_a, hi))), di,
+                  tight_hi + j);
+      }
     }
     list_length[p] = n;
   }
   // When the records stay in the state for the backward, narrow their rows (the forward below
   // reads only the columns). Rows cut here hold no pixel the Gaussian reaches.
-  if (job.tile_records != nullptr) {
+  if constexpr (kKeep) {
     for (int j = 0; j < count; ++j) {
       float* r = rec + static_cast<std::size_t>(j) * stride;
       SetBox(r, channels, kBoxRow0, tight_lo[j]);
@@ -566,7 +616,7 @@ void ForwardTileImpl(const TileJob& job, int tile) {
       }
     }
     hn::Store(st.T, d, out_T);
-    hn::Store(st.last, di, out_n);
+    if constexpr (kKeep) hn::Store(st.last, di, out_n);
     const int y = y0 + v * lanes / kTileSize;
     const int xs = x0 + v * lanes % kTileSize;
     if (y >= job.height) return;
@@ -575,7 +625,7 @@ void ForwardTileImpl(const TileJob& job, int tile) {
     for (int i = 0; i < n_valid; ++i) {
       const std::size_t pix = row_start + xs + i;
       job.final_T[pix] = out_T[i];
-      job.n_contrib[pix] = out_n[i];
+      if constexpr (kKeep) job.n_contrib[pix] = out_n[i];
       float* px_out = job.image + pix * channels;
       for (int c = 0; c < channels; ++c) px_out[c] = out_color[c * lanes + i];
     }
@@ -612,12 +662,10 @@ void ForwardTileImpl(const TileJob& job, int tile) {
       const int col1 = col0 + lanes - 1;
       for (int i = 0; i < list_length[pair]; ++i) {
         const int j = list[i];
-        const float* r = rec + static_cast<std::size_t>(j) * stride;
-        if (vectors_per_row > 1 &&
-            (Box(r, channels, kBoxCol1) < col0 || Box(r, channels, kBoxCol0) > col1))
-          continue;
-        const M stop_a = BlendStep<kC>(r, j, channels, px, py_a, a);
-        const M stop_b = BlendStep<kC>(r, j, channels, px, py_b, b);
+        const float* r = record(j);
+        if (vectors_per_row > 1 && (box(j, kBoxCol1) < col0 || box(j, kBoxCol0) > col1)) continue;
+        const M stop_a = BlendStep<kC, kKeep>(r, j, channels, px, py_a, a);
+        const M stop_b = BlendStep<kC, kKeep>(r, j, channels, px, py_b, b);
         if (!hn::AllFalse(d, hn::Or(stop_a, stop_b)) && hn::AllTrue(d, hn::And(a.done, b.done)))
           break;
       }
@@ -854,19 +902,25 @@ void BackwardTileImpl(const TileJob& job, int tile) {
   }
 }
 
-void ForwardTile(const TileJob& job, int tile) {
+template <bool kKeep>
+void ForwardTileKeeping(const TileJob& job, int tile) {
   switch (job.channels) {
     case 1:
-      return ForwardTileImpl<1>(job, tile);
+      return ForwardTileImpl<1, kKeep>(job, tile);
     case 3:
-      return ForwardTileImpl<3>(job, tile);
+      return ForwardTileImpl<3, kKeep>(job, tile);
     case 4:
-      return ForwardTileImpl<4>(job, tile);
+      return ForwardTileImpl<4, kKeep>(job, tile);
     case 6:
-      return ForwardTileImpl<6>(job, tile);
+      return ForwardTileImpl<6, kKeep>(job, tile);
     default:
-      return ForwardTileImpl<0>(job, tile);
+      return ForwardTileImpl<0, kKeep>(job, tile);
   }
+}
+
+void ForwardTile(const TileJob& job, int tile) {
+  if (job.tile_records != nullptr) return ForwardTileKeeping<true>(job, tile);
+  ForwardTileKeeping<false>(job, tile);
 }
 
 void BackwardTile(const TileJob& job, int tile) {

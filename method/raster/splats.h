@@ -100,11 +100,11 @@ struct RasterSettings {
   std::vector<float> background;
   RasterBackend backend = RasterBackend::kSimd;
   // Keep what a backward of the same frame needs. false, for a render no backward follows:
-  // binning skips the backward's entry slots (point_entries, entry_slots) and the kSimd forward
-  // gathers each tile's records into per-thread scratch that stays in cache instead of the
-  // state's per-entry records (~50 bytes per tile entry at 6 channels, written and read back
-  // once per frame). The images are the same bit for bit; a backward of such a frame is a
-  // caller bug (checked).
+  // binning skips the backward's entry slots (point_entries, entry_slots), the kSimd forward
+  // reads the per-Gaussian records in place instead of writing the state's per-entry records
+  // (~50 bytes per tile entry at 6 channels, written and read back once per frame), and
+  // n_contrib is left empty. The images and final_transmittance are the same bit for bit; a
+  // backward of such a frame is a caller bug (checked).
   bool keep_records = true;
 };
 
@@ -137,6 +137,7 @@ struct RasterState {
   std::vector<float> final_transmittance;  // H x W: T after the last contributing Gaussian
   // H x W: 1 + the position, within the pixel's tile list, of the last Gaussian that
   // contributed (0 = none), as n_contrib in the 3DGS kernels. The backward starts there.
+  // Empty after a forward without keep_records.
   std::vector<std::int32_t> n_contrib;
 
   // --- Scratch reused between calls (contents meaningless outside a call). ---
