@@ -119,10 +119,19 @@ class Scratch {
   std::size_t capacity_ = 0;
 };
 
+// 2^n for a whole float n in [-126, 127] (garbage outside): n + 1.5 * 2^23 + 127 is exact and
+// holds n + 127 in its low mantissa bits, which the shift moves into the exponent field (the bits
+// above fall off). One add and one shift; Highway's float-to-int conversion is five
+// instructions here (it fixes up overflow), and these sit in the blend kernels' inner loops.
+HWY_INLINE V Pow2Whole(D d, V n) {
+  const DI di;
+  const V biased = hn::Add(n, hn::Set(d, 12582912.0f + 127.0f));
+  return hn::BitCast(d, hn::ShiftLeft<23>(hn::BitCast(di, biased)));
+}
+
 // exp(x) for x in [-87, 0] without the clamp: outside that range the result is garbage (maybe
 // inf or NaN), so only for callers that mask such lanes out of every result (the forward blend).
 HWY_INLINE V FastExpUnclampedV(D d, V x) {
-  const DI di;
   const V n = hn::Round(hn::Mul(x, hn::Set(d, 1.44269504088896341f)));
   V r = hn::MulAdd(n, hn::Set(d, -0.693145751953125f), x);  // exact: few bits in ln2_hi
   r = hn::MulAdd(n, hn::Set(d, -1.428606765330187e-6f), r);
@@ -133,8 +142,7 @@ HWY_INLINE V FastExpUnclampedV(D d, V x) {
   p = hn::MulAdd(p, r, hn::Set(d, 0.5f));
   p = hn::MulAdd(p, r, hn::Set(d, 1.0f));
   p = hn::MulAdd(p, r, hn::Set(d, 1.0f));
-  const VI bits = hn::ShiftLeft<23>(hn::Add(hn::ConvertTo(di, n), hn::Set(di, 127)));
-  return hn::Mul(p, hn::BitCast(d, bits));
+  return hn::Mul(p, Pow2Whole(d, n));
 }
 
 // exp(x) for x in [-87, 0] (clamped), relative error <= 1e-6 (see FastExp in blend.h).
@@ -149,7 +157,6 @@ constexpr float kLn2 = 0.693147180559945309f;
 // x = n + r, |r| <= 1/2 exact, 2^r = e^(r ln2) by the same degree-6 Taylor polynomial
 // (truncation 1.2e-7 relative), 2^n in the exponent bits.
 HWY_INLINE V FastExp2UnclampedV(D d, V x) {
-  const DI di;
   const V n = hn::Round(x);
   const V r = hn::Sub(x, n);
   constexpr double l = 0.693147180559945309;
@@ -160,8 +167,7 @@ HWY_INLINE V FastExp2UnclampedV(D d, V x) {
   p = hn::MulAdd(p, r, hn::Set(d, static_cast<float>(l * l / 2.0)));
   p = hn::MulAdd(p, r, hn::Set(d, static_cast<float>(l)));
   p = hn::MulAdd(p, r, hn::Set(d, 1.0f));
-  const VI bits = hn::ShiftLeft<23>(hn::Add(hn::ConvertTo(di, n), hn::Set(di, 127)));
-  return hn::Mul(p, hn::BitCast(d, bits));
+  return hn::Mul(p, Pow2Whole(d, n));
 }
 
 // 2^x clamped to [-125.5, 0] (exp of [-87, 0]).
