@@ -4,20 +4,19 @@
 // SSE4, AVX2, AVX-512) and chosen at run time with HWY_DYNAMIC_DISPATCH.
 //
 // Per frame, every listed Gaussian's kernel record (conic terms, opacity, log-space alpha
-// threshold, reach extents, features) is packed once (PackSplats); both kernels read the records
-// of a tile's list where they are, through point_list, and turn each reach box into the tile rows
-// and columns it covers (4 bytes per entry). The reach box bounds the pixels where alpha can
-// reach kMinAlpha; it only prunes work, the per-lane tests of the 3DGS rules still decide, so
-// pruning never changes a result.
+// threshold, reach extents, features) is packed once (PackSplats); per tile the records of its
+// list are copied into a contiguous array and their reach box is turned into tile rows/columns.
+// The reach box bounds the pixels where alpha can reach kMinAlpha; it only prunes work, the
+// per-lane tests of the 3DGS rules still decide, so pruning never changes a result.
 //
-// While building its row lists the forward also drops, per row, the Gaussians whose power cannot
-// reach the log threshold within the tile's columns (exact maximum on the row, with a rounding
-// margin); when a backward follows it stores each entry's tile box with the rows narrowed to
-// those (TileJob::tile_boxes), which the backward then walks.
+// The forward gathers each tile's records into the state (after the per-Gaussian records), so
+// the backward of the same frame reads them instead of gathering again; while building its row
+// lists the forward also drops, per row, the Gaussians whose power cannot reach the log
+// threshold within the tile's columns (exact maximum on the row, with a rounding margin) and
+// narrows the stored rows to those, which the backward then walks.
 // Forward: pixel vectors go in pairs (a vector and the one below it: two independent T chains,
 // the T -> test_T -> T recurrence being latency-bound), each pair walking only the Gaussians whose
-// reach box covers its two rows (selected with Compress), T, colour and n_contrib (when a
-// backward follows) in registers,
+// reach box covers its two rows (selected with Compress), T, colour and n_contrib in registers,
 // and stopping when all its pixels are done.
 // Backward: for each Gaussian back to front, the pixel vectors of its reach rows that still list
 // it (n_contrib per vector bounds the loop), with T and the "behind" colour per pixel in
