@@ -358,18 +358,19 @@ detail::TileJob MakeJob(const SplatBuffers& splats,
 
 // The SIMD kernels' per-Gaussian records, for the Gaussians listed in some tile (in parallel,
 // in id order).
-// packed_splats holds the per-Gaussian records, then the forward's per-entry tile boxes (4 bytes
-// each, TileJob::tile_boxes), then a marker that is 1 once the forward has written the latter for
-// the current packing. With_records false (a forward no backward follows): no tile boxes.
+// packed_splats holds the per-Gaussian records, then the forward's per-entry records, then a
+// marker that is 1 once the forward has written the latter for the current packing.
+// With_records false (a forward no backward follows): no room for the per-entry records, and
+// job.tile_records null so the forward gathers into its scratch.
 void PackSplats(detail::TileJob& job, RasterState* state, bool with_records = true) {
   const std::size_t stride = detail::PackedStride(job.channels);
   const std::size_t per_gaussian = static_cast<std::size_t>(state->num_gaussians) * stride;
-  const std::size_t per_entry = with_records ? state->num_entries() : 0;  // one float each
+  const std::size_t per_entry =
+      with_records ? state->num_entries() * detail::TileRecordStride(job.channels) : 0;
   ResizeScratch(&state->packed_splats, per_gaussian + per_entry + 1);
   state->packed_splats.back() = 0.0f;
   job.packed = state->packed_splats.data();
-  job.tile_boxes =
-      with_records ? reinterpret_cast<unsigned char*>(job.packed + per_gaussian) : nullptr;
+  job.tile_records = with_records ? job.packed + per_gaussian : nullptr;
   ParallelForChunks(
       static_cast<std::int64_t>(state->num_gaussians), 4096,
       [&](std::int64_t begin, std::int64_t end) { detail::PackSplatsSimd(job, begin, end); });
@@ -460,7 +461,7 @@ void BlendForward(const SplatBuffers& splats,
   PackSplats(job, state, settings.keep_records);
   ParallelFor(state->num_tiles(), 1,
               [&](std::int64_t tile) { detail::ForwardTileSimd(job, static_cast<int>(tile)); });
-  // The per-entry tile boxes are there for the backward (else it works out its own).
+  // The per-entry records are there for the backward (else it gathers its own).
   if (settings.keep_records) state->packed_splats.back() = 1.0f;
 }
 
@@ -508,9 +509,9 @@ void BlendBackward(const SplatBuffers& splats,
       dL_dbackground != nullptr ? state->tile_background_grad.data() : nullptr;
   if (!state->packed_ready) PackSplats(job, state);
   job.packed = state->packed_splats.data();
-  job.tile_boxes = reinterpret_cast<unsigned char*>(
-      job.packed + static_cast<std::size_t>(state->num_gaussians) * detail::PackedStride(channels));
-  job.tile_boxes_ready = state->packed_splats.back() == 1.0f;
+  job.tile_records = job.packed + static_cast<std::size_t>(state->num_gaussians) *
+                                      detail::PackedStride(channels);
+  job.tile_records_ready = state->packed_splats.back() == 1.0f;
   ParallelFor(state->num_tiles(), 1,
               [&](std::int64_t tile) { detail::BackwardTileSimd(job, static_cast<int>(tile)); });
   ReduceGradients<float>(*state, channels, state->entry_gradients.data(), job.tile_background_grad,

@@ -150,17 +150,18 @@ struct TileJob {
   // rects, RasterState::rects).
   float* packed = nullptr;
   const std::int32_t* rects = nullptr;
-  // Per point_list entry, the tile rows and columns its Gaussian can reach (4 bytes, each + 1),
-  // the rows narrowed by the forward's exact row test: written by a forward that keeps them
-  // (non-null: a backward follows), read by the backward when tile_boxes_ready (else it works
-  // out its own, unnarrowed). The kernels read the Gaussians' records in `packed`.
-  unsigned char* tile_boxes = nullptr;
-  bool tile_boxes_ready = false;
+  // Per-entry records (TileRecordStride(channels) per point_list entry: the per-Gaussian record
+  // with its reach turned into tile rows/columns packed in one slot): written by the forward,
+  // read by the backward when non-null and tile_records_ready (else the backward gathers its
+  // own). They are the largest per-entry buffer, hence the compact form.
+  float* tile_records = nullptr;
+  bool tile_records_ready = false;
 };
 // Per Gaussian: 7 scalar fields, the features, then the reach box as 4 floats (absolute pixel
-// indices).
+// indices); per tile entry: the same 7 fields and features, then the box in one 4-byte slot.
 inline constexpr int kRecordScalars = 7;
 inline int PackedStride(int channels) { return kRecordScalars + channels + 4; }
+inline int TileRecordStride(int channels) { return kRecordScalars + channels + 1; }
 // Packs the records of the listed Gaussians among ids [begin .. end).
 void PackSplatsSimd(const TileJob& job, std::int64_t begin, std::int64_t end);
 void ForwardTileSimd(const TileJob& job, int tile);

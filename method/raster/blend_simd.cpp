@@ -71,15 +71,23 @@ constexpr int kRecOpacity = 5;
 constexpr int kRecLogThreshold = 6;  // log2 power below this cannot reach kMinAlpha
 constexpr int kRecFeatures = kRecordScalars;
 static_assert(kRecLogThreshold + 1 == kRecFeatures);
-// After the features: the reach box, 4 floats: the first and last pixel row and column
-// (absolute, inclusive) of pixel centres the Gaussian can reach. Per tile entry the kernels keep
-// the tile rows and columns it covers (0..15, inclusive; row0 > row1 when it reaches none) as 4
-// bytes, each value + 1 (TileJob::tile_boxes). The backward's natural -a and -c are read from the
-// splats' conic instead of stored.
+// After the features: the reach box. In the per-Gaussian records, 4 floats: the first and last
+// pixel row and column (absolute, inclusive) of pixel centres the Gaussian can reach. In the
+// per-entry tile records, the tile rows and columns (0..15, inclusive; row0 > row1 when it
+// reaches none) as 4 bytes, each value + 1, in one slot (tile_records are the biggest per-entry
+// buffer: 4 bytes instead of 16). The backward's natural -a and -c are read from the splats'
+// conic instead of stored.
 constexpr int kBoxRow0 = 0;
 constexpr int kBoxRow1 = 1;
 constexpr int kBoxCol0 = 2;
 constexpr int kBoxCol1 = 3;
+HWY_INLINE int Box(const float* r, int channels, int k) {
+  return reinterpret_cast<const unsigned char*>(r + kRecFeatures + channels)[k] - 1;
+}
+HWY_INLINE void SetBox(float* r, int channels, int k, int value) {
+  reinterpret_cast<unsigned char*>(r + kRecFeatures + channels)[k] =
+      static_cast<unsigned char>(value + 1);
+}
 
 // Pixel centre offsets within a tile, in vector order (row-major).
 struct PixelOffsets {
@@ -259,7 +267,7 @@ void PackSplats(const TileJob& job, std::int64_t begin, std::int64_t end) {
 }
 
 // The tile rows and columns (0..15, inclusive; row0 > row1 when none) that a packed record's
-// absolute reach box covers in the tile at (x0, y0), each + 1, as 4 bytes.
+// absolute reach box covers in the tile at (x0, y0), stored + 1 as 4 bytes (SetBox's form).
 HWY_INLINE void TileBox(const float* box, float fx0, float fy0, unsigned char* out) {
   // The packed bounds are absolute pixel indices: shift to the tile and clamp (whole numbers
   // below 2^24, so exact). One-lane vector min/max: no branches (ternaries compile to some).
@@ -281,30 +289,41 @@ HWY_INLINE void TileBox(const float* box, float fx0, float fy0, unsigned char* o
   out[kBoxCol1] = static_cast<unsigned char>(col1 + 1);
 }
 
-// The record of tile entry start + j: the per-Gaussian record (scalars, features, then the
-// absolute reach box as 4 floats) of the Gaussian it lists.
-HWY_INLINE const float* EntryRecord(const TileJob& job, int entry) {
-  return job.packed + static_cast<std::size_t>(job.point_list[entry]) * PackedStride(job.channels);
-}
-
-// Per entry start + j of a tile at (x0, y0), j < count: a pointer to its record and its tile box
-// (4 bytes at boxes + 4 j, as TileBox writes them). The records are in Gaussian order and the
-// entries in depth order, so the loads would miss the cache: prefetched a few entries ahead.
-HWY_INLINE void TileEntries(const TileJob& job, int start, int count, int x0, int y0,
-                            const float** records, unsigned char* boxes) {
-  const int channels = job.channels;
+// Copies the packed records of tile entries [start, start + count) into `rec` (tile records)
+// and replaces the reach box with the tile rows and columns it covers.
+template <int kC>
+void GatherRecords(const TileJob& job, int tile, int start, int count, float* rec) {
+  const int channels = kC > 0 ? kC : job.channels;
   const int in_stride = PackedStride(channels);
-  const float fx0 = static_cast<float>(x0), fy0 = static_cast<float>(y0);
+  const int out_stride = TileRecordStride(channels);
+  const int copied = kRecFeatures + channels;  // the scalars and the features
+  const int x0 = (tile % job.tiles_x) * kTileSize;
+  const int y0 = (tile / job.tiles_x) * kTileSize;
+  const float fx0 = static_cast<float>(x0);
+  const float fy0 = static_cast<float>(y0);
+  const D d;
+  const int lanes = static_cast<int>(hn::Lanes(d));
+  // The loads miss the cache (records in Gaussian order, entries in depth order): prefetch.
   constexpr int kAhead = 8;
   for (int j = 0; j < count; ++j) {
     if (j + kAhead < count) {
-      const float* ahead = EntryRecord(job, start + j + kAhead);
+      const float* ahead =
+          job.packed + static_cast<std::size_t>(job.point_list[start + j + kAhead]) * in_stride;
       __builtin_prefetch(ahead);
       __builtin_prefetch(ahead + in_stride - 1);
     }
-    const float* src = EntryRecord(job, start + j);
-    records[j] = src;
-    TileBox(src + kRecFeatures + channels, fx0, fy0, boxes + 4 * j);
+    const int g = job.point_list[start + j];
+    float* r = rec + static_cast<std::size_t>(j) * out_stride;
+    const float* src = job.packed + static_cast<std::size_t>(g) * in_stride;
+    if (copied >= lanes) {
+      // Whole vectors, the last one overlapping the one before (never past the record).
+      int k = 0;
+      for (; k + lanes < copied; k += lanes) hn::StoreU(hn::LoadU(d, src + k), d, r + k);
+      hn::StoreU(hn::LoadU(d, src + copied - lanes), d, r + copied - lanes);
+    } else {
+      for (int k = 0; k < copied; ++k) r[k] = src[k];
+    }
+    TileBox(src + copied, fx0, fy0, reinterpret_cast<unsigned char*>(r + copied));
   }
 }
 
@@ -404,16 +423,18 @@ HWY_INLINE M BlendStep(const float* r, int j, int channels, V px, V py, PixelSta
 // Forward of one tile. Pixel vectors are processed in pairs, a vector and the one below it,
 // whose blend chains are independent (the T -> test_T -> T recurrence is latency-bound), each
 // pair walking the list of Gaussians whose reach box covers its two rows.
-// The kernel reads the per-Gaussian records where they are, through a pointer per entry (a
-// copy of every entry's record took 14% of a render's forward samples). kKeep (job.tile_boxes
-// set: a backward follows): each entry's tile box, its rows narrowed, goes to the state for the
-// backward, and n_contrib is kept; without it (a render) neither is.
+// kKeep (job.tile_records set: a backward follows): the records are gathered into the state's
+// per-entry array, their rows narrowed for the backward, and n_contrib kept. Otherwise (a render)
+// the kernel reads the per-Gaussian records where they are, through a pointer per entry, with the
+// tile box beside it: no copy of the records (14% of the forward's samples went to it) and no
+// n_contrib.
 template <int kC, bool kKeep>
 void ForwardTileImpl(const TileJob& job, int tile) {
   const D d;
   const DI di;
   const int lanes = static_cast<int>(hn::Lanes(d));
   const int channels = kC > 0 ? kC : job.channels;
+  const int stride = TileRecordStride(channels);
   const int x0 = (tile % job.tiles_x) * kTileSize;
   const int y0 = (tile / job.tiles_x) * kTileSize;
   const int start = job.tile_ranges[tile];
@@ -423,13 +444,43 @@ void ForwardTileImpl(const TileJob& job, int tile) {
   thread_local Scratch<float> acc_scratch;  // run-time channel count only
   thread_local Scratch<std::int32_t> list_scratch;
   thread_local Scratch<std::int32_t> list_scratch2;
-  thread_local Scratch<const float*> pointer_scratch;
-  thread_local Scratch<unsigned char> box_scratch;
-  const float** records = pointer_scratch.Get(static_cast<std::size_t>(count) + 1);
-  unsigned char* boxes = box_scratch.Get(4 * static_cast<std::size_t>(count) + 4);
-  TileEntries(job, start, count, x0, y0, records, boxes);
-  // Entry j's tile box field k.
-  const auto box = [&](int j, int k) { return boxes[4 * j + k] - 1; };
+  thread_local Scratch<const float*> pointer_scratch;  // without kKeep
+  thread_local Scratch<unsigned char> box_scratch;     // without kKeep
+  // kKeep: into the state's per-entry records, so the backward can reuse them.
+  float* rec = nullptr;
+  const float** records = nullptr;
+  unsigned char* boxes = nullptr;
+  if constexpr (kKeep) {
+    rec = job.tile_records + static_cast<std::size_t>(start) * stride;
+    GatherRecords<kC>(job, tile, start, count, rec);
+  } else {
+    records = pointer_scratch.Get(static_cast<std::size_t>(count) + 1);
+    boxes = box_scratch.Get(4 * static_cast<std::size_t>(count) + 4);
+    const int in_stride = PackedStride(channels);
+    const float fx0 = static_cast<float>(x0), fy0 = static_cast<float>(y0);
+    constexpr int kAhead = 8;  // records in Gaussian order, entries in depth order: prefetch
+    for (int j = 0; j < count; ++j) {
+      if (j + kAhead < count) {
+        const float* ahead =
+            job.packed + static_cast<std::size_t>(job.point_list[start + j + kAhead]) * in_stride;
+        __builtin_prefetch(ahead);
+        __builtin_prefetch(ahead + in_stride - 1);
+      }
+      const float* src =
+          job.packed + static_cast<std::size_t>(job.point_list[start + j]) * in_stride;
+      records[j] = src;
+      TileBox(src + kRecFeatures + channels, fx0, fy0, boxes + 4 * j);
+    }
+  }
+  // Record j (scalars, then features) and its tile box field k.
+  const auto record = [&](int j) -> const float* {
+    if constexpr (kKeep) return rec + static_cast<std::size_t>(j) * stride;
+    return records[j];
+  };
+  const auto box = [&](int j, int k) -> int {
+    if constexpr (kKeep) return Box(record(j), channels, k);
+    return boxes[4 * j + k] - 1;
+  };
   float* acc_mem =
       kC > 0 ? nullptr : acc_scratch.Get(2 * static_cast<std::size_t>(channels) * lanes);
 
@@ -453,7 +504,7 @@ void ForwardTileImpl(const TileJob& job, int tile) {
   float* s_k = s_hc + padded;   // -b / a: the dx maximising power on a row is k dy
   float* s_thr = s_k + padded;  // log threshold; -inf: never pruned
   for (int j = 0; j < padded; ++j) {
-    const float* r = j < count ? records[j] : nullptr;
+    const float* r = j < count ? record(j) : nullptr;
     row0[j] = j < count ? box(j, kBoxRow0) : kTileSize;
     row1[j] = j < count ? box(j, kBoxRow1) : -1;
     // Only when a > 0 (power concave in dx on a row) and the reach box is not the whole tile
@@ -541,15 +592,13 @@ void ForwardTileImpl(const TileJob& job, int tile) {
     }
     list_length[p] = n;
   }
-  // For the backward: the tile boxes with their rows narrowed (the forward below reads only the
-  // columns). Rows cut here hold no pixel the Gaussian reaches.
+  // When the records stay in the state for the backward, narrow their rows (the forward below
+  // reads only the columns). Rows cut here hold no pixel the Gaussian reaches.
   if constexpr (kKeep) {
-    unsigned char* out = job.tile_boxes + 4 * static_cast<std::size_t>(start);
     for (int j = 0; j < count; ++j) {
-      out[4 * j + kBoxRow0] = static_cast<unsigned char>(tight_lo[j] + 1);
-      out[4 * j + kBoxRow1] = static_cast<unsigned char>(tight_hi[j] + 1);
-      out[4 * j + kBoxCol0] = boxes[4 * j + kBoxCol0];
-      out[4 * j + kBoxCol1] = boxes[4 * j + kBoxCol1];
+      float* r = rec + static_cast<std::size_t>(j) * stride;
+      SetBox(r, channels, kBoxRow0, tight_lo[j]);
+      SetBox(r, channels, kBoxRow1, tight_hi[j]);
     }
   }
 
@@ -619,7 +668,7 @@ void ForwardTileImpl(const TileJob& job, int tile) {
       const int col1 = col0 + lanes - 1;
       for (int i = 0; i < list_length[pair]; ++i) {
         const int j = list[i];
-        const float* r = records[j];
+        const float* r = record(j);
         if (vectors_per_row > 1 && (box(j, kBoxCol1) < col0 || box(j, kBoxCol0) > col1)) continue;
         const M stop_a = BlendStep<kC, kKeep>(r, j, channels, px, py_a, a);
         const M stop_b = BlendStep<kC, kKeep>(r, j, channels, px, py_b, b);
@@ -663,6 +712,7 @@ void BackwardTileImpl(const TileJob& job, int tile) {
   const DI di;
   const int lanes = static_cast<int>(hn::Lanes(d));
   const int channels = kC > 0 ? kC : job.channels;
+  const int stride = TileRecordStride(channels);
   const int slot_stride = SlotStride(channels);
   const int x0 = (tile % job.tiles_x) * kTileSize;
   const int y0 = (tile / job.tiles_x) * kTileSize;
@@ -674,6 +724,7 @@ void BackwardTileImpl(const TileJob& job, int tile) {
   // and with a geometry image its dL/dimage (channels), which dL/dalpha and g_T take instead.
   const bool split = job.dL_dimage_geometry != nullptr;
   thread_local Scratch<float> plane_scratch;
+  thread_local Scratch<float> rec_scratch;
   float* planes = plane_scratch.Get(
       static_cast<std::size_t>(kTilePixels) * (3 + (split ? 3 : 2) * channels) +
       static_cast<std::size_t>(channels) * lanes);
@@ -736,17 +787,13 @@ void BackwardTileImpl(const TileJob& job, int tile) {
     return job.entry_gradients + static_cast<std::size_t>(slot_index[j]) * slot_stride;
   };
   for (int j = tile_max; j < count; ++j) std::fill_n(slot_of(j), slot_stride, 0.0f);
-  // The tile boxes the forward narrowed, or this tile's own.
-  const unsigned char* boxes;
-  const float fx0 = static_cast<float>(x0), fy0 = static_cast<float>(y0);
-  if (job.tile_boxes_ready) {
-    boxes = job.tile_boxes + 4 * static_cast<std::size_t>(start);
+  const float* rec;
+  if (job.tile_records_ready) {
+    rec = job.tile_records + static_cast<std::size_t>(start) * stride;
   } else {
-    thread_local Scratch<unsigned char> box_scratch;
-    unsigned char* own = box_scratch.Get(4 * static_cast<std::size_t>(tile_max) + 4);
-    for (int j = 0; j < tile_max; ++j)
-      TileBox(EntryRecord(job, start + j) + kRecFeatures + channels, fx0, fy0, own + 4 * j);
-    boxes = own;
+    float* own = rec_scratch.Get(static_cast<std::size_t>(tile_max) * stride + 1);
+    GatherRecords<kC>(job, tile, start, tile_max, own);
+    rec = own;
   }
 
   const V one = hn::Set(d, 1.0f);
@@ -763,22 +810,17 @@ void BackwardTileImpl(const TileJob& job, int tile) {
   }
   constexpr int kGradCount = kSlotFeatures + (kC > 0 ? kC : 0);
 
-  // The record, the conic row (read after the pixels) and the gradient slot (written then) of
-  // each Gaussian are at random places: prefetch them a few Gaussians ahead (the conic load was a
-  // tenth of this kernel's time in a 200x200 run).
+  // The conic row (read after the pixels) and the gradient slot (written then) of each Gaussian
+  // are at random places: prefetch them a few Gaussians ahead (the conic load was a tenth of this
+  // kernel's time in a 200x200 run).
   constexpr int kAhead = 4;
-  const int in_stride = PackedStride(channels);
   for (int j = tile_max - 1; j >= 0; --j) {
     if (j >= kAhead) {
-      const float* ahead = EntryRecord(job, start + j - kAhead);
-      __builtin_prefetch(ahead);
-      __builtin_prefetch(ahead + in_stride - 1);
       __builtin_prefetch(job.conic +
                          3 * static_cast<std::size_t>(job.point_list[start + j - kAhead]));
       __builtin_prefetch(slot_of(j - kAhead), 1);
     }
-    const float* r = EntryRecord(job, start + j);
-    const unsigned char* box = boxes + 4 * j;  // each + 1
+    const float* r = rec + static_cast<std::size_t>(j) * stride;
     const VI jv = hn::Set(di, j);
     const V mean_x = hn::Set(d, r[kRecMeanX]);
     const V mean_y = hn::Set(d, r[kRecMeanY]);
@@ -792,10 +834,10 @@ void BackwardTileImpl(const TileJob& job, int tile) {
     bool any = false;
     // Only the pixel vectors of the rows (and, for narrow vectors, columns) it can reach.
     const int vectors_per_row = kTileSize / lanes;
-    const int v_end = box[kBoxRow1] * vectors_per_row;
-    const int box_col0 = box[kBoxCol0] - 1;
-    const int box_col1 = box[kBoxCol1] - 1;
-    for (int vi = (box[kBoxRow0] - 1) * vectors_per_row; vi < v_end; ++vi) {
+    const int v_end = (Box(r, channels, kBoxRow1) + 1) * vectors_per_row;
+    const int box_col0 = Box(r, channels, kBoxCol0);
+    const int box_col1 = Box(r, channels, kBoxCol1);
+    for (int vi = Box(r, channels, kBoxRow0) * vectors_per_row; vi < v_end; ++vi) {
       if (vector_max[vi] <= j) continue;
       const int off = vi * lanes;
       if (vectors_per_row > 1) {
@@ -883,7 +925,7 @@ void ForwardTileKeeping(const TileJob& job, int tile) {
 }
 
 void ForwardTile(const TileJob& job, int tile) {
-  if (job.tile_boxes != nullptr) return ForwardTileKeeping<true>(job, tile);
+  if (job.tile_records != nullptr) return ForwardTileKeeping<true>(job, tile);
   ForwardTileKeeping<false>(job, tile);
 }
 
