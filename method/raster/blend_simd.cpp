@@ -10,13 +10,15 @@
 // per-lane tests of the 3DGS rules still decide, so pruning never changes a result.
 //
 // The forward gathers each tile's records into the state (after the per-Gaussian records), so
-// the backward of the same frame reads them instead of gathering again; while building its row
+// the backward of the same frame reads them contiguously instead of gathering again (a render,
+// which no backward follows, reads the per-Gaussian records in place); while building its row
 // lists the forward also drops, per row, the Gaussians whose power cannot reach the log
 // threshold within the tile's columns (exact maximum on the row, with a rounding margin) and
 // narrows the stored rows to those, which the backward then walks.
 // Forward: pixel vectors go in pairs (a vector and the one below it: two independent T chains,
 // the T -> test_T -> T recurrence being latency-bound), each pair walking only the Gaussians whose
-// reach box covers its two rows (selected with Compress), T, colour and n_contrib in registers,
+// reach box covers its two rows (selected with Compress), T, colour and n_contrib (when a
+// backward follows) in registers,
 // and stopping when all its pixels are done.
 // Backward: for each Gaussian back to front, the pixel vectors of its reach rows that still list
 // it (n_contrib per vector bounds the loop), with T and the "behind" colour per pixel in
