@@ -291,6 +291,21 @@ HWY_INLINE void TileBox(const float* box, float fx0, float fy0, unsigned char* o
   out[kBoxCol1] = static_cast<unsigned char>(col1 + 1);
 }
 
+// The packed per-Gaussian record (stride PackedStride) of point_list entry `entry`.
+HWY_INLINE const float* EntryRecord(const TileJob& job, int entry, int stride) {
+  return job.packed + static_cast<std::size_t>(job.point_list[entry]) * stride;
+}
+
+// Walking a tile's entries j = 0.. reads records in Gaussian order while entries are in depth
+// order, so the loads miss the cache: fetch entry j's record kRecordAhead entries early.
+constexpr int kRecordAhead = 8;
+HWY_INLINE void PrefetchRecordAhead(const TileJob& job, int start, int j, int count, int stride) {
+  if (j + kRecordAhead >= count) return;
+  const float* ahead = EntryRecord(job, start + j + kRecordAhead, stride);
+  __builtin_prefetch(ahead);
+  __builtin_prefetch(ahead + stride - 1);
+}
+
 // Copies the packed records of tile entries [start, start + count) into `rec` (tile records)
 // and replaces the reach box with the tile rows and columns it covers.
 template <int kC>
@@ -305,18 +320,10 @@ void GatherRecords(const TileJob& job, int tile, int start, int count, float* re
   const float fy0 = static_cast<float>(y0);
   const D d;
   const int lanes = static_cast<int>(hn::Lanes(d));
-  // The loads miss the cache (records in Gaussian order, entries in depth order): prefetch.
-  constexpr int kAhead = 8;
   for (int j = 0; j < count; ++j) {
-    if (j + kAhead < count) {
-      const float* ahead =
-          job.packed + static_cast<std::size_t>(job.point_list[start + j + kAhead]) * in_stride;
-      __builtin_prefetch(ahead);
-      __builtin_prefetch(ahead + in_stride - 1);
-    }
-    const int g = job.point_list[start + j];
+    PrefetchRecordAhead(job, start, j, count, in_stride);
     float* r = rec + static_cast<std::size_t>(j) * out_stride;
-    const float* src = job.packed + static_cast<std::size_t>(g) * in_stride;
+    const float* src = EntryRecord(job, start + j, in_stride);
     if (copied >= lanes) {
       // Whole vectors, the last one overlapping the one before (never past the record).
       int k = 0;
@@ -460,16 +467,9 @@ void ForwardTileImpl(const TileJob& job, int tile) {
     boxes = box_scratch.Get(4 * static_cast<std::size_t>(count) + 4);
     const int in_stride = PackedStride(channels);
     const float fx0 = static_cast<float>(x0), fy0 = static_cast<float>(y0);
-    constexpr int kAhead = 8;  // records in Gaussian order, entries in depth order: prefetch
     for (int j = 0; j < count; ++j) {
-      if (j + kAhead < count) {
-        const float* ahead =
-            job.packed + static_cast<std::size_t>(job.point_list[start + j + kAhead]) * in_stride;
-        __builtin_prefetch(ahead);
-        __builtin_prefetch(ahead + in_stride - 1);
-      }
-      const float* src =
-          job.packed + static_cast<std::size_t>(job.point_list[start + j]) * in_stride;
+      PrefetchRecordAhead(job, start, j, count, in_stride);
+      const float* src = EntryRecord(job, start + j, in_stride);
       records[j] = src;
       TileBox(src + kRecFeatures + channels, fx0, fy0, boxes + 4 * j);
     }
