@@ -16,6 +16,7 @@
 #include "core/parallel.h"
 #include "method/gaussian/constants.h"
 #include "method/raster/binning.h"
+#include "method/raster/simd_targets_for_test.h"
 
 namespace hdr4d::method {
 namespace {
@@ -815,13 +816,7 @@ TEST(RasterBlendSimd, MatchesScalarPath) {
 // SSSE3: 4, several vectors per row with column culling; scalar: 1) against the scalar path, by
 // restricting Highway's dispatch to one target at a time.
 TEST(RasterBlendSimd, EveryCompiledTargetMatchesScalarPath) {
-  const std::int64_t supported = hwy::SupportedTargets();
-  int tested = 0;
-  for (std::int64_t target : {HWY_AVX3, HWY_AVX2, HWY_SSE4, HWY_SSSE3, HWY_SCALAR}) {
-    if ((supported & target) == 0 || (HWY_TARGETS & target) == 0) continue;
-    hwy::SetSupportedTargetsForTest(target);
-    SCOPED_TRACE(hwy::TargetName(target));
-    ++tested;
+  const int tested = ForEachCompiledTarget([] {
     for (int channels : {3, 5}) {
       SceneOptions o;
       o.channels = channels;
@@ -842,8 +837,7 @@ TEST(RasterBlendSimd, EveryCompiledTargetMatchesScalarPath) {
     for (std::size_t i = 0; i < x.size(); ++i)
       worst = std::max(worst, std::abs(out[i] / std::exp(static_cast<double>(x[i])) - 1.0));
     EXPECT_LT(worst, 1e-6);
-  }
-  hwy::SetSupportedTargetsForTest(0);
+  });
   EXPECT_GE(tested, 2);  // at least one vector target and the scalar fallback
 }
 
@@ -1048,15 +1042,9 @@ TEST(RasterBlendSimd, ForwardWithoutRecordsIsIdenticalAndKeepsLess) {
       EXPECT_LT(lean.packed_splats.size(), kept.packed_splats.size() / 2);
     }
   }
-  const std::int64_t supported = hwy::SupportedTargets();
-  int tested = 0;
-  for (std::int64_t target : {HWY_AVX3, HWY_AVX2, HWY_SSE4, HWY_SSSE3, HWY_SCALAR}) {
-    if ((supported & target) == 0 || (HWY_TARGETS & target) == 0) continue;
-    hwy::SetSupportedTargetsForTest(target);
-    ++tested;
+  const int tested = ForEachCompiledTarget([] {
     for (int channels : {1, 3, 4, 6, 5}) {
-      SCOPED_TRACE(std::string(hwy::TargetName(target)) + ", channels " +
-                   std::to_string(channels));
+      SCOPED_TRACE("channels " + std::to_string(channels));
       SceneOptions o;
       o.channels = channels;
       o.count = 400;
@@ -1074,8 +1062,7 @@ TEST(RasterBlendSimd, ForwardWithoutRecordsIsIdenticalAndKeepsLess) {
       EXPECT_EQ(kept.final_transmittance, lean.final_transmittance);
       EXPECT_TRUE(lean.n_contrib.empty());
     }
-  }
-  hwy::SetSupportedTargetsForTest(0);
+  });
   EXPECT_GE(tested, 2);
 }
 

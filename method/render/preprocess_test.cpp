@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "core/camera.h"
+#include "method/raster/simd_targets_for_test.h"
 
 namespace hdr4d::method {
 namespace {
@@ -241,23 +242,6 @@ void ExpectPathsAgree(const GaussianModel& model, int sh_degree, unsigned seed) 
         std::tuple{"color_rest", &g_fast.color_rest, &g_ref.color_rest}}) {
     CountFar(*a, *b, 1e-4f * std::max(1e-3f, max_abs(*b)), 2e-3f, name);
   }
-}
-
-// Runs `body` once per Highway target compiled into hdr4d and supported here (AVX-512, AVX2,
-// the baseline), with dispatch restricted to that target; returns how many ran.
-template <typename Body>
-int ForEachCompiledTarget(Body body) {
-  const std::int64_t supported = hwy::SupportedTargets();
-  int ran = 0;
-  for (std::int64_t target = 1; target != 0 && target <= HWY_TARGETS; target <<= 1) {
-    if ((HWY_TARGETS & target) == 0 || (supported & target) == 0) continue;
-    hwy::SetSupportedTargetsForTest(target);
-    SCOPED_TRACE(hwy::TargetName(target));
-    body();
-    ++ran;
-  }
-  hwy::SetSupportedTargetsForTest(0);
-  return ran;
 }
 
 TEST(Preprocess, EveryCompiledTargetMatchesTheReference) {
