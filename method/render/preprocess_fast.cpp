@@ -1,6 +1,9 @@
 // The fast preprocess (preprocess.h): float, 4D or 3D, the Highway kernels of preprocess_simd.h over
-// batches of Gaussians, the colour sums per Gaussian (preprocess_common.h).
+// batches of Gaussians, the colour sums per Gaussian (preprocess_common.h). The forward's full
+// geometry runs only on the Gaussians a cheap test by time keeps, the backward's only on the
+// visible ones: in a dynamic scene most are culled by time (70% at the paper's Syn configuration).
 #include <algorithm>
+#include <utility>
 #include <vector>
 
 #include "core/parallel.h"
@@ -9,8 +12,7 @@
 #include "method/render/preprocess_simd.h"
 
 namespace hdr4d::method {
-using namespace detail;
-namespace {
+namespace detail {
 
 PreprocessSimdJob MakePreprocessJob(const GaussianModel& model,
                                     const ViewParams<float>& view,
@@ -47,9 +49,24 @@ PreprocessSimdJob MakePreprocessJob(const GaussianModel& model,
   return job;
 }
 
+}  // namespace detail
+
+using namespace detail;
+namespace {
+
 // One lane's weights out of a batch's [k][lane] block.
 inline void LaneWeights(const float* batch, int lane, int coefficients, float* w) {
   for (int k = 0; k < coefficients; ++k) w[k] = batch[k * kPreprocessBatch + lane];
+}
+
+// The geometry gradients of Gaussian i, zero (what the kernel writes for a culled Gaussian).
+void ZeroGeometryGradients(std::size_t i, GaussianGradients* grads) {
+  std::fill_n(&grads->xyz[3 * i], 3, 0.0f);
+  grads->t[i] = 0.0f;
+  std::fill_n(&grads->log_scales[4 * i], 4, 0.0f);
+  std::fill_n(&grads->rot_left[4 * i], 4, 0.0f);
+  std::fill_n(&grads->rot_right[4 * i], 4, 0.0f);
+  grads->opacity_logit[i] = 0.0f;
 }
 
 }  // namespace
@@ -78,27 +95,47 @@ void PreprocessForwardFast(const GaussianModel& model,
   job.reach = s.reach.data();
   job.screen_radius = state->screen_radius.data();
   const int coefficients = job.coefficients;
-  ParallelForChunks(
-      static_cast<std::int64_t>(n), kGaussianGrain, [&](std::int64_t b, std::int64_t e) {
-        alignas(64) float batch_w[kMaxColorCoefficients * kPreprocessBatch];
-        float w[kMaxColorCoefficients];
-        std::int64_t visible = 0;
-        for (std::int64_t g0 = b; g0 < e; g0 += kPreprocessBatch) {
-          const int count = static_cast<int>(std::min<std::int64_t>(kPreprocessBatch, e - g0));
-          PreprocessForwardSimd(job, g0, count, batch_w);
-          for (int l = 0; l < count; ++l) {
-            const std::size_t i = static_cast<std::size_t>(g0 + l);
-            // The colour rows stream from memory (the optimiser's sweep evicts them).
-            if (stride > 0 && g0 + l + kColorAhead < e)
-              PrefetchRow(&model.color_rest[(i + kColorAhead) * stride], stride);
-            if (state->screen_radius[i] == 0) continue;
-            LaneWeights(batch_w, l, coefficients, w);
-            WriteColour(model, i, w, options, time_degree, state);
-            ++visible;
-          }
-        }
-        visible_per_chunk[b / kGaussianGrain] = visible;
-      });
+  const auto chunk = [&](std::int64_t b, std::int64_t e) {
+    // Two batches in flight: a batch's visible colour rows are prefetched as soon as its
+    // geometry says which they are, and read one batch later. The rows stream from memory
+    // (the optimiser's sweep evicts them), and in a dynamic scene most Gaussians are culled
+    // by time (70% at the paper's Syn configuration), whose rows are not fetched at all.
+    alignas(64) float batch_w[2][kMaxColorCoefficients * kPreprocessBatch];
+    std::int64_t index[2][kPreprocessBatch];
+    int batch_count[2] = {0, 0};
+    float w[kMaxColorCoefficients];
+    std::int64_t visible = 0;
+    const auto write_colours = [&](int slot) {
+      for (int l = 0; l < batch_count[slot]; ++l) {
+        const std::size_t i = static_cast<std::size_t>(index[slot][l]);
+        if (state->screen_radius[i] == 0) continue;
+        LaneWeights(batch_w[slot], l, coefficients, w);
+        WriteColour(model, i, w, options, time_degree, state);
+        ++visible;
+      }
+    };
+    // The Gaussians culled by time alone are done here, without their geometry.
+    HDR4D_CHECK(e - b <= kGaussianGrain);
+    std::int64_t survivors[kGaussianGrain];
+    const int num_survivors =
+        PreprocessTemporalSurvivors(job, b, static_cast<int>(e - b), survivors);
+    int slot = 0;
+    for (int k = 0; k < num_survivors; k += kPreprocessBatch) {
+      const int count = std::min(kPreprocessBatch, num_survivors - k);
+      std::copy_n(survivors + k, count, index[slot]);
+      batch_count[slot] = count;
+      PreprocessForwardSimd(job, index[slot], count, batch_w[slot]);
+      for (int l = 0; l < count && stride > 0; ++l) {
+        const std::size_t i = static_cast<std::size_t>(index[slot][l]);
+        if (state->screen_radius[i] != 0) PrefetchRow(&model.color_rest[i * stride], stride);
+      }
+      slot ^= 1;
+      write_colours(slot);  // the batch before (none before the first)
+    }
+    write_colours(slot ^ 1);
+    visible_per_chunk[b / kGaussianGrain] = visible;
+  };
+  ParallelForChunks(static_cast<std::int64_t>(n), kGaussianGrain, chunk);
   FinishPreprocess(options, model, visible_per_chunk, state);
 }
 
@@ -131,42 +168,54 @@ void PreprocessBackwardFast(const GaussianModel& model,
   job.d_rot_left = grads->rot_left.data();
   job.d_rot_right = grads->rot_right.data();
   job.d_opacity_logit = grads->opacity_logit.data();
-  ParallelForChunks(
-      static_cast<std::int64_t>(n), kGaussianGrain, [&](std::int64_t b, std::int64_t e) {
-        alignas(64) float batch_w[kMaxColorCoefficients * kPreprocessBatch];
-        float w[kMaxColorCoefficients];
-        std::int64_t done = b;  // rows before this are handed to rows_done
-        // With rows_done the colour rows (nine tenths of the gradient) go to a per-thread block
-        // that is handed over and reused, so they never travel to memory and back.
-        thread_local std::vector<float> block_dc, block_rest;
-        if (rows_done) {
-          block_dc.resize(static_cast<std::size_t>(kRowsDoneBlock + kPreprocessBatch) * channels);
-          block_rest.resize(static_cast<std::size_t>(kRowsDoneBlock + kPreprocessBatch) * stride);
+  const auto chunk = [&](std::int64_t b, std::int64_t e) {
+    alignas(64) float batch_w[kMaxColorCoefficients * kPreprocessBatch];
+    float w[kMaxColorCoefficients];
+    std::int64_t kept[kRowsDoneBlock];
+    // With rows_done the colour rows (nine tenths of the gradient) go to a per-thread block
+    // that is handed over and reused, so they never travel to memory and back.
+    thread_local std::vector<float> block_dc, block_rest;
+    if (rows_done) {
+      block_dc.resize(static_cast<std::size_t>(kRowsDoneBlock) * channels);
+      block_rest.resize(static_cast<std::size_t>(kRowsDoneBlock) * stride);
+    }
+    // Blocks of kRowsDoneBlock rows: ~160 KB of gradients at 160 floats a row, still in L2.
+    for (std::int64_t first = b; first < e; first += kRowsDoneBlock) {
+      const std::int64_t last = std::min(first + kRowsDoneBlock, e);
+      const auto colour_rows = [&](std::size_t i) {
+        const std::size_t row = rows_done ? i - static_cast<std::size_t>(first) : i;
+        return std::pair{rows_done ? &block_dc[row * channels] : &grads->color_dc[i * channels],
+                         rows_done ? &block_rest[row * stride] : &grads->color_rest[i * stride]};
+      };
+      // Only the Gaussians the forward kept get a gradient. The kernel runs on them alone,
+      // packed into full batches (in a dynamic scene most Gaussians are culled by time);
+      // the others' rows are zero, as the kernel would have written them.
+      int num_kept = 0;
+      for (std::int64_t g = first; g < last; ++g) {
+        const std::size_t i = static_cast<std::size_t>(g);
+        if (s.radius[i] > 0) {
+          kept[num_kept++] = g;
+          continue;
         }
-        for (std::int64_t g0 = b; g0 < e; g0 += kPreprocessBatch) {
-          const int count = static_cast<int>(std::min<std::int64_t>(kPreprocessBatch, e - g0));
-          PreprocessBackwardSimd(job, g0, count, batch_w);
-          for (int l = 0; l < count; ++l) {
-            const std::size_t i = static_cast<std::size_t>(g0 + l);
-            const std::size_t row = rows_done ? i - static_cast<std::size_t>(done) : i;
-            float* gdc = rows_done ? &block_dc[row * channels] : &grads->color_dc[i * channels];
-            float* grest = rows_done ? &block_rest[row * stride] : &grads->color_rest[i * stride];
-            if (s.radius[i] <= 0) {
-              std::fill_n(gdc, channels, 0.0f);
-              std::fill_n(grest, stride, 0.0f);
-              continue;
-            }
-            LaneWeights(batch_w, l, num_coefficients, w);
-            WriteColourGradient(model, i, w, options, state, gdc, grest);
-          }
-          // Blocks of kRowsDoneBlock rows: ~160 KB of gradients at 160 floats a row, still in L2.
-          const std::int64_t next = g0 + count;
-          if (rows_done && (next - done >= kRowsDoneBlock || next == e)) {
-            rows_done(done, next, GradientRows{block_dc.data(), block_rest.data()});
-            done = next;
-          }
+        ZeroGeometryGradients(i, grads);
+        const auto [gdc, grest] = colour_rows(i);
+        std::fill_n(gdc, channels, 0.0f);
+        std::fill_n(grest, stride, 0.0f);
+      }
+      for (int k = 0; k < num_kept; k += kPreprocessBatch) {
+        const int count = std::min(kPreprocessBatch, num_kept - k);
+        PreprocessBackwardSimd(job, kept + k, count, batch_w);
+        for (int l = 0; l < count; ++l) {
+          const std::size_t i = static_cast<std::size_t>(kept[k + l]);
+          const auto [gdc, grest] = colour_rows(i);
+          LaneWeights(batch_w, l, num_coefficients, w);
+          WriteColourGradient(model, i, w, options, state, gdc, grest);
         }
-      });
+      }
+      if (rows_done) rows_done(first, last, GradientRows{block_dc.data(), block_rest.data()});
+    }
+  };
+  ParallelForChunks(static_cast<std::int64_t>(n), kGaussianGrain, chunk);
 }
 
 }  // namespace hdr4d::method

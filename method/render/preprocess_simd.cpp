@@ -40,10 +40,10 @@ struct BatchIn {
   HWY_ALIGN float logit[kB];
 };
 
-void LoadBatch(const PreprocessSimdJob& job, std::int64_t begin, int count, BatchIn* in) {
+void LoadBatch(const PreprocessSimdJob& job, const std::int64_t* index, int count, BatchIn* in) {
   if (count < kB) std::memset(in, 0, sizeof(BatchIn));
   for (int l = 0; l < count; ++l) {
-    const std::size_t i = static_cast<std::size_t>(begin + l);
+    const std::size_t i = static_cast<std::size_t>(index[l]);
     for (int k = 0; k < 3; ++k) in->mean[k][l] = job.xyz[3 * i + k];
     in->mean[3][l] = job.t[i];
     for (int k = 0; k < 4; ++k) {
@@ -53,6 +53,88 @@ void LoadBatch(const PreprocessSimdJob& job, std::int64_t begin, int count, Batc
     }
     in->logit[l] = job.opacity_logit[i];
   }
+}
+
+// Which of the Gaussians [begin, begin + count) may be visible at the view's time. A Gaussian
+// whose marginal p(t) is surely at or below kTemporalCullMarginal gets the forward's outputs of
+// a culled one here (zero radii), without its geometry; the others' indices go to `kept`, for
+// ForwardBatch. Sigma_tt is computed as SlicedGeometry computes it (the same operations on the
+// same values), the floor from the sum of the variances (trace(Sigma) up to rounding), and the
+// cull needs p(t) below the threshold by a margin far above either rounding, so it removes only
+// Gaussians the full test would remove: the results do not change. Lanes past the last whole
+// vector, and quaternions the kernels replace by the identity, are kept.
+int TemporalSurvivors(const PreprocessSimdJob& job,
+                      std::int64_t begin,
+                      int count,
+                      std::int64_t* kept) {
+  const D d;
+  const int lanes = static_cast<int>(hn::Lanes(d));
+  int num_kept = 0;
+  const auto keep = [&](std::int64_t i) { kept[num_kept++] = i; };
+  if (!job.temporal) {
+    for (int l = 0; l < count; ++l) keep(begin + l);
+    return num_kept;
+  }
+  const V min_norm = hn::Set(d, static_cast<float>(kMinQuaternionNorm));
+  int off = 0;
+  for (; off + lanes <= count; off += lanes) {
+    const std::size_t i0 = static_cast<std::size_t>(begin + off);
+    V ql[4], qr[4], s[4];
+    hn::LoadInterleaved4(d, job.rot_left + 4 * i0, ql[0], ql[1], ql[2], ql[3]);
+    hn::LoadInterleaved4(d, job.rot_right + 4 * i0, qr[0], qr[1], qr[2], qr[3]);
+    hn::LoadInterleaved4(d, job.log_scales + 4 * i0, s[0], s[1], s[2], s[3]);
+    // Normalize's operations, without its identity fallback (such lanes are kept below).
+    const auto normalize = [&](V* q) {
+      V n2 = hn::Mul(q[0], q[0]);
+      for (int k = 1; k < 4; ++k) n2 = hn::MulAdd(q[k], q[k], n2);
+      const V norm = hn::Sqrt(n2);
+      for (int k = 0; k < 4; ++k) q[k] = hn::Div(q[k], norm);
+      return hn::Gt(norm, min_norm);
+    };
+    const M ok = hn::And(normalize(ql), normalize(qr));
+    // Row 0 of M_l (LeftIsoclinic) times M_r (RightIsoclinic): A(0, j) = R(3, 3 - j).
+    const V ml0[4] = {ql[0], hn::Neg(ql[1]), hn::Neg(ql[2]), hn::Neg(ql[3])};
+    const V p = qr[0], x = qr[1], y = qr[2], z = qr[3];
+    const V mr[4][4] = {{p, x, y, z},
+                        {hn::Neg(x), p, hn::Neg(z), y},
+                        {hn::Neg(y), z, p, hn::Neg(x)},
+                        {hn::Neg(z), hn::Neg(y), x, p}};
+    V row[4];  // R(3, k)
+    for (int j = 0; j < 4; ++j) {
+      V acc = hn::Mul(ml0[0], mr[0][j]);
+      for (int k = 1; k < 4; ++k) acc = hn::MulAdd(ml0[k], mr[k][j], acc);
+      row[3 - j] = acc;
+    }
+    V stt = hn::Zero(d), trace = hn::Zero(d);
+    for (int k = 0; k < 4; ++k) {
+      const V e = hn::Exp(d, hn::Min(s[k], hn::Set(d, 88.0f)));
+      const V l3 = hn::Mul(row[k], e);  // L(3, k)
+      stt = k == 0 ? hn::Mul(l3, l3) : hn::MulAdd(l3, l3, stt);
+      trace = hn::MulAdd(e, e, trace);
+    }
+    const V floor = hn::MulAdd(hn::Set(d, static_cast<float>(kSliceRelativeVarianceFloor)), trace,
+                               hn::Set(d, static_cast<float>(kSliceAbsoluteVarianceFloor)));
+    // The variance the slice uses is max(Sigma_tt, floor); 1.001 x that bounds it from above.
+    const V var = hn::Mul(hn::Max(stt, floor), hn::Set(d, 1.001f));
+    const V dt = hn::Sub(hn::Set(d, job.time), hn::LoadU(d, job.t + i0));
+    const V marginal = hn::Exp(
+        d, hn::Max(hn::Div(hn::Mul(hn::Set(d, -0.5f), hn::Mul(dt, dt)), var), hn::Set(d, -100.0f)));
+    const M culled = hn::And(ok, hn::Lt(marginal, hn::Set(d, 0.999f * kTemporalCullMarginal)));
+    HWY_ALIGN std::int32_t flag[kB];
+    hn::Store(hn::VecFromMask(DI(), hn::RebindMask(DI(), culled)), DI(), flag);
+    for (int l = 0; l < lanes; ++l) {
+      const std::size_t i = i0 + static_cast<std::size_t>(l);
+      if (flag[l] == 0) {
+        keep(static_cast<std::int64_t>(i));
+        continue;
+      }
+      job.radius[i] = 0;
+      job.reach[2 * i] = job.reach[2 * i + 1] = 0;
+      job.screen_radius[i] = 0;
+    }
+  }
+  for (; off < count; ++off) keep(begin + off);
+  return num_kept;
 }
 
 // The forward's values of one vector of Gaussians that the backward needs as well.
@@ -325,12 +407,15 @@ HWY_INLINE void ColorWeights(
   }
 }
 
-void ForwardBatch(const PreprocessSimdJob& job, std::int64_t begin, int count, float* weights) {
+void ForwardBatch(const PreprocessSimdJob& job,
+                  const std::int64_t* index,
+                  int count,
+                  float* weights) {
   const D d;
   const DI di;
   const int lanes = static_cast<int>(hn::Lanes(d));
   BatchIn in;
-  LoadBatch(job, begin, count, &in);
+  LoadBatch(job, index, count, &in);
   HWY_ALIGN float mx[kB], my[kB], ca[kB], cb[kB], cc[kB], depth[kB], opacity[kB];
   HWY_ALIGN std::int32_t screen[kB], bin[kB], reach_x[kB], reach_y[kB];
   for (int off = 0; off < count; off += lanes) {
@@ -370,7 +455,7 @@ void ForwardBatch(const PreprocessSimdJob& job, std::int64_t begin, int count, f
     if (!hn::AllFalse(d, g.visible)) ColorWeights(job, in, off, g, weights);
   }
   for (int l = 0; l < count; ++l) {
-    const std::size_t i = static_cast<std::size_t>(begin + l);
+    const std::size_t i = static_cast<std::size_t>(index[l]);
     job.radius[i] = bin[l];
     job.reach[2 * i] = reach_x[l];
     job.reach[2 * i + 1] = reach_y[l];
@@ -399,17 +484,20 @@ HWY_INLINE void NormalizeBackward(const V* n, const V* gr, V norm, M keep, int o
   }
 }
 
-void BackwardBatch(const PreprocessSimdJob& job, std::int64_t begin, int count, float* weights) {
+void BackwardBatch(const PreprocessSimdJob& job,
+                   const std::int64_t* index,
+                   int count,
+                   float* weights) {
   const D d;
   const DI di;
   const int lanes = static_cast<int>(hn::Lanes(d));
   BatchIn in;
-  LoadBatch(job, begin, count, &in);
+  LoadBatch(job, index, count, &in);
   HWY_ALIGN float g_m[2][kB], g_c[3][kB], g_o[kB];
   HWY_ALIGN std::int32_t radius[kB];
   std::memset(radius, 0, sizeof(radius));
   for (int l = 0; l < count; ++l) {
-    const std::size_t i = static_cast<std::size_t>(begin + l);
+    const std::size_t i = static_cast<std::size_t>(index[l]);
     radius[l] = job.radius_in[i];
     const bool on = radius[l] > 0;
     for (int k = 0; k < 2; ++k) g_m[k][l] = on ? job.g_mean2d[2 * i + k] : 0.0f;
@@ -619,7 +707,7 @@ void BackwardBatch(const PreprocessSimdJob& job, std::int64_t begin, int count, 
     if (!hn::AllFalse(d, on)) ColorWeights(job, in, off, g, weights);
   }
   for (int l = 0; l < count; ++l) {
-    const std::size_t i = static_cast<std::size_t>(begin + l);
+    const std::size_t i = static_cast<std::size_t>(index[l]);
     for (int m = 0; m < 3; ++m) job.d_xyz[3 * i + m] = out_mean[m][l];
     job.d_t[i] = out_mean[3][l];
     for (int m = 0; m < 4; ++m) {
@@ -638,20 +726,28 @@ HWY_AFTER_NAMESPACE();
 #if HWY_ONCE
 namespace hdr4d::method::detail {
 
+HWY_EXPORT(TemporalSurvivors);
 HWY_EXPORT(ForwardBatch);
 HWY_EXPORT(BackwardBatch);
 
+int PreprocessTemporalSurvivors(const PreprocessSimdJob& job,
+                                std::int64_t begin,
+                                int count,
+                                std::int64_t* kept) {
+  return HWY_DYNAMIC_DISPATCH(TemporalSurvivors)(job, begin, count, kept);
+}
+
 void PreprocessForwardSimd(const PreprocessSimdJob& job,
-                           std::int64_t begin,
+                           const std::int64_t* index,
                            int count,
                            float* weights) {
-  HWY_DYNAMIC_DISPATCH(ForwardBatch)(job, begin, count, weights);
+  HWY_DYNAMIC_DISPATCH(ForwardBatch)(job, index, count, weights);
 }
 void PreprocessBackwardSimd(const PreprocessSimdJob& job,
-                            std::int64_t begin,
+                            const std::int64_t* index,
                             int count,
                             float* weights) {
-  HWY_DYNAMIC_DISPATCH(BackwardBatch)(job, begin, count, weights);
+  HWY_DYNAMIC_DISPATCH(BackwardBatch)(job, index, count, weights);
 }
 
 }  // namespace hdr4d::method::detail

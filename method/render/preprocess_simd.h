@@ -8,6 +8,8 @@
 
 #include <cstdint>
 
+#include "method/render/frame_state.h"
+
 namespace hdr4d::method::detail {
 
 // Gaussians per batch: one AVX-512 vector (two AVX2 vectors, and so on).
@@ -48,7 +50,7 @@ struct PreprocessSimdJob {
   const float* g_mean2d = nullptr;
   const float* g_conic = nullptr;
   const float* g_opacity = nullptr;
-  // Backward outputs, written for every Gaussian of the batch (zeros where radius_in is 0).
+  // Backward outputs, written for the Gaussians of the batch (zeros where radius_in is 0).
   float* d_xyz = nullptr;
   float* d_t = nullptr;
   float* d_log_scales = nullptr;
@@ -57,15 +59,33 @@ struct PreprocessSimdJob {
   float* d_opacity_logit = nullptr;
 };
 
-// Gaussians [begin, begin + count), count <= kPreprocessBatch. Both also write the colour-basis
-// weights of each Gaussian (zeros beyond the active degrees) at weights[k * kPreprocessBatch +
-// lane], k < coefficients; in the forward only for lanes with screen_radius > 0.
+// The job of a frame: the model's arrays, the view, the colour basis (preprocess_fast.cpp); the
+// caller binds the output arrays.
+PreprocessSimdJob MakePreprocessJob(const GaussianModel& model,
+                                    const ViewParams<float>& view,
+                                    float time,
+                                    const RenderOptions& options);
+
+// The Gaussians of [begin, begin + count) that may be visible at the view's time, in order, to
+// kept[0..return value); the others are culled (the forward's outputs written: zero radii)
+// without their geometry. The same Gaussians as ForwardBatch's own temporal test would cull, or
+// fewer (a margin covers rounding). Static (3D) mode keeps them all.
+int PreprocessTemporalSurvivors(const PreprocessSimdJob& job,
+                                std::int64_t begin,
+                                int count,
+                                std::int64_t* kept);
+
+// The Gaussians index[0..count), count <= kPreprocessBatch, one per lane (any indices: the
+// backward passes only the visible ones). Both also write the colour-basis weights of each
+// Gaussian (zeros beyond the active degrees) at weights[k * kPreprocessBatch + lane],
+// k < coefficients; in the forward only for lanes with screen_radius > 0. The backward writes
+// the gradients of the Gaussians it is given; the caller zeroes the others'.
 void PreprocessForwardSimd(const PreprocessSimdJob& job,
-                           std::int64_t begin,
+                           const std::int64_t* index,
                            int count,
                            float* weights);
 void PreprocessBackwardSimd(const PreprocessSimdJob& job,
-                            std::int64_t begin,
+                            const std::int64_t* index,
                             int count,
                             float* weights);
 

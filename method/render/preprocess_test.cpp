@@ -9,12 +9,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "core/camera.h"
+#include "method/gaussian/sh4d.h"
 #include "method/raster/simd_targets_for_test.h"
+#include "method/render/preprocess_simd.h"
 
 namespace hdr4d::method {
 namespace {
@@ -404,6 +407,172 @@ TEST(Preprocess, NormalizeBackwardMatchesFiniteDifferencesInDouble) {
     }
   });
   EXPECT_GE(ran, 1);
+}
+
+// Gaussians whose marginal p(t) straddles the cull threshold: times spread around kTime, time
+// scales of 0.03-0.3 and rotations that mix time and space, so Sigma_tt is not the 4th scale.
+GaussianModel TimeSpread(int count, unsigned seed) {
+  GaussianModel m = Scene(count, false, seed);
+  std::mt19937 rng(seed + 1);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  for (int i = 0; i < count; ++i) {
+    m.t[i] = kTime + 0.6f * u(rng);
+    m.log_scales[4 * i + 3] = std::log(0.03f) + 1.15f * (u(rng) + 1.0f);
+    for (int k = 0; k < 4; ++k) m.rot_right[4 * i + k] = u(rng);
+  }
+  m.rot_right[0] = m.rot_right[1] = m.rot_right[2] = m.rot_right[3] =
+      0.0f;  // the identity fallback
+  return m;
+}
+
+// The forward's outputs of every Gaussian, `index` in batches of kPreprocessBatch.
+struct JobOutputs {
+  explicit JobOutputs(std::size_t n)
+      : mean2d(2 * n, -7),
+        conic(3 * n, -7),
+        depth(n, -7),
+        opacity(n, -7),
+        radius(n, -7),
+        reach(2 * n, -7),
+        screen(n, -7) {}
+  void Bind(detail::PreprocessSimdJob* job) {
+    job->mean2d = mean2d.data(), job->conic = conic.data(), job->depth = depth.data();
+    job->opacity = opacity.data(), job->radius = radius.data(), job->reach = reach.data();
+    job->screen_radius = screen.data();
+  }
+  std::vector<float> mean2d, conic, depth, opacity;
+  std::vector<int> radius, reach, screen;
+};
+
+void ForwardBatches(const detail::PreprocessSimdJob& job, const std::vector<std::int64_t>& index) {
+  alignas(64) float weights[kMaxColorCoefficients * detail::kPreprocessBatch];  // aligned stores
+  for (std::size_t k = 0; k < index.size(); k += detail::kPreprocessBatch) {
+    const int count =
+        static_cast<int>(std::min<std::size_t>(detail::kPreprocessBatch, index.size() - k));
+    detail::PreprocessForwardSimd(job, index.data() + k, count, weights);
+  }
+}
+
+// The cull by time ahead of the geometry (PreprocessTemporalSurvivors) removes only Gaussians the
+// full forward removes, and its outputs for them are the full forward's: on every target, over
+// chunks that end mid-vector, the results are those of the forward run on every Gaussian, to the
+// bit. It must also remove most of what is far from the threshold, or it saves nothing.
+TEST(Preprocess, TheCullByTimeRemovesOnlyWhatTheFullForwardRemoves) {
+  const GaussianModel model = TimeSpread(3001, 31);
+  const std::size_t n = model.size();
+  RenderOptions options;
+  options.sh_degree = 3;
+  options.time_degree = 2;
+  const ViewParams<float> view = ViewParams<float>::FromCamera(TestCamera());
+  const int ran = ForEachCompiledTarget([&] {
+    detail::PreprocessSimdJob job = detail::MakePreprocessJob(model, view, kTime, options);
+    JobOutputs all(n), culled_first(n);
+    all.Bind(&job);
+    std::vector<std::int64_t> every(n);
+    for (std::size_t i = 0; i < n; ++i) every[i] = static_cast<std::int64_t>(i);
+    ForwardBatches(job, every);
+
+    culled_first.Bind(&job);
+    std::vector<std::int64_t> survivors;
+    for (std::int64_t begin = 0; begin < static_cast<std::int64_t>(n); begin += 1000) {
+      const int count = static_cast<int>(std::min<std::int64_t>(1000, n - begin));
+      std::vector<std::int64_t> kept(count);
+      kept.resize(detail::PreprocessTemporalSurvivors(job, begin, count, kept.data()));
+      survivors.insert(survivors.end(), kept.begin(), kept.end());
+    }
+    ASSERT_TRUE(std::is_sorted(survivors.begin(), survivors.end()));
+    ForwardBatches(job, survivors);
+    EXPECT_EQ(culled_first.radius, all.radius);
+    EXPECT_EQ(culled_first.reach, all.reach);
+    EXPECT_EQ(culled_first.screen, all.screen);
+    std::size_t visible = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (all.screen[i] == 0) continue;
+      ++visible;
+      for (int k = 0; k < 2; ++k) EXPECT_EQ(culled_first.mean2d[2 * i + k], all.mean2d[2 * i + k]);
+      for (int k = 0; k < 3; ++k) EXPECT_EQ(culled_first.conic[3 * i + k], all.conic[3 * i + k]);
+      EXPECT_EQ(culled_first.depth[i], all.depth[i]);
+      EXPECT_EQ(culled_first.opacity[i], all.opacity[i]);
+    }
+    // The scene straddles the threshold: some visible, many culled in time, most of those early.
+    const std::size_t removed_early = n - survivors.size();
+    EXPECT_GT(visible, n / 5);
+    EXPECT_GT(removed_early, n / 4);
+    EXPECT_LE(survivors.size(), visible + (n - visible) / 4);
+  });
+  EXPECT_GE(ran, 2);
+}
+
+// The backward writes every Gaussian's gradient rows, zero for the culled ones, whatever the
+// buffers held before (the kernel runs on the visible Gaussians alone), directly and through the
+// rows-done callback.
+TEST(Preprocess, TheBackwardZeroesTheCulledGaussiansRows) {
+  const GaussianModel model = TimeSpread(700, 33);
+  const std::size_t n = model.size();
+  RenderOptions options;
+  options.sh_degree = 2;
+  options.time_degree = 2;
+  const ViewParams<float> view = ViewParams<float>::FromCamera(TestCamera());
+  FrameState state;
+  PreprocessForwardFast(model, view, kTime, options, &state);
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  state.splat_grads.SetZero(n, 3);
+  std::size_t visible = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (state.splats.radius[i] <= 0) continue;
+    ++visible;
+    for (int k = 0; k < 2; ++k) state.splat_grads.mean2d[2 * i + k] = u(rng);
+    for (int k = 0; k < 3; ++k) state.splat_grads.conic[3 * i + k] = u(rng);
+    state.splat_grads.opacity[i] = u(rng);
+    for (int k = 0; k < 3; ++k) state.splat_grads.features[3 * i + k] = u(rng);
+  }
+  ASSERT_GT(visible, n / 5);
+  ASSERT_LT(visible, n - n / 5);
+  ForEachCompiledTarget([&] {
+    GaussianGradients clean, dirty;
+    clean.ZerosLike(model);
+    dirty.ZerosLike(model);
+    for (std::vector<float>* v :
+         {&dirty.xyz, &dirty.t, &dirty.log_scales, &dirty.rot_left, &dirty.rot_right,
+          &dirty.opacity_logit, &dirty.color_dc, &dirty.color_rest})
+      std::fill(v->begin(), v->end(), 9.0f);
+    PreprocessBackwardFast(model, view, kTime, options, state, &clean);
+    PreprocessBackwardFast(model, view, kTime, options, state, &dirty);
+    EXPECT_EQ(dirty.xyz, clean.xyz);
+    EXPECT_EQ(dirty.t, clean.t);
+    EXPECT_EQ(dirty.log_scales, clean.log_scales);
+    EXPECT_EQ(dirty.rot_left, clean.rot_left);
+    EXPECT_EQ(dirty.rot_right, clean.rot_right);
+    EXPECT_EQ(dirty.opacity_logit, clean.opacity_logit);
+    EXPECT_EQ(dirty.color_dc, clean.color_dc);
+    EXPECT_EQ(dirty.color_rest, clean.color_rest);
+    // Through the callback: the same rows, every row handed over once, in blocks.
+    std::vector<float> dc(clean.color_dc.size(), 9.0f), rest(clean.color_rest.size(), 9.0f);
+    std::vector<int> handed(n, 0);
+    const std::size_t stride = model.rest_stride();
+    GaussianGradients geometry;
+    geometry.ZerosLike(model);
+    geometry.color_dc.clear();
+    geometry.color_rest.clear();
+    std::fill(geometry.xyz.begin(), geometry.xyz.end(), 9.0f);
+    std::mutex mutex;
+    PreprocessBackwardFast(model, view, kTime, options, state, &geometry,
+                           [&](std::int64_t begin, std::int64_t end, const GradientRows& rows) {
+                             std::lock_guard<std::mutex> lock(mutex);
+                             for (std::int64_t i = begin; i < end; ++i) {
+                               ++handed[i];
+                               const std::size_t r = static_cast<std::size_t>(i - begin);
+                               std::copy_n(rows.color_dc + r * 3, 3, dc.begin() + i * 3);
+                               std::copy_n(rows.color_rest + r * stride, stride,
+                                           rest.begin() + i * stride);
+                             }
+                           });
+    EXPECT_EQ(handed, std::vector<int>(n, 1));
+    EXPECT_EQ(dc, clean.color_dc);
+    EXPECT_EQ(rest, clean.color_rest);
+    EXPECT_EQ(geometry.xyz, clean.xyz);
+  });
 }
 
 }  // namespace
