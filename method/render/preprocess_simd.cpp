@@ -9,6 +9,7 @@
 #include <hwy/contrib/math/math-inl.h>
 #include <hwy/highway.h>
 
+#include <cmath>
 #include <cstring>
 #include <initializer_list>
 #include <numbers>
@@ -55,19 +56,36 @@ void LoadBatch(const PreprocessSimdJob& job, const std::int64_t* index, int coun
   }
 }
 
+// 2^x for x <= 0 (whole part >= -126), from above: 2^n times the degree-3 Taylor polynomial
+// of 2^f, |f| <= 1/2, whose error is below 6.2e-4 of the value, times 1 + 1e-3. For bounds only.
+HWY_INLINE V Exp2Above(V x) {
+  const D d;
+  const DI di;
+  const V n = hn::Round(x);
+  const V r = hn::Mul(hn::Sub(x, n), hn::Set(d, 0.693147180559945309f));
+  V p = hn::MulAdd(r, hn::Set(d, 1.0f / 6.0f), hn::Set(d, 0.5f));
+  p = hn::MulAdd(hn::MulAdd(p, r, hn::Set(d, 1.0f)), r, hn::Set(d, 1.0f));
+  const V two_n = hn::BitCast(
+      d, hn::ShiftLeft<23>(hn::BitCast(di, hn::Add(n, hn::Set(d, 12582912.0f + 127.0f)))));
+  return hn::Mul(hn::Mul(p, two_n), hn::Set(d, 1.001f));
+}
+
 // Which of the Gaussians [begin, begin + count) may be visible at the view's time. A Gaussian
-// whose marginal p(t) is surely at or below kTemporalCullMarginal gets the forward's outputs of
-// a culled one here (zero radii), without its geometry; the others' indices go to `kept`, for
-// ForwardBatch. Sigma_tt is computed as SlicedGeometry computes it (the same operations on the
-// same values), the floor from the sum of the variances (trace(Sigma) up to rounding), and the
-// cull needs p(t) below the threshold by a margin far above either rounding, so it removes only
-// Gaussians the full test would remove: the results do not change. Lanes past the last whole
-// vector, and quaternions the kernels replace by the identity, are kept.
+// whose marginal p(t) = exp(-dt^2 / 2 Sigma_tt) is surely at or below kTemporalCullMarginal,
+// i.e. dt^2 >= 2 ln(1 / threshold) Sigma_tt, gets the forward's outputs of a culled one here
+// (zero radii), without its geometry; the others' indices go to `kept`, for ForwardBatch.
+// Sigma_tt = sum_k R(3, k)^2 exp(2 s_k) (floored as in SlicedGeometry) is bounded from above:
+// the row of the 4D rotation from the unnormalised quaternions, divided once by both squared
+// norms, the exponentials from above (Exp2Above), and a margin of 1% over all (the full test's
+// own rounding is about 1e-6 of it). So the cull removes only Gaussians the full test removes,
+// and the results do not change. Lanes past the last whole vector, non-finite values, extreme
+// values (see `ok`) and quaternions the kernels replace by the identity are kept.
 int TemporalSurvivors(const PreprocessSimdJob& job,
                       std::int64_t begin,
                       int count,
                       std::int64_t* kept) {
   const D d;
+  const DI di;
   const int lanes = static_cast<int>(hn::Lanes(d));
   int num_kept = 0;
   const auto keep = [&](std::int64_t i) { kept[num_kept++] = i; };
@@ -75,7 +93,12 @@ int TemporalSurvivors(const PreprocessSimdJob& job,
     for (int l = 0; l < count; ++l) keep(begin + l);
     return num_kept;
   }
-  const V min_norm = hn::Set(d, static_cast<float>(kMinQuaternionNorm));
+  const float min_norm = static_cast<float>(kMinQuaternionNorm);
+  const V min_norm2 = hn::Set(d, min_norm * min_norm);
+  const V max_norm2 = hn::Set(d, 1e6f);
+  // dt^2 / Sigma_tt above this: p(t) below the threshold.
+  const V cut = hn::Set(d, 1.01f * 2.0f * std::log(1.0f / kTemporalCullMarginal));
+  const V log2e2 = hn::Set(d, 2.0f * 1.44269504088896341f);
   int off = 0;
   for (; off + lanes <= count; off += lanes) {
     const std::size_t i0 = static_cast<std::size_t>(begin + off);
@@ -83,15 +106,17 @@ int TemporalSurvivors(const PreprocessSimdJob& job,
     hn::LoadInterleaved4(d, job.rot_left + 4 * i0, ql[0], ql[1], ql[2], ql[3]);
     hn::LoadInterleaved4(d, job.rot_right + 4 * i0, qr[0], qr[1], qr[2], qr[3]);
     hn::LoadInterleaved4(d, job.log_scales + 4 * i0, s[0], s[1], s[2], s[3]);
-    // Normalize's operations, without its identity fallback (such lanes are kept below).
-    const auto normalize = [&](V* q) {
+    const auto norm2 = [](const V* q) {
       V n2 = hn::Mul(q[0], q[0]);
       for (int k = 1; k < 4; ++k) n2 = hn::MulAdd(q[k], q[k], n2);
-      const V norm = hn::Sqrt(n2);
-      for (int k = 0; k < 4; ++k) q[k] = hn::Div(q[k], norm);
-      return hn::Gt(norm, min_norm);
+      return n2;
     };
-    const M ok = hn::And(normalize(ql), normalize(qr));
+    const V n2l = norm2(ql), n2r = norm2(qr);
+    // The bound is computed only where no step can overflow or meet a NaN: quaternions of
+    // length between kMinQuaternionNorm and 1000, log-scales at most 40 (the others are kept).
+    M ok = hn::And(hn::And(hn::Gt(n2l, min_norm2), hn::Lt(n2l, max_norm2)),
+                   hn::And(hn::Gt(n2r, min_norm2), hn::Lt(n2r, max_norm2)));
+    for (int k = 0; k < 4; ++k) ok = hn::And(ok, hn::Le(s[k], hn::Set(d, 40.0f)));
     // Row 0 of M_l (LeftIsoclinic) times M_r (RightIsoclinic): A(0, j) = R(3, 3 - j).
     const V ml0[4] = {ql[0], hn::Neg(ql[1]), hn::Neg(ql[2]), hn::Neg(ql[3])};
     const V p = qr[0], x = qr[1], y = qr[2], z = qr[3];
@@ -99,29 +124,22 @@ int TemporalSurvivors(const PreprocessSimdJob& job,
                         {hn::Neg(x), p, hn::Neg(z), y},
                         {hn::Neg(y), z, p, hn::Neg(x)},
                         {hn::Neg(z), hn::Neg(y), x, p}};
-    V row[4];  // R(3, k)
-    for (int j = 0; j < 4; ++j) {
-      V acc = hn::Mul(ml0[0], mr[0][j]);
-      for (int k = 1; k < 4; ++k) acc = hn::MulAdd(ml0[k], mr[k][j], acc);
-      row[3 - j] = acc;
-    }
     V stt = hn::Zero(d), trace = hn::Zero(d);
-    for (int k = 0; k < 4; ++k) {
-      const V e = hn::Exp(d, hn::Min(s[k], hn::Set(d, 88.0f)));
-      const V l3 = hn::Mul(row[k], e);  // L(3, k)
-      stt = k == 0 ? hn::Mul(l3, l3) : hn::MulAdd(l3, l3, stt);
-      trace = hn::MulAdd(e, e, trace);
+    for (int j = 0; j < 4; ++j) {
+      V r = hn::Mul(ml0[0], mr[0][j]);
+      for (int k = 1; k < 4; ++k) r = hn::MulAdd(ml0[k], mr[k][j], r);
+      // exp(2 s) of axis 3 - j (2^-126 at least: Exp2Above's range; a bound from above).
+      const V var = Exp2Above(hn::Max(hn::Mul(s[3 - j], log2e2), hn::Set(d, -126.0f)));
+      stt = hn::MulAdd(hn::Mul(r, r), var, stt);
+      trace = hn::Add(trace, var);
     }
+    stt = hn::Div(stt, hn::Mul(n2l, n2r));
     const V floor = hn::MulAdd(hn::Set(d, static_cast<float>(kSliceRelativeVarianceFloor)), trace,
                                hn::Set(d, static_cast<float>(kSliceAbsoluteVarianceFloor)));
-    // The variance the slice uses is max(Sigma_tt, floor); 1.001 x that bounds it from above.
-    const V var = hn::Mul(hn::Max(stt, floor), hn::Set(d, 1.001f));
     const V dt = hn::Sub(hn::Set(d, job.time), hn::LoadU(d, job.t + i0));
-    const V marginal = hn::Exp(
-        d, hn::Max(hn::Div(hn::Mul(hn::Set(d, -0.5f), hn::Mul(dt, dt)), var), hn::Set(d, -100.0f)));
-    const M culled = hn::And(ok, hn::Lt(marginal, hn::Set(d, 0.999f * kTemporalCullMarginal)));
+    const M culled = hn::And(ok, hn::Gt(hn::Mul(dt, dt), hn::Mul(cut, hn::Max(stt, floor))));
     HWY_ALIGN std::int32_t flag[kB];
-    hn::Store(hn::VecFromMask(DI(), hn::RebindMask(DI(), culled)), DI(), flag);
+    hn::Store(hn::VecFromMask(di, hn::RebindMask(di, culled)), di, flag);
     for (int l = 0; l < lanes; ++l) {
       const std::size_t i = i0 + static_cast<std::size_t>(l);
       if (flag[l] == 0) {

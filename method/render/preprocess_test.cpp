@@ -422,6 +422,18 @@ GaussianModel TimeSpread(int count, unsigned seed) {
   }
   m.rot_right[0] = m.rot_right[1] = m.rot_right[2] = m.rot_right[3] =
       0.0f;  // the identity fallback
+  // Extremes the early test must keep or cull exactly as the full one: a huge and a tiny time
+  // scale (the variance floor), long and short quaternions, a time far away, at two offsets.
+  for (int i : {count - 40, count - 23}) {
+    m.log_scales[4 * (i + 0) + 3] = 45.0f;
+    m.log_scales[4 * (i + 1) + 3] = -60.0f;
+    m.t[i + 1] = kTime + 1e-20f;
+    m.log_scales[4 * (i + 2) + 3] = -60.0f;
+    for (int k = 0; k < 4; ++k) m.rot_right[4 * (i + 3) + k] *= 1e4f;
+    for (int k = 0; k < 4; ++k) m.rot_left[4 * (i + 4) + k] *= 1e-3f;
+    m.t[i + 5] = 1e19f;
+    m.log_scales[4 * (i + 6) + 0] = 41.0f;
+  }
   return m;
 }
 
