@@ -130,12 +130,36 @@ int CountFar(const std::vector<float>& a,
   return far;
 }
 
-// Forward and backward of both paths on `model`; every output agrees.
-void ExpectPathsAgree(const GaussianModel& model, int sh_degree, unsigned seed) {
-  const ViewParams<float> view = ViewParams<float>::FromCamera(TestCamera());
+// Options with the given SH degree and the time degree 2 (every colour block in use).
+RenderOptions ColourOptions(int sh_degree) {
   RenderOptions options;
   options.sh_degree = sh_degree;
   options.time_degree = 2;
+  return options;
+}
+
+// Random splat gradients in [-1, 1) for the Gaussians visible in both radii (a state's own radii
+// twice for one state), zero for the others; the draws in Gaussian order.
+void RandomSplatGradients(const std::vector<int>& radius_a,
+                          const std::vector<int>& radius_b,
+                          std::mt19937& rng,
+                          SplatGradients* g) {
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  const std::size_t n = radius_a.size();
+  g->SetZero(n, 3);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!(radius_a[i] > 0 && radius_b[i] > 0)) continue;
+    for (int k = 0; k < 2; ++k) g->mean2d[2 * i + k] = u(rng);
+    for (int k = 0; k < 3; ++k) g->conic[3 * i + k] = u(rng);
+    g->opacity[i] = u(rng);
+    for (int k = 0; k < 3; ++k) g->features[3 * i + k] = u(rng);
+  }
+}
+
+// Forward and backward of both paths on `model`; every output agrees.
+void ExpectPathsAgree(const GaussianModel& model, int sh_degree, unsigned seed) {
+  const ViewParams<float> view = ViewParams<float>::FromCamera(TestCamera());
+  const RenderOptions options = ColourOptions(sh_degree);
   FrameState fast, ref;
   PreprocessForwardFast(model, view, kTime, options, &fast);
   PreprocessForwardReference(model, view, kTime, options, &ref);
@@ -213,15 +237,7 @@ void ExpectPathsAgree(const GaussianModel& model, int sh_degree, unsigned seed) 
 
   // Backward from the same splat gradients (zero where either path culled).
   std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-  ref.splat_grads.SetZero(n, 3);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!(ref.splats.radius[i] > 0 && fast.splats.radius[i] > 0)) continue;
-    for (int k = 0; k < 2; ++k) ref.splat_grads.mean2d[2 * i + k] = u(rng);
-    for (int k = 0; k < 3; ++k) ref.splat_grads.conic[3 * i + k] = u(rng);
-    ref.splat_grads.opacity[i] = u(rng);
-    for (int k = 0; k < 3; ++k) ref.splat_grads.features[3 * i + k] = u(rng);
-  }
+  RandomSplatGradients(ref.splats.radius, fast.splats.radius, rng, &ref.splat_grads);
   fast.splat_grads = ref.splat_grads;
   GaussianGradients g_fast, g_ref;
   g_fast.ZerosLike(model);
@@ -345,21 +361,11 @@ TEST(Preprocess, NormalizeBackwardMatchesFiniteDifferencesInDouble) {
     d.color_rest = copy(m.color_rest);
     return d;
   };
-  RenderOptions options;
-  options.sh_degree = 1;
-  options.time_degree = 2;
+  const RenderOptions options = ColourOptions(1);
   FrameState fast;
   PreprocessForwardFast(model, ViewParams<float>::FromCamera(TestCamera()), kTime, options, &fast);
   std::mt19937 rng(5);
-  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-  fast.splat_grads.SetZero(n, 3);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (fast.splats.radius[i] <= 0) continue;
-    for (int k = 0; k < 2; ++k) fast.splat_grads.mean2d[2 * i + k] = u(rng);
-    for (int k = 0; k < 3; ++k) fast.splat_grads.conic[3 * i + k] = u(rng);
-    fast.splat_grads.opacity[i] = u(rng);
-    for (int k = 0; k < 3; ++k) fast.splat_grads.features[3 * i + k] = u(rng);
-  }
+  RandomSplatGradients(fast.splats.radius, fast.splats.radius, rng, &fast.splat_grads);
   const ViewParams<double> view = ViewParams<double>::FromCamera(TestCamera());
   const GaussianModelT<double> base = to_double(model);
   // The loss of one quaternion entry's value (the rest of the model as it is).
@@ -472,9 +478,7 @@ void ForwardBatches(const detail::PreprocessSimdJob& job, const std::vector<std:
 TEST(Preprocess, TheCullByTimeRemovesOnlyWhatTheFullForwardRemoves) {
   const GaussianModel model = TimeSpread(3001, 31);
   const std::size_t n = model.size();
-  RenderOptions options;
-  options.sh_degree = 3;
-  options.time_degree = 2;
+  const RenderOptions options = ColourOptions(3);
   const ViewParams<float> view = ViewParams<float>::FromCamera(TestCamera());
   const int ran = ForEachCompiledTarget([&] {
     detail::PreprocessSimdJob job = detail::MakePreprocessJob(model, view, kTime, options);
@@ -521,24 +525,15 @@ TEST(Preprocess, TheCullByTimeRemovesOnlyWhatTheFullForwardRemoves) {
 TEST(Preprocess, TheBackwardZeroesTheCulledGaussiansRows) {
   const GaussianModel model = TimeSpread(700, 33);
   const std::size_t n = model.size();
-  RenderOptions options;
-  options.sh_degree = 2;
-  options.time_degree = 2;
+  const RenderOptions options = ColourOptions(2);
   const ViewParams<float> view = ViewParams<float>::FromCamera(TestCamera());
   FrameState state;
   PreprocessForwardFast(model, view, kTime, options, &state);
   std::mt19937 rng(9);
-  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-  state.splat_grads.SetZero(n, 3);
-  std::size_t visible = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (state.splats.radius[i] <= 0) continue;
-    ++visible;
-    for (int k = 0; k < 2; ++k) state.splat_grads.mean2d[2 * i + k] = u(rng);
-    for (int k = 0; k < 3; ++k) state.splat_grads.conic[3 * i + k] = u(rng);
-    state.splat_grads.opacity[i] = u(rng);
-    for (int k = 0; k < 3; ++k) state.splat_grads.features[3 * i + k] = u(rng);
-  }
+  RandomSplatGradients(state.splats.radius, state.splats.radius, rng, &state.splat_grads);
+  const std::size_t visible = static_cast<std::size_t>(
+      std::count_if(state.splats.radius.begin(), state.splats.radius.end(),
+                    [](int r) { return r > 0; }));
   ASSERT_GT(visible, n / 5);
   ASSERT_LT(visible, n - n / 5);
   ForEachCompiledTarget([&] {
