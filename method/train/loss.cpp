@@ -48,17 +48,21 @@ T* Workspace(std::size_t size) {
   if (workspace.size() < size) workspace.resize(size);
   return workspace.data();
 }
+// Row scratch starts on a cache line (the filters' rows are padded to whole lines, so their
+// vector loads and stores never straddle two).
 template <typename T>
 T* RowScratch(std::size_t size) {
+  constexpr std::size_t kSlack = 64 / sizeof(T);
   thread_local std::vector<T> scratch;
-  if (scratch.size() < size) scratch.resize(size);
-  return scratch.data();
+  if (scratch.size() < size + kSlack) scratch.resize(size + kSlack);
+  const auto address = reinterpret_cast<std::uintptr_t>(scratch.data());
+  return scratch.data() + ((64 - address % 64) % 64) / sizeof(T);
 }
-
-// Rows per parallel chunk: about 4096 values (a 200 x 200 x 3 image gives 34 chunks).
-inline std::int64_t RowGrain(std::size_t row_len) {
-  return std::max<std::int64_t>(
-      1, 4096 / static_cast<std::int64_t>(std::max<std::size_t>(1, row_len)));
+// n rounded up to whole cache lines of T.
+template <typename T>
+std::size_t LinePitch(std::size_t n) {
+  constexpr std::size_t k = 64 / sizeof(T);
+  return (n + k - 1) / k * k;
 }
 
 }  // namespace hdr4d::method::loss_detail
@@ -71,7 +75,7 @@ namespace HWY_NAMESPACE {
 namespace {
 
 using loss_detail::kRadius;
-using loss_detail::RowGrain;
+using loss_detail::LinePitch;
 using loss_detail::RowScratch;
 using loss_detail::Window;
 using loss_detail::Workspace;
@@ -105,24 +109,6 @@ template <typename T>
 void FilterPaddedRow(const T* padded, T* dst, std::size_t len, std::size_t stride) {
   const T* src[kSsimWindow];
   for (int k = 0; k < kSsimWindow; ++k) src[k] = padded + static_cast<std::size_t>(k) * stride;
-  Taps(src, dst, len);
-}
-
-// Vertical filtering at row y of an image of `height` rows stored `pitch` apart (the first row
-// at `plane`); rows outside the image read `zeros`.
-template <typename T>
-void FilterColumn(const T* plane,
-                  std::size_t pitch,
-                  const T* zeros,
-                  T* dst,
-                  std::size_t len,
-                  std::int64_t y,
-                  int height) {
-  const T* src[kSsimWindow];
-  for (int k = 0; k < kSsimWindow; ++k) {
-    const std::int64_t r = y + k - kRadius;
-    src[k] = (r >= 0 && r < height) ? plane + static_cast<std::size_t>(r) * pitch : zeros;
-  }
   Taps(src, dst, len);
 }
 
@@ -209,6 +195,36 @@ void SsimRowWithPartials(const T* __restrict mu_x, const T* __restrict mu_y,
   }
 }
 
+// Vertical filtering at row y from a ring of kSsimWindow horizontally filtered rows (image row r
+// at slot r mod kSsimWindow, `pitch` apart); rows outside the image read `zeros`. The same taps
+// on the same values as filtering a whole plane, so the result does not depend on the banding.
+template <typename T>
+void FilterRing(const T* ring,
+                std::size_t pitch,
+                const T* zeros,
+                T* dst,
+                std::size_t len,
+                std::int64_t y,
+                int height) {
+  const T* src[kSsimWindow];
+  for (int k = 0; k < kSsimWindow; ++k) {
+    const std::int64_t r = y + k - kRadius;
+    src[k] =
+        (r >= 0 && r < height) ? ring + static_cast<std::size_t>(r % kSsimWindow) * pitch : zeros;
+  }
+  Taps(src, dst, len);
+}
+
+// Rows per band of the separable filters. Each band filters its rows horizontally into a ring of
+// kSsimWindow rows as the vertical filter needs them (so both passes read from L1/L2 instead of
+// whole filtered planes from memory: 5 maps of a 400x400x3 image are 9.6 MB), at the cost of
+// filtering the 2 x kRadius rows around a band twice; a few bands per thread keep that small and
+// the threads balanced. Bands change no value, only where it is computed.
+inline std::int64_t BandRows(int height) {
+  const std::int64_t bands = 2 * static_cast<std::int64_t>(std::max(1, MaxThreads()));
+  return std::max<std::int64_t>(3 * kSsimWindow, (height + bands - 1) / bands);
+}
+
 template <typename T>
 LossResult LossImpl(
     const T* pred, const T* gt, int width, int height, int channels, T lambda, T* grad) {
@@ -220,59 +236,61 @@ LossResult LossImpl(
   const std::size_t pitch = row_len + 2 * pad;  // a zero-padded row
   const std::size_t plane = row_len * static_cast<std::size_t>(height);
   const std::size_t padded_plane = pitch * static_cast<std::size_t>(height);
+  // Ring and filtered rows: whole cache lines apart, so that the vertical taps load aligned.
+  const std::size_t line = LinePitch<T>(row_len);
+  const std::size_t ring_len = static_cast<std::size_t>(kSsimWindow) * line;
   const double count = static_cast<double>(plane);
-  const std::int64_t grain = RowGrain(row_len);
+  const std::int64_t band = BandRows(height);
   const T c1 = static_cast<T>(kSsimC1);
   const T c2 = static_cast<T>(kSsimC2);
   const bool backward = grad != nullptr;
 
-  // Layout: a zero row; maps 0..4 = the horizontally filtered x, y, x^2, y^2, xy (later maps
-  // 0..2 hold the horizontally filtered partials); then, for the backward, the per-pixel
-  // partials P_mu, P_xx, P_xy in zero-padded rows.
-  T* work = Workspace<T>(row_len + 5 * plane + (backward ? 3 * padded_plane : 0));
+  // Layout: a zero row, then, for the backward, the per-pixel partials P_mu, P_xx, P_xy in
+  // zero-padded rows (the only image-sized maps: the backward's bands need their neighbours'
+  // rows).
+  T* work = Workspace<T>(row_len + (backward ? 3 * padded_plane : 0));
   T* zeros = work;
   std::fill(zeros, zeros + row_len, T(0));
-  auto map = [&](int q) { return work + row_len + static_cast<std::size_t>(q) * plane; };
-  auto partial = [&](int q) {
-    return work + row_len + 5 * plane + static_cast<std::size_t>(q) * padded_plane;
-  };
+  auto partial = [&](int q) { return work + row_len + static_cast<std::size_t>(q) * padded_plane; };
   std::vector<double> l1_rows(height), ssim_rows(height);
 
-  // Pass 1: per row, the five quantities in padded scratch rows, filtered horizontally.
-  ParallelForChunks(height, grain, [&](std::int64_t y0, std::int64_t y1) {
-    T* scratch = RowScratch<T>(5 * pitch);
+  // d value / d mean(SSIM) = -lambda, and the mean divides by the count.
+  const T scale = static_cast<T>(-static_cast<double>(lambda) / count);
+  // Pass 1, per band: the five quantities of each row in padded scratch rows, filtered
+  // horizontally into the ring; per row of the band, the vertical filtering, the SSIM map's row
+  // sum and the scaled partials.
+  ParallelForChunks(height, band, [&](std::int64_t y0, std::int64_t y1) {
+    T* ring = RowScratch<T>(5 * ring_len + 6 * line + 5 * pitch);
+    T* f = ring + 5 * ring_len;
+    T* scratch = f + 6 * line;
     std::fill(scratch, scratch + 5 * pitch, T(0));
     T* qx = scratch + pad;
     T* qy = qx + pitch;
     T* qxx = qy + pitch;
     T* qyy = qxx + pitch;
     T* qxy = qyy + pitch;
-    for (std::int64_t y = y0; y < y1; ++y) {
-      const std::size_t base = static_cast<std::size_t>(y) * row_len;
-      const T* __restrict a = pred + base;
-      const T* __restrict b = gt + base;
-      WindowProducts(a, b, qx, qy, qxx, qyy, qxy, row_len);
-      l1_rows[y] = SumAbsDiffRow(a, b, row_len);
-      for (int q = 0; q < 5; ++q) {
-        FilterPaddedRow(scratch + q * pitch, map(q) + base, row_len, stride);
-      }
-    }
-  });
-
-  // d value / d mean(SSIM) = -lambda, and the mean divides by the count.
-  const T scale = static_cast<T>(-static_cast<double>(lambda) / count);
-  // Pass 2: per row, the vertical filtering, the SSIM map's row sum and the scaled partials.
-  ParallelForChunks(height, grain, [&](std::int64_t y0, std::int64_t y1) {
-    T* f = RowScratch<T>(6 * row_len);
     T* __restrict mu_x = f;
-    T* __restrict mu_y = f + row_len;
-    T* __restrict e_xx = f + 2 * row_len;
-    T* __restrict e_yy = f + 3 * row_len;
-    T* __restrict e_xy = f + 4 * row_len;
-    T* __restrict ssim = f + 5 * row_len;
+    T* __restrict mu_y = f + line;
+    T* __restrict e_xx = f + 2 * line;
+    T* __restrict e_yy = f + 3 * line;
+    T* __restrict e_xy = f + 4 * line;
+    T* __restrict ssim = f + 5 * line;
+    std::int64_t next = std::max<std::int64_t>(0, y0 - kRadius);  // the next row to filter
     for (std::int64_t y = y0; y < y1; ++y) {
+      for (const std::int64_t last = std::min<std::int64_t>(height - 1, y + kRadius); next <= last;
+           ++next) {
+        const std::size_t base = static_cast<std::size_t>(next) * row_len;
+        const T* __restrict a = pred + base;
+        const T* __restrict b = gt + base;
+        WindowProducts(a, b, qx, qy, qxx, qyy, qxy, row_len);
+        if (next >= y0 && next < y1) l1_rows[next] = SumAbsDiffRow(a, b, row_len);
+        const std::size_t slot = static_cast<std::size_t>(next % kSsimWindow) * line;
+        for (int q = 0; q < 5; ++q) {
+          FilterPaddedRow(scratch + q * pitch, ring + q * ring_len + slot, row_len, stride);
+        }
+      }
       for (int q = 0; q < 5; ++q) {
-        FilterColumn(map(q), row_len, zeros, f + q * row_len, row_len, y, height);
+        FilterRing(ring + q * ring_len, line, zeros, f + q * line, row_len, y, height);
       }
       if (backward) {
         T* row[3];
@@ -307,26 +325,27 @@ LossResult LossImpl(
                  static_cast<double>(lambda) * (1.0 - result.ssim);
   if (!backward) return result;
 
-  // Pass 3: horizontal filtering of the three partial maps (into maps 0..2).
-  ParallelForChunks(height, grain, [&](std::int64_t y0, std::int64_t y1) {
-    for (std::int64_t y = y0; y < y1; ++y) {
-      for (int q = 0; q < 3; ++q) {
-        FilterPaddedRow(partial(q) + static_cast<std::size_t>(y) * pitch,
-                        map(q) + static_cast<std::size_t>(y) * row_len, row_len, stride);
-      }
-    }
-  });
-
-  // Pass 4: vertical filtering and the chain rule into the gradient.
+  // Pass 2, per band: the three partial maps filtered horizontally into the ring, then per row
+  // the vertical filtering and the chain rule into the gradient.
   const T l1_weight = static_cast<T>((1.0 - static_cast<double>(lambda)) / count);
-  ParallelForChunks(height, grain, [&](std::int64_t y0, std::int64_t y1) {
-    T* f = RowScratch<T>(3 * row_len);
+  ParallelForChunks(height, band, [&](std::int64_t y0, std::int64_t y1) {
+    T* ring = RowScratch<T>(3 * ring_len + 3 * line);
+    T* f = ring + 3 * ring_len;
     const T* __restrict g_mu = f;
-    const T* __restrict g_xx = f + row_len;
-    const T* __restrict g_xy = f + 2 * row_len;
+    const T* __restrict g_xx = f + line;
+    const T* __restrict g_xy = f + 2 * line;
+    std::int64_t next = std::max<std::int64_t>(0, y0 - kRadius);
     for (std::int64_t y = y0; y < y1; ++y) {
+      for (const std::int64_t last = std::min<std::int64_t>(height - 1, y + kRadius); next <= last;
+           ++next) {
+        const std::size_t slot = static_cast<std::size_t>(next % kSsimWindow) * line;
+        for (int q = 0; q < 3; ++q) {
+          FilterPaddedRow(partial(q) + static_cast<std::size_t>(next) * pitch,
+                          ring + q * ring_len + slot, row_len, stride);
+        }
+      }
       for (int q = 0; q < 3; ++q) {
-        FilterColumn(map(q), row_len, zeros, f + q * row_len, row_len, y, height);
+        FilterRing(ring + q * ring_len, line, zeros, f + q * line, row_len, y, height);
       }
       const std::size_t base = static_cast<std::size_t>(y) * row_len;
       const T* __restrict a = pred + base;

@@ -131,6 +131,15 @@ TEST(PhotometricLoss, GradientMatchesFiniteDifferencesTinyImages) {
 }
 
 // The checker is sharp enough to see a wrong sign or a missing factor in the SSIM part.
+// Tall enough for the separable filters to work in several bands of rows (at least 33 rows
+// each): the rows around a band's edges are filtered by both bands.
+TEST(PhotometricLoss, GradientMatchesFiniteDifferencesAcrossBands) {
+  for (int threads : {1, 2}) {
+    ThreadLimit limit(threads);
+    ExpectGradientMatches(4, 80, 2, 31, 0.2);
+  }
+}
+
 TEST(PhotometricLoss, FiniteDifferenceCheckCatchesWrongGradients) {
   const Pair p = RandomPair(13, 9, 3, 14);
   std::vector<double> g_l1, g_ssim, g_both;
