@@ -582,5 +582,49 @@ TEST(Preprocess, TheBackwardZeroesTheCulledGaussiansRows) {
   });
 }
 
+// The colour rows handed to the callback stay right from frame to frame while the culled set
+// changes: the backward reuses its per-thread block and skips re-zeroing the rows it knows are
+// zero, so a row written for a visible Gaussian must be zeroed when a culled one takes its place.
+TEST(Preprocess, TheCallbackRowsFollowTheCulledSetFromFrameToFrame) {
+  const GaussianModel model = TimeSpread(700, 34);
+  const std::size_t stride = model.rest_stride();
+  const RenderOptions options = ColourOptions(2);
+  const ViewParams<float> view = ViewParams<float>::FromCamera(TestCamera());
+  const float times[] = {kTime - 0.4f, kTime + 0.4f, kTime, kTime - 0.4f};
+  std::vector<FrameState> states(std::size(times));
+  std::mt19937 rng(10);
+  for (std::size_t f = 0; f < states.size(); ++f) {
+    PreprocessForwardFast(model, view, times[f], options, &states[f]);
+    RandomSplatGradients(states[f].splats.radius, states[f].splats.radius, rng,
+                         &states[f].splat_grads);
+  }
+  // The frames differ in which Gaussians are culled.
+  ASSERT_NE(states[0].splats.radius, states[1].splats.radius);
+  ForEachCompiledTarget([&] {
+    for (std::size_t f = 0; f < states.size(); ++f) {
+      GaussianGradients direct;
+      direct.ZerosLike(model);
+      PreprocessBackwardFast(model, view, times[f], options, states[f], &direct);
+      std::vector<float> dc(direct.color_dc.size(), 9.0f), rest(direct.color_rest.size(), 9.0f);
+      GaussianGradients geometry;
+      geometry.ZerosLike(model);
+      geometry.color_dc.clear();
+      geometry.color_rest.clear();
+      std::mutex mutex;
+      PreprocessBackwardFast(model, view, times[f], options, states[f], &geometry,
+                             [&](std::int64_t begin, std::int64_t end, const GradientRows& rows) {
+                               std::lock_guard<std::mutex> lock(mutex);
+                               const std::size_t b = static_cast<std::size_t>(begin);
+                               const std::size_t count = static_cast<std::size_t>(end - begin);
+                               std::copy_n(rows.color_dc, 3 * count, dc.begin() + 3 * b);
+                               std::copy_n(rows.color_rest, stride * count,
+                                           rest.begin() + stride * b);
+                             });
+      EXPECT_EQ(dc, direct.color_dc) << "frame " << f;
+      EXPECT_EQ(rest, direct.color_rest) << "frame " << f;
+    }
+  });
+}
+
 }  // namespace
 }  // namespace hdr4d::method
