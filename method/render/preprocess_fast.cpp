@@ -169,16 +169,15 @@ void PreprocessBackwardFast(const GaussianModel& model,
     thread_local std::vector<float> block_dc, block_rest;
     // Which block rows already hold zeros (a culled Gaussian's, and not written since): in a
     // dynamic scene most Gaussians are culled by time, and re-zeroing their ~600-byte rows on
-    // every use of the block was 1.6% of a paper-configuration iteration. Valid for one layout.
+    // every use of the block was 1.6% of a paper-configuration iteration. A block of another
+    // size (another layout) starts all zeros.
     thread_local std::vector<char> row_is_zero;
-    thread_local std::pair<std::size_t, std::size_t> block_layout{0, 0};
-    if (rows_done) {
-      if (block_layout != std::pair{static_cast<std::size_t>(channels), stride}) {
-        block_layout = {static_cast<std::size_t>(channels), stride};
-        row_is_zero.assign(kRowsDoneBlock, 0);
-      }
-      block_dc.resize(static_cast<std::size_t>(kRowsDoneBlock) * channels);
-      block_rest.resize(static_cast<std::size_t>(kRowsDoneBlock) * stride);
+    const std::size_t dc_size = static_cast<std::size_t>(kRowsDoneBlock) * channels;
+    const std::size_t rest_size = static_cast<std::size_t>(kRowsDoneBlock) * stride;
+    if (rows_done && (block_dc.size() != dc_size || block_rest.size() != rest_size)) {
+      block_dc.assign(dc_size, 0.0f);
+      block_rest.assign(rest_size, 0.0f);
+      row_is_zero.assign(kRowsDoneBlock, 1);
     }
     // Blocks of kRowsDoneBlock rows: ~160 KB of gradients at 160 floats a row, still in L2.
     for (std::int64_t first = b; first < e; first += kRowsDoneBlock) {

@@ -195,25 +195,57 @@ void SsimRowWithPartials(const T* __restrict mu_x, const T* __restrict mu_y,
   }
 }
 
-// Vertical filtering at row y from a ring of kSsimWindow horizontally filtered rows (image row r
-// at slot r mod kSsimWindow, `pitch` apart); rows outside the image read `zeros`. The same taps
-// on the same values as filtering a whole plane, so the result does not depend on the banding.
+// The horizontally filtered rows of `maps` image-sized maps that the vertical taps at a row need:
+// a ring of kSsimWindow rows per map (image row r at slot r mod kSsimWindow, rows whole cache
+// lines apart), filled in row order as a band of rows advances. The vertical taps
+// are the same taps on the same values as filtering whole planes, so the banding changes no result.
 template <typename T>
-void FilterRing(const T* ring,
-                std::size_t pitch,
-                const T* zeros,
-                T* dst,
-                std::size_t len,
-                std::int64_t y,
-                int height) {
-  const T* src[kSsimWindow];
-  for (int k = 0; k < kSsimWindow; ++k) {
-    const std::int64_t r = y + k - kRadius;
-    src[k] =
-        (r >= 0 && r < height) ? ring + static_cast<std::size_t>(r % kSsimWindow) * pitch : zeros;
+class FilteredRowRing {
+ public:
+  // The ring and `maps` output rows of `len` values, in the calling thread's row scratch after
+  // `extra` values of the caller's own (at the scratch's start, returned by Extra(); rounded up
+  // to whole lines so that the ring stays aligned), for a band starting at `first_row`.
+  FilteredRowRing(int maps, std::size_t len, std::size_t extra, std::int64_t first_row)
+      : maps_(maps),
+        len_(len),
+        line_(LinePitch<T>(len)),
+        ring_len_(static_cast<std::size_t>(kSsimWindow) * line_),
+        extra_lines_(LinePitch<T>(extra)),
+        next_(std::max<std::int64_t>(0, first_row - kRadius)),
+        base_(RowScratch<T>(extra_lines_ + static_cast<std::size_t>(maps) * (ring_len_ + line_))) {}
+  T* Extra() const { return base_; }
+  // Output row q of the last Filter call.
+  T* Out(int q) const { return base_ + extra_lines_ + maps_ * ring_len_ + q * line_; }
+  // Calls fill(r, dst) for each row r not yet filled up to row y + kRadius (below `height`),
+  // where dst(q) is map q's ring slot for that row, to be filled with its horizontal filtering.
+  template <typename Fill>
+  void FillFor(std::int64_t y, int height, Fill&& fill) {
+    const std::int64_t last = std::min<std::int64_t>(height - 1, y + kRadius);
+    for (; next_ <= last; ++next_) {
+      const std::size_t slot = static_cast<std::size_t>(next_ % kSsimWindow) * line_;
+      fill(next_, [&](int q) { return base_ + extra_lines_ + q * ring_len_ + slot; });
+    }
   }
-  Taps(src, dst, len);
-}
+  // The vertical taps at row y of every map into Out(q); rows outside the image read `zeros`.
+  void Filter(const T* zeros, std::int64_t y, int height) const {
+    for (int q = 0; q < maps_; ++q) {
+      const T* ring = base_ + extra_lines_ + q * ring_len_;
+      const T* src[kSsimWindow];
+      for (int k = 0; k < kSsimWindow; ++k) {
+        const std::int64_t r = y + k - kRadius;
+        src[k] = (r >= 0 && r < height) ? ring + static_cast<std::size_t>(r % kSsimWindow) * line_
+                                        : zeros;
+      }
+      Taps(src, Out(q), len_);
+    }
+  }
+
+ private:
+  int maps_;
+  std::size_t len_, line_, ring_len_, extra_lines_;
+  std::int64_t next_;
+  T* base_;
+};
 
 // Rows per band of the separable filters. Each band filters its rows horizontally into a ring of
 // kSsimWindow rows as the vertical filter needs them (so both passes read from L1/L2 instead of
@@ -236,9 +268,6 @@ LossResult LossImpl(
   const std::size_t pitch = row_len + 2 * pad;  // a zero-padded row
   const std::size_t plane = row_len * static_cast<std::size_t>(height);
   const std::size_t padded_plane = pitch * static_cast<std::size_t>(height);
-  // Ring and filtered rows: whole cache lines apart, so that the vertical taps load aligned.
-  const std::size_t line = LinePitch<T>(row_len);
-  const std::size_t ring_len = static_cast<std::size_t>(kSsimWindow) * line;
   const double count = static_cast<double>(plane);
   const std::int64_t band = BandRows(height);
   const T c1 = static_cast<T>(kSsimC1);
@@ -260,38 +289,32 @@ LossResult LossImpl(
   // horizontally into the ring; per row of the band, the vertical filtering, the SSIM map's row
   // sum and the scaled partials.
   ParallelForChunks(height, band, [&](std::int64_t y0, std::int64_t y1) {
-    T* ring = RowScratch<T>(5 * ring_len + 6 * line + 5 * pitch);
-    T* f = ring + 5 * ring_len;
-    T* scratch = f + 6 * line;
+    // The caller's part of the scratch: the SSIM map's row, then the five padded product rows.
+    const std::size_t ssim_len = LinePitch<T>(row_len);
+    FilteredRowRing<T> ring(5, row_len, ssim_len + 5 * pitch, y0);
+    T* __restrict ssim = ring.Extra();
+    T* scratch = ssim + ssim_len;
     std::fill(scratch, scratch + 5 * pitch, T(0));
     T* qx = scratch + pad;
     T* qy = qx + pitch;
     T* qxx = qy + pitch;
     T* qyy = qxx + pitch;
     T* qxy = qyy + pitch;
-    T* __restrict mu_x = f;
-    T* __restrict mu_y = f + line;
-    T* __restrict e_xx = f + 2 * line;
-    T* __restrict e_yy = f + 3 * line;
-    T* __restrict e_xy = f + 4 * line;
-    T* __restrict ssim = f + 5 * line;
-    std::int64_t next = std::max<std::int64_t>(0, y0 - kRadius);  // the next row to filter
+    T* __restrict mu_x = ring.Out(0);
+    T* __restrict mu_y = ring.Out(1);
+    T* __restrict e_xx = ring.Out(2);
+    T* __restrict e_yy = ring.Out(3);
+    T* __restrict e_xy = ring.Out(4);
     for (std::int64_t y = y0; y < y1; ++y) {
-      for (const std::int64_t last = std::min<std::int64_t>(height - 1, y + kRadius); next <= last;
-           ++next) {
-        const std::size_t base = static_cast<std::size_t>(next) * row_len;
+      ring.FillFor(y, height, [&](std::int64_t r, auto dst) {
+        const std::size_t base = static_cast<std::size_t>(r) * row_len;
         const T* __restrict a = pred + base;
         const T* __restrict b = gt + base;
         WindowProducts(a, b, qx, qy, qxx, qyy, qxy, row_len);
-        if (next >= y0 && next < y1) l1_rows[next] = SumAbsDiffRow(a, b, row_len);
-        const std::size_t slot = static_cast<std::size_t>(next % kSsimWindow) * line;
-        for (int q = 0; q < 5; ++q) {
-          FilterPaddedRow(scratch + q * pitch, ring + q * ring_len + slot, row_len, stride);
-        }
-      }
-      for (int q = 0; q < 5; ++q) {
-        FilterRing(ring + q * ring_len, line, zeros, f + q * line, row_len, y, height);
-      }
+        if (r >= y0 && r < y1) l1_rows[r] = SumAbsDiffRow(a, b, row_len);
+        for (int q = 0; q < 5; ++q) FilterPaddedRow(scratch + q * pitch, dst(q), row_len, stride);
+      });
+      ring.Filter(zeros, y, height);
       if (backward) {
         T* row[3];
         for (int q = 0; q < 3; ++q) {
@@ -329,24 +352,18 @@ LossResult LossImpl(
   // the vertical filtering and the chain rule into the gradient.
   const T l1_weight = static_cast<T>((1.0 - static_cast<double>(lambda)) / count);
   ParallelForChunks(height, band, [&](std::int64_t y0, std::int64_t y1) {
-    T* ring = RowScratch<T>(3 * ring_len + 3 * line);
-    T* f = ring + 3 * ring_len;
-    const T* __restrict g_mu = f;
-    const T* __restrict g_xx = f + line;
-    const T* __restrict g_xy = f + 2 * line;
-    std::int64_t next = std::max<std::int64_t>(0, y0 - kRadius);
+    FilteredRowRing<T> ring(3, row_len, 0, y0);
+    const T* __restrict g_mu = ring.Out(0);
+    const T* __restrict g_xx = ring.Out(1);
+    const T* __restrict g_xy = ring.Out(2);
     for (std::int64_t y = y0; y < y1; ++y) {
-      for (const std::int64_t last = std::min<std::int64_t>(height - 1, y + kRadius); next <= last;
-           ++next) {
-        const std::size_t slot = static_cast<std::size_t>(next % kSsimWindow) * line;
+      ring.FillFor(y, height, [&](std::int64_t r, auto dst) {
         for (int q = 0; q < 3; ++q) {
-          FilterPaddedRow(partial(q) + static_cast<std::size_t>(next) * pitch,
-                          ring + q * ring_len + slot, row_len, stride);
+          FilterPaddedRow(partial(q) + static_cast<std::size_t>(r) * pitch, dst(q), row_len,
+                          stride);
         }
-      }
-      for (int q = 0; q < 3; ++q) {
-        FilterRing(ring + q * ring_len, line, zeros, f + q * line, row_len, y, height);
-      }
+      });
+      ring.Filter(zeros, y, height);
       const std::size_t base = static_cast<std::size_t>(y) * row_len;
       const T* __restrict a = pred + base;
       const T* __restrict b = gt + base;

@@ -130,7 +130,6 @@ TEST(PhotometricLoss, GradientMatchesFiniteDifferencesTinyImages) {
   ExpectGradientMatches(6, 5, 1, 13, 1.0);
 }
 
-// The checker is sharp enough to see a wrong sign or a missing factor in the SSIM part.
 // Tall enough for the separable filters to work in several bands of rows (at least 33 rows
 // each): the rows around a band's edges are filtered by both bands.
 TEST(PhotometricLoss, GradientMatchesFiniteDifferencesAcrossBands) {
@@ -140,6 +139,7 @@ TEST(PhotometricLoss, GradientMatchesFiniteDifferencesAcrossBands) {
   }
 }
 
+// The checker is sharp enough to see a wrong sign or a missing factor in the SSIM part.
 TEST(PhotometricLoss, FiniteDifferenceCheckCatchesWrongGradients) {
   const Pair p = RandomPair(13, 9, 3, 14);
   std::vector<double> g_l1, g_ssim, g_both;
