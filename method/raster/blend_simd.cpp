@@ -21,10 +21,10 @@
 // backward follows) in registers,
 // and stopping when all its pixels are done.
 // Backward: for each Gaussian back to front, the pixel vectors of its reach rows that still list
-// it (n_contrib per vector bounds the loop), with T and the "behind" colour per pixel in
-// L1-resident planes and the Gaussian's gradient summed across the tile in registers; one
-// horizontal reduction per Gaussian and tile (a shared transpose network with AVX-512) goes to
-// its entry slot.
+// it (n_contrib per vector bounds the loop), with T and the "behind" colour (one value per pixel:
+// its dot product with dL/dimage) in L1-resident planes and the Gaussian's gradient summed across
+// the tile in registers; one horizontal reduction per Gaussian and tile (a shared transpose network
+// with AVX-512) goes to its entry slot.
 //
 // The channel count is a template parameter for 1, 3, 4 and 6 channels (accumulators in
 // registers) and a run-time value otherwise (accumulators in L1).
@@ -722,17 +722,23 @@ void BackwardTileImpl(const TileJob& job, int tile) {
   const int count = job.tile_ranges[tile + 1] - start;
   const int num_vectors = kTilePixels / lanes;
 
-  // Per-pixel planes: T, behind colour (channels), dL/dimage (channels), T_final g_T, n_contrib,
+  // Per-pixel planes: T, the behind term (below), dL/dimage (channels), T_final g_T, n_contrib,
   // and with a geometry image its dL/dimage (channels), which dL/dalpha and g_T take instead.
+  //
+  // The behind colour b_c (what the Gaussians behind the current one add, per channel) enters
+  // the gradients only as dL/dalpha = sum_c (f_c - b_c) dgeo_c, and its update b_c += alpha
+  // (f_c - b_c) is linear, so one plane keeps B = sum_c b_c dgeo_c instead of one per channel:
+  // dL/dalpha = F - B with F = sum_c f_c dgeo_c, and B += alpha (F - B). The same maths as the
+  // scalar path's per-channel form (which the tests compare against), with other roundings.
   const bool split = job.dL_dimage_geometry != nullptr;
   thread_local Scratch<float> plane_scratch;
   thread_local Scratch<float> rec_scratch;
-  float* planes = plane_scratch.Get(
-      static_cast<std::size_t>(kTilePixels) * (3 + (split ? 3 : 2) * channels) +
-      static_cast<std::size_t>(channels) * lanes);
+  float* planes =
+      plane_scratch.Get(static_cast<std::size_t>(kTilePixels) * (4 + (split ? 2 : 1) * channels) +
+                        static_cast<std::size_t>(channels) * lanes);
   float* T_plane = planes;
   float* behind = T_plane + kTilePixels;
-  float* dpix = behind + static_cast<std::size_t>(kTilePixels) * channels;
+  float* dpix = behind + kTilePixels;
   float* tfb = dpix + static_cast<std::size_t>(kTilePixels) * channels;
   auto* nc_plane = reinterpret_cast<std::int32_t*>(tfb + kTilePixels);
   float* gf_mem = tfb + 2 * kTilePixels;  // feature gradients, run-time channel count only
@@ -754,8 +760,8 @@ void BackwardTileImpl(const TileJob& job, int tile) {
         T_plane[p] = 1.0f;
         tfb[p] = 0.0f;
         nc_plane[p] = 0;
+        behind[p] = 0.0f;
         for (int c = 0; c < channels; ++c) {
-          behind[c * kTilePixels + p] = 0.0f;
           dpix[c * kTilePixels + p] = 0.0f;
           if (split) dgeo[c * kTilePixels + p] = 0.0f;
         }
@@ -769,11 +775,11 @@ void BackwardTileImpl(const TileJob& job, int tile) {
       for (int c = 0; c < channels; ++c) {
         g_T += job.background[c] * dG[c];
         if (tile_bg != nullptr) tile_bg[c] += T_final * dL[c];
-        behind[c * kTilePixels + p] = 0.0f;
         dpix[c * kTilePixels + p] = dL[c];
         if (split) dgeo[c * kTilePixels + p] = dG[c];  // else dgeo is dpix
       }
       T_plane[p] = T_final;
+      behind[p] = 0.0f;
       tfb[p] = T_final * g_T;
       nc_plane[p] = job.n_contrib[pix];
       vmax = std::max(vmax, job.n_contrib[pix]);
@@ -864,23 +870,22 @@ void BackwardTileImpl(const TileJob& job, int tile) {
       const V T = hn::Mul(T_old, inv);  // transmittance in front of this Gaussian
       hn::Store(hn::IfThenElse(m, T, T_old), d, T_plane + off);
       const V w = hn::IfThenElseZero(m, hn::Mul(alpha, T));
-      V dL_dalpha = hn::Zero(d);
+      V F = hn::Zero(d);
       for (int c = 0; c < channels; ++c) {
-        float* bp = behind + c * kTilePixels + off;
-        const V b = hn::Load(d, bp);
         const V dp = hn::Load(d, dpix + c * kTilePixels + off);
-        const V diff = hn::Sub(hn::Set(d, r[kRecFeatures + c]), b);
-        dL_dalpha = hn::MulAdd(diff, split ? hn::Load(d, dgeo + c * kTilePixels + off) : dp,
-                               dL_dalpha);
+        F = hn::MulAdd(hn::Set(d, r[kRecFeatures + c]),
+                       split ? hn::Load(d, dgeo + c * kTilePixels + off) : dp, F);
         if constexpr (kC > 0) {
           grad[kSlotFeatures + c] = hn::MulAdd(w, dp, grad[kSlotFeatures + c]);
         } else {
           float* gp = gf_mem + c * lanes;
           hn::Store(hn::MulAdd(w, dp, hn::Load(d, gp)), d, gp);
         }
-        // behind = alpha f + (1 - alpha) behind, for the Gaussians in front of this one.
-        hn::Store(hn::IfThenElse(m, hn::MulAdd(alpha, diff, b), b), d, bp);
       }
+      const V B = hn::Load(d, behind + off);
+      const V dL_dalpha = hn::Sub(F, B);
+      // B for the Gaussians in front of this one.
+      hn::Store(hn::IfThenElse(m, hn::MulAdd(alpha, dL_dalpha, B), B), d, behind + off);
       // u = G dL/dalpha. The per-Gaussian factors (opacity, the conic terms, -1/2) come out of
       // the sums over pixels, so per pixel vector only the sums of u, u dx, u dy, u dx^2,
       // u dx dy and u dy^2 are kept; FinishSlot applies the factors once per Gaussian and tile.
