@@ -898,6 +898,37 @@ TEST(RasterBlendSimd, BackendsCanBeMixedBetweenForwardAndBackward) {
   EXPECT_LT(RelativeDiff(g_mixed.mean2d, g_pure.mean2d), 1e-5);
 }
 
+// A scene rounded to float, binned, with its double reference forward; Gradients gives the
+// reference backward for a dL/dimage. The float paths are measured against these.
+struct RoundedReference {
+  SplatBuffers s;                   // the float splats
+  SplatBuffersT<double> s_rounded;  // the same values in double
+  std::vector<double> bg;
+  RasterState bins;
+  Forward64 f;
+  SplatGradientsT<double> Gradients(const std::vector<double>& dL) const {
+    SplatGradientsT<double> g;
+    BlendBackwardReference<double>(s_rounded, bins, bg.data(), f.final_T.data(), f.n_contrib.data(),
+                                   dL.data(), nullptr, &g, nullptr);
+    return g;
+  }
+};
+RoundedReference MakeRoundedReference(const SplatBuffersT<double>& s64,
+                                      const SceneOptions& o,
+                                      double background) {
+  RoundedReference r;
+  r.s = Convert<float>(s64);
+  r.s_rounded = Convert<double>(r.s);
+  r.bg.assign(o.channels, background);
+  BinSplats(r.s_rounded, Settings(o.width, o.height, {}), &r.bins);
+  r.f = Reference64(r.s_rounded, r.bins, r.bg);
+  return r;
+}
+
+std::vector<float> ToFloat(const std::vector<double>& v) {
+  return std::vector<float>(v.begin(), v.end());
+}
+
 // The float scalar path against the double reference: the scale of float round-off that the
 // SIMD tolerance above is measured against.
 TEST(RasterBlendSimd, FloatPathsAgreeWithDoubleReference) {
@@ -906,33 +937,22 @@ TEST(RasterBlendSimd, FloatPathsAgreeWithDoubleReference) {
   o.width = 80;
   o.height = 64;
   o.channels = 6;
-  const SplatBuffersT<double> s64 = RandomScene(o, 77);
-  const SplatBuffers s = Convert<float>(s64);
-  const SplatBuffersT<double> s_rounded = Convert<double>(s);
-  const std::vector<double> bg64(6, 0.5);
+  const RoundedReference ref = MakeRoundedReference(RandomScene(o, 77), o, 0.5);
   const std::size_t pixels = static_cast<std::size_t>(o.width) * o.height;
   const std::vector<double> w64 = RandomValues(pixels * 6, 78);
-  const std::vector<float> w(w64.begin(), w64.end());
-  RasterState bins;
-  BinSplats(s_rounded, Settings(o.width, o.height, {}), &bins);
-  const Forward64 f = Reference64(s_rounded, bins, bg64);
-  SplatGradientsT<double> g64;
-  BlendBackwardReference<double>(s_rounded, bins, bg64.data(), f.final_T.data(), f.n_contrib.data(),
-                                 w64.data(), nullptr, &g64, nullptr);
-  const auto to_float = [](const std::vector<double>& v) {
-    return std::vector<float>(v.begin(), v.end());
-  };
+  const SplatGradientsT<double> g64 = ref.Gradients(w64);
   for (RasterBackend backend : {RasterBackend::kScalar, RasterBackend::kSimd}) {
     const FloatRun r =
-        RunFloat(s, Settings(o.width, o.height, std::vector<float>(6, 0.5f), backend), w, nullptr);
+        RunFloat(ref.s, Settings(o.width, o.height, std::vector<float>(6, 0.5f), backend),
+                 ToFloat(w64), nullptr);
     double image = 0;
     for (std::size_t i = 0; i < r.image.size(); ++i)
-      image = std::max(image, std::abs(r.image[i] - f.image[i]));
+      image = std::max(image, std::abs(r.image[i] - ref.f.image[i]));
     EXPECT_LT(image, 1e-5);
-    EXPECT_LT(RelativeDiff(r.grads.mean2d, to_float(g64.mean2d)), 1e-5);
-    EXPECT_LT(RelativeDiff(r.grads.conic, to_float(g64.conic)), 1e-5);
-    EXPECT_LT(RelativeDiff(r.grads.opacity, to_float(g64.opacity)), 1e-5);
-    EXPECT_LT(RelativeDiff(r.grads.features, to_float(g64.features)), 1e-5);
+    EXPECT_LT(RelativeDiff(r.grads.mean2d, ToFloat(g64.mean2d)), 1e-5);
+    EXPECT_LT(RelativeDiff(r.grads.conic, ToFloat(g64.conic)), 1e-5);
+    EXPECT_LT(RelativeDiff(r.grads.opacity, ToFloat(g64.opacity)), 1e-5);
+    EXPECT_LT(RelativeDiff(r.grads.features, ToFloat(g64.features)), 1e-5);
   }
 }
 
@@ -953,30 +973,20 @@ TEST(RasterBlendSimd, HdrAndLdrChannelsTogetherMatchTheDoubleReference) {
     for (int ch = 0; ch < 3; ++ch) s64.features[g * 6 + ch] = std::pow(10.0, exponent(rng));
     for (int ch = 3; ch < 6; ++ch) s64.features[g * 6 + ch] = 0.5 + 0.5 * s64.features[g * 6 + ch];
   }
-  const SplatBuffers s = Convert<float>(s64);
-  const SplatBuffersT<double> s_rounded = Convert<double>(s);
-  const std::vector<double> bg64(6, 0.0);
+  const RoundedReference ref = MakeRoundedReference(s64, o, 0.0);
   const std::size_t pixels = static_cast<std::size_t>(o.width) * o.height;
   std::vector<double> w64 = RandomValues(pixels * 6, 83);
-  RasterState bins;
-  BinSplats(s_rounded, Settings(o.width, o.height, {}), &bins);
-  const Forward64 f = Reference64(s_rounded, bins, bg64);
   for (std::size_t px = 0; px < pixels; ++px) {
-    for (int ch = 0; ch < 3; ++ch) w64[px * 6 + ch] /= std::max(1e-2, f.image[px * 6 + ch]);
+    for (int ch = 0; ch < 3; ++ch) w64[px * 6 + ch] /= std::max(1e-2, ref.f.image[px * 6 + ch]);
   }
-  const std::vector<float> w(w64.begin(), w64.end());
-  SplatGradientsT<double> g64;
-  BlendBackwardReference<double>(s_rounded, bins, bg64.data(), f.final_T.data(), f.n_contrib.data(),
-                                 w64.data(), nullptr, &g64, nullptr);
-  const auto to_float = [](const std::vector<double>& v) {
-    return std::vector<float>(v.begin(), v.end());
-  };
+  const SplatGradientsT<double> g64 = ref.Gradients(w64);
   const auto errors = [&](RasterBackend backend) {
     const FloatRun r =
-        RunFloat(s, Settings(o.width, o.height, std::vector<float>(6, 0.0f), backend), w, nullptr);
-    return std::vector<double>{RelativeDiff(r.grads.mean2d, to_float(g64.mean2d)),
-                               RelativeDiff(r.grads.conic, to_float(g64.conic)),
-                               RelativeDiff(r.grads.opacity, to_float(g64.opacity))};
+        RunFloat(ref.s, Settings(o.width, o.height, std::vector<float>(6, 0.0f), backend),
+                 ToFloat(w64), nullptr);
+    return std::vector<double>{RelativeDiff(r.grads.mean2d, ToFloat(g64.mean2d)),
+                               RelativeDiff(r.grads.conic, ToFloat(g64.conic)),
+                               RelativeDiff(r.grads.opacity, ToFloat(g64.opacity))};
   };
   const std::vector<double> scalar = errors(RasterBackend::kScalar);
   // Every SIMD target, within 6x the scalar path's error (1e-5 relative error in the behind
