@@ -36,13 +36,13 @@
 //   RasterSettings::keep_records false (a render no backward follows) the forward reads the
 //   per-Gaussian records in place instead of copying them per tile entry into the state, keeps
 //   no n_contrib, and binning leaves out the backward's entry slots.
-//   Differences from kScalar: the exp below (relative error <= 1e-6 on [-87, 0], FastExp; the
-//   kernels take the same polynomial as exp2 of the power in log2 units), fused
-//   multiply-adds, 1/(1 - alpha) multiplied instead of divided, and the behind colour updated
-//   eagerly (same expression); images agree to ~3e-7 and gradients to ~7e-7 of each field's
-//   largest value (blend_test.cpp bounds both at 1e-5). A pixel whose alpha or test_T lies
-//   within ~1e-6 relative of kMinAlpha / kMinTransmittance may take the other branch (about
-//   1 pixel in 10^4 on dense random scenes).
+//   Differences from kScalar: the kernels take exp2 of the power in log2 units (FastExp2 below,
+//   relative error <= 3e-7), fused multiply-adds (T - alpha T for T (1 - alpha)), 1/(1 - alpha)
+//   multiplied instead of divided, and the behind colour updated eagerly (same expression),
+//   folded into one value per pixel in the SIMD backward; images agree to ~3e-7 and gradients to
+//   ~7e-7 of each field's largest value (blend_test.cpp bounds both at 1e-5). A pixel whose alpha
+//   or test_T lies within ~1e-6 relative of kMinAlpha / kMinTransmittance may take the other branch
+//   (about 1 pixel in 10^4 on dense random scenes).
 #pragma once
 
 #include <cstddef>
@@ -108,11 +108,10 @@ void BlendBackwardReference(const SplatBuffersT<T>& splats,
                             T* dL_dbackground,
                             const T* dL_dimage_geometry = nullptr);
 
-// The exp of the fast path, exposed so tests can bound its error: out[i] ~ exp(x[i]) for x in
-// [-87, 0] (x is clamped to that range) with relative error <= 1e-6. Range reduction
-// x = n ln2 + r (two-part ln2), degree-6 Taylor polynomial in |r| <= ln2 / 2 (truncation
-// 1.2e-7), 2^n built in the exponent bits.
-void FastExp(const float* x, float* out, std::size_t n);
+// The 2^x of the blend kernels (alpha = opacity 2^power, the power in log2 units), exposed so
+// tests can bound its error: x clamped to [-125.5, 0], relative error <= 3e-7. x = n + r with
+// |r| <= 1/2, a degree-5 minimax polynomial in r, 2^n in the exponent bits.
+void FastExp2(const float* x, float* out, std::size_t n);
 
 namespace detail {
 
