@@ -36,11 +36,12 @@
 //   RasterSettings::keep_records false (a render no backward follows) the forward reads the
 //   per-Gaussian records in place instead of copying them per tile entry into the state, keeps
 //   no n_contrib, and binning leaves out the backward's entry slots.
-//   Differences from kScalar: the kernels take exp2 of the power in log2 units (FastExp2 below,
-//   relative error <= 3e-7), fused multiply-adds (T - alpha T for T (1 - alpha)), 1/(1 - alpha)
+//   Differences from kScalar: the kernels take alpha = 2^(power + log2 opacity), the power in
+//   log2 units (FastExp2 below, relative error <= 3e-7; the sum's rounding adds up to ~1e-6
+//   where opacity is small), fused multiply-adds (T - alpha T for T (1 - alpha)), 1/(1 - alpha)
 //   multiplied instead of divided, and the behind colour updated eagerly (same expression),
-//   folded into one value per pixel in the SIMD backward; images agree to ~3e-7 and gradients to
-//   ~7e-7 of each field's largest value (blend_test.cpp bounds both at 1e-5). A pixel whose alpha
+//   folded into one value per pixel in the SIMD backward; images and gradients agree within 1e-5
+//   of each field's largest value (blend_test.cpp, on every compiled target). A pixel whose alpha
 //   or test_T lies within ~1e-6 relative of kMinAlpha / kMinTransmittance may take the other branch
 //   (about 1 pixel in 10^4 on dense random scenes).
 #pragma once

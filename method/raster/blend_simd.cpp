@@ -3,8 +3,8 @@
 // takes a whole row). Compiled for every x86 target Highway 1.0.3 builds here (scalar, SSSE3,
 // SSE4, AVX2, AVX-512) and chosen at run time with HWY_DYNAMIC_DISPATCH.
 //
-// Per frame, every listed Gaussian's kernel record (conic terms, opacity, log-space alpha
-// threshold, reach extents, features) is packed once (PackSplats); per tile the records of its
+// Per frame, every listed Gaussian's kernel record (conic terms, opacity and its log2, reach
+// extents, features) is packed once (PackSplats); per tile the records of its
 // list are copied into a contiguous array and their reach box is turned into tile rows/columns.
 // The reach box bounds the pixels where alpha can reach kMinAlpha; it only prunes work, the
 // per-lane tests of the 3DGS rules still decide, so pruning never changes a result.
@@ -65,15 +65,22 @@ constexpr int kTilePixels = kTileSize * kTileSize;
 // Record of one Gaussian gathered per tile (array of structures, read by broadcasts).
 constexpr int kRecMeanX = 0;
 constexpr int kRecMeanY = 1;
-// The exponent terms and the threshold are in log2 units (times log2(e)), so the kernels take
-// exp2 of the power directly: two operations fewer per Gaussian and pixel vector.
+// The exponent terms are in log2 units (times log2(e)), so the kernels take exp2 of the power
+// directly: two operations fewer per Gaussian and pixel vector.
 constexpr int kRecHalfNegA = 2;  // -a / 2 log2(e)
 constexpr int kRecNegB = 3;      // -b log2(e)
 constexpr int kRecHalfNegC = 4;  // -c / 2 log2(e)
 constexpr int kRecOpacity = 5;
-constexpr int kRecLogThreshold = 6;  // log2 power below this cannot reach kMinAlpha
+// log2(opacity) (-inf where opacity <= 0 or NaN): the kernels take alpha = 2^(power + log2 o),
+// the sum in the power's last multiply-add, so no multiply by the opacity per pixel vector.
+constexpr int kRecLog2Opacity = 6;
 constexpr int kRecFeatures = kRecordScalars;
-static_assert(kRecLogThreshold + 1 == kRecFeatures);
+static_assert(kRecLog2Opacity + 1 == kRecFeatures);
+// A lane whose power + log2 o is below this has alpha < kMinAlpha (2^-125.5 <= it, so the
+// unclamped exp2 is valid above it); the margin (1.5e-4, about the reach boxes' 1e-4 of a natural
+// log) covers the roundings. It only prunes: alpha >= kMinAlpha decides.
+constexpr float kLogAlphaFloor = -7.994353f - 1.5e-4f;  // log2(1/255) - margin
+static_assert(kMinAlpha == 1.0f / 255.0f);
 // After the features: the reach box. In the per-Gaussian records, 4 floats: the first and last
 // pixel row and column (absolute, inclusive) of pixel centres the Gaussian can reach. In the
 // per-entry tile records, the tile rows and columns (0..15, inclusive; row0 > row1 when it
@@ -237,7 +244,7 @@ void PackSplats(const TileJob& job, std::int64_t begin, std::int64_t end) {
     put(kRecNegB, hn::Mul(hn::Neg(b), log2e));
     put(kRecHalfNegC, hn::Mul(neg_half_log2e, c));
     put(kRecOpacity, o);
-    put(kRecLogThreshold, hn::Mul(threshold, log2e));
+    put(kRecLog2Opacity, hn::IfThenElse(positive, hn::Mul(hn::Log(d, o), log2e), hn::Neg(inf)));
     put(kBox + kBoxRow0, lo(cy, ey));
     put(kBox + kBoxRow1, hi(cy, ey));
     put(kBox + kBoxCol0, lo(cx, ex));
@@ -322,12 +329,12 @@ void GatherRecords(const TileJob& job, int tile, int start, int count, float* re
   }
 }
 
-// power = -0.5 (a dx^2 + c dy^2) - b dx dy (times log2(e), from the record), as
-// dx (-a/2 dx - b dy) + (-c/2 dy) dy.
-HWY_INLINE V Power(const float* r, V dx, V dy) {
+// power + log2 o, with power = -0.5 (a dx^2 + c dy^2) - b dx dy (times log2(e), from the
+// record), as dx (-a/2 dx - b dy) + ((-c/2 dy) dy + log2 o).
+HWY_INLINE V PowerPlusLog2Opacity(const float* r, V dx, V dy, V log2o) {
   const D d;
   const V q = hn::MulAdd(hn::Set(d, r[kRecHalfNegA]), dx, hn::Mul(hn::Set(d, r[kRecNegB]), dy));
-  return hn::MulAdd(dx, q, hn::Mul(hn::Mul(hn::Set(d, r[kRecHalfNegC]), dy), dy));
+  return hn::MulAdd(dx, q, hn::MulAdd(hn::Mul(hn::Set(d, r[kRecHalfNegC]), dy), dy, log2o));
 }
 
 // out[k] = sum of the lanes of acc[k], k < kCount, in a fixed order. With AVX-512, groups of 8
@@ -385,15 +392,13 @@ HWY_INLINE M BlendStep(const float* r, int j, int channels, V px, V py, PixelSta
   [[maybe_unused]] const DI di;
   const V dx = hn::Sub(hn::Set(d, r[kRecMeanX]), px);
   const V dy = hn::Sub(hn::Set(d, r[kRecMeanY]), py);
-  const V power = Power(r, dx, dy);
-  const M reach = hn::AndNot(st.done, hn::Ge(power, hn::Set(d, r[kRecLogThreshold])));
-  // Lanes with power outside [threshold, 0] (threshold >= -125.5 in log2 units for any
-  // opacity <= e^82) never contribute: their alpha reaches only masks and an IfThenElseZero, so
-  // the clamps can go.
-  const V alpha = hn::Min(hn::Set(d, kMaxAlpha),
-                          hn::Mul(hn::Set(d, r[kRecOpacity]), FastExp2UnclampedV(d, power)));
-  const M active =
-      hn::And(reach, hn::And(hn::Le(power, hn::Zero(d)), hn::Ge(alpha, hn::Set(d, kMinAlpha))));
+  const V log2o = hn::Set(d, r[kRecLog2Opacity]);
+  const V x = PowerPlusLog2Opacity(r, dx, dy, log2o);  // log2 of the unclamped alpha
+  const M reach = hn::AndNot(st.done, hn::Ge(x, hn::Set(d, kLogAlphaFloor)));
+  // Lanes with x below the floor never contribute: their alpha reaches only masks and an
+  // IfThenElseZero, so the clamps can go. x <= log2 o is the 3DGS rule power <= 0.
+  const V alpha = hn::Min(hn::Set(d, kMaxAlpha), FastExp2UnclampedV(d, x));
+  const M active = hn::And(reach, hn::And(hn::Le(x, log2o), hn::Ge(alpha, hn::Set(d, kMinAlpha))));
   // T - alpha T: one fused operation (T (1 - alpha) took two), beside the weight alpha T.
   const V test_T = hn::NegMulAdd(alpha, st.T, st.T);
   const M stop = hn::And(active, hn::Lt(test_T, hn::Set(d, kMinTransmittance)));
@@ -507,7 +512,8 @@ void ForwardTileImpl(const TileJob& job, int tile) {
     s_hc[j] = exact ? r[kRecHalfNegC] : 0.0f;
     // -b / a from the record's log2-unit terms: the row test's margin covers their rounding.
     s_k[j] = exact ? r[kRecNegB] / (-2.0f * r[kRecHalfNegA]) : 0.0f;
-    s_thr[j] = exact && std::isfinite(s_k[j]) ? r[kRecLogThreshold]
+    // The power below which x = power + log2 o misses the floor.
+    s_thr[j] = exact && std::isfinite(s_k[j]) ? kLogAlphaFloor - r[kRecLog2Opacity]
                                               : -std::numeric_limits<float>::infinity();
   }
   // Per pair of rows, also drop the Gaussians whose power stays below the log threshold on both
@@ -670,7 +676,7 @@ void ForwardTileImpl(const TileJob& job, int tile) {
   }
 }
 
-// The backward sums, per pixel vector, u = G dL/dalpha and its moments in the slot positions
+// The backward sums, per pixel vector, u = o G dL/dalpha and its moments in the slot positions
 // below; FinishSlot turns them into the slot's gradients (mean, conic, opacity) in place.
 constexpr int kSumUdx = kSlotMean;
 constexpr int kSumUdy = kSlotMean + 1;
@@ -679,20 +685,21 @@ constexpr int kSumUdxdy = kSlotConic + 1;
 constexpr int kSumUdydy = kSlotConic + 2;
 constexpr int kSumU = kSlotOpacity;
 
-// With power = -a dx^2 / 2 - b dx dy - c dy^2 / 2 (natural units), alpha = o G:
-// dL/dopacity = sum u, dL/dmean = o sum u dpower/dmean, dL/dconic = o sum u dpower/dconic.
-// neg_a and neg_c: the natural -a and -c (from the splats' conic).
+// With power = -a dx^2 / 2 - b dx dy - c dy^2 / 2 (natural units), alpha = o G and u = o G
+// dL/dalpha: dL/dopacity = (sum u) / o, dL/dmean = sum u dpower/dmean, dL/dconic = sum u
+// dpower/dconic. (The kernel has o G = 2^(power + log2 o) at hand, not G; o > 0 wherever a
+// Gaussian reaches a pixel.) neg_a and neg_c: the natural -a and -c (from the splats' conic).
 HWY_INLINE void FinishSlot(const float* r, float neg_a, float neg_c, float* slot) {
   const float o = r[kRecOpacity];
   const float neg_b = r[kRecNegB] * kLn2;  // the natural -b
   const float sx = slot[kSumUdx], sy = slot[kSumUdy];
   const float sxx = slot[kSumUdxdx], sxy = slot[kSumUdxdy], syy = slot[kSumUdydy];
-  slot[kSlotMean] = o * (neg_a * sx + neg_b * sy);
-  slot[kSlotMean + 1] = o * (neg_c * sy + neg_b * sx);
-  slot[kSlotConic] = -0.5f * o * sxx;
-  slot[kSlotConic + 1] = -o * sxy;
-  slot[kSlotConic + 2] = -0.5f * o * syy;
-  // slot[kSlotOpacity] is sum u already.
+  slot[kSlotMean] = neg_a * sx + neg_b * sy;
+  slot[kSlotMean + 1] = neg_c * sy + neg_b * sx;
+  slot[kSlotConic] = -0.5f * sxx;
+  slot[kSlotConic + 1] = -sxy;
+  slot[kSlotConic + 2] = -0.5f * syy;
+  slot[kSlotOpacity] = slot[kSumU] / o;
 }
 
 template <int kC>
@@ -831,8 +838,8 @@ void BackwardTileImpl(const TileJob& job, int tile) {
     const VI jv = hn::Set(di, j);
     const V mean_x = hn::Set(d, r[kRecMeanX]);
     const V mean_y = hn::Set(d, r[kRecMeanY]);
-    const V threshold = hn::Set(d, r[kRecLogThreshold]);
-    const V opacity = hn::Set(d, r[kRecOpacity]);
+    const V log2o = hn::Set(d, r[kRecLog2Opacity]);
+    const V floor = hn::Set(d, kLogAlphaFloor);
     V grad[kGradCount];
     for (int k = 0; k < kGradCount; ++k) grad[k] = hn::Zero(d);
     if constexpr (kC == 0) {
@@ -852,15 +859,15 @@ void BackwardTileImpl(const TileJob& job, int tile) {
         const int off = vi * lanes;
         const V dx = hn::Sub(mean_x, hn::Load(d, pixel_x + off));
         const V dy = hn::Sub(mean_y, hn::Load(d, pixel_y + off));
-        const V power = Power(r, dx, dy);
+        const V x = PowerPlusLog2Opacity(r, dx, dy, log2o);  // log2 of the unclamped alpha
         const M listed = hn::RebindMask(d, hn::Lt(jv, hn::Load(di, nc_plane + off)));
-        const M reach = hn::And(listed, hn::Ge(power, threshold));
+        const M reach = hn::And(listed, hn::Ge(x, floor));
         if (hn::AllFalse(d, reach)) continue;
-        // Unclamped: lanes outside m may hold garbage (even inf or NaN) in G, alpha and inv; every
+        // Unclamped: lanes outside m may hold garbage (even inf or NaN) in oG, alpha and inv; every
         // use below is masked by m (T, behind, w) or multiplied into u under IfThenElseZero.
-        const V G = FastExp2UnclampedV(d, power);
-        const V alpha = hn::Min(max_alpha, hn::Mul(opacity, G));
-        const M m = hn::And(reach, hn::And(hn::Le(power, hn::Zero(d)), hn::Ge(alpha, min_alpha)));
+        const V oG = FastExp2UnclampedV(d, x);  // opacity G, alpha before the clamp
+        const V alpha = hn::Min(max_alpha, oG);
+        const M m = hn::And(reach, hn::And(hn::Le(x, log2o), hn::Ge(alpha, min_alpha)));
         // (no early exit when m is empty: rare once reach holds, and masked below)
         any = true;
         const V inv = hn::Div(one, hn::Sub(one, alpha));
@@ -884,11 +891,11 @@ void BackwardTileImpl(const TileJob& job, int tile) {
         const V dL_dalpha = hn::Sub(F, B);
         // B for the Gaussians in front of this one.
         hn::Store(hn::IfThenElse(m, hn::MulAdd(alpha, dL_dalpha, B), B), d, behind + off);
-        // u = G dL/dalpha. The per-Gaussian factors (opacity, the conic terms, -1/2) come out of
-        // the sums over pixels, so per pixel vector only the sums of u, u dx, u dy, u dx^2,
-        // u dx dy and u dy^2 are kept; FinishSlot applies the factors once per Gaussian and tile.
+        // u = o G dL/dalpha. The per-Gaussian factors (1/opacity, the conic terms, -1/2) come out
+        // of the sums over pixels, so per pixel vector only the sums of u, u dx, u dy, u dx^2, u dx
+        // dy and u dy^2 are kept; FinishSlot applies the factors once per Gaussian and tile.
         const V u = hn::IfThenElseZero(
-            m, hn::Mul(G, hn::NegMulAdd(hn::Load(d, tfb + off), inv, hn::Mul(dL_dalpha, T))));
+            m, hn::Mul(oG, hn::NegMulAdd(hn::Load(d, tfb + off), inv, hn::Mul(dL_dalpha, T))));
         const V udx = hn::Mul(u, dx);
         const V udy = hn::Mul(u, dy);
         grad[kSumU] = hn::Add(grad[kSumU], u);
