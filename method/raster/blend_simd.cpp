@@ -146,8 +146,8 @@ constexpr float kLn2 = 0.693147180559945309f;
 // or NaN), so only for callers that mask such lanes out of every result (the blend kernels).
 // x = n + r, |r| <= 1/2 exact, 2^r by a degree-5 minimax polynomial (coefficients from a Remez
 // fit of the relative error, 7.5e-8; 2.1e-7 with float coefficients and float Horner steps, as
-// a degree-6 Taylor polynomial gives with one step more), 2^n in the
-// exponent bits (with AVX-512 one vscalefps: the add, shift and multiply in one instruction).
+// a degree-6 Taylor polynomial gives with one step more), 2^n in the exponent bits (with
+// AVX-512 one vscalefps: the add, shift and multiply in one instruction).
 HWY_INLINE V FastExp2UnclampedV(D d, V x) {
   const V n = hn::Round(x);
   const V r = hn::Sub(x, n);
@@ -814,6 +814,7 @@ void BackwardTileImpl(const TileJob& job, int tile) {
   const V one = hn::Set(d, 1.0f);
   const V max_alpha = hn::Set(d, kMaxAlpha);
   const V min_alpha = hn::Set(d, kMinAlpha);
+  const V log_alpha_floor = hn::Set(d, kLogAlphaFloor);
   // Pixel centres of the tile in plane order (the forward's values: k + 0.5 and the tile origin
   // are exact in float, so dx and dy are bit-equal).
   HWY_ALIGN float pixel_x[kTilePixels];
@@ -839,7 +840,6 @@ void BackwardTileImpl(const TileJob& job, int tile) {
     const V mean_x = hn::Set(d, r[kRecMeanX]);
     const V mean_y = hn::Set(d, r[kRecMeanY]);
     const V log2o = hn::Set(d, r[kRecLog2Opacity]);
-    const V floor = hn::Set(d, kLogAlphaFloor);
     V grad[kGradCount];
     for (int k = 0; k < kGradCount; ++k) grad[k] = hn::Zero(d);
     if constexpr (kC == 0) {
@@ -861,7 +861,7 @@ void BackwardTileImpl(const TileJob& job, int tile) {
         const V dy = hn::Sub(mean_y, hn::Load(d, pixel_y + off));
         const V x = PowerPlusLog2Opacity(r, dx, dy, log2o);  // log2 of the unclamped alpha
         const M listed = hn::RebindMask(d, hn::Lt(jv, hn::Load(di, nc_plane + off)));
-        const M reach = hn::And(listed, hn::Ge(x, floor));
+        const M reach = hn::And(listed, hn::Ge(x, log_alpha_floor));
         if (hn::AllFalse(d, reach)) continue;
         // Unclamped: lanes outside m may hold garbage (even inf or NaN) in oG, alpha and inv; every
         // use below is masked by m (T, behind, w) or multiplied into u under IfThenElseZero.
@@ -960,24 +960,19 @@ void PackTiles(const TileJob& job, std::int64_t begin, std::int64_t end) {
   PackSplats(job, begin, end);
 }
 
-// out = f(x) elementwise, f a vector function; the tail through a zero-padded vector.
-template <typename F>
-void ApplyToArray(F f, const float* x, float* out, std::size_t n) {
+// The tail goes through a zero-padded vector.
+void FastExp2Array(const float* x, float* out, std::size_t n) {
   const D d;
   const std::size_t lanes = hn::Lanes(d);
   std::size_t i = 0;
-  for (; i + lanes <= n; i += lanes) hn::StoreU(f(d, hn::LoadU(d, x + i)), d, out + i);
+  for (; i + lanes <= n; i += lanes) hn::StoreU(FastExp2V(d, hn::LoadU(d, x + i)), d, out + i);
   if (i < n) {
     HWY_ALIGN float in_buf[kTileSize] = {};
     HWY_ALIGN float out_buf[kTileSize];
     std::copy(x + i, x + n, in_buf);
-    hn::Store(f(d, hn::Load(d, in_buf)), d, out_buf);
+    hn::Store(FastExp2V(d, hn::Load(d, in_buf)), d, out_buf);
     std::copy(out_buf, out_buf + (n - i), out + i);
   }
-}
-
-void FastExp2Array(const float* x, float* out, std::size_t n) {
-  ApplyToArray([](D d, V v) { return FastExp2V(d, v); }, x, out, n);
 }
 
 }  // namespace HWY_NAMESPACE
