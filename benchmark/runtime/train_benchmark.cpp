@@ -15,6 +15,7 @@
 #include "method/optim/adam.h"
 #include "method/optim/densify.h"
 #include "method/optim/fused_adam_step.h"
+#include "method/optim/time_order.h"
 #include "method/render/frame_render.h"
 #include "method/render/hdr_color_stage.h"
 #include "method/tonemap/dynamic_tone_mapper.h"
@@ -241,6 +242,29 @@ BENCHMARK(BM_TrainingIterationSurface)
     ->Args({64, 20})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+
+// Reordering a model of N thousand Gaussians by time (time_order.h) with its Adam moments, as
+// the trainer does after every densification: the order's computation and the permutation of
+// every buffer. The scene's times are shuffled first, so every row moves (a worst case; after a
+// densification the survivors are already in order).
+void BM_ReorderByTime(benchmark::State& state) {
+  Scene scene = MakeScene(200, static_cast<int>(state.range(0)));
+  GaussianModel& m = scene.model;
+  GaussianGradients grads;
+  grads.ZerosLike(m);
+  Adam adam;
+  AddModelGroups(m, grads, {1e-3f, 1e-3f, 1e-3f, 1e-3f, 1e-3f, 1e-3f, 1e-3f}, &adam);
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<float> u(0, 1);
+  for (auto _ : state) {
+    state.PauseTiming();
+    for (float& t : m.t) t = u(rng);
+    state.ResumeTiming();
+    ReorderGaussians(VisibleTimeOrder(m, 0.0f, 1.0f), &m, &adam, nullptr);
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(m.size()));
+}
+BENCHMARK(BM_ReorderByTime)->Arg(20)->Arg(320)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 }  // namespace hdr4d::method

@@ -18,6 +18,7 @@
 #include "core/binary_stream.h"
 #include "core/error.h"
 #include "core/parallel.h"
+#include "method/optim/permute_rows.h"
 
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "method/optim/adam.cpp"
@@ -397,6 +398,16 @@ void Adam::ReserveGroup(const std::string& name, std::size_t size) {
   State& s = Find(name);
   s.m.reserve(size);
   s.v.reserve(size);
+}
+
+void Adam::PermuteRows(const std::string& name,
+                       const std::vector<std::uint32_t>& order,
+                       std::size_t row_width) {
+  State& s = Find(name);
+  HDR4D_CHECK(row_width > 0 && s.m.size() == order.size() * row_width);
+  HDR4D_CHECK(IsPermutation(order));
+  PermuteRowsInPlace(s.m.data(), row_width, order);
+  PermuteRowsInPlace(s.v.data(), row_width, order);
 }
 
 void Adam::ResetMoments(const std::string& name) {

@@ -160,6 +160,12 @@ class Adam {
   // reallocation holds the old and the new moments at once). Untouched capacity costs address
   // space only. Keeps the binding.
   void ReserveGroup(const std::string& name, std::size_t size);
+  // Reorders the rows in place (new row k is old row order[k]; `order` a permutation of the
+  // group's rows, checked), as the caller reorders the parameters (time_order.h). Keeps the
+  // binding and the step count.
+  void PermuteRows(const std::string& name,
+                   const std::vector<std::uint32_t>& order,
+                   std::size_t row_width);
   // Zeroes the moments of the whole group (as 3DGS's opacity reset does), or of the given rows.
   void ResetMoments(const std::string& name);
   void ResetMoments(const std::string& name,

@@ -33,12 +33,8 @@ struct GroupBuffers {
 
 // In kModelGroups order.
 std::array<GroupBuffers, kModelGroups.size()> Groups(GaussianModel& m, GaussianGradients& g) {
-  const std::array<std::vector<float>*, kModelGroups.size()> params = {
-      &m.xyz,           &m.t,        &m.log_scales, &m.rot_left, &m.rot_right,
-      &m.opacity_logit, &m.color_dc, &m.color_rest};
-  const std::array<std::vector<float>*, kModelGroups.size()> grads = {
-      &g.xyz,           &g.t,        &g.log_scales, &g.rot_left, &g.rot_right,
-      &g.opacity_logit, &g.color_dc, &g.color_rest};
+  const auto params = ModelGroupBuffers(m);
+  const auto grads = ModelGroupBuffers(g);  // the same type: one gradient per parameter
   std::array<GroupBuffers, kModelGroups.size()> out;
   for (std::size_t k = 0; k < kModelGroups.size(); ++k) {
     out[k] = {kModelGroups[k], params[k], grads[k], GroupRowWidth(m, kModelGroups[k])};
@@ -150,6 +146,11 @@ std::size_t GroupRowWidth(const GaussianModel& model, const std::string& group) 
   if (group == kGroupFDc) return static_cast<std::size_t>(model.channels);
   HDR4D_CHECK(group == kGroupFRest);
   return model.rest_stride();
+}
+
+std::array<std::vector<float>*, kModelGroups.size()> ModelGroupBuffers(GaussianModel& m) {
+  return {&m.xyz,           &m.t,        &m.log_scales, &m.rot_left, &m.rot_right,
+          &m.opacity_logit, &m.color_dc, &m.color_rest};
 }
 
 ModelLearningRates LearningRatesAt(const OptimizationOptions& options, double extent, int step) {

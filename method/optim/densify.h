@@ -8,6 +8,7 @@
 //   2. the surviving clones, in the order of their originals;
 //   3. the surviving split children, copy-major as torch's repeat(N, 1) lays them out: the first
 //      child of every split parent (in parent order), then the second child of every parent.
+// (The trainer then sorts a 4D model by the opening of its time windows: time_order.h.)
 // Randomness: each child draws its offset from `rng` in that same order (4 normals in 4D, 3 in
 // 3D mode), for every child, pruned or not, so the draws do not depend on the prune test.
 //
@@ -49,6 +50,8 @@ inline constexpr std::array<const char*, 8> kModelGroups = {
 // opacity 1, f_dc C, f_rest (K-1) C (0 when the basis has a single coefficient). The name must be
 // one of kModelGroups (checked).
 std::size_t GroupRowWidth(const GaussianModel& model, const std::string& group);
+// The model's buffer of each group, in kModelGroups order.
+std::array<std::vector<float>*, kModelGroups.size()> ModelGroupBuffers(GaussianModel& model);
 
 // Learning rates of the model groups (rotation_r shares rotation's, as in the reference).
 struct ModelLearningRates {

@@ -32,6 +32,7 @@
 #include "method/gaussian/constants.h"
 #include "method/optim/densify.h"
 #include "method/optim/model_optimizer.h"
+#include "method/optim/time_order.h"
 #include "method/render/frame_render.h"
 #include "method/render/hdr_color_stage.h"
 #include "method/render/learned_background.h"
@@ -284,6 +285,7 @@ class TrainingRun {
     return geometry_split_ ? dL_dgeometry_.data() : nullptr;
   }
   bool DensifiesAt(int it) const;
+  void OrderByTime();
   bool ResetsOpacityAt(int it) const;
   std::size_t ActiveRestColumns() const;
   void BackwardAndUpdate(const TrainView& view, int it, double loss_value);
@@ -521,6 +523,7 @@ void TrainingRun::ResumeOrInitialise() {
       }
     }
     stats_.Reset(model_.size());
+    OrderByTime();  // before the optimiser's groups exist: the model alone
     StartLearnedBackground(nullptr);
   }
   // At batch size 1 the fused step takes the colour gradient rows straight from the backward,
@@ -703,6 +706,17 @@ double TrainingRun::ForwardAndLoss(const TrainView& view, const float** ldr_out)
 
 // As in the reference, densification replaces every parameter tensor, so no optimiser step
 // happens on that iteration; an opacity reset replaces only the opacity.
+// A 4D model's Gaussians in the order their time windows open (time_order.h), in the model, the
+// optimiser's moments (once registered) and the statistics.
+void TrainingRun::OrderByTime() {
+  if (!model_.temporal || train_views_.empty()) return;
+  const auto [first, last] =
+      std::minmax_element(train_views_.begin(), train_views_.end(),
+                          [](const TrainView& a, const TrainView& b) { return a.time < b.time; });
+  ReorderGaussians(VisibleTimeOrder(model_, first->time, last->time), &model_,
+                   optimizer_ ? &optimizer_->adam() : nullptr, &stats_);
+}
+
 bool TrainingRun::DensifiesAt(int it) const {
   return it < opt_.densify_until && it > opt_.densify_from && it % opt_.densification_interval == 0;
 }
@@ -794,6 +808,7 @@ void TrainingRun::FinishUpdate(int it, double loss_value) {
   if (DensifiesAt(it)) {
     DensifyAndPrune(&model_, &grads_, &optimizer_->adam(), &stats_,
                     DensifyParamsAt(opt_, extent_, it), &loop_.rng);
+    OrderByTime();
     ReturnFreedMemory();  // its temporaries (core/free_memory.h)
   }
   optimizer_->Finish();
