@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <future>
 #include <numbers>
@@ -19,6 +20,8 @@
 #include "core/output_guard.h"
 #include "core/parallel.h"
 #include "core/progress.h"
+#include "method/optim/permute_rows.h"
+#include "method/optim/time_order.h"
 #include "method/render/frame_render.h"
 #include "method/render/learned_background.h"
 #include "method/tonemap/radiance_bank.h"
@@ -126,6 +129,28 @@ std::string ShellQuote(const std::string& text) {
 
 }  // namespace
 
+void OrderForRendering(LoadedRun* run) {
+  GaussianModel& model = run->model;
+  if (!model.temporal || model.size() < 2) return;
+  // The dataset's time range (every split: a render may show any of them), else [0, 1].
+  float time_min = 0.0f, time_max = 1.0f;
+  bool any = false;
+  for (const std::vector<Frame>* frames :
+       {&run->dataset.train, &run->dataset.test, &run->dataset.val}) {
+    for (const Frame& f : *frames) {
+      const auto t = static_cast<float>(f.time);
+      if (!std::isfinite(t)) continue;
+      time_min = any ? std::min(time_min, t) : t;
+      time_max = any ? std::max(time_max, t) : t;
+      any = true;
+    }
+  }
+  const std::vector<std::uint32_t> order = VisibleTimeOrder(model, time_min, time_max);
+  ReorderGaussians(order, &model, nullptr, nullptr);
+  // The HDR head's offsets are rows of the model's order too.
+  if (!run->hdr_head.offset.empty()) PermuteRowsInPlace(run->hdr_head.offset.data(), 3, order);
+}
+
 std::vector<Camera> OrbitCameras(const std::vector<Camera>& train, int frames) {
   HDR4D_CHECK(!train.empty() && frames > 0);
   // Least-squares point closest to every optical axis: sum (I - d d^T) p = sum (I - d d^T) c.
@@ -167,6 +192,7 @@ int RenderRun(const RenderRunOptions& options) {
     Fail("render: --exposure {} must be a positive number of seconds", *options.exposure);
   const Split split = ParseSplit(options.split, "render");
   LoadedRun run = LoadRun(options.run, options.resolution);
+  OrderForRendering(&run);
   const Dataset& dataset = run.dataset;
   const GaussianModel& model = run.model;
   const fs::path out = options.out.empty() ? options.run / "renders" / options.split : options.out;

@@ -12,20 +12,23 @@
 #include "core/dataset.h"
 #include "core/dataset_image_rules.h"
 #include "core/demo_scene.h"
-#include "core/image_io.h"
 #include "core/error.h"
 #include "core/exposure_stack.h"
 #include "core/hdr_alignment.h"
 #include "core/image_io.h"
 #include "core/json_util.h"
 #include "method/gaussian/constants.h"
+#include "method/optim/permute_rows.h"
+#include "method/optim/time_order.h"
 #include "method/run/render_split.h"
 #include "method/tonemap/dynamic_tone_mapper.h"
+#include "method/tonemap/radiance_bank.h"
 #include "method/train/checkpoint.h"
 #include "method/train/hdr_head.h"
 #include "method/train/hdr_loss.h"
 #include "method/train/train_views.h"
 #include "method/train/trainer.h"
+#include "method/train/view_outputs.h"
 #include "tests/testing.h"
 
 namespace hdr4d::method {
@@ -705,6 +708,63 @@ TEST(TrainerHdr, HdrHeadKeepsLdrAloneAndFitsTheHdr) {
     EXPECT_NE(e.find(expect), std::string::npos) << e;
     EXPECT_FALSE(fs::exists(dir / "bad")) << e;
   }
+}
+
+// `hdr4d render` sorts a 4D model by the time its Gaussians' windows open (OrderForRendering):
+// the model's rows and the HDR head's move together, and every view renders the same LDR and
+// HDR as in the order it was loaded (here: the trainer's order reversed).
+TEST(TrainerHdr, RenderOrderMovesTheHeadWithTheModelAndKeepsTheImages) {
+  TempDir dir;
+  MakeHdrScene(dir / "scene", 16);
+  TrainOptions o = HdrRun(dir / "scene", dir / "run", 30);
+  o.hdr.supervision = Supervision::kLdrHdr;
+  o.hdr.hdr_head = true;
+  o.hdr.hdr_head_iterations = 30;
+  Train(o);
+  LoadedRun run = LoadRun(dir / "run");
+  ASSERT_TRUE(run.model.temporal);
+  const std::size_t n = run.model.size();
+  ASSERT_GT(n, 10u);
+  ASSERT_EQ(run.hdr_head.offset.size(), 3 * n);
+  std::vector<std::uint32_t> reverse(n);
+  for (std::size_t k = 0; k < n; ++k) reverse[k] = static_cast<std::uint32_t>(n - 1 - k);
+  ReorderGaussians(reverse, &run.model, nullptr, nullptr);
+  PermuteRowsInPlace(run.hdr_head.offset.data(), 3, reverse);
+
+  RenderOptions render;
+  render.sh_degree = run.model.basis.max_sh_degree;
+  render.time_degree = run.model.basis.max_time_degree;
+  const auto render_all = [&] {
+    ViewRenderer renderer(run.model, run.tone_mapper.get(), run.resolved, render, run.background,
+                          run.learned_background ? &*run.learned_background : nullptr,
+                          &run.hdr_head);
+    std::vector<std::vector<float>> images;
+    for (const Frame& f : run.dataset.test) {
+      std::vector<float> ldr, hdr;
+      const ToneFrame frame{RadianceBank::TimeIndex(static_cast<float>(f.time), run.num_times), -1,
+                            static_cast<float>(std::log(f.exposure))};
+      renderer.Render(f.camera, static_cast<float>(f.time), frame, &ldr, &hdr);
+      EXPECT_FALSE(ldr.empty());
+      EXPECT_FALSE(hdr.empty());
+      images.push_back(std::move(ldr));
+      images.push_back(std::move(hdr));
+    }
+    return images;
+  };
+  const std::vector<float> xyz_before = run.model.xyz;
+  const auto before = render_all();
+  OrderForRendering(&run);
+  EXPECT_NE(run.model.xyz, xyz_before);  // moved
+  float t0 = 1, t1 = 0;
+  for (const auto* frames : {&run.dataset.train, &run.dataset.test, &run.dataset.val}) {
+    for (const Frame& f : *frames) {
+      t0 = std::min(t0, static_cast<float>(f.time));
+      t1 = std::max(t1, static_cast<float>(f.time));
+    }
+  }
+  const std::vector<std::uint32_t> again = VisibleTimeOrder(run.model, t0, t1);
+  for (std::size_t k = 0; k < n; ++k) ASSERT_EQ(again[k], k) << "not in time order at row " << k;
+  EXPECT_EQ(render_all(), before);
 }
 
 }  // namespace
