@@ -70,7 +70,9 @@ void AddRenderCommand(CLI::App& app) {
       ->check(Integer(0, 9))
       ->capture_default_str();
   auto no_hdr = std::make_shared<bool>(false);
-  cmd->add_flag("--no-hdr", *no_hdr, "Do not write the HDR (EXR) renders");
+  cmd->add_flag("--no-hdr", *no_hdr,
+                "Do not write the HDR (EXR) renders (nor blend the HDR channels: about 10% faster "
+                "for HDR-4DGS, the same LDR images)");
   cmd->callback([options, run, out, time, time_option, exposure, exposure_option, no_hdr, timing] {
     options->timing = *timing;
     if (time_option->count() > 0) options->time = *time;

@@ -14,6 +14,11 @@ constexpr std::int64_t kGrain = 4096;
 HdrColorStage::HdrColorStage(ToneMapper* tone_mapper, bool map_gaussians)
     : tm_(tone_mapper), map_(map_gaussians && tone_mapper && tone_mapper->pointwise()) {}
 
+void HdrColorStage::SetLdrOnly(bool ldr_only) {
+  HDR4D_CHECK(!ldr_only || map_);
+  ldr_only_ = ldr_only;
+}
+
 void HdrColorStage::Forward(const float* colors,
                             int color_channels,
                             const std::vector<std::uint32_t>& visible,
@@ -28,6 +33,7 @@ void HdrColorStage::Forward(const float* colors,
       for (int c = 0; c < 3; ++c) {
         const float v = colors[i * 3 + c];
         packed_[j * 3 + c] = v;
+        if (ldr_only_) continue;
         features[std::size_t(i) * out + c] =
             GuardedExp(offset_ ? v + offset_[std::size_t(i) * 3 + c] : v);
       }
@@ -46,8 +52,9 @@ void HdrColorStage::Forward(const float* colors,
   if (!map_) return;
   ldr_.resize(m * 3);
   tm_->Map(packed_.data(), m, ldr_.data());
+  const int ldr_at = ldr_only_ ? 0 : 3;
   ParallelFor(static_cast<std::int64_t>(m), kGrain, [&](std::int64_t j) {
-    float* f = features + std::size_t(visible[j]) * out + 3;
+    float* f = features + std::size_t(visible[j]) * out + ldr_at;
     for (int c = 0; c < 3; ++c) f[c] = ldr_[j * 3 + c];
   });
 }
@@ -57,7 +64,7 @@ void HdrColorStage::Backward(const float* colors,
                              const std::vector<std::uint32_t>& visible,
                              const float* dL_dfeatures,
                              float* dL_dcolors) {
-  HDR4D_CHECK(color_channels == 3 && packed_.size() == visible.size() * 3);
+  HDR4D_CHECK(color_channels == 3 && packed_.size() == visible.size() * 3 && !ldr_only_);
   const std::size_t m = visible.size();
   const int out = feature_channels();
   if (map_) {

@@ -1,8 +1,10 @@
-// HDR-4DGS's 3D branch (ARCHITECTURE §4): each visible Gaussian's log-HDR colour c becomes the features
-// the rasteriser blends, in one pass:
+// HDR-4DGS's 3D branch (ARCHITECTURE §4): each visible Gaussian's log-HDR colour c becomes the
+// features the rasteriser blends, in one pass:
 //   HDR only:            [exp(c)]                         (3 channels; 4dgs-hdr, or a mapper
 //                                                          that needs whole images: Durand)
 //   HDR + tone-mapped:   [exp(c), TM(c + log e)]          (6 channels; hdr4dgs, hdr-gs)
+//   tone-mapped alone:   [TM(c + log e)]                  (3 channels; a render that asks for
+//                                                          no HDR output: SetLdrOnly)
 // Before mapping it writes the radiance bank (the mean log-HDR colour, ToneMapper::
 // ObserveMeanLogHdr) and starts the tone mapper's frame (BeginFrame), so the context learner of
 // the Dynamic Tone Mapper sees the row written for this very frame when it is the first one.
@@ -59,7 +61,14 @@ class HdrColorStage final : public ColorStage {
     offset_grad_ = offset_grad;
   }
 
-  int feature_channels() const override { return map_ ? 6 : 3; }
+  // A render that asks for the tone-mapped image alone (no HDR output) blends [TM(c + log e)]:
+  // 3 channels instead of 6, holding the same values as channels 3-5 would, so the LDR image is
+  // the same bit for bit at about half the blend's per-channel work. For renders only (Backward
+  // refuses), and only when the stage maps Gaussians (checked).
+  void SetLdrOnly(bool ldr_only);
+  bool ldr_only() const { return ldr_only_; }
+
+  int feature_channels() const override { return map_ && !ldr_only_ ? 6 : 3; }
   void Forward(const float* colors,
                int color_channels,
                const std::vector<std::uint32_t>& visible,
@@ -75,6 +84,7 @@ class HdrColorStage final : public ColorStage {
   bool map_;
   ToneFrame frame_;
   bool observe_bank_ = true;
+  bool ldr_only_ = false;
   const float* offset_ = nullptr;
   float* offset_grad_ = nullptr;
   std::vector<float> packed_, ldr_, dldr_, dlog_;  // compact rows of the visible Gaussians

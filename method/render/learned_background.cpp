@@ -43,6 +43,11 @@ void LearnedBackground::Forward(int channels, std::vector<float>* background) {
     std::copy(values_.begin(), values_.end(), background->begin());
     return;
   }
+  if (ldr_only_) {
+    HDR4D_CHECK(channels == 3 && tm_ && tm_->pointwise());
+    tm_->Map(values_.data(), 1, background->data());
+    return;
+  }
   HDR4D_CHECK(channels == 3 || (channels == 6 && tm_ && tm_->pointwise()));
   for (int c = 0; c < 3; ++c)
     (*background)[c] = GuardedExp(values_[c] + (offset_ ? offset_[c] : 0.0f));
@@ -50,6 +55,7 @@ void LearnedBackground::Forward(int channels, std::vector<float>* background) {
 }
 
 void LearnedBackground::Backward(int channels, const float* dL_dbackground) {
+  HDR4D_CHECK(!ldr_only_);
   if (!log_hdr_) {
     for (int c = 0; c < channels; ++c) grads_[c] += dL_dbackground[c];
     return;

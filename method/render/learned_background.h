@@ -60,6 +60,10 @@ class LearnedBackground final : public BackgroundSource {
     offset_grad_ = offset_grad;
   }
 
+  // With the colour stage's tone-mapped-alone render (HdrColorStage::SetLdrOnly): 3 channels
+  // of TM(b + log e), the values channels 3-5 would hold. Forward only (Backward refuses).
+  void SetLdrOnly(bool ldr_only) { ldr_only_ = ldr_only; }
+
   std::vector<float>& params() { return values_; }
   const std::vector<float>& params() const { return values_; }
   std::vector<float>& grads() { return grads_; }
@@ -71,6 +75,7 @@ class LearnedBackground final : public BackgroundSource {
   ToneMapper* tm_;
   const float* offset_ = nullptr;
   float* offset_grad_ = nullptr;
+  bool ldr_only_ = false;
 };
 
 }  // namespace hdr4d::method

@@ -231,7 +231,9 @@ int RenderRun(const RenderRunOptions& options) {
     const ToneFrame frame{RadianceBank::TimeIndex(time, run.num_times), -1,
                           static_cast<float>(std::log(exposure))};
     const auto start = std::chrono::steady_clock::now();
-    renderer.Render(camera, time, frame, &ldr, options.write_hdr ? &hdr : nullptr);
+    // No HDR file to write (--no-hdr, video frames): the HDR channels are not blended.
+    renderer.Render(camera, time, frame, &ldr,
+                    options.write_hdr && !hdr_path.empty() ? &hdr : nullptr);
     render_seconds.push_back(
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     // Copies: the renderer reuses its buffers for the next view.

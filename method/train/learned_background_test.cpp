@@ -147,5 +147,47 @@ TEST(LearnedBackground, ExtremeLogRadianceStaysFinite) {
   EXPECT_TRUE(std::isfinite(background.grads()[1]));
 }
 
+// A render that wants the tone-mapped image alone (HdrColorStage::SetLdrOnly and the background's
+// SetLdrOnly) blends 3 channels that hold exactly what channels 3-5 of the full render hold,
+// backdrop included; switched back, the full render is what it was.
+TEST(LearnedBackground, ToneMappedAloneIsChannelsThreeToFiveOfTheFullRender) {
+  GaussianModel model = SmallScene(ColorMode::kLogHdr);
+  ToneMapperConfig tc;
+  tc.context_window = 2;
+  tc.num_times = 2;
+  std::unique_ptr<ToneMapper> tm = MakeToneMapper(tc);
+  HdrColorStage stage(tm.get(), true);
+  stage.SetFrame({.time_index = 1, .log_exposure = std::log(0.5f)}, false);
+  LearnedBackground background({-1.0f, 0.3f, -2.0f}, true, tm.get());
+  RenderOptions options;
+  options.sh_degree = options.time_degree = 0;
+  options.color_stage = &stage;
+  options.background_source = &background;
+  options.backward_follows = false;
+  const Camera camera{PinholeIntrinsics::FromFovX(0.9, 20, 16),
+                      LookAtWorldFromCamGl({0, -4, 0.2}, {0, 0, 0}, Eigen::Vector3d::UnitZ())};
+  const std::size_t pixels = 20 * 16;
+  FrameState state;
+  std::vector<float> full(pixels * 6), alone(pixels * 3), again(pixels * 6);
+  ASSERT_EQ(stage.feature_channels(), 6);
+  RenderForward(model, camera, 0.5f, options, &state, full.data());
+  stage.SetLdrOnly(true);
+  background.SetLdrOnly(true);
+  ASSERT_EQ(stage.feature_channels(), 3);
+  RenderForward(model, camera, 0.5f, options, &state, alone.data());
+  double tone_mapped = 0;
+  for (std::size_t p = 0; p < pixels; ++p) {
+    for (int c = 0; c < 3; ++c) {
+      ASSERT_EQ(alone[p * 3 + c], full[p * 6 + 3 + c]) << "pixel " << p << " channel " << c;
+      tone_mapped += alone[p * 3 + c];
+    }
+  }
+  EXPECT_GT(tone_mapped, 0.0);
+  stage.SetLdrOnly(false);
+  background.SetLdrOnly(false);
+  RenderForward(model, camera, 0.5f, options, &state, again.data());
+  EXPECT_EQ(again, full);
+}
+
 }  // namespace
 }  // namespace hdr4d::method

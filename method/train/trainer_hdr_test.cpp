@@ -712,7 +712,8 @@ TEST(TrainerHdr, HdrHeadKeepsLdrAloneAndFitsTheHdr) {
 
 // `hdr4d render` sorts a 4D model by the time its Gaussians' windows open (OrderForRendering):
 // the model's rows and the HDR head's move together, and every view renders the same LDR and
-// HDR as in the order it was loaded (here: the trainer's order reversed).
+// HDR as in the order it was loaded (here: the trainer's order reversed). A view rendered without
+// its HDR image (only the tone-mapped channels blended) has the same LDR image.
 TEST(TrainerHdr, RenderOrderMovesTheHeadWithTheModelAndKeepsTheImages) {
   TempDir dir;
   MakeHdrScene(dir / "scene", 16);
@@ -753,6 +754,21 @@ TEST(TrainerHdr, RenderOrderMovesTheHeadWithTheModelAndKeepsTheImages) {
   };
   const std::vector<float> xyz_before = run.model.xyz;
   const auto before = render_all();
+  // No HDR asked for: the LDR image is the same (only the tone-mapped channels are blended).
+  {
+    ViewRenderer renderer(run.model, run.tone_mapper.get(), run.resolved, render, run.background,
+                          run.learned_background ? &*run.learned_background : nullptr,
+                          &run.hdr_head);
+    ASSERT_TRUE(run.learned_background.has_value());  // its LDR-alone path too
+    for (std::size_t k = 0; k < run.dataset.test.size(); ++k) {
+      const Frame& f = run.dataset.test[k];
+      std::vector<float> ldr;
+      const ToneFrame frame{RadianceBank::TimeIndex(static_cast<float>(f.time), run.num_times), -1,
+                            static_cast<float>(std::log(f.exposure))};
+      renderer.Render(f.camera, static_cast<float>(f.time), frame, &ldr, nullptr);
+      EXPECT_EQ(ldr, before[2 * k]) << "view " << k;
+    }
+  }
   OrderForRendering(&run);
   EXPECT_NE(run.model.xyz, xyz_before);  // moved
   float t0 = 1, t1 = 0;

@@ -40,8 +40,9 @@ ViewRenderer::ViewRenderer(const GaussianModel& model,
       learned_->SetHdrOffset(hdr_head->background.data(), nullptr);
     }
   }
-  options_.background.assign(stage_->feature_channels(), 0.0f);
-  for (int c = 3; c < stage_->feature_channels(); ++c) options_.background[c] = background;
+  background_all_.assign(stage_->feature_channels(), 0.0f);
+  for (int c = 3; c < stage_->feature_channels(); ++c) background_all_[c] = background;
+  background_ldr_.assign(3, background);
 }
 
 void ViewRenderer::Render(const Camera& camera,
@@ -63,9 +64,20 @@ void ViewRenderer::Render(const Camera& camera,
     return;
   }
   stage_->SetFrame(frame, /*observe_bank=*/false);
+  // No HDR image asked for and the LDR one is the tone-mapped Gaussians': only those 3 channels
+  // are blended (the same LDR bits; BENCHMARKS.md, issue 15's twentieth pass).
+  const bool ldr_only = !hdr && ldr && stage_->maps_gaussians();
+  stage_->SetLdrOnly(ldr_only);
+  if (learned_) learned_->SetLdrOnly(ldr_only);
+  options_.background = ldr_only ? background_ldr_ : background_all_;
   const int channels = stage_->feature_channels();
   raster_.resize(pixels * channels);
   RenderForward(model_, camera, time, options_, &state_, raster_.data());
+  if (ldr_only) {
+    ldr->swap(raster_);  // the raster is the LDR image; the old buffer becomes the next raster
+    for (float& v : *ldr) v = std::clamp(v, 0.0f, 1.0f);
+    return;
+  }
   if (hdr) {
     ExtractChannels(raster_.data(), channels, 0, pixels, hdr);
     for (float& v : *hdr) v = std::max(v, 0.0f) * hdr_scale_;

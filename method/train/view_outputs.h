@@ -33,7 +33,8 @@ class ViewRenderer {
                const HdrHead* hdr_head = nullptr);
 
   // ldr: H x W x 3 in [0,1]; hdr: H x W x 3 linear radiance (left empty for an LDR model).
-  // Either may be null.
+  // Either may be null; with hdr null the HDR channels are not blended at all when the LDR image
+  // is the tone-mapped Gaussians' (the LDR image is the same either way).
   void Render(const Camera& camera,
               float time,
               const ToneFrame& frame,
@@ -52,6 +53,9 @@ class ViewRenderer {
   std::optional<LearnedBackground> learned_;
   FrameState state_;
   std::vector<float> raster_, x_;
+  // The LDR background of the blend's channels: [0, 0, 0, b, b, b] (or the HDR-only zeros), and
+  // [b, b, b] when only the tone-mapped channels are blended.
+  std::vector<float> background_all_, background_ldr_;
   float hdr_scale_ = 1.0f;  // the HDR head's factor
 };
 
