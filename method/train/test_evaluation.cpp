@@ -98,7 +98,9 @@ nlohmann::json EvaluateViews(ViewRenderer* renderer, const std::vector<TrainView
     for (std::size_t i : group) {
       const TrainView& v = views[i];
       const ToneFrame frame{v.time_index, -1, static_cast<float>(std::log(v.exposure))};
-      renderer->Render(v.camera, v.time, frame, &ldr, &hdr);
+      // The HDR image only where it is scored (the group's first view); the other brackets'
+      // renders then blend the LDR channels alone (the same LDR image).
+      renderer->Render(v.camera, v.time, frame, &ldr, hdr_path && !prediction ? &hdr : nullptr);
       if (!ldr.empty()) {
         v.ToFloat(&gt);
         Image render = DisplayImageFromBuffer(ldr.data(), v.width(), v.height(), 3);
