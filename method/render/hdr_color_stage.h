@@ -66,7 +66,6 @@ class HdrColorStage final : public ColorStage {
   // the same bit for bit at about half the blend's per-channel work. For renders only (Backward
   // refuses), and only when the stage maps Gaussians (checked).
   void SetLdrOnly(bool ldr_only);
-  bool ldr_only() const { return ldr_only_; }
 
   int feature_channels() const override { return map_ && !ldr_only_ ? 6 : 3; }
   void Forward(const float* colors,

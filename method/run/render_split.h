@@ -84,9 +84,10 @@ LoadedRun LoadRun(const std::filesystem::path& run, int resolution = 0);
 // Puts a 4D model's Gaussians (and its HDR head's rows) in the order their time windows open
 // over the dataset's time range (method/optim/time_order.h), as the trainer keeps them: a frame's
 // Gaussians then sit together in memory. The trainer sorts at each densification only (and runs
-// from before it never), while the windows keep moving until the end; sorted again on load, the
-// r800 model rendered 6% faster (BENCHMARKS.md, issue 15). The images are the same but for the
-// order of Gaussians at exactly equal depth. Static models are left as they are.
+// from before it never), while the windows keep moving until the end; sorted on load, the r800
+// model (saved before the trainer sorted) rendered 2.6% faster (BENCHMARKS.md, issue 15's
+// twentieth pass). The images are the same but for the order of Gaussians at exactly equal
+// depth. Static models are left as they are.
 void OrderForRendering(LoadedRun* run);
 
 // For commands that only read a run (render, export-ply, tone-curves): its configuration and
