@@ -145,8 +145,11 @@ void OrderForRendering(LoadedRun* run) {
       any = true;
     }
   }
-  const std::vector<std::uint32_t> order = VisibleTimeOrder(model, time_min, time_max);
-  ReorderGaussians(order, &model, nullptr, nullptr);
+  ReorderRun(VisibleTimeOrder(model, time_min, time_max), run);
+}
+
+void ReorderRun(const std::vector<std::uint32_t>& order, LoadedRun* run) {
+  ReorderGaussians(order, &run->model, nullptr, nullptr);
   // The HDR head's offsets are rows of the model's order too.
   if (!run->hdr_head.offset.empty()) PermuteRowsInPlace(run->hdr_head.offset.data(), 3, order);
 }

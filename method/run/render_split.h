@@ -89,6 +89,9 @@ LoadedRun LoadRun(const std::filesystem::path& run, int resolution = 0);
 // twentieth pass). The images are the same but for the order of Gaussians at exactly equal
 // depth. Static models are left as they are.
 void OrderForRendering(LoadedRun* run);
+// Moves Gaussian order[k] to row k in the run's model and its HDR head's offsets (`order` a
+// permutation of the model's rows, checked).
+void ReorderRun(const std::vector<std::uint32_t>& order, LoadedRun* run);
 
 // For commands that only read a run (render, export-ply, tone-curves): its configuration and
 // checkpoint become protected inputs (core/output_guard.h), so no output of theirs replaces them.

@@ -704,8 +704,6 @@ double TrainingRun::ForwardAndLoss(const TrainView& view, const float** ldr_out)
   return loss.total;
 }
 
-// As in the reference, densification replaces every parameter tensor, so no optimiser step
-// happens on that iteration; an opacity reset replaces only the opacity.
 // A 4D model's Gaussians in the order their time windows open (time_order.h), in the model, the
 // optimiser's moments (once registered) and the statistics.
 void TrainingRun::OrderByTime() {
@@ -717,6 +715,8 @@ void TrainingRun::OrderByTime() {
                    optimizer_ ? &optimizer_->adam() : nullptr, &stats_);
 }
 
+// As in the reference, densification replaces every parameter tensor, so no optimiser step
+// happens on that iteration; an opacity reset replaces only the opacity.
 bool TrainingRun::DensifiesAt(int it) const {
   return it < opt_.densify_until && it > opt_.densify_from && it % opt_.densification_interval == 0;
 }
