@@ -84,10 +84,11 @@ LoadedRun LoadRun(const std::filesystem::path& run, int resolution = 0);
 // Puts a 4D model's Gaussians (and its HDR head's rows) in the order their time windows open
 // over the dataset's time range (method/optim/time_order.h), as the trainer keeps them: a frame's
 // Gaussians then sit together in memory. The trainer sorts at each densification only (and runs
-// from before it never), while the windows keep moving until the end; sorted on load, the r800
-// model (saved before the trainer sorted) rendered 2.6% faster (BENCHMARKS.md, issue 15's
-// twentieth pass). The images are the same but for the order of Gaussians at exactly equal
-// depth. Static models are left as they are.
+// from before it never), while the windows keep moving until the end; sorted on load, runs
+// saved before the trainer sorted rendered 2.6% (r800, 4 times) and 16% (the paper scene)
+// faster (BENCHMARKS.md, issue 15's twentieth pass). The images change only where Gaussians
+// sit at exactly equal depth, which then blend in another order. Static models are left as
+// they are.
 void OrderForRendering(LoadedRun* run);
 // Moves Gaussian order[k] to row k in the run's model and its HDR head's offsets (`order` a
 // permutation of the model's rows, checked).
