@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
+#include <memory>
 #include <numbers>
 #include <random>
 #include <vector>
@@ -18,6 +20,7 @@
 #include "method/optim/time_order.h"
 #include "method/render/frame_render.h"
 #include "method/render/hdr_color_stage.h"
+#include "method/run/render_split.h"
 #include "method/tonemap/dynamic_tone_mapper.h"
 #include "method/train/initialise.h"
 #include "method/train/loss.h"
@@ -118,6 +121,46 @@ BENCHMARK(BM_RenderHdrLdr)
     ->Args({800, 100, 0})
     ->Args({800, 100, 1})
     ->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The render call of `hdr4d render --timing` on a trained run, so that a render change can be
+// timed on real Gaussians (sizes, overlap, opacities and termination as trained, which random
+// clouds do not have) in quiet repetitions rather than in whole commands on a noisy host: the
+// run folder in HDR4D_BENCH_RUN (skipped without it), loaded and sorted as the command loads it,
+// its first 4 training views per iteration. Args: threads, HDR (1: HDR + LDR, 0: LDR alone).
+void BM_TrainedRunRender(benchmark::State& state) {
+  const char* folder = std::getenv("HDR4D_BENCH_RUN");
+  if (folder == nullptr || *folder == '\0') {
+    state.SkipWithError("set HDR4D_BENCH_RUN to a trained run's folder");
+    return;
+  }
+  static const std::unique_ptr<LoadedRun> run = [&] {
+    auto loaded = std::make_unique<LoadedRun>(LoadRun(folder));
+    OrderForRendering(loaded.get());
+    return loaded;
+  }();
+  const ThreadLimit limit(static_cast<int>(state.range(0)));
+  const std::unique_ptr<ViewRenderer> renderer = MakeRunRenderer(*run);
+  const std::vector<Frame>& frames = run->dataset.train;
+  const std::size_t views = std::min<std::size_t>(4, frames.size());
+  std::vector<float> ldr, hdr;
+  for (auto _ : state) {
+    for (std::size_t k = 0; k < views; ++k) {
+      const Frame& f = frames[k];
+      renderer->Render(f.camera, static_cast<float>(f.time),
+                       RunToneFrame(*run, static_cast<float>(f.time), f.exposure), &ldr,
+                       state.range(1) != 0 ? &hdr : nullptr);
+    }
+  }
+  state.counters["views"] = static_cast<double>(views);
+  state.counters["fps"] =
+      benchmark::Counter(static_cast<double>(views), benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_TrainedRunRender)
+    ->Args({1, 1})
+    ->Args({2, 1})
+    ->Args({2, 0})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 // Forward + loss + backward (which writes every gradient row) + Adam step with the finite check,
 // as the trainer runs it: fused into the backward, block by block of Gaussians (AdamRowStep).

@@ -181,6 +181,19 @@ std::vector<Camera> OrbitCameras(const std::vector<Camera>& train, int frames) {
   return path;
 }
 
+std::unique_ptr<ViewRenderer> MakeRunRenderer(const LoadedRun& run) {
+  RenderOptions render;
+  render.sh_degree = run.model.basis.max_sh_degree;
+  render.time_degree = run.model.temporal ? run.model.basis.max_time_degree : 0;
+  return std::make_unique<ViewRenderer>(
+      run.model, run.tone_mapper.get(), run.resolved, render, run.background,
+      run.learned_background ? &*run.learned_background : nullptr, &run.hdr_head);
+}
+
+ToneFrame RunToneFrame(const LoadedRun& run, float time, double exposure) {
+  return {RadianceBank::TimeIndex(time, run.num_times), -1, static_cast<float>(std::log(exposure))};
+}
+
 int RenderRun(const RenderRunOptions& options) {
   // The CLI checks its flags too; a library caller gets the same refusals.
   if (options.threads < 0) Fail("render: threads {} must be >= 0", options.threads);
@@ -197,14 +210,9 @@ int RenderRun(const RenderRunOptions& options) {
   LoadedRun run = LoadRun(options.run, options.resolution);
   OrderForRendering(&run);
   const Dataset& dataset = run.dataset;
-  const GaussianModel& model = run.model;
   const fs::path out = options.out.empty() ? options.run / "renders" / options.split : options.out;
-  RenderOptions render;
-  render.sh_degree = model.basis.max_sh_degree;
-  render.time_degree = model.temporal ? model.basis.max_time_degree : 0;
-  ViewRenderer renderer(model, run.tone_mapper.get(), run.resolved, render, run.background,
-                        run.learned_background ? &*run.learned_background : nullptr,
-                        &run.hdr_head);
+  const std::unique_ptr<ViewRenderer> renderer_owner = MakeRunRenderer(run);
+  ViewRenderer& renderer = *renderer_owner;
   const std::vector<Frame>& frames = dataset.FramesOf(split);
   if (frames.empty()) Fail("{}: the {} split has no frames", dataset.root.string(), options.split);
   const double default_exposure = options.exposure.value_or(MedianExposure(dataset));
@@ -231,8 +239,7 @@ int RenderRun(const RenderRunOptions& options) {
   auto render_to = [&](const Camera& camera, float time, double exposure, const fs::path& ldr_path,
                        const fs::path& hdr_path) {
     const int w = camera.intrinsics.width, h = camera.intrinsics.height;
-    const ToneFrame frame{RadianceBank::TimeIndex(time, run.num_times), -1,
-                          static_cast<float>(std::log(exposure))};
+    const ToneFrame frame = RunToneFrame(run, time, exposure);
     const auto start = std::chrono::steady_clock::now();
     // No HDR file to write (--no-hdr, video frames): the HDR channels are not blended.
     renderer.Render(camera, time, frame, &ldr,

@@ -17,6 +17,7 @@
 #include "method/tonemap/tone_mapper.h"
 #include "method/train/hdr_head.h"
 #include "method/train/hdr_training_options.h"
+#include "method/train/view_outputs.h"
 
 namespace hdr4d::method {
 
@@ -93,6 +94,11 @@ void OrderForRendering(LoadedRun* run);
 // Moves Gaussian order[k] to row k in the run's model and its HDR head's offsets (`order` a
 // permutation of the model's rows, checked).
 void ReorderRun(const std::vector<std::uint32_t>& order, LoadedRun* run);
+
+// The renderer `hdr4d render` draws a loaded run's views with (the run must outlive it), and the
+// tone-mapper frame of a view at `time` (in [0, 1]) with `exposure` seconds.
+std::unique_ptr<ViewRenderer> MakeRunRenderer(const LoadedRun& run);
+ToneFrame RunToneFrame(const LoadedRun& run, float time, double exposure);
 
 // For commands that only read a run (render, export-ply, tone-curves): its configuration and
 // checkpoint become protected inputs (core/output_guard.h), so no output of theirs replaces them.
