@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "core/parallel.h"
 #include "method/train/hdr_loss.h"
 
 namespace hdr4d::method {
@@ -76,6 +77,23 @@ void ViewRenderer::Render(const Camera& camera,
   if (ldr_only) {
     ldr->swap(raster_);  // the raster is the LDR image; the old buffer becomes the next raster
     for (float& v : *ldr) v = std::clamp(v, 0.0f, 1.0f);
+    return;
+  }
+  if (hdr && ldr && channels == 6) {
+    // Both images in one parallel pass over the raster (the two copies and two serial clamps
+    // took about 1 ms of an 800x800 view's 30 with 2 threads).
+    hdr->resize(pixels * 3);
+    ldr->resize(pixels * 3);
+    const float* raster = raster_.data();
+    float* hdr_out = hdr->data();
+    float* ldr_out = ldr->data();
+    const float scale = hdr_scale_;
+    ParallelFor(static_cast<std::int64_t>(pixels), 16384, [&](std::int64_t p) {
+      for (int c = 0; c < 3; ++c) {
+        hdr_out[3 * p + c] = std::max(raster[6 * p + c], 0.0f) * scale;
+        ldr_out[3 * p + c] = std::clamp(raster[6 * p + 3 + c], 0.0f, 1.0f);
+      }
+    });
     return;
   }
   if (hdr) {
