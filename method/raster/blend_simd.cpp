@@ -375,14 +375,14 @@ HWY_INLINE void ReduceLanes(const V* acc, float* out) {
 }
 
 #if HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL
-// Index tables of a 3-way interleave of vectors of n lanes (n = 16 floats or 8 doubles): output
-// vector k, lane e holds source (nk + e) % 3's lane (nk + e) / 3. first: lanes from sources 0 and
-// 1 (a two-source permute index: lane + n for source 1); third: lanes from source 2, where
-// third_mask is set.
-template <int kLanes>
+// Index tables of a 3-way interleave of vectors of n lanes (n = 16 floats or 8 doubles, indices
+// as wide as the lanes): output vector k, lane e holds source (nk + e) % 3's lane (nk + e) / 3.
+// first: lanes from sources 0 and 1 (a two-source permute index: lane + n for source 1); third:
+// lanes from source 2, where third_mask is set.
+template <typename Index, int kLanes>
 struct Interleave3Tables {
-  alignas(64) std::int32_t first[3][16] = {};
-  alignas(64) std::int32_t third[3][16] = {};
+  alignas(64) Index first[3][kLanes] = {};
+  alignas(64) Index third[3][kLanes] = {};
   std::uint16_t third_mask[3] = {};
   constexpr Interleave3Tables() {
     for (int k = 0; k < 3; ++k) {
@@ -396,8 +396,8 @@ struct Interleave3Tables {
     }
   }
 };
-constexpr Interleave3Tables<16> kInterleave3Floats;
-constexpr Interleave3Tables<8> kInterleave3Doubles;
+constexpr Interleave3Tables<std::int32_t, 16> kInterleave3Floats;
+constexpr Interleave3Tables<std::int64_t, 8> kInterleave3Doubles;
 
 // out[3 i + c] = v[c] lane i: 48 floats (3 channels of 16 pixels) in pixel order.
 HWY_INLINE void StoreInterleaved3(const __m512 v[3], float* out) {
@@ -424,15 +424,10 @@ HWY_INLINE void StoreInterleaved6(const __m512 v[6], float* out) {
     for (int q = 0; q < 3; ++q)
       pairs[q] = _mm512_castps_pd(_mm512_permutex2var_ps(v[2 * q], idx, v[2 * q + 1]));
     for (int k = 0; k < 3; ++k) {
-      // 64-bit lanes: the tables' 32-bit entries widened (they are < 16).
-      const __m512i first =
-          _mm512_cvtepi32_epi64(_mm256_load_si256(reinterpret_cast<const __m256i*>(t.first[k])));
-      const __m512i third =
-          _mm512_cvtepi32_epi64(_mm256_load_si256(reinterpret_cast<const __m256i*>(t.third[k])));
-      const __m512d ab = _mm512_permutex2var_pd(pairs[0], first, pairs[1]);
-      _mm512_storeu_pd(
-          reinterpret_cast<double*>(out + 48 * half + 16 * k),
-          _mm512_mask_permutexvar_pd(ab, static_cast<__mmask8>(t.third_mask[k]), third, pairs[2]));
+      const __m512d ab = _mm512_permutex2var_pd(pairs[0], _mm512_load_si512(t.first[k]), pairs[1]);
+      _mm512_storeu_pd(reinterpret_cast<double*>(out + 48 * half + 16 * k),
+                       _mm512_mask_permutexvar_pd(ab, static_cast<__mmask8>(t.third_mask[k]),
+                                                  _mm512_load_si512(t.third[k]), pairs[2]));
     }
   }
 }

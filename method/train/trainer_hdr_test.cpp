@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <set>
 #include <tuple>
 
@@ -20,7 +21,6 @@
 #include "method/gaussian/constants.h"
 #include "method/run/render_split.h"
 #include "method/tonemap/dynamic_tone_mapper.h"
-#include "method/tonemap/radiance_bank.h"
 #include "method/train/checkpoint.h"
 #include "method/train/hdr_head.h"
 #include "method/train/hdr_loss.h"
@@ -729,20 +729,15 @@ TEST(TrainerHdr, RenderOrderMovesTheHeadWithTheModelAndKeepsTheImages) {
   for (std::size_t k = 0; k < n; ++k) reverse[k] = static_cast<std::uint32_t>(n - 1 - k);
   ReorderRun(reverse, &run);
 
-  RenderOptions render;
-  render.sh_degree = run.model.basis.max_sh_degree;
-  render.time_degree = run.model.basis.max_time_degree;
-  // Every test view's LDR image, then (with_hdr) its HDR image.
+  // Every test view's LDR image, then (with_hdr) its HDR image, as `hdr4d render` draws them.
   const auto render_all = [&](bool with_hdr) {
-    ViewRenderer renderer(run.model, run.tone_mapper.get(), run.resolved, render, run.background,
-                          run.learned_background ? &*run.learned_background : nullptr,
-                          &run.hdr_head);
+    const std::unique_ptr<ViewRenderer> renderer = MakeRunRenderer(run);
     std::vector<std::vector<float>> images;
     for (const Frame& f : run.dataset.test) {
       std::vector<float> ldr, hdr;
-      const ToneFrame frame{RadianceBank::TimeIndex(static_cast<float>(f.time), run.num_times), -1,
-                            static_cast<float>(std::log(f.exposure))};
-      renderer.Render(f.camera, static_cast<float>(f.time), frame, &ldr, with_hdr ? &hdr : nullptr);
+      const auto time = static_cast<float>(f.time);
+      renderer->Render(f.camera, time, RunToneFrame(run, time, f.exposure), &ldr,
+                       with_hdr ? &hdr : nullptr);
       EXPECT_FALSE(ldr.empty());
       images.push_back(std::move(ldr));
       if (!with_hdr) continue;
