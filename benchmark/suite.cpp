@@ -38,7 +38,8 @@ class Obj {
   const nlohmann::json& Raw(const std::string& key) const { return j_.at(key); }
 
   void OnlyKeys(std::initializer_list<const char*> keys) const {
-    for (const auto& [k, v] : j_.items()) {
+    for (const auto& item : j_.items()) {
+      const std::string& k = item.key();  // not a binding: captured below (clang < 16)
       if (k == "comment") continue;
       if (std::none_of(keys.begin(), keys.end(), [&](const char* a) { return k == a; })) {
         std::string known;

@@ -433,7 +433,7 @@ TEST(Crf, BadJsonGivesClearErrors) {
 TEST(Crf, ModelConstructorsRejectBadParameters) {
   EXPECT_THROW(GammaCrf(0.0), Error);
   EXPECT_THROW(GammaCrf(-2.2), Error);
-  EXPECT_THROW(GammaCrf(std::numeric_limits<double>::infinity()), Error);
+  EXPECT_THROW(GammaCrf{std::numeric_limits<double>::infinity()}, Error);  // braces: an expression
   EXPECT_THROW(FilmicCrf(-1.0, 0.2), Error);
   EXPECT_THROW(FilmicCrf(1.0, 0.0), Error);
   EXPECT_THROW(FilmicCrf(1.0, std::nan("")), Error);

@@ -20,7 +20,6 @@ using testing::TempDir;
 
 constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr std::array<float, 3> kBlack = {0.0f, 0.0f, 0.0f};
 constexpr std::array<float, 3> kBlue = {0.0f, 0.0f, 1.0f};
 
 float Luminance(const Image& image, int x, int y) {

@@ -104,8 +104,11 @@ const std::vector<std::pair<const char*, OptimizationField>>& RecordedOptimizati
 
 nlohmann::json TrainOptions::ToJson() const {
   nlohmann::json optimization = nlohmann::json::object();
-  for (const auto& [name, field] : RecordedOptimizationFields())
-    std::visit([&](auto member) { optimization[name] = this->optimization.*member; }, field);
+  // Not a structured binding: lambdas may capture those only since C++20 (clang 16).
+  for (const auto& entry : RecordedOptimizationFields()) {
+    const auto& name = entry.first;
+    std::visit([&](auto member) { optimization[name] = this->optimization.*member; }, entry.second);
+  }
   nlohmann::json json = {
       {"data", fs::absolute(data).string()},
       {"seed", seed},
@@ -146,7 +149,8 @@ TrainOptions TrainOptions::FromJson(const nlohmann::json& j, const std::string& 
   o.init.random_half_extent = static_cast<float>(init["random_half_extent"].Number());
   o.init.initial_opacity = static_cast<float>(init["initial_opacity"].Number());
   const JsonField optimization = record["optimization"].Object();
-  for (const auto& [name, field] : RecordedOptimizationFields()) {
+  for (const auto& entry : RecordedOptimizationFields()) {  // see ToJson
+    const auto& name = entry.first;
     std::visit(
         [&](auto member) {
           using T = std::remove_reference_t<decltype(o.optimization.*member)>;
@@ -160,7 +164,7 @@ TrainOptions TrainOptions::FromJson(const nlohmann::json& j, const std::string& 
                                                std::numeric_limits<std::int64_t>::max());
           }
         },
-        field);
+        entry.second);
   }
   // Runs from before the option recorded nothing and trained without it.
   o.learn_background = record.Has("learn_background") && record["learn_background"].Bool();
