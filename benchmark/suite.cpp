@@ -39,7 +39,7 @@ class Obj {
 
   void OnlyKeys(std::initializer_list<const char*> keys) const {
     for (const auto& item : j_.items()) {
-      const std::string& k = item.key();  // not a binding: captured below (clang < 16)
+      const std::string& k = item.key();  // not a binding: clang < 16 cannot capture one
       if (k == "comment") continue;
       if (std::none_of(keys.begin(), keys.end(), [&](const char* a) { return k == a; })) {
         std::string known;

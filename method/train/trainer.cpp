@@ -104,7 +104,7 @@ const std::vector<std::pair<const char*, OptimizationField>>& RecordedOptimizati
 
 nlohmann::json TrainOptions::ToJson() const {
   nlohmann::json optimization = nlohmann::json::object();
-  // Not a structured binding: lambdas may capture those only since C++20 (clang 16).
+  // Not a structured binding: lambdas capture those from C++20, which clang implements from 16.
   for (const auto& entry : RecordedOptimizationFields()) {
     const auto& name = entry.first;
     std::visit([&](auto member) { optimization[name] = this->optimization.*member; }, entry.second);
