@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/error.h"
-#include "core/parallel.h"
+#include "core/util/error.h"
+#include "core/util/parallel.h"
 
 namespace hdr4d::baselines {
 

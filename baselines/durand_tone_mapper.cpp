@@ -8,8 +8,8 @@
 #include "baselines/bilateral_grid.h"
 #include "baselines/chunked_reduce.h"
 #include "baselines/log_domain.h"
-#include "core/error.h"
-#include "core/parallel.h"
+#include "core/util/error.h"
+#include "core/util/parallel.h"
 
 namespace hdr4d::baselines {
 namespace {

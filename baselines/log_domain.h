@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "core/sigmoid.h"
+#include "core/util/sigmoid.h"
 
 namespace hdr4d::baselines {
 
@@ -15,7 +15,7 @@ namespace hdr4d::baselines {
 // about 1e26, far outside any physical scene, yet e^(60 + log of the longest exposure) still fits
 // a float. So log 0 = -inf maps like radiance e^-60 (black), +inf like e^60 (white). Outside the
 // clamp the input's gradient is 0 (the clamp's own derivative). NaN is not clamped: it propagates,
-// so a bug upstream stays visible (the convention of core/crf.h).
+// so a bug upstream stays visible (the convention of core/radiometry/crf.h).
 inline constexpr double kMaxAbsLogInput = 60.0;
 // Learned log-parameters (key, white point, gamma, compression) are clamped to +-kMaxAbsLogParam
 // where they are used (a box constraint: zero gradient outside), so no optimiser step can drive
@@ -42,7 +42,7 @@ inline T Softplus(T z) {
   return z > T(0) ? z + std::log1p(std::exp(-z)) : std::log1p(std::exp(z));
 }
 
-// Logistic function; never the exponential of a large positive number (core/sigmoid.h).
+// Logistic function; never the exponential of a large positive number (core/util/sigmoid.h).
 template <typename T>
 inline T Logistic(T z) {
   return StableSigmoid(z);

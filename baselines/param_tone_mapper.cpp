@@ -7,8 +7,8 @@
 #include <istream>
 #include <ostream>
 
-#include "core/binary_stream.h"
-#include "core/error.h"
+#include "core/files/binary_stream.h"
+#include "core/util/error.h"
 
 namespace hdr4d::baselines {
 namespace {

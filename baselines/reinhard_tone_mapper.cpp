@@ -5,7 +5,7 @@
 
 #include "baselines/chunked_reduce.h"
 #include "baselines/log_domain.h"
-#include "core/parallel.h"
+#include "core/util/parallel.h"
 
 namespace hdr4d::baselines {
 namespace {

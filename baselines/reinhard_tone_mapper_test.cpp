@@ -8,7 +8,7 @@
 #include <limits>
 
 #include "baselines/test_util.h"
-#include "core/parallel.h"
+#include "core/util/parallel.h"
 
 namespace hdr4d::baselines {
 namespace {

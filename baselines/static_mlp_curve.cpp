@@ -4,7 +4,7 @@
 #include <cmath>
 #include <numeric>
 
-#include "core/error.h"
+#include "core/util/error.h"
 
 namespace hdr4d::baselines {
 

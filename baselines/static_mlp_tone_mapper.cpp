@@ -6,8 +6,8 @@
 #include "baselines/chunked_reduce.h"
 #include "baselines/log_domain.h"
 #include "baselines/static_mlp_curve.h"
-#include "core/error.h"
-#include "core/parallel.h"
+#include "core/util/error.h"
+#include "core/util/parallel.h"
 #include "method/tonemap/monotone_mlp.h"
 
 namespace hdr4d::baselines {

@@ -9,7 +9,7 @@
 
 #include "baselines/static_mlp_curve.h"
 #include "baselines/test_util.h"
-#include "core/parallel.h"
+#include "core/util/parallel.h"
 #include "method/optim/adam.h"
 #include "method/tonemap/monotone_mlp.h"
 #include "method/tonemap/tone_curve_samples.h"

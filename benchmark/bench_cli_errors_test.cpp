@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "benchmark/bench_test_util.h"
-#include "core/json_util.h"
+#include "core/files/json_util.h"
 #include "tests/testing.h"
 
 namespace hdr4d::bench {

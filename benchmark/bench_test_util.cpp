@@ -3,7 +3,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "core/json_util.h"
+#include "core/files/json_util.h"
 
 namespace hdr4d::bench::testutil {
 namespace fs = std::filesystem;

@@ -14,7 +14,7 @@
 #include <fstream>
 #include <thread>
 
-#include "core/error.h"
+#include "core/util/error.h"
 
 extern char** environ;
 

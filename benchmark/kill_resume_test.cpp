@@ -10,7 +10,7 @@
 #include "benchmark/bench_test_util.h"
 #include "benchmark/results_store.h"
 #include "benchmark/sqlite_db.h"
-#include "core/dataset.h"
+#include "core/dataset/dataset.h"
 #include "tests/testing.h"
 
 namespace hdr4d::bench {

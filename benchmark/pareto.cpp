@@ -9,8 +9,8 @@
 #include <tuple>
 
 #include "benchmark/stats.h"
-#include "core/error.h"
-#include "core/json_util.h"
+#include "core/util/error.h"
+#include "core/files/json_util.h"
 #include "core/viz/plot.h"
 
 namespace hdr4d::bench {

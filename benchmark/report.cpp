@@ -13,10 +13,10 @@
 #include "benchmark/run_pipeline.h"
 #include "benchmark/scoring.h"
 #include "benchmark/stats.h"
-#include "core/dataset.h"
-#include "core/error.h"
-#include "core/image_io.h"
-#include "core/json_util.h"
+#include "core/dataset/dataset.h"
+#include "core/util/error.h"
+#include "core/image/image_io.h"
+#include "core/files/json_util.h"
 
 #include "benchmark/report_scene.h"
 namespace hdr4d::bench {

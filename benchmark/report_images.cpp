@@ -8,9 +8,9 @@
 #include <fstream>
 #include <sstream>
 
-#include "core/error.h"
-#include "core/image_io.h"
-#include "core/metrics.h"
+#include "core/util/error.h"
+#include "core/image/image_io.h"
+#include "core/metrics/metrics.h"
 
 namespace hdr4d::bench {
 namespace fs = std::filesystem;

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "core/image.h"
+#include "core/image/image.h"
 #include "core/viz/plot.h"
 
 namespace hdr4d::bench {

@@ -1,6 +1,6 @@
 #include "benchmark/results_store.h"
 
-#include "core/error.h"
+#include "core/util/error.h"
 
 namespace hdr4d::bench {
 namespace {

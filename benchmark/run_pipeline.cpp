@@ -11,9 +11,9 @@
 #include "benchmark/child_process.h"
 #include "benchmark/machine.h"
 #include "benchmark/scoring.h"
-#include "core/dataset.h"
-#include "core/error.h"
-#include "core/json_util.h"
+#include "core/dataset/dataset.h"
+#include "core/util/error.h"
+#include "core/files/json_util.h"
 #include "method/tonemap/tone_mapper.h"
 #include "method/tonemap/tone_mapper_registry.h"
 

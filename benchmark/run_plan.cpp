@@ -5,8 +5,8 @@
 #include <map>
 
 #include "benchmark/settings_flags.h"
-#include "core/error.h"
-#include "datagen/sha256.h"
+#include "core/util/error.h"
+#include "core/files/sha256.h"
 
 namespace hdr4d::bench {
 
@@ -58,7 +58,7 @@ std::vector<RunSpec> PlanRuns(const Suite& suite, const std::vector<PreparedScen
                             {"code_version", code_version},
                             {"scoring_version", kScoringVersion},
                             {"region", r.region}};
-              r.id = datagen::Sha256Hex(r.identity.dump()).substr(0, 20);
+              r.id = Sha256Hex(r.identity.dump()).substr(0, 20);
               if (suite.curve_points > 0 && budget.iterations > 0) {
                 const std::int64_t every =
                     std::max<std::int64_t>(1, budget.iterations / suite.curve_points);

@@ -18,7 +18,7 @@
 #include "benchmark/machine.h"
 #include "benchmark/results_store.h"
 #include "benchmark/run_pipeline.h"
-#include "core/error.h"
+#include "core/util/error.h"
 
 namespace hdr4d::bench {
 namespace fs = std::filesystem;

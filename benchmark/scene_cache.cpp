@@ -10,9 +10,9 @@
 
 #include "benchmark/child_process.h"
 #include "benchmark/settings_flags.h"
-#include "core/dataset.h"
-#include "core/error.h"
-#include "datagen/sha256.h"
+#include "core/dataset/dataset.h"
+#include "core/util/error.h"
+#include "core/files/sha256.h"
 
 namespace hdr4d::bench {
 namespace fs = std::filesystem;
@@ -65,7 +65,7 @@ fs::path CachedSceneDir(const SceneSpec& spec, const fs::path& cache) {
       // Named by the hash of its options: two suites asking for the same scene share it.
       return cache / "builtin" /
              fmt::format("{}-{}", spec.source["scene"].get<std::string>(),
-                         datagen::Sha256Hex(spec.source.dump()).substr(0, 12));
+                         Sha256Hex(spec.source.dump()).substr(0, 12));
   }
   return {};
 }
@@ -147,10 +147,10 @@ std::string DatasetChecksum(const fs::path& dir) {
   std::string listing;
   for (const fs::path& f : files) {
     // A frame whose LDR image is not there yet (HDR-only scenes) is named, not hashed.
-    const std::string hash = fs::exists(f) ? datagen::Sha256File(f) : "absent";
+    const std::string hash = fs::exists(f) ? Sha256File(f) : "absent";
     listing += fs::relative(f, dir).generic_string() + " " + hash + "\n";
   }
-  return datagen::Sha256Hex(listing);
+  return Sha256Hex(listing);
 }
 
 }  // namespace hdr4d::bench

@@ -7,10 +7,10 @@
 #include <map>
 #include <set>
 
-#include "core/error.h"
-#include "core/evaluate.h"
-#include "core/image_io.h"
-#include "core/metrics.h"
+#include "core/util/error.h"
+#include "core/metrics/evaluate.h"
+#include "core/image/image_io.h"
+#include "core/metrics/metrics.h"
 
 namespace hdr4d::bench {
 namespace fs = std::filesystem;

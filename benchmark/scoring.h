@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "benchmark/run_record.h"
-#include "core/dataset.h"
+#include "core/dataset/dataset.h"
 
 namespace hdr4d::bench {
 

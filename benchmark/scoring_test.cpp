@@ -4,8 +4,8 @@
 
 #include <cmath>
 
-#include "core/image_io.h"
-#include "core/json_util.h"
+#include "core/image/image_io.h"
+#include "core/files/json_util.h"
 #include "tests/testing.h"
 
 namespace hdr4d::bench {

@@ -12,8 +12,8 @@
 #include "benchmark/results_store.h"
 #include "benchmark/run_pipeline.h"
 #include "benchmark/run_plan.h"
-#include "core/error.h"
-#include "core/json_util.h"
+#include "core/util/error.h"
+#include "core/files/json_util.h"
 
 namespace hdr4d::bench {
 namespace fs = std::filesystem;

@@ -7,7 +7,7 @@
 #include <thread>
 #include <utility>
 
-#include "core/error.h"
+#include "core/util/error.h"
 
 namespace hdr4d::bench {
 namespace {

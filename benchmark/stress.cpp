@@ -7,7 +7,7 @@
 
 #include "benchmark/machine.h"
 #include "benchmark/stress_kit.h"
-#include "core/error.h"
+#include "core/util/error.h"
 
 namespace hdr4d::bench {
 namespace fs = std::filesystem;

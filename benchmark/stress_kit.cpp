@@ -14,11 +14,11 @@
 #include "benchmark/child_process.h"
 #include "benchmark/machine.h"
 #include "benchmark/scoring.h"
-#include "core/dataset.h"
-#include "core/error.h"
-#include "core/image_io.h"
-#include "core/json_util.h"
-#include "core/ply.h"
+#include "core/dataset/dataset.h"
+#include "core/util/error.h"
+#include "core/image/image_io.h"
+#include "core/files/json_util.h"
+#include "core/geometry/ply.h"
 
 namespace hdr4d::bench::stress {
 namespace fs = std::filesystem;

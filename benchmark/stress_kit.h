@@ -11,7 +11,7 @@
 #include "benchmark/child_process.h"
 #include "benchmark/results_store.h"
 #include "benchmark/stress.h"
-#include "core/dataset.h"
+#include "core/dataset/dataset.h"
 
 namespace hdr4d::bench::stress {
 

@@ -9,10 +9,10 @@
 #include "benchmark/scene_cache.h"
 #include "benchmark/scoring.h"
 #include "benchmark/suite.h"
-#include "core/dataset.h"
-#include "core/error.h"
-#include "core/json_util.h"
-#include "datagen/sha256.h"
+#include "core/dataset/dataset.h"
+#include "core/util/error.h"
+#include "core/files/json_util.h"
+#include "core/files/sha256.h"
 
 namespace hdr4d::bench {
 namespace fs = std::filesystem;
@@ -76,16 +76,16 @@ RunRecord Submit(const SubmitOptions& o) {
   for (const Frame& f : dataset.test) {
     for (const std::string& n : {LdrRenderName(f), HdrRenderName(f)})
       if (fs::exists(o.renders / n) && names.insert(n).second)
-        renders_listing += n + " " + datagen::Sha256File(o.renders / n) + "\n";
+        renders_listing += n + " " + Sha256File(o.renders / n) + "\n";
   }
   RunRecord r;
   r.source = "submit";
   r.data_checksum = DatasetChecksum(scene_dir);
   const nlohmann::json identity = {{"method", o.method},      {"supervision", o.supervision},
                                    {"seed", o.seed},          {"data_checksum", r.data_checksum},
-                                   {"renders", datagen::Sha256Hex(renders_listing)},
+                                   {"renders", Sha256Hex(renders_listing)},
                                    {"meta", meta},            {"scoring_version", kScoringVersion}};
-  r.id = "sub-" + datagen::Sha256Hex(identity.dump()).substr(0, 16);
+  r.id = "sub-" + Sha256Hex(identity.dump()).substr(0, 16);
   r.labels = {{suite_name, o.method, scene_name, o.supervision, o.seed, "external", ""}};
   r.frames = scored.frames;
   r.config = {{"identity", identity},

@@ -5,8 +5,8 @@
 
 #include "benchmark/bench_test_util.h"
 #include "benchmark/results_store.h"
-#include "core/image_io.h"
-#include "core/json_util.h"
+#include "core/image/image_io.h"
+#include "core/files/json_util.h"
 #include "tests/testing.h"
 
 namespace hdr4d::bench {

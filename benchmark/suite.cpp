@@ -8,8 +8,8 @@
 #include <set>
 
 #include "benchmark/settings_flags.h"
-#include "core/error.h"
-#include "core/json_util.h"
+#include "core/util/error.h"
+#include "core/files/json_util.h"
 
 #ifndef HDR4D_SOURCE_DIR
 #define HDR4D_SOURCE_DIR "."

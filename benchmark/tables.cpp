@@ -9,7 +9,7 @@
 #include <set>
 #include <tuple>
 
-#include "core/error.h"
+#include "core/util/error.h"
 
 namespace hdr4d::bench {
 namespace {

@@ -4,8 +4,8 @@
 #include <opencv2/imgproc.hpp>
 #include <regex>
 
-#include "core/error.h"
-#include "core/image_io.h"
+#include "core/util/error.h"
+#include "core/image/image_io.h"
 
 namespace hdr4d {
 namespace fs = std::filesystem;

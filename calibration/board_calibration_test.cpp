@@ -5,7 +5,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 
-#include "core/image_io.h"
+#include "core/image/image_io.h"
 #include "tests/testing.h"
 
 namespace hdr4d {

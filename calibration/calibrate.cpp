@@ -14,11 +14,11 @@
 #include "calibration/colmap_driver.h"
 #include "calibration/rig_geometry.h"
 #include "calibration/undistort.h"
-#include "core/colmap_model.h"
-#include "core/dataset.h"
-#include "core/error.h"
-#include "core/image_io.h"
-#include "core/progress.h"
+#include "core/geometry/colmap_model.h"
+#include "core/dataset/dataset.h"
+#include "core/util/error.h"
+#include "core/image/image_io.h"
+#include "core/util/progress.h"
 
 namespace hdr4d {
 namespace fs = std::filesystem;

@@ -9,10 +9,10 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
-#include "core/colmap_model.h"
-#include "core/crf.h"
-#include "core/dataset.h"
-#include "core/image_io.h"
+#include "core/geometry/colmap_model.h"
+#include "core/radiometry/crf.h"
+#include "core/dataset/dataset.h"
+#include "core/image/image_io.h"
 #include "tests/testing.h"
 
 namespace hdr4d {

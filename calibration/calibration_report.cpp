@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-#include "core/json_util.h"
+#include "core/files/json_util.h"
 
 namespace hdr4d {
 

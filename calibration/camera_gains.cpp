@@ -4,8 +4,8 @@
 #include <cmath>
 #include <optional>
 
-#include "core/camera.h"
-#include "core/error.h"
+#include "core/geometry/camera.h"
+#include "core/util/error.h"
 
 namespace hdr4d {
 namespace {

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "calibration/rig_geometry.h"
-#include "core/image.h"
+#include "core/image/image.h"
 
 namespace hdr4d {
 

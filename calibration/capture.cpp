@@ -10,8 +10,8 @@
 #include <regex>
 #include <set>
 
-#include "core/error.h"
-#include "core/json_util.h"
+#include "core/util/error.h"
+#include "core/files/json_util.h"
 
 namespace hdr4d {
 namespace fs = std::filesystem;

@@ -10,7 +10,7 @@
 #include <cstdlib>
 #include <nlohmann/json.hpp>
 
-#include "core/json_util.h"
+#include "core/files/json_util.h"
 #include "datagen/blender_process.h"
 #include "tests/testing.h"
 

@@ -7,9 +7,9 @@
 #include <cstdlib>
 #include <fstream>
 
-#include "core/colmap_model.h"
-#include "core/error.h"
-#include "core/progress.h"
+#include "core/geometry/colmap_model.h"
+#include "core/util/error.h"
+#include "core/util/progress.h"
 
 namespace hdr4d {
 namespace fs = std::filesystem;

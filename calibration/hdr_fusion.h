@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "calibration/response_recovery.h"
-#include "core/image.h"
+#include "core/image/image.h"
 
 namespace hdr4d {
 

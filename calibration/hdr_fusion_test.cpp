@@ -5,7 +5,7 @@
 #include <cmath>
 #include <random>
 
-#include "core/crf.h"
+#include "core/radiometry/crf.h"
 #include "tests/testing.h"
 
 namespace hdr4d {

@@ -9,8 +9,8 @@
 #include <fstream>
 #include <random>
 
-#include "core/error.h"
-#include "core/json_util.h"
+#include "core/util/error.h"
+#include "core/files/json_util.h"
 #include "core/viz/plot.h"
 
 namespace hdr4d {

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "core/image.h"
+#include "core/image/image.h"
 
 namespace hdr4d {
 

@@ -6,7 +6,7 @@
 #include <opencv2/photo.hpp>
 #include <random>
 
-#include "core/crf.h"
+#include "core/radiometry/crf.h"
 #include "tests/testing.h"
 
 namespace hdr4d {

@@ -7,8 +7,8 @@
 #include <map>
 
 #include "calibration/undistort.h"
-#include "core/error.h"
-#include "core/json_util.h"
+#include "core/util/error.h"
+#include "core/files/json_util.h"
 
 namespace hdr4d {
 namespace fs = std::filesystem;

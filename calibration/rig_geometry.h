@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "calibration/bundle_refinement.h"
-#include "core/colmap_model.h"
-#include "core/ply.h"
+#include "core/geometry/colmap_model.h"
+#include "core/geometry/ply.h"
 
 namespace hdr4d {
 

@@ -11,9 +11,9 @@
 #include <sstream>
 
 #include "calibration/rig_geometry.h"
-#include "core/error.h"
-#include "core/image_io.h"
-#include "core/json_util.h"
+#include "core/util/error.h"
+#include "core/image/image_io.h"
+#include "core/files/json_util.h"
 
 namespace hdr4d {
 namespace fs = std::filesystem;

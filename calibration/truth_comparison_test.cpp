@@ -12,9 +12,9 @@
 #include <random>
 
 #include "calibration/rig_geometry.h"
-#include "core/camera.h"
-#include "core/image_io.h"
-#include "core/json_util.h"
+#include "core/geometry/camera.h"
+#include "core/image/image_io.h"
+#include "core/files/json_util.h"
 #include "tests/testing.h"
 
 namespace hdr4d {

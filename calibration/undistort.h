@@ -3,7 +3,7 @@
 #pragma once
 
 #include "calibration/bundle_refinement.h"
-#include "core/image.h"
+#include "core/image/image.h"
 
 namespace hdr4d {
 

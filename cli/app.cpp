@@ -9,9 +9,9 @@
 
 #include "baselines/tone_mapper_kinds.h"
 #include "cli/commands.h"
-#include "core/error.h"
-#include "core/image_io.h"
-#include "core/output_guard.h"
+#include "core/util/error.h"
+#include "core/image/image_io.h"
+#include "core/files/output_guard.h"
 
 namespace hdr4d::cli {
 

@@ -19,8 +19,8 @@
 #include "benchmark/tables.h"
 #include "cli/commands.h"
 #include "cli/flags.h"
-#include "core/error.h"
-#include "core/json_util.h"
+#include "core/util/error.h"
+#include "core/files/json_util.h"
 
 namespace hdr4d::cli {
 namespace {

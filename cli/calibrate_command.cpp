@@ -5,8 +5,8 @@
 
 #include "calibration/calibrate.h"
 #include "calibration/truth_comparison.h"
-#include "core/error.h"
-#include "core/json_util.h"
+#include "core/util/error.h"
+#include "core/files/json_util.h"
 #include "cli/commands.h"
 #include "cli/flags.h"
 

@@ -10,11 +10,11 @@
 
 #include "cli/commands.h"
 #include "cli/flags.h"
-#include "core/dataset.h"
-#include "core/error.h"
-#include "core/image_io.h"
-#include "core/json_util.h"
-#include "core/scene_profile.h"
+#include "core/dataset/dataset.h"
+#include "core/util/error.h"
+#include "core/image/image_io.h"
+#include "core/files/json_util.h"
+#include "core/dataset/scene_profile.h"
 #include "core/viz/preview.h"
 
 namespace hdr4d::cli {

@@ -3,8 +3,8 @@
 
 #include "cli/commands.h"
 #include "cli/flags.h"
-#include "core/demo_scene.h"
-#include "core/error.h"
+#include "core/dataset/demo_scene.h"
+#include "core/util/error.h"
 
 namespace hdr4d::cli {
 

@@ -7,9 +7,9 @@
 
 #include "cli/commands.h"
 #include "cli/flags.h"
-#include "core/evaluate.h"
-#include "core/json_util.h"
-#include "core/output_guard.h"
+#include "core/metrics/evaluate.h"
+#include "core/files/json_util.h"
+#include "core/files/output_guard.h"
 
 namespace hdr4d::cli {
 

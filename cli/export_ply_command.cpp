@@ -3,8 +3,8 @@
 
 #include "cli/commands.h"
 #include "cli/flags.h"
-#include "core/error.h"
-#include "core/output_guard.h"
+#include "core/util/error.h"
+#include "core/files/output_guard.h"
 #include "method/run/export_ply.h"
 #include "method/run/render_split.h"
 #include "method/tonemap/radiance_bank.h"

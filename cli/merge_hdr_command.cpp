@@ -3,7 +3,7 @@
 
 #include "cli/commands.h"
 #include "cli/flags.h"
-#include "core/exposure_stack.h"
+#include "core/radiometry/exposure_stack.h"
 
 namespace hdr4d::cli {
 

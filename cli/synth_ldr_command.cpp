@@ -7,12 +7,12 @@
 
 #include "cli/commands.h"
 #include "cli/flags.h"
-#include "core/crf.h"
-#include "core/error.h"
-#include "core/exposure_stack.h"
-#include "core/image_io.h"
-#include "core/ldr_synthesis.h"
-#include "core/output_guard.h"
+#include "core/radiometry/crf.h"
+#include "core/util/error.h"
+#include "core/radiometry/exposure_stack.h"
+#include "core/image/image_io.h"
+#include "core/radiometry/ldr_synthesis.h"
+#include "core/files/output_guard.h"
 
 namespace hdr4d::cli {
 namespace fs = std::filesystem;

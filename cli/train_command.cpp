@@ -10,7 +10,7 @@
 #include "baselines/scene_baselines.h"
 #include "cli/commands.h"
 #include "cli/flags.h"
-#include "core/error.h"
+#include "core/util/error.h"
 #include "method/tonemap/tone_mapper_registry.h"
 #include "method/train/resume_check.h"
 #include "method/train/train_config.h"

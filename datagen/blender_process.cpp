@@ -12,7 +12,7 @@
 #include <exception>
 #include <sstream>
 
-#include "core/error.h"
+#include "core/util/error.h"
 
 extern char** environ;
 

@@ -9,9 +9,9 @@
 #include <fstream>
 #include <regex>
 
-#include "core/error.h"
-#include "core/json_util.h"
-#include "core/progress.h"
+#include "core/util/error.h"
+#include "core/files/json_util.h"
+#include "core/util/progress.h"
 #include "datagen/blender_process.h"
 
 namespace hdr4d::datagen {

@@ -9,9 +9,9 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 
-#include "core/dataset.h"
-#include "core/image_io.h"
-#include "core/json_util.h"
+#include "core/dataset/dataset.h"
+#include "core/image/image_io.h"
+#include "core/files/json_util.h"
 #include "datagen/blender_process.h"
 #include "datagen/generator.h"
 #include "tests/testing.h"

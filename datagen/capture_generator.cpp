@@ -9,12 +9,12 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
-#include "core/crf.h"
-#include "core/dataset.h"
-#include "core/error.h"
-#include "core/image_io.h"
-#include "core/json_util.h"
-#include "core/ldr_synthesis.h"
+#include "core/radiometry/crf.h"
+#include "core/dataset/dataset.h"
+#include "core/util/error.h"
+#include "core/image/image_io.h"
+#include "core/files/json_util.h"
+#include "core/radiometry/ldr_synthesis.h"
 #include "datagen/blender_process.h"
 #include "datagen/blender_render.h"
 #include "datagen/dataset_assembly.h"

@@ -10,7 +10,7 @@
 //   sequence/camCC/FFFFF_K.png      bracket K (exposure index into 0.125, 2, 32 s) of frame F
 //   exposures.json                  {"brackets": [0.125, 2, 32]}
 //   timestamps.json                 {"F": time} with the dataset's times (0 to 1)
-//   truth/                          the original dataset of the same renders (DESIGN §3:
+//   truth/                          the original dataset of the same renders (ARCHITECTURE §3:
 //                                   transforms_{train,test}.json with Blender's poses,
 //                                   hdr/camCC_tFFFF.exr, images/, point3d.ply), the last camera
 //                                   held out as calibrate holds it out, plus

@@ -4,10 +4,10 @@
 
 #include <fstream>
 
-#include "core/error.h"
-#include "core/image_io.h"
-#include "core/parallel.h"
-#include "core/ply.h"
+#include "core/util/error.h"
+#include "core/image/image_io.h"
+#include "core/util/parallel.h"
+#include "core/geometry/ply.h"
 #include "datagen/blender_render.h"
 
 namespace hdr4d::datagen {

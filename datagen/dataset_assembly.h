@@ -8,8 +8,8 @@
 #include <nlohmann/json.hpp>
 #include <vector>
 
-#include "core/dataset.h"
-#include "core/image.h"
+#include "core/dataset/dataset.h"
+#include "core/image/image.h"
 #include "datagen/dynamic_range.h"
 #include "datagen/scene_presets.h"
 

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/image.h"
+#include "core/image/image.h"
 
 namespace hdr4d::datagen {
 

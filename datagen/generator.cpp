@@ -8,11 +8,11 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
-#include "core/crf.h"
-#include "core/dataset.h"
-#include "core/error.h"
-#include "core/exposure_stack.h"
-#include "core/json_util.h"
+#include "core/radiometry/crf.h"
+#include "core/dataset/dataset.h"
+#include "core/util/error.h"
+#include "core/radiometry/exposure_stack.h"
+#include "core/files/json_util.h"
 #include "datagen/blender_process.h"
 #include "datagen/blender_render.h"
 #include "datagen/capture_generator.h"

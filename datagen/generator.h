@@ -22,8 +22,8 @@
 #include <string>
 #include <vector>
 
-#include "core/exposure_stack.h"
-#include "core/ldr_synthesis.h"
+#include "core/radiometry/exposure_stack.h"
+#include "core/radiometry/ldr_synthesis.h"
 #include "datagen/dynamic_range.h"
 
 namespace hdr4d::datagen {

@@ -10,15 +10,15 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "core/camera.h"
-#include "core/dataset.h"
-#include "core/image_io.h"
-#include "core/json_util.h"
-#include "core/ldr_synthesis.h"
-#include "core/ply.h"
+#include "core/geometry/camera.h"
+#include "core/dataset/dataset.h"
+#include "core/image/image_io.h"
+#include "core/files/json_util.h"
+#include "core/radiometry/ldr_synthesis.h"
+#include "core/geometry/ply.h"
 #include "datagen/capture_generator.h"
 #include "datagen/scene_presets.h"
-#include "datagen/sha256.h"
+#include "core/files/sha256.h"
 #include "tests/testing.h"
 
 namespace hdr4d::datagen {

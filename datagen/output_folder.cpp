@@ -5,10 +5,10 @@
 #include <algorithm>
 #include <vector>
 
-#include "core/error.h"
-#include "core/json_util.h"
+#include "core/util/error.h"
+#include "core/files/json_util.h"
 #include "datagen/blender_render.h"
-#include "datagen/sha256.h"
+#include "core/files/sha256.h"
 
 namespace hdr4d::datagen {
 namespace fs = std::filesystem;

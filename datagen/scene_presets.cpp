@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "core/error.h"
+#include "core/util/error.h"
 
 namespace hdr4d::datagen {
 

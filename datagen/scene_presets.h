@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "core/dataset.h"
+#include "core/dataset/dataset.h"
 
 namespace hdr4d::datagen {
 

@@ -8,7 +8,7 @@
 // HDR. At the log-HDR rate (lr_schedule.h, f_dc_lr_log_hdr) it is 0.69 (BENCHMARKS.md, "Why the
 // learned HDR had the wrong shape"); held-out geometry error alone keeps it below 1 here.
 // The log correlation counts the held-out camera's holes (measured pixels the model renders
-// black) since the metric stopped dropping them (core/hdr_alignment.h): 0.70 on the 2026-11-27
+// black) since the metric stopped dropping them (core/metrics/hdr_alignment.h): 0.70 on the 2026-11-27
 // host with the fixed background of the time, where dropping them gave more than 0.75; hence
 // 0.5, with room for the host spread and the learned background, the default since (the slope
 // check is what catches a squeezed HDR).
@@ -64,7 +64,7 @@ TEST(HdrShape, LdrTrainingRecoversTheSlopeOfTheTruth) {
   ASSERT_FALSE(test.is_null());
   EXPECT_GT(test["hdr_log_slope"].get<double>(), 0.55) << test.dump();
   // Where the held-out LDR is reproduced the geometry is right, and the slope is the tone curve's
-  // alone (core/hdr_alignment.h): 0.84 here on the 2026-11-28 host (0.93 at 96 px and 3000
+  // alone (core/metrics/hdr_alignment.h): 0.84 here on the 2026-11-28 host (0.93 at 96 px and 3000
   // iterations), 0.17 with the reference's colour rate (a squeezed HDR behind the LDR).
   EXPECT_GT(test["hdr_log_slope_ldr_fit"].get<double>(), 0.7) << test.dump();
   EXPECT_LT(test["hdr_log_slope_ldr_fit"].get<double>(), 1.3) << test.dump();

@@ -20,7 +20,7 @@
 #include <string>
 #include <thread>
 
-#include "core/image_io.h"
+#include "core/image/image_io.h"
 #include "tests/testing.h"
 
 namespace hdr4d {
@@ -216,7 +216,7 @@ TEST_F(Hostile, Case05DeeplyNestedJsonIsAProblemNotACrash) {
 
 // --- Silent wrong results ----------------------------------------------------------------------
 
-// FNV-1a over `bytes`, as the checkpoint trailer stores it (core/binary_stream.h), written out
+// FNV-1a over `bytes`, as the checkpoint trailer stores it (core/files/binary_stream.h), written out
 // independently here so a test can write a damaged checkpoint that still passes the checksum and
 // reach the value checks.
 std::uint64_t Fnv1a(const std::string& bytes) {

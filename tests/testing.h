@@ -6,8 +6,8 @@
 #include <optional>
 #include <string>
 
-#include "core/error.h"
-#include "core/image.h"
+#include "core/util/error.h"
+#include "core/image/image.h"
 
 namespace hdr4d::testing {
 

@@ -8,10 +8,10 @@
 #include <filesystem>
 #include <random>
 
-#include "core/crf.h"
-#include "core/dataset.h"
-#include "core/image_io.h"
-#include "core/ldr_synthesis.h"
+#include "core/radiometry/crf.h"
+#include "core/dataset/dataset.h"
+#include "core/image/image_io.h"
+#include "core/radiometry/ldr_synthesis.h"
 
 namespace hdr4d {
 namespace {

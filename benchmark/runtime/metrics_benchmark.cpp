@@ -5,8 +5,8 @@
 #include <cstdint>
 #include <random>
 
-#include "core/image.h"
-#include "core/metrics.h"
+#include "core/image/image.h"
+#include "core/metrics/metrics.h"
 
 namespace hdr4d {
 namespace {

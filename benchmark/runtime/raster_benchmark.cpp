@@ -20,7 +20,7 @@
 #include <tuple>
 #include <vector>
 
-#include "core/parallel.h"
+#include "core/util/parallel.h"
 #include "method/gaussian/constants.h"
 #include "method/raster/binning.h"
 #include "method/raster/blend.h"

@@ -13,7 +13,7 @@
 #include <random>
 #include <vector>
 
-#include "core/parallel.h"
+#include "core/util/parallel.h"
 #include "method/optim/adam.h"
 #include "method/optim/densify.h"
 #include "method/optim/fused_adam_step.h"

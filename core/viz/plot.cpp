@@ -7,9 +7,9 @@
 #include <limits>
 #include <variant>
 
-#include "core/error.h"
-#include "core/image_io.h"
-#include "core/json_util.h"
+#include "core/util/error.h"
+#include "core/image/image_io.h"
+#include "core/files/json_util.h"
 #include "core/viz/text.h"
 
 namespace hdr4d {

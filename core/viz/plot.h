@@ -10,7 +10,7 @@
 #include <utility>
 #include <vector>
 
-#include "core/image.h"
+#include "core/image/image.h"
 
 namespace hdr4d {
 

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "core/image_io.h"
+#include "core/image/image_io.h"
 #include "core/viz/text.h"
 #include "tests/testing.h"
 

@@ -6,9 +6,9 @@
 #include <cmath>
 #include <map>
 
-#include "core/error.h"
-#include "core/image_io.h"
-#include "core/metrics.h"
+#include "core/util/error.h"
+#include "core/image/image_io.h"
+#include "core/metrics/metrics.h"
 
 namespace hdr4d {
 

@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "core/dataset.h"
-#include "core/image.h"
+#include "core/dataset/dataset.h"
+#include "core/image/image.h"
 
 namespace hdr4d {
 

@@ -2,9 +2,9 @@
 
 #include <gtest/gtest.h>
 
-#include "core/demo_scene.h"
-#include "core/error.h"
-#include "core/exposure_stack.h"
+#include "core/dataset/demo_scene.h"
+#include "core/util/error.h"
+#include "core/radiometry/exposure_stack.h"
 #include "tests/testing.h"
 
 namespace hdr4d {

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <string_view>
 
-#include "core/error.h"
+#include "core/util/error.h"
 
 namespace hdr4d {
 namespace {

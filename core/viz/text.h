@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <string_view>
 
-#include "core/image.h"
+#include "core/image/image.h"
 
 namespace hdr4d {
 

@@ -1,14 +1,14 @@
 // EWA splatting of a 3D Gaussian into a pinhole view, as 3DGS does it (ARCHITECTURE §4):
 // local affine approximation of the projection, 2D covariance + dilation, conic,
 // screen radius. Forward and backward side by side; matrix gradients follow the GRADIENT
-// CONVENTION of method/gaussian/rotation4d.h. Pixel coordinates follow core/camera.h (top-left
+// CONVENTION of method/gaussian/rotation4d.h. Pixel coordinates follow core/geometry/camera.h (top-left
 // corner at (0,0), OpenCV camera axes).
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 
-#include "core/camera.h"
+#include "core/geometry/camera.h"
 #include "method/gaussian/constants.h"
 #include "method/gaussian/rotation4d.h"
 

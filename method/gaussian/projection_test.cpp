@@ -7,7 +7,7 @@
 #include <functional>
 #include <random>
 
-#include "core/camera.h"
+#include "core/geometry/camera.h"
 #include "method/gaussian/rotation4d.h"
 #include "method/gaussian/slice.h"
 #include "tests/finite_difference.h"
@@ -134,7 +134,7 @@ TEST(ProjectEwa, ConicInvertsCovariance) {
 }
 
 TEST(ProjectEwa, MatchesCameraProjectFromCamera) {
-  // ViewParams::FromCamera must use the same axes and pixel convention as core/camera.h.
+  // ViewParams::FromCamera must use the same axes and pixel convention as core/geometry/camera.h.
   Camera camera;
   camera.intrinsics = PinholeIntrinsics::FromFovX(0.9, 120, 90);
   camera.world_from_cam_gl =

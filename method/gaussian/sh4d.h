@@ -12,7 +12,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "core/error.h"
+#include "core/util/error.h"
 #include "method/gaussian/constants.h"
 #include "method/gaussian/gaussian_model.h"
 #include "method/gaussian/rotation4d.h"

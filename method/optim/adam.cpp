@@ -15,9 +15,9 @@
 #include <istream>
 #include <ostream>
 
-#include "core/binary_stream.h"
-#include "core/error.h"
-#include "core/parallel.h"
+#include "core/files/binary_stream.h"
+#include "core/util/error.h"
+#include "core/util/parallel.h"
 #include "method/optim/permute_rows.h"
 
 #undef HWY_TARGET_INCLUDE

@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "core/error.h"
-#include "core/parallel.h"
+#include "core/util/error.h"
+#include "core/util/parallel.h"
 #include "method/optim/lr_schedule.h"
 #include "method/raster/simd_targets_for_test.h"
 #include "tests/testing.h"

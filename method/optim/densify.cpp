@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <numbers>
 
-#include "core/error.h"
-#include "core/sigmoid.h"
+#include "core/util/error.h"
+#include "core/util/sigmoid.h"
 #include "method/gaussian/rotation4d.h"
 
 namespace hdr4d::method {

@@ -3,7 +3,7 @@
 #include <array>
 #include <span>
 
-#include "core/error.h"
+#include "core/util/error.h"
 #include "method/optim/densify.h"
 
 namespace hdr4d::method {

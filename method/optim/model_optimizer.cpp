@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "core/error.h"
+#include "core/util/error.h"
 #include "method/optim/densify.h"
 #include "method/optim/fused_adam_step.h"
 

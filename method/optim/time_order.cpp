@@ -4,8 +4,8 @@
 #include <cmath>
 #include <utility>
 
-#include "core/error.h"
-#include "core/parallel.h"
+#include "core/util/error.h"
+#include "core/util/parallel.h"
 #include "method/gaussian/constants.h"
 #include "method/gaussian/rotation4d.h"
 #include "method/gaussian/slice.h"

@@ -9,7 +9,7 @@
 #include <random>
 #include <vector>
 
-#include "core/camera.h"
+#include "core/geometry/camera.h"
 #include "method/gaussian/constants.h"
 #include "method/optim/permute_rows.h"
 #include "method/render/frame_render.h"

@@ -8,9 +8,9 @@
 #include <cstdint>
 #include <utility>
 
-#include "core/error.h"
-#include "core/parallel.h"
-#include "core/scratch_vector.h"
+#include "core/util/error.h"
+#include "core/util/parallel.h"
+#include "core/util/scratch_vector.h"
 #include "method/gaussian/constants.h"
 
 namespace hdr4d::method {

@@ -8,7 +8,7 @@
 #include <random>
 #include <vector>
 
-#include "core/parallel.h"
+#include "core/util/parallel.h"
 #include "method/gaussian/constants.h"
 
 namespace hdr4d::method {

@@ -8,9 +8,9 @@
 #include <cmath>
 #include <vector>
 
-#include "core/error.h"
-#include "core/parallel.h"
-#include "core/scratch_vector.h"
+#include "core/util/error.h"
+#include "core/util/parallel.h"
+#include "core/util/scratch_vector.h"
 #include "method/gaussian/constants.h"
 #include "method/raster/binning.h"
 

@@ -45,7 +45,7 @@
 #include <cstdint>
 #include <limits>
 
-#include "core/error.h"
+#include "core/util/error.h"
 #include "method/gaussian/constants.h"
 #include "method/raster/blend.h"
 

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "core/parallel.h"
+#include "core/util/parallel.h"
 #include "method/gaussian/constants.h"
 #include "method/raster/binning.h"
 #include "method/raster/simd_targets_for_test.h"

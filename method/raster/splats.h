@@ -3,7 +3,7 @@
 // and the state the forward keeps for the backward.
 //
 // Conventions every producer and consumer of these buffers must follow:
-// - Pixel coordinates are corner-origin (core/camera.h): pixel (x, y) covers [x, x+1) x [y, y+1)
+// - Pixel coordinates are corner-origin (core/geometry/camera.h): pixel (x, y) covers [x, x+1) x [y, y+1)
 //   and its centre is (x + 0.5, y + 0.5).
 // - A splat's 2D Gaussian at pixel centre p is G = exp(power) with d = mean2d - p and
 //   power = -0.5 (a dx^2 + c dy^2) - b dx dy, where conic = (a, b, c) is the inverse 2D

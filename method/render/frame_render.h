@@ -7,7 +7,7 @@
 // back-propagated; an empty tile is never blended.
 #pragma once
 
-#include "core/camera.h"
+#include "core/geometry/camera.h"
 #include "method/render/frame_state.h"
 #include "method/render/preprocess.h"
 

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "core/error.h"
+#include "core/util/error.h"
 #include "method/render/hdr_color_stage.h"
 
 namespace hdr4d::method {

@@ -9,7 +9,7 @@
 #include <type_traits>
 #include <vector>
 
-#include "core/error.h"
+#include "core/util/error.h"
 #include "method/gaussian/constants.h"
 #include "method/gaussian/rotation4d.h"
 #include "method/gaussian/sh4d.h"

@@ -6,7 +6,7 @@
 #include <utility>
 #include <vector>
 
-#include "core/parallel.h"
+#include "core/util/parallel.h"
 #include "method/render/preprocess.h"
 #include "method/render/preprocess_common.h"
 #include "method/render/preprocess_simd.h"

@@ -2,8 +2,8 @@
 // the header-only maths of method/gaussian/.
 #include <vector>
 
-#include "core/parallel.h"
-#include "core/sigmoid.h"
+#include "core/util/parallel.h"
+#include "core/util/sigmoid.h"
 #include "method/gaussian/projection.h"
 #include "method/render/preprocess.h"
 #include "method/render/preprocess_common.h"

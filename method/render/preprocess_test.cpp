@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "core/camera.h"
+#include "core/geometry/camera.h"
 #include "method/gaussian/sh4d.h"
 #include "method/raster/simd_targets_for_test.h"
 #include "method/render/preprocess_simd.h"

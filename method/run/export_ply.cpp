@@ -9,9 +9,9 @@
 #include <numbers>
 #include <vector>
 
-#include "core/error.h"
-#include "core/image.h"
-#include "core/json_util.h"
+#include "core/util/error.h"
+#include "core/image/image.h"
+#include "core/files/json_util.h"
 #include "method/gaussian/constants.h"
 #include "method/gaussian/rotation4d.h"
 #include "method/gaussian/slice.h"

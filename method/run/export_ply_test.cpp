@@ -6,7 +6,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "core/error.h"
+#include "core/util/error.h"
 #include "method/gaussian/constants.h"
 #include "tests/testing.h"
 

@@ -6,9 +6,9 @@
 #include <numbers>
 #include <random>
 
-#include "core/error.h"
-#include "core/image_io.h"
-#include "core/staged_folder.h"
+#include "core/util/error.h"
+#include "core/image/image_io.h"
+#include "core/files/staged_folder.h"
 #include "method/gaussian/constants.h"
 #include "method/render/frame_render.h"
 
@@ -49,7 +49,7 @@ GaussianModel MakeGaussianSceneModel(const GaussianSceneOptions& options) {
 
 Dataset MakeGaussianScene(const GaussianSceneOptions& options, const fs::path& final_root) {
   const GaussianModel model = MakeGaussianSceneModel(options);
-  // Built beside its place and moved there when complete (core/staged_folder.h).
+  // Built beside its place and moved there when complete (core/files/staged_folder.h).
   StagedFolder staged(final_root);
   const fs::path& root = staged.path();
   constexpr double kFovX = 0.7;

@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <filesystem>
 
-#include "core/dataset.h"
+#include "core/dataset/dataset.h"
 #include "method/gaussian/gaussian_model.h"
 
 namespace hdr4d::method {

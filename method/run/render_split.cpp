@@ -12,14 +12,14 @@
 #include <optional>
 #include <sstream>
 
-#include "core/atomic_file.h"
-#include "core/dataset.h"
-#include "core/error.h"
-#include "core/image_io.h"
-#include "core/json_util.h"
-#include "core/output_guard.h"
-#include "core/parallel.h"
-#include "core/progress.h"
+#include "core/files/atomic_file.h"
+#include "core/dataset/dataset.h"
+#include "core/util/error.h"
+#include "core/image/image_io.h"
+#include "core/files/json_util.h"
+#include "core/files/output_guard.h"
+#include "core/util/parallel.h"
+#include "core/util/progress.h"
 #include "method/optim/permute_rows.h"
 #include "method/optim/time_order.h"
 #include "method/render/frame_render.h"
@@ -218,7 +218,7 @@ int RenderRun(const RenderRunOptions& options) {
   const double default_exposure = options.exposure.value_or(MedianExposure(dataset));
   std::vector<float> ldr, hdr;
   // A command's renders are moved into place together once all are made: a failure or a kill
-  // halfway never leaves new renders mixed with an earlier run's (core/atomic_file.h).
+  // halfway never leaves new renders mixed with an earlier run's (core/files/atomic_file.h).
   FileBatch batch;
   // A view's files are written on another thread while the next view renders (writing took
   // several times the render: BENCHMARKS.md, issue 15), one view at a time; not with one

@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "core/camera.h"
-#include "core/dataset.h"
+#include "core/geometry/camera.h"
+#include "core/dataset/dataset.h"
 #include "method/gaussian/gaussian_model.h"
 #include "method/tonemap/tone_mapper.h"
 #include "method/train/hdr_head.h"
@@ -101,7 +101,7 @@ std::unique_ptr<ViewRenderer> MakeRunRenderer(const LoadedRun& run);
 ToneFrame RunToneFrame(const LoadedRun& run, float time, double exposure);
 
 // For commands that only read a run (render, export-ply, tone-curves): its configuration and
-// checkpoint become protected inputs (core/output_guard.h), so no output of theirs replaces them.
+// checkpoint become protected inputs (core/files/output_guard.h), so no output of theirs replaces them.
 void ProtectRunInputs(const std::filesystem::path& run);
 
 }  // namespace hdr4d::method

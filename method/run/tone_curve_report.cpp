@@ -5,9 +5,9 @@
 #include <cmath>
 #include <sstream>
 
-#include "core/error.h"
-#include "core/json_util.h"
-#include "core/output_guard.h"
+#include "core/util/error.h"
+#include "core/files/json_util.h"
+#include "core/files/output_guard.h"
 #include "core/viz/plot.h"
 #include "method/run/render_split.h"
 

@@ -5,7 +5,7 @@
 #include <limits>
 #include <random>
 
-#include "core/error.h"
+#include "core/util/error.h"
 #include "method/tonemap/mlp.h"
 
 namespace hdr4d::method {

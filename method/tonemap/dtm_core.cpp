@@ -5,8 +5,8 @@
 #include <cmath>
 #include <type_traits>
 
-#include "core/error.h"
-#include "core/parallel.h"
+#include "core/util/error.h"
+#include "core/util/parallel.h"
 #include "method/tonemap/monotone_mlp.h"
 #include "method/tonemap/tone_table_simd.h"
 

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "core/error.h"
-#include "core/parallel.h"
+#include "core/util/error.h"
+#include "core/util/parallel.h"
 #include "method/tonemap/dtm_core.h"
 #include "tests/finite_difference.h"
 #include "tests/testing.h"

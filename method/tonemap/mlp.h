@@ -13,7 +13,7 @@
 #include <random>
 #include <vector>
 
-#include "core/sigmoid.h"
+#include "core/util/sigmoid.h"
 
 namespace hdr4d::method {
 

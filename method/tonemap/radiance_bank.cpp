@@ -6,8 +6,8 @@
 #include <istream>
 #include <ostream>
 
-#include "core/error.h"
-#include "core/binary_stream.h"
+#include "core/util/error.h"
+#include "core/files/binary_stream.h"
 
 namespace hdr4d::method {
 namespace {

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "core/binary_stream.h"
+#include "core/files/binary_stream.h"
 #include "tests/testing.h"
 
 namespace hdr4d::method {

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <numeric>
 
-#include "core/error.h"
+#include "core/util/error.h"
 #include "method/tonemap/monotone_mlp.h"
 
 namespace hdr4d::method {

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "core/error.h"
+#include "core/util/error.h"
 #include "method/tonemap/radiance_bank.h"
 
 namespace hdr4d::method {

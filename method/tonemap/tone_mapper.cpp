@@ -7,7 +7,7 @@
 #include <limits>
 #include <string_view>
 
-#include "core/error.h"
+#include "core/util/error.h"
 
 namespace hdr4d::method {
 namespace {

@@ -3,7 +3,7 @@
 #include <mutex>
 #include <utility>
 
-#include "core/error.h"
+#include "core/util/error.h"
 #include "method/tonemap/dynamic_tone_mapper.h"
 
 namespace hdr4d::method {

@@ -5,7 +5,7 @@
 #include <limits>
 #include <string>
 
-#include "core/error.h"
+#include "core/util/error.h"
 #include "tests/testing.h"
 
 namespace hdr4d::method {

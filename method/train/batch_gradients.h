@@ -5,7 +5,7 @@
 
 #include <vector>
 
-#include "core/error.h"
+#include "core/util/error.h"
 #include "method/gaussian/gaussian_model.h"
 
 namespace hdr4d::method {

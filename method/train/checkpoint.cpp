@@ -7,9 +7,9 @@
 #include <streambuf>
 #include <string_view>
 
-#include "core/binary_stream.h"
-#include "core/error.h"
-#include "core/json_util.h"
+#include "core/files/binary_stream.h"
+#include "core/util/error.h"
+#include "core/files/json_util.h"
 
 namespace hdr4d::method {
 namespace fs = std::filesystem;

@@ -5,7 +5,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "core/error.h"
+#include "core/util/error.h"
 #include "method/train/initialise.h"
 #include "tests/testing.h"
 

@@ -6,7 +6,7 @@
 
 #include <fmt/format.h>
 
-#include "core/error.h"
+#include "core/util/error.h"
 #include "method/train/checkpoint.h"
 
 namespace hdr4d::method {

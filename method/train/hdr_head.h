@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "core/progress.h"
+#include "core/util/progress.h"
 #include "method/gaussian/gaussian_model.h"
 #include "method/render/frame_render.h"
 #include "method/render/hdr_color_stage.h"

@@ -6,7 +6,7 @@
 // m = 5000 and the maximum of each image (the reference), or m = 1e6 and one maximum over the
 // scene's training views (--hdr-target scene-log, hdr_training_options.h). As in the reference,
 // the HDR raster enters mu unnormalised (the target is normalised); evaluation normalises each
-// image by its own maximum instead (core/metrics.h).
+// image by its own maximum instead (core/metrics/metrics.h).
 //
 // The 2D branch's log takes a floor, log(HDR + eps): ResolvedHdrTraining::pixel_log_epsilon
 // (hdr_training_options.h) says which.
@@ -18,7 +18,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/metrics.h"
+#include "core/metrics/metrics.h"
 
 #include "method/tonemap/tone_mapper.h"
 #include "method/train/hdr_training_options.h"

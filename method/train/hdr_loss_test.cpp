@@ -11,7 +11,7 @@
 #include <random>
 #include <sstream>
 
-#include "core/camera.h"
+#include "core/geometry/camera.h"
 #include "method/render/frame_render.h"
 #include "method/render/hdr_color_stage.h"
 #include "tests/finite_difference.h"

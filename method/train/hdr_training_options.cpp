@@ -1,6 +1,6 @@
 #include "method/train/hdr_training_options.h"
 
-#include "core/error.h"
+#include "core/util/error.h"
 
 namespace hdr4d::method {
 

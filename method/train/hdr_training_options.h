@@ -8,7 +8,7 @@
 #include <optional>
 #include <string>
 
-#include "core/metrics.h"
+#include "core/metrics/metrics.h"
 #include "method/gaussian/gaussian_model.h"
 #include "method/tonemap/tone_mapper.h"
 

@@ -6,8 +6,8 @@
 #include <limits>
 #include <random>
 
-#include "core/error.h"
-#include "core/parallel.h"
+#include "core/util/error.h"
+#include "core/util/parallel.h"
 #include "method/gaussian/constants.h"
 
 namespace hdr4d::method {

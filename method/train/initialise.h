@@ -8,7 +8,7 @@
 #include <optional>
 #include <vector>
 
-#include "core/ply.h"
+#include "core/geometry/ply.h"
 #include "method/gaussian/gaussian_model.h"
 
 namespace hdr4d::method {

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <random>
 
-#include "core/error.h"
+#include "core/util/error.h"
 #include "method/gaussian/constants.h"
 
 namespace hdr4d::method {

@@ -5,8 +5,8 @@
 #include <numeric>
 #include <sstream>
 
-#include "core/error.h"
-#include "core/json_util.h"
+#include "core/util/error.h"
+#include "core/files/json_util.h"
 
 namespace hdr4d::method {
 namespace fs = std::filesystem;

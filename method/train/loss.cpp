@@ -10,9 +10,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/error.h"
-#include "core/metrics.h"
-#include "core/parallel.h"
+#include "core/util/error.h"
+#include "core/metrics/metrics.h"
+#include "core/util/parallel.h"
 
 // SSSE3 / SSE4 gain little over the SSE2 baseline for these loops; skipping them keeps the
 // build short.
@@ -28,7 +28,7 @@ namespace hdr4d::method::loss_detail {
 
 constexpr int kRadius = kSsimWindow / 2;
 
-// The SSIM window of core/metrics.h, rounded once to T.
+// The SSIM window of core/metrics/metrics.h, rounded once to T.
 template <typename T>
 const std::array<T, kSsimWindow>& Window() {
   static const std::array<T, kSsimWindow> window = [] {

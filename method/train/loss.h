@@ -1,7 +1,7 @@
 // The photometric training loss of 3DGS / 4DGS / HDR-4DGS (ARCHITECTURE §4 "Losses") and its backward:
 //   L(pred, gt) = (1 - lambda) L1 + lambda (1 - SSIM),   lambda = 0.2 by default,
 // L1 = mean |pred - gt| over pixels and channels, SSIM = the windowed SSIM of hdr4d::Ssim
-// (core/metrics.h): 11x11 Gaussian window (sigma 1.5), c1 = 0.01^2, c2 = 0.03^2, zero-padded
+// (core/metrics/metrics.h): 11x11 Gaussian window (sigma 1.5), c1 = 0.01^2, c2 = 0.03^2, zero-padded
 // "same"-size maps, each channel on its own, mean over pixels and channels.
 //
 // Backward: SSIM at a pixel is a function of five window sums (mu_x, mu_y, E[x^2], E[y^2], E[xy]).
@@ -12,7 +12,7 @@
 // L1's subgradient at pred == gt is 0 (sign(0) = 0, as in torch).
 //
 // Images are interleaved H x W x C (index (y * W + x) * C + c), any channel count. Rows run in
-// parallel (core/parallel.h); every per-row quantity is reduced in row order, so the value and
+// parallel (core/util/parallel.h); every per-row quantity is reduced in row order, so the value and
 // the gradient are bit-identical at any thread count. Working memory (8 image-sized maps) is kept
 // per calling thread and reused, so repeated calls at one size do not allocate.
 #pragma once

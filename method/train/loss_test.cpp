@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "core/image.h"
-#include "core/metrics.h"
-#include "core/parallel.h"
+#include "core/image/image.h"
+#include "core/metrics/metrics.h"
+#include "core/util/parallel.h"
 #include "tests/testing.h"
 
 namespace hdr4d::method {
@@ -177,7 +177,7 @@ TEST(PhotometricLoss, SinglePixelGoldenValue) {
   EXPECT_NEAR(r.value, 0.8 * 0.5 + 0.2 * (1.0 - ssim), 1e-15);
 }
 
-// The float path agrees with hdr4d::Ssim (core/metrics.h) and with the stated weighting.
+// The float path agrees with hdr4d::Ssim (core/metrics/metrics.h) and with the stated weighting.
 TEST(PhotometricLoss, MatchesCoreSsimAndWeighting) {
   struct Shape {
     int w, h, c;

@@ -3,8 +3,8 @@
 #include <array>
 #include <string>
 
-#include "core/error.h"
-#include "core/json_util.h"
+#include "core/util/error.h"
+#include "core/files/json_util.h"
 
 namespace hdr4d::method {
 namespace fs = std::filesystem;

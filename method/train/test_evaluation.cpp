@@ -10,10 +10,10 @@
 #include <utility>
 #include <vector>
 
-#include "core/hdr_alignment.h"
-#include "core/image_io.h"
-#include "core/json_util.h"
-#include "core/metrics.h"
+#include "core/metrics/hdr_alignment.h"
+#include "core/image/image_io.h"
+#include "core/files/json_util.h"
+#include "core/metrics/metrics.h"
 
 namespace hdr4d::method {
 
@@ -38,7 +38,7 @@ std::vector<std::vector<std::size_t>> GroupByHdrTruth(const std::vector<TrainVie
 
 // The HDR metrics of `prediction` against the group's truth: raw, scale-aligned over the pixels
 // some bracket of the group measures, and the shape where the rendered brackets `rendered` (one
-// per view of the group, in its order) reproduce the truth's (core/hdr_alignment.h). A run at
+// per view of the group, in its order) reproduce the truth's (core/metrics/hdr_alignment.h). A run at
 // --resolution R compares with the truth reduced as its training target was. `gt`: scratch;
 // `fit_sums` receives the sums behind the shape where the LDR fits, for the split's pooled figure.
 MetricList GroupHdrMetrics(const std::vector<TrainView>& views,

@@ -1,6 +1,6 @@
 // The test metrics of a model during and after training: every view rendered, the LDR metrics
 // of its final LDR image and, where it has HDR ground truth, the HDR metrics of its HDR render
-// (raw and scale-aligned, core/hdr_alignment.h), averaged as hdr4d eval does.
+// (raw and scale-aligned, core/metrics/hdr_alignment.h), averaged as hdr4d eval does.
 #pragma once
 
 #include <nlohmann/json.hpp>

@@ -7,8 +7,8 @@
 #include <filesystem>
 #include <limits>
 
-#include "core/error.h"
-#include "core/json_util.h"
+#include "core/util/error.h"
+#include "core/files/json_util.h"
 
 namespace hdr4d::method {
 namespace {

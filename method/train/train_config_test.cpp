@@ -4,7 +4,7 @@
 
 #include <set>
 
-#include "core/json_util.h"
+#include "core/files/json_util.h"
 #include "tests/testing.h"
 
 namespace hdr4d::method {

@@ -5,11 +5,11 @@
 #include <algorithm>
 #include <cmath>
 
-#include "core/dataset_image_rules.h"
-#include "core/error.h"
-#include "core/image_io.h"
-#include "core/image_resize.h"
-#include "core/parallel.h"
+#include "core/dataset/dataset_image_rules.h"
+#include "core/util/error.h"
+#include "core/image/image_io.h"
+#include "core/image/image_resize.h"
+#include "core/util/parallel.h"
 #include "method/train/hdr_loss.h"
 
 namespace hdr4d::method {

@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "core/camera.h"
-#include "core/dataset.h"
-#include "core/image_resize.h"  // DownsampleBox, ResolutionProblem
+#include "core/geometry/camera.h"
+#include "core/dataset/dataset.h"
+#include "core/image/image_resize.h"  // DownsampleBox, ResolutionProblem
 #include "method/train/hdr_training_options.h"
 
 namespace hdr4d::method {
@@ -71,7 +71,7 @@ std::vector<TrainView> CheckViews(const Dataset& dataset,
 std::optional<float> MedianLogHdrTarget(const std::vector<TrainView>& views, double mu_law);
 
 // The intrinsics of an image reduced by an integer `factor` (width and height divisible by it;
-// checked). With pixel centres at i + 0.5 (core/camera.h, PIXEL CONVENTION) output pixel i
+// checked). With pixel centres at i + 0.5 (core/geometry/camera.h, PIXEL CONVENTION) output pixel i
 // covers input [i f, (i + 1) f), so every image coordinate, focal lengths and principal point
 // included, is divided by f exactly.
 PinholeIntrinsics DownscaledIntrinsics(const PinholeIntrinsics& intrinsics, int factor);

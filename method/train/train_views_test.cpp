@@ -5,10 +5,10 @@
 #include <filesystem>
 #include <string>
 
-#include "core/camera.h"
-#include "core/dataset.h"
-#include "core/error.h"
-#include "core/image.h"
+#include "core/geometry/camera.h"
+#include "core/dataset/dataset.h"
+#include "core/util/error.h"
+#include "core/image/image.h"
 #include "method/run/gaussian_scene.h"
 #include "tests/testing.h"
 

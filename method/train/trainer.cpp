@@ -19,16 +19,16 @@
 #include <variant>
 #include <vector>
 
-#include "core/dataset.h"
-#include "core/error.h"
-#include "core/folder_lock.h"
-#include "core/free_memory.h"
-#include "core/json_util.h"
-#include "core/output_guard.h"
-#include "core/parallel.h"
-#include "core/ply.h"
-#include "core/progress.h"
-#include "core/scene_profile.h"
+#include "core/dataset/dataset.h"
+#include "core/util/error.h"
+#include "core/files/folder_lock.h"
+#include "core/util/free_memory.h"
+#include "core/files/json_util.h"
+#include "core/files/output_guard.h"
+#include "core/util/parallel.h"
+#include "core/geometry/ply.h"
+#include "core/util/progress.h"
+#include "core/dataset/scene_profile.h"
 #include "method/gaussian/constants.h"
 #include "method/optim/densify.h"
 #include "method/optim/model_optimizer.h"
@@ -410,7 +410,7 @@ void TrainingRun::SetUp() {
   for (auto* views : {&train_views_, &test_views_}) {
     for (TrainView& v : *views) v.time_index = RadianceBank::TimeIndex(v.time, num_times_);
   }
-  ReturnFreedMemory();  // the checked test images and the decoding buffers (core/free_memory.h)
+  ReturnFreedMemory();  // the checked test images and the decoding buffers (core/util/free_memory.h)
   extent_ = SceneExtent(train_views_);
   OptimizationOptions requested = options_.optimization;
   if (saved_config_) KeepSavedSchedules(*saved_config_, &requested);
@@ -813,7 +813,7 @@ void TrainingRun::FinishUpdate(int it, double loss_value) {
     DensifyAndPrune(&model_, &grads_, &optimizer_->adam(), &stats_,
                     DensifyParamsAt(opt_, extent_, it), &loop_.rng);
     OrderByTime();
-    ReturnFreedMemory();  // its temporaries (core/free_memory.h)
+    ReturnFreedMemory();  // its temporaries (core/util/free_memory.h)
   }
   optimizer_->Finish();
   if (ResetsOpacityAt(it)) ResetOpacity(&model_, &optimizer_->adam());

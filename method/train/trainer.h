@@ -9,7 +9,7 @@
 #include <optional>
 #include <string>
 
-#include "core/dataset.h"
+#include "core/dataset/dataset.h"
 #include "method/optim/lr_schedule.h"
 #include "method/train/hdr_training_options.h"
 #include "method/train/initialise.h"

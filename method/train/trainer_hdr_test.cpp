@@ -10,14 +10,14 @@
 #include <set>
 #include <tuple>
 
-#include "core/dataset.h"
-#include "core/dataset_image_rules.h"
-#include "core/demo_scene.h"
-#include "core/error.h"
-#include "core/exposure_stack.h"
-#include "core/hdr_alignment.h"
-#include "core/image_io.h"
-#include "core/json_util.h"
+#include "core/dataset/dataset.h"
+#include "core/dataset/dataset_image_rules.h"
+#include "core/dataset/demo_scene.h"
+#include "core/util/error.h"
+#include "core/radiometry/exposure_stack.h"
+#include "core/metrics/hdr_alignment.h"
+#include "core/image/image_io.h"
+#include "core/files/json_util.h"
 #include "method/gaussian/constants.h"
 #include "method/run/render_split.h"
 #include "method/tonemap/dynamic_tone_mapper.h"

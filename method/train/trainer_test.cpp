@@ -2,8 +2,8 @@
 
 #include <gtest/gtest.h>
 
-#include "core/error.h"
-#include "core/json_util.h"
+#include "core/util/error.h"
+#include "core/files/json_util.h"
 #include "method/run/gaussian_scene.h"
 #include "method/train/checkpoint.h"
 #include "tests/testing.h"

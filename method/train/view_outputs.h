@@ -8,7 +8,7 @@
 #include <optional>
 #include <vector>
 
-#include "core/camera.h"
+#include "core/geometry/camera.h"
 #include "method/render/frame_render.h"
 #include "method/render/hdr_color_stage.h"
 #include "method/render/learned_background.h"

@@ -1,0 +1,78 @@
+// The small parts of the dataset format: split names, frame access, problem text, image paths.
+// Reading, layouts and checking are in dataset_reading.cpp, dataset_layouts.cpp and
+// dataset_check.cpp (ARCHITECTURE §3).
+#include "core/dataset/dataset.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <iterator>
+#include <string_view>
+
+#include "core/util/error.h"
+
+namespace hdr4d {
+namespace fs = std::filesystem;
+
+const char* SplitName(Split split) {
+  switch (split) {
+    case Split::kTrain:
+      return "train";
+    case Split::kTest:
+      return "test";
+    case Split::kVal:
+      return "val";
+  }
+  return "?";
+}
+
+Split ParseSplit(const std::string& name, const char* what) {
+  for (Split split : {Split::kTrain, Split::kTest, Split::kVal}) {
+    if (name == SplitName(split)) return split;
+  }
+  Fail("{}: unknown split '{}' (use train, test or val)", what, name);
+}
+
+std::vector<const Frame*> Dataset::AllFrames() const {
+  std::vector<const Frame*> frames;
+  frames.reserve(NumFrames());
+  for (const std::vector<Frame>* split : {&train, &test, &val}) {
+    for (const Frame& f : *split) frames.push_back(&f);
+  }
+  return frames;
+}
+
+const std::vector<Frame>& Dataset::FramesOf(Split split) const {
+  switch (split) {
+    case Split::kTrain:
+      return train;
+    case Split::kTest:
+      return test;
+    case Split::kVal:
+      return val;
+  }
+  return train;
+}
+
+std::string DatasetProblem::ToString() const {
+  std::string s = file.string();
+  if (frame >= 0) s += fmt::format(": frame {}", frame);
+  if (!key.empty()) s += ": " + key;
+  return s + ": " + message;
+}
+
+fs::path ResolveImagePath(const fs::path& root, const std::string& file_path) {
+  static constexpr std::string_view kImageExtensions[] = {".png", ".jpg",  ".jpeg", ".exr", ".hdr",
+                                                          ".tif", ".tiff", ".bmp",  ".webp"};
+  fs::path relative(file_path);
+  std::string ext = relative.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
+  const bool known = std::find(std::begin(kImageExtensions), std::end(kImageExtensions), ext) !=
+                     std::end(kImageExtensions);
+  if (!known) relative += ".png";
+  return (root / relative).lexically_normal();
+}
+
+}  // namespace hdr4d

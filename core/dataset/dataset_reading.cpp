@@ -1,0 +1,264 @@
+// The transforms files of a scene read key by key, every problem recorded against its file,
+// frame and key (ARCHITECTURE §3).
+#include <fmt/format.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "core/geometry/camera.h"
+#include "core/dataset/dataset_detail.h"
+#include "core/files/json_util.h"
+
+namespace hdr4d::dataset_detail {
+namespace {
+
+// The frame's pose; identity when missing or ill-shaped (the problem is recorded).
+Eigen::Matrix4d ParseMatrix(const Reader& r, const json& obj, int frame) {
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  const auto it = obj.find("transform_matrix");
+  if (it == obj.end()) {
+    r.Problem(frame, "transform_matrix", "missing");
+    return m;
+  }
+  const json& rows = *it;
+  bool shape_ok = rows.is_array() && rows.size() == 4;
+  for (std::size_t i = 0; shape_ok && i < 4; ++i) {
+    shape_ok = rows[i].is_array() && rows[i].size() == 4;
+    for (std::size_t j = 0; shape_ok && j < 4; ++j) {
+      shape_ok = rows[i][j].is_number();
+      if (shape_ok) m(i, j) = rows[i][j].get<double>();
+    }
+  }
+  if (!shape_ok) {
+    r.Problem(frame, "transform_matrix", "expected a 4x4 array of numbers, got " + Describe(rows));
+    return Eigen::Matrix4d::Identity();
+  }
+  if (std::string problem = PoseProblem(m); !problem.empty()) {
+    r.Problem(frame, "transform_matrix", problem);
+  }
+  return m;
+}
+
+// One frame's keys, over the file's top-level intrinsics; HDR-NeRF's exposures come later.
+PendingFrame ParseFrame(const fs::path& root,
+                        const SplitFile& file,
+                        const json& obj,
+                        int index,
+                        const Reader& r,
+                        const IntrinsicsKeys& top,
+                        bool time_required,
+                        bool* camera_angle_reported) {
+  PendingFrame pending;
+  pending.rank = SplitRank(file.split, false);
+  pending.json_path = file.path;
+  Frame& f = pending.frame;
+  f.split = file.split;
+  f.index = index;
+
+  if (obj.contains("file_path")) {
+    if (std::optional<std::string> path = r.String(obj, index, "file_path")) f.file_path = *path;
+  } else {
+    r.Problem(index, "file_path", "missing");
+  }
+  f.camera.world_from_cam_gl = ParseMatrix(r, obj, index);
+
+  if (obj.contains("time")) {
+    if (std::optional<double> t = r.Number(obj, index, "time")) {
+      if (*t < 0) {
+        r.Problem(index, "time", fmt::format("must not be negative, got {}", *t));
+      } else {
+        f.time_raw = *t;
+      }
+    }
+  } else if (time_required) {
+    r.Problem(index, "time", "missing (every frame needs a time)");
+  }
+
+  if (const auto it = obj.find("exposures"); it != obj.end()) {
+    // The reference reads a scalar; a one-element list is the same value.
+    const json* value = &*it;
+    if (it->is_array() && it->size() == 1) value = &(*it)[0];
+    if (!value->is_number()) {
+      r.Problem(index, "exposures", "expected a number (seconds), got " + Describe(*it));
+    } else {
+      const double e = value->get<double>();
+      if (!(std::isfinite(e) && e > 0)) {
+        r.Problem(index, "exposures", fmt::format("must be positive and finite, got {}", e));
+      } else {
+        f.exposure = e;
+        f.exposure_given = true;
+      }
+    }
+  }
+  if (std::optional<std::string> exr = r.String(obj, index, "exr_file_path")) {
+    f.exr_file_path = *exr;
+    f.hdr_path = (root / *exr).lexically_normal();
+  }
+  f.camera_id = r.Int(obj, index, "camera_id", 0).value_or(-1);
+  f.exposure_index = r.Int(obj, index, "exposure_index", 0).value_or(-1);
+  IntrinsicsKeys keys;
+  keys.Read(r, obj, index);
+  pending.keys = keys.Over(top);
+  if (!pending.keys.fl_x && !file.camera_angle_x && !*camera_angle_reported) {
+    r.Problem(
+        -1, "camera_angle_x",
+        fmt::format("missing, and frame {} gives no fl_x either (one of them is required)", index));
+    *camera_angle_reported = true;
+  }
+  return pending;
+}
+
+// HDR-NeRF: one frame per exposure of this view, "<file_path>_<k>.png" for k = 0, 1, ...
+void AddHdrNerfViews(const fs::path& root,
+                     const PendingFrame& pending,
+                     int index,
+                     const ExposureTable& hdrnerf,
+                     SplitFile& file) {
+  const Frame& f = pending.frame;
+  if (f.file_path.empty()) return;
+  int k = 0;
+  for (;; ++k) {
+    const std::string name = fmt::format("{}_{}.png", f.file_path, k);
+    const auto it = hdrnerf.values.find(name);
+    if (it == hdrnerf.values.end()) break;
+    PendingFrame view = pending;
+    view.frame.file_path = name;
+    view.frame.image_path = (root / name).lexically_normal();
+    view.frame.exposure_index = k;
+    view.frame.exposure_given = true;
+    if (!it->is_number() || !(std::isfinite(it->get<double>()) && it->get<double>() > 0)) {
+      hdrnerf.reader.Problem(index, name, "expected a positive exposure, got " + Describe(*it));
+    } else {
+      view.frame.exposure = it->get<double>();
+    }
+    file.frames.push_back(std::move(view));
+  }
+  if (k == 0) {
+    hdrnerf.reader.Problem(index, f.file_path + "_0.png", "missing: no exposure for this view");
+  }
+}
+
+}  // namespace
+
+std::string Describe(const json& value) { return JsonPreview(value, 40); }
+
+// Parses one transforms file into pending frames (images are checked later).
+void ParseSplitFile(const fs::path& root,
+                    SplitFile& file,
+                    const json& doc,
+                    const Reader& r,
+                    const ExposureTable* hdrnerf,
+                    bool time_optional) {
+  if (!doc.is_object()) {
+    r.Problem(-1, "", "expected a JSON object at the top level, got " + Describe(doc));
+    return;
+  }
+  file.camera_angle_x = r.Number(doc, -1, "camera_angle_x");
+  if (file.camera_angle_x &&
+      !(*file.camera_angle_x > 0 && *file.camera_angle_x < std::numbers::pi)) {
+    r.Problem(-1, "camera_angle_x",
+              fmt::format("{} radians is not in (0, pi)", *file.camera_angle_x));
+    file.camera_angle_x.reset();
+  }
+  file.near = r.Number(doc, -1, "near");
+  file.far = r.Number(doc, -1, "far");
+  IntrinsicsKeys top;
+  top.Read(r, doc, -1);
+
+  const auto frames_it = doc.find("frames");
+  if (frames_it == doc.end()) {
+    r.Problem(-1, "frames", "missing");
+    return;
+  }
+  if (!frames_it->is_array()) {
+    r.Problem(-1, "frames", "expected an array, got " + Describe(*frames_it));
+    return;
+  }
+  // An empty test or val split is legitimate (a capture without held-out views); an empty
+  // training set is not.
+  if (frames_it->empty() && file.split == Split::kTrain) r.Problem(-1, "frames", "no frames");
+  file.parsed = true;
+
+  bool camera_angle_reported = false;
+  const bool time_required = hdrnerf == nullptr && !time_optional;
+  for (std::size_t i = 0; i < frames_it->size(); ++i) {
+    const int index = static_cast<int>(i);
+    const json& obj = (*frames_it)[i];
+    if (!obj.is_object()) {
+      r.Problem(index, "", "expected a JSON object, got " + Describe(obj));
+      continue;
+    }
+    PendingFrame pending =
+        ParseFrame(root, file, obj, index, r, top, time_required, &camera_angle_reported);
+    if (hdrnerf != nullptr) {
+      AddHdrNerfViews(root, pending, index, *hdrnerf, file);
+      continue;
+    }
+    Frame& f = pending.frame;
+    if (!f.file_path.empty()) f.image_path = ResolveImagePath(root, f.file_path);
+    file.frames.push_back(std::move(pending));
+  }
+}
+
+SceneFiles ReadSceneFiles(const fs::path& root,
+                          const DatasetLoadOptions& options,
+                          ProblemSink& sink) {
+  SceneFiles scene;
+  std::error_code ec;
+  const fs::path nerfstudio_path = root / "transforms.json";
+  scene.nerfstudio =
+      !fs::exists(root / "transforms_train.json", ec) && fs::exists(nerfstudio_path, ec);
+  scene.hdrnerf = !scene.nerfstudio && fs::exists(root / "exposure_train.json", ec);
+  const bool nerfstudio = scene.nerfstudio, hdrnerf = scene.hdrnerf;
+  std::array<SplitFile, 3>& files = scene.files;
+  std::vector<fs::path>& json_files = scene.json_files;
+  std::optional<fs::path>& nerfstudio_ply = scene.nerfstudio_ply;
+  const Split splits[3] = {Split::kTrain, Split::kTest, Split::kVal};
+  for (int s = 0; s < 3; ++s) {
+    SplitFile& file = files[s];
+    file.split = splits[s];
+    file.path = root / fmt::format("transforms_{}.json", SplitName(file.split));
+    if (nerfstudio) {
+      if (s > 0) continue;  // one file holds every split
+      file.path = nerfstudio_path;
+    }
+    const Reader r(sink, SplitRank(file.split, false), file.path);
+    if (!fs::exists(file.path, ec)) {
+      if (file.split == Split::kTest && options.require_test) r.Problem(-1, "", "file not found");
+      continue;
+    }
+    json_files.push_back(file.path);
+    json doc;
+    try {
+      doc = ReadJsonFile(file.path);
+    } catch (const std::exception& e) {  // also nlohmann's number overflow (1e999)
+      r.Problem(-1, "", WithoutPathPrefix(e.what(), file.path));
+      continue;
+    }
+    std::optional<ExposureTable> table;
+    if (hdrnerf) {
+      const fs::path exposure_path = root / fmt::format("exposure_{}.json", SplitName(file.split));
+      const Reader er(sink, SplitRank(file.split, true), exposure_path);
+      json_files.push_back(exposure_path);
+      try {
+        table.emplace(ExposureTable{er, ReadJsonFile(exposure_path)});
+        if (!table->values.is_object()) {
+          er.Problem(-1, "", "expected an object mapping image names to exposures");
+          table.reset();
+        }
+      } catch (const std::exception& e) {
+        er.Problem(-1, "", WithoutPathPrefix(e.what(), exposure_path));
+      }
+      if (!table) continue;
+    }
+    ParseSplitFile(root, file, doc, r, table ? &*table : nullptr, nerfstudio);
+    if (nerfstudio && file.parsed) {
+      CheckNerfstudioCameraModel(doc, r);
+      SplitNerfstudio(root, doc, r, files);
+      if (const auto ply = r.String(doc, -1, "ply_file_path")) nerfstudio_ply = root / *ply;
+    }
+  }
+  return scene;
+}
+
+}  // namespace hdr4d::dataset_detail

@@ -1,0 +1,173 @@
+#include "core/files/output_guard.h"
+
+#include <sys/stat.h>
+
+#include <map>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <unordered_map>
+#include <utility>
+
+#include "core/util/error.h"
+#include "core/files/file_access.h"
+
+namespace hdr4d {
+namespace fs = std::filesystem;
+
+namespace {
+
+using FileId = std::pair<dev_t, ino_t>;
+
+std::optional<FileId> IdOf(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return std::nullopt;
+  return FileId{st.st_dev, st.st_ino};
+}
+
+// Protected paths of one kind (files or folders): by resolved path and by identity.
+struct Table {
+  std::unordered_map<std::string, std::string> role_by_key;
+  std::map<FileId, std::set<std::string>> keys_by_id;
+
+  void Add(const std::string& key, const std::string& role) {
+    role_by_key.emplace(key, role);
+    if (const auto id = IdOf(key)) keys_by_id[*id].insert(key);
+  }
+  // The role of the entry `key` matches, or nullptr. An identity match counts only while the
+  // protected path still is that file (it may have been removed and its inode reused).
+  const std::string* Match(const std::string& key, const std::optional<FileId>& id) const {
+    if (const auto it = role_by_key.find(key); it != role_by_key.end()) return &it->second;
+    if (!id) return nullptr;
+    const auto it = keys_by_id.find(*id);
+    if (it == keys_by_id.end()) return nullptr;
+    for (const std::string& protected_key : it->second) {
+      if (IdOf(protected_key) == id) return &role_by_key.at(protected_key);
+    }
+    return nullptr;
+  }
+};
+
+struct Registry {
+  std::mutex mutex;
+  int scopes = 0;  // registrations are kept only while a scope is open
+  Table files, folders;
+  std::multiset<std::string> permits;
+  std::unordered_map<std::string, std::string> folder_keys;  // folder as given -> its key
+};
+
+Registry& TheRegistry() {
+  static Registry registry;
+  return registry;
+}
+
+// Absolute, normalised, symlinks of the existing part resolved.
+std::string ResolvedKey(const fs::path& path) {
+  std::error_code ec;
+  const fs::path absolute = fs::absolute(path, ec);
+  fs::path resolved = fs::weakly_canonical(absolute, ec);
+  if (ec) resolved = absolute.lexically_normal();
+  std::string key = resolved.string();
+  while (key.size() > 1 && key.back() == '/') key.pop_back();
+  return key;
+}
+
+// The key of a file: its folder's key (cached: a dataset has thousands of files in a few
+// folders) joined with its name; a file that is itself a symlink is matched through its identity.
+std::string FileKey(Registry& r, const fs::path& file) {
+  const std::string folder = file.parent_path().string();
+  auto it = r.folder_keys.find(folder);
+  if (it == r.folder_keys.end())
+    it = r.folder_keys.emplace(folder, ResolvedKey(folder.empty() ? "." : folder)).first;
+  return (fs::path(it->second) / file.filename()).string();
+}
+
+std::string FolderOf(const std::string& key) { return fs::path(key).parent_path().string(); }
+
+}  // namespace
+
+void ProtectInputFile(const fs::path& file, const std::string& role) {
+  Registry& r = TheRegistry();
+  const std::lock_guard<std::mutex> lock(r.mutex);
+  if (r.scopes > 0) r.files.Add(FileKey(r, file), role);
+}
+
+void ProtectInputFolder(const fs::path& folder, const std::string& role) {
+  Registry& r = TheRegistry();
+  const std::lock_guard<std::mutex> lock(r.mutex);
+  if (r.scopes > 0) r.folders.Add(ResolvedKey(folder), role);
+}
+
+void ProtectInput(const fs::path& path, const std::string& role) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) {
+    ProtectInputFolder(path, role);
+  } else {
+    ProtectInputFile(path, role);
+  }
+}
+
+void CheckOutput(const fs::path& path) {
+  const std::string key = ResolvedKey(ResolveWriteTarget(path));
+  const std::string folder = FolderOf(key);
+  Registry& r = TheRegistry();
+  const std::lock_guard<std::mutex> lock(r.mutex);
+  if (r.permits.count(key) > 0) return;
+  if (const std::string* role = r.files.Match(key, IdOf(key))) {
+    Fail("{}: refusing to write: it is {}", path.string(), *role);
+  }
+  if (const std::string* role = r.folders.Match(folder, IdOf(folder))) {
+    Fail("{}: refusing to write into {}: it holds {}", path.string(), folder, *role);
+  }
+}
+
+void CheckOutputFolder(const fs::path& folder) {
+  const std::string key = ResolvedKey(ResolveWriteTarget(folder));
+  Registry& r = TheRegistry();
+  const std::lock_guard<std::mutex> lock(r.mutex);
+  const std::optional<FileId> id = IdOf(key);
+  if (const std::string* role = r.folders.Match(key, id)) {
+    Fail("{}: refusing to write into this folder: it holds {}", folder.string(), *role);
+  }
+  if (const std::string* role = r.files.Match(key, id)) {
+    Fail("{}: refusing to write: it is {}", folder.string(), *role);
+  }
+}
+
+bool SameFile(const fs::path& a, const fs::path& b) {
+  const std::string ka = ResolvedKey(ResolveWriteTarget(a)), kb = ResolvedKey(ResolveWriteTarget(b));
+  if (ka == kb) return true;
+  const std::optional<FileId> ia = IdOf(ka);
+  return ia && ia == IdOf(kb);
+}
+
+OutputPermit::OutputPermit(const std::vector<fs::path>& files) {
+  keys_.reserve(files.size());
+  for (const fs::path& f : files) keys_.push_back(ResolvedKey(ResolveWriteTarget(f)));
+  Registry& r = TheRegistry();
+  const std::lock_guard<std::mutex> lock(r.mutex);
+  for (const std::string& k : keys_) r.permits.insert(k);
+}
+
+OutputPermit::~OutputPermit() {
+  Registry& r = TheRegistry();
+  const std::lock_guard<std::mutex> lock(r.mutex);
+  for (const std::string& k : keys_) r.permits.erase(r.permits.find(k));
+}
+
+InputProtectionScope::InputProtectionScope() {
+  Registry& r = TheRegistry();
+  const std::lock_guard<std::mutex> lock(r.mutex);
+  ++r.scopes;
+}
+
+InputProtectionScope::~InputProtectionScope() {
+  Registry& r = TheRegistry();
+  const std::lock_guard<std::mutex> lock(r.mutex);
+  if (--r.scopes > 0) return;
+  r.files = {};
+  r.folders = {};
+  r.folder_keys.clear();
+}
+
+}  // namespace hdr4d

@@ -1,0 +1,111 @@
+#include "core/files/output_guard.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "core/files/atomic_file.h"
+#include "core/util/error.h"
+#include "tests/testing.h"
+
+namespace hdr4d {
+namespace {
+namespace fs = std::filesystem;
+using testing::ErrorOf;
+using testing::TempDir;
+
+TEST(OutputGuard, AProtectedFileIsRefusedUnderEverySpelling) {
+  TempDir dir;
+  const InputProtectionScope scope;
+  testing::WriteTextFile(dir / "gt" / "a.exr", "ground truth");
+  ProtectInputFile(dir / "gt" / "a.exr", "the ground truth");
+  fs::create_symlink(dir / "gt" / "a.exr", dir / "link.exr");
+  fs::create_hard_link(dir / "gt" / "a.exr", dir / "hard.exr");
+  for (const fs::path& p : {dir / "gt" / "a.exr", dir / "gt" / ".." / "gt" / "a.exr",
+                            dir / "link.exr", dir / "hard.exr"}) {
+    const std::string error = ErrorOf([&] { CheckOutput(p); });
+    EXPECT_NE(error.find(p.string() + ": refusing to write: it is the ground truth"),
+              std::string::npos)
+        << error;
+    // The writer asks the guard itself: the file keeps its content.
+    EXPECT_THROW(WriteTextFileAtomic(p, "overwritten"), Error);
+  }
+  EXPECT_EQ(testing::ReadTextFile(dir / "gt" / "a.exr"), "ground truth");
+  EXPECT_NO_THROW(CheckOutput(dir / "b.exr"));
+}
+
+TEST(OutputGuard, AFileThatDoesNotExistYetIsProtectedByItsPath) {
+  TempDir dir;
+  const InputProtectionScope scope;
+  ProtectInputFile(dir / "images" / "x.png", "an image of the dataset");
+  EXPECT_THROW(CheckOutput(dir / "images" / "x.png"), Error);
+}
+
+TEST(OutputGuard, NothingMayBeWrittenDirectlyInsideAProtectedFolder) {
+  TempDir dir;
+  const InputProtectionScope scope;
+  fs::create_directories(dir / "images" / "sub");
+  fs::create_symlink(dir / "images", dir / "alias");
+  ProtectInputFolder(dir / "images", "the images of the dataset");
+  for (const fs::path& p : {dir / "images" / "new.png", dir / "alias" / "new.png"}) {
+    const std::string error = ErrorOf([&] { CheckOutput(p); });
+    EXPECT_NE(error.find("refusing to write into"), std::string::npos) << error;
+    EXPECT_NE(error.find("the images of the dataset"), std::string::npos) << error;
+  }
+  EXPECT_THROW(CheckOutputFolder(dir / "images"), Error);
+  EXPECT_THROW(CheckOutputFolder(dir / "alias"), Error);
+  EXPECT_NO_THROW(CheckOutput(dir / "images" / "sub" / "x.png"));  // only direct children
+  EXPECT_NO_THROW(CheckOutputFolder(dir / "renders"));
+}
+
+TEST(OutputGuard, APermitLetsExactlyItsFilesThrough) {
+  TempDir dir;
+  const InputProtectionScope scope;
+  ProtectInputFolder(dir.path(), "the dataset");
+  {
+    const OutputPermit permit({dir / "images_a.png"});
+    EXPECT_NO_THROW(CheckOutput(dir / "images_a.png"));
+    EXPECT_THROW(CheckOutput(dir / "images_b.png"), Error);
+  }
+  EXPECT_THROW(CheckOutput(dir / "images_a.png"), Error);  // the permit ended
+}
+
+// Registrations belong to one command: without a scope nothing is recorded, and the end of the
+// scope forgets them (a long-running process runs commands one after another).
+TEST(OutputGuard, RegistrationsLastAsLongAsTheScope) {
+  TempDir dir;
+  ProtectInputFile(dir / "a.json", "input");
+  EXPECT_NO_THROW(CheckOutput(dir / "a.json"));
+  {
+    const InputProtectionScope scope;
+    ProtectInputFile(dir / "a.json", "input");
+    EXPECT_THROW(CheckOutput(dir / "a.json"), Error);
+  }
+  EXPECT_NO_THROW(CheckOutput(dir / "a.json"));
+}
+
+// A protected file that was replaced since (its inode now belongs to something else) does not
+// make an unrelated file with a reused inode unwritable.
+TEST(OutputGuard, IdentityMatchesOnlyWhileTheProtectedPathIsThatFile) {
+  TempDir dir;
+  const InputProtectionScope scope;
+  testing::WriteTextFile(dir / "in.txt", "x");
+  ProtectInputFile(dir / "in.txt", "input");
+  fs::rename(dir / "in.txt", dir / "moved.txt");
+  EXPECT_NO_THROW(CheckOutput(dir / "moved.txt"));
+  EXPECT_THROW(CheckOutput(dir / "in.txt"), Error);  // the path itself stays protected
+}
+
+TEST(OutputGuard, SameFileSeesThroughLinks) {
+  TempDir dir;
+  testing::WriteTextFile(dir / "a", "x");
+  fs::create_symlink(dir / "a", dir / "s");
+  fs::create_hard_link(dir / "a", dir / "h");
+  EXPECT_TRUE(SameFile(dir / "a", dir / "s"));
+  EXPECT_TRUE(SameFile(dir / "h", dir / "s"));
+  EXPECT_TRUE(SameFile(dir / "new", dir / "." / "new"));
+  EXPECT_FALSE(SameFile(dir / "a", dir / "new"));
+}
+
+}  // namespace
+}  // namespace hdr4d

@@ -1,0 +1,69 @@
+// Reading and writing images through OpenImageIO: OpenEXR (half or float), PNG (8 or 16 bit),
+// JPEG. Errors name the file and the problem; writes go through WriteFileAtomic (temporary file,
+// output guard, write-through for links and devices), so a failed write never leaves a
+// truncated image behind.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include "core/image/image.h"
+
+namespace hdr4d {
+
+enum class PixelFormat {
+  kAuto,    // EXR: half; PNG/JPEG: 8 bit
+  kUint8,   // PNG, JPEG
+  kUint16,  // PNG
+  kHalf,    // EXR
+  kFloat,   // EXR
+};
+
+struct ImageReadOptions {
+  // Reject NaN/Inf pixel values (EXR can hold them; a NeRF target must not).
+  bool require_finite = true;
+};
+
+class FileBatch;
+
+struct ImageWriteOptions {
+  PixelFormat format = PixelFormat::kAuto;
+  int jpeg_quality = 95;
+  // PNG only: zlib level 0 (none) .. 9 (smallest); -1 keeps OpenImageIO's default (6). Level 1
+  // writes an 800x800 render about 3x faster for files 30-45% larger (BENCHMARKS.md).
+  int png_compression = -1;
+  // Set: the image is one of a set moved into place together by batch->Commit()
+  // (core/files/atomic_file.h); null: it is moved into place at once.
+  FileBatch* batch = nullptr;
+};
+
+// True for file names whose format stores linear HDR values (.exr, .hdr).
+bool IsHdrPath(const std::filesystem::path& path);
+
+// Reads any format OpenImageIO knows. EXR/HDR come back Encoding::kLinear, integer formats
+// (PNG, JPEG, ...) come back Encoding::kSrgb with values scaled to [0,1] as stored.
+// Throws hdr4d::Error naming the file for a missing, unreadable, corrupt or non-finite image.
+Image ReadImage(const std::filesystem::path& path, const ImageReadOptions& options = {});
+
+// Only the header: size, channels, float or integer. Throws like ReadImage.
+struct ImageSpecInfo {
+  int width = 0;
+  int height = 0;
+  int channels = 0;
+  bool linear = false;  // float pixels (EXR/HDR: linear radiance), else integers (display-encoded)
+};
+ImageSpecInfo ReadImageSpec(const std::filesystem::path& path);
+
+// Writes by extension. Integer formats are written as stored values: the caller chooses the
+// encoding (ToSrgb before writing a linear image to PNG, or write the linear values on
+// purpose); values are clamped to [0,1] and rounded. EXR keeps values exactly (float) or
+// to half precision. Creates missing parent folders. Throws hdr4d::Error naming the file.
+void WriteImage(const std::filesystem::path& path,
+                const Image& image,
+                const ImageWriteOptions& options = {});
+
+// Fetches and drops the error messages OpenImageIO still holds (it prints unfetched ones when
+// the program exits, which would put them after hdr4d's own error line).
+void DiscardImageLibraryErrors();
+
+}  // namespace hdr4d

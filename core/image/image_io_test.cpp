@@ -1,0 +1,254 @@
+#include "core/image/image_io.h"
+
+#include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "core/util/error.h"
+#include "core/image/png_structure.h"
+#include "tests/testing.h"
+
+namespace hdr4d {
+namespace {
+
+using testing::RandomImage;
+using testing::TempDir;
+
+TEST(ImageIo, ExrFloatRoundTripIsExact) {
+  TempDir dir;
+  Image image = RandomImage(17, 9, 3, 1, -5.0f, 1e6f);
+  image.at(0, 0, 0) = 1e-7f;
+  WriteImage(dir / "a.exr", image, {.format = PixelFormat::kFloat});
+  const Image back = ReadImage(dir / "a.exr");
+  ASSERT_TRUE(back.SameShape(image));
+  EXPECT_EQ(back.encoding(), Encoding::kLinear);
+  for (std::size_t i = 0; i < image.size(); ++i)
+    ASSERT_EQ(back.values()[i], image.values()[i]) << i;
+}
+
+TEST(ImageIo, ExrHalfRoundTripWithinHalfPrecision) {
+  TempDir dir;
+  const Image image = RandomImage(8, 8, 4, 2, 0.0f, 1000.0f);
+  WriteImage(dir / "h.exr", image);  // half by default
+  const Image back = ReadImage(dir / "h.exr");
+  ASSERT_TRUE(back.SameShape(image));
+  for (std::size_t i = 0; i < image.size(); ++i) {
+    EXPECT_NEAR(back.values()[i], image.values()[i], std::abs(image.values()[i]) * 1e-3 + 1e-6);
+  }
+}
+
+TEST(ImageIo, Png8RoundTripIsExactOnCodes) {
+  TempDir dir;
+  Image image(5, 4, 3, Encoding::kSrgb);
+  for (std::size_t i = 0; i < image.size(); ++i)
+    image.values()[i] = static_cast<float>(i * 7 % 256) / 255.0f;
+  WriteImage(dir / "a.png", image);
+  const Image back = ReadImage(dir / "a.png");
+  ASSERT_TRUE(back.SameShape(image));
+  EXPECT_EQ(back.encoding(), Encoding::kSrgb);
+  for (std::size_t i = 0; i < image.size(); ++i)
+    EXPECT_FLOAT_EQ(back.values()[i], image.values()[i]);
+}
+
+TEST(ImageIo, Png16RoundTripIsExactOnCodes) {
+  TempDir dir;
+  Image image(6, 3, 1, Encoding::kSrgb);
+  for (std::size_t i = 0; i < image.size(); ++i)
+    image.values()[i] = static_cast<float>(i * 3001 % 65536) / 65535.0f;
+  WriteImage(dir / "a.png", image, {.format = PixelFormat::kUint16});
+  const Image back = ReadImage(dir / "a.png");
+  ASSERT_TRUE(back.SameShape(image));
+  for (std::size_t i = 0; i < image.size(); ++i)
+    EXPECT_NEAR(back.values()[i], image.values()[i], 1e-7);
+}
+
+TEST(ImageIo, PngClampsOutOfRangeValues) {
+  TempDir dir;
+  Image image(2, 1, 1, Encoding::kSrgb);
+  image.values() = {-0.5f, 7.0f};
+  WriteImage(dir / "c.png", image);
+  const Image back = ReadImage(dir / "c.png");
+  EXPECT_EQ(back.values()[0], 0.0f);
+  EXPECT_EQ(back.values()[1], 1.0f);
+}
+
+TEST(ImageIo, JpegLoadsCloseToWhatWasWritten) {
+  TempDir dir;
+  Image image(32, 32, 3, Encoding::kSrgb, 0.5f);
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) image.at(x, y, 0) = x / 31.0f;
+  WriteImage(dir / "a.jpg", image);
+  const Image back = ReadImage(dir / "a.jpg");
+  ASSERT_TRUE(back.SameShape(image));
+  double err = 0;
+  for (std::size_t i = 0; i < image.size(); ++i)
+    err += std::abs(back.values()[i] - image.values()[i]);
+  EXPECT_LT(err / image.size(), 0.02);
+}
+
+TEST(ImageIo, MissingFileNamesTheFile) {
+  TempDir dir;
+  try {
+    ReadImage(dir / "nope.png");
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("nope.png"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("not found"), std::string::npos);
+  }
+}
+
+TEST(ImageIo, CorruptFileIsAnError) {
+  TempDir dir;
+  testing::WriteTextFile(dir / "bad.png", "this is not a png");
+  EXPECT_THROW(ReadImage(dir / "bad.png"), Error);
+  // A PNG cut in half: the header reads, the pixels do not.
+  const Image image = RandomImage(64, 64, 3, 3, 0, 1, Encoding::kSrgb);
+  WriteImage(dir / "full.png", image);
+  const std::string bytes = testing::ReadTextFile(dir / "full.png");
+  testing::WriteTextFile(dir / "cut.png", bytes.substr(0, bytes.size() / 2));
+  try {
+    ReadImage(dir / "cut.png");
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("cut.png"), std::string::npos) << e.what();
+  }
+}
+
+// Issue 11, case 13: libpng printed "libpng error: ..." and OpenImageIO "PNG library error" on
+// stderr around hdr4d's own line. Broken PNGs are now found by their chunk structure before
+// libpng reads them, so stderr stays silent and the message says what is wrong.
+TEST(ImageIo, BrokenPngsAreReportedWithoutLibraryChatter) {
+  TempDir dir;
+  WriteImage(dir / "full.png", RandomImage(64, 64, 3, 3, 0, 1, Encoding::kSrgb));
+  const std::string bytes = testing::ReadTextFile(dir / "full.png");
+  testing::WriteTextFile(dir / "cut.png", bytes.substr(0, bytes.size() - 20));
+  testing::WriteTextFile(dir / "head.png", bytes.substr(0, 20));
+  std::string flipped = bytes;
+  flipped[bytes.size() / 2] = static_cast<char>(flipped[bytes.size() / 2] ^ 0x40);
+  testing::WriteTextFile(dir / "flip.png", flipped);
+  struct Case {
+    const char* name;
+    const char* problem;
+  };
+  for (const Case& c : {Case{"cut.png", "truncated PNG: it ends inside chunk"},
+                        Case{"head.png", "truncated PNG: it ends inside chunk IHDR"},
+                        Case{"flip.png", "fails its CRC check"}}) {
+    // stderr to a file for the duration of the read.
+    const std::string log = (dir / "stderr.txt").string();
+    std::fflush(stderr);
+    const int saved = dup(2);
+    FILE* f = std::fopen(log.c_str(), "w");
+    dup2(fileno(f), 2);
+    const std::string error = testing::ErrorOf([&] { ReadImage(dir / c.name); });
+    const std::string header_error = testing::ErrorOf([&] { ReadImageSpec(dir / c.name); });
+    std::fflush(stderr);
+    dup2(saved, 2);
+    close(saved);
+    std::fclose(f);
+    EXPECT_NE(error.find(std::string(c.name) + ": cannot read image: "), std::string::npos)
+        << error;
+    EXPECT_NE(error.find(c.problem), std::string::npos) << error;
+    EXPECT_EQ(testing::ReadTextFile(log), "") << c.name;
+    // Reading the header needs only the signature and IHDR.
+    EXPECT_EQ(header_error.empty(), std::string(c.name) != "head.png") << header_error;
+  }
+  EXPECT_EQ(PngStructureProblem(dir / "full.png", true), "");
+}
+
+TEST(ImageIo, NonFinitePixelIsRejectedWithItsPosition) {
+  TempDir dir;
+  Image image(4, 3, 3, Encoding::kLinear, 1.0f);
+  image.at(2, 1, 1) = std::numeric_limits<float>::quiet_NaN();
+  WriteImage(dir / "nan.exr", image, {.format = PixelFormat::kFloat});
+  try {
+    ReadImage(dir / "nan.exr");
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("nan.exr"), std::string::npos) << what;
+    EXPECT_NE(what.find("x=2, y=1"), std::string::npos) << what;
+  }
+  image.at(2, 1, 1) = std::numeric_limits<float>::infinity();
+  WriteImage(dir / "inf.exr", image, {.format = PixelFormat::kFloat});
+  EXPECT_THROW(ReadImage(dir / "inf.exr"), Error);
+  EXPECT_NO_THROW(ReadImage(dir / "inf.exr", {.require_finite = false}));
+}
+
+TEST(ImageIo, WriteThatFailsHalfwayKeepsTheOldFile) {
+  // A file-size limit makes the write fail after some bytes (as a full disk would), and works
+  // for root too, unlike a read-only folder.
+  TempDir dir;
+  const Image first(4, 4, 3, Encoding::kSrgb, 0.25f);
+  WriteImage(dir / "keep.exr", first);
+  const std::string before = testing::ReadTextFile(dir / "keep.exr");
+  rlimit old_limit{};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &old_limit), 0);
+  const auto old_handler = std::signal(SIGXFSZ, SIG_IGN);  // get EFBIG instead of a signal
+  rlimit small = old_limit;
+  small.rlim_cur = 4096;
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
+  std::string error;
+  try {
+    WriteImage(dir / "keep.exr", RandomImage(256, 256, 3, 9, 0, 1),
+               {.format = PixelFormat::kFloat});
+  } catch (const Error& e) {
+    error = e.what();
+  }
+  setrlimit(RLIMIT_FSIZE, &old_limit);
+  std::signal(SIGXFSZ, old_handler);
+  EXPECT_NE(error.find((dir / "keep.exr").string()), std::string::npos) << error;
+  EXPECT_EQ(testing::ReadTextFile(dir / "keep.exr"), before);
+  // No temporary file is left behind.
+  int files = 0;
+  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    ++files;
+  EXPECT_EQ(files, 1);
+}
+
+TEST(ImageIo, WriteWhereNoFileCanBeCreatedIsAnError) {
+  // /proc refuses new files even for root, so this runs everywhere.
+  try {
+    WriteImage("/proc/hdr4d_cannot_write/a.exr", Image(2, 2, 3));
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("/proc/hdr4d_cannot_write/a.exr"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(ImageIo, WriteToAFileInPlaceOfAFolderIsAnError) {
+  TempDir dir;
+  testing::WriteTextFile(dir / "blocker", "x");
+  try {
+    WriteImage(dir / "blocker" / "a.png", Image(2, 2, 3, Encoding::kSrgb));
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("a.png"), std::string::npos);
+  }
+}
+
+TEST(ImageIo, UnsupportedExtensionAndFormatMismatchAreErrors) {
+  TempDir dir;
+  const Image image(2, 2, 3);
+  EXPECT_THROW(WriteImage(dir / "a.bmpx", image), Error);
+  EXPECT_THROW(WriteImage(dir / "a.png", image, {.format = PixelFormat::kFloat}), Error);
+  EXPECT_THROW(WriteImage(dir / "a.exr", image, {.format = PixelFormat::kUint8}), Error);
+}
+
+TEST(Image, SrgbConversionsInvertEachOther) {
+  for (float v = 0.0f; v <= 1.0f; v += 0.01f) EXPECT_NEAR(SrgbToLinear(LinearToSrgb(v)), v, 1e-6);
+  EXPECT_NEAR(LinearToSrgb(0.18f), 0.4613f, 1e-3);  // middle grey
+  Image linear(1, 1, 4, Encoding::kLinear, 0.18f);
+  const Image encoded = ToSrgb(linear);
+  EXPECT_EQ(encoded.encoding(), Encoding::kSrgb);
+  EXPECT_NEAR(encoded.values()[0], 0.4613f, 1e-3);
+  EXPECT_FLOAT_EQ(encoded.values()[3], 0.18f);  // alpha untouched
+}
+
+}  // namespace
+}  // namespace hdr4d

@@ -1,0 +1,225 @@
+#include "core/radiometry/exposure_stack.h"
+
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include <map>
+#include <set>
+#include <vector>
+
+#include "core/files/atomic_file.h"
+#include "core/dataset/dataset.h"
+#include "core/dataset/dataset_image_rules.h"
+#include "core/util/error.h"
+#include "core/files/file_access.h"
+#include "core/image/image_io.h"
+#include "core/files/json_util.h"
+#include "core/files/output_guard.h"
+#include "core/util/parallel.h"
+#include "core/util/progress.h"
+
+namespace hdr4d {
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr const char* kManifestName = "synthesis.json";
+
+// SplitMix64 finaliser: decorrelates per-frame seeds derived from one user seed.
+std::uint64_t MixSeed(std::uint64_t x) {
+  x += 0x9e3779b97f4a7c15ULL;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+  return x ^ (x >> 31);
+}
+
+std::vector<const Frame*> FramesOfSplit(const Dataset& dataset, const std::string& split) {
+  std::vector<const Frame*> frames;
+  for (const Frame* f : dataset.AllFrames()) {
+    if (split == "all" || split == SplitName(f->split)) frames.push_back(f);
+  }
+  return frames;
+}
+
+}  // namespace
+
+void DatasetSynthesisOptions::Validate() const {
+  ParseCrf(crf);  // throws with a clear message for a bad spec
+  LdrSynthesisOptions probe;
+  probe.noise = noise;
+  probe.bits = bits;
+  probe.Validate();
+  if (bits == 0) Fail("synth-ldr: a dataset's LDR images are integer PNGs; use 8 or 16 bits");
+  if (!std::isfinite(gain_drift) || std::abs(gain_drift) > 20)
+    Fail("synth-ldr: gain drift {} must be finite and within [-20, 20]", gain_drift);
+}
+
+int SynthesizeDatasetLdr(const fs::path& root, const DatasetSynthesisOptions& options) {
+  options.Validate();
+  const std::unique_ptr<Crf> crf = ParseCrf(options.crf);
+  const Dataset dataset =
+      LoadDataset(root, {.image_check = ImageCheck::kNone, .require_test = false});
+  std::vector<const Frame*> frames = dataset.AllFrames();
+  for (const Frame* f : frames) {
+    if (!f->hdr_path) {
+      Fail(
+          "{}: frame {} ({}) has no exr_file_path: LDR synthesis needs HDR ground truth for every "
+          "frame",
+          (root / fmt::format("transforms_{}.json", SplitName(f->split))).string(), f->index,
+          f->file_path);
+    }
+  }
+  if (frames.empty()) Fail("{}: the dataset has no frames", root.string());
+
+  // The LDR images are this command's outputs, the HDR images its inputs: an LDR path that is an
+  // HDR file would destroy ground truth, so it is refused before anything is written.
+  std::map<fs::path, const Frame*> hdr_inputs;
+  for (const Frame* f : frames) hdr_inputs.emplace(fs::weakly_canonical(*f->hdr_path), f);
+  std::vector<fs::path> outputs = {root / kManifestName};
+  for (const Frame* f : frames) {
+    if (const auto it = hdr_inputs.find(fs::weakly_canonical(f->image_path));
+        it != hdr_inputs.end()) {
+      Fail("{}: frame {}: file_path {} is the exr_file_path of {} frame {}: synthesising LDR there "
+           "would overwrite the HDR ground truth",
+           (root / fmt::format("transforms_{}.json", SplitName(f->split))).string(), f->index,
+           f->file_path, SplitName(it->second->split), it->second->index);
+    }
+    outputs.push_back(f->image_path);
+  }
+  // Writing a dataset's LDR images is this command's job: the output guard lets exactly these
+  // files through (core/files/output_guard.h), nothing else in the dataset's folders.
+  const OutputPermit permit(outputs);
+  // Every HDR image's size against its frames' cameras, from the headers, before any work.
+  std::map<fs::path, std::vector<const Frame*>> by_hdr;
+  for (const Frame* f : frames) by_hdr[*f->hdr_path].push_back(f);
+  for (const auto& [hdr_path, users] : by_hdr) {
+    const ImageSpecInfo spec = ReadImageSpec(hdr_path);
+    for (const Frame* f : users) {
+      // The LDR image gets the camera's size: an HDR image of another size would make a
+      // dataset whose images disagree with its JSON.
+      const PinholeIntrinsics& k = f->camera.intrinsics;
+      if (spec.width != k.width || spec.height != k.height) {
+        Fail("{}: HDR image is {}x{}, but the camera of frame {} of transforms_{}.json is {}x{}",
+             hdr_path.string(), spec.width, spec.height, f->index, SplitName(f->split), k.width,
+             k.height);
+      }
+    }
+  }
+
+  // Grouped by HDR file so each EXR is decoded once however many exposures use it.
+  std::vector<std::pair<fs::path, std::vector<const Frame*>>> groups(by_hdr.begin(), by_hdr.end());
+  // All or nothing: a bad HDR image found halfway leaves the previous LDR images, not a mix.
+  FileBatch batch;
+
+  Progress progress("synth-ldr", static_cast<std::int64_t>(frames.size()));
+  std::vector<int> written(groups.size(), 0);
+  // One group per task; inside SynthesizeLdr the pixels run in parallel too.
+  ParallelFor(static_cast<std::int64_t>(groups.size()), 1, [&](std::int64_t g) {
+    const fs::path& hdr_path = groups[g].first;
+    const Image hdr = ReadHdrGroundTruth(hdr_path);
+    for (const Frame* f : groups[g].second) {
+      if (!options.overwrite && PathExists(f->image_path)) {
+        progress.Advance();
+        continue;
+      }
+      LdrSynthesisOptions ldr;
+      ldr.exposure = f->exposure * std::exp(options.gain_drift * (f->time - 0.5));
+      ldr.bits = options.bits;
+      ldr.noise = options.noise;
+      ldr.noise.seed =
+          MixSeed(options.noise.seed ^ MixSeed(static_cast<std::uint64_t>(f->split) << 32 |
+                                               static_cast<std::uint32_t>(f->index)));
+      Image image;
+      try {
+        image = SynthesizeLdr(hdr.Rgb(), *crf, ldr);
+      } catch (const Error& e) {
+        Fail("{}: {}", hdr_path.string(), e.what());
+      }
+      WriteImage(f->image_path, image,
+                 {.format = options.bits == 16 ? PixelFormat::kUint16 : PixelFormat::kUint8,
+                  .batch = &batch});
+      ++written[g];
+      progress.Advance();
+    }
+  });
+  progress.Finish();
+  batch.Commit();
+
+  nlohmann::json manifest = {
+      {"crf", crf->ToJson()},
+      {"crf_spec", crf->Spec()},
+      {"bits", options.bits},
+      {"gain_drift", options.gain_drift},
+      {"noise",
+       {{"full_well", options.noise.full_well},
+        {"read_sigma", options.noise.read_sigma},
+        {"seed", options.noise.seed}}},
+      {"frames", frames.size()},
+  };
+  WriteJsonFile(root / kManifestName, manifest);
+  int total = 0;
+  for (int w : written) total += w;
+  return total;
+}
+
+void MergeOptions::Validate() const {
+  if (split != "train" && split != "test" && split != "val" && split != "all") {
+    Fail("merge-hdr: unknown split '{}' (use train, test, val or all)", split);
+  }
+  if (!crf.empty()) ParseCrf(crf);
+}
+
+int MergeDatasetExposures(const fs::path& root, const fs::path& out, const MergeOptions& options) {
+  options.Validate();
+  std::string crf_spec = options.crf;
+  if (crf_spec.empty()) {
+    const fs::path manifest = root / kManifestName;
+    if (!PathExists(manifest)) {
+      Fail("{}: not found, so the camera response is unknown; pass --crf", manifest.string());
+    }
+    const nlohmann::json j = ReadJsonFile(manifest);
+    if (!j.contains("crf_spec") || !j["crf_spec"].is_string())
+      Fail("{}: key 'crf_spec' missing or not a string", manifest.string());
+    crf_spec = j["crf_spec"].get<std::string>();
+  }
+  const std::unique_ptr<Crf> crf = ParseCrf(crf_spec);
+  if (!crf->Invertible()) Fail("merge-hdr: the camera response '{}' is not invertible", crf_spec);
+  const Dataset dataset =
+      LoadDataset(root, {.image_check = ImageCheck::kHeaders, .require_test = false});
+
+  std::map<fs::path, std::vector<const Frame*>> by_hdr;
+  for (const Frame* f : FramesOfSplit(dataset, options.split)) {
+    if (f->hdr_path) by_hdr[*f->hdr_path].push_back(f);
+  }
+  if (by_hdr.empty())
+    Fail("{}: no {} frame has an exr_file_path to merge towards", root.string(), options.split);
+  // Before any work: the output folder may not be one of the dataset's image folders.
+  CheckOutputFolder(out);
+  std::set<std::string> names;
+  for (const auto& [hdr, frames] : by_hdr) {
+    if (!names.insert(hdr.filename().string()).second) {
+      Fail("{}: two HDR files share the name {}; merged outputs would overwrite each other",
+           root.string(), hdr.filename().string());
+    }
+  }
+  std::vector<std::pair<fs::path, std::vector<const Frame*>>> groups(by_hdr.begin(), by_hdr.end());
+  FileBatch batch;  // all merged images or none
+  Progress progress("merge-hdr", static_cast<std::int64_t>(groups.size()));
+  ParallelFor(static_cast<std::int64_t>(groups.size()), 1, [&](std::int64_t g) {
+    std::vector<Image> stack;
+    std::vector<double> exposures;
+    for (const Frame* f : groups[g].second) {
+      stack.push_back(ReadImage(f->image_path).Rgb());
+      exposures.push_back(f->exposure);
+    }
+    WriteImage(out / groups[g].first.filename(), MergeExposures(stack, exposures, *crf),
+               {.format = PixelFormat::kFloat, .batch = &batch});
+    progress.Advance();
+  });
+  progress.Finish();
+  batch.Commit();
+  return static_cast<int>(groups.size());
+}
+
+}  // namespace hdr4d

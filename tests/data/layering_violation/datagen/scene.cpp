@@ -1,0 +1,2 @@
+// Test data: datagen may not include method/.
+#include "method/x.h"

@@ -1,4 +1,0 @@
-// A fixture for method/Layering.CatchesAnUpwardInclude: the rasteriser must not include the
-// trainer, so the layering check has to name this file and this include.
-#include "method/raster/blend.h"
-#include "method/train/trainer.h"
