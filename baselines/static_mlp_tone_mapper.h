@@ -5,9 +5,9 @@
 //
 // Two exact evaluations: `direct` runs method::MlpForward / MlpBackward per value; the default
 // (ToneMapperConfig::tabulated, the same switch as the Dynamic Tone Mapper's fast path) uses the
-// network's piecewise-linear form (baselines/static_mlp_curve.h), much faster (BENCHMARKS.md) and
-// equal to the direct path up to float rounding (tested), so the baseline is not slowed by its
-// evaluator.
+// network's piecewise-linear form (baselines/static_mlp_curve.h), much faster
+// (docs/history/tone-mappers.md) and equal to the direct path up to float rounding (tested), so the
+// baseline is not slowed by its evaluator.
 //
 // Like HDR-GS it starts from PyTorch's default initialisation with no pretraining. By default
 // (ToneMapperConfig::monotone_curves) its weights are used as monotone_mlp.h says, so each curve

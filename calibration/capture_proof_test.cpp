@@ -1,8 +1,8 @@
 // The whole chain on a rig with known truth: `hdr4d datagen --capture` renders the room for six
 // fixed cameras with unlike gains (320x240, six hand-held views, brackets two stops apart),
 // `hdr4d calibrate --truth` runs COLMAP, the Ceres refinement, the response recovery, fusion
-// and gains on it and compares each with the truth. BENCHMARKS.md has the numbers of a larger
-// run with training (benchmark/proofs/capture_proof.sh); the bounds here leave room for
+// and gains on it and compares each with the truth. docs/history/calibration.md has the numbers
+// of a larger run with training (benchmark/proofs/capture_proof.sh); the bounds here leave room for
 // COLMAP's run-to-run differences.
 // Skipped, with the reason, where Blender or COLMAP is not installed.
 #include <gtest/gtest.h>

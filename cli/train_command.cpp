@@ -141,7 +141,8 @@ void AddTrainCommand(CLI::App& app) {
                   "Gaussian budget (the reference's densify_until_num_points): densification "
                   "never takes the count past N, keeping the clone/split candidates with the "
                   "largest gradients; 0 = no budget (default: 2 x the pixels of one training "
-                  "view, of every view for a static scene, at least 32768; BENCHMARKS.md)")
+                  "view, of every view for a static scene, at least 32768; "
+                  "docs/history/gaussian-budget.md)")
       ->check(Integer(0, std::int64_t{1} << 40));
   cmd->add_option("--config", *config,
                   "Training configuration: a JSON file of option names and values "
@@ -250,7 +251,7 @@ void AddTrainCommand(CLI::App& app) {
           ->capture_default_str();
   cmd->add_flag("--monotone-tone-curves", flags->monotone_curves,
                 "Tone-curve MLPs (dtm, mlp) non-decreasing in log exposure by construction "
-                "instead of the reference's free ones (BENCHMARKS.md, issue 12: no better once "
+                "instead of the reference's free ones (docs/history/accuracy.md: no better once "
                 "log colours learn at --color-lr's default)");
   cmd->add_flag("--direct-tone-curves", flags->direct_curves,
                 "Evaluate the tone-curve MLP per value instead of the per-frame table");
@@ -266,14 +267,14 @@ void AddTrainCommand(CLI::App& app) {
          },
          "Learning rate of the colours' DC term (default: the reference's 2.5e-3 for LDR "
          "colours, 0.04 for log-HDR colours, which span about ten log units where LDR colours "
-         "span one: slower, the tone curve squeezes the HDR instead; BENCHMARKS.md, issue 12)")
+         "span one: slower, the tone curve squeezes the HDR instead; docs/history/accuracy.md)")
       ->check(Real(1e-9, 10));
   CLI::Option* pixel_log_epsilon_flag =
       cmd->add_option("--pixel-log-epsilon", flags->pixel_log_epsilon,
                       "Floor of the pixel branch's log(HDR + eps) (default: the reference's 1e-5 "
                       "under LDR supervision alone, 1e-8 when an HDR term sets the raster's units: "
                       "at 1e-5 of the target's maximum the darkest pixels the brackets record "
-                      "look black to the pixel branch; BENCHMARKS.md, issue 12)")
+                      "look black to the pixel branch; docs/history/accuracy.md)")
           ->check(Real(1e-30, 1));
   cmd->add_option("--hdr-target", flags->hdr_target,
                   "Target of the HDR term: image-max (the reference: mu-law, mu 5000, of each "
@@ -287,14 +288,15 @@ void AddTrainCommand(CLI::App& app) {
       "The HDR term trains the colours only: its gradient does not reach the means, covariances "
       "and opacities (nor the densification statistics), which follow the LDR terms alone. "
       "Under LDR+HDR it recovers about half of the held-out LDR the HDR term otherwise costs, "
-      "and gives up part of its HDR gain (BENCHMARKS.md, issue 12 §3). Needs an LDR term");
+      "and gives up part of its HDR gain (docs/history/accuracy.md). Needs an LDR term");
   CLI::Option* hdr_head_flag = cmd->add_flag(
       "--hdr-head", flags->hdr_head,
       "LDR+HDR as an HDR head (not the paper's joint training): train on the LDR images exactly "
       "as --supervision ldr does, then fit a log-radiance offset per Gaussian, used by the HDR "
       "output only, to the HDR ground truth with everything else frozen. The LDR output is LDR "
-      "alone's bit for bit, the HDR gains most of the joint term's accuracy (BENCHMARKS.md, "
-      "issue 12 §3). Needs --supervision ldr+hdr (or auto on a scene with HDR ground truth). "
+      "alone's bit for bit, the HDR gains most of the joint term's accuracy "
+      "(docs/history/accuracy.md). Needs --supervision ldr+hdr (or auto on a scene with HDR "
+      "ground truth). "
       "With --resume it also turns a --supervision ldr run into such a run, whose loop it has "
       "already trained, and fits the head");
   CLI::Option* hdr_head_iterations_flag =

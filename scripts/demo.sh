@@ -24,7 +24,7 @@ echo "== 4. merge each test view's exposure bracket back to HDR"
 echo "== 5. score the merged HDR against the ground truth"
 "$HDR4D" eval "$OUT/merged" "$OUT/scene/hdr" --out "$OUT/eval.json"
 echo "== 6. train HDR-4DGS (Dynamic Tone Mapper) from the LDR brackets alone, no HDR supervision"
-# Default schedules: they follow --iterations (BENCHMARKS.md, issue 12).
+# Default schedules: they follow --iterations (docs/history/accuracy.md, issue 12 §1).
 "$HDR4D" train --data "$OUT/scene" --out "$OUT/hdr_run" --supervision ldr --iterations 3000
 echo "== 7. render its held-out camera (LDR PNG + HDR EXR), score both, plot the learned tone curves"
 "$HDR4D" render --run "$OUT/hdr_run" --split test

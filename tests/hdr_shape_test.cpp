@@ -5,8 +5,8 @@
 //
 // The log-log slope of the held-out HDR against the truth was 0.30 while log-HDR colours learned
 // at the reference's 2.5e-3: the tone curve learned one branch per exposure and squeezed the
-// HDR. At the log-HDR rate (lr_schedule.h, f_dc_lr_log_hdr) it is 0.69 (BENCHMARKS.md, "Why the
-// learned HDR had the wrong shape"); held-out geometry error alone keeps it below 1 here.
+// HDR. At the log-HDR rate (lr_schedule.h, f_dc_lr_log_hdr) it is 0.69 (docs/history/accuracy.md,
+// "Why the learned HDR had the wrong shape"); held-out geometry error alone keeps it below 1 here.
 // The log correlation counts the held-out camera's holes (measured pixels the model renders
 // black) since the metric stopped dropping them (core/metrics/hdr_alignment.h): 0.70 on the 2026-11-27
 // host with the fixed background of the time, where dropping them gave more than 0.75; hence
@@ -18,10 +18,11 @@
 // pixels sit, and while log colours started 10^3x too bright for the HDR term (with the pixel
 // branch alone: 12.5 against 25.3 dB on standup). One run cannot hold it to "no worse": on
 // studio LDR+HDR is 0.49 dB below LDR alone on average with a per-seed spread of about 0.6 dB
-// (8 seeds, BENCHMARKS.md, "A scale-invariant HDR term"), and which seed is unlucky depends on
-// the host as well (likely the SIMD kernels' per-CPU rounding): on one host this run gave 21.69
-// against 21.50 dB, on the 2026-11-26 sixth-pass host 19.67 against 21.42, with the same code. So the
-// test guards against a collapse (more than 3 dB) and checks that the HDR term shows in the HDR.
+// (8 seeds, docs/history/accuracy.md, "A scale-invariant HDR term"), and which seed is unlucky
+// depends on the host as well (likely the SIMD kernels' per-CPU rounding): on one host this run
+// gave 21.69 against 21.50 dB, on the 2026-11-26 sixth-pass host 19.67 against 21.42, with the same
+// code. So the test guards against a collapse (more than 3 dB) and checks that the HDR term shows
+// in the HDR.
 #include <gtest/gtest.h>
 
 #include <cstdlib>

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# The real-photo proofs of `hdr4d calibrate` in BENCHMARKS.md: Debevec's memorial stack through
-# the radiometry stage, Sceaux castle through the geometry stage (its focal length against the
-# photographer's K.txt). Usage: bash benchmark/proofs/calibration_proofs.sh [WORK_DIR] [COLMAP_MAX_IMAGE_SIZE]
+# The real-photo proofs of `hdr4d calibrate` in docs/history/calibration.md: Debevec's memorial
+# stack through the radiometry stage, Sceaux castle through the geometry stage (its focal length
+# against the photographer's K.txt).
+# Usage: bash benchmark/proofs/calibration_proofs.sh [WORK_DIR] [COLMAP_MAX_IMAGE_SIZE]
 set -euo pipefail
 here="$(cd "$(dirname "$0")/../.." && pwd)"  # the repository root
 data="$here/../shared/data"

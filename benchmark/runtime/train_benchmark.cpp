@@ -1,7 +1,7 @@
 // Whole-pipeline speed of the 4DGS engine: one frame's preprocess, forward render, backward,
 // the loss, the Adam step and a full training iteration, on random 4D Gaussians filling the view
 // (Gaussian size chosen so that about 35 contribute per pixel at 200x200 with 20k, as the
-// target in BENCHMARKS.md assumes). Args: image size, Gaussians (thousands).
+// target in docs/history/engine-speed.md assumes). Args: image size, Gaussians (thousands).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>

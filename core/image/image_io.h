@@ -30,7 +30,8 @@ struct ImageWriteOptions {
   PixelFormat format = PixelFormat::kAuto;
   int jpeg_quality = 95;
   // PNG only: zlib level 0 (none) .. 9 (smallest); -1 keeps OpenImageIO's default (6). Level 1
-  // writes an 800x800 render about 3x faster for files 30-45% larger (BENCHMARKS.md).
+  // writes an 800x800 render about 3x faster for files 30-45% larger
+  // (docs/history/render-speed.md).
   int png_compression = -1;
   // Set: the image is one of a set moved into place together by batch->Commit()
   // (core/files/atomic_file.h); null: it is moved into place at once.

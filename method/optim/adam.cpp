@@ -1,6 +1,6 @@
 // Adam. The element update is written with Highway and compiled once per x86 target (AVX-512,
 // AVX2, the baseline), picked at run time: without -fno-math-errno the compiler will not
-// vectorise std::sqrt, and the scalar loop was compute-bound (timings: BENCHMARKS.md).
+// vectorise std::sqrt, and the scalar loop was compute-bound (docs/history/engine-speed.md).
 #include "method/optim/adam.h"
 
 #include <fmt/format.h>

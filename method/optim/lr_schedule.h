@@ -85,7 +85,7 @@ inline int StepsForRunLength(int reference_steps, int iterations) {
 // of one view), hence the floor, 2 x 128 x 128. It is a ceiling against runaway growth in long
 // runs: capped there, a four-camera rig was better on held-out views than growing freely and an
 // eight-camera one 0.36 dB worse; 2 x keeps the paper's Syn configuration (four 400 px cameras)
-// under 2 GB (BENCHMARKS.md, "Gaussian budget (issue 15)").
+// under 2 GB (docs/history/gaussian-budget.md).
 inline constexpr double kGaussiansPerPixel = 2.0;
 inline constexpr std::int64_t kMinGaussianBudget = 32768;
 inline std::int64_t DefaultGaussianBudget(double pixels) {
@@ -107,7 +107,7 @@ inline std::int64_t DefaultGaussianBudget(double pixels) {
 // used as it is. The densification interval and the colour-degree interval stay the
 // reference's: scaled down they densify and unlock SH detail too often for the views a step
 // sees (a 3000-iteration run on the known Gaussian scene: 28.5 dB scaled, 31.8 dB not;
-// BENCHMARKS.md, issue 12).
+// docs/history/accuracy.md, issue 12 §1).
 struct OptimizationOptions {
   int iterations = 20000;
   int batch_size = 1;  // camera/time samples per step; losses are divided by it
@@ -126,7 +126,7 @@ struct OptimizationOptions {
   // The colours' DC when they are log-HDR (Resolved(.., true) uses it for f_dc_lr): 16x the
   // reference's. Log colours span about ten units (ln of a 1e4:1 scene) where LDR colours span
   // one, and at 2.5e-3 they cannot spread that far in a run: the tone curve squeezes the HDR
-  // instead (slope 0.27 of the truth's; 0.79 at 0.04; issue 12, BENCHMARKS.md).
+  // instead (slope 0.27 of the truth's; 0.79 at 0.04; docs/history/accuracy.md).
   double f_dc_lr_log_hdr = 4e-2;
   double f_rest_lr = 2.5e-3 / 20.0;
   double opacity_lr = 0.05;
@@ -147,7 +147,7 @@ struct OptimizationOptions {
   double densify_grad_threshold = kFollowRunLength;  // scaled: 2e-4 at 400 px, x 400 / size
   double percent_dense = 0.01;
   // Resolved to the reference's 3000 whatever the run length: scaled resets (every 450 of 3000
-  // iterations) leave the model no time to recover between them (issue 12, BENCHMARKS.md).
+  // iterations) leave the model no time to recover between them (docs/history/accuracy.md).
   int opacity_reset_interval = kFollowRunLength;
   double prune_opacity = 0.005;
   int sh_increase_interval = 1000;

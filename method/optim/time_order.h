@@ -4,7 +4,7 @@
 // walks the model in index order. Densification appends its clones and children at the end, so
 // after a few rounds a frame's Gaussians are scattered through hundreds of MB and each pass
 // streams the culled rows between them. Sorted by the time their window opens, the Gaussians a
-// frame keeps sit together (measured: BENCHMARKS.md, issue 15's nineteenth pass).
+// frame keeps sit together (measured: docs/history/real-run-speed.md, issue 15's nineteenth pass).
 //
 // The trainer reorders a 4D model after initialisation and after every densification, both
 // deterministic points of a run (a resumed run reorders where the uninterrupted one does).

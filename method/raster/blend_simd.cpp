@@ -30,7 +30,7 @@
 // The channel count is a template parameter for 1, 3, 4 and 6 channels (accumulators in
 // registers) and a run-time value otherwise (accumulators in L1).
 //
-// Timings: benchmark/runtime/raster_benchmark, recorded in BENCHMARKS.md.
+// Timings: benchmark/runtime/raster_benchmark, recorded in BENCHMARKS.md (history: docs/history/).
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "method/raster/blend_simd.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
@@ -747,7 +747,7 @@ void ForwardTileImpl(const TileJob& job, int tile) {
         BlendStep<kC, kKeep>(r, j, channels, px, py_b, b);
         // Tested every step, and on `done` alone: a first test of whether any pixel stopped at
         // this step (to skip the second) was a branch on the data, mispredicted at every stop,
-        // and cost the forward 11% (a real 800x800 model's views, BENCHMARKS.md, issue 15).
+        // and cost the forward 11% (a real 800x800 model's views, docs/history/real-run-speed.md).
         if (hn::AllTrue(d, hn::And(a.done, b.done))) break;
       }
       write(va, a);

@@ -2,7 +2,7 @@
 // reference trains on a fixed black background): one colour behind every Gaussian, the same in
 // every view and at every time. Why: a uniform sky or backdrop on a fixed background has to be
 // built from Gaussians, and with few, widely spaced cameras nothing fixes their depth, so they
-// float in front of the scene from a held-out camera (BENCHMARKS.md, issues 12 and 15). One
+// float in front of the scene from a held-out camera (docs/history/accuracy.md). One
 // learned value per channel explains such a backdrop at infinity instead.
 //
 // For log-HDR colours the value b is a log radiance, blended the way a Gaussian's colour is
@@ -17,9 +17,10 @@
 // segment, O(step^2) elsewhere), and the curve's parameters get no gradient from the backdrop.
 // With the curve's gradient, the backdrop's many pixels bent the curve's dark end towards a
 // value no Gaussian has: on studio (a black backdrop) held-out LDR fell 0.24 dB below the fixed
-// background and the HDR's log correlation from 0.90 to 0.85; without it, -0.07 dB (BENCHMARKS.md,
-// "A learned background"). The 2D branch still maps the blended HDR, backdrop included, through
-// the curve with its full gradient, as it maps a fixed background's pixels.
+// background and the HDR's log correlation from 0.90 to 0.85; without it, -0.07 dB
+// (docs/history/accuracy.md, "A learned background"). The 2D branch still maps the blended HDR,
+// backdrop included, through the curve with its full gradient, as it maps a fixed background's
+// pixels.
 #pragma once
 
 #include <nlohmann/json.hpp>

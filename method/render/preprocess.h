@@ -9,7 +9,8 @@
 //   - the fast path, float only, 4D and 3D: the Highway kernels of preprocess_simd.h over batches
 //     of 16 Gaussians (runtime dispatch over the compiled targets), the colour sums per Gaussian.
 //     The 3D mode matters as much as the 4D one: every static scene trains a 3D model, and there
-//     the reference preprocess was a third of a real training iteration (BENCHMARKS.md, issue 15).
+//     the reference preprocess was a third of a real training iteration
+//     (docs/history/real-run-speed.md).
 // PreprocessForward / PreprocessBackward pick the fast path where it applies.
 #pragma once
 

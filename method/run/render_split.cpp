@@ -221,7 +221,7 @@ int RenderRun(const RenderRunOptions& options) {
   // halfway never leaves new renders mixed with an earlier run's (core/files/atomic_file.h).
   FileBatch batch;
   // A view's files are written on another thread while the next view renders (writing took
-  // several times the render: BENCHMARKS.md, issue 15), one view at a time; not with one
+  // several times the render: docs/history/render-speed.md), one view at a time; not with one
   // thread, nor with --timing, whose render times must not share the cores with a writer.
   // Declared after the batch: an unfinished write ends before the batch drops its files.
   const bool overlap_writes = MaxThreads() > 1 && options.timing.empty();

@@ -46,7 +46,7 @@ struct RenderRunOptions {
   // image's size must be divisible by it.
   int resolution = 0;
   // zlib level of the LDR PNGs: 1 writes an 800x800 render ~3x faster than the usual 6, which
-  // took ~4x the render itself (BENCHMARKS.md, issue 15); renders are remade at will, so speed
+  // took ~4x the render itself (docs/history/render-speed.md); renders are remade at will, so speed
   // wins over 30-45% of file size.
   int png_compression = 1;
 };
@@ -87,7 +87,7 @@ LoadedRun LoadRun(const std::filesystem::path& run, int resolution = 0);
 // Gaussians then sit together in memory. The trainer sorts at each densification only (and runs
 // from before it never), while the windows keep moving until the end; sorted on load, runs
 // saved before the trainer sorted rendered 2.6% (r800, 4 times) and 16% (the paper scene)
-// faster (BENCHMARKS.md, issue 15's twentieth pass). The images change only where Gaussians
+// faster (docs/history/real-run-speed.md, twentieth pass). The images change only where Gaussians
 // sit at exactly equal depth, which then blend in another order. Static models are left as
 // they are.
 void OrderForRendering(LoadedRun* run);

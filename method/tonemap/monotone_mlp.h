@@ -2,8 +2,8 @@
 // response is non-decreasing in exposure; an unconstrained curve MLP need not be, and with log
 // colours learning at the reference's rate it learned a sawtooth: one rising branch per
 // exposure, so that a squeezed log-HDR still reproduced every bracket. A monotone curve, though,
-// learned a staircase that squeezes the same way (BENCHMARKS.md, "Why the learned HDR had the
-// wrong shape"): the cause was the colours' learning rate, not the curve's freedom.
+// learned a staircase that squeezes the same way (docs/history/accuracy.md, "Why the learned HDR
+// had the wrong shape"): the cause was the colours' learning rate, not the curve's freedom.
 //
 // Construction: a ReLU network is non-decreasing in its input 0 when the product of the weights
 // along every path from that input to the output is >= 0. Each hidden unit gets a fixed sign,

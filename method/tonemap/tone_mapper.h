@@ -50,7 +50,7 @@ struct ToneMapperConfig {
   // Learned curves (dtm, mlp) non-decreasing in log exposure by construction
   // (method/tonemap/monotone_mlp.h). false, the default, is the reference's free MLP: with log
   // colours at their own learning rate (lr_schedule.h, f_dc_lr_log_hdr) it learns a smooth
-  // rising curve, and the monotone one adds nothing measurable (issue 12, BENCHMARKS.md). A
+  // rising curve, and the monotone one adds nothing measurable (docs/history/accuracy.md). A
   // config.json without the key means false.
   bool monotone_curves = false;
   std::uint64_t seed = 0;  // initial weights

@@ -142,8 +142,9 @@ void SaveCheckpoint(const fs::path& path, const CheckpointParts& p) {
       {"trainer", *p.trainer},
   };
   // Streamed into the file with a running checksum, from the live state: building the bytes in
-  // memory first (a copy of the model, the optimiser state as a string, a growing string stream
-  // of the file) added ~4 KB per Gaussian to the peak of every run (BENCHMARKS.md, issue 15).
+  // memory first (a copy of the model, the optimiser state as a string, a growing string stream of
+  // the file) added ~4 KB per Gaussian to the peak of every run
+  // (docs/history/paper-configuration.md).
   WriteFileAtomic(path, [&](std::ostream& file) {
     HashingWriter out(file);
     const auto floats = [&](const std::vector<float>& v) {

@@ -16,7 +16,7 @@ namespace hdr4d::method {
 
 enum class Supervision { kAuto, kLdr, kHdr, kLdrHdr };
 
-// The HDR term's target (issue 12 §3, BENCHMARKS.md "LDR+HDR supervision"):
+// The HDR term's target (issue 12 §3, docs/history/accuracy.md "LDR+HDR supervision"):
 //   image-max  the reference's mu(gt / max of that image), mu = 5000: a light that dims over
 //              time changes every other pixel's target, and the dark half of the range is
 //              almost flat under mu = 5000;
@@ -33,7 +33,7 @@ enum class HdrTarget { kImageMax, kSceneLog, kAligned };
 // to the target's units (each image, or the scene, over its maximum), where the darkest
 // radiance an LDR bracket still records sits near 1e-5 on a scene of 1e5:1 (two exposures 256x
 // apart record 1/65000 of the top): the 2D branch then cannot tell those pixels from black and
-// fights the HDR term there (issue 12 §3, BENCHMARKS.md: 2.4 dB of held-out LDR on studio).
+// fights the HDR term there (docs/history/accuracy.md: 2.4 dB of held-out LDR on studio).
 // So with an HDR term the floor is 1e-8 of the target's maximum.
 inline constexpr float kReferencePixelLogEpsilon = 1e-5f;
 inline constexpr float kHdrUnitsPixelLogEpsilon = 1e-8f;
@@ -59,7 +59,7 @@ struct HdrTrainingOptions {
   HdrTarget hdr_target = HdrTarget::kImageMax;
   // Whether the HDR term's gradient reaches the geometry (means, covariances, opacities, hence
   // the densification statistics) or, false (--no-hdr-geometry), the colours only, the geometry
-  // then following the LDR terms alone (issue 12 §3, BENCHMARKS.md). Needs an LDR term.
+  // then following the LDR terms alone (docs/history/accuracy.md). Needs an LDR term.
   bool hdr_geometry = true;
   // --hdr-head: LDR+HDR supervision as an HDR head (method/train/hdr_head.h, issue 12 §3): the
   // run trains on the LDR terms exactly as LDR alone (no HDR term in the loop), then fits a

@@ -40,9 +40,9 @@ GaussianModel InitialiseGaussians(const std::optional<PointCloud>& cloud,
 // nothing of: with image-max targets the median pixel of a scene with a bright lamp is 1e-4 of
 // its image's maximum, so colours started at the points' values made the first renders ~10^3x
 // too bright, and the HDR term's first hundreds of steps went into opacity (which moves fast)
-// rather than the log colours (which move slowly), pruning the geometry (BENCHMARKS.md, issue
-// 12, "The cause of LDR+HDR's deficit"). Adds one constant to every log-HDR DC colour so that
-// their median is `log_level`; returns the constant (log units).
+// rather than the log colours (which move slowly), pruning the geometry
+// (docs/history/accuracy.md, "The cause of LDR+HDR's deficit"). Adds one constant to every
+// log-HDR DC colour so that their median is `log_level`; returns the constant (log units).
 float ShiftLogColoursToLevel(GaussianModel* model, float log_level);
 
 }  // namespace hdr4d::method

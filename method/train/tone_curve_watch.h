@@ -2,7 +2,7 @@
 // gives it (FindFlatToneCurves): every LDR value the same, so no LDR loss can bring it back and
 // training would go on to the end with LDR images of one colour. Found with HDR-GS's
 // unconstrained static MLP under the joint LDR+HDR term on the `studio` scene (its sigmoid
-// saturated at 1 everywhere: 2.25 dB held out; BENCHMARKS.md, issue 12); the run is kept as it
+// saturated at 1 everywhere: 2.25 dB held out; docs/history/accuracy.md); the run is kept as it
 // is (that curve is the baseline as published) and the user is told, with the way out.
 #pragma once
 

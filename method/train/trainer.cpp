@@ -936,7 +936,7 @@ void TrainingRun::Save() {
 
 // After the last checkpoint nothing needs the optimiser, the gradients or the training frame's
 // buffers (the test renderer has its own): released before the final test evaluation, so the
-// end of a run is not its peak (about 2 KB per Gaussian; BENCHMARKS.md, issue 15).
+// end of a run is not its peak (about 2 KB per Gaussian; docs/history/paper-configuration.md).
 void TrainingRun::ReleaseTrainingState() {
   optimizer_.reset();
   grads_ = GaussianGradients{};

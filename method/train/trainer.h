@@ -37,7 +37,7 @@ struct TrainOptions {
   // Learn one background colour with the scene (learned_background.h; not in the paper, whose
   // background is fixed at `background`): a log radiance through the tone mapper for log-HDR
   // colours, else an LDR colour starting at `background`. Saved in the checkpoint; render and
-  // eval use it. Unset: on for a new run (BENCHMARKS.md, issue 12's learned-background
+  // eval use it. Unset: on for a new run (docs/history/accuracy.md, the learned-background
   // sections: never worse beyond seed noise, +0.9 to +2.2 dB held-out where a sky is seen from
   // few cameras); a resumed run keeps what it started with (runs from before the option: off).
   std::optional<bool> learn_background;

@@ -236,7 +236,7 @@ namespace {
 // The proof of correctness of the engine: a known moving 4D Gaussian scene (64x64, 9 train and
 // 3 held-out cameras, 8 timestamps) is recovered from 5000 random points. 30 dB on held-out
 // cameras means errors of about 3% of the range per pixel; the trained model typically reaches
-// 31.3 dB here in ~6 s on two cores (BENCHMARKS.md).
+// 31.3 dB here in ~6 s on two cores (docs/history/engine-speed.md).
 TEST(Trainer, RecoversAKnownSceneAbove30Db) {
   hdr4d::testing::TempDir dir;
   GaussianSceneOptions scene;

@@ -66,7 +66,7 @@ void ViewRenderer::Render(const Camera& camera,
   }
   stage_->SetFrame(frame, /*observe_bank=*/false);
   // No HDR image asked for and the LDR one is the tone-mapped Gaussians': only those 3 channels
-  // are blended (the same LDR bits; BENCHMARKS.md, issue 15's twentieth pass).
+  // are blended (the same LDR bits; docs/history/real-run-speed.md, twentieth pass).
   const bool ldr_only = !hdr && ldr && stage_->maps_gaussians();
   stage_->SetLdrOnly(ldr_only);
   if (learned_) learned_->SetLdrOnly(ldr_only);
