@@ -8,6 +8,7 @@
 
 #include "cli/commands.h"
 #include "cli/flags.h"
+#include "cli/pipeline_flags.h"
 #include "datagen/generator.h"
 #include "datagen/scene_presets.h"
 
@@ -117,7 +118,9 @@ void AddDatagenCommand(CLI::App& app) {
       ->check(OneOf(datagen::UnlikeCamerasModes()))
       ->capture_default_str();
   cmd->add_flag("--list", *list, "List the scenes and presets, render nothing");
-  cmd->callback([options, out, list] {
+  auto pipeline = std::make_shared<PipelineFlags>(cmd, options->pipeline);
+  cmd->callback([options, out, list, pipeline] {
+    pipeline->Check();
     if (*list) {
       PrintSceneList();
       return;

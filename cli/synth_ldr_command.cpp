@@ -7,6 +7,7 @@
 
 #include "cli/commands.h"
 #include "cli/flags.h"
+#include "cli/pipeline_flags.h"
 #include "core/radiometry/crf.h"
 #include "core/util/error.h"
 #include "core/radiometry/exposure_stack.h"
@@ -31,6 +32,7 @@ struct SynthLdrArgs {
   int bits = 8;
   bool keep_existing = false;
   double gain_drift = 0;
+  CameraPipelineOptions pipeline;
 };
 
 void Run(const SynthLdrArgs& a) {
@@ -43,7 +45,9 @@ void Run(const SynthLdrArgs& a) {
         .noise = noise,
         .bits = a.bits,
         .overwrite = !a.keep_existing,
-        .gain_drift = a.gain_drift};
+        .gain_drift = a.gain_drift,
+        .pipeline = a.pipeline};
+    options.pipeline.seed = a.seed;
     const int n = SynthesizeDatasetLdr(a.data, options);
     fmt::print(
         "synth-ldr: wrote {} LDR images in {} (camera response {}, settings in synthesis.json)\n",
@@ -52,6 +56,9 @@ void Run(const SynthLdrArgs& a) {
   }
   if (a.input.empty() || a.output.empty())
     Fail("synth-ldr: give IN and --out OUT, or --data DIR (see --help)");
+  if (!a.pipeline.IsIdentity())
+    Fail("synth-ldr: --pipeline and --vignetting need --data DIR (a pipeline plans over the "
+         "whole sequence)");
   LdrSynthesisOptions options{.exposure = a.exposure, .noise = noise, .bits = a.bits};
   options.Validate();
   const auto crf = ParseCrf(a.crf);
@@ -120,7 +127,11 @@ void AddSynthLdrCommand(CLI::App& app) {
                   "(auto-exposure-like; the JSON keeps the nominal exposures)")
       ->check(Real(-20, 20))
       ->capture_default_str();
-  cmd->callback([args] { Run(*args); });
+  auto pipeline = std::make_shared<PipelineFlags>(cmd, args->pipeline);
+  cmd->callback([args, pipeline] {
+    pipeline->Check();
+    Run(*args);
+  });
 }
 
 }  // namespace hdr4d::cli

@@ -85,6 +85,9 @@ void DatagenOptions::Validate() const {
       }
     }
   }
+  if (capture && !pipeline.IsIdentity())
+    Fail("datagen: --pipeline and --vignetting make datasets, not captures: a capture's cameras "
+         "differ through --unlike-cameras");
   for (const std::string& name : scene == "all" ? DefaultSceneNames() : std::vector{scene})
     LdrFor(name).Validate();
 }
@@ -92,11 +95,14 @@ void DatagenOptions::Validate() const {
 DatasetSynthesisOptions DatagenOptions::LdrFor(const std::string& name) const {
   const SceneInfo& info = FindScene(name);
   constexpr double kFullWell = 20000, kReadSigma = 0.002;  // the eight scenes' sensor
+  CameraPipelineOptions scene_pipeline = pipeline;
+  scene_pipeline.seed = seed;
   return {.crf = crf.value_or(info.crf),
           .noise = {.full_well = full_well.value_or(info.noise ? kFullWell : 0.0),
                     .read_sigma = read_sigma.value_or(info.noise ? kReadSigma : 0.0),
                     .seed = seed},
-          .bits = 8};
+          .bits = 8,
+          .pipeline = scene_pipeline};
 }
 
 const std::vector<std::string>& UnlikeCamerasModes() {

@@ -44,6 +44,9 @@ struct DatagenOptions {
   std::optional<std::string> crf;
   std::optional<double> full_well;
   std::optional<double> read_sigma;
+  // The camera pipeline of the LDR images (core/radiometry/camera_pipeline.h); its seed is
+  // the scene seed. Not with --capture, whose cameras have --unlike-cameras instead.
+  CameraPipelineOptions pipeline;
   bool show_progress = true;
   // --capture: instead of a dataset, the capture layout `hdr4d calibrate` reads (a fixed rig
   // with bracketed exposures) plus truth/ (datagen/capture_generator.h). One scene at a time.

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/files/atomic_file.h"
+#include "core/radiometry/camera_pipeline_dataset.h"
 #include "core/dataset/dataset.h"
 #include "core/dataset/dataset_image_rules.h"
 #include "core/util/error.h"
@@ -53,6 +54,7 @@ void DatasetSynthesisOptions::Validate() const {
   if (bits == 0) Fail("synth-ldr: a dataset's LDR images are integer PNGs; use 8 or 16 bits");
   if (!std::isfinite(gain_drift) || std::abs(gain_drift) > 20)
     Fail("synth-ldr: gain drift {} must be finite and within [-20, 20]", gain_drift);
+  pipeline.Validate();
 }
 
 int SynthesizeDatasetLdr(const fs::path& root, const DatasetSynthesisOptions& options) {
@@ -107,6 +109,8 @@ int SynthesizeDatasetLdr(const fs::path& root, const DatasetSynthesisOptions& op
     }
   }
 
+  const DatasetPipeline pipeline(options.pipeline, options.crf, frames);
+
   // Grouped by HDR file so each EXR is decoded once however many exposures use it.
   std::vector<std::pair<fs::path, std::vector<const Frame*>>> groups(by_hdr.begin(), by_hdr.end());
   // All or nothing: a bad HDR image found halfway leaves the previous LDR images, not a mix.
@@ -132,7 +136,7 @@ int SynthesizeDatasetLdr(const fs::path& root, const DatasetSynthesisOptions& op
                                                static_cast<std::uint32_t>(f->index)));
       Image image;
       try {
-        image = SynthesizeLdr(hdr.Rgb(), *crf, ldr);
+        image = pipeline.Synthesize(hdr.Rgb(), *f, *crf, ldr);
       } catch (const Error& e) {
         Fail("{}: {}", hdr_path.string(), e.what());
       }
@@ -157,6 +161,7 @@ int SynthesizeDatasetLdr(const fs::path& root, const DatasetSynthesisOptions& op
         {"seed", options.noise.seed}}},
       {"frames", frames.size()},
   };
+  if (!pipeline.Identity()) manifest["pipeline"] = pipeline.ToJson(root);
   WriteJsonFile(root / kManifestName, manifest);
   int total = 0;
   for (int w : written) total += w;

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <string>
 
+#include "core/radiometry/camera_pipeline.h"
 #include "core/radiometry/crf.h"
 #include "core/radiometry/ldr_synthesis.h"
 
@@ -21,6 +22,9 @@ struct DatasetSynthesisOptions {
   // exp(gain_drift (t - 0.5)) while its JSON keeps the nominal exposure. 0 = a fixed response.
   // The case a dynamic tone mapper exists for; merge-hdr assumes 0.
   double gain_drift = 0.0;
+  // The camera pipeline (core/radiometry/camera_pipeline.h); the default, fixed, is the plain
+  // response above. Recorded in synthesis.json under "pipeline" unless it is the identity.
+  CameraPipelineOptions pipeline;
   void Validate() const;
 };
 
