@@ -56,11 +56,14 @@ fs::path CachedSceneDir(const SceneSpec& spec, const fs::path& cache) {
   switch (spec.kind) {
     case SceneSpec::Kind::kPath:
       return {};
-    case SceneSpec::Kind::kDatagen:
-      return cache / "datagen" /
-             fmt::format("{}-s{}", spec.source["preset"].get<std::string>(),
-                         spec.source["seed"].get<std::int64_t>()) /
-             spec.source["scene"].get<std::string>();
+    case SceneSpec::Kind::kDatagen: {
+      std::string folder = fmt::format("{}-s{}", spec.source["preset"].get<std::string>(),
+                                        spec.source["seed"].get<std::int64_t>());
+      // Extra datagen flags make another dataset of the same renders: its own folder.
+      if (spec.source.contains("flags") && !spec.source["flags"].empty())
+        folder += "-" + Sha256Hex(spec.source["flags"].dump()).substr(0, 12);
+      return cache / "datagen" / folder / spec.source["scene"].get<std::string>();
+    }
     case SceneSpec::Kind::kBuiltin:
       // Named by the hash of its options: two suites asking for the same scene share it.
       return cache / "builtin" /
@@ -99,11 +102,15 @@ PreparedScene PrepareScene(const SceneSpec& spec, const SceneCacheOptions& optio
         fmt::print(stderr, "bench: generating scene '{}' into {}\n", spec.name, p.dir.string());
       if (spec.kind == SceneSpec::Kind::kDatagen) {
         // datagen builds OUT/<scene>.partial and renames it into place when complete.
-        Run({hdr4d, "datagen", "--scene", spec.source["scene"].get<std::string>(), "--preset",
-             spec.source["preset"].get<std::string>(), "--seed",
-             std::to_string(spec.source["seed"].get<std::int64_t>()), "--out",
-             p.dir.parent_path().string()},
-            log, spec.name);
+        std::vector<std::string> datagen = {
+            hdr4d, "datagen", "--scene", spec.source["scene"].get<std::string>(), "--preset",
+            spec.source["preset"].get<std::string>(), "--seed",
+            std::to_string(spec.source["seed"].get<std::int64_t>()), "--out",
+            p.dir.parent_path().string()};
+        if (spec.source.contains("flags"))
+          for (const std::string& a : SettingsToArgs(spec.source["flags"], 0, spec.name))
+            datagen.push_back(a);
+        Run(datagen, log, spec.name);
       } else {
         const fs::path partial = p.dir.string() + ".partial";
         fs::remove_all(partial, ec);

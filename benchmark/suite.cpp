@@ -134,10 +134,14 @@ SceneSpec ParseScene(const nlohmann::json& j, const std::string& where, const fs
   } else if (o.Has("datagen")) {
     s.kind = SceneSpec::Kind::kDatagen;
     const Obj d(o.Raw("datagen"), o.At("datagen"));
-    d.OnlyKeys({"scene", "preset", "seed"});
+    d.OnlyKeys({"scene", "preset", "seed", "flags"});
     s.source = {{"scene", d.String("scene", "", true)},
                 {"preset", d.String("preset", "mini")},
                 {"seed", d.Integer("seed", 0, 0)}};
+    // More `hdr4d datagen` flags (e.g. a camera pipeline); absent keeps the plain source.
+    if (d.Has("flags"))
+      s.source["flags"] =
+          Settings(d, "flags", {"scene", "preset", "seed", "out", "o", "capture", "list"});
   } else {
     s.kind = SceneSpec::Kind::kBuiltin;
     const Obj b(o.Raw("builtin"), o.At("builtin"));

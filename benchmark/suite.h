@@ -42,7 +42,8 @@ struct SceneSpec {
   std::string group = "syn";  // tables select scenes by group
   Kind kind = Kind::kPath;
   std::filesystem::path path;  // kPath: absolute
-  // kDatagen: {"scene", "preset", "seed"}; kBuiltin: {"scene": "demo"|"gaussians", "flags":
+  // kDatagen: {"scene", "preset", "seed"} and optionally "flags" (more datagen flags, such as
+  // {"pipeline": "phone"}); kBuiltin: {"scene": "demo"|"gaussians", "flags":
   // {...}, "synth": {...}} (flags of make-demo-scene / make-gaussian-scene and synth-ldr).
   nlohmann::json source = nlohmann::json::object();
   // Region (fractions x, y, width, height of the image) whose luminance over time the report

@@ -2,8 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
 #include <set>
 
+#include "benchmark/scene_cache.h"
 #include "tests/testing.h"
 
 namespace hdr4d::bench {
@@ -67,7 +69,7 @@ TEST(Suite, UnknownSuiteNameListsTheShippedOnes) {
 // The paper suite holds every configuration of Tables 1 and 4-7; the ci suite the same ones.
 TEST(Suite, ShippedSuitesCoverThePapersTables) {
   const std::set<std::string> external = {"HexPlane", "HDR-NeRF", "HDR-HexPlane"};
-  for (const char* name : {"paper", "ci", "speed", "proof", "tone-mappers"}) {
+  for (const char* name : {"paper", "ci", "speed", "proof", "tone-mappers", "pipelines"}) {
     const Suite s = LoadSuite(name);
     EXPECT_EQ(s.name, name);
     for (const TableSpec& t : s.tables)
@@ -93,6 +95,48 @@ TEST(Suite, ShippedSuitesCoverThePapersTables) {
   }
   EXPECT_EQ(mappers, (std::set<std::string>{"dtm", "mlp", "sigmoid", "reinhard", "durand"}));
   EXPECT_EQ(learners, (std::set<std::string>{"gru", "rnn", "lstm", "transformer"}));
+}
+
+// A datagen scene may carry more datagen flags (a camera pipeline): they reach the source and
+// give the scene its own cache folder; without them the source and folder are as before.
+TEST(Suite, DatagenFlagsMakeTheirOwnScene) {
+  nlohmann::json j = Minimal();
+  j["scenes"] = nlohmann::json::parse(R"([
+    {"name": "a", "datagen": {"scene": "lego"}},
+    {"name": "b", "datagen": {"scene": "lego", "flags": {"pipeline": "phone"}}},
+    {"name": "c", "datagen": {"scene": "lego", "flags": {"pipeline": "auto-exposure"}}}])");
+  const Suite s = ParseSuite(j, "/x/suite.json");
+  EXPECT_FALSE(s.scenes[0].source.contains("flags"));
+  EXPECT_EQ(s.scenes[1].source["flags"]["pipeline"], "phone");
+  const std::filesystem::path a = CachedSceneDir(s.scenes[0], "/c"),
+                              b = CachedSceneDir(s.scenes[1], "/c"),
+                              c = CachedSceneDir(s.scenes[2], "/c");
+  EXPECT_EQ(a, "/c/datagen/mini-s0/lego");
+  EXPECT_NE(b, a);
+  EXPECT_NE(b, c);
+  EXPECT_EQ(b.filename(), "lego");
+  j["scenes"][1]["datagen"]["flags"] = {{"seed", 3}};  // the harness's own flag
+  EXPECT_NE(ErrorFor(j).find("seed"), std::string::npos);
+}
+
+// The pipelines suite: Tables 4, 6 and 7 per pipeline on the eight scenes.
+TEST(Suite, PipelinesSuiteFilmsTheEightScenesThreeWays) {
+  const Suite s = LoadSuite("pipelines");
+  ASSERT_EQ(s.scenes.size(), 24u);
+  std::map<std::string, std::set<std::string>> scenes_of;
+  for (const SceneSpec& scene : s.scenes) {
+    const std::string pipeline = scene.source.contains("flags")
+                                     ? scene.source["flags"]["pipeline"].get<std::string>()
+                                     : "fixed";
+    EXPECT_EQ(pipeline, scene.group) << scene.name;
+    scenes_of[scene.group].insert(scene.source["scene"].get<std::string>());
+  }
+  EXPECT_EQ(scenes_of.size(), 3u);
+  for (const auto& [group, names] : scenes_of) EXPECT_EQ(names.size(), 8u) << group;
+  EXPECT_EQ(s.seeds.size(), 3u);
+  ASSERT_EQ(s.budgets.size(), 1u);
+  EXPECT_EQ(s.budgets[0].iterations, 3000);
+  EXPECT_EQ(s.tables.size(), 9u);
 }
 
 }  // namespace

@@ -245,6 +245,10 @@ TEST(DatasetPipeline, RecordsTheHiddenTruthAndKeepsTheJson) {
     }
     EXPECT_NE(testing::ReadTextFile(dataset.train[0].image_path), fixed);
   }
+  // merge-hdr does not invert a pipeline with the recorded response.
+  EXPECT_NE(testing::ErrorOf([&] { MergeDatasetExposures(dir.path(), dir / "m", {}); })
+                .find("camera pipeline 'rig-mismatch'"),
+            std::string::npos);
   // Back to the default: the same bytes as before, and no record.
   SynthesizeDatasetLdr(dir.path(), {});
   EXPECT_EQ(testing::ReadTextFile(dataset.train[0].image_path), fixed);

@@ -187,6 +187,10 @@ int MergeDatasetExposures(const fs::path& root, const fs::path& out, const Merge
     if (!j.contains("crf_spec") || !j["crf_spec"].is_string())
       Fail("{}: key 'crf_spec' missing or not a string", manifest.string());
     crf_spec = j["crf_spec"].get<std::string>();
+    if (j.contains("pipeline"))  // per-view gains and curves: no one response inverts them
+      Fail("{}: the LDR images went through the camera pipeline '{}', not one response; pass "
+           "--crf to merge with one anyway",
+           manifest.string(), j["pipeline"].value("name", "?"));
   }
   const std::unique_ptr<Crf> crf = ParseCrf(crf_spec);
   if (!crf->Invertible()) Fail("merge-hdr: the camera response '{}' is not invertible", crf_spec);
