@@ -61,7 +61,7 @@ fs::path CachedSceneDir(const SceneSpec& spec, const fs::path& cache) {
                                         spec.source["seed"].get<std::int64_t>());
       // Extra datagen flags make another dataset of the same renders: its own folder.
       if (spec.source.contains("flags") && !spec.source["flags"].empty())
-        folder += "-" + Sha256Hex(spec.source["flags"].dump()).substr(0, 12);
+        folder += fmt::format("-{}", Sha256Hex(spec.source["flags"].dump()).substr(0, 12));
       return cache / "datagen" / folder / spec.source["scene"].get<std::string>();
     }
     case SceneSpec::Kind::kBuiltin:
