@@ -5,6 +5,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
+#include <set>
+
+#include <fmt/format.h>
 
 #include "core/dataset/dataset.h"
 #include "core/dataset/demo_scene.h"
@@ -273,6 +277,28 @@ TEST(DatasetPipeline, RigWideAutoExposureSharesAGainPerTimestamp) {
       else EXPECT_GT(gains.size(), 1u) << t;  // the demo's cameras see different brightness
     }
   }
+}
+
+// A dataset whose JSON names no camera_id: each distinct pose is a camera.
+TEST(DatasetPipeline, CamerasWithoutIdsAreTheirPoses) {
+  testing::TempDir dir;
+  SmallScene(dir.path());
+  for (const char* split : {"train", "test"}) {
+    const fs::path file = dir / fmt::format("transforms_{}.json", split);
+    nlohmann::json j = ReadJsonFile(file);
+    for (nlohmann::json& f : j["frames"]) f.erase("camera_id");
+    WriteJsonFile(file, j);
+  }
+  SynthesizeDatasetLdr(dir.path(), {.pipeline = {.name = "rig-mismatch"}});
+  const nlohmann::json manifest = ReadJsonFile(dir / "synthesis.json");
+  ASSERT_TRUE(manifest.contains("pipeline"));
+  // camera number -> the camera part of its HDR files' names ("hdr/cam00_t000.exr").
+  std::map<int, std::set<std::string>> files_of;
+  for (const nlohmann::json& v : manifest["pipeline"]["views"])
+    files_of[v["camera"].get<int>()].insert(v["hdr"].get<std::string>().substr(0, 9));
+  ASSERT_EQ(files_of.size(), 2u);
+  EXPECT_EQ(files_of[0], (std::set<std::string>{"hdr/cam00"}));
+  EXPECT_EQ(files_of[1], (std::set<std::string>{"hdr/cam01"}));
 }
 
 }  // namespace
