@@ -24,11 +24,12 @@
 #include "method/optim/time_order.h"
 #include "method/render/frame_render.h"
 #include "method/render/learned_background.h"
+#include "method/render/view_renderer.h"
 #include "method/tonemap/radiance_bank.h"
 #include "method/tonemap/tone_mapper_registry.h"
 #include "method/train/checkpoint.h"
-#include "method/train/train_views.h"
-#include "method/train/view_outputs.h"
+#include "method/train/hdr_head_fit.h"  // ReadHdrHead
+#include "method/train/train_views.h"   // DownscaledIntrinsics
 
 namespace hdr4d::method {
 namespace fs = std::filesystem;

@@ -40,7 +40,7 @@
 #include "method/tonemap/tone_mapper_registry.h"
 #include "method/train/batch_gradients.h"
 #include "method/train/checkpoint.h"
-#include "method/train/hdr_head.h"
+#include "method/train/hdr_head_fit.h"
 #include "method/train/hdr_loss.h"
 #include "method/train/loop_state.h"
 #include "method/train/loss.h"
@@ -48,7 +48,7 @@
 #include "method/train/test_evaluation.h"
 #include "method/train/tone_curve_watch.h"
 #include "method/train/train_views.h"
-#include "method/train/view_outputs.h"
+#include "method/render/view_renderer.h"
 
 namespace hdr4d::method {
 namespace fs = std::filesystem;

@@ -1,4 +1,4 @@
-#include "method/train/hdr_head.h"
+#include "method/train/hdr_head_fit.h"
 
 #include <algorithm>
 #include <cmath>

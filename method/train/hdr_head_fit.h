@@ -1,5 +1,5 @@
-// The HDR head (`hdr4d train --hdr-head`; issue 12 §3, BENCHMARKS.md "An HDR head after LDR
-// training"). Every HDR term that shares the colours and the geometry with the LDR terms cost
+// Fitting the HDR head (`hdr4d train --hdr-head`; issue 12 §3, BENCHMARKS.md "An HDR head after
+// LDR training"). Every HDR term that shares the colours and the geometry with the LDR terms cost
 // held-out LDR on some scene family (twelve tested variants), so this mode keeps them apart: the
 // run trains on the LDR brackets exactly as LDR alone does, then a log-radiance offset d per
 // Gaussian and channel, used only by the HDR channels (exp(c + d); the tone-mapped channels stay
@@ -8,6 +8,8 @@
 // offset per channel moves the backdrop's HDR the same way (its LDR stays TM(b + log e)). One
 // factor exp(log_scale) then scales the whole HDR output, background included. Not the paper's
 // joint LDR+HDR training (which stays the default); the LDR output is LDR alone's bit for bit.
+// The head itself is plain data the renderers apply (HdrHead, method/render/hdr_head.h); here are
+// its fit and its place in a checkpoint.
 #pragma once
 
 #include <cstdint>
@@ -18,18 +20,12 @@
 #include "method/gaussian/gaussian_model.h"
 #include "method/render/frame_render.h"
 #include "method/render/hdr_color_stage.h"
+#include "method/render/hdr_head.h"
 #include "method/render/learned_background.h"
 #include "method/train/hdr_loss.h"
 #include "method/train/train_views.h"
 
 namespace hdr4d::method {
-
-struct HdrHead {
-  std::vector<float> offset;  // N x 3, the model's order; empty: no head
-  std::vector<float> background;  // 3: the learned background's HDR offset; empty: none
-  float log_scale = 0.0f;     // the whole HDR output is multiplied by exp(log_scale)
-  bool empty() const { return offset.empty(); }
-};
 
 // Adam's step size on the offsets (log-radiance units), measured on 20 scene-seed pairs of nine
 // families (BENCHMARKS.md): at 0.002 the head improved aligned mu-PSNR over LDR alone on all 20
