@@ -466,8 +466,11 @@ std::uint64_t Adam::SavedSize() const {
   return bytes;
 }
 
-void Adam::Load(std::istream& in, const std::string& source) {
-  HashingReader r(in, source, "Adam state");
+namespace {
+
+// The header of a saved state: magic, version and the options (the checksum starts after the
+// version).
+AdamOptions ReadAdamHeader(HashingReader& r, const std::string& source) {
   char magic[sizeof(kMagic)];
   r.Bytes(magic, sizeof(magic), "the header");
   if (std::memcmp(magic, kMagic, sizeof(kMagic)) != 0) {
@@ -483,41 +486,45 @@ void Adam::Load(std::istream& in, const std::string& source) {
   options.beta1 = r.Value<double>("beta1");
   options.beta2 = r.Value<double>("beta2");
   options.eps = r.Value<double>("eps");
-  const auto count = r.Value<std::uint32_t>("the group count");
-  if (count > kMaxGroups) {
-    Fail("{}: Adam state claims {} parameter groups (more than {}: corrupt)", source, count,
-         kMaxGroups);
-  }
-  std::vector<State> groups(count);
-  for (std::uint32_t i = 0; i < count; ++i) {
-    State& s = groups[i];
-    const std::string group_what = fmt::format("group {}", i);
-    const auto name_length = r.Value<std::uint32_t>(group_what + " name length");
-    if (name_length == 0 || name_length > kMaxNameLength) {
-      Fail("{}: Adam state group {} has a name of length {} (must be 1..{}: corrupt)", source, i,
-           name_length, kMaxNameLength);
-    }
-    s.group.name.resize(name_length);
-    r.Bytes(s.group.name.data(), name_length, group_what + " name");
-    const std::string what = fmt::format("group '{}'", s.group.name);
-    for (std::uint32_t j = 0; j < i; ++j) {
-      if (groups[j].group.name == s.group.name) {
-        Fail("{}: Adam state has two groups named '{}'", source, s.group.name);
-      }
-    }
-    const auto size = r.Value<std::uint64_t>(what + " size");
-    if (size > kMaxGroupSize) {
-      Fail("{}: Adam state {} claims {} values (corrupt)", source, what, size);
-    }
-    s.step = r.Value<std::int64_t>(what + " step count");
-    s.group.lr = r.Value<float>(what + " learning rate");
-    s.m = r.Floats(size, what + " first moments");
-    s.v = r.Floats(size, what + " second moments");
-    s.group.size = static_cast<std::size_t>(size);
-  }
-  r.VerifyChecksum();
+  return options;
+}
 
-  // Values the checksum cannot vouch for (a state written from a broken optimiser).
+}  // namespace
+
+Adam::State Adam::ReadGroupState(HashingReader& r,
+                                 std::uint32_t index,
+                                 const std::vector<State>& before) {
+  const std::string& source = r.source();
+  State s;
+  const std::string group_what = fmt::format("group {}", index);
+  const auto name_length = r.Value<std::uint32_t>(group_what + " name length");
+  if (name_length == 0 || name_length > kMaxNameLength) {
+    Fail("{}: Adam state group {} has a name of length {} (must be 1..{}: corrupt)", source, index,
+         name_length, kMaxNameLength);
+  }
+  s.group.name.resize(name_length);
+  r.Bytes(s.group.name.data(), name_length, group_what + " name");
+  const std::string what = fmt::format("group '{}'", s.group.name);
+  for (const State& other : before) {
+    if (other.group.name == s.group.name) {
+      Fail("{}: Adam state has two groups named '{}'", source, s.group.name);
+    }
+  }
+  const auto size = r.Value<std::uint64_t>(what + " size");
+  if (size > kMaxGroupSize) {
+    Fail("{}: Adam state {} claims {} values (corrupt)", source, what, size);
+  }
+  s.step = r.Value<std::int64_t>(what + " step count");
+  s.group.lr = r.Value<float>(what + " learning rate");
+  s.m = r.Floats(size, what + " first moments");
+  s.v = r.Floats(size, what + " second moments");
+  s.group.size = static_cast<std::size_t>(size);
+  return s;
+}
+
+void Adam::CheckLoadedValues(const AdamOptions& options,
+                             const std::vector<State>& groups,
+                             const std::string& source) {
   const std::string problem = options.Validate();
   if (!problem.empty()) Fail("{}: Adam state has invalid options: {}", source, problem);
   for (const State& s : groups) {
@@ -535,6 +542,22 @@ void Adam::Load(std::istream& in, const std::string& source) {
       }
     }
   }
+}
+
+void Adam::Load(std::istream& in, const std::string& source) {
+  HashingReader r(in, source, "Adam state");
+  const AdamOptions options = ReadAdamHeader(r, source);
+  const auto count = r.Value<std::uint32_t>("the group count");
+  if (count > kMaxGroups) {
+    Fail("{}: Adam state claims {} parameter groups (more than {}: corrupt)", source, count,
+         kMaxGroups);
+  }
+  std::vector<State> groups;
+  groups.reserve(count);
+  for (std::uint32_t i = 0; i < count; ++i) groups.push_back(ReadGroupState(r, i, groups));
+  r.VerifyChecksum();
+  // Values the checksum cannot vouch for (a state written from a broken optimiser).
+  CheckLoadedValues(options, groups, source);
 
   // Commit: keep the buffers of groups that exist with the same name and size.
   for (State& s : groups) {

@@ -40,6 +40,10 @@
 #include <string>
 #include <vector>
 
+namespace hdr4d {
+class HashingReader;  // core/files/binary_stream.h
+}  // namespace hdr4d
+
 namespace hdr4d::method {
 
 struct AdamOptions {
@@ -201,6 +205,14 @@ class Adam {
   };
   State& Find(const std::string& name);
   const State& Find(const std::string& name) const;
+  // Load's parts: group `index`'s record (its name checked against the groups `before` it), and
+  // the values the checksum cannot vouch for.
+  static State ReadGroupState(HashingReader& r,
+                              std::uint32_t index,
+                              const std::vector<State>& before);
+  static void CheckLoadedValues(const AdamOptions& options,
+                                const std::vector<State>& groups,
+                                const std::string& source);
   void StepState(State& state);
   // Counts a step of the group and returns its update constants.
   detail::StepConstants NextStep(State& state);

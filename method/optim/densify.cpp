@@ -363,17 +363,18 @@ void KeepWithinBudget(const std::vector<float>& mean_grad,
 
 }  // namespace
 
-DensifyResult DensifyAndPrune(GaussianModel* model,
-                              GaussianGradients* grads,
-                              Adam* adam,
-                              DensifyStats* stats,
-                              const DensifyParams& params,
-                              std::mt19937_64* rng) {
+namespace {
+
+void CheckDensifyInputs(GaussianModel* model,
+                        GaussianGradients* grads,
+                        Adam* adam,
+                        DensifyStats* stats,
+                        const DensifyParams& params,
+                        std::mt19937_64* rng) {
   HDR4D_CHECK(model != nullptr && grads != nullptr && adam != nullptr && stats != nullptr &&
               rng != nullptr);
   HDR4D_CHECK(params.Validate().empty());
   HDR4D_CHECK(model->Validate().empty() && FitsModel(*model, *grads));
-  const bool colour_rows_only = ColourRowsOnly(*model, *grads);
   const std::size_t n = model->size();
   HDR4D_CHECK(n <= UINT32_MAX);  // row indices are 32-bit, as Adam's
   HDR4D_CHECK(stats->grad_accum.size() == n && stats->denom.size() == n &&
@@ -381,63 +382,101 @@ DensifyResult DensifyAndPrune(GaussianModel* model,
   for (const GroupBuffers& g : Groups(*model, *grads)) {
     HDR4D_CHECK(adam->group(g.name).size == g.params->size());
   }
+}
 
-  // Thresholds as float, as torch compares a float tensor with a Python scalar.
-  const float grad_threshold = params.grad_threshold;
-  const float dense_limit =
-      static_cast<float>(static_cast<double>(params.percent_dense) * params.scene_extent);
-  const float world_limit = static_cast<float>(kLargeWorldFraction * params.scene_extent);
-  const std::vector<float> mean_grad = stats->MeanGradient();
-
+// The Gaussians to densify, in index order: small ones are cloned, large ones (the parents) split.
+struct DensifyCandidates {
   std::vector<std::uint32_t> clones, parents;
-  std::vector<std::uint8_t> is_parent(n, 0);
+  std::vector<std::uint8_t> is_parent;  // per Gaussian
+};
+
+DensifyCandidates SelectCandidates(const GaussianModel& model,
+                                   const std::vector<float>& mean_grad,
+                                   float grad_threshold,
+                                   float dense_limit) {
+  const std::size_t n = model.size();
+  DensifyCandidates c;
+  c.is_parent.assign(n, 0);
   for (std::size_t i = 0; i < n; ++i) {
     if (!(mean_grad[i] >= grad_threshold)) continue;
-    if (MaxSpatialScale(&model->log_scales[4 * i]) <= dense_limit) {
-      clones.push_back(static_cast<std::uint32_t>(i));
+    if (MaxSpatialScale(&model.log_scales[4 * i]) <= dense_limit) {
+      c.clones.push_back(static_cast<std::uint32_t>(i));
     } else {
-      parents.push_back(static_cast<std::uint32_t>(i));
-      is_parent[i] = 1;
+      c.parents.push_back(static_cast<std::uint32_t>(i));
+      c.is_parent[i] = 1;
     }
   }
+  return c;
+}
 
-  KeepWithinBudget(mean_grad, n, params.max_gaussians, &clones, &parents, &is_parent);
+// The split children's own fields, copy-major (child c of parent parents[c % parents.size()]);
+// the other fields are their parent's.
+struct SplitChildren {
+  std::vector<float> xyz, t, log_scales;  // 3, 1 and 4 per child
+};
 
-  // Children, copy-major; every child's offset is drawn whether or not it is pruned later.
+// Child c's position (an offset drawn from the parent's Gaussian) and shrunk scales.
+void DrawChild(const GaussianModel& model,
+               std::size_t p,
+               std::size_t c,
+               NormalSampler& normal,
+               SplitChildren* children) {
+  const float* ls = &model.log_scales[4 * p];
+  const float* mu = &model.xyz[3 * p];
+  float* xyz = &children->xyz[3 * c];
+  float* log_scales = &children->log_scales[4 * c];
+  if (model.temporal) {
+    const Vec4<double> q_l(model.rot_left[4 * p], model.rot_left[4 * p + 1],
+                           model.rot_left[4 * p + 2], model.rot_left[4 * p + 3]);
+    const Vec4<double> q_r(model.rot_right[4 * p], model.rot_right[4 * p + 1],
+                           model.rot_right[4 * p + 2], model.rot_right[4 * p + 3]);
+    Vec4<double> scaled;
+    for (int k = 0; k < 4; ++k) scaled(k) = normal() * std::exp(double{ls[k]});
+    const Vec4<double> offset = Rotation4D(q_l, q_r) * scaled;
+    for (int k = 0; k < 3; ++k) xyz[k] = static_cast<float>(mu[k] + offset(k));
+    children->t[c] = static_cast<float>(model.t[p] + offset(3));
+    for (int k = 0; k < 4; ++k) log_scales[k] = ls[k] - kLogSplitShrink;
+  } else {
+    const Vec4<double> q(model.rot_left[4 * p], model.rot_left[4 * p + 1],
+                         model.rot_left[4 * p + 2], model.rot_left[4 * p + 3]);
+    Vec3<double> scaled;
+    for (int k = 0; k < 3; ++k) scaled(k) = normal() * std::exp(double{ls[k]});
+    const Vec3<double> offset = Rotation3D(q) * scaled;
+    for (int k = 0; k < 3; ++k) xyz[k] = static_cast<float>(mu[k] + offset(k));
+    children->t[c] = model.t[p];  // ignored in 3D mode: left as it was
+    for (int k = 0; k < 3; ++k) log_scales[k] = ls[k] - kLogSplitShrink;
+    log_scales[3] = ls[3];
+  }
+}
+
+// Every child's offset is drawn, in child order, whether or not it is pruned later.
+SplitChildren DrawChildren(const GaussianModel& model,
+                           const std::vector<std::uint32_t>& parents,
+                           std::mt19937_64* rng) {
   const std::size_t num_children = parents.size() * kSplitChildren;
-  std::vector<float> child_xyz(num_children * 3), child_t(num_children),
-      child_log_scales(num_children * 4);
-  {
-    NormalSampler normal(rng);
-    for (std::size_t c = 0; c < num_children; ++c) {
-      const std::size_t p = parents[c % parents.size()];
-      const float* ls = &model->log_scales[4 * p];
-      const float* mu = &model->xyz[3 * p];
-      if (model->temporal) {
-        const Vec4<double> q_l(model->rot_left[4 * p], model->rot_left[4 * p + 1],
-                               model->rot_left[4 * p + 2], model->rot_left[4 * p + 3]);
-        const Vec4<double> q_r(model->rot_right[4 * p], model->rot_right[4 * p + 1],
-                               model->rot_right[4 * p + 2], model->rot_right[4 * p + 3]);
-        Vec4<double> scaled;
-        for (int k = 0; k < 4; ++k) scaled(k) = normal() * std::exp(double{ls[k]});
-        const Vec4<double> offset = Rotation4D(q_l, q_r) * scaled;
-        for (int k = 0; k < 3; ++k) child_xyz[3 * c + k] = static_cast<float>(mu[k] + offset(k));
-        child_t[c] = static_cast<float>(model->t[p] + offset(3));
-        for (int k = 0; k < 4; ++k) child_log_scales[4 * c + k] = ls[k] - kLogSplitShrink;
-      } else {
-        const Vec4<double> q(model->rot_left[4 * p], model->rot_left[4 * p + 1],
-                             model->rot_left[4 * p + 2], model->rot_left[4 * p + 3]);
-        Vec3<double> scaled;
-        for (int k = 0; k < 3; ++k) scaled(k) = normal() * std::exp(double{ls[k]});
-        const Vec3<double> offset = Rotation3D(q) * scaled;
-        for (int k = 0; k < 3; ++k) child_xyz[3 * c + k] = static_cast<float>(mu[k] + offset(k));
-        child_t[c] = model->t[p];  // ignored in 3D mode: left as it was
-        for (int k = 0; k < 3; ++k) child_log_scales[4 * c + k] = ls[k] - kLogSplitShrink;
-        child_log_scales[4 * c + 3] = ls[3];
-      }
-    }
-  }
+  SplitChildren children;
+  children.xyz.resize(num_children * 3);
+  children.t.resize(num_children);
+  children.log_scales.resize(num_children * 4);
+  NormalSampler normal(rng);
+  for (std::size_t c = 0; c < num_children; ++c)
+    DrawChild(model, parents[c % parents.size()], c, normal, &children);
+  return children;
+}
 
+// The rows of the new model: surviving originals, then clones (both taken from the old model by
+// index), then children (indices into SplitChildren).
+struct KeptRows {
+  std::vector<std::uint32_t> originals, clones, children;
+};
+
+KeptRows SelectSurvivors(const GaussianModel& model,
+                         const DensifyStats& stats,
+                         const DensifyParams& params,
+                         const DensifyCandidates& candidates,
+                         const SplitChildren& children,
+                         std::size_t* pruned_count) {
+  const float world_limit = static_cast<float>(kLargeWorldFraction * params.scene_extent);
   // The prune test on a Gaussian with these log-scales, opacity logit and max radius.
   const bool test_radii = params.max_screen_size > 0.0f && params.keep_radii_for_prune;
   auto pruned = [&](const float* log_scales, float logit, float max_radius) {
@@ -445,57 +484,90 @@ DensifyResult DensifyAndPrune(GaussianModel* model,
     if (test_radii && max_radius > params.max_screen_size) return true;
     return params.prune_large_world && MaxSpatialScale(log_scales) > world_limit;
   };
+  KeptRows kept;
+  std::size_t& count = *pruned_count;
+  for (std::size_t i = 0; i < model.size(); ++i) {
+    if (candidates.is_parent[i]) continue;
+    if (pruned(&model.log_scales[4 * i], model.opacity_logit[i], stats.max_radii[i])) {
+      ++count;
+    } else {
+      kept.originals.push_back(static_cast<std::uint32_t>(i));
+    }
+  }
+  for (std::uint32_t i : candidates.clones) {
+    if (pruned(&model.log_scales[4 * i], model.opacity_logit[i], 0.0f)) {
+      ++count;
+    } else {
+      kept.clones.push_back(i);
+    }
+  }
+  const std::vector<std::uint32_t>& parents = candidates.parents;
+  for (std::size_t c = 0; c < children.t.size(); ++c) {
+    const std::uint32_t p = parents[c % parents.size()];
+    if (pruned(&children.log_scales[4 * c], model.opacity_logit[p], 0.0f)) {
+      ++count;
+    } else {
+      kept.children.push_back(static_cast<std::uint32_t>(c));
+    }
+  }
+  return kept;
+}
+
+// Rebuilds every group's rows (and Adam's) as `kept` says, then writes the children's own fields.
+// Returns the new number of Gaussians.
+std::size_t RebuildModel(const KeptRows& kept,
+                         const std::vector<std::uint32_t>& parents,
+                         const SplitChildren& children,
+                         GaussianModel* model,
+                         GaussianGradients* grads,
+                         Adam* adam) {
+  // Old row of every appended row (children copy their parent's other fields).
+  std::vector<std::uint32_t> appended = kept.clones;
+  for (std::uint32_t c : kept.children) appended.push_back(parents[c % parents.size()]);
+  const std::size_t first_child = kept.originals.size() + kept.clones.size();
+  const std::size_t new_n = kept.originals.size() + appended.size();
+  for (const GroupBuffers& g : Groups(*model, *grads)) {
+    RebuildRows(g.params, kept.originals, appended, g.width);
+    if (g.width > 0) {  // Adam checks row_width > 0; a 0-wide group stays empty
+      adam->GatherGroup(g.name, kept.originals, g.width);
+      adam->AppendRows(g.name, new_n - kept.originals.size(), g.width);
+    }
+  }
+  for (std::size_t k = 0; k < kept.children.size(); ++k) {
+    const std::size_t c = kept.children[k], row = first_child + k;
+    std::copy_n(&children.xyz[3 * c], 3, &model->xyz[3 * row]);
+    model->t[row] = children.t[c];
+    std::copy_n(&children.log_scales[4 * c], 4, &model->log_scales[4 * row]);
+  }
+  return new_n;
+}
+
+}  // namespace
+
+DensifyResult DensifyAndPrune(GaussianModel* model,
+                              GaussianGradients* grads,
+                              Adam* adam,
+                              DensifyStats* stats,
+                              const DensifyParams& params,
+                              std::mt19937_64* rng) {
+  CheckDensifyInputs(model, grads, adam, stats, params, rng);
+  const bool colour_rows_only = ColourRowsOnly(*model, *grads);
+  // Thresholds as float, as torch compares a float tensor with a Python scalar.
+  const float dense_limit =
+      static_cast<float>(static_cast<double>(params.percent_dense) * params.scene_extent);
+  const std::vector<float> mean_grad = stats->MeanGradient();
+  DensifyCandidates candidates =
+      SelectCandidates(*model, mean_grad, params.grad_threshold, dense_limit);
+  KeepWithinBudget(mean_grad, model->size(), params.max_gaussians, &candidates.clones,
+                   &candidates.parents, &candidates.is_parent);
+  const SplitChildren children = DrawChildren(*model, candidates.parents, rng);
 
   DensifyResult result;
-  result.cloned = clones.size();
-  result.split = parents.size();
-  // Rows of the new model: surviving originals, then clones (both taken from the old model by
-  // index), then children (from the child buffers).
-  std::vector<std::uint32_t> kept_originals, kept_clones, kept_children;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (is_parent[i]) continue;
-    if (pruned(&model->log_scales[4 * i], model->opacity_logit[i], stats->max_radii[i])) {
-      ++result.pruned;
-    } else {
-      kept_originals.push_back(static_cast<std::uint32_t>(i));
-    }
-  }
-  for (std::uint32_t i : clones) {
-    if (pruned(&model->log_scales[4 * i], model->opacity_logit[i], 0.0f)) {
-      ++result.pruned;
-    } else {
-      kept_clones.push_back(i);
-    }
-  }
-  for (std::size_t c = 0; c < num_children; ++c) {
-    const std::uint32_t p = parents[c % parents.size()];
-    if (pruned(&child_log_scales[4 * c], model->opacity_logit[p], 0.0f)) {
-      ++result.pruned;
-    } else {
-      kept_children.push_back(static_cast<std::uint32_t>(c));
-    }
-  }
-
-  // Old row of every appended row (children copy their parent's other fields).
-  std::vector<std::uint32_t> appended = kept_clones;
-  for (std::uint32_t c : kept_children) appended.push_back(parents[c % parents.size()]);
-  const std::size_t first_child = kept_originals.size() + kept_clones.size();
-  const std::size_t new_n = kept_originals.size() + appended.size();
-
-  for (const GroupBuffers& g : Groups(*model, *grads)) {
-    RebuildRows(g.params, kept_originals, appended, g.width);
-    if (g.width > 0) {  // Adam checks row_width > 0; a 0-wide group stays empty
-      adam->GatherGroup(g.name, kept_originals, g.width);
-      adam->AppendRows(g.name, new_n - kept_originals.size(), g.width);
-    }
-  }
-  for (std::size_t k = 0; k < kept_children.size(); ++k) {
-    const std::size_t c = kept_children[k], row = first_child + k;
-    std::copy_n(&child_xyz[3 * c], 3, &model->xyz[3 * row]);
-    model->t[row] = child_t[c];
-    std::copy_n(&child_log_scales[4 * c], 4, &model->log_scales[4 * row]);
-  }
-
+  result.cloned = candidates.clones.size();
+  result.split = candidates.parents.size();
+  const KeptRows kept =
+      SelectSurvivors(*model, *stats, params, candidates, children, &result.pruned);
+  const std::size_t new_n = RebuildModel(kept, candidates.parents, children, model, grads, adam);
   grads->ZerosLike(*model, /*colour=*/!colour_rows_only);
   BindModelGroups(*model, *grads, adam);
   stats->Reset(new_n);

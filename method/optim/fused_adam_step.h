@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "method/gaussian/gradient_rows.h"
 #include "method/optim/adam.h"
-#include "method/render/frame_render.h"
 
 namespace hdr4d::method {
 

@@ -7,6 +7,7 @@
 
 #include "method/optim/densify.h"
 #include "method/optim/model_optimizer.h"
+#include "method/render/frame_render.h"
 
 namespace hdr4d::method {
 namespace {

@@ -1,8 +1,9 @@
 // The optimiser of one training run: Adam over the model's eight parameter groups and the tone
 // mapper's parameters, with the model's step fused into the backward. The renderer knows nothing
-// of it: it calls the GradientRowsDone callback that Begin returns with each block of Gaussians
-// whose gradient rows are final (frame_render.h), and the block is stepped there, while its
-// gradients are still in cache (fused_adam_step.h). Per iteration the trainer calls
+// of it, nor it of the renderer: the renderer calls the GradientRowsDone callback that Begin
+// returns (method/gaussian/gradient_rows.h) with each block of Gaussians whose gradient rows are
+// final, and the block is stepped there, while its gradients are still in cache
+// (fused_adam_step.h). Per iteration the trainer calls
 //   SetIteration -> Begin -> (backward) -> FirstNonFinite -> [densify] -> Finish
 // (docs/ARCHITECTURE.md, "One training step").
 #pragma once
@@ -15,9 +16,9 @@
 #include <vector>
 
 #include "method/gaussian/gaussian_model.h"
+#include "method/gaussian/gradient_rows.h"
 #include "method/optim/adam.h"
 #include "method/optim/lr_schedule.h"
-#include "method/render/frame_render.h"
 #include "method/tonemap/tone_mapper.h"
 
 namespace hdr4d::method {

@@ -102,31 +102,22 @@ TileRect GaussianTileRect(
   return rect;
 }
 
+namespace {
+
+// Chunks large enough that a thread wake-up (tens of microseconds) pays for itself.
+constexpr int kChunk = 8192;
+
+// 1. Each Gaussian's tile rectangle, then the visible ones in index order with their depth keys,
+//    both in parallel over fixed chunks (so the order does not depend on threads). Returns how
+//    many are visible.
 template <typename T>
-void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, RasterState* state) {
-  HDR4D_CHECK(state != nullptr);
-  HDR4D_CHECK(settings.width > 0 && settings.height > 0);
-  HDR4D_CHECK(splats.Validate().empty());
-  HDR4D_CHECK(splats.size() < static_cast<std::size_t>(INT_MAX));
-  RasterState& s = *state;
-  const int n = static_cast<int>(splats.size());
-  s.width = settings.width;
-  s.height = settings.height;
-  s.tiles_x = TileCount(settings.width);
-  s.tiles_y = TileCount(settings.height);
-  s.num_gaussians = n;
-  s.packed_ready = false;
+int VisibleRectsAndDepthKeys(const SplatBuffersT<T>& splats, RasterState& s) {
+  const int n = s.num_gaussians;
   const int tiles_x = s.tiles_x;
   const int tiles_y = s.tiles_y;
-  const int num_tiles = s.num_tiles();
   const T* mean = splats.mean2d.data();
   const int* radius = splats.radius.data();
   const int* reach = splats.reach.empty() ? nullptr : splats.reach.data();
-
-  // 1. Each Gaussian's tile rectangle, then the visible ones in index order with their depth
-  //    keys, both in parallel over fixed chunks (so the order does not depend on threads).
-  // Chunks large enough that a thread wake-up (tens of microseconds) pays for itself.
-  constexpr int kChunk = 8192;
   const int n_chunks = (n + kChunk - 1) / kChunk;
   s.rects.resize(4 * static_cast<std::size_t>(n));
   s.chunk_visible.assign(static_cast<std::size_t>(n_chunks) + 1, 0);
@@ -161,15 +152,16 @@ void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, R
       ++v;
     }
   });
+  return visible;
+}
 
-  // 2. Front-to-back order of the visible Gaussians (ties by id: the sort is stable).
-  RadixSortByKey(s.sort_keys, s.depth_order, s.sort_keys_tmp, s.sort_ids_tmp);
-
-  // 3. Their rectangles in that order (one gather with independent loads, so the passes below
-  //    stream instead of waiting on a random access per Gaussian) and the offsets of their
-  //    entries (entry_ranges, in depth order).
+// 3. The visible Gaussians' rectangles in depth order (one gather with independent loads, so the
+//    passes below stream instead of waiting on a random access per Gaussian) and the offsets of
+//    their entries (entry_ranges, in depth order). Returns the number of entries.
+std::int64_t SortedRectsAndEntryRanges(int visible, RasterState& s) {
   s.sorted_rects.resize(4 * static_cast<std::size_t>(visible));
   std::int32_t* sorted = s.sorted_rects.data();
+  const std::int32_t* rects = s.rects.data();
   const std::int32_t* order = s.depth_order.data();
   ParallelFor(visible, kChunk, [&](std::int64_t i) {
     const std::int32_t* r = rects + 4 * static_cast<std::size_t>(order[i]);
@@ -184,29 +176,77 @@ void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, R
     HDR4D_CHECK(total < INT_MAX);
   }
   s.entry_ranges[visible] = static_cast<std::int32_t>(total);
+  return total;
+}
 
-  // 4. Counting sort by tile, keeping depth order. The depth-ordered list is cut into chunks
-  //    counted and scattered in parallel; within a tile, chunk c's entries follow chunk c - 1's,
-  //    so the result is the same for any number of chunks. Most Gaussians cover at most 2 x 2
-  //    tiles; for those both passes run without data-dependent branches (a loop of 1..4
-  //    iterations mispredicts), adding 0 or writing to a spare slot after index `total` for the
-  //    tiles a smaller rectangle lacks. Each chunk has its own spare slot and counters, a cache
-  //    line apart: a slot shared by the threads was written for nearly every Gaussian by both,
-  //    and the line's ping-pong made binning 100k Gaussians with 2 threads 2.7x slower than
-  //    with one.
-  const int chunks = std::clamp(MaxThreads(), 1, std::max(1, visible / kMinBinChunk));
-  const int chunk_size = visible == 0 ? 1 : (visible + chunks - 1) / chunks;
-  // Per chunk: num_tiles counters + 3 spare counters (see the scatter), rounded up to whole
-  // cache lines.
-  const int counters = (num_tiles + 3 + kLineInts - 1) / kLineInts * kLineInts;
-  s.chunk_offsets.assign(static_cast<std::size_t>(chunks) * counters, 0);
-  const auto chunk_bounds = [&](std::int64_t c) {
-    return std::pair<int, int>(static_cast<int>(c) * chunk_size,
-                               std::min(visible, static_cast<int>(c + 1) * chunk_size));
-  };
-  ParallelFor(chunks, 1, [&](std::int64_t c) {
-    std::int32_t* counts = s.chunk_offsets.data() + c * counters;
-    const auto [begin, end] = chunk_bounds(c);
+// 4. The counting sort by tile, keeping depth order. The depth-ordered list is cut into chunks
+//    counted and scattered in parallel; within a tile, chunk c's entries follow chunk c - 1's,
+//    so the result is the same for any number of chunks. Most Gaussians cover at most 2 x 2
+//    tiles; for those both passes run without data-dependent branches (a loop of 1..4
+//    iterations mispredicts), adding 0 or writing to a spare slot after index `total` for the
+//    tiles a smaller rectangle lacks. Each chunk has its own spare slot and counters, a cache
+//    line apart: a slot shared by the threads was written for nearly every Gaussian by both,
+//    and the line's ping-pong made binning 100k Gaussians with 2 threads 2.7x slower than
+//    with one.
+class TileCountingSort {
+ public:
+  TileCountingSort(int visible, RasterState& s)
+      : s_(s),
+        visible_(visible),
+        num_tiles_(s.num_tiles()),
+        tiles_x_(s.tiles_x),
+        chunks_(std::clamp(MaxThreads(), 1, std::max(1, visible / kMinBinChunk))),
+        chunk_size_(visible == 0 ? 1 : (visible + chunks_ - 1) / chunks_),
+        // Per chunk: num_tiles counters + 3 spare counters (see Scatter), rounded up to whole
+        // cache lines.
+        counters_((num_tiles_ + 3 + kLineInts - 1) / kLineInts * kLineInts) {}
+
+  // Each chunk's entries per tile, then each (chunk, tile)'s first slot and the tiles' ranges.
+  void Count(std::int64_t total) {
+    s_.chunk_offsets.assign(static_cast<std::size_t>(chunks_) * counters_, 0);
+    ParallelFor(chunks_, 1, [&](std::int64_t c) { CountChunk(c); });
+    const int num_tiles = num_tiles_, chunks = chunks_, counters = counters_;
+    s_.tile_ranges.resize(static_cast<std::size_t>(num_tiles) + 1);
+    std::int32_t* tile_ranges = s_.tile_ranges.data();
+    std::int32_t* offsets = s_.chunk_offsets.data();
+    std::int32_t running = 0;
+    for (int t = 0; t < num_tiles; ++t) {
+      tile_ranges[t] = running;
+      for (int c = 0; c < chunks; ++c) {
+        std::int32_t& slot = offsets[static_cast<std::size_t>(c) * counters + t];
+        const std::int32_t count = slot;
+        slot = running;
+        running += count;
+      }
+    }
+    tile_ranges[num_tiles] = running;
+    HDR4D_CHECK(running == total);
+  }
+
+  // Every entry to its slot (point_list) and, with `slots`, the backward's entry slots.
+  void Scatter(std::int64_t total, bool slots) {
+    // + one spare slot per chunk, the first of a cache line of its own.
+    const std::int64_t with_spares = total + static_cast<std::int64_t>(chunks_) * kLineInts;
+    ResizeScratch(&s_.point_list, with_spares);
+    ResizeScratch(&s_.point_entries, slots ? with_spares : 1);
+    ResizeScratch(&s_.entry_slots, slots ? with_spares : 1);
+    ParallelFor(chunks_, 1, [&](std::int64_t c) { ScatterChunk(c, total, slots); });
+    s_.point_list.resize(total);
+    s_.point_entries.resize(slots ? total : 0);
+    s_.entry_slots.resize(slots ? total : 0);
+  }
+
+ private:
+  std::pair<int, int> ChunkBounds(std::int64_t c) const {
+    return {static_cast<int>(c) * chunk_size_,
+            std::min(visible_, static_cast<int>(c + 1) * chunk_size_)};
+  }
+
+  void CountChunk(std::int64_t c) {
+    std::int32_t* counts = s_.chunk_offsets.data() + c * counters_;
+    const std::int32_t* sorted = s_.sorted_rects.data();
+    const int tiles_x = tiles_x_;
+    const auto [begin, end] = ChunkBounds(c);
     for (int i = begin; i < end; ++i) {
       const std::int32_t* rect = sorted + 4 * static_cast<std::size_t>(i);
       const int w = rect[2] - rect[0];
@@ -223,34 +263,20 @@ void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, R
       for (int ty = 0; ty < h; ++ty)
         for (int tx = 0; tx < w; ++tx) ++counts[t + ty * tiles_x + tx];
     }
-  });
-  s.tile_ranges.resize(static_cast<std::size_t>(num_tiles) + 1);
-  std::int32_t running = 0;
-  for (int t = 0; t < num_tiles; ++t) {
-    s.tile_ranges[t] = running;
-    for (int c = 0; c < chunks; ++c) {
-      std::int32_t& slot = s.chunk_offsets[static_cast<std::size_t>(c) * counters + t];
-      const std::int32_t count = slot;
-      slot = running;
-      running += count;
-    }
   }
-  s.tile_ranges[num_tiles] = running;
-  HDR4D_CHECK(running == total);
-  // + one spare slot per chunk, the first of a cache line of its own.
-  const std::int64_t with_spares = total + static_cast<std::int64_t>(chunks) * kLineInts;
-  ResizeScratch(&s.point_list, with_spares);
-  // The backward's entry slots, not built for a render no backward follows.
-  const bool slots = settings.keep_records;
-  ResizeScratch(&s.point_entries, slots ? with_spares : 1);
-  ResizeScratch(&s.entry_slots, slots ? with_spares : 1);
-  std::int32_t* points = s.point_list.data();
-  std::int32_t* entries = s.point_entries.data();
-  std::int32_t* slots_of = s.entry_slots.data();
-  ParallelFor(chunks, 1, [&](std::int64_t c) {
-    std::int32_t* next = s.chunk_offsets.data() + c * counters;
+
+  void ScatterChunk(std::int64_t c, std::int64_t total, bool slots) {
+    std::int32_t* next = s_.chunk_offsets.data() + c * counters_;
     const std::int32_t spare = static_cast<std::int32_t>(total + c * kLineInts);
-    const auto [begin, end] = chunk_bounds(c);
+    const std::int32_t* sorted = s_.sorted_rects.data();
+    const std::int32_t* order = s_.depth_order.data();
+    const std::int32_t* entry_ranges = s_.entry_ranges.data();
+    std::int32_t* points = s_.point_list.data();
+    std::int32_t* entries = s_.point_entries.data();
+    std::int32_t* slots_of = s_.entry_slots.data();
+    const int tiles_x = tiles_x_;
+    const int num_tiles = num_tiles_;
+    const auto [begin, end] = ChunkBounds(c);
     for (int i = begin; i < end; ++i) {
       const int g = order[i];
       const std::int32_t* rect = sorted + 4 * static_cast<std::size_t>(i);
@@ -258,7 +284,7 @@ void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, R
       const int h = rect[3] - rect[1];
       const int t = rect[1] * tiles_x + rect[0];
       // This Gaussian's tiles, row-major (only written with slots; else the spare slot).
-      std::int32_t* own = entries + (slots ? s.entry_ranges[i] : 0);
+      std::int32_t* own = entries + (slots ? entry_ranges[i] : 0);
       if (w <= 2 && h <= 2) {
         // A missing tile uses its own spare counter (num_tiles + 0..2), so it neither waits on
         // nor delays the counter of a real tile; its entry goes to the spare slot.
@@ -270,7 +296,7 @@ void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, R
           points[pos] = g;
           if (!slots) return;
           (valid ? own[k] : entries[spare]) = pos;
-          slots_of[pos] = valid ? s.entry_ranges[i] + k : spare;
+          slots_of[pos] = valid ? entry_ranges[i] + k : spare;
         };
         put(t, 0, 1, 0);
         put(t + dx, 1, dx, 0);
@@ -284,15 +310,40 @@ void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, R
           const std::int32_t pos = next[t + ty * tiles_x + tx]++;
           points[pos] = g;
           if (!slots) continue;
-          slots_of[pos] = s.entry_ranges[i] + k;
+          slots_of[pos] = entry_ranges[i] + k;
           own[k++] = pos;
         }
       }
     }
-  });
-  s.point_list.resize(total);
-  s.point_entries.resize(slots ? total : 0);
-  s.entry_slots.resize(slots ? total : 0);
+  }
+
+  RasterState& s_;
+  const int visible_, num_tiles_, tiles_x_, chunks_, chunk_size_, counters_;
+};
+
+}  // namespace
+
+template <typename T>
+void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, RasterState* state) {
+  HDR4D_CHECK(state != nullptr);
+  HDR4D_CHECK(settings.width > 0 && settings.height > 0);
+  HDR4D_CHECK(splats.Validate().empty());
+  HDR4D_CHECK(splats.size() < static_cast<std::size_t>(INT_MAX));
+  RasterState& s = *state;
+  s.width = settings.width;
+  s.height = settings.height;
+  s.tiles_x = TileCount(settings.width);
+  s.tiles_y = TileCount(settings.height);
+  s.num_gaussians = static_cast<int>(splats.size());
+  s.packed_ready = false;
+  const int visible = VisibleRectsAndDepthKeys(splats, s);
+  // 2. Front-to-back order of the visible Gaussians (ties by id: the sort is stable).
+  RadixSortByKey(s.sort_keys, s.depth_order, s.sort_keys_tmp, s.sort_ids_tmp);
+  const std::int64_t total = SortedRectsAndEntryRanges(visible, s);
+  TileCountingSort tiles(visible, s);
+  tiles.Count(total);
+  // The backward's entry slots are not built for a render no backward follows.
+  tiles.Scatter(total, /*slots=*/settings.keep_records);
 }
 
 template TileRect GaussianTileRect<float>(float, float, int, int, int, int);

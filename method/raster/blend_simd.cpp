@@ -487,6 +487,8 @@ HWY_INLINE void BlendStep(const float* r, int j, int channels, V px, V py, Pixel
 // the kernel reads the per-Gaussian records where they are, through a pointer per entry, with the
 // tile box beside it: no copy of the records (14% of the forward's samples went to it) and no
 // n_contrib.
+// A kernel long on purpose: the blend is the hottest loop of a step (BM_RasterForward); its per-
+// Gaussian steps are the HWY_INLINE helpers above, and its phases share the tile's scratch.
 template <int kC, bool kKeep>
 void ForwardTileImpl(const TileJob& job, int tile) {
   const D d;
@@ -782,6 +784,8 @@ HWY_INLINE void FinishSlot(const float* r, float neg_a, float neg_c, float* slot
   slot[kSlotOpacity] = slot[kSumU] / o;
 }
 
+// A kernel long on purpose: the blend's backward is the costliest loop of a step
+// (BM_RasterBackward); its per-Gaussian steps are the HWY_INLINE helpers above (FinishSlot ...).
 template <int kC>
 void BackwardTileImpl(const TileJob& job, int tile) {
   const D d;

@@ -3,10 +3,10 @@
 #pragma once
 
 #include <cstdint>
-#include <functional>
 #include <vector>
 
 #include "method/gaussian/gaussian_model.h"
+#include "method/gaussian/gradient_rows.h"  // GradientRowsDone, the backward's callback
 #include "method/gaussian/projection.h"
 #include "method/gaussian/rotation4d.h"
 #include "method/raster/splats.h"
@@ -119,23 +119,5 @@ struct FrameStateT {
   }
 };
 using FrameState = FrameStateT<float>;
-
-// The colour gradient rows of a block of Gaussians [begin, end): colour_dc and colour_rest of
-// Gaussian begin + r at color_dc + r * channels and color_rest + r * rest_stride.
-template <typename T>
-struct GradientRowsT {
-  const T* color_dc;
-  const T* color_rest;
-};
-using GradientRows = GradientRowsT<float>;
-
-// Called with Gaussian ranges [begin, end) whose gradient rows are final, from worker threads,
-// each Gaussian exactly once per backward: the trainer's optimiser step runs here, on rows still
-// in cache (AdamRowStep). The colour rows are passed (see PreprocessBackward); the other rows
-// are in `grads`.
-template <typename T>
-using GradientRowsDoneT =
-    std::function<void(std::int64_t begin, std::int64_t end, const GradientRowsT<T>& colour)>;
-using GradientRowsDone = GradientRowsDoneT<float>;
 
 }  // namespace hdr4d::method

@@ -13,7 +13,7 @@
 // temporal marginal or the frustum), not over every Gaussian as the reference does: a culled
 // Gaussian then costs nothing, and the mean describes what the frame shows. Said in README.
 //
-// With an HDR head (method/train/hdr_head.h) the HDR channels are exp(c + d) for the Gaussian's
+// With an HDR head (hdr_head.h) the HDR channels are exp(c + d) for the Gaussian's
 // log-radiance offset d, and the tone-mapped channels stay TM(c + log e): the head changes the
 // HDR output and nothing the LDR output shows.
 //

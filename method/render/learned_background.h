@@ -53,7 +53,7 @@ class LearnedBackground final : public BackgroundSource {
   void Forward(int channels, std::vector<float>* background) override;
   void Backward(int channels, const float* dL_dbackground) override;
 
-  // The HDR head's offset (method/train/hdr_head.h): the HDR channels show exp(b + offset), the
+  // The HDR head's offset (hdr_head.h): the HDR channels show exp(b + offset), the
   // tone-mapped ones keep TM(b + log e). offset_grad (may be null) gets dL/d(offset), added, as b
   // does. Both arrays hold 3 values and must outlive their use; null: no offset.
   void SetHdrOffset(const float* offset, float* offset_grad) {

@@ -131,6 +131,123 @@ void PreprocessForwardFast(const GaussianModel& model,
   FinishPreprocess(options, model, visible_per_chunk, state);
 }
 
+namespace {
+
+// With rows_done the colour rows (nine tenths of the gradient) go to a per-thread block of
+// kRowsDoneBlock rows that is handed over and reused, so they never travel to memory and back.
+struct ColourRowBlock {
+  std::vector<float> dc, rest;
+  // Which block rows already hold zeros (a culled Gaussian's, and not written since): in a
+  // dynamic scene most Gaussians are culled by time, and re-zeroing their ~600-byte rows on
+  // every use of the block was 1.6% of a paper-configuration iteration. A block of another
+  // size (another layout) starts all zeros.
+  std::vector<char> row_is_zero;
+  void Fit(int channels, std::size_t stride) {
+    const std::size_t dc_size = static_cast<std::size_t>(kRowsDoneBlock) * channels;
+    const std::size_t rest_size = static_cast<std::size_t>(kRowsDoneBlock) * stride;
+    if (dc.size() == dc_size && rest.size() == rest_size) return;
+    dc.assign(dc_size, 0.0f);
+    rest.assign(rest_size, 0.0f);
+    row_is_zero.assign(kRowsDoneBlock, 1);
+  }
+};
+
+// The fast backward over chunks of Gaussians, each cut into blocks of kRowsDoneBlock rows
+// (~160 KB of gradients at 160 floats a row, still in L2) handed to rows_done when it is set.
+class FastBackward {
+ public:
+  FastBackward(const GaussianModel& model,
+               const ViewParams<float>& view,
+               float time,
+               const RenderOptions& options,
+               const FrameState& state,
+               GaussianGradients* grads,
+               const GradientRowsDone& rows_done)
+      : model_(model),
+        options_(options),
+        state_(state),
+        grads_(grads),
+        rows_done_(rows_done),
+        job_(MakePreprocessJob(model, view, time, options)) {
+    const SplatGradientsT<float>& sg = state.splat_grads;
+    job_.radius_in = state.splats.radius.data();
+    job_.g_mean2d = sg.mean2d.data();
+    job_.g_conic = sg.conic.data();
+    job_.g_opacity = sg.opacity.data();
+    job_.d_xyz = grads->xyz.data();
+    job_.d_t = grads->t.data();
+    job_.d_log_scales = grads->log_scales.data();
+    job_.d_rot_left = grads->rot_left.data();
+    job_.d_rot_right = grads->rot_right.data();
+    job_.d_opacity_logit = grads->opacity_logit.data();
+  }
+
+  void Chunk(std::int64_t b, std::int64_t e) const {
+    thread_local ColourRowBlock block;
+    if (rows_done_) block.Fit(model_.channels, model_.rest_stride());
+    for (std::int64_t first = b; first < e; first += kRowsDoneBlock)
+      Block(first, std::min(first + kRowsDoneBlock, e), &block);
+  }
+
+ private:
+  // Rows [first, last). Only the Gaussians the forward kept get a gradient. The kernel runs on
+  // them alone, packed into full batches (in a dynamic scene most Gaussians are culled by time);
+  // the others' rows are zero, as the kernel would have written them.
+  void Block(std::int64_t first, std::int64_t last, ColourRowBlock* block) const {
+    const int channels = model_.channels;
+    const std::size_t stride = model_.rest_stride();
+    const bool to_block = static_cast<bool>(rows_done_);
+    GaussianGradients* grads = grads_;
+    const auto colour_rows = [&](std::size_t i) {
+      const std::size_t row = to_block ? i - static_cast<std::size_t>(first) : i;
+      return std::pair{to_block ? &block->dc[row * channels] : &grads->color_dc[i * channels],
+                       to_block ? &block->rest[row * stride] : &grads->color_rest[i * stride]};
+    };
+    std::int64_t kept[kRowsDoneBlock];
+    int num_kept = 0;
+    for (std::int64_t g = first; g < last; ++g) {
+      const std::size_t i = static_cast<std::size_t>(g);
+      if (state_.splats.radius[i] > 0) {
+        kept[num_kept++] = g;
+        continue;
+      }
+      ZeroGeometryGradients(i, grads);
+      if (to_block) {
+        char& zero = block->row_is_zero[static_cast<std::size_t>(g - first)];
+        if (zero) continue;
+        zero = 1;
+      }
+      const auto [gdc, grest] = colour_rows(i);
+      std::fill_n(gdc, channels, 0.0f);
+      std::fill_n(grest, stride, 0.0f);
+    }
+    alignas(64) float batch_w[kMaxColorCoefficients * kPreprocessBatch];
+    float w[kMaxColorCoefficients];
+    const int num_coefficients = model_.basis.coefficients();
+    for (int k = 0; k < num_kept; k += kPreprocessBatch) {
+      const int count = std::min(kPreprocessBatch, num_kept - k);
+      PreprocessBackwardSimd(job_, kept + k, count, batch_w);
+      for (int l = 0; l < count; ++l) {
+        const std::size_t i = static_cast<std::size_t>(kept[k + l]);
+        const auto [gdc, grest] = colour_rows(i);
+        if (to_block) block->row_is_zero[i - static_cast<std::size_t>(first)] = 0;
+        LaneWeights(batch_w, l, num_coefficients, w);
+        WriteColourGradient(model_, i, w, options_, state_, gdc, grest);
+      }
+    }
+    if (to_block) rows_done_(first, last, GradientRows{block->dc.data(), block->rest.data()});
+  }
+
+  const GaussianModel& model_;
+  const RenderOptions& options_;
+  const FrameState& state_;
+  GaussianGradients* grads_;
+  const GradientRowsDone& rows_done_;
+  PreprocessSimdJob job_;
+};
+
+}  // namespace
+
 void PreprocessBackwardFast(const GaussianModel& model,
                             const ViewParams<float>& view,
                             float time,
@@ -143,85 +260,10 @@ void PreprocessBackwardFast(const GaussianModel& model,
   HDR4D_CHECK(grads->size() == n &&
               (rows_done || (grads->color_rest.size() == model.color_rest.size() &&
                              grads->color_dc.size() == model.color_dc.size())));
-  const int channels = model.channels;
-  const SplatBuffersT<float>& s = state.splats;
-  const SplatGradientsT<float>& sg = state.splat_grads;
-  HDR4D_CHECK(sg.opacity.size() == n);
-  const std::size_t stride = model.rest_stride();
-  const int num_coefficients = model.basis.coefficients();
-  PreprocessSimdJob job = MakePreprocessJob(model, view, time, options);
-  job.radius_in = s.radius.data();
-  job.g_mean2d = sg.mean2d.data();
-  job.g_conic = sg.conic.data();
-  job.g_opacity = sg.opacity.data();
-  job.d_xyz = grads->xyz.data();
-  job.d_t = grads->t.data();
-  job.d_log_scales = grads->log_scales.data();
-  job.d_rot_left = grads->rot_left.data();
-  job.d_rot_right = grads->rot_right.data();
-  job.d_opacity_logit = grads->opacity_logit.data();
-  const auto chunk = [&](std::int64_t b, std::int64_t e) {
-    alignas(64) float batch_w[kMaxColorCoefficients * kPreprocessBatch];
-    float w[kMaxColorCoefficients];
-    std::int64_t kept[kRowsDoneBlock];
-    // With rows_done the colour rows (nine tenths of the gradient) go to a per-thread block
-    // that is handed over and reused, so they never travel to memory and back.
-    thread_local std::vector<float> block_dc, block_rest;
-    // Which block rows already hold zeros (a culled Gaussian's, and not written since): in a
-    // dynamic scene most Gaussians are culled by time, and re-zeroing their ~600-byte rows on
-    // every use of the block was 1.6% of a paper-configuration iteration. A block of another
-    // size (another layout) starts all zeros.
-    thread_local std::vector<char> row_is_zero;
-    const std::size_t dc_size = static_cast<std::size_t>(kRowsDoneBlock) * channels;
-    const std::size_t rest_size = static_cast<std::size_t>(kRowsDoneBlock) * stride;
-    if (rows_done && (block_dc.size() != dc_size || block_rest.size() != rest_size)) {
-      block_dc.assign(dc_size, 0.0f);
-      block_rest.assign(rest_size, 0.0f);
-      row_is_zero.assign(kRowsDoneBlock, 1);
-    }
-    // Blocks of kRowsDoneBlock rows: ~160 KB of gradients at 160 floats a row, still in L2.
-    for (std::int64_t first = b; first < e; first += kRowsDoneBlock) {
-      const std::int64_t last = std::min(first + kRowsDoneBlock, e);
-      const auto colour_rows = [&](std::size_t i) {
-        const std::size_t row = rows_done ? i - static_cast<std::size_t>(first) : i;
-        return std::pair{rows_done ? &block_dc[row * channels] : &grads->color_dc[i * channels],
-                         rows_done ? &block_rest[row * stride] : &grads->color_rest[i * stride]};
-      };
-      // Only the Gaussians the forward kept get a gradient. The kernel runs on them alone,
-      // packed into full batches (in a dynamic scene most Gaussians are culled by time);
-      // the others' rows are zero, as the kernel would have written them.
-      int num_kept = 0;
-      for (std::int64_t g = first; g < last; ++g) {
-        const std::size_t i = static_cast<std::size_t>(g);
-        if (s.radius[i] > 0) {
-          kept[num_kept++] = g;
-          continue;
-        }
-        ZeroGeometryGradients(i, grads);
-        if (rows_done) {
-          char& zero = row_is_zero[static_cast<std::size_t>(g - first)];
-          if (zero) continue;
-          zero = 1;
-        }
-        const auto [gdc, grest] = colour_rows(i);
-        std::fill_n(gdc, channels, 0.0f);
-        std::fill_n(grest, stride, 0.0f);
-      }
-      for (int k = 0; k < num_kept; k += kPreprocessBatch) {
-        const int count = std::min(kPreprocessBatch, num_kept - k);
-        PreprocessBackwardSimd(job, kept + k, count, batch_w);
-        for (int l = 0; l < count; ++l) {
-          const std::size_t i = static_cast<std::size_t>(kept[k + l]);
-          const auto [gdc, grest] = colour_rows(i);
-          if (rows_done) row_is_zero[i - static_cast<std::size_t>(first)] = 0;
-          LaneWeights(batch_w, l, num_coefficients, w);
-          WriteColourGradient(model, i, w, options, state, gdc, grest);
-        }
-      }
-      if (rows_done) rows_done(first, last, GradientRows{block_dc.data(), block_rest.data()});
-    }
-  };
-  ParallelForChunks(static_cast<std::int64_t>(n), kGaussianGrain, chunk);
+  HDR4D_CHECK(state.splat_grads.opacity.size() == n);
+  const FastBackward backward(model, view, time, options, state, grads, rows_done);
+  ParallelForChunks(static_cast<std::int64_t>(n), kGaussianGrain,
+                    [&](std::int64_t b, std::int64_t e) { backward.Chunk(b, e); });
 }
 
 }  // namespace hdr4d::method

@@ -63,6 +63,55 @@ void PreprocessForwardReference(const GaussianModelT<T>& model,
   FinishPreprocess(options, model, visible_per_chunk, state);
 }
 
+namespace {
+
+// The geometry's backward of visible Gaussian i (conditioned as `c`) from the projection's
+// gradients dmean3, dcov3 and the marginal's: through the slice, the 4D (or 3D) covariance and
+// the rotation to the stored parameters, ADDED to `grads`.
+template <typename T>
+void GeometryBackward(const GaussianModelT<T>& model,
+                      std::size_t i,
+                      T time,
+                      const ConditionalGaussian<T>& c,
+                      const Vec3<T>& dmean3,
+                      const Mat3<T>& dcov3,
+                      T dmarginal,
+                      GaussianGradientsT<T>* grads) {
+  const Vec4<T> log_scales = Row4(model.log_scales, i);
+  if (model.temporal) {
+    Vec4<T> dmean4;
+    Mat4<T> dsigma;
+    SliceAtTimeBackward(Mean4(model, i), c.sigma4, time, dmean3, dcov3, dmarginal, &dmean4,
+                        &dsigma);
+    Mat4<T> drot;
+    Vec4<T> dlog_scales;
+    Covariance4DBackward(c.rotation4, log_scales, dsigma, &drot, &dlog_scales);
+    Vec4<T> dql, dqr;
+    Rotation4DBackward(Row4(model.rot_left, i), Row4(model.rot_right, i), drot, &dql, &dqr);
+    for (int k = 0; k < 3; ++k) grads->xyz[i * 3 + k] += dmean4[k];
+    grads->t[i] += dmean4[3];
+    for (int k = 0; k < 4; ++k) {
+      grads->log_scales[i * 4 + k] += dlog_scales[k];
+      grads->rot_left[i * 4 + k] += dql[k];
+      grads->rot_right[i * 4 + k] += dqr[k];
+    }
+    return;
+  }
+  Mat3<T> drot;
+  Vec3<T> dlog_scales;
+  Covariance3DBackward(c.rotation3, Vec3<T>(log_scales.template head<3>()), dcov3, &drot,
+                       &dlog_scales);
+  Vec4<T> dq;
+  Rotation3DBackward(Row4(model.rot_left, i), drot, &dq);
+  for (int k = 0; k < 3; ++k) {
+    grads->xyz[i * 3 + k] += dmean3[k];
+    grads->log_scales[i * 4 + k] += dlog_scales[k];
+  }
+  for (int k = 0; k < 4; ++k) grads->rot_left[i * 4 + k] += dq[k];
+}
+
+}  // namespace
+
 template <typename T>
 void PreprocessBackwardReference(const GaussianModelT<T>& model,
                                  const ViewParams<T>& view,
@@ -106,37 +155,7 @@ void PreprocessBackwardReference(const GaussianModelT<T>& model,
     ProjectEwaBackward(c.mean, c.cov, view, Vec2<T>(sg.mean2d[2 * i], sg.mean2d[2 * i + 1]),
                        Vec3<T>(sg.conic[3 * i], sg.conic[3 * i + 1], sg.conic[3 * i + 2]), &dmean3,
                        &dcov3);
-    const Vec4<T> log_scales = Row4(model.log_scales, i);
-    if (model.temporal) {
-      Vec4<T> dmean4;
-      Mat4<T> dsigma;
-      SliceAtTimeBackward(Mean4(model, i), c.sigma4, time, dmean3, dcov3, dmarginal, &dmean4,
-                          &dsigma);
-      Mat4<T> drot;
-      Vec4<T> dlog_scales;
-      Covariance4DBackward(c.rotation4, log_scales, dsigma, &drot, &dlog_scales);
-      Vec4<T> dql, dqr;
-      Rotation4DBackward(Row4(model.rot_left, i), Row4(model.rot_right, i), drot, &dql, &dqr);
-      for (int k = 0; k < 3; ++k) grads->xyz[i * 3 + k] += dmean4[k];
-      grads->t[i] += dmean4[3];
-      for (int k = 0; k < 4; ++k) {
-        grads->log_scales[i * 4 + k] += dlog_scales[k];
-        grads->rot_left[i * 4 + k] += dql[k];
-        grads->rot_right[i * 4 + k] += dqr[k];
-      }
-    } else {
-      Mat3<T> drot;
-      Vec3<T> dlog_scales;
-      Covariance3DBackward(c.rotation3, Vec3<T>(log_scales.template head<3>()), dcov3, &drot,
-                           &dlog_scales);
-      Vec4<T> dq;
-      Rotation3DBackward(Row4(model.rot_left, i), drot, &dq);
-      for (int k = 0; k < 3; ++k) {
-        grads->xyz[i * 3 + k] += dmean3[k];
-        grads->log_scales[i * 4 + k] += dlog_scales[k];
-      }
-      for (int k = 0; k < 4; ++k) grads->rot_left[i * 4 + k] += dq[k];
-    }
+    GeometryBackward(model, i, time, c, dmean3, dcov3, dmarginal, grads);
   });
   if (!rows_done) return;
   ParallelForChunks(

@@ -502,6 +502,9 @@ HWY_INLINE void NormalizeBackward(const V* n, const V* gr, V norm, M keep, int o
   }
 }
 
+// A kernel long on purpose: the chain's intermediate vectors (dmean, dcov, dSigma, dR) flow from
+// stage to stage in registers within one function (opacity, projection, slice, covariance and
+// rotation backward of a batch; BM_Preprocess), its stages marked by the comments below.
 void BackwardBatch(const PreprocessSimdJob& job,
                    const std::int64_t* index,
                    int count,

@@ -24,11 +24,12 @@
 #include "method/optim/time_order.h"
 #include "method/render/frame_render.h"
 #include "method/render/learned_background.h"
+#include "method/render/view_renderer.h"
 #include "method/tonemap/radiance_bank.h"
 #include "method/tonemap/tone_mapper_registry.h"
 #include "method/train/checkpoint.h"
-#include "method/train/train_views.h"
-#include "method/train/view_outputs.h"
+#include "method/train/hdr_head_fit.h"  // ReadHdrHead
+#include "method/train/train_views.h"   // DownscaledIntrinsics
 
 namespace hdr4d::method {
 namespace fs = std::filesystem;
@@ -194,8 +195,10 @@ ToneFrame RunToneFrame(const LoadedRun& run, float time, double exposure) {
   return {RadianceBank::TimeIndex(time, run.num_times), -1, static_cast<float>(std::log(exposure))};
 }
 
-int RenderRun(const RenderRunOptions& options) {
-  // The CLI checks its flags too; a library caller gets the same refusals.
+namespace {
+
+// The CLI checks its flags too; a library caller gets the same refusals.
+void CheckRenderOptions(const RenderRunOptions& options) {
   if (options.threads < 0) Fail("render: threads {} must be >= 0", options.threads);
   if (options.video_frames < 0) Fail("render: video frames {} must be >= 1", options.video_frames);
   if (options.fps < 1 || options.fps > 1000)
@@ -203,136 +206,184 @@ int RenderRun(const RenderRunOptions& options) {
   if (options.png_compression < 0 || options.png_compression > 9)
     Fail("render: PNG compression {} must be within [0, 9]", options.png_compression);
   if (options.camera_index < 0) Fail("render: camera {} must be >= 0", options.camera_index);
-  const ThreadLimit limit(options.threads);
   if (options.exposure && !(*options.exposure > 0 && std::isfinite(*options.exposure)))
     Fail("render: --exposure {} must be a positive number of seconds", *options.exposure);
-  const Split split = ParseSplit(options.split, "render");
-  LoadedRun run = LoadRun(options.run, options.resolution);
-  OrderForRendering(&run);
-  const Dataset& dataset = run.dataset;
-  const fs::path out = options.out.empty() ? options.run / "renders" / options.split : options.out;
-  const std::unique_ptr<ViewRenderer> renderer_owner = MakeRunRenderer(run);
-  ViewRenderer& renderer = *renderer_owner;
-  const std::vector<Frame>& frames = dataset.FramesOf(split);
-  if (frames.empty()) Fail("{}: the {} split has no frames", dataset.root.string(), options.split);
-  const double default_exposure = options.exposure.value_or(MedianExposure(dataset));
-  std::vector<float> ldr, hdr;
-  // A command's renders are moved into place together once all are made: a failure or a kill
-  // halfway never leaves new renders mixed with an earlier run's (core/files/atomic_file.h).
-  FileBatch batch;
-  // A view's files are written on another thread while the next view renders (writing took
-  // several times the render: docs/history/render-speed.md), one view at a time; not with one
-  // thread, nor with --timing, whose render times must not share the cores with a writer.
-  // Declared after the batch: an unfinished write ends before the batch drops its files.
-  const bool overlap_writes = MaxThreads() > 1 && options.timing.empty();
-  std::future<void> writing;
-  const auto finish_writing = [&] {
-    if (writing.valid()) writing.get();  // rethrows the writer's error
-  };
-  const auto commit_files = [&] {
-    finish_writing();
-    batch.Commit();
-  };
-  std::vector<double> render_seconds;  // per view, the Render call alone
+}
+
+// Renders views and writes their files. A command's renders are moved into place together once
+// all are made (Commit): a failure or a kill halfway never leaves new renders mixed with an
+// earlier run's (core/files/atomic_file.h). A view's files are written on another thread while
+// the next view renders (writing took several times the render: docs/history/render-speed.md), one
+// view at a time; not with one thread, nor with --timing, whose render times must not share the
+// cores with a writer.
+class ViewFileWriter {
+ public:
+  ViewFileWriter(const LoadedRun& run, ViewRenderer* renderer, const RenderRunOptions& options)
+      : run_(run),
+        renderer_(*renderer),
+        options_(options),
+        overlap_writes_(MaxThreads() > 1 && options.timing.empty()) {}
+
   // Renders one view; writes the LDR image to ldr_path and the HDR one to hdr_path (each when
   // the model has that output and the path is not empty). Returns the number of files written.
-  auto render_to = [&](const Camera& camera, float time, double exposure, const fs::path& ldr_path,
-                       const fs::path& hdr_path) {
+  int Render(const Camera& camera,
+             float time,
+             double exposure,
+             const fs::path& ldr_path,
+             const fs::path& hdr_path) {
     const int w = camera.intrinsics.width, h = camera.intrinsics.height;
-    const ToneFrame frame = RunToneFrame(run, time, exposure);
+    const ToneFrame frame = RunToneFrame(run_, time, exposure);
     const auto start = std::chrono::steady_clock::now();
     // No HDR file to write (--no-hdr, video frames): the HDR channels are not blended.
-    renderer.Render(camera, time, frame, &ldr,
-                    options.write_hdr && !hdr_path.empty() ? &hdr : nullptr);
-    render_seconds.push_back(
+    renderer_.Render(camera, time, frame, &ldr_,
+                     options_.write_hdr && !hdr_path.empty() ? &hdr_ : nullptr);
+    render_seconds_.push_back(
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     // Copies: the renderer reuses its buffers for the next view.
     std::optional<Image> ldr_image, hdr_image;
-    if (!ldr.empty() && !ldr_path.empty()) ldr_image = DisplayImageFromBuffer(ldr.data(), w, h, 3);
-    if (options.write_hdr && !hdr.empty() && !hdr_path.empty()) {
+    if (!ldr_.empty() && !ldr_path.empty())
+      ldr_image = DisplayImageFromBuffer(ldr_.data(), w, h, 3);
+    if (options_.write_hdr && !hdr_.empty() && !hdr_path.empty()) {
       hdr_image.emplace(w, h, 3, Encoding::kLinear);
-      std::copy(hdr.begin(), hdr.end(), hdr_image->data());
+      std::copy(hdr_.begin(), hdr_.end(), hdr_image->data());
     }
-    auto write = [&batch, &options, ldr_path, hdr_path, ldr_image = std::move(ldr_image),
+    const int written = (ldr_image ? 1 : 0) + (hdr_image ? 1 : 0);
+    auto write = [this, ldr_path, hdr_path, ldr_image = std::move(ldr_image),
                   hdr_image = std::move(hdr_image)] {
       if (ldr_image) {
         WriteImage(ldr_path, *ldr_image,
-                   {.png_compression = options.png_compression, .batch = &batch});
+                   {.png_compression = options_.png_compression, .batch = &batch_});
       }
       // Float, not half: radiance in physical units passes half's 65504 (the stress suite's
       // 1e6 scene) and falls below its normal range (1e-6).
       if (hdr_image)
-        WriteImage(hdr_path, *hdr_image, {.format = PixelFormat::kFloat, .batch = &batch});
+        WriteImage(hdr_path, *hdr_image, {.format = PixelFormat::kFloat, .batch = &batch_});
     };
-    const int written = (ldr_image ? 1 : 0) + (hdr_image ? 1 : 0);
-    finish_writing();  // the previous view's
-    if (overlap_writes) {
-      writing = std::async(std::launch::async, std::move(write));
+    FinishWriting();  // the previous view's
+    if (overlap_writes_) {
+      writing_ = std::async(std::launch::async, std::move(write));
     } else {
       write();
     }
     return written;
-  };
-
-  if (options.time) {
-    if (options.camera_index < 0 || options.camera_index >= static_cast<int>(frames.size())) {
-      Fail("render: --camera {} is not a frame of the {} split (0..{})", options.camera_index,
-           options.split, frames.size() - 1);
-    }
-    if (!(*options.time >= 0 && *options.time <= 1))
-      Fail("render: --time {} is outside [0, 1]", *options.time);
-    const fs::path dir = options.out.empty() ? options.run / "renders" / "time" : options.out;
-    CheckOutputFolder(dir);
-    const std::string stem =
-        fmt::format("{}_cam{:03d}_t{:.4f}", options.split, options.camera_index, *options.time);
-    const Frame& f = frames[options.camera_index];
-    const int written = render_to(f.camera, *options.time, options.exposure.value_or(f.exposure),
-                                  dir / (stem + ".png"), dir / (stem + ".exr"));
-    commit_files();
-    fmt::print("render: {} ({} file{})\n", (dir / stem).string(), written, written == 1 ? "" : "s");
-    return written;
   }
 
-  if (options.video_frames > 0) {
-    if (!renderer.has_ldr()) {
-      Fail("render: --video writes LDR frames, and this run ({}) has no LDR output",
-           run.MethodName());
-    }
-    std::vector<Camera> train_cameras;
-    for (const Frame& f : dataset.train) train_cameras.push_back(f.camera);
-    const std::vector<Camera> path = OrbitCameras(train_cameras, options.video_frames);
-    const fs::path dir = options.out.empty() ? options.run / "video" : options.out;
-    CheckOutputFolder(dir);
-    Progress progress("render video", options.video_frames);
-    for (int k = 0; k < options.video_frames; ++k) {
-      const float time =
-          options.video_frames > 1 ? static_cast<float>(k) / (options.video_frames - 1) : 0.0f;
-      render_to(path[k], time, default_exposure, dir / fmt::format("frame_{:04d}.png", k), {});
-      progress.Advance();
-    }
-    progress.Finish();
-    commit_files();
-    if (HaveFfmpeg()) {
-      const fs::path mp4 = dir / "video.mp4";
-      // Through the atomic writer like every output (a killed ffmpeg leaves no half video);
-      // -frames:v: exactly this video's frames, even if a longer earlier one left more.
-      WriteFileAtomicAt(mp4, [&](const fs::path& tmp) {
-        const std::string command = fmt::format(
-            "ffmpeg -loglevel error -y -framerate {} -i {} -frames:v {} -vf "
-            "'pad=ceil(iw/2)*2:ceil(ih/2)*2' -pix_fmt yuv420p -c:v libx264 -f mp4 {}",
-            options.fps, ShellQuote((dir / "frame_%04d.png").string()), options.video_frames,
-            ShellQuote(tmp.string()));
-        if (std::system(command.c_str()) != 0)
-          Fail("{}: ffmpeg failed to encode the frames in {}", mp4.string(), dir.string());
-      });
-      fmt::print("render: {} frames and {}\n", options.video_frames, mp4.string());
-    } else {
-      fmt::print("render: {} frames in {} (install ffmpeg for an MP4)\n", options.video_frames,
-                 dir.string());
-    }
-    return options.video_frames;
+  // Moves every file written so far into place.
+  void Commit() {
+    FinishWriting();
+    batch_.Commit();
   }
 
+  // Per view, the Render call alone (seconds).
+  const std::vector<double>& render_seconds() const { return render_seconds_; }
+
+ private:
+  void FinishWriting() {
+    if (writing_.valid()) writing_.get();  // rethrows the writer's error
+  }
+
+  const LoadedRun& run_;
+  ViewRenderer& renderer_;
+  const RenderRunOptions& options_;
+  const bool overlap_writes_;
+  std::vector<float> ldr_, hdr_;
+  std::vector<double> render_seconds_;
+  FileBatch batch_;
+  // Declared after the batch: an unfinished write ends before the batch drops its files.
+  std::future<void> writing_;
+};
+
+// --time: one view, the camera of frame options.camera_index at options.time.
+int RenderAtTime(const RenderRunOptions& options,
+                 const std::vector<Frame>& frames,
+                 ViewFileWriter* writer) {
+  if (options.camera_index < 0 || options.camera_index >= static_cast<int>(frames.size())) {
+    Fail("render: --camera {} is not a frame of the {} split (0..{})", options.camera_index,
+         options.split, frames.size() - 1);
+  }
+  if (!(*options.time >= 0 && *options.time <= 1))
+    Fail("render: --time {} is outside [0, 1]", *options.time);
+  const fs::path dir = options.out.empty() ? options.run / "renders" / "time" : options.out;
+  CheckOutputFolder(dir);
+  const std::string stem =
+      fmt::format("{}_cam{:03d}_t{:.4f}", options.split, options.camera_index, *options.time);
+  const Frame& f = frames[options.camera_index];
+  const int written = writer->Render(f.camera, *options.time, options.exposure.value_or(f.exposure),
+                                     dir / (stem + ".png"), dir / (stem + ".exr"));
+  writer->Commit();
+  fmt::print("render: {} ({} file{})\n", (dir / stem).string(), written, written == 1 ? "" : "s");
+  return written;
+}
+
+// Encodes the video's PNG frames in `dir` as dir/video.mp4, through the atomic writer like every
+// output (a killed ffmpeg leaves no half video); -frames:v: exactly this video's frames, even if
+// a longer earlier one left more.
+fs::path EncodeVideo(const fs::path& dir, int frames, int fps) {
+  const fs::path mp4 = dir / "video.mp4";
+  WriteFileAtomicAt(mp4, [&](const fs::path& tmp) {
+    const std::string command = fmt::format(
+        "ffmpeg -loglevel error -y -framerate {} -i {} -frames:v {} -vf "
+        "'pad=ceil(iw/2)*2:ceil(ih/2)*2' -pix_fmt yuv420p -c:v libx264 -f mp4 {}",
+        fps, ShellQuote((dir / "frame_%04d.png").string()), frames, ShellQuote(tmp.string()));
+    if (std::system(command.c_str()) != 0)
+      Fail("{}: ffmpeg failed to encode the frames in {}", mp4.string(), dir.string());
+  });
+  return mp4;
+}
+
+// --video: the orbit (OrbitCameras) as PNG frames and, with ffmpeg, an MP4.
+int RenderVideo(const RenderRunOptions& options,
+                const LoadedRun& run,
+                const ViewRenderer& renderer,
+                ViewFileWriter* writer) {
+  if (!renderer.has_ldr()) {
+    Fail("render: --video writes LDR frames, and this run ({}) has no LDR output",
+         run.MethodName());
+  }
+  const double exposure = options.exposure.value_or(MedianExposure(run.dataset));
+  std::vector<Camera> train_cameras;
+  for (const Frame& f : run.dataset.train) train_cameras.push_back(f.camera);
+  const std::vector<Camera> path = OrbitCameras(train_cameras, options.video_frames);
+  const fs::path dir = options.out.empty() ? options.run / "video" : options.out;
+  CheckOutputFolder(dir);
+  Progress progress("render video", options.video_frames);
+  for (int k = 0; k < options.video_frames; ++k) {
+    const float time =
+        options.video_frames > 1 ? static_cast<float>(k) / (options.video_frames - 1) : 0.0f;
+    writer->Render(path[k], time, exposure, dir / fmt::format("frame_{:04d}.png", k), {});
+    progress.Advance();
+  }
+  progress.Finish();
+  writer->Commit();
+  if (HaveFfmpeg()) {
+    const fs::path mp4 = EncodeVideo(dir, options.video_frames, options.fps);
+    fmt::print("render: {} frames and {}\n", options.video_frames, mp4.string());
+  } else {
+    fmt::print("render: {} frames in {} (install ffmpeg for an MP4)\n", options.video_frames,
+               dir.string());
+  }
+  return options.video_frames;
+}
+
+// --timing: each view's render time and the frames per second over every view but the first
+// (the warm-up; with one view, that view).
+void WriteRenderTiming(const fs::path& path, const std::vector<double>& render_seconds) {
+  const std::size_t warmup = render_seconds.size() > 1 ? 1 : 0;
+  double timed = 0;
+  for (std::size_t i = warmup; i < render_seconds.size(); ++i) timed += render_seconds[i];
+  const double fps = timed > 0 ? static_cast<double>(render_seconds.size() - warmup) / timed : 0.0;
+  WriteJsonFile(path, {{"views", render_seconds.size()},
+                       {"warmup_views", warmup},
+                       {"threads", MaxThreads()},
+                       {"fps", FiniteOrNull(fps)},
+                       {"view_seconds", render_seconds}});
+}
+
+// Every view of the split, named like its ground truth.
+int RenderSplitViews(const RenderRunOptions& options,
+                     const std::vector<Frame>& frames,
+                     ViewFileWriter* writer) {
+  const fs::path out = options.out.empty() ? options.run / "renders" / options.split : options.out;
   CheckOutputFolder(out);  // before the first render: never among the dataset's images
   Progress progress("render", static_cast<std::int64_t>(frames.size()));
   int written = 0;
@@ -343,25 +394,32 @@ int RenderRun(const RenderRunOptions& options) {
     if (name.extension() != ".png") name += ".png";
     fs::path hdr_name = f.hdr_path ? f.hdr_path->filename() : f.image_path.stem();
     if (hdr_name.extension() != ".exr") hdr_name += ".exr";
-    written += render_to(f.camera, static_cast<float>(f.time),
-                         options.exposure.value_or(f.exposure), out / name, out / hdr_name);
+    written += writer->Render(f.camera, static_cast<float>(f.time),
+                              options.exposure.value_or(f.exposure), out / name, out / hdr_name);
     progress.Advance();
   }
   progress.Finish();
-  commit_files();
-  if (!options.timing.empty()) {
-    const std::size_t warmup = render_seconds.size() > 1 ? 1 : 0;
-    double timed = 0;
-    for (std::size_t i = warmup; i < render_seconds.size(); ++i) timed += render_seconds[i];
-    const double fps =
-        timed > 0 ? static_cast<double>(render_seconds.size() - warmup) / timed : 0.0;
-    WriteJsonFile(options.timing, {{"views", render_seconds.size()},
-                                   {"warmup_views", warmup},
-                                   {"threads", MaxThreads()},
-                                   {"fps", FiniteOrNull(fps)},
-                                   {"view_seconds", render_seconds}});
-  }
+  writer->Commit();
+  if (!options.timing.empty()) WriteRenderTiming(options.timing, writer->render_seconds());
   return written;
+}
+
+}  // namespace
+
+int RenderRun(const RenderRunOptions& options) {
+  CheckRenderOptions(options);
+  const ThreadLimit limit(options.threads);
+  const Split split = ParseSplit(options.split, "render");
+  LoadedRun run = LoadRun(options.run, options.resolution);
+  OrderForRendering(&run);
+  const std::unique_ptr<ViewRenderer> renderer = MakeRunRenderer(run);
+  const std::vector<Frame>& frames = run.dataset.FramesOf(split);
+  if (frames.empty())
+    Fail("{}: the {} split has no frames", run.dataset.root.string(), options.split);
+  ViewFileWriter writer(run, renderer.get(), options);
+  if (options.time) return RenderAtTime(options, frames, &writer);
+  if (options.video_frames > 0) return RenderVideo(options, run, *renderer, &writer);
+  return RenderSplitViews(options, frames, &writer);
 }
 
 }  // namespace hdr4d::method

@@ -14,10 +14,10 @@
 #include "core/geometry/camera.h"
 #include "core/dataset/dataset.h"
 #include "method/gaussian/gaussian_model.h"
+#include "method/render/hdr_head.h"
+#include "method/render/resolved_hdr_training.h"
+#include "method/render/view_renderer.h"
 #include "method/tonemap/tone_mapper.h"
-#include "method/train/hdr_head.h"
-#include "method/train/hdr_training_options.h"
-#include "method/train/view_outputs.h"
 
 namespace hdr4d::method {
 

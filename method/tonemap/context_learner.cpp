@@ -385,17 +385,17 @@ void TransformerForward(const ContextLearnerShape& shape,
   MatVecAdd(params + P.w_head, shape.size, kD, y2, f);
 }
 
+// TransformerBackward's stages, last layer first; v: the forward's tape values, dp: ADDED to.
+// The head, the second norm and the feed-forward with its residual: dL/df to dL/dy1.
 template <typename T>
-void TransformerBackward(const ContextLearnerShape& shape,
+void FeedForwardBackward(const ContextLearnerShape& shape,
+                         const TransformerLayout& P,
+                         const TransformerTape& S,
                          const T* params,
-                         const T* rows,
-                         const ContextTape<T>& tape,
+                         const T* v,
                          const T* dL_df,
-                         T* dp) {
-  const int length = tape.length;
-  const TransformerLayout P(shape.size);
-  const TransformerTape S(length);
-  const T* v = tape.values.data();
+                         T* dp,
+                         T* dy1) {
   // Head.
   OuterAdd(dp + P.w_head, shape.size, kD, dL_df, v + S.y2);
   for (int j = 0; j < shape.size; ++j) dp[P.b_head + j] += dL_df[j];
@@ -412,20 +412,39 @@ void TransformerBackward(const ContextLearnerShape& shape,
   for (int j = 0; j < kF; ++j) dhid[j] = hid[j] > T(0) ? dhid[j] : T(0);
   OuterAdd(dp + P.w1, kF, kD, dhid, v + S.y1);
   for (int j = 0; j < kF; ++j) dp[P.b1 + j] += dhid[j];
-  T dy1[kD];
   std::copy(dr2, dr2 + kD, dy1);
   MatTVecAdd(params + P.w1, kF, kD, dhid, dy1);
-  // First norm, attention output projection and its residual.
-  T dr1[kD];
+}
+
+// The first norm and the attention's output projection: dL/dy1 to dL/dr1 (also the residual's
+// gradient at the last row's x) and dL/da.
+template <typename T>
+void OutputProjectionBackward(const TransformerLayout& P,
+                              const TransformerTape& S,
+                              const T* params,
+                              const T* v,
+                              const T* dy1,
+                              T* dp,
+                              T* dr1,
+                              T* da) {
   LayerNormBackward(dy1, params + P.g1, v + S.xhat1, v[S.inv1], dp + P.g1, dp + P.be1, dr1);
   OuterAdd(dp + P.w_o, kD, kD, dr1, v + S.a);
   for (int i = 0; i < kD; ++i) dp[P.b_o + i] += dr1[i];
-  T da[kD] = {};
   MatTVecAdd(params + P.w_o, kD, kD, dr1, da);
-  // Attention.
-  std::vector<T> dx(std::size_t(length) * kD, T(0));
-  T* dx_last = dx.data() + std::size_t(length - 1) * kD;
-  for (int i = 0; i < kD; ++i) dx_last[i] += dr1[i];
+}
+
+// The attention of the last query over every row: dL/da to the q, k and v projections'
+// gradients and dL/dx of every row (ADDED to dx, length x kD).
+template <typename T>
+void AttentionBackward(const TransformerLayout& P,
+                       const TransformerTape& S,
+                       const T* params,
+                       const T* v,
+                       int length,
+                       const T* da,
+                       T* dp,
+                       T* dx) {
+  T* dx_last = dx + std::size_t(length - 1) * kD;
   const T* p = v + S.p;
   const T* q = v + S.q;
   const T scale = T(1) / std::sqrt(T(kD));
@@ -461,7 +480,7 @@ void TransformerBackward(const ContextLearnerShape& shape,
     }
     OuterAdd(dwk, kD, kD, dk, x);
     OuterAdd(dwv, kD, kD, dv, x);
-    T* dxt = dx.data() + std::size_t(t) * kD;
+    T* dxt = dx + std::size_t(t) * kD;
     MatTVecAdd(wk, kD, kD, dk, dxt);
     MatTVecAdd(wv, kD, kD, dv, dxt);
   }
@@ -469,6 +488,29 @@ void TransformerBackward(const ContextLearnerShape& shape,
   OuterAdd(dwq, kD, kD, dq, x_last);
   for (int i = 0; i < kD; ++i) dbq[i] += dq[i];
   MatTVecAdd(wq, kD, kD, dq, dx_last);
+}
+
+template <typename T>
+void TransformerBackward(const ContextLearnerShape& shape,
+                         const T* params,
+                         const T* rows,
+                         const ContextTape<T>& tape,
+                         const T* dL_df,
+                         T* dp) {
+  const int length = tape.length;
+  const TransformerLayout P(shape.size);
+  const TransformerTape S(length);
+  const T* v = tape.values.data();
+  T dy1[kD];
+  FeedForwardBackward(shape, P, S, params, v, dL_df, dp, dy1);
+  T dr1[kD];
+  T da[kD] = {};
+  OutputProjectionBackward(P, S, params, v, dy1, dp, dr1, da);
+  // The residual around the attention reaches the last row's x.
+  std::vector<T> dx(std::size_t(length) * kD, T(0));
+  T* dx_last = dx.data() + std::size_t(length - 1) * kD;
+  for (int i = 0; i < kD; ++i) dx_last[i] += dr1[i];
+  AttentionBackward(P, S, params, v, length, da, dp, dx.data());
   // Embedding.
   for (int t = 0; t < length; ++t) {
     const T* dxt = dx.data() + std::size_t(t) * kD;

@@ -205,6 +205,69 @@ void DtmCore<T>::Map(const T* log_hdr, std::size_t n, T* ldr) const {
   });
 }
 
+namespace {
+
+// Grows a chunk's zeroed node range [lo, hi] of one channel (lo > hi: empty; `a` that channel's
+// nodes) to cover nodes j and j + 1, zeroing the nodes it adds.
+inline void CoverNodes(int j, double* a, int& lo, int& hi) {
+  if (lo > hi) {
+    lo = j;
+    hi = j + 1;
+    a[j] = a[j + 1] = 0.0;
+    return;
+  }
+  if (j < lo) {
+    std::fill(a + j, a + lo, 0.0);
+    lo = j;
+  }
+  if (j + 1 > hi) {
+    std::fill(a + hi + 1, a + j + 2, 0.0);
+    hi = j + 1;
+  }
+}
+
+// The SIMD path's table backward of one chunk's `count` values: ToneTableBackward's node and
+// weights per value, each channel's touched node range (indices into the concatenated tables)
+// zeroed in `acc` and recorded in `range`, then the scatter in value order. Returns how many
+// values lie outside the tables (their indices in tls_simd.outside), which it leaves alone.
+std::size_t SimdChunkTableBackward(const detail::ToneTableView& view,
+                                   const float* log_hdr,
+                                   const float* dL_dldr,
+                                   std::size_t count,
+                                   float* dL_dlog_hdr,
+                                   double* acc,
+                                   int* range) {
+  SimdScratch& s = tls_simd;
+  s.Reserve(count);
+  const std::size_t n_out =
+      detail::ToneTableBackward(view, log_hdr, dL_dldr, count, dL_dlog_hdr, s.node.data(),
+                                s.a0.data(), s.a1.data(), s.outside.data());
+  std::int32_t lo[3] = {INT32_MAX, INT32_MAX, INT32_MAX}, hi[3] = {-1, -1, -1};
+  for (std::size_t v = 0; v < count; v += 3) {
+    for (int c = 0; c < 3; ++c) {
+      if (s.a0[v + c] != 0.0f || s.a1[v + c] != 0.0f) {
+        lo[c] = std::min(lo[c], s.node[v + c]);
+        hi[c] = std::max(hi[c], s.node[v + c] + 1);
+      }
+    }
+  }
+  for (int c = 0; c < 3; ++c) {
+    if (hi[c] < 0) continue;
+    std::fill(acc + lo[c], acc + hi[c] + 1, 0.0);
+    range[2 * c] = lo[c] - c * view.nodes;
+    range[2 * c + 1] = hi[c] - c * view.nodes;
+  }
+  for (std::size_t v = 0; v < count; ++v) {
+    if (s.a0[v] != 0.0f || s.a1[v] != 0.0f) {
+      acc[s.node[v]] += double(s.a0[v]);
+      acc[s.node[v] + 1] += double(s.a1[v]);
+    }
+  }
+  return n_out;
+}
+
+}  // namespace
+
 template <typename T>
 void DtmCore<T>::MapBackward(const T* log_hdr, std::size_t n, const T* dL_dldr, T* dL_dlog_hdr) {
   HDR4D_CHECK(ready_);
@@ -215,102 +278,73 @@ void DtmCore<T>::MapBackward(const T* log_hdr, std::size_t n, const T* dL_dldr, 
   if (chunk_direct_.size() < chunks * direct_stride) chunk_direct_.resize(chunks * direct_stride);
   chunk_range_.assign(chunks * 6, 0);
   chunk_direct_used_.assign(chunks, 0);
-
   ParallelForChunks(std::int64_t(n), kDtmChunk, [&](std::int64_t b, std::int64_t e) {
     const std::int64_t chunk = b / kDtmChunk;
-    double* acc = chunk_nodes_.data() + chunk * node_stride;
-    int* range = chunk_range_.data() + chunk * 6;
+    ChunkGradient acc{chunk_nodes_.data() + chunk * node_stride, chunk_range_.data() + chunk * 6,
+                      chunk_direct_.data() + chunk * direct_stride, &chunk_direct_used_[chunk]};
     for (int c = 0; c < 3; ++c) {
-      range[2 * c] = 1;  // empty: lo > hi
-      range[2 * c + 1] = 0;
+      acc.range[2 * c] = 1;  // empty: lo > hi
+      acc.range[2 * c + 1] = 0;
     }
-    T* dacc = chunk_direct_.data() + chunk * direct_stride;
-    char* dacc_used = &chunk_direct_used_[chunk];
-    std::vector<T> scratch;
     const std::size_t v0 = std::size_t(b) * 3, count = std::size_t(e - b) * 3;
-
     if constexpr (std::is_same_v<T, float>) {
       if (UseSimd()) {
-        SimdScratch& s = tls_simd;
-        s.Reserve(count);
         const std::size_t n_out =
-            detail::ToneTableBackward(TableView(), log_hdr + v0, dL_dldr + v0, count,
-                                        dL_dlog_hdr ? dL_dlog_hdr + v0 : nullptr, s.node.data(),
-                                        s.a0.data(), s.a1.data(), s.outside.data());
-        // Each channel's touched node range (indices into the concatenated tables), zeroed,
-        // then the scatter in value order.
-        std::int32_t lo[3] = {INT32_MAX, INT32_MAX, INT32_MAX}, hi[3] = {-1, -1, -1};
-        for (std::size_t v = 0; v < count; v += 3) {
-          for (int c = 0; c < 3; ++c) {
-            if (s.a0[v + c] != 0.0f || s.a1[v + c] != 0.0f) {
-              lo[c] = std::min(lo[c], s.node[v + c]);
-              hi[c] = std::max(hi[c], s.node[v + c] + 1);
-            }
-          }
-        }
-        for (int c = 0; c < 3; ++c) {
-          if (hi[c] < 0) continue;
-          std::fill(acc + lo[c], acc + hi[c] + 1, 0.0);
-          range[2 * c] = lo[c] - c * nodes_;
-          range[2 * c + 1] = hi[c] - c * nodes_;
-        }
-        for (std::size_t v = 0; v < count; ++v) {
-          if (s.a0[v] != 0.0f || s.a1[v] != 0.0f) {
-            acc[s.node[v]] += double(s.a0[v]);
-            acc[s.node[v] + 1] += double(s.a1[v]);
-          }
-        }
+            SimdChunkTableBackward(TableView(), log_hdr + v0, dL_dldr + v0, count,
+                                   dL_dlog_hdr ? dL_dlog_hdr + v0 : nullptr, acc.nodes, acc.range);
+        std::vector<T> scratch;
         for (std::size_t k = 0; k < n_out; ++k) {
-          const std::size_t v = v0 + s.outside[k];
-          const T dx =
-              DirectValueBackward(log_hdr[v], dL_dldr[v], int(v % 3), &scratch, dacc, dacc_used);
+          const std::size_t v = v0 + tls_simd.outside[k];
+          const T dx = DirectValueBackward(log_hdr[v], dL_dldr[v], int(v % 3), &scratch,
+                                           acc.direct, acc.direct_used);
           if (dL_dlog_hdr) dL_dlog_hdr[v] = dx;
         }
         return;
       }
     }
-
-    for (std::size_t v = v0; v < v0 + count; ++v) {
-      const int c = int(v % 3);
-      const T g = dL_dldr[v];
-      T dx = T(0);
-      const FrameToneCurve<T>& curve = curves_[c];
-      bool inside;
-      const T x = CurveInput(log_hdr[v], log_e_, &inside);
-      if (g != T(0) && tabulated_ && curve.InTable(x)) {
-        int j;
-        T w;
-        curve.Locate(x, &j, &w);
-        const T y = StableSigmoid(curve.TablePreSigmoid(j, w));
-        const T dz = g * y * (T(1) - y);
-        dx = dz * curve.TableSlope(j);
-        // Grow this channel's zeroed range to cover nodes j and j + 1.
-        double* a = acc + std::size_t(c) * nodes_;
-        int& lo = range[2 * c];
-        int& hi = range[2 * c + 1];
-        if (lo > hi) {
-          lo = j;
-          hi = j + 1;
-          a[j] = a[j + 1] = 0.0;
-        } else {
-          if (j < lo) {
-            std::fill(a + j, a + lo, 0.0);
-            lo = j;
-          }
-          if (j + 1 > hi) {
-            std::fill(a + hi + 1, a + j + 2, 0.0);
-            hi = j + 1;
-          }
-        }
-        a[j] += double(dz) * double(T(1) - w);
-        a[j + 1] += double(dz) * double(w);
-      } else if (!(tabulated_ && curve.InTable(x))) {
-        dx = DirectValueBackward(log_hdr[v], g, c, &scratch, dacc, dacc_used);
-      }
-      if (dL_dlog_hdr) dL_dlog_hdr[v] = dx;
-    }
+    ScalarChunkBackward(log_hdr, dL_dldr, dL_dlog_hdr, v0, count, acc);
   });
+  AddChunkGradients(chunks);
+  pending_ = true;
+}
 
+template <typename T>
+void DtmCore<T>::ScalarChunkBackward(const T* log_hdr,
+                                     const T* dL_dldr,
+                                     T* dL_dlog_hdr,
+                                     std::size_t v0,
+                                     std::size_t count,
+                                     const ChunkGradient& acc) const {
+  std::vector<T> scratch;
+  for (std::size_t v = v0; v < v0 + count; ++v) {
+    const int c = int(v % 3);
+    const T g = dL_dldr[v];
+    T dx = T(0);
+    const FrameToneCurve<T>& curve = curves_[c];
+    bool inside;
+    const T x = CurveInput(log_hdr[v], log_e_, &inside);
+    if (g != T(0) && tabulated_ && curve.InTable(x)) {
+      int j;
+      T w;
+      curve.Locate(x, &j, &w);
+      const T y = StableSigmoid(curve.TablePreSigmoid(j, w));
+      const T dz = g * y * (T(1) - y);
+      dx = dz * curve.TableSlope(j);
+      double* a = acc.nodes + std::size_t(c) * nodes_;
+      CoverNodes(j, a, acc.range[2 * c], acc.range[2 * c + 1]);
+      a[j] += double(dz) * double(T(1) - w);
+      a[j + 1] += double(dz) * double(w);
+    } else if (!(tabulated_ && curve.InTable(x))) {
+      dx = DirectValueBackward(log_hdr[v], g, c, &scratch, acc.direct, acc.direct_used);
+    }
+    if (dL_dlog_hdr) dL_dlog_hdr[v] = dx;
+  }
+}
+
+template <typename T>
+void DtmCore<T>::AddChunkGradients(std::int64_t chunks) {
+  const std::size_t node_stride = tabulated_ ? 3 * std::size_t(nodes_) : 0;
+  const std::size_t direct_stride = DirectStride();
   // Chunk order: the same sums at any thread count.
   for (std::int64_t chunk = 0; chunk < chunks; ++chunk) {
     const double* acc = chunk_nodes_.data() + chunk * node_stride;
@@ -326,7 +360,6 @@ void DtmCore<T>::MapBackward(const T* log_hdr, std::size_t n, const T* dL_dldr, 
       direct_used_ = true;
     }
   }
-  pending_ = true;
 }
 
 template <typename T>

@@ -87,6 +87,24 @@ class DtmCore {
   T DirectValueBackward(
       T log_hdr, T g, int c, std::vector<T>* scratch, T* dacc, char* dacc_used) const;
   void ResetAccumulators();
+  // One chunk's share of MapBackward's gradient: its table nodes (3 x nodes), their zeroed,
+  // touched range per channel (lo, hi), its direct path's gradients (DirectStride(), zeroed on
+  // first use) and whether they were used.
+  struct ChunkGradient {
+    double* nodes;
+    int* range;
+    T* direct;
+    char* direct_used;
+  };
+  // MapBackward's scalar path over values [v0, v0 + count).
+  void ScalarChunkBackward(const T* log_hdr,
+                           const T* dL_dldr,
+                           T* dL_dlog_hdr,
+                           std::size_t v0,
+                           std::size_t count,
+                           const ChunkGradient& acc) const;
+  // Adds the chunks' gradients to the frame's, in chunk order.
+  void AddChunkGradients(std::int64_t chunks);
 
   DtmShape shape_;
   bool tabulated_;

@@ -34,25 +34,36 @@ void FrameToneCurve<T>::Prepare(const ToneCurveShape& shape,
   mlp_ = shape.Mlp();
   params_.assign(stored, stored + shape.NumParams());
   if (shape.monotone) MonotoneEffective(mlp_, stored, params_.data());
-  const T* params = params_.data();  // effective from here on
   f_.assign(f, f + shape.context_size);
   z_.clear();
   dz_.clear();
   node_segment_.clear();
   if (table_nodes == 0) return;
+  FoldFirstLayer();
+  SortSwitchPoints();
+  BuildSegments();
+  TabulateNodes(table_nodes);
+}
 
-  const CurveLayout L(shape);
-  const int H = L.h, d = shape.context_size;
+template <typename T>
+void FrameToneCurve<T>::FoldFirstLayer() {
+  const CurveLayout L(shape_);
+  const int H = L.h, d = shape_.context_size;
+  const T* params = params_.data();  // effective
   const T* W1 = params + L.w1;
-  const T* W2 = params + L.w2;
   a_.assign(H, 0.0);
   beff_.assign(H, 0.0);
   for (int o = 0; o < H; ++o) {
     a_[o] = double(W1[o * L.in]);
     double b = double(params[L.b1 + o]);
-    for (int k = 0; k < d; ++k) b += double(W1[o * L.in + 1 + k]) * double(f[k]);
+    for (int k = 0; k < d; ++k) b += double(W1[o * L.in + 1 + k]) * double(f_[k]);
     beff_[o] = b;
   }
+}
+
+template <typename T>
+void FrameToneCurve<T>::SortSwitchPoints() {
+  const int H = shape_.hidden;
   // Switching units sorted by switch point (ties by unit index: deterministic).
   order_.clear();
   rank_.assign(H, -1);
@@ -69,6 +80,14 @@ void FrameToneCurve<T>::Prepare(const ToneCurveShape& shape,
     rank_[order_[i]] = static_cast<int>(i);
     switch_x_[i] = x_switch[order_[i]];
   }
+}
+
+template <typename T>
+void FrameToneCurve<T>::BuildSegments() {
+  const CurveLayout L(shape_);
+  const int H = L.h;
+  const T* params = params_.data();  // effective
+  const T* W2 = params + L.w2;
   // Segment 0 (x below every switch point): units with a < 0 are on, constant units when
   // beff > 0. Each later segment toggles one unit.
   const int S = static_cast<int>(order_.size()) + 1;
@@ -96,6 +115,13 @@ void FrameToneCurve<T>::Prepare(const ToneCurveShape& shape,
       nb[k] = pb[k] + w * beff_[o];
     }
   }
+}
+
+template <typename T>
+void FrameToneCurve<T>::TabulateNodes(int table_nodes) {
+  const CurveLayout L(shape_);
+  const int H = L.h, S = static_cast<int>(order_.size()) + 1;
+  const T* params = params_.data();  // effective
   // Nodes, swept in order with the segments.
   step_ = (kTableXMax - kTableXMin) / (table_nodes - 1);
   inv_step_ = T(1.0 / step_);
@@ -150,21 +176,34 @@ template <typename T>
 void FrameToneCurve<T>::TableBackward(const double* dL_dz, T* dL_dparams, T* dL_df) const {
   HDR4D_CHECK(!z_.empty());
   const CurveLayout L(shape_);
-  const int H = L.h, d = shape_.context_size, S = static_cast<int>(order_.size()) + 1;
-  const T* W1 = params_.data() + L.w1;
-  const T* W2 = params_.data() + L.w2;
+  const int H = L.h, d = shape_.context_size;
+  const TableSums sums = SegmentSums(dL_dz);
+  std::vector<double> g_f(d, 0.0);
+  FirstLayersBackward(sums, dL_dparams, g_f.data());
+  for (int k = 0; k < H; ++k) {
+    dL_dparams[L.b2 + k] += T(sums.g_b2[k]);
+    dL_dparams[L.w3 + k] += T(sums.g_w3[k]);
+  }
+  dL_dparams[L.b3] += T(sums.g_b3);
+  for (int k = 0; k < d; ++k) dL_df[k] += T(g_f[k]);
+}
+
+template <typename T>
+typename FrameToneCurve<T>::TableSums FrameToneCurve<T>::SegmentSums(const double* dL_dz) const {
+  const CurveLayout L(shape_);
+  const int H = L.h, S = static_cast<int>(order_.size()) + 1;
   const T* w3 = params_.data() + L.w3;
-  // Per segment: A_s = sum of G2_j x_j and B_s = sum of G2_j over its nodes, with G2_j the
-  // gradient at the second layer's pre-activation of node j.
-  std::vector<double> A(std::size_t(S + 1) * H, 0.0), B(std::size_t(S + 1) * H, 0.0);
-  std::vector<double> g_w3(H, 0.0), g_b2(H, 0.0);
-  double g_b3 = 0.0;
+  TableSums t;
+  t.A.assign(std::size_t(S + 1) * H, 0.0);
+  t.B.assign(std::size_t(S + 1) * H, 0.0);
+  t.g_w3.assign(H, 0.0);
+  t.g_b2.assign(H, 0.0);
   int first = nodes(), last = -1;  // the nodes with a gradient
   for (int j = 0; j < nodes(); ++j) {
     if (dL_dz[j] != 0.0) {
       first = std::min(first, j);
       last = j;
-      g_b3 += dL_dz[j];
+      t.g_b3 += dL_dz[j];
     }
   }
   // Per run of nodes in one segment, unit by unit (branch-free over the nodes): the sums of
@@ -176,8 +215,8 @@ void FrameToneCurve<T>::TableBackward(const double* dL_dz, T* dL_dparams, T* dL_
     const double* al = alpha_.data() + std::size_t(s) * H;
     const double* be = beta_.data() + std::size_t(s) * H;
     // Row s + 1 of A and B: they become prefix sums below (row 0 stays zero).
-    double* As = A.data() + std::size_t(s + 1) * H;
-    double* Bs = B.data() + std::size_t(s + 1) * H;
+    double* As = t.A.data() + std::size_t(s + 1) * H;
+    double* Bs = t.B.data() + std::size_t(s + 1) * H;
     for (int k = 0; k < H; ++k) {
       const double a = al[k], b = be[k];
       double sum_gu = 0.0, sum_g = 0.0, sum_gx = 0.0;
@@ -189,8 +228,8 @@ void FrameToneCurve<T>::TableBackward(const double* dL_dz, T* dL_dparams, T* dL_
         sum_gx += g * x;
       }
       const double w = double(w3[k]);
-      g_w3[k] += sum_gu;
-      g_b2[k] += w * sum_g;
+      t.g_w3[k] += sum_gu;
+      t.g_b2[k] += w * sum_g;
       As[k] += w * sum_gx;
       Bs[k] += w * sum_g;
     }
@@ -198,13 +237,22 @@ void FrameToneCurve<T>::TableBackward(const double* dL_dz, T* dL_dparams, T* dL_
   }
   for (int s = 1; s <= S; ++s) {  // prefix sums: row s = segments 0 .. s-1
     for (int k = 0; k < H; ++k) {
-      A[std::size_t(s) * H + k] += A[std::size_t(s - 1) * H + k];
-      B[std::size_t(s) * H + k] += B[std::size_t(s - 1) * H + k];
+      t.A[std::size_t(s) * H + k] += t.A[std::size_t(s - 1) * H + k];
+      t.B[std::size_t(s) * H + k] += t.B[std::size_t(s - 1) * H + k];
     }
   }
-  const double* A_all = A.data() + std::size_t(S) * H;
-  const double* B_all = B.data() + std::size_t(S) * H;
-  std::vector<double> SA(H), SB(H), g_f(d, 0.0);
+  return t;
+}
+
+template <typename T>
+void FrameToneCurve<T>::FirstLayersBackward(const TableSums& t, T* dL_dparams, double* g_f) const {
+  const CurveLayout L(shape_);
+  const int H = L.h, d = shape_.context_size, S = static_cast<int>(order_.size()) + 1;
+  const T* W1 = params_.data() + L.w1;
+  const T* W2 = params_.data() + L.w2;
+  const double* A_all = t.A.data() + std::size_t(S) * H;
+  const double* B_all = t.B.data() + std::size_t(S) * H;
+  std::vector<double> SA(H), SB(H);
   T* dW1 = dL_dparams + L.w1;
   T* dW2 = dL_dparams + L.w2;
   for (int o = 0; o < H; ++o) {
@@ -212,13 +260,13 @@ void FrameToneCurve<T>::TableBackward(const double* dL_dz, T* dL_dparams, T* dL_
     const int r = rank_[o];
     if (a_[o] > 0.0) {
       for (int k = 0; k < H; ++k) {
-        SA[k] = A_all[k] - A[std::size_t(r + 1) * H + k];
-        SB[k] = B_all[k] - B[std::size_t(r + 1) * H + k];
+        SA[k] = A_all[k] - t.A[std::size_t(r + 1) * H + k];
+        SB[k] = B_all[k] - t.B[std::size_t(r + 1) * H + k];
       }
     } else if (a_[o] < 0.0) {
       for (int k = 0; k < H; ++k) {
-        SA[k] = A[std::size_t(r + 1) * H + k];
-        SB[k] = B[std::size_t(r + 1) * H + k];
+        SA[k] = t.A[std::size_t(r + 1) * H + k];
+        SB[k] = t.B[std::size_t(r + 1) * H + k];
       }
     } else if (beff_[o] > 0.0) {
       std::copy(A_all, A_all + H, SA.begin());
@@ -241,12 +289,6 @@ void FrameToneCurve<T>::TableBackward(const double* dL_dz, T* dL_dparams, T* dL_
       g_f[k] += g_beff * double(W1[o * L.in + 1 + k]);
     }
   }
-  for (int k = 0; k < H; ++k) {
-    dL_dparams[L.b2 + k] += T(g_b2[k]);
-    dL_dparams[L.w3 + k] += T(g_w3[k]);
-  }
-  dL_dparams[L.b3] += T(g_b3);
-  for (int k = 0; k < d; ++k) dL_df[k] += T(g_f[k]);
 }
 
 // Direct scratch layout: input [x, f] | activation cache | backward scratch | dL/dinput.

@@ -80,6 +80,22 @@ class FrameToneCurve {
 
  private:
   int Segment(double x) const;  // switch points strictly below x
+  // Prepare's table, in steps: the first layer folded with f (a_, beff_), the switching units in
+  // order (order_, rank_, switch_x_), each segment's alpha, beta, then the nodes.
+  void FoldFirstLayer();
+  void SortSwitchPoints();
+  void BuildSegments();
+  void TabulateNodes(int table_nodes);
+  // TableBackward's sums over the nodes with a gradient: per segment s, row s + 1 of A (sum of
+  // G2_j x_j) and B (sum of G2_j), G2_j the gradient at the second layer's pre-activation of node
+  // j, then prefix sums over the rows; and the gradients of w3, b2 and b3.
+  struct TableSums {
+    std::vector<double> A, B, g_w3, g_b2;
+    double g_b3 = 0.0;
+  };
+  TableSums SegmentSums(const double* dL_dz) const;
+  // The first two layers' share of TableBackward: ADDS to W1, b1, W2 in dL_dparams and to g_f.
+  void FirstLayersBackward(const TableSums& sums, T* dL_dparams, double* g_f) const;
 
   ToneCurveShape shape_;
   MlpShape mlp_;

@@ -174,39 +174,48 @@ void SaveCheckpoint(const fs::path& path, const Checkpoint& c) {
   SaveCheckpoint(path, parts);
 }
 
-Checkpoint LoadCheckpoint(const fs::path& path, const CheckpointLoadOptions& options) {
+namespace {
+
+// The whole file in one buffer of its size, to be parsed in place: copying through string
+// streams held the file four times over (rdbuf into a growing buffer, str(), istringstream),
+// 1.5 GB of a 0.4 GB checkpoint at the peak, and took most of `hdr4d render`'s start-up.
+std::unique_ptr<char[]> ReadWholeFile(const fs::path& path, std::size_t* size) {
   std::error_code ec;
   if (!fs::exists(path, ec)) Fail("{}: checkpoint not found", path.string());
   std::ifstream file(path, std::ios::binary);
   if (!file) Fail("{}: cannot open for reading", path.string());
-  // One read into a buffer of the file's size, parsed in place: copying through string streams
-  // held the file four times over (rdbuf into a growing buffer, str(), istringstream), 1.5 GB of
-  // a 0.4 GB checkpoint at the peak, and took most of `hdr4d render`'s start-up.
   const std::uintmax_t expected = fs::file_size(path, ec);
   if (ec) Fail("{}: cannot read its size: {}", path.string(), ec.message());
   // Not zero-filled first: the read writes every byte.
-  const auto buffer = std::make_unique_for_overwrite<char[]>(static_cast<std::size_t>(expected));
-  const std::string_view bytes(buffer.get(), static_cast<std::size_t>(expected));
-  if (!file.read(buffer.get(), static_cast<std::streamsize>(bytes.size())))
+  auto buffer = std::make_unique_for_overwrite<char[]>(static_cast<std::size_t>(expected));
+  *size = static_cast<std::size_t>(expected);
+  if (!file.read(buffer.get(), static_cast<std::streamsize>(*size)))
     Fail("{}: truncated checkpoint (the file shrank while it was read)", path.string());
-  MemoryStreamBuf view(buffer.get(), bytes.size());
-  std::istream in(&view);
-  const std::uint64_t file_size = bytes.size();
+  return buffer;
+}
+
+// The magic and the JSON header; `in` is left at the model's first buffer.
+nlohmann::json ReadHeader(std::istream& in,
+                          const fs::path& path,
+                          std::uint64_t file_size,
+                          std::uint64_t* header_size) {
   char magic[8] = {};
   if (!in.read(magic, 8) || std::memcmp(magic, kMagic, 8) != 0)
     Fail("{}: not an hdr4d checkpoint", path.string());
-  const std::uint64_t header_size = ReadU64(in, path, "the header size");
-  if (header_size > file_size) Fail("{}: corrupt checkpoint header", path.string());
-  std::string text(header_size, '\0');
-  if (!in.read(text.data(), static_cast<std::streamsize>(header_size)))
+  *header_size = ReadU64(in, path, "the header size");
+  if (*header_size > file_size) Fail("{}: corrupt checkpoint header", path.string());
+  std::string text(*header_size, '\0');
+  if (!in.read(text.data(), static_cast<std::streamsize>(*header_size)))
     Fail("{}: truncated checkpoint header", path.string());
-  nlohmann::json header;
   try {
-    header = nlohmann::json::parse(text);
+    return nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {
     Fail("{}: corrupt checkpoint header: {}", path.string(), e.what());
   }
-  Checkpoint c;
+}
+
+// The header's model layout and trainer state into `c`; returns the file's version.
+std::uint32_t ApplyHeader(const nlohmann::json& header, const fs::path& path, Checkpoint* c) {
   std::uint32_t version = 0;
   try {
     version = header.at("version").get<std::uint32_t>();
@@ -214,55 +223,70 @@ Checkpoint LoadCheckpoint(const fs::path& path, const CheckpointLoadOptions& opt
       Fail("{}: checkpoint version {} is not supported (this build reads {})", path.string(),
            header.at("version").get<std::uint32_t>(), kVersion);
     }
-    c.model.temporal = header.at("temporal").get<bool>();
-    c.model.color_mode =
+    c->model.temporal = header.at("temporal").get<bool>();
+    c->model.color_mode =
         header.at("color_mode").get<std::string>() == "ldr" ? ColorMode::kLdr : ColorMode::kLogHdr;
-    c.model.basis.max_sh_degree = header.at("max_sh_degree").get<int>();
-    c.model.basis.max_time_degree = header.at("max_time_degree").get<int>();
-    c.model.channels = header.at("channels").get<int>();
-    c.trainer = header.at("trainer");
+    c->model.basis.max_sh_degree = header.at("max_sh_degree").get<int>();
+    c->model.basis.max_time_degree = header.at("max_time_degree").get<int>();
+    c->model.channels = header.at("channels").get<int>();
+    c->trainer = header.at("trainer");
   } catch (const nlohmann::json::exception& e) {
     Fail("{}: checkpoint header is missing a key: {}", path.string(), e.what());
   }
-  if (version >= 3) {
-    const std::size_t body = bytes.size() >= kTrailerSize ? bytes.size() - kTrailerSize : 0;
-    std::uint64_t stored = 0;
-    if (body < header_size || std::memcmp(bytes.data() + body, kTrailerMagic, 8) != 0)
-      Fail("{}: truncated checkpoint (its checksum trailer is missing)", path.string());
-    std::memcpy(&stored, bytes.data() + body + 8, 8);
-    if (stored != Fnv1a(bytes.data(), body)) {
-      Fail("{}: corrupt checkpoint (checksum mismatch: the file was damaged after it was written)",
-           path.string());
-    }
+  return version;
+}
+
+// Version 3's trailer: the checksum of every byte before it.
+void VerifyChecksum(std::string_view bytes, std::uint64_t header_size, const fs::path& path) {
+  const std::size_t body = bytes.size() >= kTrailerSize ? bytes.size() - kTrailerSize : 0;
+  std::uint64_t stored = 0;
+  if (body < header_size || std::memcmp(bytes.data() + body, kTrailerMagic, 8) != 0)
+    Fail("{}: truncated checkpoint (its checksum trailer is missing)", path.string());
+  std::memcpy(&stored, bytes.data() + body + 8, 8);
+  if (stored != Fnv1a(bytes.data(), body)) {
+    Fail("{}: corrupt checkpoint (checksum mismatch: the file was damaged after it was written)",
+         path.string());
   }
+}
+
+// After the header: the model's buffers, the extra float buffers, the optimiser's state (kept
+// or skipped as `options` says) and, from version 2, the tone mapper's.
+void ReadBody(std::istream& in,
+              const fs::path& path,
+              std::uint64_t file_size,
+              std::uint32_t version,
+              const CheckpointLoadOptions& options,
+              Checkpoint* c) {
   const std::uint64_t limit = file_size / sizeof(float);
-  ForEachBuffer(c.model, [&](const char* name, std::vector<float>& v) {
+  ForEachBuffer(c->model, [&](const char* name, std::vector<float>& v) {
     v = ReadFloats(in, path, name, limit);
   });
   const std::uint64_t extras = ReadU64(in, path, "the extra buffer count");
   if (extras > 64) Fail("{}: corrupt checkpoint ({} extra buffers)", path.string(), extras);
   for (std::uint64_t i = 0; i < extras; ++i)
-    c.extra_floats.push_back(ReadFloats(in, path, "an extra buffer", limit));
+    c->extra_floats.push_back(ReadFloats(in, path, "an extra buffer", limit));
   const std::uint64_t adam_size = ReadU64(in, path, "the optimiser state size");
   if (adam_size > file_size) Fail("{}: corrupt checkpoint (optimiser state size)", path.string());
   if (options.optimizer_state) {
-    c.adam_state.resize(adam_size);
-    in.read(c.adam_state.data(), static_cast<std::streamsize>(adam_size));
+    c->adam_state.resize(adam_size);
+    in.read(c->adam_state.data(), static_cast<std::streamsize>(adam_size));
   } else {
     in.ignore(static_cast<std::streamsize>(adam_size));
   }
   if (!in || static_cast<std::uint64_t>(in.gcount()) != adam_size)
     Fail("{}: truncated checkpoint (while reading the optimiser state)", path.string());
-  if (version >= 2) {
-    const std::uint64_t tm_size = ReadU64(in, path, "the tone mapper state size");
-    if (tm_size > file_size) Fail("{}: corrupt checkpoint (tone mapper state size)", path.string());
-    c.tone_mapper_state.resize(tm_size);
-    if (!in.read(c.tone_mapper_state.data(), static_cast<std::streamsize>(tm_size))) {
-      Fail("{}: truncated checkpoint (while reading the tone mapper state)", path.string());
-    }
+  if (version < 2) return;
+  const std::uint64_t tm_size = ReadU64(in, path, "the tone mapper state size");
+  if (tm_size > file_size) Fail("{}: corrupt checkpoint (tone mapper state size)", path.string());
+  c->tone_mapper_state.resize(tm_size);
+  if (!in.read(c->tone_mapper_state.data(), static_cast<std::streamsize>(tm_size))) {
+    Fail("{}: truncated checkpoint (while reading the tone mapper state)", path.string());
   }
-  // Values, not only sizes: a model with NaN or Inf in it is never resumed or rendered (version
-  // 1-2 files have no checksum, and a writer bug could store them).
+}
+
+// Values, not only sizes: a model with NaN or Inf in it is never resumed or rendered (version
+// 1-2 files have no checksum, and a writer bug could store them).
+void CheckLoadedValues(const Checkpoint& c, const nlohmann::json& header, const fs::path& path) {
   ForEachBuffer(c.model, [&](const char* name, const std::vector<float>& v) {
     RequireFiniteValues(v, path, name);
   });
@@ -275,6 +299,23 @@ Checkpoint LoadCheckpoint(const fs::path& path, const CheckpointLoadOptions& opt
     Fail("{}: inconsistent checkpoint: header says {} Gaussians, buffers hold {}", path.string(),
          header.value("gaussians", std::size_t{0}), c.model.size());
   }
+}
+
+}  // namespace
+
+Checkpoint LoadCheckpoint(const fs::path& path, const CheckpointLoadOptions& options) {
+  std::size_t size = 0;
+  const std::unique_ptr<char[]> buffer = ReadWholeFile(path, &size);
+  const std::string_view bytes(buffer.get(), size);
+  MemoryStreamBuf view(buffer.get(), bytes.size());
+  std::istream in(&view);
+  std::uint64_t header_size = 0;
+  const nlohmann::json header = ReadHeader(in, path, bytes.size(), &header_size);
+  Checkpoint c;
+  const std::uint32_t version = ApplyHeader(header, path, &c);
+  if (version >= 3) VerifyChecksum(bytes, header_size, path);
+  ReadBody(in, path, bytes.size(), version, options, &c);
+  CheckLoadedValues(c, header, path);
   return c;
 }
 

@@ -13,7 +13,7 @@
 #include "method/render/learned_background.h"
 #include "method/tonemap/tone_mapper_registry.h"
 #include "method/train/checkpoint.h"
-#include "method/train/hdr_head.h"
+#include "method/train/hdr_head_fit.h"
 #include "tests/testing.h"
 
 namespace hdr4d::method {

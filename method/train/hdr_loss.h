@@ -8,8 +8,8 @@
 // the HDR raster enters mu unnormalised (the target is normalised); evaluation normalises each
 // image by its own maximum instead (core/metrics/metrics.h).
 //
-// The 2D branch's log takes a floor, log(HDR + eps): ResolvedHdrTraining::pixel_log_epsilon
-// (hdr_training_options.h) says which.
+// The 2D branch's log takes a floor, log(HDR + eps) (PixelLog and its derivative,
+// method/render/pixel_log.h): ResolvedHdrTraining::pixel_log_epsilon says which.
 //
 // The raster holds 3 channels (HDR only) or 6 (HDR, then the 3D branch's LDR), interleaved.
 #pragma once
@@ -20,6 +20,7 @@
 
 #include "core/metrics/metrics.h"
 
+#include "method/render/pixel_log.h"
 #include "method/tonemap/tone_mapper.h"
 #include "method/train/hdr_training_options.h"
 
@@ -42,22 +43,6 @@ inline T MuLawEncodeBackward(T x, T dL_dy, double mu = kMuLawMu) {
   if (!(x > T(0))) return T(0);
   return dL_dy * T(mu) / ((T(1) + T(mu) * x) * std::log(T(1) + T(mu)));
 }
-
-// The 2D branch's input: log(max(HDR, 0) + eps), and its derivative.
-template <typename T>
-inline T PixelLog(T hdr, T eps) {
-  return std::log((hdr > T(0) ? hdr : T(0)) + eps);
-}
-template <typename T>
-inline T PixelLogBackward(T hdr, T dL_dy, T eps) {
-  return hdr > T(0) ? dL_dy / (hdr + eps) : T(0);
-}
-
-// Channels [first, first + 3) of an interleaved H x W x channels buffer as a 3-channel one.
-void ExtractChannels(
-    const float* src, int channels, int first, std::size_t pixels, std::vector<float>* dst);
-// The 2D branch's input for every value of a 3-channel HDR image: PixelLog of each.
-void PixelLogImage(const std::vector<float>& hdr, float eps, std::vector<float>* x);
 
 struct SupervisionTerms {
   bool ldr_gaussian = true;  // L(clamp(LDR_3D), gt): needs a 6-channel raster

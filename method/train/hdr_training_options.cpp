@@ -122,16 +122,6 @@ HdrTrainingOptions HdrTrainingOptions::FromJson(const nlohmann::json& j,
   return o;
 }
 
-nlohmann::json ResolvedHdrTraining::ToJson() const {
-  return {{"hdr_colors", hdr_colors},
-          {"ldr_gaussian", ldr_gaussian},
-          {"ldr_pixel", ldr_pixel},
-          {"hdr", hdr},
-          {"hdr_head", hdr_head},
-          {"final_ldr_from_pixels", final_ldr_from_pixels},
-          {"pixel_log_epsilon", pixel_log_epsilon}};
-}
-
 ResolvedHdrTraining ResolveHdrTraining(const HdrTrainingOptions& o,
                                        bool train_views_have_hdr,
                                        bool pointwise) {

@@ -10,6 +10,7 @@
 
 #include "core/metrics/metrics.h"
 #include "method/gaussian/gaussian_model.h"
+#include "method/render/resolved_hdr_training.h"
 #include "method/tonemap/tone_mapper.h"
 
 namespace hdr4d::method {
@@ -28,15 +29,6 @@ enum class Supervision { kAuto, kLdr, kHdr, kLdrHdr };
 //              under per-image maxima, to the LDR terms and their known exposures.
 enum class HdrTarget { kImageMax, kSceneLog, kAligned };
 
-// The floor of the 2D branch's log(HDR + eps). The reference's 1e-5 is harmless under LDR
-// supervision alone, where the model picks its own radiance scale. An HDR term fixes the raster
-// to the target's units (each image, or the scene, over its maximum), where the darkest
-// radiance an LDR bracket still records sits near 1e-5 on a scene of 1e5:1 (two exposures 256x
-// apart record 1/65000 of the top): the 2D branch then cannot tell those pixels from black and
-// fights the HDR term there (docs/history/accuracy.md: 2.4 dB of held-out LDR on studio).
-// So with an HDR term the floor is 1e-8 of the target's maximum.
-inline constexpr float kReferencePixelLogEpsilon = 1e-5f;
-inline constexpr float kHdrUnitsPixelLogEpsilon = 1e-8f;
 inline constexpr double kSceneLogMu = 1e6;
 inline double HdrTargetMu(HdrTarget t) { return t == HdrTarget::kSceneLog ? kSceneLogMu : kMuLawMu; }
 const char* HdrTargetName(HdrTarget t);
@@ -59,16 +51,17 @@ struct HdrTrainingOptions {
   HdrTarget hdr_target = HdrTarget::kImageMax;
   // Whether the HDR term's gradient reaches the geometry (means, covariances, opacities, hence
   // the densification statistics) or, false (--no-hdr-geometry), the colours only, the geometry
-  // then following the LDR terms alone (docs/history/accuracy.md). Needs an LDR term.
+  // then following the LDR terms alone (issue 12 §3, docs/history/accuracy.md). Needs an LDR term.
   bool hdr_geometry = true;
-  // --hdr-head: LDR+HDR supervision as an HDR head (method/train/hdr_head.h, issue 12 §3): the
-  // run trains on the LDR terms exactly as LDR alone (no HDR term in the loop), then fits a
-  // per-Gaussian log-radiance offset that only the HDR output uses to the HDR ground truth,
-  // everything else frozen. The LDR output is LDR alone's, bit for bit.
+  // --hdr-head: LDR+HDR supervision as an HDR head (method/train/hdr_head_fit.h, issue 12
+  // §3): the run trains on the LDR terms exactly as LDR alone (no HDR term in the loop), then
+  // fits a per-Gaussian log-radiance offset that only the HDR output uses to the HDR ground
+  // truth, everything else frozen. The LDR output is LDR alone's, bit for bit.
   bool hdr_head = false;
   int hdr_head_iterations = 0;  // 0: half of the run's iterations
   // The floor of the 2D branch's log(HDR + eps); unset: ResolveHdrTraining picks
-  // kHdrUnitsPixelLogEpsilon with an HDR term, else kReferencePixelLogEpsilon.
+  // kHdrUnitsPixelLogEpsilon with an HDR term, else kReferencePixelLogEpsilon (both in
+  // method/render/pixel_log.h, with why).
   std::optional<float> pixel_log_epsilon;
 
   std::string Validate() const;
@@ -76,21 +69,11 @@ struct HdrTrainingOptions {
   static HdrTrainingOptions FromJson(const nlohmann::json& json, const std::string& source);
 };
 
-// The switches resolved against a scene and a tone mapper: what one training view computes.
-struct ResolvedHdrTraining {
-  bool hdr_colors = true;              // log-HDR colours and an HDR raster (false: plain LDR 4DGS)
-  bool ldr_gaussian = false;           // 3D branch LDR term (6-channel raster)
-  bool ldr_pixel = false;              // 2D branch LDR term
-  bool hdr = false;                    // HDR term (views with HDR ground truth)
-  bool hdr_head = false;               // an HDR head fitted after the last iteration
-  bool final_ldr_from_pixels = false;  // the LDR output is the 2D branch (whole-image mappers)
-  float pixel_log_epsilon = kReferencePixelLogEpsilon;  // the 2D branch's log(HDR + eps)
-  nlohmann::json ToJson() const;
-};
-
-// Throws hdr4d::Error when the combination cannot train on this scene (HDR supervision without
-// HDR ground truth, a whole-image mapper without the pixel branch, ...). pointwise: whether the
-// tone mapper (if any) maps values on their own.
+// The switches resolved against a scene and a tone mapper (ResolvedHdrTraining,
+// method/render/resolved_hdr_training.h: what one training view computes). Throws hdr4d::Error
+// when the combination cannot train on this scene (HDR supervision without HDR ground truth, a
+// whole-image mapper without the pixel branch, ...). pointwise: whether the tone mapper (if any)
+// maps values on their own.
 ResolvedHdrTraining ResolveHdrTraining(const HdrTrainingOptions& options,
                                        bool train_views_have_hdr,
                                        bool pointwise);

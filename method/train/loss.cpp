@@ -257,83 +257,149 @@ inline std::int64_t BandRows(int height) {
   return std::max<std::int64_t>(3 * kSsimWindow, (height + bands - 1) / bands);
 }
 
+// The sizes of one loss call: rows of width x channels values, zero-padded by kRadius pixels on
+// each side in the maps the filters read, and the bands the passes run in parallel.
+struct LossLayout {
+  LossLayout(int width, int height_, int channels)
+      : stride(static_cast<std::size_t>(channels)),
+        row_len(static_cast<std::size_t>(width) * stride),
+        pad(static_cast<std::size_t>(kRadius) * stride),
+        pitch(row_len + 2 * pad),
+        padded_plane(pitch * static_cast<std::size_t>(height_)),
+        height(height_),
+        band(BandRows(height_)) {}
+  std::size_t stride, row_len, pad;
+  std::size_t pitch;         // a zero-padded row
+  std::size_t padded_plane;  // a map of zero-padded rows
+  int height;
+  std::int64_t band;
+};
+
+// Pass 1 over rows [y0, y1): the five quantities of each row in padded scratch rows, filtered
+// horizontally into the ring; per row, the vertical filtering, the SSIM map's row sum
+// (ssim_rows) and the L1 row sum (l1_rows); with `partials` (the backward), the scaled partials
+// P_mu, P_xx, P_xy of each row into those three padded maps.
+template <typename T>
+void SsimBand(const T* pred,
+              const T* gt,
+              const LossLayout& L,
+              const T* zeros,
+              T* partials,
+              T scale,
+              std::int64_t y0,
+              std::int64_t y1,
+              double* l1_rows,
+              double* ssim_rows) {
+  const T c1 = static_cast<T>(kSsimC1);
+  const T c2 = static_cast<T>(kSsimC2);
+  const std::size_t row_len = L.row_len, pitch = L.pitch, pad = L.pad;
+  const int height = L.height;
+  // The caller's part of the scratch: the SSIM map's row, then the five padded product rows.
+  const std::size_t ssim_len = LinePitch<T>(row_len);
+  FilteredRowRing<T> ring(5, row_len, ssim_len + 5 * pitch, y0);
+  T* __restrict ssim = ring.Extra();
+  T* scratch = ssim + ssim_len;
+  std::fill(scratch, scratch + 5 * pitch, T(0));
+  T* qx = scratch + pad;
+  T* qy = qx + pitch;
+  T* qxx = qy + pitch;
+  T* qyy = qxx + pitch;
+  T* qxy = qyy + pitch;
+  T* __restrict mu_x = ring.Out(0);
+  T* __restrict mu_y = ring.Out(1);
+  T* __restrict e_xx = ring.Out(2);
+  T* __restrict e_yy = ring.Out(3);
+  T* __restrict e_xy = ring.Out(4);
+  for (std::int64_t y = y0; y < y1; ++y) {
+    ring.FillFor(y, height, [&](std::int64_t r, auto dst) {
+      const std::size_t base = static_cast<std::size_t>(r) * row_len;
+      const T* __restrict a = pred + base;
+      const T* __restrict b = gt + base;
+      WindowProducts(a, b, qx, qy, qxx, qyy, qxy, row_len);
+      if (r >= y0 && r < y1) l1_rows[r] = SumAbsDiffRow(a, b, row_len);
+      for (int q = 0; q < 5; ++q) FilterPaddedRow(scratch + q * pitch, dst(q), row_len, L.stride);
+    });
+    ring.Filter(zeros, y, height);
+    if (partials) {
+      T* row[3];
+      for (int q = 0; q < 3; ++q) {
+        T* r = partials + static_cast<std::size_t>(q) * L.padded_plane +
+               static_cast<std::size_t>(y) * pitch;
+        std::fill(r, r + pad, T(0));
+        std::fill(r + pad + row_len, r + pitch, T(0));
+        row[q] = r + pad;
+      }
+      SsimRowWithPartials(mu_x, mu_y, e_xx, e_yy, e_xy, ssim, row[0], row[1], row[2], row_len,
+                          c1, c2, scale);
+    } else {
+      for (std::size_t j = 0; j < row_len; ++j) {
+        const auto [a1, a2, b1, b2] =
+            WindowSsim(mu_x[j], mu_y[j], e_xx[j], e_yy[j], e_xy[j], c1, c2);
+        ssim[j] = a1 * a2 * (T(1) / (b1 * b2));
+      }
+    }
+    ssim_rows[y] = SumRow(ssim, row_len);
+  }
+}
+
+// Pass 2 over rows [y0, y1): the three partial maps filtered horizontally into the ring, then
+// per row the vertical filtering and the chain rule into the gradient.
+template <typename T>
+void GradientBand(const T* pred,
+                  const T* gt,
+                  const LossLayout& L,
+                  const T* zeros,
+                  const T* partials,
+                  T l1_weight,
+                  std::int64_t y0,
+                  std::int64_t y1,
+                  T* grad) {
+  const std::size_t row_len = L.row_len;
+  FilteredRowRing<T> ring(3, row_len, 0, y0);
+  const T* __restrict g_mu = ring.Out(0);
+  const T* __restrict g_xx = ring.Out(1);
+  const T* __restrict g_xy = ring.Out(2);
+  for (std::int64_t y = y0; y < y1; ++y) {
+    ring.FillFor(y, L.height, [&](std::int64_t r, auto dst) {
+      for (int q = 0; q < 3; ++q) {
+        FilterPaddedRow(partials + static_cast<std::size_t>(q) * L.padded_plane +
+                            static_cast<std::size_t>(r) * L.pitch,
+                        dst(q), row_len, L.stride);
+      }
+    });
+    ring.Filter(zeros, y, L.height);
+    const std::size_t base = static_cast<std::size_t>(y) * row_len;
+    const T* __restrict a = pred + base;
+    const T* __restrict b = gt + base;
+    T* __restrict out = grad + base;
+    for (std::size_t j = 0; j < row_len; ++j) {
+      const T d = a[j] - b[j];
+      const T sign = (d > T(0) ? T(1) : T(0)) - (d < T(0) ? T(1) : T(0));  // sign(0) = 0
+      out[j] = l1_weight * sign + g_mu[j] + T(2) * a[j] * g_xx[j] + b[j] * g_xy[j];
+    }
+  }
+}
+
 template <typename T>
 LossResult LossImpl(
     const T* pred, const T* gt, int width, int height, int channels, T lambda, T* grad) {
   HDR4D_CHECK(width > 0 && height > 0 && channels > 0);
   HDR4D_CHECK(lambda >= T(0) && lambda <= T(1));
-  const std::size_t stride = static_cast<std::size_t>(channels);
-  const std::size_t row_len = static_cast<std::size_t>(width) * stride;
-  const std::size_t pad = static_cast<std::size_t>(kRadius) * stride;
-  const std::size_t pitch = row_len + 2 * pad;  // a zero-padded row
-  const std::size_t plane = row_len * static_cast<std::size_t>(height);
-  const std::size_t padded_plane = pitch * static_cast<std::size_t>(height);
-  const double count = static_cast<double>(plane);
-  const std::int64_t band = BandRows(height);
-  const T c1 = static_cast<T>(kSsimC1);
-  const T c2 = static_cast<T>(kSsimC2);
+  const LossLayout L(width, height, channels);
+  const double count = static_cast<double>(L.row_len * static_cast<std::size_t>(height));
   const bool backward = grad != nullptr;
-
   // Layout: a zero row, then, for the backward, the per-pixel partials P_mu, P_xx, P_xy in
   // zero-padded rows (the only image-sized maps: the backward's bands need their neighbours'
   // rows).
-  T* work = Workspace<T>(row_len + (backward ? 3 * padded_plane : 0));
+  T* work = Workspace<T>(L.row_len + (backward ? 3 * L.padded_plane : 0));
   T* zeros = work;
-  std::fill(zeros, zeros + row_len, T(0));
-  auto partial = [&](int q) { return work + row_len + static_cast<std::size_t>(q) * padded_plane; };
+  std::fill(zeros, zeros + L.row_len, T(0));
+  T* partials = backward ? work + L.row_len : nullptr;
   std::vector<double> l1_rows(height), ssim_rows(height);
-
   // d value / d mean(SSIM) = -lambda, and the mean divides by the count.
   const T scale = static_cast<T>(-static_cast<double>(lambda) / count);
-  // Pass 1, per band: the five quantities of each row in padded scratch rows, filtered
-  // horizontally into the ring; per row of the band, the vertical filtering, the SSIM map's row
-  // sum and the scaled partials.
-  ParallelForChunks(height, band, [&](std::int64_t y0, std::int64_t y1) {
-    // The caller's part of the scratch: the SSIM map's row, then the five padded product rows.
-    const std::size_t ssim_len = LinePitch<T>(row_len);
-    FilteredRowRing<T> ring(5, row_len, ssim_len + 5 * pitch, y0);
-    T* __restrict ssim = ring.Extra();
-    T* scratch = ssim + ssim_len;
-    std::fill(scratch, scratch + 5 * pitch, T(0));
-    T* qx = scratch + pad;
-    T* qy = qx + pitch;
-    T* qxx = qy + pitch;
-    T* qyy = qxx + pitch;
-    T* qxy = qyy + pitch;
-    T* __restrict mu_x = ring.Out(0);
-    T* __restrict mu_y = ring.Out(1);
-    T* __restrict e_xx = ring.Out(2);
-    T* __restrict e_yy = ring.Out(3);
-    T* __restrict e_xy = ring.Out(4);
-    for (std::int64_t y = y0; y < y1; ++y) {
-      ring.FillFor(y, height, [&](std::int64_t r, auto dst) {
-        const std::size_t base = static_cast<std::size_t>(r) * row_len;
-        const T* __restrict a = pred + base;
-        const T* __restrict b = gt + base;
-        WindowProducts(a, b, qx, qy, qxx, qyy, qxy, row_len);
-        if (r >= y0 && r < y1) l1_rows[r] = SumAbsDiffRow(a, b, row_len);
-        for (int q = 0; q < 5; ++q) FilterPaddedRow(scratch + q * pitch, dst(q), row_len, stride);
-      });
-      ring.Filter(zeros, y, height);
-      if (backward) {
-        T* row[3];
-        for (int q = 0; q < 3; ++q) {
-          T* r = partial(q) + static_cast<std::size_t>(y) * pitch;
-          std::fill(r, r + pad, T(0));
-          std::fill(r + pad + row_len, r + pitch, T(0));
-          row[q] = r + pad;
-        }
-        SsimRowWithPartials(mu_x, mu_y, e_xx, e_yy, e_xy, ssim, row[0], row[1], row[2], row_len,
-                            c1, c2, scale);
-      } else {
-        for (std::size_t j = 0; j < row_len; ++j) {
-          const auto [a1, a2, b1, b2] =
-              WindowSsim(mu_x[j], mu_y[j], e_xx[j], e_yy[j], e_xy[j], c1, c2);
-          ssim[j] = a1 * a2 * (T(1) / (b1 * b2));
-        }
-      }
-      ssim_rows[y] = SumRow(ssim, row_len);
-    }
+  ParallelForChunks(height, L.band, [&](std::int64_t y0, std::int64_t y1) {
+    SsimBand(pred, gt, L, zeros, partials, scale, y0, y1, l1_rows.data(), ssim_rows.data());
   });
 
   LossResult result;
@@ -348,32 +414,9 @@ LossResult LossImpl(
                  static_cast<double>(lambda) * (1.0 - result.ssim);
   if (!backward) return result;
 
-  // Pass 2, per band: the three partial maps filtered horizontally into the ring, then per row
-  // the vertical filtering and the chain rule into the gradient.
   const T l1_weight = static_cast<T>((1.0 - static_cast<double>(lambda)) / count);
-  ParallelForChunks(height, band, [&](std::int64_t y0, std::int64_t y1) {
-    FilteredRowRing<T> ring(3, row_len, 0, y0);
-    const T* __restrict g_mu = ring.Out(0);
-    const T* __restrict g_xx = ring.Out(1);
-    const T* __restrict g_xy = ring.Out(2);
-    for (std::int64_t y = y0; y < y1; ++y) {
-      ring.FillFor(y, height, [&](std::int64_t r, auto dst) {
-        for (int q = 0; q < 3; ++q) {
-          FilterPaddedRow(partial(q) + static_cast<std::size_t>(r) * pitch, dst(q), row_len,
-                          stride);
-        }
-      });
-      ring.Filter(zeros, y, height);
-      const std::size_t base = static_cast<std::size_t>(y) * row_len;
-      const T* __restrict a = pred + base;
-      const T* __restrict b = gt + base;
-      T* __restrict out = grad + base;
-      for (std::size_t j = 0; j < row_len; ++j) {
-        const T d = a[j] - b[j];
-        const T sign = (d > T(0) ? T(1) : T(0)) - (d < T(0) ? T(1) : T(0));  // sign(0) = 0
-        out[j] = l1_weight * sign + g_mu[j] + T(2) * a[j] * g_xx[j] + b[j] * g_xy[j];
-      }
-    }
+  ParallelForChunks(height, L.band, [&](std::int64_t y0, std::int64_t y1) {
+    GradientBand(pred, gt, L, zeros, partials, l1_weight, y0, y1, grad);
   });
   return result;
 }

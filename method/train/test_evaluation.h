@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "method/train/train_views.h"
-#include "method/train/view_outputs.h"
+#include "method/render/view_renderer.h"
 
 namespace hdr4d::method {
 

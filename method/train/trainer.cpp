@@ -40,7 +40,7 @@
 #include "method/tonemap/tone_mapper_registry.h"
 #include "method/train/batch_gradients.h"
 #include "method/train/checkpoint.h"
-#include "method/train/hdr_head.h"
+#include "method/train/hdr_head_fit.h"
 #include "method/train/hdr_loss.h"
 #include "method/train/loop_state.h"
 #include "method/train/loss.h"
@@ -48,7 +48,7 @@
 #include "method/train/test_evaluation.h"
 #include "method/train/tone_curve_watch.h"
 #include "method/train/train_views.h"
-#include "method/train/view_outputs.h"
+#include "method/render/view_renderer.h"
 
 namespace hdr4d::method {
 namespace fs = std::filesystem;
@@ -282,6 +282,12 @@ class TrainingRun {
   TrainSummary Finish();
 
  private:
+  // SetUp's stages, in order.
+  void CheckGivenAgainstSaved();
+  void LoadTrainingViews();
+  void ResolveSchedules();
+  void ResolveLearnedBackground();
+  void RecordConfig();
   double ViewLoss(const TrainView& view, int it, const float** ldr_out, std::size_t* pixels);
   double ForwardAndLoss(const TrainView& view, const float** ldr_out);
   // The image the blend's geometry gradient takes for the current view (null: dL/dimage).
@@ -356,47 +362,58 @@ class TrainingRun {
 // The data, the schedules for this run's length and image size, the tone mapper and the
 // configuration to record (a resumed run must match the one it continues).
 void TrainingRun::SetUp() {
-  // A resumed run keeps the configuration it was started with: an option given now that
-  // differs is refused before the scene is read (a paper-size scene takes a minute to load);
-  // what only the scene resolves is compared once it is (end of SetUp).
-  if (options_.resume) {
-    saved_config_ = ReadSavedRunConfig(options_.out);
-    nlohmann::json given = options_.ToJson();
-    if (AcceptAddedHdrHead(&*saved_config_, given["hdr"])) {
-      spdlog::info("train: {} was trained with supervision ldr; it continues as an ldr+hdr run "
-                   "with --hdr-head, whose training loop is the same, and fits the HDR head when "
-                   "its steps are done",
-                   options_.out.string());
-    }
-    nlohmann::json& o = given["optimization"];
-    for (auto it = o.begin(); it != o.end();) {
-      // kFollowRunLength (negative) fields and t_lr_init's "as position_lr_init" are resolved
-      // with the scene.
-      if (it->is_number() && it->get<double>() < 0) it = o.erase(it); else ++it;
-    }
-    // Log-HDR colours take their own DC rate (OptimizationOptions::Resolved); the method, and
-    // with it the colours, is picked with the scene when when_nothing_hdr is set.
-    if (options_.when_nothing_hdr) {
-      given.erase("hdr");
-      o.erase("f_dc_lr");
-    } else if (options_.hdr.color_mode == ColorMode::kLogHdr) {
-      o["f_dc_lr"] = options_.optimization.f_dc_lr_log_hdr;
-    }
-    RequireSameGivenConfig(*saved_config_, given, options_.out / "config.json");
-  }
+  if (options_.resume) CheckGivenAgainstSaved();
   dataset_.emplace(LoadDataset(options_.data, {.image_check = ImageCheck::kHeaders}));
   profile_ = ProfileScene(*dataset_);
   PickMethodForScene();
-  const HdrTrainingOptions& hdr = options_.hdr;
-  const float background[3] = {options_.background, options_.background, options_.background};
   num_times_ = DistinctTimes(*dataset_);
-  if (hdr.tone_mapper) {
-    ToneMapperConfig tc = *hdr.tone_mapper;
+  if (options_.hdr.tone_mapper) {
+    ToneMapperConfig tc = *options_.hdr.tone_mapper;
     tc.num_times = num_times_;
     tc.num_images = static_cast<int>(dataset_->train.size());
     tc.seed = options_.seed;
     tone_mapper_ = MakeToneMapper(tc);
   }
+  LoadTrainingViews();
+  ResolveSchedules();
+  ResolveLearnedBackground();
+  RecordConfig();
+}
+
+// A resumed run keeps the configuration it was started with: an option given now that differs
+// is refused before the scene is read (a paper-size scene takes a minute to load); what only the
+// scene resolves is compared once it is (RecordConfig).
+void TrainingRun::CheckGivenAgainstSaved() {
+  saved_config_ = ReadSavedRunConfig(options_.out);
+  nlohmann::json given = options_.ToJson();
+  if (AcceptAddedHdrHead(&*saved_config_, given["hdr"])) {
+    spdlog::info("train: {} was trained with supervision ldr; it continues as an ldr+hdr run "
+                 "with --hdr-head, whose training loop is the same, and fits the HDR head when "
+                 "its steps are done",
+                 options_.out.string());
+  }
+  nlohmann::json& o = given["optimization"];
+  for (auto it = o.begin(); it != o.end();) {
+    // kFollowRunLength (negative) fields and t_lr_init's "as position_lr_init" are resolved
+    // with the scene.
+    if (it->is_number() && it->get<double>() < 0) it = o.erase(it); else ++it;
+  }
+  // Log-HDR colours take their own DC rate (OptimizationOptions::Resolved); the method, and
+  // with it the colours, is picked with the scene when when_nothing_hdr is set.
+  if (options_.when_nothing_hdr) {
+    given.erase("hdr");
+    o.erase("f_dc_lr");
+  } else if (options_.hdr.color_mode == ColorMode::kLogHdr) {
+    o["f_dc_lr"] = options_.optimization.f_dc_lr_log_hdr;
+  }
+  RequireSameGivenConfig(*saved_config_, given, options_.out / "config.json");
+}
+
+// What each view computes, then the training views (with HDR targets where a term uses them)
+// and the checked test views, and the scene's extent.
+void TrainingRun::LoadTrainingViews() {
+  const HdrTrainingOptions& hdr = options_.hdr;
+  const float background[3] = {options_.background, options_.background, options_.background};
   // What each view computes is decided before the images are read, so the HDR targets are
   // loaded only when an HDR term uses them (under LDR supervision they would double a
   // paper-size scene's memory and loading time, issue 15).
@@ -412,9 +429,14 @@ void TrainingRun::SetUp() {
   }
   ReturnFreedMemory();  // the checked test images and the decoding buffers (core/util/free_memory.h)
   extent_ = SceneExtent(train_views_);
+}
+
+// Schedules for this run's length and image size (an explicit value stays as it is; a resumed
+// run keeps its own), the Gaussian budget, and whether the model has a time axis.
+void TrainingRun::ResolveSchedules() {
+  const HdrTrainingOptions& hdr = options_.hdr;
   OptimizationOptions requested = options_.optimization;
   if (saved_config_) KeepSavedSchedules(*saved_config_, &requested);
-  // Schedules for this run's length and image size (an explicit value stays as it is).
   const double image_size = ImageSize(train_views_);
   opt_ = requested.Resolved(image_size, hdr.color_mode == ColorMode::kLogHdr);
   if (opt_.max_gaussians < 0) {
@@ -427,19 +449,25 @@ void TrainingRun::SetUp() {
   spdlog::info("train: {} train / {} test views, extent {:.3f}, {}, method {}", train_views_.size(),
                test_views_.size(), extent_, temporal_ ? "dynamic" : "static (no time axis)",
                hdr.method);
-  // The learned background: as asked, else as the resumed run started (runs from before the
-  // option recorded nothing and trained without it), else on.
-  if (!options_.learn_background) {
-    bool learn = true;
-    if (saved_config_) {
-      const auto saved = saved_config_->find("learn_background");
-      const bool recorded = saved != saved_config_->end();
-      if (recorded && !saved->is_boolean())
-        Fail("{}: learn_background must be true or false", (options_.out / "config.json").string());
-      learn = recorded && saved->get<bool>();
-    }
-    options_.learn_background = learn;
+}
+
+// The learned background: as asked, else as the resumed run started (runs from before the
+// option recorded nothing and trained without it), else on.
+void TrainingRun::ResolveLearnedBackground() {
+  if (options_.learn_background) return;
+  bool learn = true;
+  if (saved_config_) {
+    const auto saved = saved_config_->find("learn_background");
+    const bool recorded = saved != saved_config_->end();
+    if (recorded && !saved->is_boolean())
+      Fail("{}: learn_background must be true or false", (options_.out / "config.json").string());
+    learn = recorded && saved->get<bool>();
   }
+  options_.learn_background = learn;
+}
+
+// The configuration to record, with what the scene resolved; a resumed run's must match.
+void TrainingRun::RecordConfig() {
   TrainOptions recorded = options_;
   recorded.optimization = opt_;
   config_ = recorded.ToJson();

@@ -22,11 +22,11 @@
 #include "method/run/render_split.h"
 #include "method/tonemap/dynamic_tone_mapper.h"
 #include "method/train/checkpoint.h"
-#include "method/train/hdr_head.h"
+#include "method/train/hdr_head_fit.h"
 #include "method/train/hdr_loss.h"
 #include "method/train/train_views.h"
 #include "method/train/trainer.h"
-#include "method/train/view_outputs.h"
+#include "method/render/view_renderer.h"
 #include "tests/testing.h"
 
 namespace hdr4d::method {

@@ -11,9 +11,9 @@
 #include "core/geometry/camera.h"
 #include "method/render/frame_render.h"
 #include "method/render/hdr_color_stage.h"
+#include "method/render/hdr_head.h"
 #include "method/render/learned_background.h"
-#include "method/train/hdr_head.h"
-#include "method/train/hdr_training_options.h"
+#include "method/render/resolved_hdr_training.h"
 
 namespace hdr4d::method {
 

@@ -1,11 +1,11 @@
-#include "method/train/view_outputs.h"
+#include "method/render/view_renderer.h"
 
 #include <algorithm>
 #include <cmath>
 
 #include "core/util/error.h"
 #include "core/util/parallel.h"
-#include "method/train/hdr_loss.h"
+#include "method/render/pixel_log.h"
 
 namespace hdr4d::method {
 
