@@ -11,12 +11,12 @@
 namespace hdr4d::method {
 
 // The floor eps of the 2D branch's log(HDR + eps). The reference's 1e-5 is harmless under LDR
-// supervision alone, where the model picks its own radiance scale. An HDR term fixes the raster
-// to the target's units (each image, or the scene, over its maximum), where the darkest
-// radiance an LDR bracket still records sits near 1e-5 on a scene of 1e5:1 (two exposures 256x
-// apart record 1/65000 of the top): the 2D branch then cannot tell those pixels from black and
-// fights the HDR term there (issue 12 §3, docs/history/accuracy.md: 2.4 dB of held-out LDR on studio).
-// So with an HDR term the floor is 1e-8 of the target's maximum (ResolveHdrTraining,
+// supervision alone, where the model picks its own radiance scale. An HDR term fixes the raster to
+// the target's units (each image, or the scene, over its maximum), where the darkest radiance an
+// LDR bracket still records sits near 1e-5 on a scene of 1e5:1 (two exposures 256x apart record
+// 1/65000 of the top): the 2D branch then cannot tell those pixels from black and fights the HDR
+// term there (issue 12 §3, docs/history/accuracy.md: 2.4 dB of held-out LDR on studio). So with an
+// HDR term the floor is 1e-8 of the target's maximum (ResolveHdrTraining,
 // method/train/hdr_training_options.h).
 inline constexpr float kReferencePixelLogEpsilon = 1e-5f;
 inline constexpr float kHdrUnitsPixelLogEpsilon = 1e-8f;

@@ -1,15 +1,15 @@
-// Fitting the HDR head (`hdr4d train --hdr-head`; issue 12 §3, docs/history/accuracy.md "An HDR head after
-// LDR training"). Every HDR term that shares the colours and the geometry with the LDR terms cost
-// held-out LDR on some scene family (twelve tested variants), so this mode keeps them apart: the
-// run trains on the LDR brackets exactly as LDR alone does, then a log-radiance offset d per
-// Gaussian and channel, used only by the HDR channels (exp(c + d); the tone-mapped channels stay
-// TM(c + log e), method/render/hdr_color_stage.h), is fitted to the HDR ground truth with the
-// model, the tone mapper and the learned background frozen; with a learned background, a log
-// offset per channel moves the backdrop's HDR the same way (its LDR stays TM(b + log e)). One
-// factor exp(log_scale) then scales the whole HDR output, background included. Not the paper's
-// joint LDR+HDR training (which stays the default); the LDR output is LDR alone's bit for bit.
-// The head itself is plain data the renderers apply (HdrHead, method/render/hdr_head.h); here are
-// its fit and its place in a checkpoint.
+// Fitting the HDR head (`hdr4d train --hdr-head`; issue 12 §3, docs/history/accuracy.md "An HDR
+// head after LDR training"). Every HDR term that shares the colours and the geometry with the LDR
+// terms cost held-out LDR on some scene family (twelve tested variants), so this mode keeps them
+// apart: the run trains on the LDR brackets exactly as LDR alone does, then a log-radiance offset d
+// per Gaussian and channel, used only by the HDR channels (exp(c + d); the tone-mapped channels
+// stay TM(c + log e), method/render/hdr_color_stage.h), is fitted to the HDR ground truth with the
+// model, the tone mapper and the learned background frozen; with a learned background, a log offset
+// per channel moves the backdrop's HDR the same way (its LDR stays TM(b + log e)). One factor
+// exp(log_scale) then scales the whole HDR output, background included. Not the paper's joint
+// LDR+HDR training (which stays the default); the LDR output is LDR alone's bit for bit. The head
+// itself is plain data the renderers apply (HdrHead, method/render/hdr_head.h); here are its fit
+// and its place in a checkpoint.
 #pragma once
 
 #include <cstdint>
@@ -28,9 +28,9 @@
 namespace hdr4d::method {
 
 // Adam's step size on the offsets (log-radiance units), measured on 20 scene-seed pairs of nine
-// families (docs/history/accuracy.md): at 0.002 the head improved aligned mu-PSNR over LDR alone on all 20
-// (+0.80 dB on the mean; +0.91 once the backdrop's offset was added); at 0.005 more on the mean
-// (+0.85) and on the reference's own-max protocol, but below LDR alone on 6 of 20 (airplane,
+// families (docs/history/accuracy.md): at 0.002 the head improved aligned mu-PSNR over LDR alone on
+// all 20 (+0.80 dB on the mean; +0.91 once the backdrop's offset was added); at 0.005 more on the
+// mean (+0.85) and on the reference's own-max protocol, but below LDR alone on 6 of 20 (airplane,
 // mutant, hook) with a lower slope. The slower rate never made the HDR worse, so it is the one
 // used.
 inline constexpr float kHdrHeadLearningRate = 0.002f;
