@@ -104,6 +104,9 @@ HexPlaneConfig HexPlanePreset(const std::string& method, const std::string& supe
     c.color = ColorModel::kLogHdr;
     c.hdr_loss = supervision == "ldr+hdr" || (supervision == "auto" && scene_has_hdr);
     c.ldr_loss = supervision != "hdr";
+    // HDR-HexPlane's configs (config/dnerf_slim_*.yaml) train 20000 iterations with HexPlane's
+    // absolute upsampling and occupancy iterations.
+    c.iterations = c.reference_iterations = 20000;
   } else {
     Fail("--method: unknown grid method '{}' (one of: {})", method,
          fmt::join(HexPlaneMethods(), ", "));
