@@ -52,8 +52,9 @@ struct HexPlaneModel {
   int NumSamples() const;
   // Bilinear resampling of every plane to the new resolution (the reference's upsampling).
   void Upsample(const std::array<int, 3>& new_grid, int new_time_grid);
-  // Recomputes the occupancy grid (at the current resolution, points already empty stay so).
-  void UpdateOccupancy();
+  // Recomputes the occupancy grid (at the current resolution, points already empty stay so);
+  // false (and the grid unchanged) when nothing would be occupied.
+  bool UpdateOccupancy();
   // The offset of training image i, or the mean for any other view (i < 0).
   float OffsetOf(int image_index) const;
 

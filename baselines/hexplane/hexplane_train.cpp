@@ -208,11 +208,15 @@ void HexPlaneTraining::Step(int it, std::mt19937_64* rng) {
 // optimiser).
 void HexPlaneTraining::Schedules(int it) {
   if (std::find(occupancy_at_.begin(), occupancy_at_.end(), it) != occupancy_at_.end()) {
-    model_.UpdateOccupancy();
-    std::size_t kept = 0;
-    for (std::uint8_t o : model_.occupancy.occupied) kept += o;
-    spdlog::info("hexplane: iteration {}: occupancy grid {}^3, {:.1f}% occupied", it,
-                 model_.occupancy.res[0], 100.0 * kept / std::max<std::size_t>(1, model_.occupancy.occupied.size()));
+    if (model_.UpdateOccupancy()) {
+      std::size_t kept = 0;
+      for (std::uint8_t o : model_.occupancy.occupied) kept += o;
+      spdlog::info("hexplane: iteration {}: occupancy grid {}^3, {:.1f}% occupied", it,
+                   model_.occupancy.res[0],
+                   100.0 * kept / std::max<std::size_t>(1, model_.occupancy.occupied.size()));
+    } else {
+      spdlog::warn("hexplane: iteration {}: no density yet, the occupancy grid is not updated", it);
+    }
   }
   const auto at = std::find(upsample_at_.begin(), upsample_at_.end(), it);
   if (at == upsample_at_.end()) return;

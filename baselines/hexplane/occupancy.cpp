@@ -61,7 +61,7 @@ std::vector<float> MaxPool3(const std::vector<float>& v, const std::array<int, 3
 
 }  // namespace
 
-void HexPlaneModel::UpdateOccupancy() {
+bool HexPlaneModel::UpdateOccupancy() {
   std::array<int, 3> r;
   for (int a = 0; a < 3; ++a) r[a] = std::min(grid[a], 256);  // the reference's 256^3 cap
   std::vector<float> opacity(std::size_t(r[0]) * r[1] * r[2], 0.0f);
@@ -79,12 +79,18 @@ void HexPlaneModel::UpdateOccupancy() {
       }
   });
   const std::vector<float> pooled = MaxPool3(opacity, r);
+  // A grid with nothing occupied would end training (empty stays empty): a schedule scaled
+  // into a short run can come before any density has formed; such an update is skipped.
+  if (std::none_of(pooled.begin(), pooled.end(),
+                   [&](float v) { return v >= config.occupancy_threshold; }))
+    return false;
   OccupancyGrid g;
   g.res = r;
   g.occupied.resize(pooled.size());
   for (std::size_t i = 0; i < pooled.size(); ++i)
     g.occupied[i] = pooled[i] >= config.occupancy_threshold ? 1 : 0;
   occupancy = std::move(g);
+  return true;
 }
 
 }  // namespace hdr4d::baselines::hexplane

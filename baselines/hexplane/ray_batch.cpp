@@ -80,7 +80,7 @@ void RayBatch::Forward(const HexPlaneModel& m, const std::vector<Ray>& rays, con
                     &lane.transmittance})
       v->clear();
     for (int r = lane.begin; r < lane.end; ++r) lane.March(m, rays[r], jitter);
-    lane.Appearance(m, rays);
+    lane.Appearance(m, rays, jitter ? kExploreSamples : 0, jitter ? jitter[0] : 0.0f);
     for (int r = lane.begin; r < lane.end; ++r) {
       const int i = r - lane.begin, b = lane.first[i];
       Composite(lane.weight.data() + b, lane.colour.data() + std::size_t(b) * K,

@@ -34,7 +34,9 @@ class RayBatch {
   ~RayBatch();
   // jitter: one value in [0, 1) per sample position along the rays (NumSamples()), shifting
   // every ray's samples by that fraction of the spacing (the reference's training jitter); null
-  // for fixed samples. The model must stay unchanged until Backward.
+  // for fixed samples. With jitter (training), a few samples per ray below the weight threshold
+  // get their colour too (kExploreSamples, ray_batch_lane.h). The model must stay unchanged
+  // until Backward.
   void Forward(const HexPlaneModel& m, const std::vector<Ray>& rays, const float* jitter,
                std::vector<float>* out);
   // dL_dout: RayChannels per ray. Overwrites *grads with the batch's gradient.

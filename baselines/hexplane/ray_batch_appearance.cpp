@@ -9,15 +9,21 @@
 
 namespace hdr4d::baselines::hexplane {
 
-void RayBatch::Lane::Appearance(const HexPlaneModel& m, const std::vector<Ray>& rays) {
+void RayBatch::Lane::Appearance(const HexPlaneModel& m, const std::vector<Ray>& rays, int explore,
+                                float offset) {
   const HexPlaneConfig& c = m.config;
   const int K = RayChannels(m), P = 3 * c.app_comps, D = c.app_dim;
   const int num_rays = end - begin;
   app_sample.clear();
   app_first.assign(1, 0);
   for (int i = 0; i < num_rays; ++i) {
-    for (int s = first[i]; s < first[i + 1]; ++s)
-      if (weight[s] > c.weight_threshold) app_sample.push_back(s);
+    const int n = first[i + 1] - first[i];
+    const int stride = explore > 0 ? std::max(1, n / explore) : 0;
+    const int phase = stride > 0 ? std::min(stride - 1, int(offset * stride)) : 0;
+    for (int s = first[i]; s < first[i + 1]; ++s) {
+      const bool explored = stride > 0 && (s - first[i]) % stride == phase;
+      if (weight[s] > c.weight_threshold || explored) app_sample.push_back(s);
+    }
     app_first.push_back(int(app_sample.size()));
   }
   const int M = int(app_sample.size());

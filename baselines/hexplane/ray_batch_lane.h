@@ -12,6 +12,15 @@ namespace hdr4d::baselines::hexplane {
 // clamp keeps a diverging MLP from overflowing float.
 constexpr float kMaxLogRadiance = 30.0f;
 
+// Training only: samples per ray that get a colour although their weight is under the threshold.
+// The reference gives such samples no colour, so a pixel's gradient reaches their density only
+// through the background (d pixel / d alpha_i = T_i (c_i - R_i) with c_i = 0): on its white
+// backgrounds that starts the density, but on a black background (the D-NeRF copy in
+// ../shared/data has its alpha dropped) c_i = R_i = 0 and an empty start never grows. A few
+// coloured samples per ray, spread along it, restore the gradient (the pixel's value changes by
+// their weights only, below the threshold each).
+constexpr int kExploreSamples = 8;
+
 struct RayBatch::Lane {
   int begin = 0, end = 0;           // rays [begin, end)
   std::vector<int> first, app_first;  // per ray (+1): first sample, first appearance row
@@ -22,7 +31,10 @@ struct RayBatch::Lane {
   std::optional<HexPlaneGrads> grads;
 
   void March(const HexPlaneModel& m, const Ray& ray, const float* jitter);
-  void Appearance(const HexPlaneModel& m, const std::vector<Ray>& rays);
+  // explore > 0: that many more samples per ray below the weight threshold also get their
+  // colour, spread evenly along the ray from `offset` (a fraction of the stride, in [0, 1)).
+  void Appearance(const HexPlaneModel& m, const std::vector<Ray>& rays, int explore = 0,
+                  float offset = 0.0f);
   void Backward(const HexPlaneModel& m, const std::vector<Ray>& rays, const float* dL_dout);
   void AppearanceBackward(const HexPlaneModel& m, const std::vector<Ray>& rays,
                           const std::vector<float>& dL_dcolour);
