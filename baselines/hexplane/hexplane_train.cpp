@@ -215,7 +215,9 @@ void HexPlaneTraining::Schedules(int it) {
                    model_.occupancy.res[0],
                    100.0 * kept / std::max<std::size_t>(1, model_.occupancy.occupied.size()));
     } else {
-      spdlog::warn("hexplane: iteration {}: no density yet, the occupancy grid is not updated", it);
+      spdlog::warn("hexplane: iteration {}: no point reaches the occupancy threshold yet; the "
+                   "occupancy grid is not updated",
+                   it);
     }
   }
   const auto at = std::find(upsample_at_.begin(), upsample_at_.end(), it);
