@@ -30,7 +30,8 @@ std::shared_ptr<hp::HexPlaneTrainOptions> AddHexPlaneTrainFlags(CLI::App* cmd) {
          },
          "Grid methods: voxel count at the start and after the last upsampling (the "
          "reference's 262144 8000000: 64^3 to 200^3)")
-      ->expected(2);
+      ->expected(2)
+      ->check(Integer(8, std::int64_t{1} << 32));
   cmd->add_option_function<std::vector<int>>(
          "--time-grid",
          [o](const std::vector<int>& v) {
@@ -38,7 +39,8 @@ std::shared_ptr<hp::HexPlaneTrainOptions> AddHexPlaneTrainFlags(CLI::App* cmd) {
            o->time_grid_final = v[1];
          },
          "Grid methods: time cells at the start and at the end (the reference's 16 24)")
-      ->expected(2);
+      ->expected(2)
+      ->check(Integer(2, 1 << 16));
   return o;
 }
 
