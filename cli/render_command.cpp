@@ -1,8 +1,11 @@
 // hdr4d render: images of a trained run.
 #include <fmt/format.h>
 
+#include "baselines/hexplane/hexplane_render.h"
 #include "cli/commands.h"
 #include "cli/flags.h"
+#include "core/util/error.h"
+#include "core/util/parallel.h"
 #include "method/run/render_split.h"
 
 namespace hdr4d::cli {
@@ -81,6 +84,17 @@ void AddRenderCommand(CLI::App& app) {
     options->run = *run;
     options->out = *out;
     method::ProtectRunInputs(*run);
+    if (baselines::hexplane::IsHexPlaneRun(*run)) {  // the grid family's runs
+      if (time_option->count() > 0 || options->video_frames > 0 || !options->timing.empty())
+        Fail("render: --time, --video and --timing are not available for HexPlane runs yet");
+      const ThreadLimit limit(options->threads);
+      const int n = baselines::hexplane::RenderHexPlaneRun(
+          {.run = *run, .out = *out, .split = options->split, .resolution = options->resolution,
+           .exposure = options->exposure, .write_hdr = options->write_hdr,
+           .png_compression = options->png_compression});
+      fmt::print("render: wrote {} images\n", n);
+      return;
+    }
     const int n = method::RenderRun(*options);
     fmt::print("render: wrote {} images\n", n);
   });

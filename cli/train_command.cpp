@@ -10,6 +10,7 @@
 #include "baselines/scene_baselines.h"
 #include "cli/commands.h"
 #include "cli/flags.h"
+#include "cli/train_hexplane.h"
 #include "core/util/error.h"
 #include "method/tonemap/tone_mapper_registry.h"
 #include "method/train/resume_check.h"
@@ -221,8 +222,9 @@ void AddTrainCommand(CLI::App& app) {
                      "training image has one exposure and the scene has no HDR ground truth, "
                      "with a note: there is no HDR to recover)",
                      fmt::join(baselines::MethodNames(), ", ")))
-      ->check(OneOf(baselines::MethodNames()))
+      ->check(OneOf(TrainMethodNames()))
       ->capture_default_str();
+  auto hexplane = AddHexPlaneTrainFlags(cmd);
   cmd->add_option("--tone-mapper", flags->tone_mapper,
                   "Tone mapper (Table 4): dtm, mlp, sigmoid, reinhard or durand (default: the "
                   "method's)")
@@ -308,12 +310,13 @@ void AddTrainCommand(CLI::App& app) {
                  list_configs, data_flag, out_flag, method_flag, supervision_flag,
                  hdr_weight_flag, pixel_log_epsilon_flag, learn_background,
                  learn_background_flag, no_hdr_geometry_flag, hdr_head_flag,
-                 hdr_head_iterations_flag] {
+                 hdr_head_iterations_flag, hexplane] {
     if (*list_configs) {
       ListTrainConfigs();
       return;
     }
     if (out_flag->count() == 0) Fail("train: --out is required");
+    if (TrainHexPlaneIfAsked(cmd, flags->method, *hexplane)) return;  // the grid family
     // --resume: the run's recorded options, the flags given now over them (ResumedOptions).
     std::optional<method::TrainOptions> saved;
     if (options->resume) {

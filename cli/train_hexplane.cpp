@@ -1,0 +1,73 @@
+#include "cli/train_hexplane.h"
+
+#include <fmt/format.h>
+
+#include "baselines/hexplane/hexplane_config.h"
+#include "baselines/scene_baselines.h"
+#include "cli/flags.h"
+#include "core/util/error.h"
+
+namespace hdr4d::cli {
+
+namespace hp = baselines::hexplane;
+
+std::vector<std::string> TrainMethodNames() {
+  std::vector<std::string> names = baselines::MethodNames();
+  for (const std::string& m : hp::HexPlaneMethods()) names.push_back(m);
+  return names;
+}
+
+std::shared_ptr<hp::HexPlaneTrainOptions> AddHexPlaneTrainFlags(CLI::App* cmd) {
+  auto o = std::make_shared<hp::HexPlaneTrainOptions>();
+  cmd->add_option_function<int>("--rays", [o](int n) { o->batch_rays = n; },
+                                "Grid methods: rays per iteration (the reference's 4096)")
+      ->check(Integer(1, 1 << 24));
+  cmd->add_option_function<std::vector<std::int64_t>>(
+         "--grid-voxels",
+         [o](const std::vector<std::int64_t>& v) {
+           o->voxels_init = v[0];
+           o->voxels_final = v[1];
+         },
+         "Grid methods: voxel count at the start and after the last upsampling (the "
+         "reference's 262144 8000000: 64^3 to 200^3)")
+      ->expected(2)
+      ->check(Integer(8, std::int64_t{1} << 32));
+  cmd->add_option_function<std::vector<int>>(
+         "--time-grid",
+         [o](const std::vector<int>& v) {
+           o->time_grid_init = v[0];
+           o->time_grid_final = v[1];
+         },
+         "Grid methods: time cells at the start and at the end (the reference's 16 24)")
+      ->expected(2)
+      ->check(Integer(2, 1 << 16));
+  return o;
+}
+
+bool TrainHexPlaneIfAsked(CLI::App* cmd, const std::string& method,
+                          hp::HexPlaneTrainOptions o) {
+  if (!hp::IsHexPlaneMethod(method)) return false;
+  const auto given = [cmd](const char* flag) { return cmd->get_option(flag)->count() > 0; };
+  for (const char* flag : {"--resume", "--config", "--tone-mapper", "--batch-size",
+                           "--max-gaussians", "--hdr-head", "--learn-background"}) {
+    if (given(flag)) Fail("train: {} does not apply to --method {}", flag, method);
+  }
+  o.method = method;
+  o.data = cmd->get_option("--data")->as<std::string>();
+  o.out = cmd->get_option("--out")->as<std::string>();
+  o.threads = cmd->get_option("--threads")->as<int>();
+  o.resolution = cmd->get_option("--resolution")->as<int>();
+  o.max_seconds = cmd->get_option("--max-seconds")->as<double>();
+  o.background = cmd->get_option("--background")->as<float>();
+  o.supervision = cmd->get_option("--supervision")->as<std::string>();
+  if (given("--iterations")) o.iterations = cmd->get_option("--iterations")->as<int>();
+  if (given("--seed")) o.seed = cmd->get_option("--seed")->as<std::int64_t>();
+  if (given("--hdr-weight")) o.hdr_weight = cmd->get_option("--hdr-weight")->as<float>();
+  if (o.data.empty()) Fail("train: --data is required");
+  const hp::HexPlaneTrainSummary s = hp::TrainHexPlane(o);
+  fmt::print("train: {} iterations in {:.1f} s; test {}\n", s.iterations, s.train_seconds,
+             s.test_metrics.dump());
+  return true;
+}
+
+}  // namespace hdr4d::cli
