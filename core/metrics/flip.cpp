@@ -412,7 +412,8 @@ float Aces(float x) {
 // The linear value that ACES maps to `target`: the larger root of
 // (c0 - t c3) x^2 + (c1 - t c4) x + (c2 - t c5) = 0.
 double AcesInverse(double t) {
-  const double a = kAces[0] - t * kAces[3], b = kAces[1] - t * kAces[4], c = kAces[2] - t * kAces[5];
+  const double a = kAces[0] - t * kAces[3], b = kAces[1] - t * kAces[4];
+  const double c = kAces[2] - t * kAces[5];
   if (a == 0.0) return -c / b;
   const double mid = -0.5 * b / a;
   return mid + std::sqrt(std::max(0.0, mid * mid - c / a));

@@ -284,7 +284,9 @@ TEST(Flip, GreyImagesAreThreeEqualChannels) {
   for (int y = 0; y < 20; ++y) {
     for (int x = 0; x < 24; ++x) {
       grey.at(x, y, 0) = rgb.at(x, y, 1), other.at(x, y, 0) = rgb.at(x, y, 0);
-      for (int c = 0; c < 3; ++c) grey3.at(x, y, c) = rgb.at(x, y, 1), other3.at(x, y, c) = rgb.at(x, y, 0);
+      for (int c = 0; c < 3; ++c) {
+        grey3.at(x, y, c) = rgb.at(x, y, 1), other3.at(x, y, c) = rgb.at(x, y, 0);
+      }
     }
   }
   EXPECT_DOUBLE_EQ(Flip(grey, other), Flip(grey3, other3));

@@ -4,9 +4,9 @@
 #include "core/metrics/magma_table.h"
 
 namespace hdr4d {
+namespace {
 
-const std::array<std::array<float, 3>, 256>& MagmaTable() {
-  static const std::array<std::array<float, 3>, 256> table = {{
+const std::array<std::array<float, 3>, 256> kMagma = {{
     {0.001462f, 0.000466f, 0.013866f}, {0.002258f, 0.001295f, 0.018331f},
     {0.003279f, 0.002305f, 0.023708f}, {0.004512f, 0.003490f, 0.029965f},
     {0.005950f, 0.004843f, 0.037130f}, {0.007588f, 0.006356f, 0.044973f},
@@ -135,8 +135,10 @@ const std::array<std::array<float, 3>, 256>& MagmaTable() {
     {0.988717f, 0.955742f, 0.712242f}, {0.988367f, 0.962878f, 0.719649f},
     {0.988033f, 0.970012f, 0.727077f}, {0.987691f, 0.977154f, 0.734536f},
     {0.987387f, 0.984288f, 0.742002f}, {0.987053f, 0.991438f, 0.749504f},
-  }};
-  return table;
-}
+}};
+
+}  // namespace
+
+const std::array<std::array<float, 3>, 256>& MagmaTable() { return kMagma; }
 
 }  // namespace hdr4d
