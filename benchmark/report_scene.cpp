@@ -9,6 +9,7 @@
 #include <set>
 
 #include "benchmark/pareto.h"
+#include "benchmark/report_flip.h"
 #include "benchmark/report_images.h"
 #include "benchmark/run_pipeline.h"
 #include "benchmark/scoring.h"
@@ -138,6 +139,7 @@ std::string SceneHtml(const std::string& scene, const std::vector<const RunSumma
     h += "</tr>\n";
   }
   h += "</tbody></table>\n";
+  h += FlipMapsHtml(*view, runs, images);
 
   // Temporal luminance of the region: each curve over its own mean, so shapes compare (the
   // absolute level of an HDR render learned from LDR images is arbitrary).

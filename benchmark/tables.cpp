@@ -18,14 +18,16 @@ using Key = std::tuple<std::string, std::string, std::string, std::int64_t>;  //
 
 const char* kLpipsNote =
     "LPIPS: not computed. It needs the LPIPS network weights, which cannot be obtained on these "
-    "machines; no substitute is reported.";
+    "machines. FLIP (NVIDIA's weight-free perceptual metric, lower is better) is reported beside "
+    "SSIM instead.";
 
 std::vector<Column> HdrColumns(const TableOptions& o, bool with_lpips) {
   std::string psnr = "mu_psnr", ssim = "mu_ssim";
   if (o.protocol == HdrProtocol::kGtMax) psnr = "mu_psnr_gt_max", ssim = "mu_ssim_gt_max";
   if (o.protocol == HdrProtocol::kPu21) psnr = "pu21_psnr", ssim = "pu21_ssim";
   if (!o.hdr_psnr_key.empty()) psnr = o.hdr_psnr_key, ssim = o.hdr_ssim_key;
-  std::vector<Column> c = {{psnr, "HDR", "PSNR", 1, 2}, {ssim, "HDR", "SSIM", 1, 3}};
+  std::vector<Column> c = {
+      {psnr, "HDR", "PSNR", 1, 2}, {ssim, "HDR", "SSIM", 1, 3}, {"hdr_flip", "HDR", "FLIP", -1, 3}};
   if (with_lpips) c.push_back({"lpips_hdr", "HDR", "LPIPS", -1, 3, false});
   return c;
 }
@@ -34,6 +36,7 @@ std::vector<Column> MainColumns(const TableOptions& o) {
   std::vector<Column> c = HdrColumns(o, true);
   c.push_back({"psnr", "LDR", "PSNR", 1, 2});
   c.push_back({"ssim", "LDR", "SSIM", 1, 3});
+  c.push_back({"flip", "LDR", "FLIP", -1, 3});
   c.push_back({"lpips", "LDR", "LPIPS", -1, 3, false});
   c.push_back({"train_minutes", "", "Training time (min)", -1, 2, true, false});
   c.push_back({"fps", "", "Inference (fps)", 1, 1, true, false});
@@ -42,7 +45,7 @@ std::vector<Column> MainColumns(const TableOptions& o) {
 int GuessDirection(const std::string& key) {
   for (const char* up : {"psnr", "ssim", "corr"})
     if (key.find(up) != std::string::npos) return 1;
-  for (const char* down : {"lpips", "mse", "error", "rmse"})
+  for (const char* down : {"lpips", "flip", "mse", "error", "rmse"})
     if (key.find(down) != std::string::npos) return -1;
   return 0;  // e.g. a slope, where the best is 1, not the largest
 }
@@ -292,12 +295,15 @@ Table BuildAllMetricsTable(const TableSpec& spec, const Suite& suite,
     if (rows.count({r.label.method, r.label.supervision}))
       for (const auto& [k, v] : r.metrics) keys.insert(k);
   // LDR keys first, then the HDR protocols, then anything newer, alphabetically.
-  const std::vector<std::string> order = {"psnr", "psnr_channel_mean", "ssim", "mu_psnr",
+  const std::vector<std::string> order = {"psnr", "psnr_channel_mean", "ssim", "flip", "mu_psnr",
                                           "mu_ssim", "mu_psnr_gt_max", "mu_ssim_gt_max",
-                                          "pu21_psnr", "pu21_ssim"};
+                                          "pu21_psnr", "pu21_ssim", "hdr_flip"};
   std::vector<Column> columns;
+  auto digits = [](const std::string& k) {
+    return k.find("ssim") != std::string::npos || k.find("flip") != std::string::npos ? 3 : 2;
+  };
   for (const std::string& k : order)
-    if (keys.erase(k)) columns.push_back({k, "", k, GuessDirection(k), k.find("ssim") != std::string::npos ? 3 : 2});
+    if (keys.erase(k)) columns.push_back({k, "", k, GuessDirection(k), digits(k)});
   for (const std::string& k : keys)
     columns.push_back({k, "", k, GuessDirection(k), k.find("psnr") != std::string::npos ? 2 : 3});
   columns.push_back({"gaussians", "", "Gaussians", 0, 0, true, false});

@@ -72,8 +72,9 @@ TEST(Tables, MainLayoutMeansSpreadsBestAndTests) {
   EXPECT_EQ(t.scenes, (std::vector<std::string>{"s1", "s2"}));
   std::vector<std::string> keys;
   for (const auto& c : t.columns) keys.push_back(c.key);
-  EXPECT_EQ(keys, (std::vector<std::string>{"mu_psnr", "mu_ssim", "lpips_hdr", "psnr", "ssim", "lpips",
-                                            "train_minutes", "fps"}));
+  EXPECT_EQ(keys, (std::vector<std::string>{"mu_psnr", "mu_ssim", "hdr_flip", "lpips_hdr", "psnr",
+                                            "ssim", "flip", "lpips", "train_minutes", "fps"}));
+  EXPECT_EQ(t.columns[Column(t, "flip")].direction, -1);  // FLIP: lower is better
   const std::size_t psnr = Column(t, "psnr"), mu = Column(t, "mu_psnr"), time = Column(t, "train_minutes");
   const RowResult &a = t.rows[0], &b = t.rows[1], &ext = t.rows[2], &d = t.rows[3];
   // B: seed means over scenes are 22 + noise: mean 22, sd = sd of the noise.
@@ -119,9 +120,9 @@ TEST(Tables, FormatsHaveOneLinePerRowAndSayWhatIsMissing) {
   const std::string tex = ToLatex(t);
   EXPECT_NE(tex.find("\\toprule"), std::string::npos);
   EXPECT_NE(tex.find("\\textbf{23.00}"), std::string::npos) << tex;
-  EXPECT_NE(tex.find("\\multicolumn{3}{c|}{HDR}"), std::string::npos) << tex;
+  EXPECT_NE(tex.find("\\multicolumn{4}{c|}{HDR}"), std::string::npos) << tex;  // PSNR SSIM FLIP LPIPS
   const std::string csv = ToCsv(t);
-  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 4 * 8);
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 4 * 10);  // 4 rows x 10 columns
   EXPECT_NE(csv.find("not computable"), std::string::npos);
 }
 

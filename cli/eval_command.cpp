@@ -11,6 +11,7 @@
 #include "core/util/error.h"
 #include "core/files/json_util.h"
 #include "core/files/output_guard.h"
+#include "core/util/error.h"
 
 namespace hdr4d::cli {
 
@@ -38,12 +39,16 @@ LDR pairs (PNG/JPEG/...; both integer) are scored on the stored sRGB values:
   psnr               10 log10(1/MSE), MSE over all pixels and RGB channels
   psnr_channel_mean  PSNR per channel, then the mean (what the 3DGS/4DGS code reports)
   ssim               11x11 Gaussian window, sigma 1.5, zero padding, per channel (3DGS)
+  flip               LDR-FLIP (Andersson et al. 2020), mean per-pixel error in [0,1], lower
+                     is better; 67 pixels per degree; matches NVIDIA's FLIP tool
 HDR pairs (EXR/HDR; both float) are scored with:
   mu_psnr, mu_ssim   HDR-4DGS protocol: prediction / its own max, clamped to [0,1];
                      ground truth / its own max; mu-law log(1+5000x)/log(5001); PSNR, SSIM
   mu_*_gt_max        HDR-NeRF protocol: both divided by the ground truth's max
   pu21_psnr          PU21 (banding_glare) of every RGB value, peak 256 (~100 cd/m^2)
   pu21_ssim          SSIM on PU21 luminance, C1 = (0.01*256)^2, C2 = (0.03*256)^2
+  hdr_flip           HDR-FLIP (Andersson et al. 2021): the worst LDR-FLIP per pixel over
+                     ACES-tone-mapped exposures whose range comes from the ground truth
 PU21 scaling: both images are multiplied by 4000 / (max luminance of the ground truth),
 luminance = 0.212656 R + 0.715158 G + 0.072186 B, then clamped to [0.005, 10000] cd/m^2.
 Scale-aligned HDR metrics (LDR fixes an HDR only up to one factor, and cannot tell how bright

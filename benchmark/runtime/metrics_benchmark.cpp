@@ -1,11 +1,14 @@
 // Speed of the image metrics at a typical test-view size (800x800 RGB, the HDR-4D-Syn
-// resolution): windowed SSIM and PU21 PSNR (two pow() per value) are the expensive ones.
+// resolution): windowed SSIM and PU21 PSNR (two pow() per value) are the expensive ones; FLIP
+// (core/metrics/flip.h) filters six planes per image, HDR-FLIP once per exposure.
 #include <benchmark/benchmark.h>
 
+#include <cmath>
 #include <cstdint>
 #include <random>
 
 #include "core/image/image.h"
+#include "core/metrics/flip.h"
 #include "core/metrics/metrics.h"
 
 namespace hdr4d {
@@ -51,6 +54,26 @@ void BM_HdrMetrics(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(HdrMetrics(a, b));
 }
 BENCHMARK(BM_HdrMetrics)->Unit(benchmark::kMillisecond);
+
+void BM_Flip(benchmark::State& state) {
+  Image a = Random(kSize, kSize, 3, 7, 1.0f), b = Random(kSize, kSize, 3, 8, 1.0f);
+  a.set_encoding(Encoding::kSrgb), b.set_encoding(Encoding::kSrgb);
+  for (auto _ : state) benchmark::DoNotOptimize(Flip(a, b));
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(a.num_pixels()));
+}
+BENCHMARK(BM_Flip)->Unit(benchmark::kMillisecond);
+
+// Radiance over 12 stops (e^-4 .. e^8): the reference's exposure range gives 9 exposures.
+void BM_HdrFlip(benchmark::State& state) {
+  Image a = Random(kSize, kSize, 3, 9, 12.0f), b = Random(kSize, kSize, 3, 10, 12.0f);
+  for (Image* image : {&a, &b}) {
+    for (float& v : image->values()) v = std::exp(v - 4.0f);
+  }
+  state.counters["exposures"] = HdrFlipExposureRange(a).count;
+  for (auto _ : state) benchmark::DoNotOptimize(HdrFlip(b, a));
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(a.num_pixels()));
+}
+BENCHMARK(BM_HdrFlip)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace hdr4d

@@ -17,6 +17,7 @@
 #include "core/dataset/dataset.h"
 #include "core/util/error.h"
 #include "core/files/file_access.h"
+#include "core/metrics/flip.h"
 #include "core/metrics/hdr_alignment.h"
 #include "core/image/image.h"
 #include "core/image/image_io.h"
@@ -140,6 +141,7 @@ PairResult EvaluateFiles(const fs::path& pred_path,
     const Image pred_rgb = pred.Rgb(), gt_rgb = gt.Rgb();
     if (hdr) {
       result.metrics = HdrMetrics(pred_rgb, gt_rgb);
+      result.metrics.emplace_back("hdr_flip", HdrFlip(pred_rgb, gt_rgb));
       MetricList aligned = AlignedHdrMetrics(pred_rgb, gt_rgb, mask);
       if (masks && masks->reproduced) {
         result.fit_sums.emplace();
@@ -152,6 +154,7 @@ PairResult EvaluateFiles(const fs::path& pred_path,
       }
     } else {
       result.metrics = LdrMetrics(pred_rgb, gt_rgb);
+      result.metrics.emplace_back("flip", Flip(pred_rgb, gt_rgb));
     }
     result.identical = pred_rgb.values() == gt_rgb.values();
   } catch (const Error& e) {
@@ -271,11 +274,12 @@ std::vector<std::pair<fs::path, fs::path>> MatchFolders(const fs::path& pred_dir
 // Display order of the known keys in tables; unknown keys follow in name order.
 const std::vector<std::string>& KnownKeys() {
   static const std::vector<std::string> keys = {
-      "psnr",           "psnr_channel_mean", "ssim",      "mu_psnr",  "mu_ssim",
-      "mu_psnr_gt_max", "mu_ssim_gt_max",    "pu21_psnr", "pu21_ssim", "mu_psnr_aligned",
-      "mu_ssim_aligned", "pu21_psnr_aligned", "pu21_ssim_aligned", "hdr_log_slope",
-      "hdr_log_corr", "hdr_log_contrast", "hdr_align_scale", "hdr_measured_fraction",
-      "hdr_log_slope_ldr_fit", "hdr_log_corr_ldr_fit", "hdr_ldr_fit_fraction"};
+      "psnr",           "psnr_channel_mean", "ssim",      "flip",      "mu_psnr",
+      "mu_ssim",        "mu_psnr_gt_max",    "mu_ssim_gt_max", "pu21_psnr", "pu21_ssim",
+      "hdr_flip",       "mu_psnr_aligned",   "mu_ssim_aligned", "pu21_psnr_aligned",
+      "pu21_ssim_aligned", "hdr_log_slope",  "hdr_log_corr", "hdr_log_contrast",
+      "hdr_align_scale", "hdr_measured_fraction", "hdr_log_slope_ldr_fit",
+      "hdr_log_corr_ldr_fit", "hdr_ldr_fit_fraction"};
   return keys;
 }
 

@@ -6,10 +6,12 @@
 //
 // - LDR pairs (both integer formats such as PNG/JPEG, read as display-encoded values) get the
 //   LdrMetrics keys, computed on the stored sRGB values as the reference code does: "psnr",
-//   "psnr_channel_mean", "ssim".
+//   "psnr_channel_mean", "ssim", then "flip" (LDR-FLIP, core/metrics/flip.h: the mean of the
+//   per-pixel error, lower is better, as NVIDIA's FLIP tool reports it).
 // - HDR pairs (both float formats: EXR, Radiance .hdr) get the HdrMetrics keys: "mu_psnr",
 //   "mu_ssim" (own-max normalisation), "mu_psnr_gt_max", "mu_ssim_gt_max", "pu21_psnr",
-//   "pu21_ssim", then the AlignedHdrMetrics keys (core/metrics/hdr_alignment.h): "hdr_align_scale",
+//   "pu21_ssim", "hdr_flip" (HDR-FLIP with the tool's defaults: ACES, the exposure range from
+//   the ground truth), then the AlignedHdrMetrics keys (core/metrics/hdr_alignment.h): "hdr_align_scale",
 //   "hdr_log_slope", "hdr_log_corr", "hdr_log_contrast", "hdr_measured_fraction",
 //   "mu_psnr_aligned", "mu_ssim_aligned", "pu21_psnr_aligned", "pu21_ssim_aligned". Their
 //   pixels are those an LDR bracket of the view measures when the brackets are known

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "core/util/error.h"
+#include "core/metrics/flip.h"
 #include "core/metrics/hdr_alignment.h"
 #include "core/image/image_io.h"
 #include "core/image/image_resize.h"
@@ -31,10 +32,10 @@ using testing::RandomImage;
 using testing::RunHdr4d;
 using testing::TempDir;
 
-const std::set<std::string> kLdrKeys = {"name", "psnr", "psnr_channel_mean", "ssim"};
+const std::set<std::string> kLdrKeys = {"name", "psnr", "psnr_channel_mean", "ssim", "flip"};
 const std::set<std::string> kHdrKeys = {
     "name",           "mu_psnr",           "mu_ssim",         "mu_psnr_gt_max",
-    "mu_ssim_gt_max", "pu21_psnr",         "pu21_ssim",       "hdr_align_scale",
+    "mu_ssim_gt_max", "pu21_psnr",         "pu21_ssim",       "hdr_flip",        "hdr_align_scale",
     "hdr_log_slope",  "hdr_log_corr",      "hdr_log_contrast", "hdr_measured_fraction", "mu_psnr_aligned",
     "mu_ssim_aligned", "pu21_psnr_aligned", "pu21_ssim_aligned"};
 
@@ -84,13 +85,16 @@ TEST(EvaluateTest, FoldersMatchByNameInSortedOrder) {
     const MetricList m = LdrMetrics(ReadImage(f.pred / names[i]), ReadImage(f.gt / names[i]));
     for (const auto& [key, value] : m)
       EXPECT_DOUBLE_EQ(result["pairs"][i][key].get<double>(), value);
+    EXPECT_DOUBLE_EQ(result["pairs"][i]["flip"].get<double>(),
+                     Flip(ReadImage(f.pred / names[i]), ReadImage(f.gt / names[i])));
   }
-  for (const std::string key : {"psnr", "psnr_channel_mean", "ssim"}) {
+  for (const std::string key : {"psnr", "psnr_channel_mean", "ssim", "flip"}) {
     const double mean =
         (result["pairs"][0][key].get<double>() + result["pairs"][1][key].get<double>()) / 2;
     EXPECT_DOUBLE_EQ(result["mean"][key].get<double>(), mean) << key;
   }
-  EXPECT_EQ(KeysOf(result["mean"]), (std::set<std::string>{"psnr", "psnr_channel_mean", "ssim"}));
+  EXPECT_EQ(KeysOf(result["mean"]),
+            (std::set<std::string>{"psnr", "psnr_channel_mean", "ssim", "flip"}));
 }
 
 TEST(EvaluateTest, HdrPairsGetHdrKeysOnly) {

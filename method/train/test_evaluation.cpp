@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/metrics/flip.h"
 #include "core/metrics/hdr_alignment.h"
 #include "core/image/image_io.h"
 #include "core/files/json_util.h"
@@ -39,13 +40,15 @@ std::vector<std::vector<std::size_t>> GroupByHdrTruth(const std::vector<TrainVie
 // The HDR metrics of `prediction` against the group's truth: raw, scale-aligned over the pixels
 // some bracket of the group measures, and the shape where the rendered brackets `rendered` (one
 // per view of the group, in its order) reproduce the truth's (core/metrics/hdr_alignment.h). A run at
-// --resolution R compares with the truth reduced as its training target was. `gt`: scratch;
-// `fit_sums` receives the sums behind the shape where the LDR fits, for the split's pooled figure.
+// --resolution R compares with the truth reduced as its training target was. `with_flip`: also
+// HDR-FLIP. `gt`: scratch; `fit_sums` receives the sums behind the shape where the LDR fits, for
+// the split's pooled figure.
 MetricList GroupHdrMetrics(const std::vector<TrainView>& views,
                            const std::vector<std::size_t>& group,
                            const std::vector<Image>& rendered,
                            const Image& prediction,
                            const std::filesystem::path& hdr_path,
+                           bool with_flip,
                            std::vector<float>* gt,
                            std::vector<LogShapeSums>* fit_sums) {
   std::vector<Image> brackets;
@@ -59,6 +62,7 @@ MetricList GroupHdrMetrics(const std::vector<TrainView>& views,
   if (factor > 1 && ResolutionProblem(truth.width(), truth.height(), factor).empty())
     truth = DownsampleBox(truth, factor);
   MetricList metrics = HdrMetrics(prediction, truth);
+  if (with_flip) metrics.emplace_back("hdr_flip", HdrFlip(prediction, truth));
   const MetricList aligned = AlignedHdrMetrics(prediction, truth, &measured);
   metrics.insert(metrics.end(), aligned.begin(), aligned.end());
   if (rendered.size() == brackets.size()) {
@@ -72,7 +76,9 @@ MetricList GroupHdrMetrics(const std::vector<TrainView>& views,
 
 }  // namespace
 
-nlohmann::json EvaluateViews(ViewRenderer* renderer, const std::vector<TrainView>& views) {
+nlohmann::json EvaluateViews(ViewRenderer* renderer,
+                             const std::vector<TrainView>& views,
+                             bool with_flip) {
   nlohmann::json mean = nlohmann::json::object();
   if (views.empty()) return mean;
   std::map<std::string, std::pair<double, int>> sums;
@@ -104,7 +110,9 @@ nlohmann::json EvaluateViews(ViewRenderer* renderer, const std::vector<TrainView
       if (!ldr.empty()) {
         v.ToFloat(&gt);
         Image render = DisplayImageFromBuffer(ldr.data(), v.width(), v.height(), 3);
-        add(LdrMetrics(render, DisplayImageFromBuffer(gt.data(), v.width(), v.height(), 3)));
+        const Image truth = DisplayImageFromBuffer(gt.data(), v.width(), v.height(), 3);
+        add(LdrMetrics(render, truth));
+        if (with_flip) add({{"flip", Flip(render, truth)}});
         if (hdr_path) rendered.push_back(std::move(render));
       }
       if (!hdr.empty() && hdr_path && !prediction) {
@@ -113,8 +121,8 @@ nlohmann::json EvaluateViews(ViewRenderer* renderer, const std::vector<TrainView
       }
     }
     if (!prediction) continue;
-    const MetricList hdr_metrics =
-        GroupHdrMetrics(views, group, rendered, *prediction, *hdr_path, &gt, &fit_sums);
+    const MetricList hdr_metrics = GroupHdrMetrics(views, group, rendered, *prediction, *hdr_path,
+                                                   with_flip, &gt, &fit_sums);
     for (std::size_t k = 0; k < group.size(); ++k) add(hdr_metrics);
   }
   for (const auto& [key, sum] : sums) mean[key] = FiniteOrNull(sum.first / sum.second);

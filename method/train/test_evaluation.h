@@ -13,7 +13,12 @@ namespace hdr4d::method {
 
 // Means over the views of the LDR metrics of the final LDR render and, where a view has HDR
 // ground truth, of the HDR metrics of the HDR render (PSNR as the mean of per-view values, 3DGS).
+// `with_flip`: also "flip" (LDR-FLIP) and "hdr_flip" (HDR-FLIP, core/metrics/flip.h). At
+// 800x800 they cost about 0.2 s of a core per view and per HDR exposure, as much as the rest of
+// an evaluation, so the trainer computes them for results.json only, not for the test curve.
 // A metric that is not finite for a view (a slope with no measured pixel) is left out of its mean.
-nlohmann::json EvaluateViews(ViewRenderer* renderer, const std::vector<TrainView>& views);
+nlohmann::json EvaluateViews(ViewRenderer* renderer,
+                             const std::vector<TrainView>& views,
+                             bool with_flip = true);
 
 }  // namespace hdr4d::method

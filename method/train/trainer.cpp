@@ -304,7 +304,7 @@ class TrainingRun {
   void ShowProgress(double loss_value, const float* ldr_out, std::size_t pixels);
   void EvaluateAndCheckpoint(int it);
   std::string FlatToneCurveCheck(int it);
-  nlohmann::json EvaluateTestViews();
+  nlohmann::json EvaluateTestViews(bool with_flip);
   std::vector<const std::vector<float>*> ExtraFloats() const;
   void Save();
   void StartLearnedBackground(const nlohmann::json* trainer);
@@ -867,7 +867,7 @@ void TrainingRun::ShowProgress(double loss_value, const float* ldr_out, std::siz
 void TrainingRun::EvaluateAndCheckpoint(int it) {
   if (options_.test_every > 0 && it % options_.test_every == 0 && it < opt_.iterations) {
     const auto eval_start = std::chrono::steady_clock::now();
-    nlohmann::json m = EvaluateTestViews();
+    nlohmann::json m = EvaluateTestViews(/*with_flip=*/false);  // the curve stays cheap
     spdlog::info("train: iteration {}: test {}", it, m.dump());
     m["iteration"] = it;
     loop_.test_curve.push_back(std::move(m));
@@ -895,13 +895,13 @@ std::string TrainingRun::FlatToneCurveCheck(int it) {
   return warning;
 }
 
-nlohmann::json TrainingRun::EvaluateTestViews() {
+nlohmann::json TrainingRun::EvaluateTestViews(bool with_flip) {
   RenderOptions base = render_;
   base.color_stage = nullptr;
   ViewRenderer renderer(model_, tone_mapper_.get(), resolved_, base, options_.background,
                         background_ ? &background_->params() : nullptr,
                         head_current_ ? &head_ : nullptr);
-  return EvaluateViews(&renderer, test_views_);
+  return EvaluateViews(&renderer, test_views_, with_flip);
 }
 
 std::vector<const std::vector<float>*> TrainingRun::ExtraFloats() const {
@@ -983,7 +983,7 @@ TrainSummary TrainingRun::Finish() {
   ReleaseTrainingState();
   TrainSummary summary;
   summary.stopped_by_time = loop_.iteration < opt_.iterations;
-  summary.test_metrics = EvaluateTestViews();
+  summary.test_metrics = EvaluateTestViews(/*with_flip=*/true);
   summary.train_seconds = loop_.train_seconds;
   summary.iterations = loop_.iteration;
   summary.gaussians = model_.size();

@@ -69,7 +69,7 @@ TEST(Trainer, SameSeedSameRun) {
   EXPECT_EQ(ca.adam_state, cb.adam_state);
   // results.json has the metric keys of `hdr4d eval`.
   const nlohmann::json results = ReadJsonFile(dir / "a" / "results.json");
-  for (const char* key : {"psnr", "psnr_channel_mean", "ssim"})
+  for (const char* key : {"psnr", "psnr_channel_mean", "ssim", "flip"})
     EXPECT_TRUE(results["test"].contains(key)) << key;
   EXPECT_EQ(results["iterations"], 60);
   EXPECT_GT(results["peak_rss_mb"].get<double>(), 1.0);
