@@ -67,7 +67,7 @@ void AddRow(const std::string& path, int number, const std::vector<std::string>&
 
 std::optional<std::vector<std::vector<double>>> ReadPerChannelResponse(const std::string& path) {
   std::ifstream in(path);
-  if (!in) Fail("{}: cannot open the response table ({})", path, std::strerror(errno));
+  if (!in) Fail("{}: cannot open CRF table ({})", path, std::strerror(errno));
   std::string line;
   int number = 0;
   if (!NextContent(in, &line, &number)) return std::nullopt;
