@@ -93,8 +93,11 @@ BundleReport RefineBundle(BundleProblem* problem, const BundleOptions& options) 
     if (!ceres_problem.HasParameterBlock(Data(k))) continue;
     if (!options.refine_intrinsics || k.fixed) {
       ceres_problem.SetParameterBlockConstant(Data(k));
-    } else if (!options.refine_principal_point) {
-      ceres_problem.SetManifold(Data(k), new ceres::SubsetManifold(5, {1, 2}));  // cx, cy held
+    } else {
+      std::vector<int> held;  // of f, cx, cy, k1, k2
+      if (!options.refine_principal_point) held.insert(held.end(), {1, 2});
+      if (k.hold_distortion) held.insert(held.end(), {3, 4});
+      if (!held.empty()) ceres_problem.SetManifold(Data(k), new ceres::SubsetManifold(5, held));
     }
   }
   for (Eigen::Vector3d& p : problem->points)

@@ -18,6 +18,7 @@ struct BundlePose {
 struct BundleIntrinsics {
   double f = 1, cx = 0, cy = 0, k1 = 0, k2 = 0;  // contiguous: Ceres sees them as one block
   bool fixed = false;  // known from elsewhere (a calibration board): not refined
+  bool hold_distortion = false;  // k1, k2 kept as they are (0: a distortion-free lens)
 };
 
 struct BundleObservation {

@@ -9,6 +9,9 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
+#include <signal.h>
+#include <unistd.h>
+
 #include "core/geometry/colmap_model.h"
 #include "core/radiometry/crf.h"
 #include "core/dataset/dataset.h"
@@ -86,12 +89,12 @@ void DrawBoard(Image* image, const Eigen::Matrix4d& cam_from_world, const Eigen:
     }
 }
 
-SyntheticRig WriteCapture(const fs::path& root, const fs::path& model_folder, bool board = false) {
+SyntheticRig WriteCapture(const fs::path& root, const fs::path& model_folder, bool board = false,
+                          std::array<double, kCameras> gammas = {2.2, 2.2, 2.2}) {
   SyntheticRig rig;
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1, 1), log_r(std::log(0.02), std::log(3.0));
   ColmapModel model;
-  const GammaCrf crf(2.2);
   for (int c = 0; c < kCameras; ++c) {
     const double a = (c - 1) * 0.5;
     rig.cam_from_world.push_back(LookAt({4 * std::sin(a), 0.5 * c, -4 * std::cos(a)}));
@@ -157,6 +160,7 @@ SyntheticRig WriteCapture(const fs::path& root, const fs::path& model_folder, bo
       DrawBoard(&with_board, rig.cam_from_world[c], BoardFromWorld(pose), rig.f);
       WriteImage(root / "static" / name / fmt::format("board{}.png", pose), with_board);
     }
+    const GammaCrf crf(gammas[c]);
     for (int frame = 0; frame < kFrames; ++frame)
       for (int k = 0; k < 3; ++k) {
         Image ldr(kW, kH, 3, Encoding::kSrgb);
@@ -172,6 +176,30 @@ SyntheticRig WriteCapture(const fs::path& root, const fs::path& model_folder, bo
 
 double AngleDegrees(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
   return Eigen::AngleAxisd(a.transpose() * b).angle() * 180 / M_PI;
+}
+
+// The fused HDR matches the radiance without the camera's gain, up to the response's unknown
+// scale per channel, which must then be the same for every camera: the gains were undone.
+void ExpectHdrMatchesRadiance(const Dataset& dataset, const SyntheticRig& truth) {
+  std::array<std::array<double, 3>, kCameras> scale{};
+  for (const Frame* f : dataset.AllFrames()) {
+    if (f->exposure_index != 0 || f->time_raw != 0) continue;
+    const Image hdr = ReadImage(*f->hdr_path);
+    const Image& radiance = truth.radiance[f->camera_id];
+    for (int ch = 0; ch < 3; ++ch) {
+      std::vector<double> ratios;
+      for (std::size_t i = ch; i < hdr.size(); i += 3) ratios.push_back(std::log(hdr.data()[i] / radiance.data()[i]));
+      std::sort(ratios.begin(), ratios.end());
+      scale[f->camera_id][ch] = ratios[ratios.size() / 2];
+      double worst = 0;
+      for (std::size_t i = ratios.size() / 20; i < ratios.size() * 19 / 20; ++i)
+        worst = std::max(worst, std::abs(ratios[i] - scale[f->camera_id][ch]));
+      EXPECT_LT(worst, 0.1) << "camera " << f->camera_id << " channel " << ch;  // 90% within 10%
+    }
+  }
+  for (int c = 1; c < kCameras; ++c)
+    for (int ch = 0; ch < 3; ++ch)
+      EXPECT_NEAR(scale[c][ch], scale[0][ch], 0.03) << "camera " << c << " channel " << ch;
 }
 
 TEST(Calibrate, SyntheticRigBecomesADataset) {
@@ -205,38 +233,42 @@ TEST(Calibrate, SyntheticRigBecomesADataset) {
   const double ratio_got = (centre(got[2]) - centre(got[0])).norm() / (centre(got[1]) - centre(got[0])).norm();
   EXPECT_NEAR(ratio_got, ratio_truth, 1e-3 * ratio_truth);
   EXPECT_NEAR(dataset.train.front().camera.intrinsics.fx, truth.f, 1e-3);
-  // The fused HDR matches the radiance without the camera's gain, up to the response's unknown
-  // scale per channel, which must then be the same for every camera: the gains were undone.
-  std::array<std::array<double, 3>, kCameras> scale{};
-  for (const Frame* f : dataset.AllFrames()) {
-    if (f->exposure_index != 0 || f->time_raw != 0) continue;
-    const Image hdr = ReadImage(*f->hdr_path);
-    const Image& radiance = truth.radiance[f->camera_id];
-    for (int ch = 0; ch < 3; ++ch) {
-      std::vector<double> ratios;
-      for (std::size_t i = ch; i < hdr.size(); i += 3) ratios.push_back(std::log(hdr.data()[i] / radiance.data()[i]));
-      std::sort(ratios.begin(), ratios.end());
-      scale[f->camera_id][ch] = ratios[ratios.size() / 2];
-      double worst = 0;
-      for (std::size_t i = ratios.size() / 20; i < ratios.size() * 19 / 20; ++i)
-        worst = std::max(worst, std::abs(ratios[i] - scale[f->camera_id][ch]));
-      EXPECT_LT(worst, 0.1) << "camera " << f->camera_id << " channel " << ch;  // 90% within 10%
-    }
-  }
-  for (int c = 1; c < kCameras; ++c)
-    for (int ch = 0; ch < 3; ++ch)
-      EXPECT_NEAR(scale[c][ch], scale[0][ch], 0.03) << "camera " << c << " channel " << ch;
+  ExpectHdrMatchesRadiance(dataset, truth);
   const nlohmann::json report = nlohmann::json::parse(testing::ReadTextFile(dir / "out" / "calibration.json"));
   EXPECT_GT(report["camera_agreement"]["disagreement_before"].get<double>(), 0.05);
   EXPECT_LT(report["camera_agreement"]["disagreement_after"].get<double>(), 0.01);
   for (const char* name : {"report.md", "response.csv", "response.png", "rig.json", "calibration.json"})
     EXPECT_TRUE(fs::exists(dir / "out" / name)) << name;
   EXPECT_NE(testing::ReadTextFile(dir / "out" / "report.md").find("reprojection RMS"), std::string::npos);
+  // Issue 54: merge-hdr reads calibrate's per-channel response.csv ("4 columns" before). The
+  // test split (one camera): merge-hdr names outputs by file name, which the cameras share.
+  const auto merged = testing::RunHdr4d("merge-hdr --data '" + (dir / "out").string() + "' --crf 'table:" +
+                                        (dir / "out" / "response.csv").string() + "' --split test --out '" +
+                                        (dir / "merged").string() + "'");
+  EXPECT_EQ(merged.exit_code, 0) << merged.err;
+  EXPECT_NE(merged.out.find("wrote 2 HDR images"), std::string::npos) << merged.out;
   // The trainer reads the result (a few iterations: this checks the format, not the quality).
   const auto train = testing::RunHdr4d("train --data '" + (dir / "out").string() + "' --out '" +
                                        (dir / "run").string() + "' --iterations 20 --threads 2");
   EXPECT_EQ(train.exit_code, 0) << train.err;
   EXPECT_TRUE(fs::exists(dir / "run" / "results.json"));
+}
+
+// Issue 54: cameras whose response curves differ (gamma 2.2, 1.6, 2.8) are each fused with
+// their own curve, detected without being asked; one joint curve leaves every camera's HDR
+// bent against the truth.
+TEST(Calibrate, CamerasWithDifferentResponsesGetTheirOwnCurves) {
+  testing::TempDir dir;
+  const SyntheticRig truth = WriteCapture(dir / "capture", dir / "model", false, {2.2, 1.6, 2.8});
+  const auto result = testing::RunHdr4d("calibrate --capture '" + (dir / "capture").string() + "' --out '" +
+                                        (dir / "out").string() + "' --colmap-model '" + (dir / "model").string() + "'");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  ExpectHdrMatchesRadiance(LoadDataset(dir / "out", {.image_check = ImageCheck::kHeaders}), truth);
+  const nlohmann::json report = nlohmann::json::parse(testing::ReadTextFile(dir / "out" / "calibration.json"));
+  EXPECT_TRUE(report["per_camera_response"].get<bool>());
+  EXPECT_GT(report["response_spread"].get<double>(), 0.05);
+  for (const char* name : {"response_cam0.csv", "response_cam1.csv", "response_cam2.csv"})
+    EXPECT_TRUE(fs::exists(dir / "out" / name)) << name;
 }
 
 TEST(Calibrate, BoardGivesIntrinsicsAndMetricScale) {
@@ -335,9 +367,133 @@ TEST(Calibrate, ColmapThatReconstructsNothingIsAClearError) {
   EXPECT_EQ(result.exit_code, 1);
   EXPECT_NE(result.err.find("COLMAP mapper failed"), std::string::npos) << result.err;
   EXPECT_NE(result.err.find("too few matches"), std::string::npos) << result.err;
-  std::vector<fs::path> left;
-  for (const auto& e : fs::directory_iterator(dir / "out")) left.push_back(e.path());
-  EXPECT_TRUE(left.empty());
+  EXPECT_FALSE(fs::exists(dir / "out"));  // issue 51 §20: no empty --out left behind
+}
+
+// A stand-in for COLMAP: a shell script `body` at dir/colmap.
+fs::path FakeColmap(const fs::path& dir, const std::string& body) {
+  const fs::path script = dir / "colmap";
+  testing::WriteTextFile(script, "#!/bin/sh\n" + body + "\n");
+  fs::permissions(script, fs::perms::owner_all);
+  return script;
+}
+
+std::string GeometryArgs(const fs::path& capture, const fs::path& out, const fs::path& colmap) {
+  return "calibrate --capture '" + capture.string() + "' --out '" + out.string() +
+         "' --stage geometry --colmap-binary '" + colmap.string() + "'";
+}
+
+// Issue 51 §8: the failed step's log was copied to a predictable /tmp name, following a link
+// planted there. It is kept in a folder of its own now, which nobody else can write into.
+TEST(Calibrate, AFailedColmapStepsLogIsKeptPrivately) {
+  testing::TempDir dir;
+  WriteCapture(dir / "capture", dir / "model");
+  const fs::path colmap = FakeColmap(dir.path(), "echo 'feature trouble here'; exit 3");
+  const auto result = testing::RunHdr4d(GeometryArgs(dir / "capture", dir / "out", colmap));
+  EXPECT_EQ(result.exit_code, 1);
+  const std::size_t at = result.err.find("log in ");
+  ASSERT_NE(at, std::string::npos) << result.err;
+  std::string log = result.err.substr(at + 7);
+  log = log.substr(0, log.find_first_of("\r\n"));
+  EXPECT_NE(testing::ReadTextFile(log).find("feature trouble here"), std::string::npos);
+  const fs::path folder = fs::path(log).parent_path();
+  EXPECT_NE(fs::canonical(folder), fs::canonical(fs::temp_directory_path())) << log;
+  const fs::perms perms = fs::status(folder).permissions();
+  EXPECT_EQ(perms & (fs::perms::group_write | fs::perms::others_write), fs::perms::none) << log;
+  fs::remove_all(folder);
+}
+
+// Issue 51 §20: a failed calibrate left the --out it had created, empty; also inside the
+// capture. Now nothing it made is left, while a folder that was there stays.
+TEST(Calibrate, AFailedRunLeavesNoOutputFolderItCreated) {
+  testing::TempDir dir;
+  WriteCapture(dir / "capture", dir / "model");
+  const fs::path colmap = FakeColmap(dir.path(), "exit 3");
+  for (const fs::path& out : {dir / "new" / "deeper" / "out", dir / "capture" / "calibrated"}) {
+    const auto result = testing::RunHdr4d(GeometryArgs(dir / "capture", out, colmap));
+    EXPECT_EQ(result.exit_code, 1) << result.err;
+    EXPECT_FALSE(fs::exists(out)) << out;
+    EXPECT_FALSE(fs::exists(out.parent_path() / ("." + out.filename().string() + ".calibrate-partial")));
+  }
+  EXPECT_FALSE(fs::exists(dir / "new"));
+  fs::create_directories(dir / "mine");
+  testing::RunHdr4d(GeometryArgs(dir / "capture", dir / "mine", colmap));
+  EXPECT_TRUE(fs::is_directory(dir / "mine"));
+}
+
+// A COLMAP that registers cam2 only from the ladder's second rung (more features) on, or never.
+fs::path LadderColmap(const fs::path& dir, const fs::path& model, bool ever) {
+  ColmapModel partial = ReadColmapModel(model);
+  partial.images.erase(3);
+  for (auto& [id, p] : partial.points) std::erase_if(p.track, [](const auto& t) { return t.first == 3; });
+  WriteColmapModel(dir / "partial", partial, ColmapFormat::kText);
+  const std::string full = ever ? model.string() : (dir / "partial").string();
+  return FakeColmap(dir, "step=$1; shift; db=; out=\n"
+                         "while [ $# -gt 0 ]; do case \"$1\" in --database_path) db=$2;; --output_path) out=$2;;\n"
+                         "  --SiftExtraction.peak_threshold) touch \"$(dirname \"$db\")/more\";; esac; shift; done\n"
+                         "echo \"$step\" >> '" + (dir / "steps.txt").string() + "'\n"
+                         "[ \"$step\" = mapper ] || exit 0\n"
+                         "if [ -f \"$(dirname \"$db\")/more\" ]; then cp -r '" + full + "' \"$out/0\"; "
+                         "else cp -r '" + (dir / "partial").string() + "' \"$out/0\"; fi");
+}
+
+// Issue 54: COLMAP's defaults leave a camera unregistered; the ladder's next rung registers
+// it and the report says which rung; a camera no rung registers still fails clearly.
+TEST(Calibrate, RegistrationLadderClimbsUntilEveryCameraRegisters) {
+  testing::TempDir dir;
+  WriteCapture(dir / "capture", dir / "model");
+  fs::path colmap = LadderColmap(dir.path(), dir / "model", true);
+  auto result = testing::RunHdr4d(GeometryArgs(dir / "capture", dir / "out", colmap));
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const std::string report = testing::ReadTextFile(dir / "out" / "report.md");
+  EXPECT_NE(report.find("rung 2 of the registration ladder (more features"), std::string::npos) << report;
+  EXPECT_NE(report.find("1. defaults: missing camera cam2"), std::string::npos) << report;
+
+  fs::remove(dir / "steps.txt");
+  colmap = LadderColmap(dir.path(), dir / "model", false);
+  result = testing::RunHdr4d(GeometryArgs(dir / "capture", dir / "out2", colmap));
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_NE(result.err.find("camera cam2: none of its static images"), std::string::npos) << result.err;
+  // Every rung was tried: five mapper runs.
+  const std::string steps = testing::ReadTextFile(dir / "steps.txt");
+  int mappers = 0;
+  for (std::size_t at = steps.find("mapper"); at != std::string::npos; at = steps.find("mapper", at + 1)) ++mappers;
+  EXPECT_EQ(mappers, 5);
+  EXPECT_FALSE(fs::exists(dir / "out2"));
+}
+
+// Running, not a zombie nobody has reaped yet.
+bool Alive(pid_t pid) {
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string text((std::istreambuf_iterator<char>(stat)), std::istreambuf_iterator<char>());
+  const std::size_t paren = text.rfind(')');
+  return paren != std::string::npos && paren + 2 < text.size() && text[paren + 2] != 'Z';
+}
+
+// Issue 51 §21: SIGTERM to calibrate left COLMAP running. Now COLMAP is stopped with it and
+// the staged work removed.
+TEST(Calibrate, SigtermStopsColmapToo) {
+  testing::TempDir dir;
+  WriteCapture(dir / "capture", dir / "model");
+  const fs::path pid_file = dir / "colmap.pid";
+  const fs::path colmap = FakeColmap(dir.path(), "echo $$ > '" + pid_file.string() + "'; exec sleep 60");
+  const std::string launch = "'" + testing::Hdr4dBinary() + "' " + GeometryArgs(dir / "capture", dir / "out", colmap) +
+                             " > /dev/null 2>&1 & echo $! > '" + (dir / "hdr4d.pid").string() + "'";
+  ASSERT_EQ(std::system(launch.c_str()), 0);
+  for (int i = 0; i < 200 && !fs::exists(pid_file); ++i) usleep(50000);
+  ASSERT_TRUE(fs::exists(pid_file));
+  usleep(100000);
+  const pid_t hdr4d = std::stoi(testing::ReadTextFile(dir / "hdr4d.pid"));
+  const pid_t child = std::stoi(testing::ReadTextFile(pid_file));
+  ASSERT_TRUE(Alive(child));
+  kill(hdr4d, SIGTERM);
+  for (int i = 0; i < 100 && Alive(hdr4d); ++i) usleep(50000);
+  for (int i = 0; i < 20 && Alive(child); ++i) usleep(50000);
+  const bool colmap_left = Alive(child);
+  if (colmap_left) kill(child, SIGKILL);
+  EXPECT_FALSE(colmap_left) << "COLMAP outlived calibrate";
+  EXPECT_FALSE(fs::exists(dir / ".out.calibrate-partial"));
+  EXPECT_FALSE(fs::exists(dir / "out"));
 }
 
 }  // namespace

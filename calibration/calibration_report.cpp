@@ -8,69 +8,97 @@
 
 namespace hdr4d {
 
+namespace {
+
+void AppendGeometry(const CalibrationRecord& record, std::string& md, nlohmann::json& doc) {
+  const Rig& rig = *record.rig;
+  md += fmt::format("## Geometry{}\n\nSparse model: {}. Intrinsics: {}. {} extra image(s) helped "
+                    "the reconstruction and were dropped. Scene normalised: centre ({:.4g}, {:.4g}, "
+                    "{:.4g}), scale {:.4g}; metric scale: {}. Refinement: {} iterations.\n\n",
+                    record.geometry_run ? "" : " (from rig.json of an earlier run)",
+                    rig.model_source, rig.intrinsics_source, rig.extra_images_registered,
+                    rig.centre.x(), rig.centre.y(), rig.centre.z(), rig.scale,
+                    rig.metres_per_unit > 0 ? fmt::format("1 unit = {:.4g} m (checkerboard)", rig.metres_per_unit)
+                                            : std::string("unknown (no board seen by two cameras)"),
+                    rig.refinement_iterations);
+  doc["metres_per_unit"] = rig.metres_per_unit;
+  doc["intrinsics_source"] = rig.intrinsics_source;
+  md += "| camera | static images registered | observations | reprojection RMS before (px) | "
+        "after (px) | focal (px) | k1 | k2 | distortion kept (BIC gain) | max distortion (px) | undistorted |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const RigCamera& c : rig.cameras) {
+    md += fmt::format("| {} | {} | {} | {:.3f} | {:.3f} | {:.2f} | {:.4f} | {:.4f} | {} ({:.1f}) | {:.2f} | {} |\n",
+                      c.name, c.static_images_registered, c.observations, c.rms_before,
+                      c.rms_after, c.intrinsics.f, c.intrinsics.k1, c.intrinsics.k2,
+                      c.distortion_kept ? "yes" : "no", c.distortion_score, c.max_distortion_pixels,
+                      c.undistort ? "yes" : "no");
+    doc["cameras"].push_back({{"name", c.name}, {"rms_before", c.rms_before},
+                              {"rms_after", c.rms_after}, {"focal", c.intrinsics.f},
+                              {"distortion_kept", c.distortion_kept}, {"distortion_score", c.distortion_score},
+                              {"undistorted", c.undistort}});
+  }
+  md += fmt::format("\n{} points in point3d.ply.\n\n", rig.points.size());
+}
+
+void AppendCameraAgreement(const CalibrationRecord& record, std::string& md, nlohmann::json& doc) {
+  const CameraGains& g = *record.gains;
+  md += fmt::format("### Camera agreement\n\nOn {} sparse points seen by two or more cameras (first "
+                    "frame), the cameras' HDR differed from the points' mean by {:.1f}% (median) "
+                    "before the per-camera gains and {:.1f}% after{}.\n\n| camera | gain R | G | B |\n"
+                    "|---|---|---|---|\n",
+                    g.points_used, 100 * g.disagreement_before, 100 * g.disagreement_after,
+                    record.gains_applied ? " (applied to hdr/, the mean gain folded into `exposures`)"
+                                         : " (not applied: --no-gain-correction)");
+  for (std::size_t c = 0; c < g.gain.size() && c < record.rig->cameras.size(); ++c)
+    md += fmt::format("| {} | {:.4f} | {:.4f} | {:.4f} |\n", record.rig->cameras[c].name,
+                      g.gain[c][0], g.gain[c][1], g.gain[c][2]);
+  md += "\n";
+  doc["camera_agreement"] = {{"points", g.points_used},
+                             {"disagreement_before", g.disagreement_before},
+                             {"disagreement_after", g.disagreement_after},
+                             {"gains", g.gain}};
+}
+
+void AppendRadiometry(const CalibrationRecord& record, std::string& md, nlohmann::json& doc) {
+  md += fmt::format("## Radiometry\n\nResponse: {}, {} (the cameras' own curves differ by {:.3f} "
+                    "RMS in log exposure over codes 32-223; above 0.05, or with --per-camera-response, "
+                    "each camera is fused with its own).\n\n![response](response.png)\n\n",
+                    record.response_method,
+                    record.per_camera_response ? "one curve per channel per camera in response_<camera>.csv "
+                                                 "(the rig's joint curve in response.csv)"
+                                               : "one curve per channel shared by every camera, in response.csv",
+                    record.response_spread);
+  if (!record.frames.empty() && !record.frames.front().noise.empty()) {
+    md += fmt::format("Fusion weights (inverse variance of each bracket's radiance estimate) of {} frame "
+                      "{}: black level / read noise / saturation per channel (codes):",
+                      record.frames.front().camera, record.frames.front().frame);
+    for (const ChannelNoise& n : record.frames.front().noise)
+      md += fmt::format(" {:.1f} / {:.2f} / {:.0f}{};", n.black, n.read_sigma, n.saturation,
+                        n.floor_found ? "" : " (no black floor seen)");
+    md += "\n\n";
+  }
+  doc["per_camera_response"] = record.per_camera_response;
+  doc["response_spread"] = record.response_spread;
+  if (record.gains && record.rig) AppendCameraAgreement(record, md, doc);
+  md += "| camera | frame | dynamic range (stops) | moving pixels (best-exposed bracket only) | "
+        "reference bracket |\n|---|---|---|---|---|\n";
+  for (const FrameRecord& f : record.frames) {
+    md += fmt::format("| {} | {} | {:.2f} | {:.2f}% | {} |\n", f.camera, f.frame,
+                      f.dynamic_range_stops, 100 * f.motion_fraction, f.reference_bracket);
+    doc["frames"].push_back({{"camera", f.camera}, {"frame", f.frame},
+                             {"dynamic_range_stops", f.dynamic_range_stops},
+                             {"motion_fraction", f.motion_fraction}});
+  }
+  md += "\n";
+}
+
+}  // namespace
+
 void WriteCalibrationReport(const std::filesystem::path& folder, const CalibrationRecord& record) {
   std::string md = "# Calibration report\n\n";
   nlohmann::json doc;
-  if (record.rig) {
-    const Rig& rig = *record.rig;
-    md += fmt::format("## Geometry{}\n\nSparse model: {}. Intrinsics: {}. {} extra image(s) helped "
-                      "the reconstruction and were dropped. Scene normalised: centre ({:.4g}, {:.4g}, "
-                      "{:.4g}), scale {:.4g}; metric scale: {}. Refinement: {} iterations.\n\n",
-                      record.geometry_run ? "" : " (from rig.json of an earlier run)",
-                      rig.model_source, rig.intrinsics_source, rig.extra_images_registered,
-                      rig.centre.x(), rig.centre.y(), rig.centre.z(), rig.scale,
-                      rig.metres_per_unit > 0 ? fmt::format("1 unit = {:.4g} m (checkerboard)", rig.metres_per_unit)
-                                              : std::string("unknown (no board seen by two cameras)"),
-                      rig.refinement_iterations);
-    doc["metres_per_unit"] = rig.metres_per_unit;
-    doc["intrinsics_source"] = rig.intrinsics_source;
-    md += "| camera | static images registered | observations | reprojection RMS before (px) | "
-          "after (px) | focal (px) | k1 | k2 | max distortion (px) | undistorted |\n"
-          "|---|---|---|---|---|---|---|---|---|---|\n";
-    for (const RigCamera& c : rig.cameras) {
-      md += fmt::format("| {} | {} | {} | {:.3f} | {:.3f} | {:.2f} | {:.4f} | {:.4f} | {:.2f} | {} |\n",
-                        c.name, c.static_images_registered, c.observations, c.rms_before,
-                        c.rms_after, c.intrinsics.f, c.intrinsics.k1, c.intrinsics.k2,
-                        c.max_distortion_pixels, c.undistort ? "yes" : "no");
-      doc["cameras"].push_back({{"name", c.name}, {"rms_before", c.rms_before},
-                                {"rms_after", c.rms_after}, {"focal", c.intrinsics.f},
-                                {"undistorted", c.undistort}});
-    }
-    md += fmt::format("\n{} points in point3d.ply.\n\n", rig.points.size());
-  }
-  if (!record.response_method.empty()) {
-    md += fmt::format("## Radiometry\n\nResponse: {} (one curve per channel shared by every "
-                      "camera), in response.csv.\n\n"
-                      "![response](response.png)\n\n", record.response_method);
-    if (record.gains && record.rig) {
-      const CameraGains& g = *record.gains;
-      md += fmt::format("### Camera agreement\n\nOn {} sparse points seen by two or more cameras (first "
-                        "frame), the cameras' HDR differed from the points' mean by {:.1f}% (median) "
-                        "before the per-camera gains and {:.1f}% after{}.\n\n| camera | gain R | G | B |\n"
-                        "|---|---|---|---|\n",
-                        g.points_used, 100 * g.disagreement_before, 100 * g.disagreement_after,
-                        record.gains_applied ? " (applied to hdr/, the mean gain folded into `exposures`)"
-                                             : " (not applied: --no-gain-correction)");
-      for (std::size_t c = 0; c < g.gain.size() && c < record.rig->cameras.size(); ++c)
-        md += fmt::format("| {} | {:.4f} | {:.4f} | {:.4f} |\n", record.rig->cameras[c].name,
-                          g.gain[c][0], g.gain[c][1], g.gain[c][2]);
-      md += "\n";
-      doc["camera_agreement"] = {{"points", g.points_used},
-                                 {"disagreement_before", g.disagreement_before},
-                                 {"disagreement_after", g.disagreement_after},
-                                 {"gains", g.gain}};
-    }
-    md += "| camera | frame | dynamic range (stops) | moving pixels (best-exposed bracket only) | "
-          "reference bracket |\n|---|---|---|---|---|\n";
-    for (const FrameRecord& f : record.frames) {
-      md += fmt::format("| {} | {} | {:.2f} | {:.2f}% | {} |\n", f.camera, f.frame,
-                        f.dynamic_range_stops, 100 * f.motion_fraction, f.reference_bracket);
-      doc["frames"].push_back({{"camera", f.camera}, {"frame", f.frame},
-                               {"dynamic_range_stops", f.dynamic_range_stops},
-                               {"motion_fraction", f.motion_fraction}});
-    }
-    md += "\n";
-  }
+  if (record.rig) AppendGeometry(record, md, doc);
+  if (!record.response_method.empty()) AppendRadiometry(record, md, doc);
   if (!record.test_camera.empty())
     md += fmt::format("Dataset: camera {} is the test split, the others train.\n\n", record.test_camera);
   if (!record.warnings.empty()) {

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "calibration/bracket_noise.h"
 #include "calibration/camera_gains.h"
 #include "calibration/rig_geometry.h"
 
@@ -18,12 +19,15 @@ struct FrameRecord {
   double dynamic_range_stops = 0;
   double motion_fraction = 0;
   int reference_bracket = 0;
+  std::vector<ChannelNoise> noise;  // the black level, read noise and saturation fusion used
 };
 
 struct CalibrationRecord {
   std::optional<Rig> rig;
   bool geometry_run = false;  // this run computed the rig (else it was read from rig.json)
   std::string response_method;  // empty: radiometry not run
+  bool per_camera_response = false;  // each camera fused with its own curve (response_<cam>.csv)
+  double response_spread = 0;        // ResponseSpread of the cameras' own curves
   std::vector<FrameRecord> frames;
   std::optional<CameraGains> gains;  // cameras' agreement (radiometry with a rig of 2+ cameras)
   bool gains_applied = false;

@@ -1,12 +1,11 @@
 #include "calibration/colmap_driver.h"
 
 #include <fmt/format.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
-#include <cstdlib>
 #include <fstream>
+#include <vector>
 
+#include "calibration/colmap_process.h"
 #include "core/geometry/colmap_model.h"
 #include "core/util/error.h"
 #include "core/util/progress.h"
@@ -16,12 +15,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string Quote(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
-
 std::string LastLine(const fs::path& log) {
   std::ifstream in(log);
   std::string line, last;
@@ -30,25 +23,32 @@ std::string LastLine(const fs::path& log) {
   return last;
 }
 
-void RunStep(const ColmapRunOptions& options, const std::string& step, const std::string& args,
-             const fs::path& workspace) {
+// A failed step's log, kept where nobody else can plant or read anything: the workspace is
+// inside calibrate's staging folder, which the failure removes.
+fs::path KeepLog(const fs::path& log, const std::string& step) {
+  try {
+    const fs::path kept = MakePrivateTempFolder("hdr4d-colmap-") / fmt::format("colmap_{}.log", step);
+    fs::copy_file(log, kept);
+    return kept;
+  } catch (const std::exception&) {
+    return log;  // no private copy possible: name the original
+  }
+}
+
+void RunStep(const ColmapRunOptions& options, const std::string& step,
+             std::vector<std::string> args, const fs::path& workspace) {
   const fs::path log = workspace / fmt::format("colmap_{}.log", step);
+  args.insert(args.begin(), {options.binary, step});
   // Headless: no display, Qt's offscreen platform.
-  const std::string command = fmt::format("QT_QPA_PLATFORM=offscreen {} {} {} > {} 2>&1",
-                                          Quote(options.binary), step, args, Quote(log.string()));
-  const int status = std::system(command.c_str());
-  const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  const int code = RunLoggedChild(args, {"QT_QPA_PLATFORM=offscreen"}, log);
   if (code == 127)
     Fail("COLMAP not found ('{}'); install it with scripts/install-deps.sh or pass --colmap-model",
          options.binary);
+  if (code != 0 && step == "mapper")
+    throw ColmapNoModel(fmt::format("COLMAP mapper failed (exit {}, too few matches between the static images?): {}; "
+                                    "log in {}", code, LastLine(log), KeepLog(log, step).string()));
   if (code != 0) {
-    // The workspace is inside calibrate's staging folder, which a failure removes: keep the log.
-    const fs::path kept = fs::temp_directory_path() / fmt::format("hdr4d-colmap-{}-{}.log", step, getpid());
-    std::error_code ec;
-    fs::copy_file(log, kept, fs::copy_options::overwrite_existing, ec);
-    Fail("COLMAP {} failed (exit {}{}): {}; log in {}", step, code,
-         step == "mapper" ? ", too few matches between the static images?" : "", LastLine(log),
-         ec ? log.string() : kept.string());
+    Fail("COLMAP {} failed (exit {}): {}; log in {}", step, code, LastLine(log), KeepLog(log, step).string());
   }
 }
 
@@ -59,28 +59,31 @@ fs::path RunColmap(const fs::path& image_root, const fs::path& workspace,
   std::error_code ec;
   fs::create_directories(workspace / "sparse", ec);
   if (ec) Fail("{}: cannot create the COLMAP workspace ({})", workspace.string(), ec.message());
-  const fs::path db = workspace / "database.db";
-  fs::remove(db, ec);
+  fs::remove(workspace / "database.db", ec);
   Progress progress("colmap", 3, options.show_progress);
-  const std::string common = fmt::format("--database_path {}", Quote(db.string()));
-  RunStep(options, "feature_extractor",
-          fmt::format("{} --image_path {} --ImageReader.single_camera_per_folder 1 "
-                      "--ImageReader.camera_model {} --SiftExtraction.use_gpu 0 "
-                      "--SiftExtraction.num_threads {}{}",
-                      common, Quote(image_root.string()), options.camera_model, options.threads,
-                      options.max_image_size > 0
-                          ? fmt::format(" --SiftExtraction.max_image_size {}", options.max_image_size)
-                          : std::string()),
-          workspace);
+  const std::vector<std::string> db = {"--database_path", (workspace / "database.db").string()};
+  auto with_db = [&](std::vector<std::string> args) {
+    args.insert(args.begin(), db.begin(), db.end());
+    return args;
+  };
+  const std::string threads = std::to_string(options.threads);
+  std::vector<std::string> extract = with_db(
+      {"--image_path", image_root.string(), "--ImageReader.single_camera_per_folder", "1",
+       "--ImageReader.camera_model", options.camera_model, "--SiftExtraction.use_gpu", "0",
+       "--SiftExtraction.num_threads", threads});
+  if (options.max_image_size > 0)
+    extract.insert(extract.end(), {"--SiftExtraction.max_image_size", std::to_string(options.max_image_size)});
+  extract.insert(extract.end(), options.extract_args.begin(), options.extract_args.end());
+  RunStep(options, "feature_extractor", extract, workspace);
   progress.Advance(1, "features");
-  RunStep(options, "exhaustive_matcher",
-          fmt::format("{} --SiftMatching.use_gpu 0 --SiftMatching.num_threads {}", common, options.threads),
-          workspace);
+  std::vector<std::string> match = with_db({"--SiftMatching.use_gpu", "0", "--SiftMatching.num_threads", threads});
+  match.insert(match.end(), options.match_args.begin(), options.match_args.end());
+  RunStep(options, "exhaustive_matcher", match, workspace);
   progress.Advance(1, "matches");
-  RunStep(options, "mapper",
-          fmt::format("{} --image_path {} --output_path {} --Mapper.num_threads {}", common,
-                      Quote(image_root.string()), Quote((workspace / "sparse").string()), options.threads),
-          workspace);
+  std::vector<std::string> map = with_db({"--image_path", image_root.string(), "--output_path",
+                                          (workspace / "sparse").string(), "--Mapper.num_threads", threads});
+  map.insert(map.end(), options.map_args.begin(), options.map_args.end());
+  RunStep(options, "mapper", map, workspace);
   progress.Advance(1, "mapped");
   progress.Finish();
 
@@ -96,8 +99,8 @@ fs::path RunColmap(const fs::path& image_root, const fs::path& workspace,
     }
   }
   if (best.empty())
-    Fail("COLMAP could not reconstruct the static scene in {} (no model; too few matches between "
-         "the images?)", image_root.string());
+    throw ColmapNoModel(fmt::format("COLMAP could not reconstruct the static scene in {} (no model; too few "
+                                    "matches between the images?)", image_root.string()));
   return best;
 }
 

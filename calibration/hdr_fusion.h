@@ -1,10 +1,12 @@
-// Fusing one view's brackets into linear HDR with a recovered response: a weighted average of
-// each bracket's radiance estimate, except where the brackets disagree because something
+// Fusing one view's brackets into linear HDR with a recovered response: an inverse-variance
+// weighted average of each bracket's radiance estimate (calibration/bracket_noise.h: weights
+// that know the exposure time, the black level and saturation), except where the brackets disagree because something
 // moved between them; there the best-exposed bracket alone is used (no ghosts).
 #pragma once
 
 #include <vector>
 
+#include "calibration/bracket_noise.h"
 #include "calibration/response_recovery.h"
 #include "core/image/image.h"
 
@@ -24,6 +26,7 @@ struct FusionResult {
   double motion_fraction = 0;  // pixels that fell back to one bracket
   int reference_bracket = 0;   // the best-exposed bracket overall
   double dynamic_range_stops = 0;  // log2 of the 99.9th / 0.1th percentile luminance (> 0)
+  std::vector<ChannelNoise> noise;  // black level, read noise and saturation per channel
 };
 
 // Brackets must share size and channel count with the response's channels; checked.

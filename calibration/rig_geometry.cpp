@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <cmath>
 #include <map>
 
 #include "calibration/undistort.h"
@@ -49,112 +50,219 @@ const RigCamera* Rig::Find(const std::string& name) const {
   return nullptr;
 }
 
-Rig RigFromColmap(const ColmapModel& model, const std::vector<std::string>& camera_names,
-                  const RigOptions& options) {
-  Rig rig;
+namespace {
+
+// The bundle problem of a COLMAP model: one pose per rig camera (all its static images share
+// it), one per extra image, COLMAP's intrinsics per camera (or a board's, held), every point.
+struct RigProblem {
   BundleProblem problem;
-  std::map<int, int> pose_of_image;        // COLMAP image id -> bundle pose
+  std::map<int, int> pose_of_image;         // COLMAP image id -> bundle pose
   std::map<int, int> intrinsics_of_camera;  // COLMAP camera id -> bundle intrinsics
-  auto intrinsics_index = [&](int camera_id) {
+  std::vector<int> rig_intrinsics;          // rig camera -> bundle intrinsics
+  std::vector<std::int64_t> point_ids;
+
+  int IntrinsicsIndex(const ColmapModel& model, int camera_id) {
     auto [it, added] = intrinsics_of_camera.emplace(camera_id, static_cast<int>(problem.intrinsics.size()));
     if (added) problem.intrinsics.push_back(IntrinsicsOf(model.cameras.at(camera_id)));
     return it->second;
-  };
-  std::vector<int> rig_intrinsics;
-  // Rig cameras first (pose i = camera i), all their images sharing one pose.
-  for (std::size_t c = 0; c < camera_names.size(); ++c) {
-    RigCamera camera;
-    camera.name = camera_names[c];
-    int first = -1;
-    for (const auto& [id, image] : model.images) {
-      if (FolderOf(image.name) != camera.name) continue;
-      if (first < 0) {
-        first = id;
-        problem.poses.push_back(PoseOf(image));
-        problem.poses.back().fixed = c == 0;  // the gauge
-      }
-      pose_of_image[id] = static_cast<int>(c);
-      ++camera.static_images_registered;
-    }
-    if (first < 0)
-      Fail("camera {}: none of its static images (static/{}/) was registered by COLMAP; it "
-           "needs views that overlap the other cameras'", camera.name, camera.name);
-    const ColmapCamera& colmap_camera = model.cameras.at(model.images.at(first).camera_id);
-    camera.width = colmap_camera.width;
-    camera.height = colmap_camera.height;
-    if (const auto board = options.board_intrinsics.find(camera.name); board != options.board_intrinsics.end()) {
-      // Its own block, held: the board's intrinsics are the better measurement.
-      rig_intrinsics.push_back(static_cast<int>(problem.intrinsics.size()));
-      problem.intrinsics.push_back(board->second);
-      problem.intrinsics.back().fixed = true;
-      camera.board_intrinsics = true;
-    } else {
-      rig_intrinsics.push_back(intrinsics_index(colmap_camera.id));
-    }
-    rig.cameras.push_back(camera);
   }
-  // Extra (hand-held) images: a pose each; they constrain the points and are then dropped.
+};
+
+// With --shared-intrinsics: the block of an earlier rig camera of the same image size, else -1.
+int SharedBlock(const std::vector<RigCamera>& earlier, const RigCamera& camera, const RigOptions& options,
+                const RigProblem& rp) {
+  if (!options.shared_intrinsics) return -1;
+  for (std::size_t e = 0; e < earlier.size(); ++e)
+    if (!earlier[e].board_intrinsics && earlier[e].width == camera.width && earlier[e].height == camera.height)
+      return rp.rig_intrinsics[e];
+  return -1;
+}
+
+RigCamera AddRigCamera(const ColmapModel& model, const std::string& name, std::size_t c,
+                       const RigOptions& options, const std::vector<RigCamera>* earlier, RigProblem* rp) {
+  RigCamera camera;
+  camera.name = name;
+  int first = -1;
   for (const auto& [id, image] : model.images) {
-    if (pose_of_image.count(id)) continue;
-    pose_of_image[id] = static_cast<int>(problem.poses.size());
-    problem.poses.push_back(PoseOf(image));
-    ++rig.extra_images_registered;
+    if (FolderOf(image.name) != camera.name) continue;
+    if (first < 0) {
+      first = id;
+      rp->problem.poses.push_back(PoseOf(image));
+      rp->problem.poses.back().fixed = c == 0;  // the gauge
+    }
+    rp->pose_of_image[id] = static_cast<int>(c);
+    ++camera.static_images_registered;
   }
-  std::vector<std::int64_t> point_ids;
+  if (first < 0)
+    Fail("camera {}: none of its static images (static/{}/) was registered by COLMAP; it "
+         "needs views that overlap the other cameras'", camera.name, camera.name);
+  const ColmapCamera& colmap_camera = model.cameras.at(model.images.at(first).camera_id);
+  camera.width = colmap_camera.width;
+  camera.height = colmap_camera.height;
+  if (const auto board = options.board_intrinsics.find(camera.name); board != options.board_intrinsics.end()) {
+    // Its own block, held: the board's intrinsics are the better measurement.
+    rp->rig_intrinsics.push_back(static_cast<int>(rp->problem.intrinsics.size()));
+    rp->problem.intrinsics.push_back(board->second);
+    rp->problem.intrinsics.back().fixed = true;
+    camera.board_intrinsics = true;
+  } else if (const int shared = SharedBlock(*earlier, camera, options, *rp); shared >= 0) {
+    rp->rig_intrinsics.push_back(shared);
+  } else {
+    rp->rig_intrinsics.push_back(rp->IntrinsicsIndex(model, colmap_camera.id));
+  }
+  return camera;
+}
+
+void AddPoints(const ColmapModel& model, std::size_t rig_cameras, RigProblem* rp, Rig* rig) {
   for (const auto& [id, point] : model.points) {
-    const int index = static_cast<int>(problem.points.size());
-    problem.points.push_back(point.xyz);
-    point_ids.push_back(id);
-    rig.visibility.emplace_back();
+    const int index = static_cast<int>(rp->problem.points.size());
+    rp->problem.points.push_back(point.xyz);
+    rp->point_ids.push_back(id);
+    rig->visibility.emplace_back();
+    std::vector<int>& seen_by = rig->visibility.back();
     for (const auto& [image_id, idx] : point.track) {
       const ColmapImage& image = model.images.at(image_id);
-      const int pose = pose_of_image.at(image_id);
-      if (pose < static_cast<int>(camera_names.size()) &&
-          std::find(rig.visibility.back().begin(), rig.visibility.back().end(), pose) == rig.visibility.back().end())
-        rig.visibility.back().push_back(pose);
-      const int k = pose < static_cast<int>(camera_names.size()) ? rig_intrinsics[pose]
-                                                                 : intrinsics_index(image.camera_id);
-      problem.observations.push_back({pose, k, index, image.points2d[idx]});
+      const int pose = rp->pose_of_image.at(image_id);
+      const bool rig_pose = pose < static_cast<int>(rig_cameras);
+      if (rig_pose && std::find(seen_by.begin(), seen_by.end(), pose) == seen_by.end()) seen_by.push_back(pose);
+      const int k = rig_pose ? rp->rig_intrinsics[pose] : rp->IntrinsicsIndex(model, image.camera_id);
+      rp->problem.observations.push_back({pose, k, index, image.points2d[idx]});
     }
   }
-  if (problem.observations.empty()) Fail("COLMAP's model has no 3D points to refine the rig with");
+}
 
-  const BundleReport report = RefineBundle(&problem);
-  rig.refinement_iterations = report.iterations;
-
-  // Normalise: the median point to the origin, 90% of the points within radius 1.
+// Normalise: the median point to the origin, 90% of the points within radius 1.
+void Normalise(const std::vector<Eigen::Vector3d>& points, Rig* rig) {
   std::vector<double> coords[3], radii;
-  for (const auto& p : problem.points)
+  for (const auto& p : points)
     for (int a = 0; a < 3; ++a) coords[a].push_back(p[a]);
-  for (int a = 0; a < 3; ++a) rig.centre[a] = Percentile(coords[a], 0.5);
-  for (const auto& p : problem.points) radii.push_back((p - rig.centre).norm());
+  for (int a = 0; a < 3; ++a) rig->centre[a] = Percentile(coords[a], 0.5);
+  for (const auto& p : points) radii.push_back((p - rig->centre).norm());
   const double r90 = Percentile(radii, 0.9);
-  rig.scale = r90 > 1e-12 ? 1.0 / r90 : 1.0;
+  rig->scale = r90 > 1e-12 ? 1.0 / r90 : 1.0;
+}
 
+void ExportCamera(const BundlePose& pose, const BundleIntrinsics& intrinsics, const Rig& rig,
+                  const RigOptions& options, RigCamera* camera) {
+  camera->intrinsics = intrinsics;
+  const double angle = pose.rotation.norm();
+  const Eigen::Matrix3d r = angle > 0 ? Eigen::AngleAxisd(angle, pose.rotation / angle).toRotationMatrix()
+                                      : Eigen::Matrix3d::Identity();
+  Eigen::Matrix4d cam_from_world = Eigen::Matrix4d::Identity();
+  cam_from_world.topLeftCorner<3, 3>() = r;
+  cam_from_world.topRightCorner<3, 1>() = rig.scale * (r * rig.centre + pose.translation);
+  const Camera cam = Camera::FromWorldFromCamCv(
+      PinholeIntrinsics{intrinsics.f, intrinsics.f, intrinsics.cx, intrinsics.cy, camera->width, camera->height},
+      RigidInverse(cam_from_world));
+  camera->world_from_cam_gl = cam.world_from_cam_gl;
+  camera->max_distortion_pixels = MaxDistortionPixels(intrinsics, camera->width, camera->height);
+  camera->undistort = camera->max_distortion_pixels > options.undistort_threshold_pixels;
+}
+
+// Per intrinsics block of the rig cameras: the sum of squared residuals, each capped at 3 px
+// so that COLMAP's remaining outliers do not decide, and the number of observations.
+std::map<int, std::pair<double, int>> CappedSse(const BundleProblem& problem, const std::vector<int>& rig_intrinsics) {
+  std::map<int, std::pair<double, int>> sse;
+  for (const BundleObservation& o : problem.observations) {
+    if (o.pose >= static_cast<int>(rig_intrinsics.size())) continue;
+    const Eigen::Vector2d e = ProjectRadial(problem.poses[o.pose], problem.intrinsics[o.intrinsics],
+                                            problem.points[o.point]) - o.pixel;
+    const double e2 = std::isfinite(e.squaredNorm()) ? std::min(e.squaredNorm(), 9.0) : 9.0;
+    auto& [sum, n] = sse[rig_intrinsics[o.pose]];
+    sum += e2, ++n;
+  }
+  return sse;
+}
+
+// Model selection of k1, k2 per intrinsics block: refine once more with the block's k1, k2
+// held at 0 (the others free, so that one camera's real distortion does not pull the shared
+// points) and keep them only where n ln(SSE0 / SSE1) exceeds 2 ln n (BIC for two
+// parameters). Blocks that drop them are zeroed and held in `rp` (to be refined again).
+// Returns whether any dropped.
+bool SelectDistortion(RigProblem* rp, std::vector<RigCamera>* cameras) {
+  const auto with_sse = CappedSse(rp->problem, rp->rig_intrinsics);
+  std::map<int, double> score_of;  // per block
+  for (const auto& [block, sse_n] : with_sse) {
+    if (rp->problem.intrinsics[block].fixed) continue;
+    BundleProblem without = rp->problem;
+    BundleIntrinsics& k = without.intrinsics[block];
+    k.k1 = k.k2 = 0;
+    k.hold_distortion = true;
+    RefineBundle(&without);
+    const auto [sse1, n] = sse_n;
+    const double sse0 = CappedSse(without, rp->rig_intrinsics).at(block).first;
+    const double floor = 1e-8 * n;  // (0.1 mpx)^2 per observation: exact synthetic data
+    score_of[block] = n * std::log((sse0 + floor) / (sse1 + floor)) - 2 * std::log(std::max(n, 2));
+  }
+  bool dropped = false;
+  for (std::size_t c = 0; c < cameras->size(); ++c) {
+    const auto it = score_of.find(rp->rig_intrinsics[c]);
+    if (it == score_of.end()) continue;
+    RigCamera& camera = (*cameras)[c];
+    camera.distortion_score = it->second;
+    camera.distortion_kept = it->second > 0;
+    if (camera.distortion_kept) continue;
+    BundleIntrinsics& k = rp->problem.intrinsics[it->first];
+    if (!k.hold_distortion) dropped = true;
+    k.k1 = k.k2 = 0;
+    k.hold_distortion = true;
+  }
+  return dropped;
+}
+
+// The report says why a camera ends with a larger reprojection RMS than COLMAP's.
+void NoteWorseCameras(const Rig& rig, std::vector<std::string>* notes) {
+  for (const RigCamera& c : rig.cameras) {
+    if (!(c.rms_after > c.rms_before * 1.001)) continue;
+    notes->push_back(fmt::format(
+        "camera {}: reprojection RMS {:.3f} px after the refinement, {:.3f} px before: {}", c.name, c.rms_after,
+        c.rms_before,
+        !c.distortion_kept ? "its distortion is held at 0, as it did not explain the observations beyond noise "
+                             "(COLMAP's k1, k2 fitted some of the noise)"
+                           : "the refinement minimises a Huber loss (residuals beyond 1 px count linearly), which "
+                             "weighs COLMAP's remaining outliers less than the RMS does"));
+  }
+}
+
+}  // namespace
+
+Rig RigFromColmap(const ColmapModel& model, const std::vector<std::string>& camera_names,
+                  const RigOptions& options) {
+  Rig rig;
+  RigProblem rp;
+  // Rig cameras first (pose i = camera i), all their images sharing one pose.
+  for (std::size_t c = 0; c < camera_names.size(); ++c)
+    rig.cameras.push_back(AddRigCamera(model, camera_names[c], c, options, &rig.cameras, &rp));
+  // Extra (hand-held) images: a pose each; they constrain the points and are then dropped.
+  for (const auto& [id, image] : model.images) {
+    if (rp.pose_of_image.count(id)) continue;
+    rp.pose_of_image[id] = static_cast<int>(rp.problem.poses.size());
+    rp.problem.poses.push_back(PoseOf(image));
+    ++rig.extra_images_registered;
+  }
+  AddPoints(model, camera_names.size(), &rp, &rig);
+  if (rp.problem.observations.empty()) Fail("COLMAP's model has no 3D points to refine the rig with");
+
+  BundleReport report = RefineBundle(&rp.problem);
+  rig.refinement_iterations = report.iterations;
+  if (options.select_distortion && SelectDistortion(&rp, &rig.cameras)) {
+    const std::vector<double> colmap_rms = report.rms_before;
+    report = RefineBundle(&rp.problem);
+    report.rms_before = colmap_rms;
+    rig.refinement_iterations += report.iterations;
+  }
+  Normalise(rp.problem.points, &rig);
   for (std::size_t c = 0; c < rig.cameras.size(); ++c) {
     RigCamera& camera = rig.cameras[c];
-    const BundlePose& pose = problem.poses[c];
-    camera.intrinsics = problem.intrinsics[rig_intrinsics[c]];
     camera.rms_before = report.rms_before[c];
     camera.rms_after = report.rms_after[c];
     camera.observations = report.observations[c];
-    const double angle = pose.rotation.norm();
-    const Eigen::Matrix3d r = angle > 0 ? Eigen::AngleAxisd(angle, pose.rotation / angle).toRotationMatrix()
-                                        : Eigen::Matrix3d::Identity();
-    Eigen::Matrix4d cam_from_world = Eigen::Matrix4d::Identity();
-    cam_from_world.topLeftCorner<3, 3>() = r;
-    cam_from_world.topRightCorner<3, 1>() = rig.scale * (r * rig.centre + pose.translation);
-    const Camera cam = Camera::FromWorldFromCamCv(
-        PinholeIntrinsics{camera.intrinsics.f, camera.intrinsics.f, camera.intrinsics.cx,
-                          camera.intrinsics.cy, camera.width, camera.height},
-        RigidInverse(cam_from_world));
-    camera.world_from_cam_gl = cam.world_from_cam_gl;
-    camera.max_distortion_pixels = MaxDistortionPixels(camera.intrinsics, camera.width, camera.height);
-    camera.undistort = camera.max_distortion_pixels > options.undistort_threshold_pixels;
+    ExportCamera(rp.problem.poses[c], rp.problem.intrinsics[rp.rig_intrinsics[c]], rig, options, &camera);
   }
-  for (std::size_t i = 0; i < problem.points.size(); ++i) {
-    rig.points.positions.push_back(((problem.points[i] - rig.centre) * rig.scale).cast<float>());
-    rig.points.colors.push_back(model.points.at(point_ids[i]).rgb);
+  NoteWorseCameras(rig, &rig.notes);
+  for (std::size_t i = 0; i < rp.problem.points.size(); ++i) {
+    rig.points.positions.push_back(((rp.problem.points[i] - rig.centre) * rig.scale).cast<float>());
+    rig.points.colors.push_back(model.points.at(rp.point_ids[i]).rgb);
   }
   return rig;
 }

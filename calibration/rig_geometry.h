@@ -27,6 +27,9 @@ struct RigCamera {
   double max_distortion_pixels = 0;
   bool undistort = false;  // distortion above the threshold: images are undistorted
   bool board_intrinsics = false;  // intrinsics from a calibration board
+  // Model selection: did k1, k2 explain the observations beyond noise (else held at 0)?
+  bool distortion_kept = true;
+  double distortion_score = 0;  // n ln(SSE without / SSE with) - 2 ln n (BIC gain, > 0: keep)
 };
 
 struct Rig {
@@ -40,6 +43,7 @@ struct Rig {
   std::string model_source;  // where the sparse model came from
   std::string intrinsics_source = "COLMAP, refined with Ceres";
   double metres_per_unit = 0;  // of the normalised world; 0 = unknown (no board seen by 2 cameras)
+  std::vector<std::string> notes;  // what the report must say (not in rig.json)
 
   const RigCamera* Find(const std::string& name) const;
 };
@@ -49,6 +53,12 @@ struct RigOptions {
   std::map<std::string, BundleIntrinsics> board_intrinsics;
   double undistort_threshold_pixels = 0.5;
   bool show_progress = true;
+  // One focal length and distortion for every rig camera of the same image size (cameras of
+  // one model); off: each camera its own.
+  bool shared_intrinsics = false;
+  // Keep k1, k2 of a camera only where they lower the reprojection error by more than their
+  // two degrees of freedom explain (BIC); off: always keep COLMAP's distortion.
+  bool select_distortion = true;
 };
 
 // Builds the rig for `camera_names` from `model`, whose image names are <camera>/<file> (any

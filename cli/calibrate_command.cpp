@@ -20,6 +20,7 @@ void AddCalibrateCommand(CLI::App& app) {
   auto stage = std::make_shared<std::string>("all");
   auto no_motion = std::make_shared<bool>(false);
   auto no_gains = std::make_shared<bool>(false);
+  auto keep_distortion = std::make_shared<bool>(false);
   auto truth = std::make_shared<std::string>();
   CLI::App* cmd = app.add_subcommand(
       "calibrate",
@@ -52,11 +53,19 @@ void AddCalibrateCommand(CLI::App& app) {
       ->check(Integer(2, 10000000));
   cmd->add_flag("--robertson", options->response.robertson,
                 "Recover the response with Robertson et al. instead of Debevec-Malik");
+  cmd->add_flag("--per-camera-response", options->per_camera_response,
+                "Fuse each camera with its own response curve (default: only when the cameras' curves "
+                "differ by more than 0.05 RMS in log exposure)");
   cmd->add_option("--smoothness", options->response.smoothness, "Debevec-Malik smoothness weight")->capture_default_str()
       ->check(Real(0, 1e9));
   cmd->add_option("--undistort-threshold", options->undistort_threshold_pixels,
                   "Undistort images when lens distortion moves a pixel by more than this")->capture_default_str()
       ->check(Real(0, 1e6));
+  cmd->add_flag("--shared-intrinsics", options->shared_intrinsics,
+                "Rig cameras of the same image size are one model: they share focal length and distortion");
+  cmd->add_flag("--keep-distortion", *keep_distortion,
+                "Keep COLMAP's k1, k2 for every camera (default: only where they explain the observations "
+                "beyond noise, by BIC; a distortion-free lens is then not resampled)");
   cmd->add_flag("--no-motion-detection", *no_motion, "Average every bracket even where they disagree");
   cmd->add_option("--truth", *truth,
                   "The truth/ folder of a synthetic capture (hdr4d datagen --capture): after "
@@ -67,6 +76,7 @@ void AddCalibrateCommand(CLI::App& app) {
                 "Measure the cameras' disagreement but leave their HDR and exposures as fused");
   cmd->callback([=] {
     options->correct_gains = !*no_gains;
+    options->select_distortion = !*keep_distortion;
     options->capture = *capture;
     options->out = *out;
     if (!colmap_model->empty()) options->colmap_model = *colmap_model;

@@ -192,78 +192,74 @@ std::string CaptureBracketFile(int camera, int frame, int k) {
   return fmt::format("sequence/{}/{:05d}_{}.png", CaptureCameraName(camera), frame, k);
 }
 
-SceneResult GenerateCapture(const DatagenOptions& options, const std::string& scene) {
-  options.Validate();
-  if (!options.capture) Fail("datagen: GenerateCapture without --capture");
-  const auto start = std::chrono::steady_clock::now();
-  const ScenePreset preset = CapturePreset(options, scene);
-  // The dataset's renders (names relative to truth/) and what Blender renders.
-  const std::vector<PlannedRender> sequence = PlanRenders(preset);
-  const std::vector<PlannedRender> renders = CaptureRenders(preset);
+namespace {
 
-  const fs::path final_dir = options.out / preset.scene;
-  FindBlender(options.blender);
-  FindScriptsDir(options.scripts_dir);
-  const fs::path staging = PrepareStaging(final_dir, preset.scene);
+// truth/: the original dataset of the sequence renders, its point cloud and LDR images.
+struct TruthDataset {
+  Dataset dataset;
+  std::int64_t points = 0;
+  int ldr_images = 0;
+};
+
+TruthDataset WriteTruthDataset(const ScenePreset& preset, const std::vector<PlannedRender>& sequence,
+                               const std::vector<PlannedRender>& renders, const BlenderRender& run,
+                               const DatasetSynthesisOptions& ldr, const fs::path& staging) {
   const fs::path truth = staging / kTruth;
-  const BlenderSettings blender{.blender = options.blender,
-                                .scripts_dir = options.scripts_dir,
-                                .seed = options.seed,
-                                .threads = options.threads,
-                                .show_progress = options.show_progress};
-  const BlenderRender run = RenderWithBlender(preset, renders, blender, staging);
-  const LuminanceHistogram histogram = NormaliseExrs(preset, renders, staging);
-
-  // truth/: the original dataset of the sequence renders.
   json sequence_info = run.info;
   sequence_info["renders"] = json::array();
   const int stills = preset.cameras + preset.extra_views;  // CaptureRenders puts them first
   for (std::size_t i = stills; i < renders.size(); ++i)
     sequence_info["renders"].push_back(run.info["renders"][i]);
-  const Dataset dataset = BuildDataset(preset, sequence, sequence_info, truth);
-  WriteDataset(dataset, truth);
+  TruthDataset out;
+  out.dataset = BuildDataset(preset, sequence, sequence_info, truth);
+  WriteDataset(out.dataset, truth);
   std::error_code ec;
   fs::rename(staging / kPointsFile, truth / kPointsFile, ec);
   if (ec) {
     Fail("datagen: scene '{}': {}: cannot move the surface points into {} ({})", preset.scene,
          (staging / kPointsFile).string(), truth.string(), ec.message());
   }
-  const std::int64_t points = WritePointCloud(preset, sequence_info, truth);
-  const DatasetSynthesisOptions ldr = options.LdrFor(preset.scene);
-  const int ldr_images = SynthesizeDatasetLdr(truth, ldr);
+  out.points = WritePointCloud(preset, sequence_info, truth);
+  out.ldr_images = SynthesizeDatasetLdr(truth, ldr);
   const DatasetReport report = CheckDataset(truth, {.image_check = ImageCheck::kFull});
   if (!report.ok()) {
     Fail("datagen: scene '{}': the truth dataset {} fails `hdr4d dataset check`: {}",
          preset.scene, truth.string(), report.problems.front().ToString());
   }
+  return out;
+}
 
-  // The capture: what each camera records.
-  const std::vector<RigCamera> cameras = MakeRigCameras(options, ldr.crf, preset.cameras);
-  const bool alike = options.unlike_cameras == "none";
+// The static images (rig cameras, then hand-held extra views); returns the extra views' truth.
+json WriteStillImages(const DatagenOptions& options, const ScenePreset& preset,
+                      const std::vector<PlannedRender>& renders, const BlenderRender& run,
+                      const std::vector<RigCamera>& cameras, const SensorNoise& noise,
+                      const fs::path& staging, int* images) {
   const int middle = static_cast<int>(preset.exposures.size()) / 2;
-  int images = 0;
   json extra_views = json::array();
-  for (int i = 0; i < stills; ++i) {
+  for (int i = 0; i < preset.cameras + preset.extra_views; ++i) {
     const Image hdr = ReadImage(staging / renders[i].hdr_file);
-    if (i < preset.cameras) {
-      WriteImage(staging / CaptureStaticFile(i),
-                 Record(hdr, cameras[i], preset.exposures[middle], ldr.noise,
-                        ImageSeed(options.seed, 2, i, 0, middle)),
-                 {.format = PixelFormat::kUint8});
-    } else {
-      // A hand-held camera of the reference's make.
-      const int j = i - preset.cameras;
-      WriteImage(staging / CaptureExtraFile(j),
-                 Record(hdr, cameras[0], preset.exposures[middle], ldr.noise,
-                        ImageSeed(options.seed, 3, j, 0, middle)),
-                 {.format = PixelFormat::kUint8});
+    const bool extra = i >= preset.cameras;
+    const int j = i - preset.cameras;
+    // A hand-held camera is of the reference's make.
+    WriteImage(staging / (extra ? CaptureExtraFile(j) : CaptureStaticFile(i)),
+               Record(hdr, cameras[extra ? 0 : i], preset.exposures[middle], noise,
+                      extra ? ImageSeed(options.seed, 3, j, 0, middle) : ImageSeed(options.seed, 2, i, 0, middle)),
+               {.format = PixelFormat::kUint8});
+    if (extra)
       extra_views.push_back({{"name", CaptureExtraName(j)},
                              {"file", CaptureExtraFile(j)},
                              {"static_hdr", fmt::format("static/{}.exr", CaptureExtraName(j))},
                              {"transform_matrix", run.info["renders"][i]["transform_matrix"]}});
-    }
-    ++images;
+    ++*images;
   }
+  return extra_views;
+}
+
+void WriteBrackets(const DatagenOptions& options, const ScenePreset& preset,
+                   const std::vector<PlannedRender>& sequence, const std::vector<RigCamera>& cameras,
+                   const SensorNoise& noise, const fs::path& staging, int* images) {
+  const fs::path truth = staging / kTruth;
+  const bool alike = options.unlike_cameras == "none";
   for (const PlannedRender& r : sequence) {
     const Image hdr = alike ? Image() : ReadImage(truth / r.hdr_file);
     for (int k : r.exposure_indices) {
@@ -274,62 +270,69 @@ SceneResult GenerateCapture(const DatagenOptions& options, const std::string& sc
         fs::copy_file(truth / LdrFileName(r, k), target, fs::copy_options::overwrite_existing);
       } else {
         WriteImage(target,
-                   Record(hdr, cameras[r.camera_id], preset.exposures[k], ldr.noise,
+                   Record(hdr, cameras[r.camera_id], preset.exposures[k], noise,
                           ImageSeed(options.seed, 1, r.camera_id, r.time_index, k)),
                    {.format = PixelFormat::kUint8});
       }
-      ++images;
+      ++*images;
     }
   }
   WriteJsonFile(staging / "exposures.json", {{"brackets", preset.exposures}});
   json timestamps = json::object();
   for (const PlannedRender& r : sequence) timestamps[std::to_string(r.time_index)] = r.time;
   WriteJsonFile(staging / "timestamps.json", timestamps);
+}
 
-  // truth/cameras.json and the responses.
+json TruthCamera(const ScenePreset& preset, const std::vector<PlannedRender>& sequence, const Dataset& dataset,
+                 const RigCamera& camera, int c) {
   const double t_min = *std::min_element(preset.exposures.begin(), preset.exposures.end());
   const double t_max = *std::max_element(preset.exposures.begin(), preset.exposures.end());
-  json truth_cameras = json::array();
-  for (int c = 0; c < preset.cameras; ++c) {
-    const RigCamera& camera = cameras[c];
-    const Frame* first = nullptr;
-    for (const Frame* f : dataset.AllFrames())
-      if (f->camera_id == c && first == nullptr) first = f;
-    HDR4D_CHECK(first != nullptr);
-    json hdr_files = json::object();  // frame number -> HDR file, relative to truth/
-    for (const PlannedRender& r : sequence)
-      if (r.camera_id == c) hdr_files[std::to_string(r.time_index)] = r.hdr_file;
-    const PinholeIntrinsics& k = first->camera.intrinsics;
-    json low = json::array(), high = json::array();
-    for (int ch = 0; ch < 3; ++ch) {
-      low.push_back(camera.crf->Inverse(kLowCode / 255.0) / (t_max * camera.gain[ch]));
-      high.push_back(camera.crf->Inverse(kHighCode / 255.0) / (t_min * camera.gain[ch]));
-    }
-    truth_cameras.push_back({{"name", camera.name},
-                             {"camera_id", c},
-                             {"held_out", c == preset.cameras - 1},
-                             {"width", k.width},
-                             {"height", k.height},
-                             {"fx", k.fx},
-                             {"fy", k.fy},
-                             {"cx", k.cx},
-                             {"cy", k.cy},
-                             {"k1", 0.0},
-                             {"k2", 0.0},
-                             {"transform_matrix", MatrixJson(first->camera.world_from_cam_gl)},
-                             {"gain", camera.gain},
-                             {"response_exponent", camera.exponent},
-                             {"crf", camera.crf->ToJson()},
-                             {"crf_spec", camera.crf->Spec()},
-                             {"measured_radiance",
-                              {{"low", low},
-                               {"high", high},
-                               {"note", fmt::format("radiance whose code is {} at the longest "
-                                                    "and {} at the shortest exposure",
-                                                    kLowCode, kHighCode)}}},
-                             {"static_hdr", fmt::format("static/{}.exr", camera.name)},
-                             {"hdr_files", hdr_files}});
+  const Frame* first = nullptr;
+  for (const Frame* f : dataset.AllFrames())
+    if (f->camera_id == c && first == nullptr) first = f;
+  HDR4D_CHECK(first != nullptr);
+  json hdr_files = json::object();  // frame number -> HDR file, relative to truth/
+  for (const PlannedRender& r : sequence)
+    if (r.camera_id == c) hdr_files[std::to_string(r.time_index)] = r.hdr_file;
+  const PinholeIntrinsics& k = first->camera.intrinsics;
+  json low = json::array(), high = json::array();
+  for (int ch = 0; ch < 3; ++ch) {
+    low.push_back(camera.crf->Inverse(kLowCode / 255.0) / (t_max * camera.gain[ch]));
+    high.push_back(camera.crf->Inverse(kHighCode / 255.0) / (t_min * camera.gain[ch]));
   }
+  return {{"name", camera.name},
+          {"camera_id", c},
+          {"held_out", c == preset.cameras - 1},
+          {"width", k.width},
+          {"height", k.height},
+          {"fx", k.fx},
+          {"fy", k.fy},
+          {"cx", k.cx},
+          {"cy", k.cy},
+          {"k1", 0.0},
+          {"k2", 0.0},
+          {"transform_matrix", MatrixJson(first->camera.world_from_cam_gl)},
+          {"gain", camera.gain},
+          {"response_exponent", camera.exponent},
+          {"crf", camera.crf->ToJson()},
+          {"crf_spec", camera.crf->Spec()},
+          {"measured_radiance",
+           {{"low", low},
+            {"high", high},
+            {"note", fmt::format("radiance whose code is {} at the longest and {} at the shortest exposure",
+                                 kLowCode, kHighCode)}}},
+          {"static_hdr", fmt::format("static/{}.exr", camera.name)},
+          {"hdr_files", hdr_files}};
+}
+
+// truth/cameras.json and the responses.
+void WriteTruthCameras(const DatagenOptions& options, const ScenePreset& preset,
+                       const std::vector<PlannedRender>& sequence, const Dataset& dataset,
+                       const std::vector<RigCamera>& cameras, const SensorNoise& noise, json extra_views,
+                       const fs::path& truth) {
+  json truth_cameras = json::array();
+  for (int c = 0; c < preset.cameras; ++c) truth_cameras.push_back(TruthCamera(preset, sequence, dataset, cameras[c], c));
+  const int middle = static_cast<int>(preset.exposures.size()) / 2;
   WriteJsonFile(truth / "cameras.json",
                 {{"format", "hdr4d-capture-truth"},
                  {"format_version", 1},
@@ -338,29 +341,20 @@ SceneResult GenerateCapture(const DatagenOptions& options, const std::string& sc
                  {"exposures", preset.exposures},
                  {"static_exposure", preset.exposures[middle]},
                  {"unlike_cameras", options.unlike_cameras},
-                 {"noise", {{"full_well", ldr.noise.full_well}, {"read_sigma", ldr.noise.read_sigma}}},
+                 {"noise", {{"full_well", noise.full_well}, {"read_sigma", noise.read_sigma}}},
                  {"cameras", truth_cameras},
-                 {"extra_views", extra_views}});
+                 {"extra_views", std::move(extra_views)}});
   WriteResponseCsv(truth / "response.csv", *cameras[0].crf);
   if (options.unlike_cameras == "responses" || options.unlike_cameras == "both") {
     for (const RigCamera& camera : cameras)
       WriteResponseCsv(truth / fmt::format("response_{}.csv", camera.name), *camera.crf);
   }
+}
 
-  SceneResult result;
-  result.scene = preset.scene;
-  result.root = final_dir;
-  result.renders = static_cast<int>(renders.size());
-  result.ldr_images = images;
-  result.capture = true;
-  result.cameras = preset.cameras;
-  result.frames = preset.timestamps();
-  result.brackets = static_cast<int>(preset.exposures.size());
-  result.extra_views = preset.extra_views;
-  result.blender_seconds = run.seconds;
-  result.range = histogram.Summary();
+json CaptureManifest(const DatagenOptions& options, const ScenePreset& preset, const BlenderRender& run,
+                     const SceneResult& result, const TruthDataset& truth, const DatasetSynthesisOptions& ldr) {
   const SceneInfo& scene_info = FindScene(preset.scene);
-  json manifest = {
+  return {
       {"generator", kGenerator},
       {"generator_version",
        fmt::format("hdr4d {}, datagen format {}, scripts {}", HDR4D_DATAGEN_VERSION,
@@ -388,7 +382,7 @@ SceneResult GenerateCapture(const DatagenOptions& options, const std::string& sc
         {"brackets", preset.exposures},
         {"static_images", "the scene at t = 0 without its actors, at the middle bracket"},
         {"unlike_cameras", options.unlike_cameras}}},
-      {"truth_dataset", {{"frames", dataset.NumFrames()}, {"ldr_images", ldr_images}}},
+      {"truth_dataset", {{"frames", truth.dataset.NumFrames()}, {"ldr_images", truth.ldr_images}}},
       {"ldr_synthesis",
        {{"crf_spec", ldr.crf},
         {"full_well", ldr.noise.full_well},
@@ -398,8 +392,56 @@ SceneResult GenerateCapture(const DatagenOptions& options, const std::string& sc
        {{"p0.1", result.range.p001},
         {"p99.9", result.range.p999},
         {"ratio_p99.9_p0.1", result.range.ratio}}},
-      {"points", points},
+      {"points", truth.points},
   };
+}
+
+}  // namespace
+
+SceneResult GenerateCapture(const DatagenOptions& options, const std::string& scene) {
+  options.Validate();
+  if (!options.capture) Fail("datagen: GenerateCapture without --capture");
+  const auto start = std::chrono::steady_clock::now();
+  const ScenePreset preset = CapturePreset(options, scene);
+  // The dataset's renders (names relative to truth/) and what Blender renders.
+  const std::vector<PlannedRender> sequence = PlanRenders(preset);
+  const std::vector<PlannedRender> renders = CaptureRenders(preset);
+
+  const fs::path final_dir = options.out / preset.scene;
+  FindBlender(options.blender);
+  FindScriptsDir(options.scripts_dir);
+  const fs::path staging = PrepareStaging(final_dir, preset.scene);
+  const BlenderSettings blender{.blender = options.blender,
+                                .scripts_dir = options.scripts_dir,
+                                .seed = options.seed,
+                                .threads = options.threads,
+                                .show_progress = options.show_progress};
+  const BlenderRender run = RenderWithBlender(preset, renders, blender, staging);
+  const LuminanceHistogram histogram = NormaliseExrs(preset, renders, staging);
+  const DatasetSynthesisOptions ldr = options.LdrFor(preset.scene);
+  const TruthDataset truth = WriteTruthDataset(preset, sequence, renders, run, ldr, staging);
+
+  // The capture: what each camera records.
+  const std::vector<RigCamera> cameras = MakeRigCameras(options, ldr.crf, preset.cameras);
+  int images = 0;
+  json extra_views = WriteStillImages(options, preset, renders, run, cameras, ldr.noise, staging, &images);
+  WriteBrackets(options, preset, sequence, cameras, ldr.noise, staging, &images);
+  WriteTruthCameras(options, preset, sequence, truth.dataset, cameras, ldr.noise, std::move(extra_views),
+                    staging / kTruth);
+
+  SceneResult result;
+  result.scene = preset.scene;
+  result.root = final_dir;
+  result.renders = static_cast<int>(renders.size());
+  result.ldr_images = images;
+  result.capture = true;
+  result.cameras = preset.cameras;
+  result.frames = preset.timestamps();
+  result.brackets = static_cast<int>(preset.exposures.size());
+  result.extra_views = preset.extra_views;
+  result.blender_seconds = run.seconds;
+  result.range = histogram.Summary();
+  json manifest = CaptureManifest(options, preset, run, result, truth, ldr);
   result.total_seconds =
       FinishOutput(std::move(manifest), result.blender_seconds, result.renders, start, staging,
                    final_dir);

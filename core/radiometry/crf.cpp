@@ -10,8 +10,9 @@
 #include <limits>
 #include <string_view>
 
-#include "core/util/error.h"
 #include "core/files/json_util.h"
+#include "core/radiometry/channel_crf.h"
+#include "core/util/error.h"
 
 namespace hdr4d {
 namespace {
@@ -281,6 +282,17 @@ std::unique_ptr<TableCrf> TableCrf::FromCodes(const std::vector<double>& x_of_co
 }
 
 std::unique_ptr<TableCrf> TableCrf::FromCsv(const std::string& path) {
+  // calibrate's per-channel layout (code,r,g,b): one curve, each code's geometric mean.
+  if (const auto columns = ReadPerChannelResponse(path)) {
+    std::vector<double> x(columns->front().size());
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      double log_sum = 0;
+      for (const auto& column : *columns) log_sum += std::log(std::max(column[i], 1e-300));
+      x[i] = i == 0 && columns->front()[0] == 0 ? 0.0 : std::exp(log_sum / columns->size());
+      if (i > 0) x[i] = std::max(x[i], std::nextafter(x[i - 1], 1e308));
+    }
+    return FromCodes(x, path);
+  }
   std::ifstream in(path);
   if (!in) Fail("{}: cannot open CRF table ({})", path, std::strerror(errno));
   std::vector<std::vector<double>> rows;

@@ -17,6 +17,7 @@
 #include "core/image/image_io.h"
 #include "core/files/json_util.h"
 #include "core/files/output_guard.h"
+#include "core/radiometry/channel_crf.h"
 #include "core/util/parallel.h"
 #include "core/util/progress.h"
 
@@ -175,6 +176,30 @@ void MergeOptions::Validate() const {
   if (!crf.empty()) ParseCrf(crf);
 }
 
+namespace {
+
+// One curve for all channels, or each colour channel merged with its own (calibrate's
+// response.csv); alpha and further channels use the last curve.
+Image MergeWithChannelCrfs(const std::vector<Image>& stack, const std::vector<double>& exposures,
+                           const std::vector<std::unique_ptr<Crf>>& crfs) {
+  if (crfs.size() == 1) return MergeExposures(stack, exposures, *crfs.front());
+  const Image& first = stack.front();
+  Image merged(first.width(), first.height(), first.channels(), Encoding::kLinear);
+  for (int c = 0; c < first.channels(); ++c) {
+    std::vector<Image> plane;
+    for (const Image& image : stack) {
+      Image p(image.width(), image.height(), 1, image.encoding());
+      for (std::size_t i = 0; i < p.num_pixels(); ++i) p.data()[i] = image.data()[i * image.channels() + c];
+      plane.push_back(std::move(p));
+    }
+    const Image m = MergeExposures(plane, exposures, *crfs[std::min<std::size_t>(c, crfs.size() - 1)]);
+    for (std::size_t i = 0; i < m.num_pixels(); ++i) merged.data()[i * first.channels() + c] = m.data()[i];
+  }
+  return merged;
+}
+
+}  // namespace
+
 int MergeDatasetExposures(const fs::path& root, const fs::path& out, const MergeOptions& options) {
   options.Validate();
   std::string crf_spec = options.crf;
@@ -192,8 +217,9 @@ int MergeDatasetExposures(const fs::path& root, const fs::path& out, const Merge
            "--crf to merge with one anyway",
            manifest.string(), j["pipeline"].value("name", "?"));
   }
-  const std::unique_ptr<Crf> crf = ParseCrf(crf_spec);
-  if (!crf->Invertible()) Fail("merge-hdr: the camera response '{}' is not invertible", crf_spec);
+  const std::vector<std::unique_ptr<Crf>> crfs = ParseChannelCrfs(crf_spec);
+  for (const auto& crf : crfs)
+    if (!crf->Invertible()) Fail("merge-hdr: the camera response '{}' is not invertible", crf_spec);
   const Dataset dataset =
       LoadDataset(root, {.image_check = ImageCheck::kHeaders, .require_test = false});
 
@@ -222,7 +248,7 @@ int MergeDatasetExposures(const fs::path& root, const fs::path& out, const Merge
       stack.push_back(ReadImage(f->image_path).Rgb());
       exposures.push_back(f->exposure);
     }
-    WriteImage(out / groups[g].first.filename(), MergeExposures(stack, exposures, *crf),
+    WriteImage(out / groups[g].first.filename(), MergeWithChannelCrfs(stack, exposures, crfs),
                {.format = PixelFormat::kFloat, .batch = &batch});
     progress.Advance();
   });

@@ -1,0 +1,207 @@
+#include "calibration/radiometry_stage.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "calibration/camera_gains.h"
+#include "calibration/hdr_fusion.h"
+#include "calibration/undistort.h"
+#include "core/image/image_io.h"
+#include "core/util/error.h"
+#include "core/util/progress.h"
+
+namespace hdr4d {
+namespace fs = std::filesystem;
+
+namespace {
+
+// Above this spread the cameras get their own curves (a few percent is recovery noise).
+constexpr double kDifferentResponses = 0.05;
+
+Bracket LoadBracket(const fs::path& path, double exposure, const std::string& camera, int frame) {
+  if (IsHdrPath(path))
+    Fail("{}: camera {}, frame {}: EXR brackets are not supported yet (use JPEG, PNG or TIFF)",
+         path.string(), camera, frame);
+  Bracket b;
+  b.image = ReadImage(path);
+  if (b.image.channels() < 3)
+    Fail("{}: camera {}, frame {}: {} channel(s); calibrate needs colour images", path.string(),
+         camera, frame, b.image.channels());
+  if (b.image.channels() > 3) b.image = b.image.Rgb();
+  b.exposure = exposure;
+  b.name = path.string();
+  return b;
+}
+
+std::vector<Bracket> LoadFrame(const CaptureCamera& camera, const CaptureFrame& frame) {
+  std::vector<Bracket> brackets;
+  for (std::size_t k = 0; k < frame.brackets.size(); ++k)
+    brackets.push_back(LoadBracket(frame.brackets[k], frame.exposures[k], camera.name, frame.index));
+  return brackets;
+}
+
+// One response per camera (in capture order): the rig's joint curve, or each camera's own.
+std::vector<CameraResponse> ChooseResponses(const Capture& capture, const std::vector<std::vector<Bracket>>& stacks,
+                                            const CalibrateOptions& options, const fs::path& staging,
+                                            CalibrationRecord* record) {
+  const CameraResponse joint = RecoverResponse(stacks, options.response);
+  WriteResponseCsv((staging / "response.csv").string(), joint);
+  WriteResponsePlot((staging / "response.png").string(), joint);
+  record->response_method = joint.method;
+  std::vector<CameraResponse> own;
+  if (stacks.size() >= 2) {
+    for (const auto& stack : stacks) own.push_back(RecoverResponse({stack}, options.response));
+    record->response_spread = ResponseSpread(own);
+  }
+  record->per_camera_response =
+      !own.empty() && (options.per_camera_response || record->response_spread > kDifferentResponses);
+  if (!record->per_camera_response) return std::vector<CameraResponse>(capture.cameras.size(), joint);
+  for (std::size_t c = 0; c < own.size(); ++c) {
+    const std::string name = capture.cameras[c].name;
+    WriteResponseCsv((staging / fmt::format("response_{}.csv", name)).string(), own[c]);
+    WriteResponsePlot((staging / fmt::format("response_{}.png", name)).string(), own[c]);
+  }
+  return own;
+}
+
+// Unlike cameras: gains from the first frame of every camera on the points they share.
+std::optional<CameraGains> EstimateGains(const Capture& capture, const std::optional<Rig>& rig,
+                                         const std::vector<std::vector<Bracket>>& stacks,
+                                         const std::vector<CameraResponse>& responses,
+                                         const CalibrateOptions& options) {
+  if (!rig || rig->visibility.empty() || capture.cameras.size() < 2) return std::nullopt;
+  std::vector<Image> ordered;  // the rig's camera order
+  for (const RigCamera& rc : rig->cameras)
+    for (std::size_t c = 0; c < capture.cameras.size(); ++c)
+      if (capture.cameras[c].name == rc.name) ordered.push_back(FuseBrackets(stacks[c], responses[c], options.fusion).hdr);
+  if (ordered.size() != rig->cameras.size()) return std::nullopt;
+  return EstimateCameraGains(*rig, ordered);
+}
+
+std::array<double, 3> GainOf(const CalibrationRecord& record, const std::optional<Rig>& rig, const std::string& name) {
+  if (!record.gains || !record.gains_applied) return {1.0, 1.0, 1.0};
+  for (std::size_t c = 0; c < rig->cameras.size(); ++c)
+    if (rig->cameras[c].name == name) return record.gains->gain[c];
+  return {1.0, 1.0, 1.0};
+}
+
+// What one camera's frames share while they are written.
+struct CameraOutput {
+  const CaptureCamera& camera;
+  int camera_id;
+  const RigCamera* rig_camera;  // null without a rig
+  const CameraResponse& response;
+  std::array<double, 3> gain;
+};
+
+// Copies (or, undistorted or not 8-bit-friendly, re-encodes) bracket k into images/.
+std::string WriteBracketImage(const CameraOutput& cam, const CaptureFrame& capture_frame, const Bracket& bracket,
+                              std::size_t k, const fs::path& staging) {
+  const fs::path& source = capture_frame.brackets[k];
+  const bool undistort = cam.rig_camera && cam.rig_camera->undistort;
+  std::string ext = source.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return std::tolower(ch); });
+  const bool copy = !undistort && (ext == ".png" || ext == ".jpg" || ext == ".jpeg");
+  const std::string name =
+      fmt::format("images/{}/{}{}", cam.camera.name, source.stem().string(), copy ? ext : ".png");
+  fs::create_directories((staging / name).parent_path());
+  if (copy) {
+    fs::copy_file(source, staging / name, fs::copy_options::overwrite_existing);
+  } else {
+    const Image ldr = undistort ? Undistort(bracket.image, cam.rig_camera->intrinsics) : bracket.image;
+    WriteImage(staging / name, ldr, {.format = PixelFormat::kUint16});
+  }
+  return name;
+}
+
+Frame DatasetFrame(const CameraOutput& cam, const CaptureFrame& capture_frame, std::size_t k,
+                   const std::string& image_name, const std::string& hdr_name, double fps) {
+  const RigCamera& rc = *cam.rig_camera;
+  Frame frame;
+  frame.file_path = image_name;
+  frame.exr_file_path = hdr_name;
+  frame.time_raw = capture_frame.time ? *capture_frame.time : capture_frame.index / fps;
+  // The camera's overall gain becomes part of its effective exposure, so that
+  // LDR = response(radiance x exposure) holds for the corrected radiance.
+  frame.exposure = capture_frame.exposures[k] * (cam.gain[0] + cam.gain[1] + cam.gain[2]) / 3;
+  frame.exposure_given = true;
+  frame.camera_id = cam.camera_id;
+  frame.exposure_index = static_cast<int>(k);
+  frame.camera.intrinsics = {rc.intrinsics.f, rc.intrinsics.f, rc.intrinsics.cx, rc.intrinsics.cy, rc.width, rc.height};
+  frame.camera.world_from_cam_gl = rc.world_from_cam_gl;
+  return frame;
+}
+
+// Fuses one frame, writes its HDR and its brackets, appends its dataset frames.
+void WriteFrame(const CameraOutput& cam, const CaptureFrame& capture_frame, const CalibrateOptions& options,
+                const fs::path& staging, CalibrationRecord* record, int* images_written, std::vector<Frame>* frames) {
+  const std::vector<Bracket> brackets = LoadFrame(cam.camera, capture_frame);
+  const Image& first = brackets.front().image;
+  if (cam.rig_camera && (first.width() != cam.rig_camera->width || first.height() != cam.rig_camera->height))
+    Fail("{}: camera {}, frame {}: size {}x{} differs from the static images' {}x{}", brackets.front().name,
+         cam.camera.name, capture_frame.index, first.width(), first.height(), cam.rig_camera->width,
+         cam.rig_camera->height);
+  FusionResult fused = FuseBrackets(brackets, cam.response, options.fusion);
+  for (std::size_t i = 0; i < fused.hdr.size(); ++i) fused.hdr.data()[i] /= static_cast<float>(cam.gain[i % 3]);
+  if (cam.rig_camera && cam.rig_camera->undistort) fused.hdr = Undistort(fused.hdr, cam.rig_camera->intrinsics);
+  const std::string hdr_name = fmt::format("hdr/{}/{:05d}.exr", cam.camera.name, capture_frame.index);
+  WriteImage(staging / hdr_name, fused.hdr);
+  ++*images_written;
+  record->frames.push_back({cam.camera.name, capture_frame.index, fused.dynamic_range_stops,
+                            fused.motion_fraction, fused.reference_bracket, fused.noise});
+  for (std::size_t k = 0; k < brackets.size(); ++k) {
+    const std::string name = WriteBracketImage(cam, capture_frame, brackets[k], k, staging);
+    ++*images_written;
+    if (cam.rig_camera) frames->push_back(DatasetFrame(cam, capture_frame, k, name, hdr_name, options.fps));
+  }
+}
+
+}  // namespace
+
+double ResponseSpread(const std::vector<CameraResponse>& responses) {
+  double sum = 0;
+  int count = 0;
+  for (std::size_t a = 1; a < responses.size(); ++a)
+    for (std::size_t c = 0; c < responses[a].inverse.size() && c < responses[0].inverse.size(); ++c)
+      for (int z = 32; z < 224; ++z) {
+        const double x0 = responses[0].inverse[c][z], x1 = responses[a].inverse[c][z];
+        if (!(x0 > 0) || !(x1 > 0)) continue;
+        sum += std::pow(std::log(x1 / x0), 2);
+        ++count;
+      }
+  return count > 0 ? std::sqrt(sum / count) : 0.0;
+}
+
+std::vector<Frame> RunRadiometry(const Capture& capture, const CalibrateOptions& options,
+                                 const std::optional<Rig>& rig, const fs::path& staging,
+                                 CalibrationRecord* record, int* images_written) {
+  std::vector<std::vector<Bracket>> stacks;
+  for (const CaptureCamera& camera : capture.cameras) stacks.push_back(LoadFrame(camera, camera.frames.front()));
+  const std::vector<CameraResponse> responses = ChooseResponses(capture, stacks, options, staging, record);
+  record->gains = EstimateGains(capture, rig, stacks, responses, options);
+  record->gains_applied = record->gains.has_value() && options.correct_gains;
+  stacks.clear();
+
+  std::size_t total = 0;
+  for (const CaptureCamera& camera : capture.cameras) total += camera.frames.size();
+  Progress progress("fuse", static_cast<std::int64_t>(total), options.show_progress);
+  std::vector<Frame> frames;
+  for (std::size_t c = 0; c < capture.cameras.size(); ++c) {
+    const CaptureCamera& camera = capture.cameras[c];
+    const RigCamera* rig_camera = rig ? rig->Find(camera.name) : nullptr;
+    if (rig && !rig_camera)
+      Fail("{}: camera {} is not in the rig of rig.json", (capture.root / "sequence" / camera.name).string(),
+           camera.name);
+    const CameraOutput cam{camera, static_cast<int>(c), rig_camera, responses[c], GainOf(*record, rig, camera.name)};
+    for (const CaptureFrame& capture_frame : camera.frames) {
+      WriteFrame(cam, capture_frame, options, staging, record, images_written, &frames);
+      progress.Advance(1, fmt::format("{} frame {}", camera.name, capture_frame.index));
+    }
+  }
+  progress.Finish();
+  return frames;
+}
+
+}  // namespace hdr4d

@@ -1,0 +1,127 @@
+#include "calibration/registration_ladder.h"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <spdlog/spdlog.h>
+
+#include <optional>
+#include <set>
+
+#include "core/geometry/colmap_model.h"
+#include "core/util/error.h"
+
+namespace hdr4d {
+namespace fs = std::filesystem;
+
+namespace {
+
+std::vector<LadderRung> MakeLadder() {
+  std::vector<LadderRung> rungs(5);
+  rungs[0] = {"defaults", "COLMAP 3.8's settings", {}, {}, {}, false};
+  rungs[1] = rungs[0];
+  rungs[1].name = "more features";
+  rungs[1].why = "16384 SIFT features, peak threshold 0.004";
+  rungs[1].extract_args = {"--SiftExtraction.max_num_features", "16384", "--SiftExtraction.peak_threshold", "0.004"};
+  rungs[2] = rungs[1];
+  rungs[2].name = "DSP-SIFT";
+  rungs[2].why = "domain-size pooling, affine shapes, guided matching";
+  rungs[2].extract_args.insert(rungs[2].extract_args.end(), {"--SiftExtraction.domain_size_pooling", "1",
+                                                             "--SiftExtraction.estimate_affine_shape", "1"});
+  rungs[2].match_args = {"--SiftMatching.guided_matching", "1"};
+  rungs[3] = rungs[2];
+  rungs[3].name = "relaxed mapper";
+  rungs[3].why = "abs_pose_min_num_inliers 12, abs_pose_min_inlier_ratio 0.1, init_min_num_inliers 30, min_num_matches 8";
+  rungs[3].map_args = {"--Mapper.abs_pose_min_num_inliers", "12", "--Mapper.abs_pose_min_inlier_ratio", "0.1",
+                       "--Mapper.init_min_num_inliers", "30", "--Mapper.min_num_matches", "8"};
+  rungs[4] = rungs[3];
+  rungs[4].name = "sequence frames";
+  rungs[4].why = "the rig cameras' sequence frames (middle bracket) beside their static images";
+  rungs[4].sequence_frames = true;
+  return rungs;
+}
+
+// What a model misses: rig cameras without a registered image, extra views not registered.
+std::vector<std::string> Unregistered(const Capture& capture, const ColmapModel& model) {
+  std::set<std::string> names;
+  for (const auto& [id, image] : model.images) names.insert(image.name);
+  auto folder_registered = [&](const std::string& folder) {
+    for (const std::string& n : names)
+      if (n.rfind(folder + "/", 0) == 0) return true;
+    return false;
+  };
+  std::vector<std::string> missing;
+  for (const CaptureCamera& camera : capture.cameras)
+    if (!folder_registered(camera.name)) missing.push_back("camera " + camera.name);
+  for (const fs::path& extra : capture.extra_images)
+    if (!names.count("extra/" + extra.filename().string())) missing.push_back("extra/" + extra.filename().string());
+  return missing;
+}
+
+// The images of the sequence rung: each rig camera's folder holds its static images and its
+// sequence frames' middle brackets (one camera, one pose: the rig does not move), and extra/.
+fs::path SequenceImageFolder(const Capture& capture, const fs::path& folder) {
+  fs::create_directories(folder);
+  // File links only: COLMAP's image listing does not enter linked folders.
+  for (const fs::path& image : capture.extra_images) {
+    fs::create_directories(folder / "extra");
+    fs::create_symlink(fs::absolute(image), folder / "extra" / image.filename());
+  }
+  for (const CaptureCamera& camera : capture.cameras) {
+    const fs::path target = folder / camera.name;
+    fs::create_directories(target);
+    for (const fs::path& image : camera.static_images)
+      fs::create_symlink(fs::absolute(image), target / image.filename());
+    for (const CaptureFrame& frame : camera.frames) {
+      const fs::path& source = frame.brackets[frame.brackets.size() / 2];
+      fs::create_symlink(fs::absolute(source), target / ("seq_" + source.filename().string()));
+    }
+  }
+  return folder;
+}
+
+}  // namespace
+
+const std::vector<LadderRung>& RegistrationLadder() {
+  static const std::vector<LadderRung> ladder = MakeLadder();
+  return ladder;
+}
+
+LadderResult RegisterWithLadder(const Capture& capture, const fs::path& workspace, const ColmapRunOptions& options) {
+  LadderResult best;
+  std::optional<std::size_t> best_missing;
+  std::optional<ColmapNoModel> last_error;
+  const auto& ladder = RegistrationLadder();
+  for (std::size_t r = 0; r < ladder.size(); ++r) {
+    const LadderRung& rung = ladder[r];
+    if (rung.sequence_frames && capture.cameras.front().frames.empty()) break;
+    ColmapRunOptions run = options;
+    run.extract_args = rung.extract_args;
+    run.match_args = rung.match_args;
+    run.map_args = rung.map_args;
+    const fs::path rung_dir = workspace / fmt::format("rung{}", r + 1);
+    const fs::path images = rung.sequence_frames ? SequenceImageFolder(capture, rung_dir / "images")
+                                                 : capture.root / "static";
+    try {
+      const fs::path model = RunColmap(images, rung_dir, run);
+      const std::vector<std::string> missing = Unregistered(capture, ReadColmapModel(model));
+      best.attempts.push_back(fmt::format("{}. {}: {}", r + 1, rung.name,
+                                          missing.empty() ? "all registered" : fmt::format("missing {}", fmt::join(missing, ", "))));
+      if (!best_missing || missing.size() < *best_missing) {
+        best_missing = missing.size();
+        best.model_folder = model;
+        best.rung = static_cast<int>(r + 1);
+        best.rung_name = rung.name;
+        best.unregistered = missing;
+      }
+      if (missing.empty()) return best;
+    } catch (const ColmapNoModel& e) {
+      best.attempts.push_back(fmt::format("{}. {}: no model", r + 1, rung.name));
+      last_error = e;
+    }
+    spdlog::info("calibrate: COLMAP rung {} ({}) left {}; trying the next", r + 1, rung.name, best.attempts.back());
+  }
+  if (!best_missing) throw *last_error;
+  return best;
+}
+
+}  // namespace hdr4d

@@ -1,0 +1,48 @@
+// Registration that does not give up: when COLMAP's defaults leave a rig camera or an extra
+// view unregistered, calibrate climbs a ladder of settings, each rung keeping the ones before:
+//   1. defaults      COLMAP 3.8 as is (SIFT already on the upsampled image, first_octave -1)
+//   2. more features twice the features (16384) and a lower peak threshold (0.004): small or
+//                    low-contrast images give SIFT few keypoints
+//   3. DSP-SIFT      domain-size pooling and affine-shape estimation (descriptors that survive
+//                    viewpoint change) and guided matching (more inliers per pair)
+//   4. relaxed       the mapper registers an image from 12 inliers (30) at a 10% inlier ratio
+//                    (25%), starts from 30 inliers (100) and keeps pairs of 8 matches (15)
+//   5. sequence      the rig cameras' own sequence frames (the middle bracket of each) join
+//                    their static images: the scene's static parts match across cameras
+// The first rung that registers every rig camera and every extra view wins; otherwise the one
+// that registered most. A camera that no rung registers fails with the error of RigFromColmap
+// (it truly shares no view). The report names the rung.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "calibration/capture.h"
+#include "calibration/colmap_driver.h"
+
+namespace hdr4d {
+
+struct LadderRung {
+  std::string name, why;
+  std::vector<std::string> extract_args, match_args, map_args;
+  bool sequence_frames = false;
+};
+
+// The rungs above, in order.
+const std::vector<LadderRung>& RegistrationLadder();
+
+struct LadderResult {
+  std::filesystem::path model_folder;
+  int rung = 0;  // 1-based, the rung whose model is returned
+  std::string rung_name;
+  std::vector<std::string> attempts;    // one line per rung tried: what it registered
+  std::vector<std::string> unregistered;  // rig cameras / extra views still missing (best effort)
+};
+
+// Runs the ladder in `workspace` (a folder per rung) until everything registers. Throws the
+// last rung's error when no rung reconstructs anything, hdr4d::Error when COLMAP cannot run.
+LadderResult RegisterWithLadder(const Capture& capture, const std::filesystem::path& workspace,
+                                const ColmapRunOptions& options);
+
+}  // namespace hdr4d

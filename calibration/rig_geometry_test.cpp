@@ -1,0 +1,99 @@
+// RigFromColmap's model selection of lens distortion and shared intrinsics, on a synthetic
+// COLMAP model whose truth is known.
+#include "calibration/rig_geometry.h"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <random>
+
+namespace hdr4d {
+namespace {
+
+constexpr int kW = 640, kH = 480;
+constexpr double kF = 500;
+
+struct Lens {
+  double k1 = 0;          // the truth
+  double colmap_k1 = 0;   // what COLMAP's model claims
+};
+
+// Three cameras on an arc looking at a cloud of 300 points; pixels through each camera's true
+// lens plus 0.3 px noise.
+ColmapModel MakeModel(const std::vector<Lens>& lenses) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::normal_distribution<double> noise(0, 0.3);
+  ColmapModel model;
+  std::vector<Eigen::Isometry3d> cam_from_world;
+  for (std::size_t c = 0; c < lenses.size(); ++c) {
+    const double a = (static_cast<double>(c) - 1) * 0.35;
+    const Eigen::Vector3d centre(4 * std::sin(a), 0.3 * c, -4 * std::cos(a));
+    const Eigen::Vector3d z = -centre.normalized(), x = Eigen::Vector3d::UnitY().cross(z).normalized();
+    Eigen::Matrix3d r;
+    r << x.transpose(), z.cross(x).transpose(), z.transpose();
+    Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+    t.linear() = r;
+    t.translation() = -r * centre;
+    cam_from_world.push_back(t);
+    const int id = static_cast<int>(c) + 1;
+    model.cameras[id] = {id, "RADIAL", kW, kH, {kF, kW / 2.0, kH / 2.0, lenses[c].colmap_k1, 0.0}};
+    ColmapImage image;
+    image.id = id;
+    image.camera_id = id;
+    image.name = fmt::format("cam{}/static.png", c);
+    image.cam_from_world_rotation = Eigen::Quaterniond(r);
+    image.cam_from_world_translation = t.translation();
+    model.images[id] = image;
+  }
+  for (int id = 1; id <= 300; ++id) {
+    ColmapPoint p;
+    p.id = id;
+    p.xyz = Eigen::Vector3d(1.5 * u(rng), 1.5 * u(rng), 1.5 * u(rng));
+    for (std::size_t c = 0; c < lenses.size(); ++c) {
+      const Eigen::Vector3d q = cam_from_world[c] * p.xyz;
+      const double x = q.x() / q.z(), y = q.y() / q.z(), d = 1 + lenses[c].k1 * (x * x + y * y);
+      ColmapImage& image = model.images[static_cast<int>(c) + 1];
+      image.points2d.emplace_back(kF * d * x + kW / 2.0 + noise(rng), kF * d * y + kH / 2.0 + noise(rng));
+      image.point3d_ids.push_back(id);
+      p.track.emplace_back(static_cast<int>(c) + 1, static_cast<int>(image.points2d.size()) - 1);
+    }
+    model.points[id] = p;
+  }
+  return model;
+}
+
+// Issue 54: a distortion-free lens whose COLMAP model carries a small k1 fitted to noise kept
+// it and was resampled; a lens with real distortion keeps it.
+TEST(RigGeometry, DistortionIsKeptOnlyWhereTheDataShowsIt) {
+  const ColmapModel model = MakeModel({{0.0, 0.012}, {-0.08, -0.07}, {0.0, -0.01}});
+  const Rig rig = RigFromColmap(model, {"cam0", "cam1", "cam2"});
+  for (int c : {0, 2}) {
+    EXPECT_FALSE(rig.cameras[c].distortion_kept) << c;
+    EXPECT_EQ(rig.cameras[c].intrinsics.k1, 0.0) << c;
+    EXPECT_FALSE(rig.cameras[c].undistort) << c;
+    EXPECT_NEAR(rig.cameras[c].intrinsics.f, kF, 0.01 * kF) << c;
+  }
+  EXPECT_TRUE(rig.cameras[1].distortion_kept);
+  EXPECT_NEAR(rig.cameras[1].intrinsics.k1, -0.08, 0.02);
+  EXPECT_TRUE(rig.cameras[1].undistort);
+  // Without the selection every camera keeps what COLMAP said.
+  RigOptions keep;
+  keep.select_distortion = false;
+  EXPECT_NE(RigFromColmap(model, {"cam0", "cam1", "cam2"}, keep).cameras[0].intrinsics.k1, 0.0);
+}
+
+TEST(RigGeometry, SharedIntrinsicsGiveOneFocalLength) {
+  ColmapModel model = MakeModel({{0, 0}, {0, 0}, {0, 0}});
+  model.cameras[2].params[0] = 520;  // COLMAP's focal lengths disagree by 4%
+  RigOptions shared;
+  shared.shared_intrinsics = true;
+  const Rig rig = RigFromColmap(model, {"cam0", "cam1", "cam2"}, shared);
+  EXPECT_EQ(rig.cameras[0].intrinsics.f, rig.cameras[1].intrinsics.f);
+  EXPECT_EQ(rig.cameras[0].intrinsics.f, rig.cameras[2].intrinsics.f);
+  EXPECT_NEAR(rig.cameras[0].intrinsics.f, kF, 0.01 * kF);
+}
+
+}  // namespace
+}  // namespace hdr4d
