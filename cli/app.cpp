@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <exception>
 #include <new>
@@ -54,6 +55,25 @@ std::string LowerFirst(std::string s) {
   return s;
 }
 
+// The option given more often than it takes values, in the subcommands being parsed: CLI11's
+// own words for it are "At Most 1 required but received 2".
+std::string RepeatedOptionProblem(const CLI::App& app) {
+  for (const CLI::App* current = &app;;) {
+    for (const CLI::Option* o : current->get_options()) {
+      if (o->get_multi_option_policy() != CLI::MultiOptionPolicy::Throw) continue;
+      const int takes = std::max(o->get_items_expected_max(), 1);
+      const std::size_t got = o->count();
+      if (got <= static_cast<std::size_t>(takes)) continue;
+      if (takes == 1) return fmt::format("{} was given {} times; give it once", o->get_name(), got);
+      return fmt::format("{} takes {} values, got {} (was it given twice?)", o->get_name(), takes,
+                         got);
+    }
+    const std::vector<CLI::App*> subs = current->get_subcommands();
+    if (subs.empty()) return "";
+    current = subs.front();
+  }
+}
+
 int ReportParseError(const CLI::App& app, const CLI::ParseError& e) {
   // --help and --version: CLI11 prints them, exit 0.
   if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
@@ -69,8 +89,12 @@ int ReportParseError(const CLI::App& app, const CLI::ParseError& e) {
       }
     }
   }
+  std::string problem = LowerFirst(e.what());
+  if (dynamic_cast<const CLI::ArgumentMismatch*>(&e) != nullptr) {
+    if (std::string repeated = RepeatedOptionProblem(app); !repeated.empty()) problem = repeated;
+  }
   PrintError(fmt::format("{}{} (see `hdr4d {}--help`)", command.empty() ? "" : command + ": ",
-                         LowerFirst(e.what()), command.empty() ? "" : command + " "));
+                         problem, command.empty() ? "" : command + " "));
   return 1;
 }
 

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "method/train/train_options_table.h"
+
 namespace hdr4d::cli {
 namespace {
 
@@ -73,6 +75,43 @@ TEST(App, BadValuesAreRefusedWhileParsingNamingTheFlag) {
     } catch (const std::exception& e) {
       ADD_FAILURE() << c.flag << ": " << e.what();
     }
+  }
+}
+
+// `hdr4d train`'s options are the option table's rows: each flag with its help, and a range
+// stated in the words its errors use.
+TEST(App, TrainFlagsAreTheOptionTablesRows) {
+  const auto app = MakeApp();
+  CLI::App* train = app->get_subcommand("train");
+  int rows = 0;
+  for (const method::TrainOption& row : method::TrainOptionTable()) {
+    if (row.flag.empty()) continue;
+    ++rows;
+    const CLI::Option* option = train->get_option(row.flag);
+    EXPECT_EQ(option->get_description(), row.help) << row.flag;
+    if (row.type == method::OptionType::kInt || row.type == method::OptionType::kDouble ||
+        row.type == method::OptionType::kFloat || row.type == method::OptionType::kInt64) {
+      EXPECT_NE(option->get_type_name().find(row.range.Bounds()), std::string::npos)
+          << row.flag << ": " << option->get_type_name();
+    }
+  }
+  EXPECT_EQ(rows, 36);
+  // The five flags that are not options of the run, and the grid family's three
+  // (cli/train_hexplane.h: --rays, --grid-voxels, --time-grid).
+  EXPECT_EQ(train->get_options().size(), 36u + 5u + 3u + 1u);  // + --help
+}
+
+TEST(App, ATrainFlagOutOfRangeIsRefusedInTheWordsOfItsHelp) {
+  const auto app = MakeApp();
+  const std::vector<std::string> args = {"2e6", "--hdr-weight", "o", "--out", "d", "--data",
+                                         "train"};  // CLI11 parses from the back
+  try {
+    app->parse(std::vector<std::string>(args));
+    ADD_FAILURE() << "accepted";
+  } catch (const CLI::ValidationError& e) {
+    EXPECT_NE(std::string(e.what()).find("--hdr-weight: expected a number in [0, 1e+06], got '2e6'"),
+              std::string::npos)
+        << e.what();
   }
 }
 

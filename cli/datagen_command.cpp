@@ -30,6 +30,59 @@ void PrintSceneList() {
       "samples), paper (800 px, 128 samples, Table 8's counts); t/t = train/test timestamps\n");
 }
 
+// One line per scene as it is written.
+void PrintSceneResult(const datagen::SceneResult& r) {
+  if (r.capture) {
+    fmt::print(
+        "datagen: {}: capture of {} cameras x {} frames x {} brackets + {} static images{} "
+        "in {} (truth in {}/truth; {} renders, Blender {:.1f} s; HDR range p99.9/p0.1 = "
+        "{:.3g})\n",
+        r.scene, r.cameras, r.frames, r.brackets, r.cameras,
+        r.extra_views > 0 ? fmt::format(" + {} hand-held views", r.extra_views) : "",
+        r.root.string(), r.root.string(), r.renders, r.blender_seconds, r.range.ratio);
+  } else {
+    fmt::print(
+        "datagen: {}: {} renders, {} LDR images in {} (Blender {:.1f} s, {:.2f} s per render; "
+        "HDR range p99.9/p0.1 = {:.3g})\n",
+        r.scene, r.renders, r.ldr_images, r.root.string(), r.blender_seconds,
+        r.blender_seconds / r.renders, r.range.ratio);
+  }
+  std::fflush(stdout);
+}
+
+// --capture and the flags that shape a capture.
+void AddCaptureFlags(CLI::App* cmd, datagen::DatagenOptions* options) {
+  cmd->add_flag("--capture", options->capture,
+                "Write the capture layout `hdr4d calibrate` reads instead of a dataset: "
+                "static/<camera>/static.png (the empty scene), sequence/<camera>/<frame>_<k>.png "
+                "brackets, exposures.json, timestamps.json, and truth/ (the original dataset, "
+                "the true cameras and response); one --scene, room is made for it");
+  cmd->add_option("--cameras", options->cameras,
+                  "With --capture: rig cameras, 30 degrees apart, the last one held out (0 = 6)")
+      ->check(Integer(0, 1000))
+      ->capture_default_str();
+  cmd->add_option("--frames", options->frames,
+                  "With --capture: timestamps of the sequence (0 = the preset's)")
+      ->check(Integer(0, 100000))
+      ->capture_default_str();
+  cmd->add_option("--extra-views", options->extra_views,
+                  "With --capture: hand-held views of the empty scene in static/extra/ (they help "
+                  "COLMAP, calibrate drops them)")
+      ->check(Integer(0, 100000))
+      ->capture_default_str();
+  cmd->add_option("--brackets", options->brackets,
+                  "With --capture: bracket exposure times in seconds, increasing, comma-separated "
+                  "(default: the scene's 0.125,2,32)")
+      ->delimiter(',')
+      ->check(PositiveReal(1e6));
+  cmd->add_option("--unlike-cameras", options->unlike_cameras,
+                  "With --capture: none, gains (a gain per camera and channel), responses (each "
+                  "camera's response bent to crf(x^e), e in [0.9, 1.1]) or both; camera 0 is "
+                  "the reference")
+      ->check(OneOf(datagen::UnlikeCamerasModes()))
+      ->capture_default_str();
+}
+
 }  // namespace
 
 void AddDatagenCommand(CLI::App& app) {
@@ -88,35 +141,7 @@ void AddDatagenCommand(CLI::App& app) {
                   "Read noise std in units of full scale (default: the scene's, 0.002 for the "
                   "eight, none for studio)")
       ->check(Real(0, 1));
-  cmd->add_flag("--capture", options->capture,
-                "Write the capture layout `hdr4d calibrate` reads instead of a dataset: "
-                "static/<camera>/static.png (the empty scene), sequence/<camera>/<frame>_<k>.png "
-                "brackets, exposures.json, timestamps.json, and truth/ (the original dataset, "
-                "the true cameras and response); one --scene, room is made for it");
-  cmd->add_option("--cameras", options->cameras,
-                  "With --capture: rig cameras, 30 degrees apart, the last one held out (0 = 6)")
-      ->check(Integer(0, 1000))
-      ->capture_default_str();
-  cmd->add_option("--frames", options->frames,
-                  "With --capture: timestamps of the sequence (0 = the preset's)")
-      ->check(Integer(0, 100000))
-      ->capture_default_str();
-  cmd->add_option("--extra-views", options->extra_views,
-                  "With --capture: hand-held views of the empty scene in static/extra/ (they help "
-                  "COLMAP, calibrate drops them)")
-      ->check(Integer(0, 100000))
-      ->capture_default_str();
-  cmd->add_option("--brackets", options->brackets,
-                  "With --capture: bracket exposure times in seconds, increasing, comma-separated "
-                  "(default: the scene's 0.125,2,32)")
-      ->delimiter(',')
-      ->check(PositiveReal(1e6));
-  cmd->add_option("--unlike-cameras", options->unlike_cameras,
-                  "With --capture: none, gains (a gain per camera and channel), responses (each "
-                  "camera's response bent to crf(x^e), e in [0.9, 1.1]) or both; camera 0 is "
-                  "the reference")
-      ->check(OneOf(datagen::UnlikeCamerasModes()))
-      ->capture_default_str();
+  AddCaptureFlags(cmd, options.get());
   cmd->add_flag("--list", *list, "List the scenes and presets, render nothing");
   auto pipeline = std::make_shared<PipelineFlags>(cmd, options->pipeline);
   cmd->callback([options, out, list, pipeline] {
@@ -126,26 +151,7 @@ void AddDatagenCommand(CLI::App& app) {
       return;
     }
     options->out = *out;
-    datagen::Generate(*options, [](const datagen::SceneResult& r) {
-      if (r.capture) {
-        fmt::print(
-            "datagen: {}: capture of {} cameras x {} frames x {} brackets + {} static images{} "
-            "in {} (truth in {}/truth; {} renders, Blender {:.1f} s; HDR range p99.9/p0.1 = "
-            "{:.3g})\n",
-            r.scene, r.cameras, r.frames, r.brackets, r.cameras,
-            r.extra_views > 0 ? fmt::format(" + {} hand-held views", r.extra_views) : "",
-            r.root.string(),
-            r.root.string(), r.renders, r.blender_seconds, r.range.ratio);
-        std::fflush(stdout);
-        return;
-      }
-      fmt::print(
-          "datagen: {}: {} renders, {} LDR images in {} (Blender {:.1f} s, {:.2f} s per render; "
-          "HDR range p99.9/p0.1 = {:.3g})\n",
-          r.scene, r.renders, r.ldr_images, r.root.string(), r.blender_seconds,
-          r.blender_seconds / r.renders, r.range.ratio);
-      std::fflush(stdout);
-    });
+    datagen::Generate(*options, PrintSceneResult);
   });
 }
 

@@ -28,16 +28,11 @@ bool ParseInteger(const std::string& text, std::int64_t* value, bool* overflow) 
   return ptr == end && (ec == std::errc() || *overflow);
 }
 
-std::string RangeText(std::int64_t min, std::int64_t max) {
-  if (max == std::numeric_limits<int>::max() || max == std::numeric_limits<std::int64_t>::max())
-    return fmt::format(">= {}", min);
-  return fmt::format("in [{}, {}]", min, max);
-}
-
 }  // namespace
 
 CLI::Validator Integer(std::int64_t min, std::int64_t max) {
-  const std::string expected = "an integer " + RangeText(min, max);
+  const ValueRange range = ValueRange::Integer(min, max);
+  const std::string expected = range.Describe();
   return CLI::Validator(
       [=](std::string& text) -> std::string {
         std::int64_t v = 0;
@@ -46,7 +41,7 @@ CLI::Validator Integer(std::int64_t min, std::int64_t max) {
           return fmt::format("expected {}, got '{}'", expected, text);
         return "";
       },
-      "INT " + RangeText(min, max), "integer");
+      "INT " + range.Bounds(), "integer");
 }
 
 CLI::Validator Seed() {
@@ -66,23 +61,32 @@ CLI::Validator Seed() {
 }
 
 CLI::Validator Real(double min, double max, bool open_min) {
-  const bool bounded = max < std::numeric_limits<double>::max();
-  const std::string range = open_min ? (bounded ? fmt::format("in ({:g}, {:g}]", min, max)
-                                                : fmt::format("> {:g}", min))
-                                     : (bounded ? fmt::format("in [{:g}, {:g}]", min, max)
-                                                : fmt::format(">= {:g}", min));
+  const ValueRange range = ValueRange::Real(min, max, open_min);
   return CLI::Validator(
       [=](std::string& text) -> std::string {
         // strtod accepts "nan", "inf" and hex; from_chars the plain decimal forms only.
         double v = 0;
         const char* end = text.data() + text.size();
         const auto [ptr, ec] = std::from_chars(text.data(), end, v);
-        const bool ok = !text.empty() && ptr == end && ec == std::errc() && std::isfinite(v) &&
-                        (open_min ? v > min : v >= min) && v <= max;
-        if (!ok) return fmt::format("expected a number {}, got '{}'", range, text);
+        if (text.empty() || ptr != end || ec != std::errc() || !range.Contains(v))
+          return fmt::format("expected {}, got '{}'", range.Describe(), text);
         return "";
       },
-      "NUMBER " + range, "real");
+      "NUMBER " + range.Bounds(), "real");
+}
+
+CLI::Validator InRange(const ValueRange& range) {
+  if (range.integer) {
+    // Bounds past int64 (an unbounded range) as int64's own.
+    const auto whole = [](double v) {
+      constexpr double kLimit = 9.2e18;
+      return v >= kLimit    ? std::numeric_limits<std::int64_t>::max()
+             : v <= -kLimit ? std::numeric_limits<std::int64_t>::min()
+                            : static_cast<std::int64_t>(v);
+    };
+    return Integer(whole(range.min), whole(range.max));
+  }
+  return Real(range.min, range.max, range.open_min);
 }
 
 CLI::Validator Text(const std::string& what) {

@@ -11,6 +11,8 @@
 #include <limits>
 #include <string>
 
+#include "core/util/value_range.h"
+
 namespace hdr4d::cli {
 
 // A decimal integer in [min, max] (no sign for min >= 0, no fraction, no exponent).
@@ -23,6 +25,8 @@ CLI::Validator Real(double min, double max, bool open_min = false);
 inline CLI::Validator PositiveReal(double max = std::numeric_limits<double>::max()) {
   return Real(0, max, /*open_min=*/true);
 }
+// A number in `range` (Integer or Real above, with the range's own wording).
+CLI::Validator InRange(const ValueRange& range);
 // Free text (a path, a name, a spec) that the command checks itself, with the same care: this
 // marks the flag as reviewed; it rejects only an empty value.
 CLI::Validator Text(const std::string& what);

@@ -53,17 +53,20 @@ bool TrainHexPlaneIfAsked(CLI::App* cmd, const std::string& method,
     if (given(flag)) Fail("train: {} does not apply to --method {}", flag, method);
   }
   o.method = method;
-  o.data = cmd->get_option("--data")->as<std::string>();
-  o.out = cmd->get_option("--out")->as<std::string>();
-  o.threads = cmd->get_option("--threads")->as<int>();
-  o.resolution = cmd->get_option("--resolution")->as<int>();
-  o.max_seconds = cmd->get_option("--max-seconds")->as<double>();
-  o.background = cmd->get_option("--background")->as<float>();
-  o.supervision = cmd->get_option("--supervision")->as<std::string>();
+  // Only what was given: the grid family keeps its own defaults (HexPlaneTrainOptions) for the
+  // rest, and an option table row without a shown default has no text to convert.
+  if (given("--data")) o.data = cmd->get_option("--data")->as<std::string>();
+  if (given("--out")) o.out = cmd->get_option("--out")->as<std::string>();
+  if (given("--threads")) o.threads = cmd->get_option("--threads")->as<int>();
+  if (given("--resolution")) o.resolution = cmd->get_option("--resolution")->as<int>();
+  if (given("--max-seconds")) o.max_seconds = cmd->get_option("--max-seconds")->as<double>();
+  if (given("--background")) o.background = cmd->get_option("--background")->as<float>();
+  if (given("--supervision")) o.supervision = cmd->get_option("--supervision")->as<std::string>();
   if (given("--iterations")) o.iterations = cmd->get_option("--iterations")->as<int>();
   if (given("--seed")) o.seed = cmd->get_option("--seed")->as<std::int64_t>();
   if (given("--hdr-weight")) o.hdr_weight = cmd->get_option("--hdr-weight")->as<float>();
   if (o.data.empty()) Fail("train: --data is required");
+  if (o.out.empty()) Fail("train: --out is required");
   const hp::HexPlaneTrainSummary s = hp::TrainHexPlane(o);
   fmt::print("train: {} iterations in {:.1f} s; test {}\n", s.iterations, s.train_seconds,
              s.test_metrics.dump());

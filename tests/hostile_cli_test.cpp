@@ -568,5 +568,37 @@ TEST_F(Hostile, Case16WrongJsonTypesNameTheFileAndTheKey) {
   ExpectOneLineError(RunHdr4d("render --run " + R()), "render", {"key 'resolved.hdr'"});
 }
 
+// Issue 51 §24: flag mistakes named the wrong thing. A repeated flag said "At Most 1 required but
+// received 2", `--config /dev/null` "no such file and no such preset", and `--hdr-weight 1e6`,
+// inside the [0, 1e+06] its help states, was refused as "must be >= 0 and finite".
+TEST_F(Hostile, Issue51Case24FlagMistakesNameTheFlagAndWhatIsWrong) {
+  const std::string train = "train --data " + S() + " --out " + (*this / "X").string();
+  for (const auto& [args, flag] : std::vector<std::pair<std::string, std::string>>{
+           {train + " --iterations 5 --iterations 6", "--iterations"},
+           {train + " --hdr-weight 0.5 --hdr-weight 0.5", "--hdr-weight"},
+           {"render --run " + R() + " --threads 1 --threads 2", "--threads"},
+           {"bench table ci --store s.db --format md --format csv", "--format"},
+           {"dataset preview " + S() + " -o a.png --columns 2 --columns 3", "--columns"}}) {
+    ExpectOneLineError(RunHdr4d(args), args, {flag + " was given 2 times; give it once"});
+  }
+  const fs::path empty = *this / "empty.json";
+  testing::WriteTextFile(empty, "");
+  testing::WriteTextFile(*this / "notes.txt", "iterations: 3\n");
+  for (const auto& [config, what] : std::vector<std::pair<std::string, std::string>>{
+           {"/dev/null", "--config /dev/null: is a character device, expected a JSON file"},
+           {S(), "--config " + S() + ": is a folder"},
+           {empty.string(), "--config " + empty.string() + ": the file is empty"},
+           {(*this / "notes.txt").string(), "notes.txt: invalid JSON"}}) {
+    const std::string args = train + " --config " + config;
+    ExpectOneLineError(RunHdr4d(args), args, {what});
+  }
+  ExpectOneLineError(RunHdr4d(train + " --hdr-weight 2e6"), "--hdr-weight 2e6",
+                     {"--hdr-weight: expected a number in [0, 1e+06], got '2e6'"});
+  EXPECT_FALSE(fs::exists(*this / "X"));
+  // The range's end is in it: the run trains.
+  const auto r = RunHdr4d(train + " --hdr-weight 1e6 --supervision ldr --iterations 1 --threads 1");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
 }  // namespace
 }  // namespace hdr4d

@@ -114,4 +114,15 @@ Preview MakeDatasetPreview(const Dataset& dataset, const PreviewOptions& options
   return preview;
 }
 
+std::string DescribePreview(const Preview& preview, const std::string& file) {
+  std::string out = fmt::format("preview: {} ({} rows x {} timestamps)\n", file,
+                                preview.row_labels.size(), preview.column_times.size());
+  for (std::size_t r = 0; r < preview.row_labels.size(); ++r)
+    out += fmt::format("  row {}: {}\n", r + 1, preview.row_labels[r]);
+  std::string times;
+  for (double t : preview.column_times)
+    times += fmt::format("{}{:.3g}", times.empty() ? "" : ", ", t);
+  return out + fmt::format("  columns: t = {}\n", times);
+}
+
 }  // namespace hdr4d

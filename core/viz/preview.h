@@ -36,4 +36,8 @@ struct Preview {
 // Reads the chosen frames (LDR images, and HDR ground truth when present) and lays them out.
 Preview MakeDatasetPreview(const Dataset& dataset, const PreviewOptions& options);
 
+// What a sheet written to `file` shows, for people: "preview: FILE (R rows x C timestamps)", a
+// line per row label, then the columns' times.
+std::string DescribePreview(const Preview& preview, const std::string& file);
+
 }  // namespace hdr4d

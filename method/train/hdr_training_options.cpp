@@ -1,6 +1,7 @@
 #include "method/train/hdr_training_options.h"
 
 #include "core/util/error.h"
+#include "method/train/train_options_table.h"
 
 namespace hdr4d::method {
 
@@ -46,10 +47,10 @@ HdrTarget ParseHdrTarget(const std::string& name, const std::string& what) {
 }
 
 std::string HdrTrainingOptions::Validate() const {
-  if (!(hdr_weight >= 0.0f && hdr_weight < 1e6f)) return "hdr_weight: must be >= 0 and finite";
-  if (pixel_log_epsilon && !(*pixel_log_epsilon >= 1e-30f && *pixel_log_epsilon <= 1.0f))
-    return "pixel_log_epsilon: must be in [1e-30, 1]";
-  if (hdr_head_iterations < 0) return "hdr_head_iterations: must be >= 0";
+  // The ranges of hdr_weight, pixel_log_epsilon, ... as the option table states them.
+  TrainOptions options;
+  options.hdr = *this;
+  if (std::string p = CheckTrainOptionValues(options, "hdr"); !p.empty()) return p;
   if (color_mode == ColorMode::kLdr) {
     if (hdr_head) return "an LDR colour model has no HDR output for an HDR head";
     if (tone_mapper) return "an LDR colour model has no tone mapper";
@@ -65,61 +66,18 @@ std::string HdrTrainingOptions::Validate() const {
   return "";
 }
 
+// RUN/config.json's "hdr": the rows of the option table under it (train_options_table.h).
 nlohmann::json HdrTrainingOptions::ToJson() const {
-  return {{"method", method},
-          {"color_mode", color_mode == ColorMode::kLdr ? "ldr" : "log_hdr"},
-          {"force_static", force_static},
-          {"tone_mapper", tone_mapper ? tone_mapper->ToJson() : nlohmann::json(nullptr)},
-          {"supervision", SupervisionName(supervision)},
-          {"pixel_branch", pixel_branch},
-          {"gaussian_branch", gaussian_branch},
-          {"hdr_weight", hdr_weight},
-          {"hdr_target", HdrTargetName(hdr_target)},
-          {"hdr_geometry", hdr_geometry},
-          {"hdr_head", hdr_head},
-          {"hdr_head_iterations", hdr_head_iterations},
-          {"pixel_log_epsilon",
-           pixel_log_epsilon ? nlohmann::json(*pixel_log_epsilon) : nlohmann::json(nullptr)}};
+  TrainOptions options;
+  options.hdr = *this;
+  return RecordTrainOptions(options, "hdr");
 }
 
 HdrTrainingOptions HdrTrainingOptions::FromJson(const nlohmann::json& j,
                                                 const std::string& source) {
-  HdrTrainingOptions o;
-  try {
-    o.method = j.at("method").get<std::string>();
-    const std::string mode = j.at("color_mode").get<std::string>();
-    if (mode != "ldr" && mode != "log_hdr")
-      Fail("{}: color_mode '{}' is not ldr or log_hdr", source, mode);
-    o.color_mode = mode == "ldr" ? ColorMode::kLdr : ColorMode::kLogHdr;
-    o.force_static = j.at("force_static").get<bool>();
-    if (j.at("tone_mapper").is_null()) {
-      o.tone_mapper.reset();
-    } else {
-      o.tone_mapper = ToneMapperConfig::FromJson(j.at("tone_mapper"), source);
-    }
-    o.supervision = ParseSupervision(j.at("supervision").get<std::string>(), source);
-    o.pixel_branch = j.at("pixel_branch").get<bool>();
-    o.gaussian_branch = j.at("gaussian_branch").get<bool>();
-    o.hdr_weight = j.at("hdr_weight").get<float>();
-    // Runs from before the key trained with the reference's target.
-    if (const auto it = j.find("hdr_target"); it != j.end())
-      o.hdr_target = ParseHdrTarget(it->get<std::string>(), source);
-    // Runs from before the key let the HDR term reach the geometry.
-    if (const auto it = j.find("hdr_geometry"); it != j.end()) o.hdr_geometry = it->get<bool>();
-    // Runs from before the keys had no HDR head.
-    if (const auto it = j.find("hdr_head"); it != j.end()) o.hdr_head = it->get<bool>();
-    if (const auto it = j.find("hdr_head_iterations"); it != j.end())
-      o.hdr_head_iterations = it->get<int>();
-    // Runs from before the key used the reference's floor whatever the supervision.
-    if (const auto it = j.find("pixel_log_epsilon"); it == j.end()) {
-      o.pixel_log_epsilon = kReferencePixelLogEpsilon;
-    } else if (!it->is_null()) {
-      o.pixel_log_epsilon = it->get<float>();
-    }
-  } catch (const nlohmann::json::exception& e) {
-    Fail("{}: bad or missing HDR training setting: {}", source, e.what());
-  }
-  return o;
+  TrainOptions options;
+  ReadTrainOptionsRecord(j, source, "hdr", &options);
+  return options.hdr;
 }
 
 ResolvedHdrTraining ResolveHdrTraining(const HdrTrainingOptions& o,

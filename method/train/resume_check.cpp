@@ -1,24 +1,15 @@
 #include "method/train/resume_check.h"
 
-#include <array>
 #include <string>
 
 #include "core/util/error.h"
 #include "core/files/json_util.h"
+#include "method/train/train_options_table.h"
 
 namespace hdr4d::method {
 namespace fs = std::filesystem;
 
 namespace {
-
-constexpr std::array<const char*, 5> kMayDiffer = {"threads", "test_every", "checkpoint_every",
-                                                   "max_seconds", "optimization.iterations"};
-
-bool MayDiffer(const std::string& key) {
-  for (const char* k : kMayDiffer)
-    if (key == k) return true;
-  return false;
-}
 
 std::string Short(const nlohmann::json& v) {
   std::string text = v.dump();
@@ -39,13 +30,13 @@ void Compare(const nlohmann::json& saved,
              const std::string& key,
              const fs::path& config_file,
              bool given_only) {
-  if (MayDiffer(key)) return;
+  if (MayChangeOnResume(key)) return;  // the option table says which (train_options_table.h)
   if (saved.is_object() && requested.is_object()) {
     for (const auto& [name, value] : saved.items()) {
       const std::string sub = key.empty() ? name : key + "." + name;
       const auto it = requested.find(name);
       if (it == requested.end()) {
-        if (MayDiffer(sub) || given_only) continue;
+        if (MayChangeOnResume(sub) || given_only) continue;
         Fail("{}: --resume would drop the run's {} = {} (start a new run folder to change the "
              "configuration)",
              config_file.string(), sub, Short(value));
@@ -81,19 +72,17 @@ nlohmann::json ReadSavedRunConfig(const fs::path& run) {
 void KeepSavedSchedules(const nlohmann::json& saved, OptimizationOptions* requested) {
   const auto it = saved.find("optimization");
   if (it == saved.end() || !it->is_object()) return;
-  const nlohmann::json& o = *it;
-  auto keep = [&](const char* name, auto* field) {
-    if (*field >= 0) return;  // given explicitly
-    const auto v = o.find(name);
-    if (v != o.end() && v->is_number() && v->template get<double>() >= 0)
-      *field = v->template get<std::remove_pointer_t<decltype(field)>>();
-  };
-  keep("position_lr_max_steps", &requested->position_lr_max_steps);
-  keep("densify_from", &requested->densify_from);
-  keep("densify_until", &requested->densify_until);
-  keep("densify_grad_threshold", &requested->densify_grad_threshold);
-  keep("opacity_reset_interval", &requested->opacity_reset_interval);
-  keep("max_gaussians", &requested->max_gaussians);
+  const std::string prefix = "optimization.";
+  TrainOptions options;
+  options.optimization = *requested;
+  // The rows whose negative value follows the run length (or the scene): densify_from, ...
+  for (const TrainOption& row : TrainOptionTable()) {
+    if (row.unset != Unset::kNegative || row.key.rfind(prefix, 0) != 0) continue;
+    if (row.get(options).get<double>() >= 0) continue;  // given explicitly
+    const auto v = it->find(row.key.substr(prefix.size()));
+    if (v != it->end() && v->is_number() && v->get<double>() >= 0) row.set(&options, *v);
+  }
+  *requested = options.optimization;
 }
 
 bool AcceptAddedHdrHead(nlohmann::json* saved, const nlohmann::json& requested_hdr) {

@@ -27,8 +27,9 @@ bool AcceptAddedHdrHead(nlohmann::json* saved, const nlohmann::json& requested_h
 
 // Throws hdr4d::Error naming `config_file` and the first key (a dotted path) whose value differs
 // between the saved and the requested configuration. Allowed to differ: what decides how long
-// and how fast the run goes and how often it reports, not what it learns (threads, test_every,
-// checkpoint_every, max_seconds, optimization.iterations). Keys the saved file lacks (runs
+// and how fast the run goes and how often it reports, not what it learns: the options the
+// table marks so (train_options_table.h: threads, test_every, checkpoint_every, max_seconds,
+// optimization.iterations). Keys the saved file lacks (runs
 // from older versions) are not compared. `data` is compared as a canonical path.
 void RequireSameConfig(const nlohmann::json& saved,
                        const nlohmann::json& requested,

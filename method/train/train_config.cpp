@@ -3,69 +3,17 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
-#include <cmath>
 #include <filesystem>
-#include <limits>
 
-#include "core/util/error.h"
+#include "core/files/file_access.h"
 #include "core/files/json_util.h"
+#include "core/util/error.h"
+#include "method/train/train_options_table.h"
 
 namespace hdr4d::method {
 namespace {
 
 using Json = nlohmann::json;
-
-// One key: its flag, whether it takes an integer, its range and where it goes.
-struct KeySpec {
-  TrainConfigKey key;
-  bool integer;
-  double min, max;
-  std::function<void(TrainOptions*, double)> set;
-};
-
-const std::vector<KeySpec>& Specs() {
-  constexpr double kIntMax = std::numeric_limits<int>::max();
-  using O = TrainOptions;
-  auto integer = [](int O::*top) {
-    return [top](O* o, double v) { o->*top = static_cast<int>(v); };
-  };
-  auto opt_int = [](int OptimizationOptions::*f) {
-    return [f](O* o, double v) { o->optimization.*f = static_cast<int>(v); };
-  };
-  auto opt_real = [](double OptimizationOptions::*f) {
-    return [f](O* o, double v) { o->optimization.*f = v; };
-  };
-  static const std::vector<KeySpec> specs = {
-      {{"iterations", "--iterations"}, true, 1, kIntMax, opt_int(&OptimizationOptions::iterations)},
-      {{"batch_size", "--batch-size"}, true, 1, 4096, opt_int(&OptimizationOptions::batch_size)},
-      {{"resolution", "--resolution"}, true, 1, 1 << 16, integer(&O::resolution)},
-      {{"max_gaussians", "--max-gaussians"},
-       true,
-       0,
-       1e12,
-       [](O* o, double v) { o->optimization.max_gaussians = static_cast<std::int64_t>(v); }},
-      {{"densify_from", "--densify-from"}, true, 0, kIntMax,
-       opt_int(&OptimizationOptions::densify_from)},
-      {{"densify_until", "--densify-until"}, true, 0, kIntMax,
-       opt_int(&OptimizationOptions::densify_until)},
-      {{"densification_interval", "--densification-interval"}, true, 1, kIntMax,
-       opt_int(&OptimizationOptions::densification_interval)},
-      {{"densify_grad_threshold", "--densify-grad-threshold"}, false, 1e-30, 1e30,
-       opt_real(&OptimizationOptions::densify_grad_threshold)},
-      {{"position_lr_init", ""}, false, 1e-30, 1e30,
-       opt_real(&OptimizationOptions::position_lr_init)},
-      {{"position_lr_final", ""}, false, 1e-30, 1e30,
-       opt_real(&OptimizationOptions::position_lr_final)},
-      {{"position_lr_max_steps", "--position-lr-steps"}, true, 1, kIntMax,
-       opt_int(&OptimizationOptions::position_lr_max_steps)},
-      {{"opacity_reset_interval", "--opacity-reset-interval"}, true, 1, kIntMax,
-       opt_int(&OptimizationOptions::opacity_reset_interval)},
-      {{"sh_increase_interval", "--sh-increase-interval"}, true, 1, kIntMax,
-       opt_int(&OptimizationOptions::sh_increase_interval)},
-      {{"lambda_dssim", ""}, false, 0, 1, opt_real(&OptimizationOptions::lambda_dssim)},
-  };
-  return specs;
-}
 
 // HDR-4DGS's configs/HDR-4D-Syn/<scene>.yaml: 20000 iterations at resolution 2, batch 1,
 // densify every 200 (tank 100) until 15000 (hook, jump 18000; standup 16000), the position
@@ -144,15 +92,54 @@ const std::vector<TrainPreset>& TrainPresets() {
 const std::vector<TrainConfigKey>& TrainConfigKeys() {
   static const std::vector<TrainConfigKey> keys = [] {
     std::vector<TrainConfigKey> k;
-    for (const KeySpec& s : Specs()) k.push_back(s.key);
+    for (const TrainOption& row : TrainOptionTable()) {
+      if (!row.config_name.empty()) k.push_back({row.config_name, row.flag, row.Accepts()});
+    }
     return k;
   }();
   return keys;
 }
 
-Json ReadTrainConfig(const std::string& spec) {
+namespace {
+
+// What is at `path` when it is not a regular file: "a folder", "a character device", ...
+std::string WhatIsAt(const std::filesystem::path& path) {
   std::error_code ec;
-  if (std::filesystem::is_regular_file(spec, ec)) {
+  const auto status = std::filesystem::status(path, ec);
+  switch (status.type()) {
+    case std::filesystem::file_type::directory:
+      return "a folder";
+    case std::filesystem::file_type::character:
+      return "a character device";
+    case std::filesystem::file_type::block:
+      return "a block device";
+    case std::filesystem::file_type::fifo:
+      return "a FIFO";
+    case std::filesystem::file_type::socket:
+      return "a socket";
+    default:
+      return "not a regular file";
+  }
+}
+
+}  // namespace
+
+Json ReadTrainConfig(const std::string& spec) {
+  // A path that exists is the file meant, whatever it is: say what is wrong with it rather than
+  // that no preset has its name.
+  const PathProbe probe = ProbePath(spec);
+  if (probe.kind == PathKind::kUnknown) Fail("--config {}: {}", spec, probe.problem);
+  if (probe.kind == PathKind::kFolder || probe.kind == PathKind::kOther) {
+    Fail("--config {}: is {}, expected a JSON file of training options or a preset name", spec,
+         WhatIsAt(spec));
+  }
+  if (probe.kind == PathKind::kFile) {
+    std::error_code ec;
+    if (std::filesystem::file_size(spec, ec) == 0 && !ec) {
+      Fail("--config {}: the file is empty, expected a JSON object of training options (`hdr4d "
+           "train --list-configs`)",
+           spec);
+    }
     Json j = ReadJsonFile(spec);
     if (!j.is_object())
       Fail("{}: a training configuration must be a JSON object of option names and values", spec);
@@ -173,27 +160,19 @@ void ApplyTrainConfig(const Json& config,
                       TrainOptions* options) {
   if (!config.is_object()) Fail("{}: a training configuration must be a JSON object", source);
   for (const auto& [name, value] : config.items()) {
-    const KeySpec* spec = nullptr;
-    for (const KeySpec& s : Specs())
-      if (s.key.name == name) spec = &s;
-    if (!spec) {
+    const TrainOption* row = nullptr;
+    for (const TrainOption& r : TrainOptionTable())
+      if (r.config_name == name) row = &r;
+    if (!row) {
       std::vector<std::string> known;
-      for (const KeySpec& s : Specs()) known.push_back(s.key.name);
+      for (const TrainConfigKey& k : TrainConfigKeys()) known.push_back(k.name);
       Fail("{}: unknown key '{}' (known: {})", source, name, fmt::join(known, ", "));
     }
-    const bool ok = value.is_number() && (spec->integer ? value.is_number_integer()
-                                                        : std::isfinite(value.get<double>()));
-    if (!ok) {
-      Fail("{}: key '{}': expected {}, got {}", source, name,
-           spec->integer ? "an integer" : "a number", value.dump());
-    }
-    const double v = value.get<double>();
-    if (v < spec->min || v > spec->max) {
-      Fail("{}: key '{}': {} is out of range [{:g}, {:g}]", source, name, value.dump(), spec->min,
-           spec->max);
-    }
-    if (!spec->key.flag.empty() && flag_given(spec->key.flag)) continue;  // the flag wins
-    spec->set(options, v);
+    // The range a flag states: a configuration is a set of given values.
+    if (std::string problem = row->Check(value, /*allow_unset=*/false); !problem.empty())
+      Fail("{}: key '{}': {}", source, name, problem);
+    if (!row->flag.empty() && flag_given(row->flag)) continue;  // the flag wins
+    row->set(options, value);
   }
 }
 

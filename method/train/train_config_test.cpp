@@ -73,11 +73,17 @@ TEST(TrainConfig, FilesAndTheirErrorsNameTheFileAndKey) {
   std::string m = error({{"batch_sise", 3}});
   EXPECT_NE(m.find("mine.json: unknown key 'batch_sise'"), std::string::npos) << m;
   m = error({{"batch_size", "4"}});
-  EXPECT_NE(m.find("key 'batch_size': expected an integer, got \"4\""), std::string::npos) << m;
+  EXPECT_NE(m.find("key 'batch_size': expected an integer in [1, 4096], got \"4\""),
+            std::string::npos)
+      << m;
   m = error({{"batch_size", 2.5}});
   EXPECT_NE(m.find("expected an integer"), std::string::npos) << m;
   m = error({{"resolution", 0}});
-  EXPECT_NE(m.find("key 'resolution': 0 is out of range"), std::string::npos) << m;
+  // The range --resolution's help states, in the same words.
+  EXPECT_NE(m.find("key 'resolution': expected an integer in [1, 65536], got 0"), std::string::npos)
+      << m;
+  m = error({{"densify_from", -1}});  // "follow the run length" is the default, not a value
+  EXPECT_NE(m.find("key 'densify_from': expected an integer >= 0, got -1"), std::string::npos) << m;
   m = testing::ErrorOf([] { ReadTrainConfig("syn/legoo"); });
   EXPECT_NE(m.find("syn/legoo: no such file and no such preset"), std::string::npos) << m;
   EXPECT_NE(m.find("syn/lego"), std::string::npos) << m;
@@ -85,6 +91,29 @@ TEST(TrainConfig, FilesAndTheirErrorsNameTheFileAndKey) {
   m = testing::ErrorOf([&] { ReadTrainConfig(file); });
   EXPECT_NE(m.find("mine.json: a training configuration must be a JSON object"), std::string::npos)
       << m;
+}
+
+// Issue 51 §24: `--config /dev/null` said "no such file and no such preset". Something at the
+// path is the file meant: what is wrong with it is said instead.
+TEST(TrainConfig, APathThatIsNoConfigurationFileSaysWhatItIs) {
+  testing::TempDir dir;
+  std::string m = testing::ErrorOf([] { ReadTrainConfig("/dev/null"); });
+  EXPECT_NE(m.find("--config /dev/null: is a character device, expected a JSON file"),
+            std::string::npos)
+      << m;
+  m = testing::ErrorOf([&] { ReadTrainConfig(dir.path().string()); });
+  EXPECT_NE(m.find("is a folder, expected a JSON file"), std::string::npos) << m;
+  const std::string empty = (dir / "empty.json").string();
+  testing::WriteTextFile(empty, "");
+  m = testing::ErrorOf([&] { ReadTrainConfig(empty); });
+  EXPECT_NE(m.find("--config " + empty + ": the file is empty, expected a JSON object"),
+            std::string::npos)
+      << m;
+  const std::string text = (dir / "notes.txt").string();
+  testing::WriteTextFile(text, "iterations = 3\n");
+  m = testing::ErrorOf([&] { ReadTrainConfig(text); });
+  EXPECT_NE(m.find(text + ": invalid JSON"), std::string::npos) << m;
+  EXPECT_EQ(m.find("no such"), std::string::npos) << m;
 }
 
 }  // namespace

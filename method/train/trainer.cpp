@@ -8,15 +8,12 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
-#include <limits>
 #include <memory>
 #include <optional>
 #include <set>
 #include <sstream>
 #include <tuple>
-#include <type_traits>
 #include <utility>
-#include <variant>
 #include <vector>
 
 #include "core/dataset/dataset.h"
@@ -47,6 +44,7 @@
 #include "method/train/resume_check.h"
 #include "method/train/test_evaluation.h"
 #include "method/train/tone_curve_watch.h"
+#include "method/train/train_options_table.h"
 #include "method/train/train_views.h"
 #include "method/render/view_renderer.h"
 
@@ -56,118 +54,19 @@ namespace fs = std::filesystem;
 std::string TrainOptions::Validate() const {
   if (data.empty()) return "data: no scene folder given";
   if (out.empty()) return "out: no run folder given";
-  if (threads < 0) return "threads: must be >= 0";
-  if (resolution < 1) return fmt::format("resolution: must be >= 1, got {}", resolution);
-  if (test_every < 0 || checkpoint_every < 0) return "test_every / checkpoint_every: must be >= 0";
-  if (!(max_seconds >= 0 && std::isfinite(max_seconds))) return "max_seconds: must be >= 0";
-  if (!(background >= 0 && background <= 1)) return "background: must be within [0, 1]";
+  // Every option's range and choices, as the command line states them (train_options_table.h).
+  if (std::string p = CheckTrainOptionValues(*this); !p.empty()) return p;
   if (std::string p = optimization.Validate(); !p.empty()) return p;
   if (std::string p = hdr.Validate(); !p.empty()) return p;
   return "";
 }
 
-namespace {
-
-// The optimisation fields RUN/config.json records, read back by TrainOptions::FromJson.
-using OptimizationField = std::variant<int OptimizationOptions::*, double OptimizationOptions::*,
-                                       std::int64_t OptimizationOptions::*>;
-const std::vector<std::pair<const char*, OptimizationField>>& RecordedOptimizationFields() {
-  using O = OptimizationOptions;
-  static const std::vector<std::pair<const char*, OptimizationField>> fields = {
-      {"iterations", &O::iterations},
-      {"batch_size", &O::batch_size},
-      {"position_lr_init", &O::position_lr_init},
-      {"position_lr_final", &O::position_lr_final},
-      {"position_lr_max_steps", &O::position_lr_max_steps},
-      {"t_lr_init", &O::t_lr_init},
-      {"f_dc_lr", &O::f_dc_lr},
-      {"f_dc_lr_log_hdr", &O::f_dc_lr_log_hdr},
-      {"f_rest_lr", &O::f_rest_lr},
-      {"opacity_lr", &O::opacity_lr},
-      {"scaling_lr", &O::scaling_lr},
-      {"rotation_lr", &O::rotation_lr},
-      {"adam_eps", &O::adam_eps},
-      {"lambda_dssim", &O::lambda_dssim},
-      {"densify_from", &O::densify_from},
-      {"densify_until", &O::densify_until},
-      {"densification_interval", &O::densification_interval},
-      {"densify_grad_threshold", &O::densify_grad_threshold},
-      {"percent_dense", &O::percent_dense},
-      {"opacity_reset_interval", &O::opacity_reset_interval},
-      {"prune_opacity", &O::prune_opacity},
-      {"sh_increase_interval", &O::sh_increase_interval},
-      {"max_gaussians", &O::max_gaussians}};
-  return fields;
-}
-
-}  // namespace
-
-nlohmann::json TrainOptions::ToJson() const {
-  nlohmann::json optimization = nlohmann::json::object();
-  // Not a structured binding: lambdas capture those from C++20, which clang implements from 16.
-  for (const auto& entry : RecordedOptimizationFields()) {
-    const auto& name = entry.first;
-    std::visit([&](auto member) { optimization[name] = this->optimization.*member; }, entry.second);
-  }
-  nlohmann::json json = {
-      {"data", fs::absolute(data).string()},
-      {"seed", seed},
-      {"threads", threads},
-      {"resolution", resolution},
-      {"test_every", test_every},
-      {"checkpoint_every", checkpoint_every},
-      {"max_seconds", max_seconds},
-      {"background", background},
-      {"hdr", hdr.ToJson()},
-      {"init",
-       {{"num_random_points", init.num_random_points},
-        {"random_half_extent", init.random_half_extent},
-        {"initial_opacity", init.initial_opacity}}},
-      {"optimization", std::move(optimization)},
-  };
-  // Resolved by the run before it is recorded (TrainingRun::SetUp); unset only for a caller's
-  // own look at the options.
-  if (learn_background) json["learn_background"] = *learn_background;
-  return json;
-}
+// RUN/config.json: the rows of the option table (train_options_table.h).
+nlohmann::json TrainOptions::ToJson() const { return RecordTrainOptions(*this); }
 
 TrainOptions TrainOptions::FromJson(const nlohmann::json& j, const std::string& source) {
-  constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
-  constexpr std::int64_t kIntMin = std::numeric_limits<int>::min();
-  const JsonField record = JsonField(j, source).Object();
   TrainOptions o;
-  o.data = record["data"].String();
-  o.seed = record["seed"].Uint64();
-  o.resolution = static_cast<int>(record["resolution"].Int(1, kIntMax));
-  o.test_every = static_cast<int>(record["test_every"].Int(0, kIntMax));
-  o.checkpoint_every = static_cast<int>(record["checkpoint_every"].Int(0, kIntMax));
-  o.max_seconds = record["max_seconds"].Number();
-  o.background = static_cast<float>(record["background"].Number());
-  o.hdr = HdrTrainingOptions::FromJson(record["hdr"].Object().json(), source);
-  const JsonField init = record["init"].Object();
-  o.init.num_random_points = static_cast<int>(init["num_random_points"].Int(0, kIntMax));
-  o.init.random_half_extent = static_cast<float>(init["random_half_extent"].Number());
-  o.init.initial_opacity = static_cast<float>(init["initial_opacity"].Number());
-  const JsonField optimization = record["optimization"].Object();
-  for (const auto& entry : RecordedOptimizationFields()) {  // see ToJson
-    const auto& name = entry.first;
-    std::visit(
-        [&](auto member) {
-          using T = std::remove_reference_t<decltype(o.optimization.*member)>;
-          const JsonField value = optimization[name];
-          if constexpr (std::is_same_v<T, double>) {
-            o.optimization.*member = value.Number();
-          } else if constexpr (std::is_same_v<T, int>) {
-            o.optimization.*member = static_cast<int>(value.Int(kIntMin, kIntMax));
-          } else {
-            o.optimization.*member = value.Int(std::numeric_limits<std::int64_t>::min(),
-                                               std::numeric_limits<std::int64_t>::max());
-          }
-        },
-        entry.second);
-  }
-  // Runs from before the option recorded nothing and trained without it.
-  o.learn_background = record.Has("learn_background") && record["learn_background"].Bool();
+  ReadTrainOptionsRecord(j, source, "", &o);
   o.out = fs::path(source).parent_path();  // the run folder the file belongs to
   if (std::string p = o.Validate(); !p.empty()) Fail("{}: {}", source, p);
   return o;

@@ -47,7 +47,10 @@ struct TrainOptions {
   // saying so. `hdr4d train` sets plain 4DGS here unless the method, tone mapper or
   // supervision was asked for.
   std::optional<HdrTrainingOptions> when_nothing_hdr;
+  // "" or the first problem: a member outside its option's range (train_options_table.h, in
+  // the words of the flag's help), then the optimisation's and the colour model's own checks.
   std::string Validate() const;
+  // RUN/config.json's record: every row of the option table at its key.
   nlohmann::json ToJson() const;
   // The options RUN/config.json recorded (ToJson's keys, schedules as the run resolved them;
   // `out` is the folder of `source`, threads keep the default): what `hdr4d train --resume`
