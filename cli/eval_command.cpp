@@ -8,6 +8,7 @@
 #include "cli/commands.h"
 #include "cli/flags.h"
 #include "core/metrics/evaluate.h"
+#include "core/util/error.h"
 #include "core/files/json_util.h"
 #include "core/files/output_guard.h"
 
