@@ -81,8 +81,11 @@ std::string ShellCommand(const std::vector<std::string>& argv) {
   return line;
 }
 
-ChildResult RunChild(const ChildOptions& options) {
-  if (options.argv.empty()) Fail("RunChild: no program given");
+namespace {
+
+// Opens the log for appending and writes the command line to it; *output_start is where the
+// child's output will begin.
+int OpenLog(const ChildOptions& options, off_t* output_start) {
   if (options.log.has_parent_path()) std::filesystem::create_directories(options.log.parent_path());
   const int log_fd = open(options.log.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
   if (log_fd < 0) Fail("{}: cannot open the log: {}", options.log.string(), std::strerror(errno));
@@ -93,20 +96,38 @@ ChildResult RunChild(const ChildOptions& options) {
   const std::string header = "$ " + ShellCommand(shown) + "\n";
   if (write(log_fd, header.data(), header.size()) < 0) {
   }
-  // Everything the child needs is built before fork: after it, only async-signal-safe calls.
-  std::vector<char*> argv;
-  for (const std::string& a : options.argv) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  std::vector<std::string> env_storage;
-  for (char** e = environ; *e; ++e) {
-    const std::string entry = *e;
-    const std::string key = entry.substr(0, entry.find('='));
-    if (!options.env.count(key)) env_storage.push_back(entry);
+  *output_start = log_start + static_cast<off_t>(header.size());
+  return log_fd;
+}
+
+// Everything the child needs, built before fork: after it, only async-signal-safe calls.
+struct ExecArgs {
+  explicit ExecArgs(const ChildOptions& options) {
+    for (const std::string& a : options.argv) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    for (char** e = environ; *e; ++e) {
+      const std::string entry = *e;
+      const std::string key = entry.substr(0, entry.find('='));
+      if (!options.env.count(key)) env_storage.push_back(entry);
+    }
+    for (const auto& [k, v] : options.env) env_storage.push_back(k + "=" + v);
+    for (std::string& e : env_storage) envp.push_back(e.data());
+    envp.push_back(nullptr);
   }
-  for (const auto& [k, v] : options.env) env_storage.push_back(k + "=" + v);
+  ExecArgs(const ExecArgs&) = delete;
+  ExecArgs& operator=(const ExecArgs&) = delete;
+
+  std::vector<char*> argv;
+  std::vector<std::string> env_storage;
   std::vector<char*> envp;
-  for (std::string& e : env_storage) envp.push_back(e.data());
-  envp.push_back(nullptr);
+};
+
+// Forks and executes the child in its own process group, its output into the log; returns its
+// pid once the exec has succeeded, and when it started in *start.
+pid_t Spawn(const ChildOptions& options,
+            const ExecArgs& exec,
+            int log_fd,
+            std::chrono::steady_clock::time_point* start) {
   const pid_t parent = getpid();
   // exec failures come back through a close-on-exec pipe: a successful exec closes it empty.
   int exec_pipe[2];
@@ -114,8 +135,7 @@ ChildResult RunChild(const ChildOptions& options) {
     close(log_fd);
     Fail("cannot start {}: pipe failed: {}", options.argv[0], std::strerror(errno));
   }
-
-  const auto start = std::chrono::steady_clock::now();
+  *start = std::chrono::steady_clock::now();
   const pid_t pid = fork();
   if (pid < 0) {
     close(log_fd);
@@ -132,7 +152,7 @@ ChildResult RunChild(const ChildOptions& options) {
     if (null_fd >= 0) dup2(null_fd, 0);
     dup2(log_fd, 1);
     dup2(log_fd, 2);
-    execve(argv[0], argv.data(), envp.data());
+    execve(exec.argv[0], exec.argv.data(), exec.envp.data());
     const int error = errno;
     if (write(exec_pipe[1], &error, sizeof error) < 0) {
     }
@@ -152,22 +172,30 @@ ChildResult RunChild(const ChildOptions& options) {
     waitpid(pid, &status, 0);
     Fail("cannot execute {}: {}", options.argv[0], std::strerror(exec_error));
   }
+  return pid;
+}
 
-  ChildResult result;
-  int status = 0;
-  rusage usage{};
+// Waits for the child, stopping its process group on timeout or cancellation (SIGKILL 3 s
+// after the stop signal); fills *status and *usage, and the result's timed_out and cancelled.
+void Wait(pid_t pid,
+          const ChildOptions& options,
+          std::chrono::steady_clock::time_point start,
+          int* status,
+          rusage* usage,
+          ChildResult* result) {
   bool stopping = false;
   std::chrono::steady_clock::time_point stop_sent;
   for (;;) {
-    const pid_t done = wait4(pid, &status, WNOHANG, &usage);
+    const pid_t done = wait4(pid, status, WNOHANG, usage);
     if (done == pid) break;
     if (done < 0 && errno != EINTR) Fail("waiting for {} failed: {}", options.argv[0], std::strerror(errno));
     const auto now = std::chrono::steady_clock::now();
     const double elapsed = std::chrono::duration<double>(now - start).count();
     if (!stopping) {
-      if (options.timeout_seconds > 0 && elapsed > options.timeout_seconds) result.timed_out = true;
-      if (options.cancel && options.cancel->load()) result.cancelled = true;
-      if (result.timed_out || result.cancelled) {
+      if (options.timeout_seconds > 0 && elapsed > options.timeout_seconds)
+        result->timed_out = true;
+      if (options.cancel && options.cancel->load()) result->cancelled = true;
+      if (result->timed_out || result->cancelled) {
         kill(-pid, options.stop_signal);
         stopping = true;
         stop_sent = now;
@@ -177,12 +205,27 @@ ChildResult RunChild(const ChildOptions& options) {
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(stopping ? 20 : 50));
   }
+}
+
+}  // namespace
+
+ChildResult RunChild(const ChildOptions& options) {
+  if (options.argv.empty()) Fail("RunChild: no program given");
+  off_t output_start = 0;
+  const int log_fd = OpenLog(options, &output_start);
+  const ExecArgs exec(options);
+  std::chrono::steady_clock::time_point start;
+  const pid_t pid = Spawn(options, exec, log_fd, &start);
+  ChildResult result;
+  int status = 0;
+  rusage usage{};
+  Wait(pid, options, start, &status, &usage, &result);
   result.wall_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   result.peak_rss_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;  // Linux: kilobytes
   if (WIFEXITED(status)) result.exit_code = WEXITSTATUS(status);
   if (WIFSIGNALED(status)) result.signal = WTERMSIG(status);
-  result.error_line = LastErrorLine(options.log, log_start + static_cast<off_t>(header.size()));
+  result.error_line = LastErrorLine(options.log, output_start);
   return result;
 }
 

@@ -71,145 +71,204 @@ void ReadToneCurveSeries(const fs::path& csv, RunRecord* record) {
   }
 }
 
-std::optional<RunRecord> ExecuteRun(const RunSpec& run, const PipelineOptions& options,
-                                    const std::function<void(const std::string&)>& on_stage) {
-  const auto start = std::chrono::steady_clock::now();
-  const fs::path dir = options.runs_dir / run.id;
-  const fs::path train_dir = dir / "train", renders = dir / "renders";
-  const fs::path log = dir / "log.txt";
-  fs::create_directories(dir);
-  WriteJsonFile(dir / "spec.json", {{"identity", run.identity},
-                                    {"labels", [&] {
-                                       nlohmann::json l = nlohmann::json::array();
-                                       for (const RunLabel& x : run.labels) l.push_back(x.ToJson());
-                                       return l;
-                                     }()}});
-  RunRecord r;
-  r.id = run.id;
-  r.source = options.source;
-  r.labels = run.labels;
+namespace {
+
+// One run's stages, in order: train, render, tone curves, score, then the training's numbers
+// and curves gathered. Each stage fills `record` and says whether the run goes on.
+class RunStages {
+ public:
+  enum class Step { kNext, kFailed, kCancelled };
+
+  RunStages(const RunSpec& run,
+            const PipelineOptions& options,
+            const std::function<void(const std::string&)>& on_stage)
+      : run_(run),
+        options_(options),
+        on_stage_(on_stage),
+        dir_(options.runs_dir / run.id),
+        train_dir_(dir_ / "train"),
+        renders_(dir_ / "renders"),
+        log_(dir_ / "log.txt"),
+        hdr4d_(options.hdr4d.string()),
+        threads_(std::to_string(options.threads)) {}
+
+  void Start();
+  Step Train();
+  Step Render();
+  Step ToneCurves();
+  Step Score();
+  void Finish();
+
+  RunRecord record;
+
+ private:
+  // Marks the record failed with `why` and the log to read.
+  Step Failed(const std::string& why);
+  // A child's end: cancelled, failed (named `what`), or on to the next step.
+  Step Ended(const ChildResult& child, const char* what);
+  ChildResult Child(std::vector<std::string> argv);
+  void Stage(const std::string& s) {
+    if (on_stage_) on_stage_(s);
+  }
+  double Seconds() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+
+  const RunSpec& run_;
+  const PipelineOptions& options_;
+  const std::function<void(const std::string&)>& on_stage_;
+  const std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  const fs::path dir_, train_dir_, renders_, log_;
+  const std::string hdr4d_, threads_;
+  std::vector<std::string> train_, render_;  // the commands, as recorded
+  double train_rss_ = 0, render_rss_ = 0;
+  nlohmann::json results_, config_, timing_;  // of the training and the render
+};
+
+void RunStages::Start() {
+  fs::create_directories(dir_);
+  WriteJsonFile(dir_ / "spec.json",
+                {{"identity", run_.identity}, {"labels", [&] {
+                                                 nlohmann::json l = nlohmann::json::array();
+                                                 for (const RunLabel& x : run_.labels)
+                                                   l.push_back(x.ToJson());
+                                                 return l;
+                                               }()}});
+  RunRecord& r = record;
+  r.id = run_.id;
+  r.source = options_.source;
+  r.labels = run_.labels;
   r.code_version = CodeVersion();
   r.git_describe = GitDescribe();
   r.machine = MachineInfo();
-  r.data_checksum = run.prepared->checksum;
-  r.scene_dir = run.prepared->dir.string();
-  r.run_dir = dir.string();
+  r.data_checksum = run_.prepared->checksum;
+  r.scene_dir = run_.prepared->dir.string();
+  r.run_dir = dir_.string();
   r.started_at = UtcNow();
-  const double limit = run.resources.minutes * 60.0;
-  auto remaining = [&] {
-    return std::max(1.0, limit - std::chrono::duration<double>(std::chrono::steady_clock::now() -
-                                                                start)
-                                     .count());
-  };
-  auto stage = [&](const std::string& s) {
-    if (on_stage) on_stage(s);
-  };
-  auto fail = [&](const std::string& why) {
-    r.status = "failed";
-    r.error = fmt::format("{} (log: {})", why, log.string());
-    r.finished_at = UtcNow();
-    r.wall_seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return r;
-  };
-  const std::string hdr4d = options.hdr4d.string(), threads = std::to_string(options.threads);
+}
 
-  // 1. Training; a finished training (killed later) is not redone, a checkpointed one resumes.
-  stage("train");
-  std::vector<std::string> train = {hdr4d, "train", "--data", run.prepared->dir.string(),
-                                    "--out", train_dir.string(), "--threads", threads};
-  train.insert(train.end(), run.train_args.begin(), run.train_args.end());
-  if (const std::int64_t every = CheckpointEvery(run.budget.iterations); every > 0)
-    train.insert(train.end(), {"--checkpoint-every", std::to_string(every)});
-  const fs::path train_process = dir / "train_process.json";
-  double train_rss = 0;
-  const bool trained = fs::exists(train_dir / "results.json") &&
-                       fs::exists(train_dir / "checkpoint.bin") && fs::exists(train_process);
+RunStages::Step RunStages::Failed(const std::string& why) {
+  record.status = "failed";
+  record.error = fmt::format("{} (log: {})", why, log_.string());
+  record.finished_at = UtcNow();
+  record.wall_seconds = Seconds();
+  return Step::kFailed;
+}
+
+RunStages::Step RunStages::Ended(const ChildResult& child, const char* what) {
+  if (child.cancelled) return Step::kCancelled;
+  if (!child.ok()) return Failed(what + (": " + child.Describe()));
+  return Step::kNext;
+}
+
+// Runs one hdr4d command with what is left of the run's time limit.
+ChildResult RunStages::Child(std::vector<std::string> argv) {
+  const double limit = run_.resources.minutes * 60.0;
+  return RunChild({.argv = std::move(argv),
+                   .log = log_,
+                   .timeout_seconds = std::max(1.0, limit - Seconds()),
+                   .cancel = options_.cancel});
+}
+
+// 1. Training; a finished training (killed later) is not redone, a checkpointed one resumes.
+RunStages::Step RunStages::Train() {
+  Stage("train");
+  train_ = {
+      hdr4d_,      "train", "--data", run_.prepared->dir.string(), "--out", train_dir_.string(),
+      "--threads", threads_};
+  train_.insert(train_.end(), run_.train_args.begin(), run_.train_args.end());
+  if (const std::int64_t every = CheckpointEvery(run_.budget.iterations); every > 0)
+    train_.insert(train_.end(), {"--checkpoint-every", std::to_string(every)});
+  const fs::path train_process = dir_ / "train_process.json";
+  const bool trained = fs::exists(train_dir_ / "results.json") &&
+                       fs::exists(train_dir_ / "checkpoint.bin") && fs::exists(train_process);
   if (trained) {
-    train_rss = NumberOr(ReadJsonFile(train_process), "peak_rss_mb", 0);
+    train_rss_ = NumberOr(ReadJsonFile(train_process), "peak_rss_mb", 0);
   } else {
     // Results without a checkpoint (killed after the clean-up): nothing to resume from.
-    if (!fs::exists(train_dir / "checkpoint.bin")) fs::remove_all(train_dir);
-    const bool resume = fs::exists(train_dir / "checkpoint.bin");
-    if (resume) train.push_back("--resume");
-    ChildResult t = RunChild({.argv = train,
-                              .log = log,
-                              .timeout_seconds = remaining(),
-                              .cancel = options.cancel});
-    if (t.cancelled) return std::nullopt;
-    if (!t.ok()) return fail("train: " + t.Describe());
-    train_rss = t.peak_rss_mb;
+    if (!fs::exists(train_dir_ / "checkpoint.bin")) fs::remove_all(train_dir_);
+    const bool resume = fs::exists(train_dir_ / "checkpoint.bin");
+    if (resume) train_.push_back("--resume");
+    const ChildResult t = Child(train_);
+    if (const Step s = Ended(t, "train"); s != Step::kNext) return s;
+    train_rss_ = t.peak_rss_mb;
     WriteJsonFile(train_process, {{"peak_rss_mb", t.peak_rss_mb},
                                   {"wall_seconds", t.wall_seconds},
                                   {"resumed", resume}});
   }
-  const nlohmann::json results = ReadJsonFile(train_dir / "results.json");
-  const nlohmann::json config = ReadJsonFile(train_dir / "config.json");
+  results_ = ReadJsonFile(train_dir_ / "results.json");
+  config_ = ReadJsonFile(train_dir_ / "config.json");
   // The trainer's warnings went to the run's log; the harness's user sees them here too.
-  for (const nlohmann::json& w : results.value("warnings", nlohmann::json::array()))
-    if (w.is_string()) spdlog::warn("bench: run {}: {}", run.id, w.get<std::string>());
+  for (const nlohmann::json& w : results_.value("warnings", nlohmann::json::array()))
+    if (w.is_string()) spdlog::warn("bench: run {}: {}", run_.id, w.get<std::string>());
+  return Step::kNext;
+}
 
-  // 2. Render the test split, timed.
-  stage("render");
-  fs::remove_all(renders);
-  std::vector<std::string> render = {hdr4d,   "render",  "--run",   train_dir.string(),
-                                     "--split", "test",  "--out",   renders.string(),
-                                     "--threads", threads, "--timing", (dir / "render_timing.json").string()};
-  render.insert(render.end(), run.render_args.begin(), run.render_args.end());
-  ChildResult rr = RunChild({.argv = render, .log = log, .timeout_seconds = remaining(),
-                             .cancel = options.cancel});
-  if (rr.cancelled) return std::nullopt;
-  if (!rr.ok()) return fail("render: " + rr.Describe());
-  const nlohmann::json timing = ReadJsonFile(dir / "render_timing.json");
+// 2. Render the test split, timed.
+RunStages::Step RunStages::Render() {
+  Stage("render");
+  fs::remove_all(renders_);
+  render_ = {hdr4d_,      "render", "--run",    train_dir_.string(),
+             "--split",   "test",   "--out",    renders_.string(),
+             "--threads", threads_, "--timing", (dir_ / "render_timing.json").string()};
+  render_.insert(render_.end(), run_.render_args.begin(), run_.render_args.end());
+  const ChildResult rr = Child(render_);
+  if (const Step s = Ended(rr, "render"); s != Step::kNext) return s;
+  render_rss_ = rr.peak_rss_mb;
+  timing_ = ReadJsonFile(dir_ / "render_timing.json");
+  return Step::kNext;
+}
 
-  // 3. Tone curves over time, for tone mappers that have them.
-  if (HasPointwiseToneMapper(config, (train_dir / "config.json").string())) {
-    ChildResult tc = RunChild({.argv = {hdr4d, "tone-curves", "--run", train_dir.string(), "--out",
-                                        (dir / "tone_curves").string(), "--times",
-                                        kToneCurveTimes},
-                               .log = log,
-                               .timeout_seconds = remaining(),
-                               .cancel = options.cancel});
-    if (tc.cancelled) return std::nullopt;
-    if (!tc.ok()) return fail("tone-curves: " + tc.Describe());
-    ReadToneCurveSeries(dir / "tone_curves" / "tone_curves.csv", &r);
-  }
+// 3. Tone curves over time, for tone mappers that have them.
+RunStages::Step RunStages::ToneCurves() {
+  if (!HasPointwiseToneMapper(config_, (train_dir_ / "config.json").string())) return Step::kNext;
+  const ChildResult tc = Child({hdr4d_, "tone-curves", "--run", train_dir_.string(), "--out",
+                                (dir_ / "tone_curves").string(), "--times", kToneCurveTimes});
+  if (const Step s = Ended(tc, "tone-curves"); s != Step::kNext) return s;
+  ReadToneCurveSeries(dir_ / "tone_curves" / "tone_curves.csv", &record);
+  return Step::kNext;
+}
 
-  // 4. Score every test view with core's evaluation.
-  stage("score");
+// 4. Score every test view with core's evaluation; the run's configuration goes with it.
+RunStages::Step RunStages::Score() {
+  Stage("score");
   try {
-    const Dataset dataset =
-        LoadDataset(run.prepared->dir, {.image_check = ImageCheck::kNone});
+    const Dataset dataset = LoadDataset(run_.prepared->dir, {.image_check = ImageCheck::kNone});
     ScoringOptions so;
-    if (run.prepared->spec->region) so.region = *run.prepared->spec->region;
-    const ScoredRenders scored = ScoreRenders(dataset, renders, so);
-    r.frames = scored.frames;
+    if (run_.prepared->spec->region) so.region = *run_.prepared->spec->region;
+    const ScoredRenders scored = ScoreRenders(dataset, renders_, so);
+    record.frames = scored.frames;
     auto shown = [](std::vector<std::string> argv) {  // the binary's name, not /proc/self/exe
       if (!argv.empty() && argv[0] == SelfExecutable()) argv[0] = SelfExecutablePath().string();
       return argv;
     };
-    r.config = {{"identity", run.identity},
-                {"threads", options.threads},
-                {"train_command", shown(train)},
-                {"render_command", shown(render)},
-                {"train_config", config},
-                // What the trainer found wrong with its run (a flat tone curve), kept with it.
-                {"train_warnings", results.value("warnings", nlohmann::json::array())},
-                {"scoring",
-                 {{"region", scored.region},
-                  {"region_camera", scored.region_camera},
-                  {"scoring_version", kScoringVersion}}}};
+    record.config = {{"identity", run_.identity},
+                     {"threads", options_.threads},
+                     {"train_command", shown(train_)},
+                     {"render_command", shown(render_)},
+                     {"train_config", config_},
+                     // What the trainer found wrong with its run (a flat tone curve), kept with it.
+                     {"train_warnings", results_.value("warnings", nlohmann::json::array())},
+                     {"scoring",
+                      {{"region", scored.region},
+                       {"region_camera", scored.region_camera},
+                       {"scoring_version", kScoringVersion}}}};
   } catch (const Error& e) {
-    return fail(std::string("score: ") + e.what());
+    return Failed(std::string("score: ") + e.what());
   }
+  return Step::kNext;
+}
 
-  r.train_seconds = NumberOr(results, "train_seconds", r.train_seconds);
-  r.iterations = static_cast<std::int64_t>(NumberOr(results, "iterations", -1));
-  r.gaussians = static_cast<std::int64_t>(NumberOr(results, "gaussians", -1));
-  r.render_fps = NumberOr(timing, "fps", r.render_fps);
-  r.peak_rss_mb = std::max(train_rss, rr.peak_rss_mb);
-  if (results.contains("curve")) {
-    const nlohmann::json& c = results["curve"];
+// 5. The training's numbers and curves; the checkpoint goes unless asked to be kept.
+void RunStages::Finish() {
+  RunRecord& r = record;
+  r.train_seconds = NumberOr(results_, "train_seconds", r.train_seconds);
+  r.iterations = static_cast<std::int64_t>(NumberOr(results_, "iterations", -1));
+  r.gaussians = static_cast<std::int64_t>(NumberOr(results_, "gaussians", -1));
+  r.render_fps = NumberOr(timing_, "fps", r.render_fps);
+  r.peak_rss_mb = std::max(train_rss_, render_rss_);
+  if (results_.contains("curve")) {
+    const nlohmann::json& c = results_["curve"];
     for (const char* name : {"loss", "train_psnr"}) {
       if (!c.contains(name) || c[name].size() != c["iteration"].size()) continue;
       for (std::size_t i = 0; i < c[name].size(); ++i) {
@@ -218,16 +277,33 @@ std::optional<RunRecord> ExecuteRun(const RunSpec& run, const PipelineOptions& o
       }
     }
   }
-  for (const nlohmann::json& point : results.value("test_curve", nlohmann::json::array())) {
+  for (const nlohmann::json& point : results_.value("test_curve", nlohmann::json::array())) {
     for (const auto& [key, value] : point.items()) {
       if (key != "iteration" && value.is_number())
         r.series["test:" + key].emplace_back(point["iteration"].get<double>(), value.get<double>());
     }
   }
-  if (!options.keep_checkpoint) fs::remove(train_dir / "checkpoint.bin");
+  if (!options_.keep_checkpoint) fs::remove(train_dir_ / "checkpoint.bin");
   r.finished_at = UtcNow();
-  r.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return r;
+  r.wall_seconds = Seconds();
+}
+
+}  // namespace
+
+std::optional<RunRecord> ExecuteRun(const RunSpec& run,
+                                    const PipelineOptions& options,
+                                    const std::function<void(const std::string&)>& on_stage) {
+  RunStages stages(run, options, on_stage);
+  stages.Start();
+  using Step = RunStages::Step;
+  for (Step (RunStages::*stage)() :
+       {&RunStages::Train, &RunStages::Render, &RunStages::ToneCurves, &RunStages::Score}) {
+    const Step s = (stages.*stage)();
+    if (s == Step::kCancelled) return std::nullopt;
+    if (s == Step::kFailed) return stages.record;
+  }
+  stages.Finish();
+  return stages.record;
 }
 
 }  // namespace hdr4d::bench

@@ -12,6 +12,8 @@
 #include <deque>
 #include <map>
 #include <mutex>
+#include <optional>
+#include <set>
 #include <thread>
 
 #include "benchmark/child_process.h"
@@ -73,6 +75,147 @@ struct Running {
   std::chrono::steady_clock::time_point start;
 };
 
+// What the workers and the progress line share, under `mutex`.
+struct Progress {
+  std::mutex mutex;
+  std::condition_variable changed;
+  std::deque<const RunSpec*> queue;
+  std::map<std::string, Running> running;
+  double units_left = 0, units_done = 0, seconds_done = 0;
+  std::vector<std::string> failures;
+  std::string last_line, fatal;
+  RunnerSummary* summary = nullptr;
+};
+
+// --dry-run: every planned run with its id and whether it is stored, failed or still to run.
+void PrintDryRun(const std::vector<PreparedScene>& scenes,
+                 const std::vector<RunSpec>& runs,
+                 const std::set<std::string>& ok,
+                 const std::set<std::string>& failed) {
+  for (const PreparedScene& s : scenes) {
+    if (!s.ready) {
+      fmt::print(stderr,
+                 "bench: scene '{}' is not generated yet ({}): a real run renders it first; "
+                 "its runs' ids depend on its data and are shown as '-'\n",
+                 s.spec->name, s.dir.string());
+    }
+  }
+  for (const RunSpec& r : runs) {
+    if (!r.prepared->ready) {
+      fmt::print("{:<16}  {:<7} {}\n", "-", "to run", Describe(r.labels.front()));
+      continue;
+    }
+    const char* state = ok.count(r.id) ? "stored" : failed.count(r.id) ? "failed" : "to run";
+    fmt::print("{}  {:<7} {}\n", r.id, state, Describe(r.labels.front()));
+  }
+}
+
+// Books one finished run (called under the mutex): counts, the failure list, the last line.
+// An exception from the harness itself (store not writable, ...) stops every worker.
+void Finished(Progress& p,
+              const RunSpec& run,
+              const std::optional<RunRecord>& record,
+              const std::string& error,
+              double took) {
+  if (!error.empty()) {
+    p.fatal = fmt::format("{}: {}", Describe(run.labels.front()), error);
+    g_cancel = true;
+  } else if (record) {
+    p.units_done += WorkUnits(run);
+    p.seconds_done += took;
+    if (record->status == "ok") {
+      ++p.summary->done;
+      p.last_line = fmt::format("{} in {}", Describe(run.labels.front()), Duration(took));
+    } else {
+      ++p.summary->failed;
+      p.failures.push_back(
+          fmt::format("{} ({}): {}", Describe(run.labels.front()), run.id, record->error));
+      p.last_line = fmt::format("FAILED {}", Describe(run.labels.front()));
+    }
+  }
+}
+
+// One worker: takes runs off the queue until it is empty or the harness is stopped, runs each
+// and stores its record.
+void Work(Progress& p, ResultsStore& store, const PipelineOptions& pipeline) {
+  for (;;) {
+    const RunSpec* run = nullptr;
+    {
+      std::lock_guard lock(p.mutex);
+      if (p.queue.empty() || g_cancel) return;
+      run = p.queue.front();
+      p.queue.pop_front();
+      p.units_left -= WorkUnits(*run);
+      p.running[run->id] = {run, "prepare", std::chrono::steady_clock::now()};
+    }
+    std::optional<RunRecord> record;
+    std::string error;
+    try {
+      record = ExecuteRun(*run, pipeline, [&](const std::string& s) {
+        std::lock_guard lock(p.mutex);
+        p.running[run->id].stage = s;
+      });
+      if (record) store.InsertRun(*record);
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    std::lock_guard lock(p.mutex);
+    const double took =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - p.running[run->id].start)
+            .count();
+    p.running.erase(run->id);
+    Finished(p, *run, record, error, took);
+    p.changed.notify_all();
+  }
+}
+
+// The progress line (called under the mutex), with an ETA from the seconds per budget unit so
+// far, over what is left and what is still running.
+std::string ProgressLine(const Progress& p, int jobs, std::chrono::steady_clock::time_point start) {
+  const int finished = p.summary->done + p.summary->failed;
+  std::string eta = "?";
+  if (p.units_done > 0) {
+    const double rate = p.seconds_done / p.units_done;
+    double left = p.units_left * rate;
+    const auto now = std::chrono::steady_clock::now();
+    for (const auto& [id, r] : p.running)
+      left += std::max(
+          0.0, WorkUnits(*r.run) * rate - std::chrono::duration<double>(now - r.start).count());
+    eta = Duration(left / jobs);
+  }
+  return fmt::format(
+      "bench: {} done ({} failed), {} running, {} left, elapsed {}, ETA {}{}", finished,
+      p.summary->failed, p.running.size(), p.queue.size(),
+      Duration(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()),
+      eta, p.last_line.empty() ? "" : "; last: " + p.last_line);
+}
+
+// Shows progress until every run has ended (or the harness is stopped and the running ones
+// have): rewritten in place on a terminal; else a line per finished run, or a minute.
+void ShowProgress(Progress& p, int jobs, std::chrono::steady_clock::time_point start) {
+  const bool tty = isatty(fileno(stderr));
+  auto last_print = std::chrono::steady_clock::now() - std::chrono::hours(1);
+  int last_finished = -1;
+  for (;;) {
+    std::unique_lock lock(p.mutex);
+    p.changed.wait_for(lock, std::chrono::seconds(1));
+    const bool all_done = p.running.empty() && (p.queue.empty() || g_cancel);
+    const int finished = p.summary->done + p.summary->failed;
+    const std::string line = ProgressLine(p, jobs, start);
+    const auto now = std::chrono::steady_clock::now();
+    if (tty) {
+      fmt::print(stderr, "\r\033[K{}", line);
+      if (all_done) fmt::print(stderr, "\n");
+    } else if (finished != last_finished || now - last_print > std::chrono::seconds(60) ||
+               all_done) {
+      fmt::print(stderr, "{}\n", line);
+      last_print = now;
+      last_finished = finished;
+    }
+    if (all_done) break;
+  }
+}
+
 }  // namespace
 
 void ApplyFilter(const SuiteFilter& f, Suite* suite) {
@@ -124,15 +267,16 @@ RunnerSummary RunSuite(const Suite& suite, const RunnerOptions& options) {
 
   RunnerSummary summary;
   summary.planned = static_cast<int>(runs.size());
+  Progress p;
+  p.summary = &summary;
   const std::set<std::string> ok = store.RunIds("ok"), failed = store.RunIds("failed");
-  std::deque<const RunSpec*> queue;
   for (const RunSpec& r : runs) {
     if (ok.count(r.id) || (failed.count(r.id) && !options.retry_failed)) {
       store.AddLabels(r.id, r.labels);  // this suite's names for a run made before
       ++(ok.count(r.id) ? summary.already_done : summary.skipped_failed);
       continue;
     }
-    queue.push_back(&r);
+    p.queue.push_back(&r);
   }
   const int threads =
       options.threads > 0 ? options.threads : std::max(1, AvailableCores() / options.jobs);
@@ -143,131 +287,27 @@ RunnerSummary RunSuite(const Suite& suite, const RunnerOptions& options) {
              summary.skipped_failed ? fmt::format(", {} failed before (--retry-failed redoes them)",
                                                   summary.skipped_failed)
                                     : "",
-             queue.size(), options.jobs, options.jobs == 1 ? "" : "s", threads,
+             p.queue.size(), options.jobs, options.jobs == 1 ? "" : "s", threads,
              threads == 1 ? "" : "s", options.store.string());
   if (options.dry_run) {
-    for (const PreparedScene& s : scenes) {
-      if (!s.ready) {
-        fmt::print(stderr,
-                   "bench: scene '{}' is not generated yet ({}): a real run renders it first; "
-                   "its runs' ids depend on its data and are shown as '-'\n",
-                   s.spec->name, s.dir.string());
-      }
-    }
-    for (const RunSpec& r : runs) {
-      if (!r.prepared->ready) {
-        fmt::print("{:<16}  {:<7} {}\n", "-", "to run", Describe(r.labels.front()));
-        continue;
-      }
-      const char* state = ok.count(r.id) ? "stored" : failed.count(r.id) ? "failed" : "to run";
-      fmt::print("{}  {:<7} {}\n", r.id, state, Describe(r.labels.front()));
-    }
+    PrintDryRun(scenes, runs, ok, failed);
     return summary;
   }
-  if (queue.empty()) return summary;
+  if (p.queue.empty()) return summary;
 
-  std::mutex mutex;
-  std::condition_variable changed;
-  std::map<std::string, Running> running;
-  double units_left = 0, units_done = 0, seconds_done = 0;
-  for (const RunSpec* r : queue) units_left += WorkUnits(*r);
-  std::vector<std::string> failures;
-  std::string last_line, fatal;
+  for (const RunSpec* r : p.queue) p.units_left += WorkUnits(*r);
   const auto start = std::chrono::steady_clock::now();
   const PipelineOptions pipeline{.runs_dir = runs_dir,
                                  .hdr4d = SelfExecutable(),
                                  .threads = threads,
                                  .cancel = &g_cancel,
                                  .keep_checkpoint = options.keep_checkpoints};
-
-  auto worker = [&] {
-    for (;;) {
-      const RunSpec* run = nullptr;
-      {
-        std::lock_guard lock(mutex);
-        if (queue.empty() || g_cancel) return;
-        run = queue.front();
-        queue.pop_front();
-        units_left -= WorkUnits(*run);
-        running[run->id] = {run, "prepare", std::chrono::steady_clock::now()};
-      }
-      std::optional<RunRecord> record;
-      std::string error;
-      try {
-        record = ExecuteRun(*run, pipeline, [&](const std::string& s) {
-          std::lock_guard lock(mutex);
-          running[run->id].stage = s;
-        });
-        if (record) store.InsertRun(*record);
-      } catch (const std::exception& e) {
-        error = e.what();
-      }
-      std::lock_guard lock(mutex);
-      const double took =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - running[run->id].start)
-              .count();
-      running.erase(run->id);
-      if (!error.empty()) {  // the harness itself failed (store not writable, ...): stop
-        fatal = fmt::format("{}: {}", Describe(run->labels.front()), error);
-        g_cancel = true;
-      } else if (record) {
-        units_done += WorkUnits(*run);
-        seconds_done += took;
-        if (record->status == "ok") {
-          ++summary.done;
-          last_line = fmt::format("{} in {}", Describe(run->labels.front()), Duration(took));
-        } else {
-          ++summary.failed;
-          failures.push_back(
-              fmt::format("{} ({}): {}", Describe(run->labels.front()), run->id, record->error));
-          last_line = fmt::format("FAILED {}", Describe(run->labels.front()));
-        }
-      }
-      changed.notify_all();
-    }
-  };
   std::vector<std::thread> workers;
-  for (int j = 0; j < options.jobs; ++j) workers.emplace_back(worker);
-
-  const bool tty = isatty(fileno(stderr));
-  auto last_print = std::chrono::steady_clock::now() - std::chrono::hours(1);
-  int last_finished = -1;
-  for (;;) {
-    std::unique_lock lock(mutex);
-    changed.wait_for(lock, std::chrono::seconds(1));
-    const bool all_done = running.empty() && (queue.empty() || g_cancel);
-    const int finished = summary.done + summary.failed;
-    // ETA: seconds per budget unit so far, over what is left and what is still running.
-    std::string eta = "?";
-    if (units_done > 0) {
-      const double rate = seconds_done / units_done;
-      double left = units_left * rate;
-      const auto now = std::chrono::steady_clock::now();
-      for (const auto& [id, r] : running)
-        left += std::max(
-            0.0, WorkUnits(*r.run) * rate - std::chrono::duration<double>(now - r.start).count());
-      eta = Duration(left / options.jobs);
-    }
-    const std::string line = fmt::format(
-        "bench: {} done ({} failed), {} running, {} left, elapsed {}, ETA {}{}", finished,
-        summary.failed, running.size(), queue.size(),
-        Duration(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()),
-        eta, last_line.empty() ? "" : "; last: " + last_line);
-    const auto now = std::chrono::steady_clock::now();
-    if (tty) {
-      fmt::print(stderr, "\r\033[K{}", line);
-      if (all_done) fmt::print(stderr, "\n");
-    } else if (finished != last_finished || now - last_print > std::chrono::seconds(60) ||
-               all_done) {
-      fmt::print(stderr, "{}\n", line);
-      last_print = now;
-      last_finished = finished;
-    }
-    if (all_done) break;
-  }
+  for (int j = 0; j < options.jobs; ++j) workers.emplace_back([&] { Work(p, store, pipeline); });
+  ShowProgress(p, options.jobs, start);
   for (std::thread& w : workers) w.join();
-  for (const std::string& f : failures) fmt::print(stderr, "bench: failed: {}\n", f);
-  if (!fatal.empty()) Fail("bench run stopped: {}", fatal);
+  for (const std::string& f : p.failures) fmt::print(stderr, "bench: failed: {}\n", f);
+  if (!p.fatal.empty()) Fail("bench run stopped: {}", p.fatal);
   summary.interrupted = g_signal != 0;
   if (summary.interrupted) {
     Fail(

@@ -98,30 +98,34 @@ std::array<double, 4> RegionFromGroundTruth(const Dataset& dataset, Split split,
   return {(best % kRegionGrid) * cell, (best / kRegionGrid) * cell, cell, cell};
 }
 
-ScoredRenders ScoreRenders(const Dataset& dataset, const fs::path& renders,
-                           const ScoringOptions& options) {
-  if (!fs::is_directory(renders)) Fail("{}: no such folder of renders", renders.string());
-  const std::vector<Frame>& frames = dataset.FramesOf(options.split);
-  if (frames.empty()) Fail("{}: the {} split has no frames", dataset.root.string(), SplitName(options.split));
+namespace {
 
-  // Expected renders: one per LDR ground truth, one per distinct HDR ground truth.
-  struct Expected {
-    std::string name;
-    fs::path gt;
-    const Frame* frame;
-    bool hdr;
-  };
-  std::vector<Expected> ldr, hdr;
+// An expected render and its ground truth.
+struct Expected {
+  std::string name;
+  fs::path gt;
+  const Frame* frame;
+  bool hdr;
+};
+
+// Expected renders: one per LDR ground truth, one per distinct HDR ground truth.
+void ExpectRenders(const std::vector<Frame>& frames,
+                   std::vector<Expected>* ldr,
+                   std::vector<Expected>* hdr) {
   std::set<std::string> hdr_names;
   for (const Frame& f : frames) {
-    if (fs::exists(f.image_path)) ldr.push_back({LdrRenderName(f), f.image_path, &f, false});
+    if (fs::exists(f.image_path)) ldr->push_back({LdrRenderName(f), f.image_path, &f, false});
     if (f.hdr_path && hdr_names.insert(HdrRenderName(f)).second)
-      hdr.push_back({HdrRenderName(f), *f.hdr_path, &f, true});
+      hdr->push_back({HdrRenderName(f), *f.hdr_path, &f, true});
   }
-  std::set<std::string> expected_names;
-  for (const auto* list : {&ldr, &hdr})
-    for (const Expected& e : *list) expected_names.insert(e.name);
+}
 
+// The expected renders the folder has. A kind is either absent (the method does not output it)
+// or complete.
+std::vector<const Expected*> PresentRenders(const std::vector<Expected>& ldr,
+                                            const std::vector<Expected>& hdr,
+                                            const fs::path& renders,
+                                            Split split) {
   std::vector<const Expected*> todo;
   for (const auto* list : {&ldr, &hdr}) {
     std::vector<std::string> missing;
@@ -134,53 +138,83 @@ ScoredRenders ScoreRenders(const Dataset& dataset, const fs::path& renders,
         missing.push_back(e.name);
       }
     }
-    // A kind is either absent (the method does not output it) or complete.
     if (present > 0 && !missing.empty()) {
       Fail("{}: {} of the {} {} renders of the {} split are missing: {}", renders.string(),
-           missing.size(), list->size(), list == &ldr ? "LDR" : "HDR", SplitName(options.split),
+           missing.size(), list->size(), list == &ldr ? "LDR" : "HDR", SplitName(split),
            List(missing));
     }
   }
-  if (options.strict) {
-    std::vector<std::string> extra;
-    for (const auto& entry : fs::directory_iterator(renders)) {
-      const std::string name = entry.path().filename().string();
-      if (entry.is_regular_file() && IsImageFile(entry.path()) && !expected_names.count(name))
-        extra.push_back(name);
-    }
-    std::sort(extra.begin(), extra.end());
-    if (!extra.empty()) {
-      Fail("{}: {} image(s) are not renders of the {} split's views (names must match the ground "
-           "truth): {}", renders.string(), extra.size(), SplitName(options.split), List(extra));
-    }
+  return todo;
+}
+
+// Strict scoring: no image in the folder but the expected renders.
+void RefuseExtraImages(const std::vector<Expected>& ldr,
+                       const std::vector<Expected>& hdr,
+                       const fs::path& renders,
+                       Split split) {
+  std::set<std::string> expected_names;
+  for (const auto* list : {&ldr, &hdr})
+    for (const Expected& e : *list) expected_names.insert(e.name);
+  std::vector<std::string> extra;
+  for (const auto& entry : fs::directory_iterator(renders)) {
+    const std::string name = entry.path().filename().string();
+    if (entry.is_regular_file() && IsImageFile(entry.path()) && !expected_names.count(name))
+      extra.push_back(name);
   }
+  std::sort(extra.begin(), extra.end());
+  if (!extra.empty()) {
+    Fail(
+        "{}: {} image(s) are not renders of the {} split's views (names must match the ground "
+        "truth): {}",
+        renders.string(), extra.size(), SplitName(split), List(extra));
+  }
+}
+
+// One render against its ground truth: every metric of `hdr4d eval`, and the region's mean.
+FrameResult ScoreFrame(const Expected& e,
+                       const fs::path& renders,
+                       const std::array<double, 4>& region) {
+  const fs::path pred = renders / e.name;
+  const nlohmann::json pair = EvaluatePair(pred, e.gt);  // throws naming both files
+  FrameResult fr;
+  fr.frame = e.hdr ? *e.frame->exr_file_path : e.frame->file_path;
+  fr.time = e.frame->time;
+  fr.camera_id = e.frame->camera_id;
+  fr.exposure = e.hdr ? 0.0 : e.frame->exposure;
+  for (const auto& [key, value] : pair.items()) {
+    if (key == "name") continue;
+    // EvaluatePair writes +inf (identical images) as null.
+    fr.metrics[key] =
+        value.is_null() ? std::numeric_limits<double>::infinity() : value.get<double>();
+  }
+  const std::string prefix = e.hdr ? "region_luminance" : "region_ldr";
+  fr.stats[prefix] = RegionMean(ReadImage(pred), region);
+  fr.stats[prefix + "_gt"] = RegionMean(ReadImage(e.gt), region);
+  return fr;
+}
+
+}  // namespace
+
+ScoredRenders ScoreRenders(const Dataset& dataset,
+                           const fs::path& renders,
+                           const ScoringOptions& options) {
+  if (!fs::is_directory(renders)) Fail("{}: no such folder of renders", renders.string());
+  const std::vector<Frame>& frames = dataset.FramesOf(options.split);
+  if (frames.empty())
+    Fail("{}: the {} split has no frames", dataset.root.string(), SplitName(options.split));
+  std::vector<Expected> ldr, hdr;
+  ExpectRenders(frames, &ldr, &hdr);
+  const std::vector<const Expected*> todo = PresentRenders(ldr, hdr, renders, options.split);
+  if (options.strict) RefuseExtraImages(ldr, hdr, renders, options.split);
   if (todo.empty()) {
     Fail("{}: no render is named like a ground-truth image of the {} split (e.g. {})",
          renders.string(), SplitName(options.split),
          !ldr.empty() ? ldr.front().name : (!hdr.empty() ? hdr.front().name : "?"));
   }
-
   ScoredRenders out;
   out.region_camera = frames.front().camera_id;
   out.region = options.region.value_or(RegionFromGroundTruth(dataset, options.split, out.region_camera));
-  for (const Expected* e : todo) {
-    const fs::path pred = renders / e->name;
-    const nlohmann::json pair = EvaluatePair(pred, e->gt);  // throws naming both files
-    FrameResult fr;
-    fr.frame = e->hdr ? *e->frame->exr_file_path : e->frame->file_path;
-    fr.time = e->frame->time;
-    fr.camera_id = e->frame->camera_id;
-    fr.exposure = e->hdr ? 0.0 : e->frame->exposure;
-    for (const auto& [key, value] : pair.items()) {
-      if (key == "name") continue;
-      // EvaluatePair writes +inf (identical images) as null.
-      fr.metrics[key] = value.is_null() ? std::numeric_limits<double>::infinity() : value.get<double>();
-    }
-    const std::string prefix = e->hdr ? "region_luminance" : "region_ldr";
-    fr.stats[prefix] = RegionMean(ReadImage(pred), out.region);
-    fr.stats[prefix + "_gt"] = RegionMean(ReadImage(e->gt), out.region);
-    out.frames.push_back(std::move(fr));
-  }
+  for (const Expected* e : todo) out.frames.push_back(ScoreFrame(*e, renders, out.region));
   return out;
 }
 

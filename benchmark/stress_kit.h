@@ -63,7 +63,8 @@ struct Case {
   StressCaseInfo info;
   CaseFn run;
 };
-// Every case, in the order they run (stress_cases.cpp).
+// Every case, in the order they run (stress_cases.cpp; the cases by category in
+// stress_cases_*.cpp).
 std::vector<Case> Cases();
 
 }  // namespace hdr4d::bench::stress

@@ -182,6 +182,101 @@ Budget ParseBudget(const nlohmann::json& j, const std::string& where) {
   return b;
 }
 
+std::vector<std::int64_t> ParseSeeds(const Obj& o) {
+  std::vector<std::int64_t> seeds;
+  std::set<std::int64_t> seen;
+  for (const nlohmann::json& v : o.Array("seeds", true)) {
+    if (!v.is_number_integer() || v.get<std::int64_t>() < 0)
+      Fail("{}: seeds are non-negative integers, got {}", o.At("seeds"), Obj::Short(v));
+    if (!seen.insert(v.get<std::int64_t>()).second)
+      Fail("{}: seed {} is listed twice", o.At("seeds"), v.get<std::int64_t>());
+    seeds.push_back(v.get<std::int64_t>());
+  }
+  return seeds;
+}
+
+std::vector<Budget> ParseBudgets(const Obj& o) {
+  std::vector<Budget> out;
+  const nlohmann::json& budgets = o.Array("budgets", true);
+  std::set<std::string> budget_labels;
+  for (std::size_t i = 0; i < budgets.size(); ++i) {
+    out.push_back(ParseBudget(budgets[i], fmt::format("{}[{}]", o.At("budgets"), i)));
+    if (!budget_labels.insert(out.back().Label()).second)
+      Fail("{}: budget {} is listed twice", o.At("budgets"), out.back().Label());
+  }
+  return out;
+}
+
+std::vector<Variant> ParseVariants(const Obj& o) {
+  std::vector<Variant> out;
+  std::set<std::string> names;
+  const nlohmann::json& variants = o.Array("variants", true);
+  for (std::size_t i = 0; i < variants.size(); ++i) {
+    const Obj v(variants[i], fmt::format("{}[{}]", o.At("variants"), i));
+    v.OnlyKeys({"name", "train", "render"});
+    Variant var{v.String("name", "", true), Settings(v, "train", kReservedTrain),
+                Settings(v, "render", kReservedRender)};
+    if (!names.insert(var.name).second) Fail("{}: variant '{}' twice", v.where(), var.name);
+    out.push_back(std::move(var));
+  }
+  return out;
+}
+
+// A method; its resources start from the suite's.
+MethodSpec ParseMethod(const nlohmann::json& j,
+                       const std::string& where,
+                       const Resources& suite_resources) {
+  const Obj m(j, where);
+  m.OnlyKeys({"name", "label", "supervision", "train", "render", "resources"});
+  MethodSpec spec;
+  spec.name = m.String("name", "", true);
+  spec.label = m.String("label", spec.name);
+  if (m.Has("supervision"))
+    spec.supervision = Supervisions(m.Array("supervision", true), m.At("supervision"));
+  spec.train = Settings(m, "train", kReservedTrain);
+  spec.render = Settings(m, "render", kReservedRender);
+  if (m.Has("resources"))
+    spec.resources = ParseResources(m.Raw("resources"), m.At("resources"), suite_resources);
+  return spec;
+}
+
+// A table's rows; rows may name methods outside the suite: external submissions (`bench submit`).
+std::vector<TableRow> ParseRows(const Obj& t) {
+  std::vector<TableRow> out;
+  const nlohmann::json& rows = t.Array("rows", true);
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    const Obj row(rows[r], fmt::format("{}[{}]", t.At("rows"), r));
+    row.OnlyKeys({"label", "method", "supervision"});
+    TableRow tr{row.String("label", ""), row.String("method", "", true),
+                row.String("supervision", "", true)};
+    if (tr.label.empty()) tr.label = tr.method;
+    Supervisions(nlohmann::json::array({tr.supervision}), row.At("supervision"));
+    for (const TableRow& other : out)
+      if (other.label == tr.label) Fail("{}: row label '{}' twice", t.where(), tr.label);
+    out.push_back(std::move(tr));
+  }
+  return out;
+}
+
+TableSpec ParseTable(const nlohmann::json& j, const std::string& where) {
+  const Obj t(j, where);
+  t.OnlyKeys({"id", "title", "layout", "scenes", "rows", "reference", "note"});
+  TableSpec spec;
+  spec.id = t.String("id", "", true);
+  spec.title = t.String("title", spec.id);
+  spec.layout = t.String("layout", "main");
+  if (spec.layout != "main" && spec.layout != "ablation")
+    Fail("{}: layout '{}' is not main or ablation", t.At("layout"), spec.layout);
+  spec.scene_group = t.String("scenes", "syn");
+  spec.note = t.String("note", "");
+  spec.rows = ParseRows(t);
+  spec.reference = t.String("reference", spec.rows.back().label);
+  if (std::none_of(spec.rows.begin(), spec.rows.end(),
+                   [&](const TableRow& r) { return r.label == spec.reference; }))
+    Fail("{}: reference '{}' is not a row label", t.At("reference"), spec.reference);
+  return spec;
+}
+
 }  // namespace
 
 nlohmann::json Resources::ToJson() const {
@@ -227,37 +322,9 @@ Suite ParseSuite(const nlohmann::json& json, const fs::path& file) {
   s.render = Settings(o, "render", kReservedRender);
   s.curve_points = static_cast<int>(o.Integer("curve_points", 0, 0));
   if (o.Has("supervision")) s.supervision = Supervisions(o.Array("supervision", true), o.At("supervision"));
-  if (o.Has("seeds")) {
-    s.seeds.clear();
-    std::set<std::int64_t> seen;
-    for (const nlohmann::json& v : o.Array("seeds", true)) {
-      if (!v.is_number_integer() || v.get<std::int64_t>() < 0)
-        Fail("{}: seeds are non-negative integers, got {}", o.At("seeds"), Obj::Short(v));
-      if (!seen.insert(v.get<std::int64_t>()).second)
-        Fail("{}: seed {} is listed twice", o.At("seeds"), v.get<std::int64_t>());
-      s.seeds.push_back(v.get<std::int64_t>());
-    }
-  }
-  const nlohmann::json& budgets = o.Array("budgets", true);
-  std::set<std::string> budget_labels;
-  for (std::size_t i = 0; i < budgets.size(); ++i) {
-    s.budgets.push_back(ParseBudget(budgets[i], fmt::format("{}[{}]", o.At("budgets"), i)));
-    if (!budget_labels.insert(s.budgets.back().Label()).second)
-      Fail("{}: budget {} is listed twice", o.At("budgets"), s.budgets.back().Label());
-  }
-  if (o.Has("variants")) {
-    s.variants.clear();
-    std::set<std::string> names;
-    const nlohmann::json& variants = o.Array("variants", true);
-    for (std::size_t i = 0; i < variants.size(); ++i) {
-      const Obj v(variants[i], fmt::format("{}[{}]", o.At("variants"), i));
-      v.OnlyKeys({"name", "train", "render"});
-      Variant var{v.String("name", "", true), Settings(v, "train", kReservedTrain),
-                  Settings(v, "render", kReservedRender)};
-      if (!names.insert(var.name).second) Fail("{}: variant '{}' twice", v.where(), var.name);
-      s.variants.push_back(std::move(var));
-    }
-  }
+  if (o.Has("seeds")) s.seeds = ParseSeeds(o);
+  s.budgets = ParseBudgets(o);
+  if (o.Has("variants")) s.variants = ParseVariants(o);
   const nlohmann::json& scenes = o.Array("scenes", true);
   for (std::size_t i = 0; i < scenes.size(); ++i) {
     s.scenes.push_back(
@@ -267,52 +334,18 @@ Suite ParseSuite(const nlohmann::json& json, const fs::path& file) {
   }
   const nlohmann::json& methods = o.Array("methods", true);
   for (std::size_t i = 0; i < methods.size(); ++i) {
-    const Obj m(methods[i], fmt::format("{}[{}]", o.At("methods"), i));
-    m.OnlyKeys({"name", "label", "supervision", "train", "render", "resources"});
-    MethodSpec spec;
-    spec.name = m.String("name", "", true);
-    spec.label = m.String("label", spec.name);
-    if (m.Has("supervision"))
-      spec.supervision = Supervisions(m.Array("supervision", true), m.At("supervision"));
-    spec.train = Settings(m, "train", kReservedTrain);
-    spec.render = Settings(m, "render", kReservedRender);
-    if (m.Has("resources"))
-      spec.resources = ParseResources(m.Raw("resources"), m.At("resources"), s.resources);
+    MethodSpec spec =
+        ParseMethod(methods[i], fmt::format("{}[{}]", o.At("methods"), i), s.resources);
     if (s.FindMethod(spec.name))
       Fail("{}: method '{}' is listed twice", o.At("methods"), spec.name);
     s.methods.push_back(std::move(spec));
   }
   const nlohmann::json& tables = o.Array("tables", false);
   for (std::size_t i = 0; i < tables.size(); ++i) {
-    const Obj t(tables[i], fmt::format("{}[{}]", o.At("tables"), i));
-    t.OnlyKeys({"id", "title", "layout", "scenes", "rows", "reference", "note"});
-    TableSpec spec;
-    spec.id = t.String("id", "", true);
-    spec.title = t.String("title", spec.id);
-    spec.layout = t.String("layout", "main");
-    if (spec.layout != "main" && spec.layout != "ablation")
-      Fail("{}: layout '{}' is not main or ablation", t.At("layout"), spec.layout);
-    spec.scene_group = t.String("scenes", "syn");
-    spec.note = t.String("note", "");
-    const nlohmann::json& rows = t.Array("rows", true);
-    for (std::size_t r = 0; r < rows.size(); ++r) {
-      const Obj row(rows[r], fmt::format("{}[{}]", t.At("rows"), r));
-      row.OnlyKeys({"label", "method", "supervision"});
-      TableRow tr{row.String("label", ""), row.String("method", "", true),
-                  row.String("supervision", "", true)};
-      if (tr.label.empty()) tr.label = tr.method;
-      Supervisions(nlohmann::json::array({tr.supervision}), row.At("supervision"));
-      // Rows may name methods outside the suite: external submissions (`bench submit`).
-      for (const TableRow& other : spec.rows)
-        if (other.label == tr.label) Fail("{}: row label '{}' twice", t.where(), tr.label);
-      spec.rows.push_back(std::move(tr));
-    }
-    spec.reference = t.String("reference", spec.rows.back().label);
-    if (std::none_of(spec.rows.begin(), spec.rows.end(),
-                     [&](const TableRow& r) { return r.label == spec.reference; }))
-      Fail("{}: reference '{}' is not a row label", t.At("reference"), spec.reference);
+    const std::string at = fmt::format("{}[{}]", o.At("tables"), i);
+    TableSpec spec = ParseTable(tables[i], at);
     for (const TableSpec& other : s.tables)
-      if (other.id == spec.id) Fail("{}: table id '{}' twice", t.where(), spec.id);
+      if (other.id == spec.id) Fail("{}: table id '{}' twice", at, spec.id);
     s.tables.push_back(std::move(spec));
   }
   return s;

@@ -104,8 +104,139 @@ std::vector<std::int64_t> RowSeeds(const Suite& suite, const Index& ix, const st
   return {it->second.begin(), it->second.end()};
 }
 
-Table Build(const TableSpec& spec, const Suite& suite, const std::vector<RunSummary>& runs,
-            const TableOptions& options, std::vector<Column> columns) {
+// A row's values per column, by (scene, seed).
+using RowValues = std::vector<std::map<std::pair<std::string, std::int64_t>, double>>;
+
+// One cell: the mean over seeds of the per-seed scene means when every run is there (with the
+// spread between seeds from two seeds on), else the mean of the runs there are.
+Cell SummariseCell(const std::map<std::pair<std::string, std::int64_t>, double>& vals,
+                   const std::vector<std::int64_t>& seeds,
+                   const std::vector<std::string>& scenes,
+                   int expected) {
+  Cell cell;
+  cell.expected = expected;
+  cell.runs = static_cast<int>(vals.size());
+  if (vals.empty()) return cell;
+  cell.has_value = true;
+  std::vector<double> all, complete_seed_means;
+  for (const auto& [k, v] : vals) all.push_back(v);
+  for (std::int64_t seed : seeds) {
+    std::vector<double> per_seed;
+    for (const std::string& scene : scenes)
+      if (auto it = vals.find({scene, seed}); it != vals.end()) per_seed.push_back(it->second);
+    if (per_seed.size() == scenes.size()) complete_seed_means.push_back(Mean(per_seed));
+  }
+  cell.mean = cell.complete() ? Mean(complete_seed_means) : Mean(all);
+  if (complete_seed_means.size() >= 2) {
+    cell.spread = SampleStdDev(complete_seed_means);
+    cell.has_spread = true;
+  }
+  return cell;
+}
+
+// One row of the table: its runs' values per column (into *values) and its cells.
+RowResult BuildRow(const TableRow& row,
+                   const TableSpec& spec,
+                   const Suite& suite,
+                   const Index& ix,
+                   const Table& t,
+                   RowValues* values) {
+  RowResult rr{row.label, row.method, row.supervision};
+  rr.is_reference = row.label == spec.reference;
+  const std::vector<std::int64_t> seeds = RowSeeds(suite, ix, row.method);
+  rr.expected = static_cast<int>(t.scenes.size() * seeds.size());
+  if (auto f = ix.failed.find({row.method, row.supervision}); f != ix.failed.end())
+    rr.failed = f->second;
+  RowValues& row_values = *values;
+  row_values.resize(t.columns.size());
+  for (const std::string& scene : t.scenes) {
+    for (std::int64_t seed : seeds) {
+      const auto it = ix.ok.find({row.method, row.supervision, scene, seed});
+      if (it == ix.ok.end()) continue;
+      ++rr.runs;
+      for (std::size_t c = 0; c < t.columns.size(); ++c) {
+        if (!t.columns[c].computable) continue;
+        if (const auto v = ValueOf(*it->second, t.columns[c])) row_values[c][{scene, seed}] = *v;
+      }
+    }
+  }
+  for (std::size_t c = 0; c < t.columns.size(); ++c)
+    rr.cells.push_back(SummariseCell(row_values[c], seeds, t.scenes, rr.expected));
+  return rr;
+}
+
+// Best per column, in the column's direction.
+void MarkBest(Table* t) {
+  for (std::size_t c = 0; c < t->columns.size(); ++c) {
+    const int dir = t->columns[c].direction;
+    if (dir == 0) continue;
+    double best = dir > 0 ? -INFINITY : INFINITY;
+    for (const RowResult& r : t->rows)
+      if (r.cells[c].has_value) best = dir > 0 ? std::max(best, r.cells[c].mean) : std::min(best, r.cells[c].mean);
+    for (RowResult& r : t->rows)
+      if (r.cells[c].has_value && r.cells[c].mean == best) r.cells[c].best = true;
+  }
+}
+
+// Paired tests of every row's quality columns against the reference row, scene by scene.
+void PairedTests(const std::vector<RowValues>& values, double alpha, Table* t) {
+  std::size_t ref = 0;
+  for (std::size_t i = 0; i < t->rows.size(); ++i)
+    if (t->rows[i].is_reference) ref = i;
+  for (std::size_t i = 0; i < t->rows.size(); ++i) {
+    for (std::size_t c = 0; c < t->columns.size(); ++c) {
+      std::vector<PairedValue> pairs;
+      if (i != ref && t->columns[c].quality && t->columns[c].computable) {
+        for (const auto& [k, v] : values[i][c]) {
+          if (auto it = values[ref][c].find(k); it != values[ref][c].end())
+            pairs.push_back({k.first, v, it->second});
+        }
+      }
+      t->rows[i].tests.push_back(PairedSeedTest(pairs, alpha));
+    }
+  }
+}
+
+// What the reader needs to know: missing and failed runs, methods to submit, partial cells,
+// LPIPS, an empty scene group.
+void AddFootnotes(const TableSpec& spec, const Suite& suite, Table* t) {
+  bool any_incomplete = false, has_lpips = false;
+  std::vector<std::string> external;  // rows of methods this suite cannot run
+  for (const RowResult& r : t->rows) {
+    for (const Cell& c : r.cells) any_incomplete |= c.has_value && !c.complete();
+    if (r.runs == 0 && !suite.FindMethod(r.method)) {
+      external.push_back(r.label);
+    } else if (r.runs == 0) {
+      t->footnotes.push_back(fmt::format("{}: no runs in the store{}.", r.label,
+                                         r.failed ? fmt::format(" ({} failed)", r.failed) : ""));
+    } else if (r.failed) {
+      t->footnotes.push_back(fmt::format("{}: {} failed run(s) left out.", r.label, r.failed));
+    }
+  }
+  if (!external.empty()) {
+    t->footnotes.push_back(fmt::format(
+        "{}: no runs in the store; not methods of this suite: score their renders with `hdr4d "
+        "bench submit --suite {} --method NAME --supervision ldr|hdr|ldr+hdr`.",
+        fmt::format("{}", fmt::join(external, ", ")), suite.name));
+  }
+  for (const Column& c : t->columns) has_lpips |= !c.computable;
+  if (any_incomplete)
+    t->footnotes.push_back(
+        "[k/n]: only k of the n scene x seed runs are in the store; the cell is "
+        "the mean of those k.");
+  if (has_lpips) t->footnotes.push_back(kLpipsNote);
+  if (t->scenes.empty())
+    t->footnotes.push_back(
+        fmt::format("No scene of group '{}' in this suite: add dataset folders "
+                    "with \"group\": \"{}\" to its scenes.",
+                    spec.scene_group, spec.scene_group));
+}
+
+Table Build(const TableSpec& spec,
+            const Suite& suite,
+            const std::vector<RunSummary>& runs,
+            const TableOptions& options,
+            std::vector<Column> columns) {
   Table t;
   t.id = spec.id;
   t.title = spec.title;
@@ -120,108 +251,12 @@ Table Build(const TableSpec& spec, const Suite& suite, const std::vector<RunSumm
                    ? HdrProtocolDescription(options.protocol)
                    : "the metric keys " + options.hdr_psnr_key + " and " + options.hdr_ssim_key;
   const Index ix = BuildIndex(runs, t.budget, t.variant);
-
-  // values[row][column][(scene, seed)]
-  std::vector<std::vector<std::map<std::pair<std::string, std::int64_t>, double>>> values;
-  for (const TableRow& row : spec.rows) {
-    RowResult rr{row.label, row.method, row.supervision};
-    rr.is_reference = row.label == spec.reference;
-    const std::vector<std::int64_t> seeds = RowSeeds(suite, ix, row.method);
-    rr.expected = static_cast<int>(t.scenes.size() * seeds.size());
-    if (auto f = ix.failed.find({row.method, row.supervision}); f != ix.failed.end())
-      rr.failed = f->second;
-    auto& row_values = values.emplace_back(t.columns.size());
-    for (const std::string& scene : t.scenes) {
-      for (std::int64_t seed : seeds) {
-        const auto it = ix.ok.find({row.method, row.supervision, scene, seed});
-        if (it == ix.ok.end()) continue;
-        ++rr.runs;
-        for (std::size_t c = 0; c < t.columns.size(); ++c) {
-          if (!t.columns[c].computable) continue;
-          if (const auto v = ValueOf(*it->second, t.columns[c])) row_values[c][{scene, seed}] = *v;
-        }
-      }
-    }
-    for (std::size_t c = 0; c < t.columns.size(); ++c) {
-      Cell cell;
-      cell.expected = rr.expected;
-      const auto& vals = row_values[c];
-      cell.runs = static_cast<int>(vals.size());
-      if (!vals.empty()) {
-        cell.has_value = true;
-        std::vector<double> all, complete_seed_means;
-        for (const auto& [k, v] : vals) all.push_back(v);
-        for (std::int64_t seed : seeds) {
-          std::vector<double> per_seed;
-          for (const std::string& scene : t.scenes)
-            if (auto it = vals.find({scene, seed}); it != vals.end()) per_seed.push_back(it->second);
-          if (per_seed.size() == t.scenes.size()) complete_seed_means.push_back(Mean(per_seed));
-        }
-        cell.mean = cell.complete() ? Mean(complete_seed_means) : Mean(all);
-        if (complete_seed_means.size() >= 2) {
-          cell.spread = SampleStdDev(complete_seed_means);
-          cell.has_spread = true;
-        }
-      }
-      rr.cells.push_back(cell);
-    }
-    t.rows.push_back(std::move(rr));
-  }
-  // Best per column.
-  for (std::size_t c = 0; c < t.columns.size(); ++c) {
-    const int dir = t.columns[c].direction;
-    if (dir == 0) continue;
-    double best = dir > 0 ? -INFINITY : INFINITY;
-    for (const RowResult& r : t.rows)
-      if (r.cells[c].has_value) best = dir > 0 ? std::max(best, r.cells[c].mean) : std::min(best, r.cells[c].mean);
-    for (RowResult& r : t.rows)
-      if (r.cells[c].has_value && r.cells[c].mean == best) r.cells[c].best = true;
-  }
-  // Paired tests against the reference row.
-  std::size_t ref = 0;
-  for (std::size_t i = 0; i < t.rows.size(); ++i)
-    if (t.rows[i].is_reference) ref = i;
-  for (std::size_t i = 0; i < t.rows.size(); ++i) {
-    for (std::size_t c = 0; c < t.columns.size(); ++c) {
-      std::vector<PairedValue> pairs;
-      if (i != ref && t.columns[c].quality && t.columns[c].computable) {
-        for (const auto& [k, v] : values[i][c]) {
-          if (auto it = values[ref][c].find(k); it != values[ref][c].end())
-            pairs.push_back({k.first, v, it->second});
-        }
-      }
-      t.rows[i].tests.push_back(PairedSeedTest(pairs, options.alpha));
-    }
-  }
-  // What the reader needs to know.
-  bool any_incomplete = false, has_lpips = false;
-  std::vector<std::string> external;  // rows of methods this suite cannot run
-  for (const RowResult& r : t.rows) {
-    for (const Cell& c : r.cells) any_incomplete |= c.has_value && !c.complete();
-    if (r.runs == 0 && !suite.FindMethod(r.method)) {
-      external.push_back(r.label);
-    } else if (r.runs == 0) {
-      t.footnotes.push_back(fmt::format("{}: no runs in the store{}.", r.label,
-                                        r.failed ? fmt::format(" ({} failed)", r.failed) : ""));
-    } else if (r.failed) {
-      t.footnotes.push_back(fmt::format("{}: {} failed run(s) left out.", r.label, r.failed));
-    }
-  }
-  if (!external.empty()) {
-    t.footnotes.push_back(fmt::format(
-        "{}: no runs in the store; not methods of this suite: score their renders with `hdr4d "
-        "bench submit --suite {} --method NAME --supervision ldr|hdr|ldr+hdr`.",
-        fmt::format("{}", fmt::join(external, ", ")), suite.name));
-  }
-  for (const Column& c : t.columns) has_lpips |= !c.computable;
-  if (any_incomplete)
-    t.footnotes.push_back("[k/n]: only k of the n scene x seed runs are in the store; the cell is "
-                          "the mean of those k.");
-  if (has_lpips) t.footnotes.push_back(kLpipsNote);
-  if (t.scenes.empty())
-    t.footnotes.push_back(fmt::format("No scene of group '{}' in this suite: add dataset folders "
-                                      "with \"group\": \"{}\" to its scenes.",
-                                      spec.scene_group, spec.scene_group));
+  std::vector<RowValues> values;  // values[row][column][(scene, seed)]
+  for (const TableRow& row : spec.rows)
+    t.rows.push_back(BuildRow(row, spec, suite, ix, t, &values.emplace_back()));
+  MarkBest(&t);
+  PairedTests(values, options.alpha, &t);
+  AddFootnotes(spec, suite, &t);
   return t;
 }
 }  // namespace

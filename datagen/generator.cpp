@@ -110,53 +110,34 @@ const std::vector<std::string>& UnlikeCamerasModes() {
   return modes;
 }
 
-SceneResult GenerateScene(const DatagenOptions& options, const std::string& scene) {
-  options.Validate();
-  if (options.capture) return GenerateCapture(options, scene);
-  const auto start = std::chrono::steady_clock::now();
-  ScenePreset preset = ResolvePreset(scene, options.preset, options.width);
-  if (options.samples > 0) preset.samples = options.samples;
-  const std::vector<PlannedRender> renders = PlanRenders(preset);
-  const fs::path final_dir = options.out / preset.scene;
-  // Fail early on a missing Blender or scripts folder, before touching the output.
-  FindBlender(options.blender);
-  FindScriptsDir(options.scripts_dir);
-  const fs::path staging = PrepareStaging(final_dir, preset.scene);
-  const BlenderSettings blender{.blender = options.blender,
-                                .scripts_dir = options.scripts_dir,
-                                .seed = options.seed,
-                                .threads = options.threads,
-                                .show_progress = options.show_progress};
-  const BlenderRender run = RenderWithBlender(preset, renders, blender, staging);
-  const json& info = run.info;
-  const LuminanceHistogram histogram = NormaliseExrs(preset, renders, staging);
-  const Dataset dataset = BuildDataset(preset, renders, info, staging);
-  WriteDataset(dataset, staging);
-  const std::int64_t points = WritePointCloud(preset, info, staging);
+namespace {
 
-  const DatasetSynthesisOptions ldr = options.LdrFor(preset.scene);
-  const int ldr_images = SynthesizeDatasetLdr(staging, ldr);
-
+// The written dataset must pass `hdr4d dataset check` with every image read; the first five
+// problems are named.
+void CheckWrittenDataset(const fs::path& staging, const std::string& scene) {
   const DatasetReport report = CheckDataset(staging, {.image_check = ImageCheck::kFull});
   if (!report.ok()) {
     std::string problems;
     for (std::size_t i = 0; i < std::min<std::size_t>(5, report.problems.size()); ++i)
       problems += "\n  " + report.problems[i].ToString();
     Fail("datagen: scene '{}': the written dataset fails `hdr4d dataset check` ({} problems):{}",
-         preset.scene, report.problems.size(), problems);
+         scene, report.problems.size(), problems);
   }
+}
 
-  SceneResult result;
-  result.scene = preset.scene;
-  result.root = final_dir;
-  result.renders = static_cast<int>(renders.size());
-  result.ldr_images = ldr_images;
-  result.blender_seconds = run.seconds;
-  result.range = histogram.Summary();
-
+// What made the scene and what it holds: generator, Blender and render settings, rig, counts,
+// LDR synthesis, dynamic range, points (manifest.json, datagen/output_folder.h).
+json SceneManifest(const DatagenOptions& options,
+                   const ScenePreset& preset,
+                   const std::vector<PlannedRender>& renders,
+                   const json& info,
+                   const Dataset& dataset,
+                   const DatasetSynthesisOptions& ldr,
+                   const SceneResult& result,
+                   std::int64_t points) {
   const std::unique_ptr<Crf> crf = ParseCrf(ldr.crf);
   const SceneInfo& scene_info = FindScene(preset.scene);
-  json manifest = {
+  return {
       {"generator", kGenerator},
       {"generator_version",
        fmt::format("hdr4d {}, datagen format {}, scripts {}", HDR4D_DATAGEN_VERSION,
@@ -204,9 +185,48 @@ SceneResult GenerateScene(const DatagenOptions& options, const std::string& scen
         {"zero_fraction", result.range.zero_fraction}}},
       {"points", {{"count", points}, {"time", 0.0}}},
   };
+}
+
+}  // namespace
+
+SceneResult GenerateScene(const DatagenOptions& options, const std::string& scene) {
+  options.Validate();
+  if (options.capture) return GenerateCapture(options, scene);
+  const auto start = std::chrono::steady_clock::now();
+  ScenePreset preset = ResolvePreset(scene, options.preset, options.width);
+  if (options.samples > 0) preset.samples = options.samples;
+  const std::vector<PlannedRender> renders = PlanRenders(preset);
+  const fs::path final_dir = options.out / preset.scene;
+  // Fail early on a missing Blender or scripts folder, before touching the output.
+  FindBlender(options.blender);
+  FindScriptsDir(options.scripts_dir);
+  const fs::path staging = PrepareStaging(final_dir, preset.scene);
+  const BlenderSettings blender{.blender = options.blender,
+                                .scripts_dir = options.scripts_dir,
+                                .seed = options.seed,
+                                .threads = options.threads,
+                                .show_progress = options.show_progress};
+  const BlenderRender run = RenderWithBlender(preset, renders, blender, staging);
+  const json& info = run.info;
+  const LuminanceHistogram histogram = NormaliseExrs(preset, renders, staging);
+  const Dataset dataset = BuildDataset(preset, renders, info, staging);
+  WriteDataset(dataset, staging);
+  const std::int64_t points = WritePointCloud(preset, info, staging);
+
+  const DatasetSynthesisOptions ldr = options.LdrFor(preset.scene);
+  const int ldr_images = SynthesizeDatasetLdr(staging, ldr);
+  CheckWrittenDataset(staging, preset.scene);
+
+  SceneResult result;
+  result.scene = preset.scene;
+  result.root = final_dir;
+  result.renders = static_cast<int>(renders.size());
+  result.ldr_images = ldr_images;
+  result.blender_seconds = run.seconds;
+  result.range = histogram.Summary();
   result.total_seconds =
-      FinishOutput(std::move(manifest), result.blender_seconds, result.renders, start, staging,
-                   final_dir);
+      FinishOutput(SceneManifest(options, preset, renders, info, dataset, ldr, result, points),
+                   result.blender_seconds, result.renders, start, staging, final_dir);
   return result;
 }
 

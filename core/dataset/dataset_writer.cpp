@@ -40,12 +40,10 @@ std::string RelativeTo(const fs::path& root, const fs::path& path) {
   return path.lexically_relative(root).generic_string();
 }
 
-}  // namespace
-
-void WriteDataset(const Dataset& dataset,
-                  const fs::path& root,
-                  const DatasetWriteOptions& options) {
-  const std::vector<const Frame*> all = dataset.AllFrames();
+// camera_angle_x: the dataset's, else the first frame's field of view.
+double CameraAngleX(const Dataset& dataset,
+                    const std::vector<const Frame*>& all,
+                    const fs::path& root) {
   double angle = dataset.camera_angle_x;
   if (!(angle > 0 && angle < std::numbers::pi) && !all.empty()) {
     angle = all.front()->camera.intrinsics.FovX();
@@ -54,9 +52,19 @@ void WriteDataset(const Dataset& dataset,
     Fail("{}: cannot write a dataset without a valid camera_angle_x (got {})", root.string(),
          angle);
   }
+  return angle;
+}
 
-  // Top level: what every frame shares (size, then intrinsics when they are not the ones
-  // camera_angle_x implies); frames that differ carry their own keys.
+// The top level's keys, and what a frame without keys gets when read back (none without a
+// shared top level).
+struct TopLevel {
+  json keys = json::object();
+  std::optional<PinholeIntrinsics> intrinsics;
+};
+
+// What every frame shares (size, then intrinsics when they are not the ones camera_angle_x
+// implies); frames that differ carry their own keys.
+TopLevel SharedTopLevel(const std::vector<const Frame*>& all, double angle) {
   bool same_size = !all.empty(), same_intrinsics = !all.empty();
   for (const Frame* f : all) {
     const PinholeIntrinsics& k = f->camera.intrinsics;
@@ -64,79 +72,96 @@ void WriteDataset(const Dataset& dataset,
     same_size = same_size && k.width == first.width && k.height == first.height;
     same_intrinsics = same_intrinsics && SameIntrinsics(k, first);
   }
-  std::optional<PinholeIntrinsics> top;  // what a frame without keys gets when read back
-  json top_keys = json::object();
+  TopLevel top;
   if (same_size) {
     const PinholeIntrinsics& first = all.front()->camera.intrinsics;
     const PinholeIntrinsics implied = PinholeIntrinsics::FromFovX(angle, first.width, first.height);
-    top = implied;
-    top_keys["w"] = first.width;
-    top_keys["h"] = first.height;
+    top.intrinsics = implied;
+    top.keys["w"] = first.width;
+    top.keys["h"] = first.height;
     if (same_intrinsics && !SameIntrinsics(first, implied)) {
-      PutIntrinsics(top_keys, first);
-      top = first;
+      PutIntrinsics(top.keys, first);
+      top.intrinsics = first;
     }
   }
+  return top;
+}
 
+// Frame `i` of the split file `path`; a value the reader would refuse fails naming the file,
+// the frame and the key.
+json FrameJson(const Frame& f,
+               std::size_t i,
+               const fs::path& path,
+               const fs::path& root,
+               double angle,
+               const std::optional<PinholeIntrinsics>& top) {
+  const auto fail = [&](const char* key, const std::string& why) {
+    Fail("{}: frame {}: {}: {}", path.string(), i, key, why);
+  };
+  json obj;
+  std::string file_path = f.file_path;
+  if (file_path.empty() && !f.image_path.empty()) file_path = RelativeTo(root, f.image_path);
+  if (file_path.empty()) fail("file_path", "empty (set file_path or image_path)");
+  obj["file_path"] = file_path;
+
+  const std::string pose_problem = PoseProblem(f.camera.world_from_cam_gl);
+  if (!pose_problem.empty()) fail("transform_matrix", pose_problem);
+  json rows = json::array();
+  for (int r = 0; r < 4; ++r) {
+    rows.push_back({f.camera.world_from_cam_gl(r, 0), f.camera.world_from_cam_gl(r, 1),
+                    f.camera.world_from_cam_gl(r, 2), f.camera.world_from_cam_gl(r, 3)});
+  }
+  obj["transform_matrix"] = rows;
+
+  if (!(std::isfinite(f.time_raw) && f.time_raw >= 0)) {
+    fail("time", fmt::format("must be finite and not negative, got {}", f.time_raw));
+  }
+  obj["time"] = f.time_raw;
+  if (f.exposure_given) {
+    if (!(std::isfinite(f.exposure) && f.exposure > 0)) {
+      fail("exposures", fmt::format("must be positive and finite, got {}", f.exposure));
+    }
+    obj["exposures"] = f.exposure;
+  }
+  std::string exr = f.exr_file_path.value_or("");
+  if (exr.empty() && f.hdr_path) exr = RelativeTo(root, *f.hdr_path);
+  if (!exr.empty()) obj["exr_file_path"] = exr;
+  if (f.camera_id >= 0) obj["camera_id"] = f.camera_id;
+  if (f.exposure_index >= 0) obj["exposure_index"] = f.exposure_index;
+
+  const PinholeIntrinsics& k = f.camera.intrinsics;
+  if (std::string problem = k.Problem(); !problem.empty()) fail("intrinsics", problem);
+  // Without a shared top level, the reader falls back on camera_angle_x at the frame's size.
+  const PinholeIntrinsics base = top ? *top : PinholeIntrinsics::FromFovX(angle, k.width, k.height);
+  if (!SameIntrinsics(k, base)) {
+    PutIntrinsics(obj, k);
+  } else if (!top) {
+    obj["w"] = k.width;
+    obj["h"] = k.height;
+  }
+  return obj;
+}
+
+}  // namespace
+
+void WriteDataset(const Dataset& dataset,
+                  const fs::path& root,
+                  const DatasetWriteOptions& options) {
+  const std::vector<const Frame*> all = dataset.AllFrames();
+  const double angle = CameraAngleX(dataset, all, root);
+  const TopLevel top = SharedTopLevel(all, angle);
   std::vector<Split> splits = {Split::kTrain, Split::kTest};
   if (options.write_val && !dataset.val.empty()) splits.push_back(Split::kVal);
   for (Split split : splits) {
     const fs::path path = root / fmt::format("transforms_{}.json", SplitName(split));
-    json doc = top_keys;
+    json doc = top.keys;
     doc["camera_angle_x"] = angle;
     if (dataset.near) doc["near"] = *dataset.near;
     if (dataset.far) doc["far"] = *dataset.far;
     json frames = json::array();
     const std::vector<Frame>& split_frames = dataset.FramesOf(split);
-    for (std::size_t i = 0; i < split_frames.size(); ++i) {
-      const Frame& f = split_frames[i];
-      const auto fail = [&](const char* key, const std::string& why) {
-        Fail("{}: frame {}: {}: {}", path.string(), i, key, why);
-      };
-      json obj;
-      std::string file_path = f.file_path;
-      if (file_path.empty() && !f.image_path.empty()) file_path = RelativeTo(root, f.image_path);
-      if (file_path.empty()) fail("file_path", "empty (set file_path or image_path)");
-      obj["file_path"] = file_path;
-
-      const std::string pose_problem = PoseProblem(f.camera.world_from_cam_gl);
-      if (!pose_problem.empty()) fail("transform_matrix", pose_problem);
-      json rows = json::array();
-      for (int r = 0; r < 4; ++r) {
-        rows.push_back({f.camera.world_from_cam_gl(r, 0), f.camera.world_from_cam_gl(r, 1),
-                        f.camera.world_from_cam_gl(r, 2), f.camera.world_from_cam_gl(r, 3)});
-      }
-      obj["transform_matrix"] = rows;
-
-      if (!(std::isfinite(f.time_raw) && f.time_raw >= 0)) {
-        fail("time", fmt::format("must be finite and not negative, got {}", f.time_raw));
-      }
-      obj["time"] = f.time_raw;
-      if (f.exposure_given) {
-        if (!(std::isfinite(f.exposure) && f.exposure > 0)) {
-          fail("exposures", fmt::format("must be positive and finite, got {}", f.exposure));
-        }
-        obj["exposures"] = f.exposure;
-      }
-      std::string exr = f.exr_file_path.value_or("");
-      if (exr.empty() && f.hdr_path) exr = RelativeTo(root, *f.hdr_path);
-      if (!exr.empty()) obj["exr_file_path"] = exr;
-      if (f.camera_id >= 0) obj["camera_id"] = f.camera_id;
-      if (f.exposure_index >= 0) obj["exposure_index"] = f.exposure_index;
-
-      const PinholeIntrinsics& k = f.camera.intrinsics;
-      if (std::string problem = k.Problem(); !problem.empty()) fail("intrinsics", problem);
-      // Without a shared top level, the reader falls back on camera_angle_x at the frame's size.
-      const PinholeIntrinsics base =
-          top ? *top : PinholeIntrinsics::FromFovX(angle, k.width, k.height);
-      if (!SameIntrinsics(k, base)) {
-        PutIntrinsics(obj, k);
-      } else if (!top) {
-        obj["w"] = k.width;
-        obj["h"] = k.height;
-      }
-      frames.push_back(std::move(obj));
-    }
+    for (std::size_t i = 0; i < split_frames.size(); ++i)
+      frames.push_back(FrameJson(split_frames[i], i, path, root, angle, top.intrinsics));
     doc["frames"] = std::move(frames);
     WriteJsonFile(path, doc);
   }

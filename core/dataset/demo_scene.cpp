@@ -201,6 +201,80 @@ namespace {
 
 Vector3d RingPosition(double angle) { return {4.2 * std::cos(angle), 4.2 * std::sin(angle), 2.4}; }
 
+// One HDR render per (view, timestamp); the LDR frames reference it once per exposure.
+struct View {
+  Split split;
+  int camera_id;
+  int time_index;
+  Eigen::Matrix4d pose;
+};
+
+// Multi-view: a ring of cameras, the last held out for test. Monocular: the camera sweeps half a
+// circle; every 4th frame is held out for test (the last one when there are fewer than 4).
+std::vector<View> DemoViews(const DemoSceneOptions& options) {
+  const int num_t = options.num_timestamps;
+  const Vector3d target(0, 0, 0.5);
+  std::vector<View> views;
+  if (options.rig == DemoRig::kMultiView) {
+    for (int c = 0; c < options.num_cameras; ++c) {
+      const double angle = 2 * kPi * (c + 0.5) / options.num_cameras;
+      const Split split = c == options.num_cameras - 1 ? Split::kTest : Split::kTrain;
+      for (int i = 0; i < num_t; ++i)
+        views.push_back(
+            {split, c, i, LookAtWorldFromCamGl(RingPosition(angle), target, Vector3d::UnitZ())});
+    }
+  } else {
+    for (int i = 0; i < num_t; ++i) {
+      const double angle = kPi * (0.1 + 0.9 * i / std::max(1, num_t - 1));
+      const bool test = num_t > 1 && (i % 4 == 3 || (num_t < 4 && i == num_t - 1));
+      const Split split = test ? Split::kTest : Split::kTrain;
+      views.push_back(
+          {split, 0, i, LookAtWorldFromCamGl(RingPosition(angle), target, Vector3d::UnitZ())});
+    }
+  }
+  return views;
+}
+
+// Renders one view's HDR image and adds its LDR frames to the dataset. Multi-view: every
+// exposure at every view; monocular: exposures cycle across frames.
+void AddViewFrames(const View& view,
+                   const DemoSceneOptions& options,
+                   const PinholeIntrinsics& intrinsics,
+                   int frame_counter[3],
+                   Dataset* dataset) {
+  const fs::path& root = dataset->root;
+  const int num_t = options.num_timestamps;
+  const int num_e = static_cast<int>(options.exposures.size());
+  const double t = num_t > 1 ? static_cast<double>(view.time_index) / (num_t - 1) : 0.0;
+  const std::string stem = fmt::format("cam{:02d}_t{:03d}", view.camera_id, view.time_index);
+  const std::string exr_rel = "hdr/" + stem + ".exr";
+  Camera camera{intrinsics, view.pose};
+  WriteImage(root / exr_rel, RenderDemoView(camera, t, options.samples_per_axis),
+             {.format = PixelFormat::kFloat});
+  std::vector<int> exposure_ids;
+  if (options.rig == DemoRig::kMultiView) {
+    for (int e = 0; e < num_e; ++e) exposure_ids.push_back(e);
+  } else {
+    exposure_ids.push_back(view.time_index % num_e);
+  }
+  for (int e : exposure_ids) {
+    Frame frame;
+    frame.split = view.split;
+    frame.index = frame_counter[static_cast<int>(view.split)]++;
+    frame.file_path = fmt::format("images/{}_e{}.png", stem, e);
+    frame.image_path = root / frame.file_path;
+    frame.exr_file_path = exr_rel;
+    frame.hdr_path = root / exr_rel;
+    frame.time_raw = frame.time = t;
+    frame.exposure = options.exposures[e];
+    frame.exposure_given = true;
+    frame.camera_id = view.camera_id;
+    frame.exposure_index = e;
+    frame.camera = camera;
+    (view.split == Split::kTrain ? dataset->train : dataset->test).push_back(frame);
+  }
+}
+
 }  // namespace
 
 Dataset MakeDemoScene(const DemoSceneOptions& options, const fs::path& final_root) {
@@ -215,70 +289,11 @@ Dataset MakeDemoScene(const DemoSceneOptions& options, const fs::path& final_roo
   dataset.camera_angle_x = kFovX;
   const PinholeIntrinsics intrinsics =
       PinholeIntrinsics::FromFovX(kFovX, options.width, options.height);
-  const int num_t = options.num_timestamps;
-  const int num_e = static_cast<int>(options.exposures.size());
-  const Vector3d target(0, 0, 0.5);
-
-  // One HDR render per (view, timestamp); the LDR frames reference it once per exposure.
-  struct View {
-    Split split;
-    int camera_id;
-    int time_index;
-    Eigen::Matrix4d pose;
-  };
-  std::vector<View> views;
-  if (options.rig == DemoRig::kMultiView) {
-    for (int c = 0; c < options.num_cameras; ++c) {
-      const double angle = 2 * kPi * (c + 0.5) / options.num_cameras;
-      const Split split = c == options.num_cameras - 1 ? Split::kTest : Split::kTrain;
-      for (int i = 0; i < num_t; ++i)
-        views.push_back(
-            {split, c, i, LookAtWorldFromCamGl(RingPosition(angle), target, Vector3d::UnitZ())});
-    }
-  } else {
-    // The camera sweeps half a circle; every 4th frame is held out for test (the last one when
-    // there are fewer than 4).
-    for (int i = 0; i < num_t; ++i) {
-      const double angle = kPi * (0.1 + 0.9 * i / std::max(1, num_t - 1));
-      const bool test = num_t > 1 && (i % 4 == 3 || (num_t < 4 && i == num_t - 1));
-      const Split split = test ? Split::kTest : Split::kTrain;
-      views.push_back(
-          {split, 0, i, LookAtWorldFromCamGl(RingPosition(angle), target, Vector3d::UnitZ())});
-    }
-  }
-
+  const std::vector<View> views = DemoViews(options);
   Progress progress("render demo scene", static_cast<std::int64_t>(views.size()));
   int frame_counter[3] = {0, 0, 0};
   for (const View& view : views) {
-    const double t = num_t > 1 ? static_cast<double>(view.time_index) / (num_t - 1) : 0.0;
-    const std::string stem = fmt::format("cam{:02d}_t{:03d}", view.camera_id, view.time_index);
-    const std::string exr_rel = "hdr/" + stem + ".exr";
-    Camera camera{intrinsics, view.pose};
-    WriteImage(root / exr_rel, RenderDemoView(camera, t, options.samples_per_axis),
-               {.format = PixelFormat::kFloat});
-    // Multi-view: every exposure at every view; monocular: exposures cycle across frames.
-    std::vector<int> exposure_ids;
-    if (options.rig == DemoRig::kMultiView) {
-      for (int e = 0; e < num_e; ++e) exposure_ids.push_back(e);
-    } else {
-      exposure_ids.push_back(view.time_index % num_e);
-    }
-    for (int e : exposure_ids) {
-      Frame frame;
-      frame.split = view.split;
-      frame.index = frame_counter[static_cast<int>(view.split)]++;
-      frame.file_path = fmt::format("images/{}_e{}.png", stem, e);
-      frame.image_path = root / frame.file_path;
-      frame.exr_file_path = exr_rel;
-      frame.hdr_path = root / exr_rel;
-      frame.time_raw = frame.time = t;
-      frame.exposure = options.exposures[e];
-      frame.exposure_given = true;
-      frame.camera_id = view.camera_id;
-      frame.exposure_index = e;
-      frame.camera = camera;
-      (view.split == Split::kTrain ? dataset.train : dataset.test).push_back(frame);
-    }
+    AddViewFrames(view, options, intrinsics, frame_counter, &dataset);
     progress.Advance();
   }
   progress.Finish();

@@ -295,6 +295,68 @@ std::string ReadAllBytes(const fs::path& path) {
   return buffer.str();
 }
 
+// The vertex element's columns this reader uses (-1 when absent): x, y, z are required, the
+// colour all three or none, time optional. List properties are refused.
+struct VertexColumns {
+  int x, y, z, red, green, blue, time;
+  bool has_colors, has_time;
+};
+
+VertexColumns FindVertexColumns(const Element& vertex, const std::string& name) {
+  auto find = [&](std::string_view prop) {
+    for (std::size_t i = 0; i < vertex.properties.size(); ++i) {
+      if (vertex.properties[i].name == prop) return static_cast<int>(i);
+    }
+    return -1;
+  };
+  for (const Property& p : vertex.properties) {
+    if (p.is_list) Fail("{}: unsupported list property '{}' in the vertex element", name, p.name);
+  }
+  VertexColumns c;
+  c.x = find("x"), c.y = find("y"), c.z = find("z");
+  if (c.x < 0 || c.y < 0 || c.z < 0)
+    Fail("{}: bad PLY header: the vertex element lacks x, y or z", name);
+  c.red = find("red"), c.green = find("green"), c.blue = find("blue"), c.time = find("time");
+  const int num_colors = (c.red >= 0) + (c.green >= 0) + (c.blue >= 0);
+  if (num_colors != 0 && num_colors != 3) {
+    Fail("{}: bad PLY header: the vertex element has only some of red, green, blue", name);
+  }
+  c.has_colors = num_colors == 3;
+  c.has_time = c.time >= 0;
+  return c;
+}
+
+// Vertex i from its row of values: the position, colour (integers scaled to [0, 1]) and time,
+// each finite.
+void AppendVertex(const std::vector<double>& row,
+                  std::int64_t i,
+                  const Element& vertex,
+                  const VertexColumns& col,
+                  const std::string& name,
+                  PointCloud* cloud) {
+  const Eigen::Vector3f p(row[col.x], row[col.y], row[col.z]);
+  if (!p.allFinite()) {
+    Fail("{}: vertex {} has a non-finite coordinate ({}, {}, {})", name, i, row[col.x], row[col.y],
+         row[col.z]);
+  }
+  cloud->positions.push_back(p);
+  if (col.has_colors) {
+    Eigen::Vector3f c;
+    const int cols[3] = {col.red, col.green, col.blue};
+    for (int ch = 0; ch < 3; ++ch) {
+      const Scalar type = vertex.properties[cols[ch]].type;
+      c[ch] = static_cast<float>(IsFloat(type) ? row[cols[ch]] : row[cols[ch]] / IntegerMax(type));
+    }
+    if (!c.allFinite()) Fail("{}: vertex {} has a non-finite colour", name, i);
+    cloud->colors.push_back(c);
+  }
+  if (col.has_time) {
+    const auto t = static_cast<float>(row[col.time]);
+    if (!std::isfinite(t)) Fail("{}: vertex {} has a non-finite time", name, i);
+    cloud->times.push_back(t);
+  }
+}
+
 }  // namespace
 
 PointCloud ReadPly(const fs::path& path) {
@@ -306,27 +368,7 @@ PointCloud ReadPly(const fs::path& path) {
                                       [](const Element& e) { return e.name == "vertex"; });
   if (vertex_it == header.elements.end()) Fail("{}: bad PLY header: no vertex element", name);
   const Element& vertex = *vertex_it;
-
-  // Column of each property we use, -1 when absent.
-  auto find = [&](std::string_view prop) {
-    for (std::size_t i = 0; i < vertex.properties.size(); ++i) {
-      if (vertex.properties[i].name == prop) return static_cast<int>(i);
-    }
-    return -1;
-  };
-  for (const Property& p : vertex.properties) {
-    if (p.is_list) Fail("{}: unsupported list property '{}' in the vertex element", name, p.name);
-  }
-  const int ix = find("x"), iy = find("y"), iz = find("z");
-  if (ix < 0 || iy < 0 || iz < 0)
-    Fail("{}: bad PLY header: the vertex element lacks x, y or z", name);
-  const int ir = find("red"), ig = find("green"), ib = find("blue"), it = find("time");
-  const int num_colors = (ir >= 0) + (ig >= 0) + (ib >= 0);
-  if (num_colors != 0 && num_colors != 3) {
-    Fail("{}: bad PLY header: the vertex element has only some of red, green, blue", name);
-  }
-  const bool has_colors = num_colors == 3;
-  const bool has_time = it >= 0;
+  const VertexColumns columns = FindVertexColumns(vertex, name);
 
   ValueReader reader(path, bytes, header.data_offset, header.format);
   for (auto e = header.elements.begin(); e != vertex_it; ++e) SkipElement(path, *e, reader);
@@ -348,8 +390,8 @@ PointCloud ReadPly(const fs::path& path) {
                                                     ? std::min<std::int64_t>(vertex.count, 1 << 20)
                                                     : vertex.count);
   cloud.positions.reserve(reserve);
-  if (has_colors) cloud.colors.reserve(reserve);
-  if (has_time) cloud.times.reserve(reserve);
+  if (columns.has_colors) cloud.colors.reserve(reserve);
+  if (columns.has_time) cloud.times.reserve(reserve);
   std::vector<double> row(num_props);
   for (std::int64_t i = 0; i < vertex.count; ++i) {
     for (std::size_t k = 0; k < num_props; ++k) {
@@ -358,28 +400,7 @@ PointCloud ReadPly(const fs::path& path) {
              vertex.count, i);
       }
     }
-    const Eigen::Vector3f p(row[ix], row[iy], row[iz]);
-    if (!p.allFinite()) {
-      Fail("{}: vertex {} has a non-finite coordinate ({}, {}, {})", name, i, row[ix], row[iy],
-           row[iz]);
-    }
-    cloud.positions.push_back(p);
-    if (has_colors) {
-      Eigen::Vector3f c;
-      const int cols[3] = {ir, ig, ib};
-      for (int ch = 0; ch < 3; ++ch) {
-        const Scalar type = vertex.properties[cols[ch]].type;
-        c[ch] =
-            static_cast<float>(IsFloat(type) ? row[cols[ch]] : row[cols[ch]] / IntegerMax(type));
-      }
-      if (!c.allFinite()) Fail("{}: vertex {} has a non-finite colour", name, i);
-      cloud.colors.push_back(c);
-    }
-    if (has_time) {
-      const auto t = static_cast<float>(row[it]);
-      if (!std::isfinite(t)) Fail("{}: vertex {} has a non-finite time", name, i);
-      cloud.times.push_back(t);
-    }
+    AppendVertex(row, i, vertex, columns, name, &cloud);
   }
   return cloud;
 }

@@ -83,6 +83,103 @@ double Mse(const T* a, const T* b, int width, int height, int channels) {
   return sum / (static_cast<double>(width) * height * channels);
 }
 
+constexpr int kSsimRadius = kSsimWindow / 2;
+constexpr int kSsimQuantities = 5;  // a, b, a^2, b^2, ab
+
+// The rows r0..r1 of a band of SSIM's separable window sum, row_len values each.
+struct SsimBand {
+  std::int64_t r0, r1;
+  std::size_t rows, row_len;
+  int channels;
+};
+
+// The horizontal pass over a band: the five per-pixel products of every row, zero-padded by the
+// window radius, filtered along the row into horizontal[q][(r - r0) * row_len + i].
+template <typename T>
+void SsimHorizontalPass(const T* a,
+                        const T* b,
+                        const SsimBand& band,
+                        const std::array<double, kSsimWindow>& g,
+                        std::vector<double>* horizontal) {
+  const std::size_t row_len = band.row_len;
+  const std::size_t pad = static_cast<std::size_t>(kSsimRadius) * band.channels;
+  const std::size_t padded_len = row_len + 2 * pad;
+  // One zero-padded row of each product; the pads stay zero.
+  std::vector<double> padded(kSsimQuantities * padded_len, 0.0);
+  for (std::int64_t r = band.r0; r < band.r1; ++r) {
+    const T* pa = a + r * row_len;
+    const T* pb = b + r * row_len;
+    double* qa = &padded[0 * padded_len + pad];
+    double* qb = &padded[1 * padded_len + pad];
+    double* qaa = &padded[2 * padded_len + pad];
+    double* qbb = &padded[3 * padded_len + pad];
+    double* qab = &padded[4 * padded_len + pad];
+    for (std::size_t i = 0; i < row_len; ++i) {
+      const double x = static_cast<double>(pa[i]);
+      const double y = static_cast<double>(pb[i]);
+      qa[i] = x;
+      qb[i] = y;
+      qaa[i] = x * x;
+      qbb[i] = y * y;
+      qab[i] = x * y;
+    }
+    for (int q = 0; q < kSsimQuantities; ++q) {
+      const double* src = &padded[q * padded_len];
+      double* dst = &(*horizontal)[(q * band.rows + (r - band.r0)) * row_len];
+      for (std::size_t i = 0; i < row_len; ++i) dst[i] = g[0] * src[i];
+      for (int k = 1; k < kSsimWindow; ++k) {
+        const double w = g[k];
+        const double* s = src + static_cast<std::size_t>(k) * band.channels;
+        for (std::size_t i = 0; i < row_len; ++i) dst[i] += w * s[i];
+      }
+    }
+  }
+}
+
+// Output row y: the vertical pass over the band's filtered rows (skipping the zero rows outside
+// the image) into `filtered`, then SSIM per value, written to `out` when non-null; returns the
+// row's sum in value order.
+double SsimRow(std::int64_t y,
+               const SsimBand& band,
+               const std::vector<double>& horizontal,
+               const std::array<double, kSsimWindow>& g,
+               double c1,
+               double c2,
+               std::vector<double>* filtered,
+               float* out) {
+  const std::size_t row_len = band.row_len;
+  for (int q = 0; q < kSsimQuantities; ++q) {
+    double* dst = &(*filtered)[q * row_len];
+    std::fill(dst, dst + row_len, 0.0);
+    for (int k = 0; k < kSsimWindow; ++k) {
+      const std::int64_t r = y + k - kSsimRadius;
+      if (r < band.r0 || r >= band.r1) continue;  // outside the image: a zero row
+      const double w = g[k];
+      const double* src = &horizontal[(q * band.rows + (r - band.r0)) * row_len];
+      for (std::size_t i = 0; i < row_len; ++i) dst[i] += w * src[i];
+    }
+  }
+  const double* mu_a = &(*filtered)[0 * row_len];
+  const double* mu_b = &(*filtered)[1 * row_len];
+  const double* e_aa = &(*filtered)[2 * row_len];
+  const double* e_bb = &(*filtered)[3 * row_len];
+  const double* e_ab = &(*filtered)[4 * row_len];
+  double sum = 0.0;
+  for (std::size_t i = 0; i < row_len; ++i) {
+    const double mu_aa = mu_a[i] * mu_a[i];
+    const double mu_bb = mu_b[i] * mu_b[i];
+    const double mu_ab = mu_a[i] * mu_b[i];
+    const double var_a = e_aa[i] - mu_aa;
+    const double var_b = e_bb[i] - mu_bb;
+    const double cov = e_ab[i] - mu_ab;
+    const double s =
+        ((2.0 * mu_ab + c1) * (2.0 * cov + c2)) / ((mu_aa + mu_bb + c1) * (var_a + var_b + c2));
+    if (out) out[i] = static_cast<float>(s);
+    sum += s;
+  }
+  return sum;
+}
+
 // Windowed SSIM on interleaved images. Zero padding makes the 2-D window sum separable exactly:
 // a horizontal pass over the five per-pixel products (a, b, a^2, b^2, ab) of every needed row,
 // then a vertical pass, both skipping the zeros outside the image. Rows are processed in
@@ -93,85 +190,22 @@ template <typename T>
 double SsimCore(
     const T* a, const T* b, int width, int height, int channels, double c1, double c2, float* map) {
   static const std::array<double, kSsimWindow> g = SsimGaussianKernel();
-  constexpr int kRadius = kSsimWindow / 2;
-  constexpr int kQuantities = 5;  // a, b, a^2, b^2, ab
   const std::size_t row_len = static_cast<std::size_t>(width) * channels;
-  const std::size_t padded_len = row_len + 2 * kRadius * static_cast<std::size_t>(channels);
   constexpr std::int64_t kBand = 32;
   std::vector<double> row_sums(height, 0.0);
-
   ParallelForChunks(height, kBand, [&](std::int64_t y0, std::int64_t y1) {
-    const std::int64_t r0 = std::max<std::int64_t>(0, y0 - kRadius);
-    const std::int64_t r1 = std::min<std::int64_t>(height, y1 + kRadius);
-    const std::size_t band_rows = static_cast<std::size_t>(r1 - r0);
-    // horizontal[q][(r - r0) * row_len + i]: the row-filtered quantity q.
-    std::vector<double> horizontal(kQuantities * band_rows * row_len);
-    // One zero-padded row of each product; the pads stay zero.
-    std::vector<double> padded(kQuantities * padded_len, 0.0);
-    const std::size_t pad = static_cast<std::size_t>(kRadius) * channels;
-    for (std::int64_t r = r0; r < r1; ++r) {
-      const T* pa = a + r * row_len;
-      const T* pb = b + r * row_len;
-      double* qa = &padded[0 * padded_len + pad];
-      double* qb = &padded[1 * padded_len + pad];
-      double* qaa = &padded[2 * padded_len + pad];
-      double* qbb = &padded[3 * padded_len + pad];
-      double* qab = &padded[4 * padded_len + pad];
-      for (std::size_t i = 0; i < row_len; ++i) {
-        const double x = static_cast<double>(pa[i]);
-        const double y = static_cast<double>(pb[i]);
-        qa[i] = x;
-        qb[i] = y;
-        qaa[i] = x * x;
-        qbb[i] = y * y;
-        qab[i] = x * y;
-      }
-      for (int q = 0; q < kQuantities; ++q) {
-        const double* src = &padded[q * padded_len];
-        double* dst = &horizontal[(q * band_rows + (r - r0)) * row_len];
-        for (std::size_t i = 0; i < row_len; ++i) dst[i] = g[0] * src[i];
-        for (int k = 1; k < kSsimWindow; ++k) {
-          const double w = g[k];
-          const double* s = src + static_cast<std::size_t>(k) * channels;
-          for (std::size_t i = 0; i < row_len; ++i) dst[i] += w * s[i];
-        }
-      }
-    }
-
-    std::vector<double> filtered(kQuantities * row_len);
-    for (std::int64_t y = y0; y < y1; ++y) {
-      for (int q = 0; q < kQuantities; ++q) {
-        double* dst = &filtered[q * row_len];
-        std::fill(dst, dst + row_len, 0.0);
-        for (int k = 0; k < kSsimWindow; ++k) {
-          const std::int64_t r = y + k - kRadius;
-          if (r < r0 || r >= r1) continue;  // outside the image: a zero row
-          const double w = g[k];
-          const double* src = &horizontal[(q * band_rows + (r - r0)) * row_len];
-          for (std::size_t i = 0; i < row_len; ++i) dst[i] += w * src[i];
-        }
-      }
-      const double* mu_a = &filtered[0 * row_len];
-      const double* mu_b = &filtered[1 * row_len];
-      const double* e_aa = &filtered[2 * row_len];
-      const double* e_bb = &filtered[3 * row_len];
-      const double* e_ab = &filtered[4 * row_len];
-      float* out = map ? map + y * row_len : nullptr;
-      double sum = 0.0;
-      for (std::size_t i = 0; i < row_len; ++i) {
-        const double mu_aa = mu_a[i] * mu_a[i];
-        const double mu_bb = mu_b[i] * mu_b[i];
-        const double mu_ab = mu_a[i] * mu_b[i];
-        const double var_a = e_aa[i] - mu_aa;
-        const double var_b = e_bb[i] - mu_bb;
-        const double cov = e_ab[i] - mu_ab;
-        const double s =
-            ((2.0 * mu_ab + c1) * (2.0 * cov + c2)) / ((mu_aa + mu_bb + c1) * (var_a + var_b + c2));
-        if (out) out[i] = static_cast<float>(s);
-        sum += s;
-      }
-      row_sums[y] = sum;
-    }
+    SsimBand band;
+    band.r0 = std::max<std::int64_t>(0, y0 - kSsimRadius);
+    band.r1 = std::min<std::int64_t>(height, y1 + kSsimRadius);
+    band.rows = static_cast<std::size_t>(band.r1 - band.r0);
+    band.row_len = row_len;
+    band.channels = channels;
+    std::vector<double> horizontal(kSsimQuantities * band.rows * row_len);
+    SsimHorizontalPass(a, b, band, g, &horizontal);
+    std::vector<double> filtered(kSsimQuantities * row_len);
+    for (std::int64_t y = y0; y < y1; ++y)
+      row_sums[y] =
+          SsimRow(y, band, horizontal, g, c1, c2, &filtered, map ? map + y * row_len : nullptr);
   });
   double total = 0.0;
   for (double s : row_sums) total += s;

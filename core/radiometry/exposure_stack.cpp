@@ -58,11 +58,10 @@ void DatasetSynthesisOptions::Validate() const {
   pipeline.Validate();
 }
 
-int SynthesizeDatasetLdr(const fs::path& root, const DatasetSynthesisOptions& options) {
-  options.Validate();
-  const std::unique_ptr<Crf> crf = ParseCrf(options.crf);
-  const Dataset dataset =
-      LoadDataset(root, {.image_check = ImageCheck::kNone, .require_test = false});
+namespace {
+
+// Every frame of the dataset; each must have HDR ground truth.
+std::vector<const Frame*> FramesWithHdr(const Dataset& dataset, const fs::path& root) {
   std::vector<const Frame*> frames = dataset.AllFrames();
   for (const Frame* f : frames) {
     if (!f->hdr_path) {
@@ -74,9 +73,13 @@ int SynthesizeDatasetLdr(const fs::path& root, const DatasetSynthesisOptions& op
     }
   }
   if (frames.empty()) Fail("{}: the dataset has no frames", root.string());
+  return frames;
+}
 
-  // The LDR images are this command's outputs, the HDR images its inputs: an LDR path that is an
-  // HDR file would destroy ground truth, so it is refused before anything is written.
+// The files this command writes: the manifest and every frame's LDR image. The LDR images are
+// its outputs, the HDR images its inputs: an LDR path that is an HDR file would destroy ground
+// truth, so it is refused before anything is written.
+std::vector<fs::path> LdrOutputs(const std::vector<const Frame*>& frames, const fs::path& root) {
   std::map<fs::path, const Frame*> hdr_inputs;
   for (const Frame* f : frames) hdr_inputs.emplace(fs::weakly_canonical(*f->hdr_path), f);
   std::vector<fs::path> outputs = {root / kManifestName};
@@ -90,10 +93,12 @@ int SynthesizeDatasetLdr(const fs::path& root, const DatasetSynthesisOptions& op
     }
     outputs.push_back(f->image_path);
   }
-  // Writing a dataset's LDR images is this command's job: the output guard lets exactly these
-  // files through (core/files/output_guard.h), nothing else in the dataset's folders.
-  const OutputPermit permit(outputs);
-  // Every HDR image's size against its frames' cameras, from the headers, before any work.
+  return outputs;
+}
+
+// The frames by HDR file, every HDR image's size checked against its frames' cameras from the
+// headers, before any work.
+std::map<fs::path, std::vector<const Frame*>> FramesByHdr(const std::vector<const Frame*>& frames) {
   std::map<fs::path, std::vector<const Frame*>> by_hdr;
   for (const Frame* f : frames) by_hdr[*f->hdr_path].push_back(f);
   for (const auto& [hdr_path, users] : by_hdr) {
@@ -109,6 +114,62 @@ int SynthesizeDatasetLdr(const fs::path& root, const DatasetSynthesisOptions& op
       }
     }
   }
+  return by_hdr;
+}
+
+// One frame's LDR image from its HDR ground truth: its exposure (with the gain drift over
+// time) and noise seeded per frame.
+Image SynthesizeFrame(const Frame& f,
+                      const Image& hdr,
+                      const fs::path& hdr_path,
+                      const Crf& crf,
+                      const DatasetPipeline& pipeline,
+                      const DatasetSynthesisOptions& options) {
+  LdrSynthesisOptions ldr;
+  ldr.exposure = f.exposure * std::exp(options.gain_drift * (f.time - 0.5));
+  ldr.bits = options.bits;
+  ldr.noise = options.noise;
+  ldr.noise.seed = MixSeed(options.noise.seed ^ MixSeed(static_cast<std::uint64_t>(f.split) << 32 |
+                                                        static_cast<std::uint32_t>(f.index)));
+  try {
+    return pipeline.Synthesize(hdr.Rgb(), f, crf, ldr);
+  } catch (const Error& e) {
+    Fail("{}: {}", hdr_path.string(), e.what());
+  }
+}
+
+void WriteManifest(const fs::path& root,
+                   const Crf& crf,
+                   const DatasetPipeline& pipeline,
+                   const DatasetSynthesisOptions& options,
+                   std::size_t frames) {
+  nlohmann::json manifest = {
+      {"crf", crf.ToJson()},
+      {"crf_spec", crf.Spec()},
+      {"bits", options.bits},
+      {"gain_drift", options.gain_drift},
+      {"noise",
+       {{"full_well", options.noise.full_well},
+        {"read_sigma", options.noise.read_sigma},
+        {"seed", options.noise.seed}}},
+      {"frames", frames},
+  };
+  if (!pipeline.Identity()) manifest["pipeline"] = pipeline.ToJson(root);
+  WriteJsonFile(root / kManifestName, manifest);
+}
+
+}  // namespace
+
+int SynthesizeDatasetLdr(const fs::path& root, const DatasetSynthesisOptions& options) {
+  options.Validate();
+  const std::unique_ptr<Crf> crf = ParseCrf(options.crf);
+  const Dataset dataset =
+      LoadDataset(root, {.image_check = ImageCheck::kNone, .require_test = false});
+  const std::vector<const Frame*> frames = FramesWithHdr(dataset, root);
+  // Writing a dataset's LDR images is this command's job: the output guard lets exactly these
+  // files through (core/files/output_guard.h), nothing else in the dataset's folders.
+  const OutputPermit permit(LdrOutputs(frames, root));
+  const std::map<fs::path, std::vector<const Frame*>> by_hdr = FramesByHdr(frames);
 
   const DatasetPipeline pipeline(options.pipeline, options.crf, frames);
 
@@ -128,19 +189,7 @@ int SynthesizeDatasetLdr(const fs::path& root, const DatasetSynthesisOptions& op
         progress.Advance();
         continue;
       }
-      LdrSynthesisOptions ldr;
-      ldr.exposure = f->exposure * std::exp(options.gain_drift * (f->time - 0.5));
-      ldr.bits = options.bits;
-      ldr.noise = options.noise;
-      ldr.noise.seed =
-          MixSeed(options.noise.seed ^ MixSeed(static_cast<std::uint64_t>(f->split) << 32 |
-                                               static_cast<std::uint32_t>(f->index)));
-      Image image;
-      try {
-        image = pipeline.Synthesize(hdr.Rgb(), *f, *crf, ldr);
-      } catch (const Error& e) {
-        Fail("{}: {}", hdr_path.string(), e.what());
-      }
+      const Image image = SynthesizeFrame(*f, hdr, hdr_path, *crf, pipeline, options);
       WriteImage(f->image_path, image,
                  {.format = options.bits == 16 ? PixelFormat::kUint16 : PixelFormat::kUint8,
                   .batch = &batch});
@@ -150,20 +199,7 @@ int SynthesizeDatasetLdr(const fs::path& root, const DatasetSynthesisOptions& op
   });
   progress.Finish();
   batch.Commit();
-
-  nlohmann::json manifest = {
-      {"crf", crf->ToJson()},
-      {"crf_spec", crf->Spec()},
-      {"bits", options.bits},
-      {"gain_drift", options.gain_drift},
-      {"noise",
-       {{"full_well", options.noise.full_well},
-        {"read_sigma", options.noise.read_sigma},
-        {"seed", options.noise.seed}}},
-      {"frames", frames.size()},
-  };
-  if (!pipeline.Identity()) manifest["pipeline"] = pipeline.ToJson(root);
-  WriteJsonFile(root / kManifestName, manifest);
+  WriteManifest(root, *crf, pipeline, options, frames.size());
   int total = 0;
   for (int w : written) total += w;
   return total;

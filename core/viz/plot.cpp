@@ -507,30 +507,29 @@ void AddPointLabels(const std::vector<PlotSeries>& series,
   }
 }
 
-Scene BuildScene(const std::vector<PlotSeries>& series, const PlotOptions& o) {
-  const PlotFrame f = ComputePlotFrame(series, o);
-  const Layout l = LayoutFor(o);
-  Scene scene{o.width, o.height, {}};
-  auto& items = scene.items;
-  const Rect area = {static_cast<double>(f.left), static_cast<double>(f.top),
-                     static_cast<double>(f.right), static_cast<double>(f.bottom)};
+// Grid lines at every tick, the minor ones first (lighter), under everything else.
+void AddGrid(const PlotFrame& f, const Rect& area, std::vector<Item>* items) {
+  auto vertical = [&](double v, const Rgb& c) {
+    const int x = TickColumn(f, v);
+    items->push_back(BoxItem{{x + 0.0, area.y0, x + 1.0, area.y1}, c, std::nullopt});
+  };
+  auto horizontal = [&](double v, const Rgb& c) {
+    const int y = TickRow(f, v);
+    items->push_back(BoxItem{{area.x0, y + 0.0, area.x1, y + 1.0}, c, std::nullopt});
+  };
+  for (double v : f.x_minor_ticks) vertical(v, kMinorGridColor);
+  for (double v : f.y_minor_ticks) horizontal(v, kMinorGridColor);
+  for (const AxisTick& t : f.x_ticks) vertical(t.value, kGridColor);
+  for (const AxisTick& t : f.y_ticks) horizontal(t.value, kGridColor);
+}
 
-  if (o.grid) {
-    auto vertical = [&](double v, const Rgb& c) {
-      const int x = TickColumn(f, v);
-      items.push_back(BoxItem{{x + 0.0, area.y0, x + 1.0, area.y1}, c, std::nullopt});
-    };
-    auto horizontal = [&](double v, const Rgb& c) {
-      const int y = TickRow(f, v);
-      items.push_back(BoxItem{{area.x0, y + 0.0, area.x1, y + 1.0}, c, std::nullopt});
-    };
-    for (double v : f.x_minor_ticks) vertical(v, kMinorGridColor);
-    for (double v : f.y_minor_ticks) horizontal(v, kMinorGridColor);
-    for (const AxisTick& t : f.x_ticks) vertical(t.value, kGridColor);
-    for (const AxisTick& t : f.y_ticks) horizontal(t.value, kGridColor);
-  }
-
-  std::vector<Point> samples;  // where the data is drawn, to keep the legend off it
+// The series' lines and markers; returns where the data is drawn, to keep the legend off it.
+std::vector<Point> AddSeriesMarks(const std::vector<PlotSeries>& series,
+                                  const PlotFrame& f,
+                                  const PlotOptions& o,
+                                  const Rect& area,
+                                  std::vector<Item>* items) {
+  std::vector<Point> samples;
   for (const PlotSeries& s : series) {
     MarkItem mark = SeriesMark(s, f, o, area);
     for (const auto& run : mark.runs) {
@@ -544,71 +543,95 @@ Scene BuildScene(const std::vector<PlotSeries>& series, const PlotOptions& o) {
       samples.push_back(run.back());
     }
     samples.insert(samples.end(), mark.markers.begin(), mark.markers.end());
-    items.push_back(std::move(mark));
+    items->push_back(std::move(mark));
   }
+  return samples;
+}
 
-  // Frame, ticks and tick labels.
-  items.push_back(BoxItem{area.Expanded(1.0), std::nullopt, kFrameColor});
+// Frame, ticks (minor ones half as long) and tick labels.
+void AddFrameAndTicks(const PlotFrame& f,
+                      const PlotOptions& o,
+                      const Layout& l,
+                      const Rect& area,
+                      std::vector<Item>* items) {
+  items->push_back(BoxItem{area.Expanded(1.0), std::nullopt, kFrameColor});
   const int fs = l.font_scale;
   for (double v : f.x_minor_ticks) {
     const int x = TickColumn(f, v);
-    items.push_back(BoxItem{{x + 0.0, area.y1 + 1, x + 1.0, area.y1 + 1 + l.tick_length / 2},
-                            kFrameColor,
-                            std::nullopt});
+    items->push_back(BoxItem{{x + 0.0, area.y1 + 1, x + 1.0, area.y1 + 1 + l.tick_length / 2},
+                             kFrameColor,
+                             std::nullopt});
   }
   for (double v : f.y_minor_ticks) {
     const int y = TickRow(f, v);
-    items.push_back(BoxItem{{area.x0 - 1 - l.tick_length / 2, y + 0.0, area.x0 - 1, y + 1.0},
-                            kFrameColor,
-                            std::nullopt});
+    items->push_back(BoxItem{{area.x0 - 1 - l.tick_length / 2, y + 0.0, area.x0 - 1, y + 1.0},
+                             kFrameColor,
+                             std::nullopt});
   }
   for (const AxisTick& t : f.x_ticks) {
     const int x = TickColumn(f, t.value);
-    items.push_back(BoxItem{
+    items->push_back(BoxItem{
         {x + 0.0, area.y1 + 1, x + 1.0, area.y1 + 1 + l.tick_length}, kFrameColor, std::nullopt});
     const int w = TextWidth(t.label, fs);
     const double lx = std::clamp(x + 0.5 - 0.5 * w, 0.0, static_cast<double>(o.width - w));
-    items.push_back(LabelItem{std::round(lx), area.y1 + 1 + l.tick_length + l.pad / 2, t.label,
-                              kTextColor, fs, false});
+    items->push_back(LabelItem{std::round(lx), area.y1 + 1 + l.tick_length + l.pad / 2, t.label,
+                               kTextColor, fs, false});
   }
   for (const AxisTick& t : f.y_ticks) {
     const int y = TickRow(f, t.value);
-    items.push_back(BoxItem{
+    items->push_back(BoxItem{
         {area.x0 - 1 - l.tick_length, y + 0.0, area.x0 - 1, y + 1.0}, kFrameColor, std::nullopt});
     const int w = TextWidth(t.label, fs);
     const double ly = std::clamp(y + 0.5 - 0.5 * kGlyphBaseline * fs, 0.0,
                                  static_cast<double>(o.height - l.text_height));
-    items.push_back(LabelItem{area.x0 - 1 - l.tick_length - l.pad / 2 - w, std::round(ly), t.label,
-                              kTextColor, fs, false});
+    items->push_back(LabelItem{area.x0 - 1 - l.tick_length - l.pad / 2 - w, std::round(ly), t.label,
+                               kTextColor, fs, false});
   }
+}
 
-  // Axis labels and title.
+// Axis labels (the y label turned up) and the title, one size larger.
+void AddAxisLabelsAndTitle(const PlotOptions& o,
+                           const Layout& l,
+                           const Rect& area,
+                           std::vector<Item>* items) {
+  const int fs = l.font_scale;
   if (!o.x_label.empty()) {
     const int w = TextWidth(o.x_label, fs);
-    items.push_back(LabelItem{std::round(std::max(0.0, 0.5 * (area.x0 + area.x1 - w))),
-                              o.height - l.pad - l.text_height + 0.0, o.x_label, kTextColor, fs,
-                              false});
+    items->push_back(LabelItem{std::round(std::max(0.0, 0.5 * (area.x0 + area.x1 - w))),
+                               o.height - l.pad - l.text_height + 0.0, o.x_label, kTextColor, fs,
+                               false});
   }
   if (!o.y_label.empty()) {
     const int w = TextWidth(o.y_label, fs);
-    items.push_back(LabelItem{static_cast<double>(l.pad),
-                              std::round(std::max(0.0, 0.5 * (area.y0 + area.y1 - w))), o.y_label,
-                              kTextColor, fs, true});
+    items->push_back(LabelItem{static_cast<double>(l.pad),
+                               std::round(std::max(0.0, 0.5 * (area.y0 + area.y1 - w))), o.y_label,
+                               kTextColor, fs, true});
   }
   if (!o.title.empty()) {
     const int w = TextWidth(o.title, fs + 1);
     const double x =
         std::clamp(0.5 * (area.x0 + area.x1 - w), 0.0, std::max(0.0, o.width - w + 0.0));
-    items.push_back(
+    items->push_back(
         LabelItem{std::round(x), static_cast<double>(l.pad), o.title, kTextColor, fs + 1, false});
   }
+}
 
+Scene BuildScene(const std::vector<PlotSeries>& series, const PlotOptions& o) {
+  const PlotFrame f = ComputePlotFrame(series, o);
+  const Layout l = LayoutFor(o);
+  Scene scene{o.width, o.height, {}};
+  const Rect area = {static_cast<double>(f.left), static_cast<double>(f.top),
+                     static_cast<double>(f.right), static_cast<double>(f.bottom)};
+  if (o.grid) AddGrid(f, area, &scene.items);
+  const std::vector<Point> samples = AddSeriesMarks(series, f, o, area, &scene.items);
+  AddFrameAndTicks(f, o, l, area, &scene.items);
+  AddAxisLabelsAndTitle(o, l, area, &scene.items);
   if (!f.has_data) {
     const std::string text = "no data";
-    const int w = TextWidth(text, fs);
-    items.push_back(LabelItem{std::round(0.5 * (area.x0 + area.x1 - w)),
-                              std::round(0.5 * (area.y0 + area.y1 - l.text_height)), text,
-                              kMutedColor, fs, false});
+    const int w = TextWidth(text, l.font_scale);
+    scene.items.push_back(LabelItem{std::round(0.5 * (area.x0 + area.x1 - w)),
+                                    std::round(0.5 * (area.y0 + area.y1 - l.text_height)), text,
+                                    kMutedColor, l.font_scale, false});
   }
   AddPointLabels(series, o, f, l, &scene);
   AddLegend(series, o, f, l, samples, &scene);
@@ -801,7 +824,8 @@ std::string SvgText(const LabelItem& label) {
                      Num(label.y + baseline), attributes, EscapeXml(label.text));
 }
 
-std::string SvgBody(const Scene& scene, const std::string& id_prefix) {
+// The clip rectangles of the marks, each once, in order of first use.
+std::vector<Rect> ClipsOf(const Scene& scene) {
   std::vector<Rect> clips;
   for (const Item& item : scene.items) {
     const auto* mark = std::get_if<MarkItem>(&item);
@@ -809,75 +833,93 @@ std::string SvgBody(const Scene& scene, const std::string& id_prefix) {
       clips.push_back(*mark->clip);
     }
   }
-  std::string out;
-  if (!clips.empty()) {
-    out += "<defs>\n";
-    for (std::size_t i = 0; i < clips.size(); ++i) {
-      const Rect& r = clips[i];
-      out += fmt::format(
-          "<clipPath id=\"{}clip{}\"><rect x=\"{}\" y=\"{}\" width=\"{}\" "
-          "height=\"{}\"/></clipPath>\n",
-          id_prefix, i, Num(r.x0), Num(r.y0), Num(r.x1 - r.x0), Num(r.y1 - r.y0));
-    }
-    out += "</defs>\n";
+  return clips;
+}
+
+std::string SvgClipDefs(const std::vector<Rect>& clips, const std::string& id_prefix) {
+  if (clips.empty()) return "";
+  std::string out = "<defs>\n";
+  for (std::size_t i = 0; i < clips.size(); ++i) {
+    const Rect& r = clips[i];
+    out += fmt::format(
+        "<clipPath id=\"{}clip{}\"><rect x=\"{}\" y=\"{}\" width=\"{}\" "
+        "height=\"{}\"/></clipPath>\n",
+        id_prefix, i, Num(r.x0), Num(r.y0), Num(r.x1 - r.x0), Num(r.y1 - r.y0));
   }
+  return out + "</defs>\n";
+}
+
+std::string SvgBox(const BoxItem& box) {
+  std::string out;
+  const Rect& r = box.rect;
+  if (box.fill) {
+    out += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"{}\"/>\n",
+                       Num(r.x0), Num(r.y0), Num(r.x1 - r.x0), Num(r.y1 - r.y0), Hex(*box.fill));
+  }
+  if (box.stroke) {  // the raster strokes the outermost pixel ring: centre the line on it
+    out += fmt::format(
+        "<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"{}\" "
+        "stroke-width=\"1\"/>\n",
+        Num(r.x0 + 0.5), Num(r.y0 + 0.5), Num(r.x1 - r.x0 - 1), Num(r.y1 - r.y0 - 1),
+        Hex(*box.stroke));
+  }
+  return out;
+}
+
+std::string SvgMarker(const MarkItem& mark, const Point& m) {
+  const double h = kMarkerHalfSide * mark.marker_radius;  // as MarkerEdgeDistance
+  const double d = h * std::sqrt(2.0);
+  switch (mark.marker) {
+    case PlotSeries::kSquare:
+      return fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"{}\"/>\n",
+                         Num(m[0] - h), Num(m[1] - h), Num(2 * h), Num(2 * h), Hex(mark.color));
+    case PlotSeries::kDiamond:
+      return fmt::format("<polygon points=\"{},{} {},{} {},{} {},{}\" fill=\"{}\"/>\n", Num(m[0]),
+                         Num(m[1] - d), Num(m[0] + d), Num(m[1]), Num(m[0]), Num(m[1] + d),
+                         Num(m[0] - d), Num(m[1]), Hex(mark.color));
+    case PlotSeries::kCircle:
+      return fmt::format("<circle cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"{}\"/>\n", Num(m[0]),
+                         Num(m[1]), Num(mark.marker_radius), Hex(mark.color));
+  }
+  return "";
+}
+
+// One series: a group (clipped to the plot area) of polylines and markers, titled by its name.
+std::string SvgMark(const MarkItem& mark,
+                    const std::vector<Rect>& clips,
+                    const std::string& id_prefix) {
+  std::string clip;
+  if (mark.clip) {
+    const auto index = std::find(clips.begin(), clips.end(), *mark.clip) - clips.begin();
+    clip = fmt::format(" clip-path=\"url(#{}clip{})\"", id_prefix, index);
+  }
+  std::string out = fmt::format("<g{}>\n", clip);
+  if (!mark.title.empty()) out += fmt::format("<title>{}</title>\n", EscapeXml(mark.title));
+  for (const auto& run : mark.runs) {
+    std::string points;
+    for (const Point& p : run) {
+      if (!points.empty()) points += ' ';
+      points += Num(p[0]) + ',' + Num(p[1]);
+    }
+    out += fmt::format(
+        "<polyline points=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"{}\" "
+        "stroke-linejoin=\"round\" stroke-linecap=\"round\"/>\n",
+        points, Hex(mark.color), Num(mark.line_width));
+  }
+  for (const Point& m : mark.markers) out += SvgMarker(mark, m);
+  return out + "</g>\n";
+}
+
+std::string SvgBody(const Scene& scene, const std::string& id_prefix) {
+  const std::vector<Rect> clips = ClipsOf(scene);
+  std::string out = SvgClipDefs(clips, id_prefix);
   out += fmt::format("<rect x=\"0\" y=\"0\" width=\"{}\" height=\"{}\" fill=\"#ffffff\"/>\n",
                      scene.width, scene.height);
   for (const Item& item : scene.items) {
     if (const auto* box = std::get_if<BoxItem>(&item)) {
-      const Rect& r = box->rect;
-      if (box->fill) {
-        out +=
-            fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"{}\"/>\n",
-                        Num(r.x0), Num(r.y0), Num(r.x1 - r.x0), Num(r.y1 - r.y0), Hex(*box->fill));
-      }
-      if (box->stroke) {  // the raster strokes the outermost pixel ring: centre the line on it
-        out += fmt::format(
-            "<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"{}\" "
-            "stroke-width=\"1\"/>\n",
-            Num(r.x0 + 0.5), Num(r.y0 + 0.5), Num(r.x1 - r.x0 - 1), Num(r.y1 - r.y0 - 1),
-            Hex(*box->stroke));
-      }
+      out += SvgBox(*box);
     } else if (const auto* mark = std::get_if<MarkItem>(&item)) {
-      std::string clip;
-      if (mark->clip) {
-        const auto index = std::find(clips.begin(), clips.end(), *mark->clip) - clips.begin();
-        clip = fmt::format(" clip-path=\"url(#{}clip{})\"", id_prefix, index);
-      }
-      out += fmt::format("<g{}>\n", clip);
-      if (!mark->title.empty()) out += fmt::format("<title>{}</title>\n", EscapeXml(mark->title));
-      for (const auto& run : mark->runs) {
-        std::string points;
-        for (const Point& p : run) {
-          if (!points.empty()) points += ' ';
-          points += Num(p[0]) + ',' + Num(p[1]);
-        }
-        out += fmt::format(
-            "<polyline points=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"{}\" "
-            "stroke-linejoin=\"round\" stroke-linecap=\"round\"/>\n",
-            points, Hex(mark->color), Num(mark->line_width));
-      }
-      const double h = kMarkerHalfSide * mark->marker_radius;  // as MarkerEdgeDistance
-      const double d = h * std::sqrt(2.0);
-      for (const Point& m : mark->markers) {
-        switch (mark->marker) {
-          case PlotSeries::kSquare:
-            out += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"{}\"/>\n",
-                               Num(m[0] - h), Num(m[1] - h), Num(2 * h), Num(2 * h),
-                               Hex(mark->color));
-            break;
-          case PlotSeries::kDiamond:
-            out += fmt::format("<polygon points=\"{},{} {},{} {},{} {},{}\" fill=\"{}\"/>\n",
-                               Num(m[0]), Num(m[1] - d), Num(m[0] + d), Num(m[1]), Num(m[0]),
-                               Num(m[1] + d), Num(m[0] - d), Num(m[1]), Hex(mark->color));
-            break;
-          case PlotSeries::kCircle:
-            out += fmt::format("<circle cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"{}\"/>\n",
-                               Num(m[0]), Num(m[1]), Num(mark->marker_radius), Hex(mark->color));
-            break;
-        }
-      }
-      out += "</g>\n";
+      out += SvgMark(*mark, clips, id_prefix);
     } else if (const auto* label = std::get_if<LabelItem>(&item)) {
       out += SvgText(*label);
     }
@@ -992,14 +1034,11 @@ double PlotFrame::PixelY(double y) const {
   return bottom - t * (bottom - top);
 }
 
-PlotFrame ComputePlotFrame(const std::vector<PlotSeries>& series, const PlotOptions& o) {
-  o.Validate();
-  ValidateSeries(series);
-  PlotFrame f;
-  f.log_x = o.log_x;
-  f.log_y = o.log_y;
+namespace {
 
-  // Data extents over drawable points; with one axis fixed, the other follows the points inside.
+// The axis ranges: given, or from the data's extents over drawable points; with one axis fixed,
+// the other follows the points inside it. Sets has_data.
+void SetRanges(const std::vector<PlotSeries>& series, const PlotOptions& o, PlotFrame* f) {
   auto usable = [](double v, bool log) { return std::isfinite(v) && (!log || v > 0.0); };
   auto inside = [](double v, const std::optional<AxisRange>& r) {
     return !r || (v >= r->min && v <= r->max);
@@ -1010,7 +1049,7 @@ PlotFrame ComputePlotFrame(const std::vector<PlotSeries>& series, const PlotOpti
     for (std::size_t i = 0; i < s.x.size(); ++i) {
       const double x = s.x[i], y = s.y[i];
       if (!usable(x, o.log_x) || !usable(y, o.log_y)) continue;
-      f.has_data = true;
+      f->has_data = true;
       if (inside(y, o.y_range)) {
         x_lo = std::min(x_lo, x);
         x_hi = std::max(x_hi, x);
@@ -1025,10 +1064,63 @@ PlotFrame ComputePlotFrame(const std::vector<PlotSeries>& series, const PlotOpti
   }
   const AxisRange xr = o.x_range ? *o.x_range : AutoRange(x_lo, x_hi, have_x, o.log_x);
   const AxisRange yr = o.y_range ? *o.y_range : AutoRange(y_lo, y_hi, have_y, o.log_y);
-  f.x_min = xr.min;
-  f.x_max = xr.max;
-  f.y_min = yr.min;
-  f.y_max = yr.max;
+  f->x_min = xr.min;
+  f->x_max = xr.max;
+  f->y_min = yr.min;
+  f->y_max = yr.max;
+}
+
+[[noreturn]] void NoRoom(const char* option, int size, int font_scale) {
+  Fail("plot options: {} {} leaves no room for the plot area at font_scale {}", option, size,
+       font_scale);
+}
+
+// x ticks for the current left and right: fewer until neighbouring labels keep two glyphs apart.
+void FitXTicks(const PlotOptions& o, int fs, PlotFrame* f) {
+  const int min_gap = 2 * kGlyphAdvance * fs;
+  for (int max_x_ticks = std::clamp((f->right - f->left) / (6 * kGlyphAdvance * fs) + 1, 2, 11);;
+       --max_x_ticks) {
+    f->x_ticks = ComputeAxisTicks(f->x_min, f->x_max, o.log_x, max_x_ticks);
+    bool fits = true;
+    for (std::size_t i = 1; i < f->x_ticks.size(); ++i) {
+      const double distance = f->PixelX(f->x_ticks[i].value) - f->PixelX(f->x_ticks[i - 1].value);
+      const double needed =
+          0.5 * (TextWidth(f->x_ticks[i].label, fs) + TextWidth(f->x_ticks[i - 1].label, fs)) +
+          min_gap;
+      fits = fits && distance >= needed;
+    }
+    if (fits || max_x_ticks <= 2) break;
+  }
+}
+
+// The right edge and the x ticks: fit the ticks, then make room on the right for the last
+// label and repeat once, as the room changes the spacing.
+void PlaceXTicks(const PlotOptions& o, const Layout& l, PlotFrame* f) {
+  const int fs = l.font_scale;
+  int right_margin = 2 * l.pad;
+  for (int pass = 0; pass < 3; ++pass) {
+    f->right = o.width - right_margin;
+    if (f->right - f->left < 4 * l.text_height) NoRoom("width", o.width, fs);
+    FitXTicks(o, fs, f);
+    int needed_right = 2 * l.pad;
+    for (const AxisTick& t : f->x_ticks) {
+      const double overhang = f->PixelX(t.value) + 0.5 * TextWidth(t.label, fs) - f->right;
+      needed_right = std::max(needed_right, static_cast<int>(std::ceil(overhang)) + l.pad);
+    }
+    if (needed_right <= right_margin) break;
+    right_margin = needed_right;
+  }
+}
+
+}  // namespace
+
+PlotFrame ComputePlotFrame(const std::vector<PlotSeries>& series, const PlotOptions& o) {
+  o.Validate();
+  ValidateSeries(series);
+  PlotFrame f;
+  f.log_x = o.log_x;
+  f.log_y = o.log_y;
+  SetRanges(series, o, &f);
 
   // Margins: title above; tick labels and the x label below; the turned y label and the y tick
   // labels on the left; room for half of the last x tick label on the right.
@@ -1038,10 +1130,7 @@ PlotFrame ComputePlotFrame(const std::vector<PlotSeries>& series, const PlotOpti
   const int below = 1 + l.tick_length + l.pad / 2 + l.text_height +
                     (o.x_label.empty() ? 0 : l.pad + l.text_height) + l.pad;
   f.bottom = o.height - below;
-  auto no_room = [&](const char* option, int size) {
-    Fail("plot options: {} {} leaves no room for the plot area at font_scale {}", option, size, fs);
-  };
-  if (f.bottom - f.top < 2 * l.text_height) no_room("height", o.height);
+  if (f.bottom - f.top < 2 * l.text_height) NoRoom("height", o.height, fs);
 
   const int max_y_ticks = std::clamp((f.bottom - f.top) / (3 * l.text_height) + 1, 2, 11);
   f.y_ticks = ComputeAxisTicks(f.y_min, f.y_max, o.log_y, max_y_ticks);
@@ -1050,35 +1139,7 @@ PlotFrame ComputePlotFrame(const std::vector<PlotSeries>& series, const PlotOpti
     y_label_width = std::max(y_label_width, TextWidth(t.label, fs));
   f.left = l.pad + (o.y_label.empty() ? 0 : l.text_height + l.pad) + y_label_width + l.pad / 2 +
            l.tick_length + 1;
-
-  // x ticks: fewer until neighbouring labels keep two glyphs apart; then make room on the right
-  // for the last label and repeat once, as the room changes the spacing.
-  int right_margin = 2 * l.pad;
-  for (int pass = 0; pass < 3; ++pass) {
-    f.right = o.width - right_margin;
-    if (f.right - f.left < 4 * l.text_height) no_room("width", o.width);
-    const int min_gap = 2 * kGlyphAdvance * fs;
-    for (int max_x_ticks = std::clamp((f.right - f.left) / (6 * kGlyphAdvance * fs) + 1, 2, 11);;
-         --max_x_ticks) {
-      f.x_ticks = ComputeAxisTicks(f.x_min, f.x_max, o.log_x, max_x_ticks);
-      bool fits = true;
-      for (std::size_t i = 1; i < f.x_ticks.size(); ++i) {
-        const double distance = f.PixelX(f.x_ticks[i].value) - f.PixelX(f.x_ticks[i - 1].value);
-        const double needed =
-            0.5 * (TextWidth(f.x_ticks[i].label, fs) + TextWidth(f.x_ticks[i - 1].label, fs)) +
-            min_gap;
-        fits = fits && distance >= needed;
-      }
-      if (fits || max_x_ticks <= 2) break;
-    }
-    int needed_right = 2 * l.pad;
-    for (const AxisTick& t : f.x_ticks) {
-      const double overhang = f.PixelX(t.value) + 0.5 * TextWidth(t.label, fs) - f.right;
-      needed_right = std::max(needed_right, static_cast<int>(std::ceil(overhang)) + l.pad);
-    }
-    if (needed_right <= right_margin) break;
-    right_margin = needed_right;
-  }
+  PlaceXTicks(o, l, &f);
 
   if (o.log_x) f.x_minor_ticks = LogMinorTicks(f.x_min, f.x_max, f.x_ticks);
   if (o.log_y) f.y_minor_ticks = LogMinorTicks(f.y_min, f.y_max, f.y_ticks);
