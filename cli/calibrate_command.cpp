@@ -5,12 +5,72 @@
 
 #include "calibration/calibrate.h"
 #include "calibration/truth_comparison.h"
-#include "core/util/error.h"
-#include "core/files/json_util.h"
 #include "cli/commands.h"
 #include "cli/flags.h"
+#include "core/files/json_util.h"
+#include "core/util/error.h"
 
 namespace hdr4d::cli {
+
+namespace {
+
+// Where the rig's geometry comes from: a checkerboard, COLMAP's binary and image size.
+void AddGeometryFlags(CLI::App* cmd, CalibrateOptions* options) {
+  cmd->add_option("--board", options->board,
+                  "A checkerboard in static/: <cols>x<rows>:<square metres> (inner corners), for "
+                  "intrinsics and the metric scale")
+      ->check(Text("a board spec"));
+  cmd->add_option("--colmap-binary", options->colmap_binary, "COLMAP executable")
+      ->capture_default_str()
+      ->check(Text("an executable"));
+  cmd->add_option("--colmap-max-image-size", options->colmap_max_image_size,
+                  "Downscale images to this size for COLMAP's SIFT (0: COLMAP's default, 3200)")
+      ->check(Integer(0, 100000));
+}
+
+// The response recovery and how the cameras' curves are fused.
+void AddRadiometryFlags(CLI::App* cmd, CalibrateOptions* options) {
+  cmd->add_option("--samples", options->response.samples, "Pixels sampled for the response")
+      ->capture_default_str()
+      ->check(Integer(2, 10000000));
+  cmd->add_flag("--robertson", options->response.robertson,
+                "Recover the response with Robertson et al. instead of Debevec-Malik");
+  cmd->add_flag(
+      "--per-camera-response", options->per_camera_response,
+      "Fuse each camera with its own response curve (default: only when the cameras' curves "
+      "differ by more than 0.05 RMS in log exposure)");
+  cmd->add_option("--smoothness", options->response.smoothness, "Debevec-Malik smoothness weight")
+      ->capture_default_str()
+      ->check(Real(0, 1e9));
+}
+
+// The lens model: undistortion, shared intrinsics, which distortion terms are kept.
+void AddLensFlags(CLI::App* cmd, CalibrateOptions* options, bool* keep_distortion) {
+  cmd->add_option("--undistort-threshold", options->undistort_threshold_pixels,
+                  "Undistort images when lens distortion moves a pixel by more than this")
+      ->capture_default_str()
+      ->check(Real(0, 1e6));
+  cmd->add_flag(
+      "--shared-intrinsics", options->shared_intrinsics,
+      "Rig cameras of the same image size are one model: they share focal length and distortion");
+  cmd->add_flag(
+      "--keep-distortion", *keep_distortion,
+      "Keep COLMAP's k1, k2 for every camera (default: only where they explain the observations "
+      "beyond noise, by BIC; a distortion-free lens is then not resampled)");
+}
+
+// --truth: the calibrated dataset against a synthetic capture's truth, printed and written.
+void ReportAgainstTruth(const std::string& out, const std::string& truth) {
+  const TruthComparison comparison = CompareWithTruth(out, truth);
+  const std::string md = TruthComparisonMarkdown(comparison);
+  WriteJsonFile(std::filesystem::path(out) / "truth_comparison.json",
+                TruthComparisonJson(comparison));
+  WriteTextFileAtomic(std::filesystem::path(out) / "truth_comparison.md",
+                      "# Calibration against the truth of " + truth + "\n\n" + md);
+  fmt::print("calibrate: against the truth of {}:\n{}", truth, md);
+}
+
+}  // namespace
 
 void AddCalibrateCommand(CLI::App& app) {
   auto options = std::make_shared<CalibrateOptions>();
@@ -27,46 +87,29 @@ void AddCalibrateCommand(CLI::App& app) {
       "Turn a capture of a fixed camera rig with bracketed exposures (static/<camera>/, "
       "sequence/<camera>/<frame>_<k>.<ext>, optional exposures.json) into a dataset: COLMAP + "
       "Ceres rig geometry, Debevec-Malik response, fused HDR ground truth, report.md.");
-  cmd->add_option("--capture", *capture, "Capture folder")->required()
+  cmd->add_option("--capture", *capture, "Capture folder")
+      ->required()
       ->check(Text("a capture folder"));
-  cmd->add_option("--out,-o", *out, "Output dataset folder")->required()
+  cmd->add_option("--out,-o", *out, "Output dataset folder")
+      ->required()
       ->check(Text("an output folder"));
-  cmd->add_option("--colmap-model", *colmap_model,
-                  "Reuse this COLMAP sparse model (image names <camera>/<file>) instead of running COLMAP")
+  cmd->add_option(
+         "--colmap-model", *colmap_model,
+         "Reuse this COLMAP sparse model (image names <camera>/<file>) instead of running COLMAP")
       ->check(Text("a COLMAP sparse model folder"));
-  cmd->add_option("--stage", *stage, "geometry, radiometry or all")->capture_default_str()
+  cmd->add_option("--stage", *stage, "geometry, radiometry or all")
+      ->capture_default_str()
       ->check(OneOf({"geometry", "radiometry", "all"}));
-  cmd->add_option("--fps", options->fps, "Frames per second (time = frame index / fps)")->capture_default_str()
+  cmd->add_option("--fps", options->fps, "Frames per second (time = frame index / fps)")
+      ->capture_default_str()
       ->check(PositiveReal(1e6));
   cmd->add_option("--test-camera", options->test_camera, "Held-out camera (default: the last one)")
       ->check(Text("a camera name"));
-  cmd->add_option("--board", options->board,
-                  "A checkerboard in static/: <cols>x<rows>:<square metres> (inner corners), for "
-                  "intrinsics and the metric scale")
-      ->check(Text("a board spec"));
-  cmd->add_option("--colmap-binary", options->colmap_binary, "COLMAP executable")->capture_default_str()
-      ->check(Text("an executable"));
-  cmd->add_option("--colmap-max-image-size", options->colmap_max_image_size,
-                  "Downscale images to this size for COLMAP's SIFT (0: COLMAP's default, 3200)")
-      ->check(Integer(0, 100000));
-  cmd->add_option("--samples", options->response.samples, "Pixels sampled for the response")->capture_default_str()
-      ->check(Integer(2, 10000000));
-  cmd->add_flag("--robertson", options->response.robertson,
-                "Recover the response with Robertson et al. instead of Debevec-Malik");
-  cmd->add_flag("--per-camera-response", options->per_camera_response,
-                "Fuse each camera with its own response curve (default: only when the cameras' curves "
-                "differ by more than 0.05 RMS in log exposure)");
-  cmd->add_option("--smoothness", options->response.smoothness, "Debevec-Malik smoothness weight")->capture_default_str()
-      ->check(Real(0, 1e9));
-  cmd->add_option("--undistort-threshold", options->undistort_threshold_pixels,
-                  "Undistort images when lens distortion moves a pixel by more than this")->capture_default_str()
-      ->check(Real(0, 1e6));
-  cmd->add_flag("--shared-intrinsics", options->shared_intrinsics,
-                "Rig cameras of the same image size are one model: they share focal length and distortion");
-  cmd->add_flag("--keep-distortion", *keep_distortion,
-                "Keep COLMAP's k1, k2 for every camera (default: only where they explain the observations "
-                "beyond noise, by BIC; a distortion-free lens is then not resampled)");
-  cmd->add_flag("--no-motion-detection", *no_motion, "Average every bracket even where they disagree");
+  AddGeometryFlags(cmd, options.get());
+  AddRadiometryFlags(cmd, options.get());
+  AddLensFlags(cmd, options.get(), keep_distortion.get());
+  cmd->add_flag("--no-motion-detection", *no_motion,
+                "Average every bracket even where they disagree");
   cmd->add_option("--truth", *truth,
                   "The truth/ folder of a synthetic capture (hdr4d datagen --capture): after "
                   "calibrating, compare poses (after a similarity), focal lengths, the response "
@@ -83,22 +126,19 @@ void AddCalibrateCommand(CLI::App& app) {
     options->stage = ParseCalibrationStage(*stage);
     options->fusion.detect_motion = !*no_motion;
     // A truth folder that cannot be read fails before the calibration, not after it.
-    if (!truth->empty() && !std::filesystem::is_regular_file(std::filesystem::path(*truth) / "cameras.json"))
-      Fail("{}: --truth needs the truth/ folder of `hdr4d datagen --capture` (no cameras.json in it)",
-           *truth);
+    if (!truth->empty() &&
+        !std::filesystem::is_regular_file(std::filesystem::path(*truth) / "cameras.json"))
+      Fail(
+          "{}: --truth needs the truth/ folder of `hdr4d datagen --capture` (no cameras.json in "
+          "it)",
+          *truth);
     const CalibrateSummary s = Calibrate(*options);
-    fmt::print("calibrate: {} cameras, {} frames, {} images written{} to {} (geometry {:.1f} s, "
-               "radiometry {:.1f} s); see {}/report.md\n",
-               s.cameras, s.frames, s.images_written, s.dataset_written ? ", dataset" : "", *out,
-               s.seconds_geometry, s.seconds_radiometry, *out);
-    if (!truth->empty()) {
-      const TruthComparison comparison = CompareWithTruth(*out, *truth);
-      const std::string md = TruthComparisonMarkdown(comparison);
-      WriteJsonFile(std::filesystem::path(*out) / "truth_comparison.json", TruthComparisonJson(comparison));
-      WriteTextFileAtomic(std::filesystem::path(*out) / "truth_comparison.md",
-                          "# Calibration against the truth of " + *truth + "\n\n" + md);
-      fmt::print("calibrate: against the truth of {}:\n{}", *truth, md);
-    }
+    fmt::print(
+        "calibrate: {} cameras, {} frames, {} images written{} to {} (geometry {:.1f} s, "
+        "radiometry {:.1f} s); see {}/report.md\n",
+        s.cameras, s.frames, s.images_written, s.dataset_written ? ", dataset" : "", *out,
+        s.seconds_geometry, s.seconds_radiometry, *out);
+    if (!truth->empty()) ReportAgainstTruth(*out, *truth);
   });
 }
 

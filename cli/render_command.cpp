@@ -10,6 +10,44 @@
 
 namespace hdr4d::cli {
 
+namespace {
+
+// A run of the grid family (HexPlane) renders through its own engine; true when `options.run` is
+// one. `one_view`: whether --time was given.
+bool RenderGridRunIfAsked(const method::RenderRunOptions& options, bool one_view) {
+  if (!baselines::hexplane::IsHexPlaneRun(options.run)) return false;
+  if (one_view || options.video_frames > 0 || !options.timing.empty())
+    Fail("render: --time, --video and --timing are not available for HexPlane runs yet");
+  const ThreadLimit limit(options.threads);
+  const int n = baselines::hexplane::RenderHexPlaneRun(
+      {.run = options.run, .out = options.out, .split = options.split,
+       .resolution = options.resolution, .exposure = options.exposure,
+       .write_hdr = options.write_hdr, .png_compression = options.png_compression});
+  fmt::print("render: wrote {} images\n", n);
+  return true;
+}
+
+// How the images are written: resolution, PNG compression, the per-view timing file.
+void AddOutputFlags(CLI::App* cmd, method::RenderRunOptions* options, std::string* timing) {
+  cmd->add_option("--timing", *timing,
+                  "Write each view's render time and the fps after a one-view warm-up to this "
+                  "JSON file (split renders)")
+      ->check(Text("a timing file"));
+  cmd->add_option("--resolution", options->resolution,
+                  "Render at the scene's images reduced R times (1: full size) instead of the "
+                  "run's own training resolution (0); scores against the truth with `hdr4d eval "
+                  "--resolution R`")
+      ->check(Integer(0, 65536))
+      ->capture_default_str();
+  cmd->add_option("--png-compression", options->png_compression,
+                  "zlib level of the LDR PNGs, 0 (none) to 9 (smallest): 1, the default, writes "
+                  "an 800x800 render about 3x faster than PNG's usual 6 for files 30-45% larger")
+      ->check(Integer(0, 9))
+      ->capture_default_str();
+}
+
+}  // namespace
+
 void AddRenderCommand(CLI::App& app) {
   auto options = std::make_shared<method::RenderRunOptions>();
   auto run = std::make_shared<std::string>();
@@ -57,21 +95,7 @@ void AddRenderCommand(CLI::App& app) {
                       "median training exposure for --video)")
           ->check(PositiveReal());
   auto timing = std::make_shared<std::string>();
-  cmd->add_option("--timing", *timing,
-                  "Write each view's render time and the fps after a one-view warm-up to this "
-                  "JSON file (split renders)")
-      ->check(Text("a timing file"));
-  cmd->add_option("--resolution", options->resolution,
-                  "Render at the scene's images reduced R times (1: full size) instead of the "
-                  "run's own training resolution (0); scores against the truth with `hdr4d eval "
-                  "--resolution R`")
-      ->check(Integer(0, 65536))
-      ->capture_default_str();
-  cmd->add_option("--png-compression", options->png_compression,
-                  "zlib level of the LDR PNGs, 0 (none) to 9 (smallest): 1, the default, writes "
-                  "an 800x800 render about 3x faster than PNG's usual 6 for files 30-45% larger")
-      ->check(Integer(0, 9))
-      ->capture_default_str();
+  AddOutputFlags(cmd, options.get(), timing.get());
   auto no_hdr = std::make_shared<bool>(false);
   cmd->add_flag("--no-hdr", *no_hdr,
                 "Do not write the HDR (EXR) renders (nor blend the HDR channels: about 10% faster "
@@ -84,17 +108,7 @@ void AddRenderCommand(CLI::App& app) {
     options->run = *run;
     options->out = *out;
     method::ProtectRunInputs(*run);
-    if (baselines::hexplane::IsHexPlaneRun(*run)) {  // the grid family's runs
-      if (time_option->count() > 0 || options->video_frames > 0 || !options->timing.empty())
-        Fail("render: --time, --video and --timing are not available for HexPlane runs yet");
-      const ThreadLimit limit(options->threads);
-      const int n = baselines::hexplane::RenderHexPlaneRun(
-          {.run = *run, .out = *out, .split = options->split, .resolution = options->resolution,
-           .exposure = options->exposure, .write_hdr = options->write_hdr,
-           .png_compression = options->png_compression});
-      fmt::print("render: wrote {} images\n", n);
-      return;
-    }
+    if (RenderGridRunIfAsked(*options, time_option->count() > 0)) return;
     const int n = method::RenderRun(*options);
     fmt::print("render: wrote {} images\n", n);
   });
