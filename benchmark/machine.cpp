@@ -4,10 +4,10 @@
 #include <unistd.h>
 
 #include <fstream>
-#include <hwy/targets.h>
 #include <thread>
 
 #include "benchmark/code_version_generated.h"
+#include "method/raster/simd_dispatch.h"
 
 namespace hdr4d::bench {
 
@@ -39,11 +39,8 @@ nlohmann::json MachineInfo() {
   }
   char host[256] = {};
   gethostname(host, sizeof host - 1);
-  // The best target Highway dispatches to on this CPU among those compiled (the method's
-  // kernels are built with the same default target list).
-  std::string simd = "scalar";
-  const std::vector<int64_t> targets = hwy::SupportedAndGeneratedTargets();
-  if (!targets.empty()) simd = hwy::TargetName(targets.front());
+  // The target the method's kernels dispatch to (HDR4D_SIMD_TARGETS may limit it).
+  const std::string simd = method::ActiveSimdTarget();
   return {{"cpu_model", model},
           {"cores", AvailableCores()},
           {"simd_target", simd},

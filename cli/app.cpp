@@ -13,6 +13,7 @@
 #include "core/util/error.h"
 #include "core/image/image_io.h"
 #include "core/files/output_guard.h"
+#include "method/raster/simd_dispatch.h"
 
 namespace hdr4d::cli {
 
@@ -105,7 +106,10 @@ std::unique_ptr<CLI::App> MakeApp() {
   baselines::RegisterToneMappers();
   auto app =
       std::make_unique<CLI::App>("hdr4d: HDR dynamic novel view synthesis (HDR-4DGS) toolkit");
-  app->set_version_flag("--version", "hdr4d 0.1.0");
+  // Read when --version prints, after main has applied HDR4D_SIMD_TARGETS.
+  app->set_version_flag("--version", [] {
+    return "hdr4d 0.1.0; SIMD target: " + method::SimdTargetDescription();
+  });
   app->require_subcommand(1);
   app->fallthrough(false);
   auto verbosity = std::make_shared<int>(0);
@@ -114,6 +118,7 @@ std::unique_ptr<CLI::App> MakeApp() {
     spdlog::set_level(*verbosity >= 2   ? spdlog::level::debug
                       : *verbosity == 1 ? spdlog::level::info
                                         : spdlog::level::warn);
+    spdlog::info("SIMD target: {}", method::SimdTargetDescription());
   });
   AddDatasetCommand(*app);
   AddEvalCommand(*app);

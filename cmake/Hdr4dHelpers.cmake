@@ -73,7 +73,8 @@ endfunction()
 
 # hdr4d_add_test(<folder> <name> [NEEDS_CLI] SOURCES ... DEPS ... [PROPERTIES ...]): a GoogleTest
 # binary whose cases are registered as <folder>/<Suite>.<Case> and run from the repository root
-# (tests/testing.h has the helpers: temp folders, shared data, running the hdr4d binary).
+# (tests/testing.h has the helpers: temp folders, shared data, running the hdr4d binary; their
+# main, tests/testing_main.cpp, applies HDR4D_SIMD_TARGETS).
 # PROPERTIES are CTest properties of every case (e.g. FIXTURES_SETUP / FIXTURES_REQUIRED, or COST:
 # the seconds a case takes, so that a fresh clone, which has no timing history, starts the longest
 # cases first instead of finishing on one of them alone).
@@ -99,13 +100,14 @@ function(hdr4d_add_test folder name)
     PROPERTIES ${ARG_PROPERTIES})
 endfunction()
 
-# hdr4d_add_benchmark(<name> SOURCES ... DEPS ...): a Google Benchmark binary.
+# hdr4d_add_benchmark(<name> SOURCES ... DEPS ...): a Google Benchmark binary (its main:
+# benchmark/runtime/bench_main.cpp, which applies HDR4D_SIMD_TARGETS).
 function(hdr4d_add_benchmark name)
   if(NOT HDR4D_BUILD_BENCHMARKS)
     return()
   endif()
   cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
   add_executable(bench_${name} ${ARG_SOURCES})
-  target_link_libraries(bench_${name} PRIVATE ${ARG_DEPS} benchmark::benchmark_main)
+  target_link_libraries(bench_${name} PRIVATE ${ARG_DEPS} hdr4d_bench_main)
   target_compile_options(bench_${name} PRIVATE ${HDR4D_WARNINGS})
 endfunction()

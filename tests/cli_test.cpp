@@ -58,6 +58,30 @@ TEST(Cli, UserMistakesEndInOneLineAndExitOne) {
   }
 }
 
+// HDR4D_SIMD_TARGETS limits the kernels' SIMD target for the whole run; --version and -v say
+// which is in use; a name that is not a target is a user mistake like a bad flag.
+TEST(Cli, SimdTargetsVariableIsAppliedReportedAndChecked) {
+  const auto scalar = testing::RunHdr4dWith("HDR4D_SIMD_TARGETS=Scalar", "--version");
+  EXPECT_EQ(scalar.exit_code, 0) << scalar.err;
+  EXPECT_NE(scalar.out.find("SIMD target: SCALAR (HDR4D_SIMD_TARGETS=Scalar)"), std::string::npos)
+      << scalar.out;
+  const auto plain = testing::RunHdr4dWith("env -u HDR4D_SIMD_TARGETS", "--version");
+  EXPECT_NE(plain.out.find("SIMD target: "), std::string::npos) << plain.out;
+  EXPECT_EQ(plain.out.find("HDR4D_SIMD_TARGETS"), std::string::npos) << plain.out;
+  testing::TempDir dir;
+  const std::string missing = (dir / "missing.png").string();
+  const auto logged =
+      testing::RunHdr4dWith("HDR4D_SIMD_TARGETS=scalar", "-v eval " + missing + " " + missing);
+  EXPECT_NE(logged.err.find("SIMD target: SCALAR"), std::string::npos) << logged.err;
+  const auto bad = testing::RunHdr4dWith("HDR4D_SIMD_TARGETS=sse9", "--version");
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_EQ(LineCount(bad.err), 1) << bad.err;
+  EXPECT_EQ(bad.err.rfind("hdr4d: error: HDR4D_SIMD_TARGETS=sse9: 'sse9' is not", 0), 0u)
+      << bad.err;
+  EXPECT_NE(bad.err.find("avx2"), std::string::npos) << bad.err;
+  EXPECT_TRUE(bad.out.empty()) << bad.out;
+}
+
 TEST(Cli, SingleImageSynthesisWritesAnLdrImage) {
   testing::TempDir dir;
   ASSERT_EQ(RunHdr4d("make-demo-scene --out " + (dir / "s").string() +

@@ -862,16 +862,14 @@ void BackwardTileImpl(const TileJob& job, int tile) {
       const float T_final = job.final_T[pix];
       const float* dL = job.dL_dimage + pix * channels;
       const float* dG = split ? job.dL_dimage_geometry + pix * channels : dL;
-      float g_T = job.dL_dfinal_T != nullptr ? job.dL_dfinal_T[pix] : 0.0f;
       for (int c = 0; c < channels; ++c) {
-        g_T += job.background[c] * dG[c];
         if (tile_bg != nullptr) tile_bg[c] += T_final * dL[c];
         dpix[c * kTilePixels + p] = dL[c];
         if (split) dgeo[c * kTilePixels + p] = dG[c];  // else dgeo is dpix
       }
       T_plane[p] = T_final;
       behind[p] = 0.0f;
-      tfb[p] = T_final * g_T;
+      tfb[p] = job.dL_dfinal_T != nullptr ? job.dL_dfinal_T[pix] : 0.0f;  // g_T, below
       nc_plane[p] = job.n_contrib[pix];
       vmax = std::max(vmax, job.n_contrib[pix]);
     }
@@ -879,6 +877,21 @@ void BackwardTileImpl(const TileJob& job, int tile) {
     tile_max = std::max(tile_max, vmax);
   }
   HDR4D_CHECK(tile_max <= count);
+  // tfb = T_final g_T, g_T = dL/dT_final + sum_c background_c dgeo_c, per pixel vector from the
+  // planes, in explicit multiply-adds. Not in the per-pixel loop above: GCC made more than one
+  // version of that loop, vectorising the sum over channels in one (products rounded, then added
+  // in order) and fusing each product into its add in another, and which ran depended on
+  // whether a geometry image was passed: with one equal to dL/dimage the gradients differed in
+  // the last bit (AVX2, 5 channels; issue 50). These are the same operations in every case.
+  for (int v = 0; v < num_vectors; ++v) {
+    const int off = v * lanes;
+    V g_T = hn::Load(d, tfb + off);
+    for (int c = 0; c < channels; ++c) {
+      g_T = hn::MulAdd(hn::Set(d, job.background[c]), hn::Load(d, dgeo + c * kTilePixels + off),
+                       g_T);
+    }
+    hn::Store(hn::Mul(hn::Load(d, T_plane + off), g_T), d, tfb + off);
+  }
 
   // Entry start + j writes its slot at entry_slots[start + j] (per-Gaussian order).
   const std::int32_t* slot_index = job.entry_slots + start;
