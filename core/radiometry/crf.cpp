@@ -10,6 +10,7 @@
 #include <limits>
 #include <string_view>
 
+#include "core/files/file_access.h"
 #include "core/util/error.h"
 #include "core/files/json_util.h"
 
@@ -281,6 +282,7 @@ std::unique_ptr<TableCrf> TableCrf::FromCodes(const std::vector<double>& x_of_co
 }
 
 std::unique_ptr<TableCrf> TableCrf::FromCsv(const std::string& path) {
+  RequireInputFile(path);  // a device or FIFO is refused before it is opened
   std::ifstream in(path);
   if (!in) Fail("{}: cannot open CRF table ({})", path, std::strerror(errno));
   std::vector<std::vector<double>> rows;

@@ -8,6 +8,7 @@
 #include <string_view>
 
 #include "core/files/binary_stream.h"
+#include "core/files/file_access.h"
 #include "core/util/error.h"
 #include "core/files/json_util.h"
 
@@ -177,6 +178,7 @@ void SaveCheckpoint(const fs::path& path, const Checkpoint& c) {
 Checkpoint LoadCheckpoint(const fs::path& path, const CheckpointLoadOptions& options) {
   std::error_code ec;
   if (!fs::exists(path, ec)) Fail("{}: checkpoint not found", path.string());
+  RequireInputFile(path);  // a device or FIFO is refused before it is opened
   std::ifstream file(path, std::ios::binary);
   if (!file) Fail("{}: cannot open for reading", path.string());
   // One read into a buffer of the file's size, parsed in place: copying through string streams
