@@ -110,6 +110,8 @@ std::unique_ptr<CLI::App> MakeApp() {
 int RunApp(CLI::App& app, int argc, char** argv) {
   // The inputs this command reads are protected from its writers for as long as it runs.
   const InputProtectionScope protect_inputs;
+  // Symlinks and special files are written through only where the user named them.
+  for (int i = 1; i < argc; ++i) NameOnCommandLine(argv[i]);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -74,13 +74,28 @@ struct PreparedWrite {
   bool existed = false;
 };
 
+// A symlink or special file found at `path` that the user did not name on the command line
+// (issue 51, case 11: a planted `checkpoint.bin -> victim` inside --out was written through).
+bool ReplaceRatherThanFollow(const fs::path& path) {
+  struct stat lst {};
+  if (::lstat(path.c_str(), &lst) != 0) return false;
+  if (S_ISREG(lst.st_mode) || S_ISDIR(lst.st_mode)) return false;
+  return !NamedOnCommandLine(path);
+}
+
 PreparedWrite Prepare(const fs::path& path, const std::function<void(const fs::path&)>& fill) {
   CheckOutput(path);
   struct stat st {};
   PreparedWrite w{path, {}, {}, ::stat(path.c_str(), &st) == 0};
   if (w.existed && S_ISDIR(st.st_mode)) Fail("{}: is a folder, expected a file", path.string());
   std::error_code ec;
-  if (w.existed && !S_ISREG(st.st_mode)) {
+  if (ReplaceRatherThanFollow(path)) {
+    // A symlink or special file the user did not name: the new file takes its place.
+    w.target = path;
+    w.existed = false;  // the link's or node's mode is not the new file's
+    const fs::path folder = path.has_parent_path() ? path.parent_path() : fs::path(".");
+    w.tmp = TemporaryName(folder, path);
+  } else if (w.existed && !S_ISREG(st.st_mode)) {
     // Written through later: the data is made in the temporary folder first, so a failing
     // writer sends nothing half-made into the device or pipe.
     w.tmp = TemporaryName(fs::temp_directory_path(ec), path);

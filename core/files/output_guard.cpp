@@ -54,6 +54,7 @@ struct Registry {
   Table files, folders;
   std::multiset<std::string> permits;
   std::unordered_map<std::string, std::string> folder_keys;  // folder as given -> its key
+  std::set<std::string> named;  // command-line arguments, absolute and normalised
 };
 
 Registry& TheRegistry() {
@@ -134,6 +135,34 @@ void CheckOutputFolder(const fs::path& folder) {
   }
 }
 
+namespace {
+std::string LexicalKey(const fs::path& path) {
+  std::error_code ec;
+  std::string key = fs::absolute(path, ec).lexically_normal().string();
+  while (key.size() > 1 && key.back() == '/') key.pop_back();
+  return key;
+}
+}  // namespace
+
+void NameOnCommandLine(const std::string& argument) {
+  if (argument.empty()) return;
+  // "--out=x" names x; "-o" alone names nothing that exists as a file anyway.
+  const std::size_t eq = argument.rfind("--", 0) == 0 ? argument.find('=') : std::string::npos;
+  const std::string value = eq == std::string::npos ? argument : argument.substr(eq + 1);
+  if (value.empty()) return;
+  const std::string key = LexicalKey(value);
+  Registry& r = TheRegistry();
+  const std::lock_guard<std::mutex> lock(r.mutex);
+  if (r.scopes > 0) r.named.insert(key);
+}
+
+bool NamedOnCommandLine(const fs::path& path) {
+  const std::string key = LexicalKey(path);
+  Registry& r = TheRegistry();
+  const std::lock_guard<std::mutex> lock(r.mutex);
+  return r.scopes == 0 || r.named.count(key) > 0;
+}
+
 bool SameFile(const fs::path& a, const fs::path& b) {
   const std::string ka = ResolvedKey(ResolveWriteTarget(a)), kb = ResolvedKey(ResolveWriteTarget(b));
   if (ka == kb) return true;
@@ -168,6 +197,7 @@ InputProtectionScope::~InputProtectionScope() {
   r.files = {};
   r.folders = {};
   r.folder_keys.clear();
+  r.named.clear();
 }
 
 }  // namespace hdr4d

@@ -37,6 +37,14 @@ void CheckOutput(const std::filesystem::path& path);
 // the folder is a protected folder or a protected file.
 void CheckOutputFolder(const std::filesystem::path& folder);
 
+// Paths the user named on the command line (cli/app.cpp registers every argument). A symlink or
+// special file (FIFO, device) is written through only when its path was named so: one that is
+// merely found inside an output folder (a planted `checkpoint.bin -> victim`) is replaced by
+// the new file, never followed (core/files/atomic_file.cpp). Without a scope (library use)
+// every path counts as named.
+void NameOnCommandLine(const std::string& argument);
+bool NamedOnCommandLine(const std::filesystem::path& path);
+
 // True when `a` and `b` name the same file (same resolved path, or same device and inode).
 bool SameFile(const std::filesystem::path& a, const std::filesystem::path& b);
 
