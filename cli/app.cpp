@@ -12,6 +12,7 @@
 #include "core/util/error.h"
 #include "core/image/image_io.h"
 #include "core/files/output_guard.h"
+#include "core/files/temporary_cleanup.h"
 
 namespace hdr4d::cli {
 
@@ -112,6 +113,8 @@ int RunApp(CLI::App& app, int argc, char** argv) {
   const InputProtectionScope protect_inputs;
   // Symlinks and special files are written through only where the user named them.
   for (int i = 1; i < argc; ++i) NameOnCommandLine(argv[i]);
+  // SIGINT, SIGTERM and SIGHUP alike: the temporary files of writes in flight go first.
+  RemoveTemporariesOnStopSignals();
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -15,12 +15,15 @@
 
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <ostream>
 #include <string>
 #include <vector>
 
 namespace hdr4d {
+
+class TrackedTemporary;  // core/files/temporary_cleanup.h
 
 // Creates the parent folders, lets `write` fill the temporary file (binary mode), then moves it
 // into place. On any failure the temporary file is removed, `path` keeps what it had, and
@@ -55,6 +58,7 @@ class FileBatch {
   struct Pending {
     std::filesystem::path path, tmp, target;  // target empty: a special file, copied into
     bool existed = false;
+    std::shared_ptr<TrackedTemporary> tracked;  // core/files/temporary_cleanup.h
   };
   std::mutex mutex_;
   std::vector<Pending> pending_;
