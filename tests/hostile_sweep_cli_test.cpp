@@ -113,5 +113,22 @@ TEST_F(Sweep, Case11PlantedSymlinksInsideTheOutputAreReplacedNotFollowed) {
   EXPECT_TRUE(json::parse(ReadTextFile(*this / "real.json")).contains("mean"));
 }
 
+// Case 5: `bench stress --out D` emptied an existing D/<case>/ with the user's files in it. Only a
+// folder bench stress made (its marker) is emptied; the second run into its own folder works.
+TEST_F(Sweep, Case05BenchStressNeverEmptiesAFolderItDidNotMake) {
+  const fs::path d = *this / "D";
+  const std::string kase = "exposure-1e-4-only";
+  fs::create_directories(d / kase);
+  testing::WriteTextFile(d / kase / "thesis.tex", "years of work");
+  const std::string args = "bench stress --out " + d.string() + " --case " + kase + " --threads 1";
+  ExpectRefused(RunHdr4d(args), args, "refusing to empty");
+  EXPECT_EQ(ReadTextFile(d / kase / "thesis.tex"), "years of work");
+  fs::remove_all(d);
+  auto r = RunHdr4d(args);
+  ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+  r = RunHdr4d(args);  // its own folder, marked: emptied and run again
+  EXPECT_EQ(r.exit_code, 0) << r.err << r.out;
+}
+
 }  // namespace
 }  // namespace hdr4d
