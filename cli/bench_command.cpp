@@ -19,6 +19,7 @@
 #include "benchmark/tables.h"
 #include "cli/commands.h"
 #include "cli/flags.h"
+#include "core/files/output_guard.h"
 #include "core/util/error.h"
 #include "core/files/json_util.h"
 
@@ -132,6 +133,7 @@ void AddTable(CLI::App& bench) {
     const bench::ResultsStore store(a->store, /*create=*/false);
     const std::vector<bench::RunSummary> runs = bench::SuiteRuns(store, suite);
     if (suite.tables.empty()) Fail("{}: the suite defines no tables", suite.file.string());
+    if (!a->out.empty()) CheckOutputFolder(a->out);  // never among a dataset's images
     bool found = false;
     std::string md_all;
     for (const bench::TableSpec& spec : suite.tables) {

@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "core/util/error.h"
+#include "core/files/dataset_folders.h"
 #include "core/files/file_access.h"
 
 namespace hdr4d {
@@ -132,6 +133,13 @@ void CheckOutputFolder(const fs::path& folder) {
   }
   if (const std::string* role = r.files.Match(key, id)) {
     Fail("{}: refusing to write: it is {}", folder.string(), *role);
+  }
+  // Also when this command read no dataset: the folder itself tells (core/files/dataset_folders.h).
+  if (r.scopes > 0) {
+    if (const std::string dataset = DatasetOfImageFolder(key); !dataset.empty()) {
+      Fail("{}: refusing to write into this folder: it holds the images of dataset {} (ground "
+           "truth is never overwritten)", folder.string(), dataset);
+    }
   }
 }
 

@@ -34,7 +34,8 @@ void ProtectInput(const std::filesystem::path& path, const std::string& role);
 // directly inside a protected folder. `path` may be a symlink (its target is what is checked).
 void CheckOutput(const std::filesystem::path& path);
 // The same for a folder a command is about to fill (call it before the work starts): refused when
-// the folder is a protected folder or a protected file.
+// the folder is a protected folder or a protected file, or (inside a command) a dataset's image
+// folder found by looking (DatasetOfImageFolder), also where the command read no dataset.
 void CheckOutputFolder(const std::filesystem::path& folder);
 
 // Paths the user named on the command line (cli/app.cpp registers every argument). A symlink or
