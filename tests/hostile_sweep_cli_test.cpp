@@ -123,11 +123,13 @@ TEST_F(Sweep, Case05BenchStressNeverEmptiesAFolderItDidNotMake) {
   const std::string args = "bench stress --out " + d.string() + " --case " + kase + " --threads 1";
   ExpectRefused(RunHdr4d(args), args, "refusing to empty");
   EXPECT_EQ(ReadTextFile(d / kase / "thesis.tex"), "years of work");
-  fs::remove_all(d);
-  auto r = RunHdr4d(args);
-  ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
-  r = RunHdr4d(args);  // its own folder, marked: emptied and run again
+  // A folder bench stress made (its marker) is emptied and used.
+  fs::remove(d / kase / "thesis.tex");
+  testing::WriteTextFile(d / kase / ".hdr4d-stress-case", "");
+  testing::WriteTextFile(d / kase / "stale.txt", "from an earlier run");
+  const auto r = RunHdr4d(args);
   EXPECT_EQ(r.exit_code, 0) << r.err << r.out;
+  EXPECT_FALSE(fs::exists(d / kase / "stale.txt"));
 }
 
 }  // namespace
