@@ -94,7 +94,7 @@ TEST(FolderLock, TakingTheFolderRemovesTemporariesOfDeadWriters) {
   for (const std::string& name :
        {".checkpoint.bin.tmp-" + dead + "-0", ".results.json.tmp-" + dead + "-12",
         ".checkpoint.bin.tmp-" + live + "-1", ".checkpoint.bin.tmp-" + dead + "-x",
-        "checkpoint.bin.tmp-" + dead + "-0", "checkpoint.bin"}) {
+        "checkpoint.bin.tmp-" + dead + "-0", std::string("checkpoint.bin")}) {
     std::ofstream(dir / name) << "x";
   }
   { FolderLock lock(dir, "test"); }

@@ -119,6 +119,12 @@ std::vector<std::uint8_t> ReproducedInBrackets(const std::vector<Image>& truth,
   return mask;
 }
 
+// True when the first n values are all the same number.
+static bool AllEqual(const std::vector<double>& v, std::size_t n) {
+  return std::all_of(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(n),
+                     [&](double x) { return x == v[0]; });
+}
+
 HdrAlignment AlignHdr(const Image& pred, const Image& gt, const std::vector<std::uint8_t>* mask) {
   CheckHdrPair(pred, gt, mask);
   const int w = gt.width(), h = gt.height();
@@ -188,10 +194,7 @@ HdrAlignment AlignHdr(const Image& pred, const Image& gt, const std::vector<std:
   }
   // A constant truth has no spread: its sum of squares is rounding (1e-30 gave a slope of 5.72
   // and a contrast of 1e15, issue 51 case 17), so it is taken as exactly zero.
-  if (std::all_of(log_gt.begin(), log_gt.begin() + static_cast<std::ptrdiff_t>(a.pixels),
-                  [&](double v) { return v == log_gt[0]; })) {
-    sgg = sgp = 0;
-  }
+  if (AllEqual(log_gt, a.pixels)) sgg = sgp = 0;
   a.sums = {sgg, spp, sgp};
   if (sgg > 0) a.slope = sgp / sgg;
   if (sgg > 0) a.contrast = std::sqrt(spp / sgg);
