@@ -10,6 +10,7 @@
 #include "core/metrics/evaluate.h"
 #include "core/files/json_util.h"
 #include "core/files/output_guard.h"
+#include "core/util/error.h"
 
 namespace hdr4d::cli {
 
