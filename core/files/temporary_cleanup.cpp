@@ -23,7 +23,7 @@ struct Slot {
 Slot g_slots[kSlots];
 std::atomic<bool> g_stopping{false};
 
-extern "C" void OnStopSignal(int sig) {
+void UnlinkTemporariesAndStop(int sig) {
   g_stopping.store(true);
   for (Slot& s : g_slots) {
     if (s.state.load() == kSet) ::unlink(s.path);  // async-signal-safe
@@ -37,7 +37,7 @@ extern "C" void OnStopSignal(int sig) {
 void RemoveTemporariesOnStopSignals() {
   static const bool installed = [] {
     struct sigaction action {};
-    action.sa_handler = OnStopSignal;
+    action.sa_handler = UnlinkTemporariesAndStop;
     sigemptyset(&action.sa_mask);
     for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaction(sig, &action, nullptr);
     return true;
