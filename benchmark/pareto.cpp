@@ -9,6 +9,7 @@
 #include <tuple>
 
 #include "benchmark/stats.h"
+#include "core/files/output_guard.h"
 #include "core/util/error.h"
 #include "core/files/json_util.h"
 #include "core/viz/plot.h"
@@ -136,6 +137,7 @@ bool ParetoChart(const std::vector<RunSummary>& runs, const Suite& suite, const 
 
 std::vector<fs::path> WritePareto(const std::vector<RunSummary>& runs, const Suite& suite,
                                   const ParetoOptions& options) {
+  CheckOutputFolder(options.out);  // never among a dataset's images (issue 51, case 10)
   std::vector<std::string> scenes;
   for (const SceneSpec& s : suite.scenes) scenes.push_back(s.name);
   scenes.push_back("");  // overall

@@ -14,6 +14,7 @@
 #include "benchmark/scoring.h"
 #include "benchmark/stats.h"
 #include "core/dataset/dataset.h"
+#include "core/files/output_guard.h"
 #include "core/util/error.h"
 #include "core/image/image_io.h"
 #include "core/files/json_util.h"
@@ -150,6 +151,10 @@ window.addEventListener('load', function () {
 }  // namespace
 
 ReportSummary WriteReport(const Suite& suite, const ResultsStore& store, const ReportOptions& options) {
+  // Before any work: the page goes neither over an input (the store, the suite: registered
+  // where they are opened) nor among a dataset's images (issue 51, cases 1 and 10).
+  CheckOutput(options.out);
+  CheckOutputFolder(options.out.has_parent_path() ? options.out.parent_path() : ".");
   ReportSummary summary;
   const std::vector<RunSummary> runs = SuiteRuns(store, suite);
   const std::string budget = options.tables.budget.empty() ? suite.budgets.back().Label() : options.tables.budget;

@@ -1,5 +1,6 @@
 #include "benchmark/results_store.h"
 
+#include "core/files/output_guard.h"
 #include "core/util/error.h"
 
 namespace hdr4d::bench {
@@ -100,6 +101,8 @@ ResultsStore::ResultsStore(const std::filesystem::path& path, bool create)
         return path;
       }(),
           create) {
+  // No command writes a file over the store it reads or fills (issue 51, case 1).
+  ProtectInputFile(path, "the results store " + path.string() + " (an input of this command)");
   Statement version = db_.Prepare("PRAGMA user_version");
   version.Step();
   const std::int64_t v = version.Int(0);

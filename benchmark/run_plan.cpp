@@ -6,9 +6,30 @@
 
 #include "benchmark/settings_flags.h"
 #include "core/util/error.h"
+#include "core/files/file_access.h"
 #include "core/files/sha256.h"
 
 namespace hdr4d::bench {
+
+namespace {
+
+// The contents of the files that train or render arguments name (a suite's `"config":
+// "lego.json"`): the run identity held only the name, so an edited file was reported as
+// stored (issue 51, case 16). Empty when no argument names a file, so the ids of runs without
+// one stay as they were.
+nlohmann::json ArgumentFileHashes(const std::vector<std::string>& train,
+                                  const std::vector<std::string>& render) {
+  nlohmann::json hashes = nlohmann::json::object();
+  for (const std::vector<std::string>* args : {&train, &render}) {
+    for (const std::string& a : *args) {
+      if (a.empty() || a[0] == '-' || hashes.contains(a)) continue;
+      if (InputFileProblem(a).empty()) hashes[a] = Sha256File(a);
+    }
+  }
+  return hashes;
+}
+
+}  // namespace
 
 std::vector<RunSpec> PlanRuns(const Suite& suite, const std::vector<PreparedScene>& scenes,
                               const std::string& code_version) {
@@ -58,6 +79,10 @@ std::vector<RunSpec> PlanRuns(const Suite& suite, const std::vector<PreparedScen
                             {"code_version", code_version},
                             {"scoring_version", kScoringVersion},
                             {"region", r.region}};
+              if (nlohmann::json files = ArgumentFileHashes(r.train_args, r.render_args);
+                  !files.empty()) {
+                r.identity["argument_files"] = std::move(files);
+              }
               r.id = Sha256Hex(r.identity.dump()).substr(0, 20);
               if (suite.curve_points > 0 && budget.iterations > 0) {
                 const std::int64_t every =

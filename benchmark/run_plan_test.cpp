@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <set>
+#include <unistd.h>
 
 namespace hdr4d::bench {
 namespace {
@@ -91,5 +92,33 @@ TEST(RunPlan, IdentityFollowsConfigCodeAndDataOnly) {
   }
 }
 
+}  // namespace
+}  // namespace hdr4d::bench
+
+#include <filesystem>
+#include <fstream>
+
+namespace hdr4d::bench {
+namespace {
+// Issue 51, case 16: the identity held only the name of a `config` file the suite names, so an
+// edited file was reported as stored. Its contents are part of the identity now.
+TEST(RunPlan, IdentityFollowsTheContentsOfAConfigFile) {
+  const std::filesystem::path file =
+      std::filesystem::temp_directory_path() / ("hdr4d_run_plan_config_" + std::to_string(::getpid()) + ".json");
+  std::ofstream(file) << R"({"batch_size": 1})";
+  nlohmann::json j = nlohmann::json::parse(R"({
+    "name": "t", "scenes": [{"name": "a", "path": "a"}],
+    "methods": [{"name": "m", "train": {"method": "hdr4dgs"}}],
+    "seeds": [0], "budgets": [{"iterations": 100}]})");
+  j["methods"][0]["train"]["config"] = file.string();
+  const Suite s = ParseSuite(j, "/x/t.json");
+  const std::vector<PreparedScene> scenes = {{&s.scenes[0], "/data/a", "aaa"}};
+  const auto a = PlanRuns(s, scenes, "v1");
+  EXPECT_EQ(PlanRuns(s, scenes, "v1")[0].id, a[0].id);
+  std::ofstream(file) << R"({"batch_size": 2})";
+  const auto b = PlanRuns(s, scenes, "v1");
+  EXPECT_NE(a[0].id, b[0].id);
+  std::filesystem::remove(file);
+}
 }  // namespace
 }  // namespace hdr4d::bench

@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <map>
@@ -42,12 +44,57 @@ nlohmann::json SpecJson(const RunSpec& r) {
           {"resources", r.resources.ToJson()}};
 }
 
+// Every value that reaches a generated script is checked before anything is planned: a newline
+// in the suite name, --partition or --account ended up as a command of its own in the sbatch
+// script (issue 51, case 7).
+void RequireNoControlCharacters(const std::string& what, const std::string& value) {
+  for (const unsigned char c : value) {
+    if (c < 0x20 || c == 0x7f) {
+      Fail("bench slurm: {} contains a control character (0x{:02x}); it would reach the "
+           "generated scripts", what, static_cast<int>(c));
+    }
+  }
+}
+
+// Slurm's partition and account names: letters, digits and . _ - (a partition list adds ,).
+void RequireSlurmName(const std::string& what, const std::string& value) {
+  RequireNoControlCharacters(what, value);
+  for (const char c : value) {
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '.' && c != '_' && c != '-' &&
+        c != ',') {
+      Fail("bench slurm: {} '{}' has the character '{}'; Slurm names are letters, digits and . _ - "
+           "(a partition list separated by ,)", what, value, c);
+    }
+  }
+}
+
+// The suite name as a job name: what Slurm shows, kept to characters no parser splits on.
+std::string JobNamePart(const std::string& name) {
+  std::string out = name;
+  for (char& c : out) {
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '.' && c != '_' && c != '-') c = '_';
+  }
+  return out;
+}
+
+// A path on an #SBATCH line: sbatch reads it up to white space unless it is in double quotes.
+std::string SbatchPath(const std::string& path) {
+  if (path.find('"') != std::string::npos)
+    Fail("bench slurm: {}: a '\"' in the output path cannot be written on an #SBATCH line", path);
+  const bool plain = std::none_of(path.begin(), path.end(), [](char c) { return c == ' ' || c == '\t'; });
+  return plain ? path : "\"" + path + "\"";
+}
+
 }  // namespace
 
 SlurmPlan WriteSlurmJobs(const Suite& suite, const SlurmOptions& o) {
   if (o.out.empty()) Fail("bench slurm: --out is required");
   if (o.max_parallel < 0) Fail("bench slurm: --max-parallel must be >= 0");
   const fs::path dir = fs::absolute(o.out);
+  RequireNoControlCharacters("the suite name", suite.name);
+  RequireNoControlCharacters("--out", dir.string());
+  RequireSlurmName("--partition", o.partition);
+  RequireSlurmName("--account", o.account);
   const fs::path cache = o.cache_dir.empty() ? DefaultCacheDir() : fs::absolute(o.cache_dir);
   const std::vector<PreparedScene> scenes = PrepareScenes(suite, cache, true);
   const std::vector<RunSpec> runs = PlanRuns(suite, scenes, CodeVersion());
@@ -76,14 +123,14 @@ SlurmPlan WriteSlurmJobs(const Suite& suite, const SlurmOptions& o) {
     for (const RunSpec* r : list) tasks.push_back(SpecJson(*r));
     arrays.push_back({{"resources", res.ToJson()}, {"tasks", tasks}});
     std::string script = "#!/bin/bash\n";
-    script += fmt::format("#SBATCH --job-name=hdr4d-{}-{}\n", suite.name, k);
+    script += fmt::format("#SBATCH --job-name=hdr4d-{}-{}\n", JobNamePart(suite.name), k);
     script += fmt::format("#SBATCH --array=0-{}{}\n", list.size() - 1,
                           o.max_parallel > 0 ? fmt::format("%{}", o.max_parallel) : "");
     script += "#SBATCH --ntasks=1\n";
     script += fmt::format("#SBATCH --cpus-per-task={}\n", res.cpus);
     script += fmt::format("#SBATCH --mem={}M\n", static_cast<long>(std::ceil(res.memory_gb * 1024)));
     script += fmt::format("#SBATCH --time={}\n", SlurmTime(res.minutes));
-    script += fmt::format("#SBATCH --output={}/logs/%A_%a.out\n", dir.string());
+    script += fmt::format("#SBATCH --output={}\n", SbatchPath(dir.string() + "/logs/%A_%a.out"));
     if (!o.partition.empty()) script += fmt::format("#SBATCH --partition={}\n", o.partition);
     if (!o.account.empty()) script += fmt::format("#SBATCH --account={}\n", o.account);
     script += fmt::format(

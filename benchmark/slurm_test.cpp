@@ -99,3 +99,31 @@ TEST(Slurm, GeneratedArraysRunAsTasksAndCollectIntoTheStore) {
 
 }  // namespace
 }  // namespace hdr4d::bench
+
+namespace hdr4d::bench {
+namespace {
+// Issue 51, case 7: a newline in the suite name, --partition or --account became a shell command
+// of the generated sbatch script. Every such value is refused before anything is written.
+TEST(Slurm, ValuesThatWouldBreakOutOfTheScriptAreRefused) {
+  testing::TempDir dir;
+  const fs::path good = dir / "good.json", bad = dir / "bad.json", jobs = dir / "jobs";
+  WriteTinySuite(good, "ok", nlohmann::json::parse(R"([{"name": "hdr4dgs", "train": {"method": "hdr4dgs"}}])"),
+                 {0}, 10);
+  WriteTinySuite(bad, "x\ntouch " + (dir / "pwned").string(),
+                 nlohmann::json::parse(R"([{"name": "hdr4dgs", "train": {"method": "hdr4dgs"}}])"), {0}, 10);
+  const std::vector<std::vector<std::string>> cases = {
+      {"bench", "slurm", bad.string(), "--out", jobs.string()},
+      {"bench", "slurm", good.string(), "--out", jobs.string(), "--partition", "cpu\ntouch x"},
+      {"bench", "slurm", good.string(), "--out", jobs.string(), "--account", "a;touch x"},
+      {"bench", "slurm", good.string(), "--out", (dir / "j\nk").string()}};
+  for (const auto& args : cases) {
+    const Command c = RunHdr4dArgs(args, dir / "log.txt");
+    EXPECT_FALSE(c.result.ok()) << c.text;
+    EXPECT_NE(c.text.find("bench slurm: "), std::string::npos) << c.text;
+    EXPECT_FALSE(fs::exists(jobs)) << c.text;
+    EXPECT_FALSE(fs::exists(dir / "j\nk")) << c.text;
+  }
+  EXPECT_FALSE(fs::exists(dir / "pwned"));
+}
+}  // namespace
+}  // namespace hdr4d::bench

@@ -7,6 +7,7 @@
 
 #include "benchmark/machine.h"
 #include "benchmark/stress_kit.h"
+#include "core/files/atomic_file.h"
 #include "core/util/error.h"
 
 namespace hdr4d::bench {
@@ -15,6 +16,38 @@ using stress::Case;
 using stress::Cases;
 using stress::Ctx;
 using stress::kNoCrash;
+
+namespace {
+
+// Marks a case folder as bench stress's own: only such a folder is emptied for a new run.
+constexpr const char* kCaseMarker = ".hdr4d-stress-case";
+
+// An empty case folder with its marker. An existing folder is emptied only when bench stress
+// made it (its marker is there): `--out D` with the user's files in D/<case>/ emptied them
+// (issue 51, case 5).
+void PrepareCaseFolder(const fs::path& dir) {
+  std::error_code ec;
+  const fs::file_status link = fs::symlink_status(dir, ec);
+  if (fs::exists(link)) {
+    if (!fs::is_directory(link)) {
+      Fail("bench stress: {} exists and is not a folder bench stress made; refusing to replace it "
+           "(choose another --out)", dir.string());
+    }
+    const bool empty = fs::is_empty(dir, ec);
+    if (!empty && !fs::exists(dir / kCaseMarker, ec)) {
+      Fail("bench stress: {} holds files bench stress did not make (no {} in it); refusing to "
+           "empty it (choose another --out, or remove the folder yourself)", dir.string(),
+           kCaseMarker);
+    }
+    fs::remove_all(dir, ec);
+    if (ec) Fail("bench stress: cannot empty {}: {}", dir.string(), ec.message());
+  }
+  fs::create_directories(dir, ec);
+  if (ec) Fail("bench stress: cannot create {}: {}", dir.string(), ec.message());
+  WriteTextFileAtomic(dir / kCaseMarker, "made by hdr4d bench stress; emptied by its next run\n");
+}
+
+}  // namespace
 
 std::vector<StressCaseInfo> StressCaseList() {
   std::vector<StressCaseInfo> list;
@@ -37,8 +70,7 @@ std::vector<StressOutcome> RunStress(const StressOptions& options) {
         std::find(options.cases.begin(), options.cases.end(), c.info.name) == options.cases.end())
       continue;
     Ctx ctx{options.work / c.info.name, SelfExecutable().string(), options.threads};
-    fs::remove_all(ctx.dir);
-    fs::create_directories(ctx.dir);
+    PrepareCaseFolder(ctx.dir);
     const auto start = std::chrono::steady_clock::now();
     StressOutcome o;
     try {

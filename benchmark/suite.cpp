@@ -8,6 +8,7 @@
 #include <set>
 
 #include "benchmark/settings_flags.h"
+#include "core/files/output_guard.h"
 #include "core/util/error.h"
 #include "core/files/json_util.h"
 
@@ -370,6 +371,8 @@ Suite LoadSuite(const std::string& name_or_path) {
     Fail("no suite '{}' (a suite file, or one of the shipped suites in {}:{})", name_or_path,
          SuitesDir().string(), known);
   }
+  // Every command that reads a suite leaves it as it was (issue 51, case 1).
+  ProtectInputFile(file, "the suite file " + file.string() + " (an input of this command)");
   return ParseSuite(ReadJsonFile(file), fs::absolute(file));
 }
 

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include "core/files/atomic_file.h"
+#include "core/files/output_guard.h"
 #include "core/util/error.h"
 
 namespace hdr4d::bench {
@@ -34,6 +35,7 @@ void OutputSuiteTables(const Suite& suite,
                        const TableOutputOptions& o,
                        const std::function<void(const std::string&)>& print) {
   if (suite.tables.empty()) Fail("{}: the suite defines no tables", suite.file.string());
+  if (!o.out.empty()) CheckOutputFolder(o.out);  // never among a dataset's images
   bool found = false;
   for (const TableSpec& spec : suite.tables) {
     if (!o.table.empty() && spec.id != o.table) continue;

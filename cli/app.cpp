@@ -13,6 +13,7 @@
 #include "core/util/error.h"
 #include "core/image/image_io.h"
 #include "core/files/output_guard.h"
+#include "core/files/temporary_cleanup.h"
 #include "method/raster/simd_dispatch.h"
 
 namespace hdr4d::cli {
@@ -139,6 +140,10 @@ std::unique_ptr<CLI::App> MakeApp() {
 int RunApp(CLI::App& app, int argc, char** argv) {
   // The inputs this command reads are protected from its writers for as long as it runs.
   const InputProtectionScope protect_inputs;
+  // Symlinks and special files are written through only where the user named them.
+  for (int i = 1; i < argc; ++i) NameOnCommandLine(argv[i]);
+  // SIGINT, SIGTERM and SIGHUP alike: the temporary files of writes in flight go first.
+  RemoveTemporariesOnStopSignals();
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -11,6 +11,7 @@
 #include "core/util/error.h"
 #include "core/files/json_util.h"
 #include "core/files/output_guard.h"
+#include "core/util/error.h"
 
 namespace hdr4d::cli {
 

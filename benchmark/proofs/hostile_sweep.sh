@@ -5,7 +5,8 @@
 #         and the protected files byte for byte as before
 #   ok    exit 0 (a valid edge case that must work)
 #   report  exit 1 with the problem named in the command's own report on stdout (dataset check)
-# Never a signal (crash), never exit 0 for a mistake, never a changed input.
+# Never a signal (crash), never a hang (120 s), never exit 0 for a mistake, never a changed input.
+# The second part covers the classes of issue 51 (the second sweep), each with variants.
 # Usage: benchmark/proofs/hostile_sweep.sh HDR4D_BINARY WORK_DIR
 set -uo pipefail
 B=$(realpath "$1"); W=$2
@@ -20,7 +21,7 @@ case_() {
   tried=$((tried + 1))
   local before; before=$(snapshot)
   local err rc out
-  out=$("$B" "$@" 2>"$W/.err"); rc=$?; err=$(cat "$W/.err")
+  out=$(timeout 120 "$B" "$@" 2>"$W/.err"); rc=$?; err=$(cat "$W/.err")  # 124: it hung
   local after; after=$(snapshot)
   local lines; lines=$(printf '%s' "$err" | grep -c '' || true)
   local ok=1 why=""
@@ -118,6 +119,96 @@ case_ err "" calibrate --capture cap --out S/images --stage radiometry
 case_ err "" calibrate --capture cap --out CAL --colmap-model nosuch
 case_ err "" calibrate --capture cap --out CAL --board 9x
 [ ! -e CAL ] && [ ! -e CAL2 ] || failed_cases+=("calibrate: a failed calibration left an output folder")
+
+# --- issue 51 -------------------------------------------------------------------------------
+check() {  # check "what" COMMAND...: an extra condition on disk, counted as a case
+  tried=$((tried + 1))
+  if "${@:2}"; then held=$((held + 1)); else failed_cases+=("$1"); fi
+}
+same() { cmp -s "$1" "$2"; }
+printf 'precious\n' > victim; cp victim victim.orig
+# 13: inputs that are not regular files are refused by name, never read (no hang)
+mkfifo fifo.png fifo.ply
+python3 -c "import socket; socket.socket(socket.AF_UNIX).bind('sock.png')"
+case_ err "not a regular file" eval /dev/zero S/hdr/cam00_t000.exr
+case_ err "not a regular file" eval S/hdr/cam00_t000.exr /dev/zero
+case_ err "not a regular file" eval fifo.png S/images/cam00_t000_e0.png
+case_ err "not a regular file" eval sock.png S/images/cam00_t000_e0.png
+case_ err "not a regular file" synth-ldr /dev/zero --out z.png
+cp -r S S13; ln -sf /dev/zero S13/images/cam00_t000_e0.png
+case_ report "not a regular file" dataset check S13
+case_ err "not a regular file" train --data S13 --out R13 --iterations 2 --threads 1
+cp -r S S13b; rm S13b/point3d.ply; ln -s ../fifo.ply S13b/point3d.ply
+case_ err "not a regular file" train --data S13b --out R13b --iterations 2 --threads 1
+cp -r R R13c; rm -f R13c/.hdr4d-lock; ln -sf /dev/zero R13c/checkpoint.bin
+case_ err "not a regular file" render --run R13c --out O13
+# 14: RGBA PNGs are read with their RGB as stored; eval ignores alpha
+oiiotool --pattern constant:color=0.8,0.6,0.4 32x32 3 --pattern constant:color=0.50196 32x32 1 \
+  --chappend --chnames R,G,B,A --attrib oiio:UnassociatedAlpha 1 -d uint8 -o rgba.png
+oiiotool --pattern constant:color=0.8,0.6,0.4 32x32 3 -d uint8 -o rgb.png
+oiiotool --pattern constant:color=0.8,0.6,0.4,0.2 32x32 4 --attrib oiio:UnassociatedAlpha 1 -d uint16 -o rgba16.png
+case_ok eval rgba.png rgb.png --out e14.json
+check "14: eval of the right RGB at alpha 128 is not an identical pair" grep -q '"identical_pairs": 1' e14.json
+case_ok eval rgba16.png rgb.png --out e14b.json
+check "14: 16-bit RGBA at alpha 0.2 scores below 40 dB" python3 -c "import json,sys; p=json.load(open('e14b.json'))['mean']['psnr']; sys.exit(0 if p is None or p > 40 else 1)"
+# 11: a symlink planted inside --out is replaced, its target never written
+mkdir -p O11 R11; ln -s ../victim O11/cam03_t000_e0.png; ln -s ../victim O11/cam03_t000.exr
+ln -s ../victim R11/checkpoint.bin; ln -s ../victim R11/.hdr4d-lock; ln -s ../victim R11/config.json
+case_ok render --run R --out O11
+case_ok train --data S --out R11 --iterations 2 --threads 1
+mkdir -p T11; ln -s ../victim T11/scores.json
+case_ok eval S/hdr S/hdr --out T11/scores.json
+check "11: a planted link's target was written" same victim victim.orig
+check "11: the planted render link is still a link" test ! -L O11/cam03_t000_e0.png
+# 17: a constant HDR truth leaves the log-shape numbers undefined, with the reason
+oiiotool --pattern constant:color=2,2,2 32x32 3 -d half -o const.exr
+oiiotool --pattern noise:type=uniform:min=0.1:max=4 32x32 3 -d half -o noise.exr
+oiiotool --pattern constant:color=0.001,0.001,0.001 17x9 3 -d float -o const2.exr
+oiiotool --pattern noise:type=uniform:min=0.1:max=4 17x9 3 -d float -o noise2.exr
+case_ok eval noise.exr const.exr --out e17.json
+case_ok eval noise2.exr const2.exr --out e17b.json
+for f in e17.json e17b.json; do
+  check "17: $f gives a number for hdr_log_slope/contrast of a constant truth" \
+    python3 -c "import json,sys; p=json.load(open('$f'))['pairs'][0]; sys.exit(1 if 'hdr_log_slope' in p or 'hdr_log_contrast' in p or 'hdr_log_slope' not in p.get('undefined', {}) else 0)"
+done
+# 19: temporaries of dead writers go when the run folder is opened; SIGHUP leaves none
+sh -c 'exit 0' & dead=$!; wait $dead
+cp -r R R19; rm -f R19/.hdr4d-lock; head -c 100000 /dev/urandom > "R19/.checkpoint.bin.tmp-$dead-0"
+cp "R19/.checkpoint.bin.tmp-$dead-0" "R19/.results.json.tmp-$dead-3"
+case_ok train --data S --out R19 --resume --iterations 40 --threads 1
+check "19: a completed resume left a dead writer's temporary" test -z "$(ls -A R19 | grep '\.tmp-')"
+for sig in HUP TERM INT; do
+  timeout 120 "$B" train --data S --out "R19$sig" --iterations 100000 --threads 1 >/dev/null 2>&1 & pid=$!
+  sleep 4; kill -"$sig" "$pid"; wait "$pid"
+  check "19: SIG$sig left a temporary in the run folder" test -z "$(ls -A "R19$sig" 2>/dev/null | grep '\.tmp-')"
+done
+# 5: bench stress empties only folders it made
+mkdir -p SW5/exposure-1e-4-only; printf 'years of work\n' > SW5/exposure-1e-4-only/thesis.tex
+cp -r SW5 SW5b; rm SW5b/exposure-1e-4-only/thesis.tex; ln -s ../../victim SW5b/exposure-1e-4-only/notes
+case_ err "refusing to empty" bench stress --out SW5 --case exposure-1e-4-only --threads 1
+case_ err "refusing to empty" bench stress --out SW5b --case exposure-1e-4-only --threads 1
+check "5: bench stress emptied a folder it did not make" test -f SW5/exposure-1e-4-only/thesis.tex
+# 7: values reaching a Slurm script carry no control characters
+python3 -c "import json; s=json.load(open('$(dirname "$B")/../../benchmark/suites/ci.json')); s['name']='ci\ntouch pwned'; json.dump(s, open('nl.json','w'))" 2>/dev/null \
+  || printf '{"name": "x\\ntouch pwned", "scenes": [], "methods": []}' > nl.json
+case_ err "control character" bench slurm ci --out SL7 --partition $'cpu\ntouch pwned'
+case_ err "control character" bench slurm ci --out SL7 --account $'a\rb'
+case_ err "--account" bench slurm ci --out SL7 --account 'a;touch pwned'
+case_ err "--partition" bench slurm ci --out SL7 --partition 'cpu $(touch pwned)'
+case_ err "" bench slurm nl.json --out SL7
+check "7: a refused bench slurm wrote scripts" test ! -e SL7
+check "7: a value became a command" test ! -e pwned
+# 1 and 10: bench commands never write over the store or suite they read, nor into a dataset
+: > st1.db; cp "$(dirname "$B")/../../benchmark/suites/ci.json" suite1.json 2>/dev/null || cp S/transforms_train.json suite1.json
+cp st1.db st1.orig 2>/dev/null
+case_ err "refusing" bench report suite1.json --store st1.db --out st1.db
+case_ err "refusing" bench report suite1.json --store st1.db --out suite1.json
+case_ err "refusing" bench report suite1.json --store st1.db --out S/images/r.html
+case_ err "refusing" bench table suite1.json --store st1.db --out S/images
+case_ err "refusing" bench table suite1.json --store st1.db --out S/hdr
+case_ err "refusing" bench pareto suite1.json --store st1.db --out S/hdr
+case_ err "refusing" bench pareto suite1.json --store st1.db --out S/images
+check "1: the suite file was replaced" grep -q '"name"' suite1.json
 
 echo "hostile sweep: $tried cases tried, $held held"
 for f in "${failed_cases[@]}"; do echo "  FAILED: $f"; done

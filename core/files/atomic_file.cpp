@@ -8,10 +8,12 @@
 #include <cerrno>
 #include <cstring>
 #include <fstream>
+#include <memory>
 
 #include "core/util/error.h"
 #include "core/files/file_access.h"
 #include "core/files/output_guard.h"
+#include "core/files/temporary_cleanup.h"
 
 namespace hdr4d {
 namespace fs = std::filesystem;
@@ -72,7 +74,17 @@ void CopyInto(const fs::path& from, const fs::path& to) {
 struct PreparedWrite {
   fs::path path, tmp, target;  // target empty: `path` is a special file, written through
   bool existed = false;
+  std::shared_ptr<TrackedTemporary> tracked;  // unlinked by a stop signal until published
 };
+
+// A symlink or special file found at `path` that the user did not name on the command line
+// (issue 51, case 11: a planted `checkpoint.bin -> victim` inside --out was written through).
+bool ReplaceRatherThanFollow(const fs::path& path) {
+  struct stat lst {};
+  if (::lstat(path.c_str(), &lst) != 0) return false;
+  if (S_ISREG(lst.st_mode) || S_ISDIR(lst.st_mode)) return false;
+  return !NamedOnCommandLine(path);
+}
 
 PreparedWrite Prepare(const fs::path& path, const std::function<void(const fs::path&)>& fill) {
   CheckOutput(path);
@@ -80,7 +92,13 @@ PreparedWrite Prepare(const fs::path& path, const std::function<void(const fs::p
   PreparedWrite w{path, {}, {}, ::stat(path.c_str(), &st) == 0};
   if (w.existed && S_ISDIR(st.st_mode)) Fail("{}: is a folder, expected a file", path.string());
   std::error_code ec;
-  if (w.existed && !S_ISREG(st.st_mode)) {
+  if (ReplaceRatherThanFollow(path)) {
+    // A symlink or special file the user did not name: the new file takes its place.
+    w.target = path;
+    w.existed = false;  // the link's or node's mode is not the new file's
+    const fs::path folder = path.has_parent_path() ? path.parent_path() : fs::path(".");
+    w.tmp = TemporaryName(folder, path);
+  } else if (w.existed && !S_ISREG(st.st_mode)) {
     // Written through later: the data is made in the temporary folder first, so a failing
     // writer sends nothing half-made into the device or pipe.
     w.tmp = TemporaryName(fs::temp_directory_path(ec), path);
@@ -92,6 +110,7 @@ PreparedWrite Prepare(const fs::path& path, const std::function<void(const fs::p
     if (ec) Fail("{}: cannot create folder {}: {}", path.string(), folder.string(), ec.message());
     w.tmp = TemporaryName(folder, w.target);
   }
+  w.tracked = std::make_shared<TrackedTemporary>(w.tmp);
   FillTemporary(w.tmp, fill);
   return w;
 }
@@ -148,7 +167,7 @@ FileBatch::~FileBatch() {
 void FileBatch::Write(const fs::path& path, const std::function<void(const fs::path&)>& fill) {
   const PreparedWrite w = Prepare(path, fill);
   const std::lock_guard<std::mutex> lock(mutex_);
-  pending_.push_back({w.path, w.tmp, w.target, w.existed});
+  pending_.push_back({w.path, w.tmp, w.target, w.existed, w.tracked});
 }
 
 void FileBatch::Commit() {
@@ -156,7 +175,7 @@ void FileBatch::Commit() {
   for (std::size_t i = 0; i < pending_.size(); ++i) {
     const Pending& p = pending_[i];
     try {
-      Publish({p.path, p.tmp, p.target, p.existed});
+      Publish({p.path, p.tmp, p.target, p.existed, p.tracked});
     } catch (...) {
       // The ones not published yet stay temporary and go with the destructor.
       pending_.erase(pending_.begin(), pending_.begin() + static_cast<std::ptrdiff_t>(i) + 1);

@@ -4,19 +4,26 @@
 //  - a regular file (or a new one) is written to a hidden temporary file beside it,
 //    ".<name>.tmp-<pid>-<n>", renamed over it only when complete, so a failed or killed write
 //    leaves the previous file and nothing a reader takes for an image or a JSON file;
-//  - a symlink is written through (its target gets the new content, the link stays);
-//  - a special file (/dev/null, /dev/stdout, a FIFO) is written directly: renaming over it would
-//    replace the device node with a regular file.
+//  - a symlink the user named on the command line is written through (its target gets the new
+//    content, the link stays);
+//  - a special file the user named (/dev/null, /dev/stdout, a FIFO) is written directly: renaming
+//    over it would replace the device node with a regular file;
+//  - a symlink or special file the user did not name (one found inside --out, e.g. a planted
+//    `checkpoint.bin -> victim`) is replaced by the new file: its target is never touched
+//    (NamedOnCommandLine in core/files/output_guard.h).
 #pragma once
 
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <ostream>
 #include <string>
 #include <vector>
 
 namespace hdr4d {
+
+class TrackedTemporary;  // core/files/temporary_cleanup.h
 
 // Creates the parent folders, lets `write` fill the temporary file (binary mode), then moves it
 // into place. On any failure the temporary file is removed, `path` keeps what it had, and
@@ -51,6 +58,7 @@ class FileBatch {
   struct Pending {
     std::filesystem::path path, tmp, target;  // target empty: a special file, copied into
     bool existed = false;
+    std::shared_ptr<TrackedTemporary> tracked;  // core/files/temporary_cleanup.h
   };
   std::mutex mutex_;
   std::vector<Pending> pending_;

@@ -34,6 +34,17 @@ PathProbe ProbePath(const fs::path& path) {
   return probe;
 }
 
+std::string SpecialFileKind(const fs::path& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return "";
+  if (S_ISCHR(st.st_mode)) return "a character device";
+  if (S_ISBLK(st.st_mode)) return "a block device";
+  if (S_ISFIFO(st.st_mode)) return "a FIFO (named pipe)";
+  if (S_ISSOCK(st.st_mode)) return "a socket";
+  if (S_ISREG(st.st_mode) || S_ISDIR(st.st_mode)) return "";
+  return "a special file";
+}
+
 std::string InputFileProblem(const fs::path& path) {
   const PathProbe p = ProbePath(path);
   switch (p.kind) {
@@ -43,8 +54,12 @@ std::string InputFileProblem(const fs::path& path) {
       return p.problem;
     case PathKind::kFolder:
       return "is a folder, expected a file";
+    case PathKind::kOther: {
+      const std::string kind = SpecialFileKind(path);
+      return "is " + (kind.empty() ? std::string("a special file") : kind) +
+             ", not a regular file";
+    }
     case PathKind::kFile:
-    case PathKind::kOther:
       return p.readable ? "" : p.problem;
   }
   return "";

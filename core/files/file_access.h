@@ -21,8 +21,14 @@ struct PathProbe {
 // One stat() and one access() (symlinks followed).
 PathProbe ProbePath(const std::filesystem::path& path);
 
-// "" when `path` is a readable regular file (or device / FIFO); else the problem, e.g.
-// "file not found", "permission denied", "is a folder, expected a file".
+// What a path that is not a regular file or folder is: "a character device", "a FIFO", ...;
+// "" for regular files, folders and paths that cannot be stat()ed.
+std::string SpecialFileKind(const std::filesystem::path& path);
+
+// "" when `path` is a readable regular file; else the problem, e.g. "file not found",
+// "permission denied", "is a folder, expected a file", "is a character device, not a regular
+// file". Devices, FIFOs and sockets are refused by name before anything opens them: reading
+// /dev/zero never ends, and opening a FIFO blocks until a writer comes.
 std::string InputFileProblem(const std::filesystem::path& path);
 // "" when `path` is a folder that can be listed and entered; else the problem.
 std::string InputFolderProblem(const std::filesystem::path& path);

@@ -12,6 +12,7 @@
 
 #include "core/util/error.h"
 #include "core/files/output_guard.h"
+#include "core/files/stale_temporaries.h"
 
 namespace hdr4d {
 namespace fs = std::filesystem;
@@ -41,7 +42,11 @@ std::string ReadHolder(int fd) {
 FolderLock::FolderLock(const fs::path& folder, const std::string& command) {
   const fs::path file = folder / kFileName;
   CheckOutput(file);  // never a file in a dataset's folders (core/files/output_guard.h)
-  fd_ = ::open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  // A symlink planted at the lock's name is replaced, never followed: the holder line would
+  // truncate its target (issue 51, case 11).
+  fd_ = ::open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0644);
+  if (fd_ < 0 && errno == ELOOP && ::unlink(file.c_str()) == 0)
+    fd_ = ::open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0644);
   if (fd_ < 0) Fail("{}: cannot create the lock file: {}", file.string(), std::strerror(errno));
   if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
     const int error = errno;
@@ -54,6 +59,8 @@ FolderLock::FolderLock(const fs::path& folder, const std::string& command) {
     }
     Fail("{}: cannot lock: {}", file.string(), std::strerror(error));
   }
+  // The folder is ours now: temporaries its killed writers left (a checkpoint each) go.
+  RemoveStaleTemporaries(folder);
   const std::string line =
       command + " (pid " + std::to_string(::getpid()) + ", since " + Now() + ")\n";
   // Best effort: the lock itself is what excludes; the text only names the holder.

@@ -2,7 +2,9 @@
 // second writer fails at once with one line naming the holder instead of mixing its files with
 // the first one's. flock(2) on FOLDER/.hdr4d-lock: the kernel releases it when the holder ends,
 // kill -9 included, so a lock file left behind never blocks a later run. The file is kept (not
-// unlinked on release): unlinking would let two later writers lock two different files.
+// unlinked on release): unlinking would let two later writers lock two different files. Taking
+// the lock removes the temporary files that killed writers left in the folder
+// (core/files/stale_temporaries.h): a completed resume leaves none behind.
 #pragma once
 
 #include <filesystem>

@@ -76,3 +76,51 @@ TEST(FolderLock, AnUncreatableLockFileIsAnErrorNamingIt) {
 
 }  // namespace
 }  // namespace hdr4d
+
+namespace hdr4d {
+namespace {
+// Issue 51, case 19: temporary checkpoints of killed runs stayed forever, also after a completed
+// resume. Taking the folder removes those of dead writers and keeps those of live ones.
+TEST(FolderLock, TakingTheFolderRemovesTemporariesOfDeadWriters) {
+  const fs::path dir = std::filesystem::temp_directory_path() / "hdr4d_folder_lock_stale";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const pid_t child = fork();
+  if (child == 0) _exit(0);
+  ASSERT_GT(child, 0);
+  int status = 0;
+  waitpid(child, &status, 0);  // its pid is now free
+  const std::string dead = std::to_string(child), live = std::to_string(getppid());
+  for (const std::string& name :
+       {".checkpoint.bin.tmp-" + dead + "-0", ".results.json.tmp-" + dead + "-12",
+        ".checkpoint.bin.tmp-" + live + "-1", ".checkpoint.bin.tmp-" + dead + "-x",
+        "checkpoint.bin.tmp-" + dead + "-0", std::string("checkpoint.bin")}) {
+    std::ofstream(dir / name) << "x";
+  }
+  { FolderLock lock(dir, "test"); }
+  EXPECT_FALSE(fs::exists(dir / (".checkpoint.bin.tmp-" + dead + "-0")));
+  EXPECT_FALSE(fs::exists(dir / (".results.json.tmp-" + dead + "-12")));
+  EXPECT_TRUE(fs::exists(dir / (".checkpoint.bin.tmp-" + live + "-1")));
+  EXPECT_TRUE(fs::exists(dir / (".checkpoint.bin.tmp-" + dead + "-x")));
+  EXPECT_TRUE(fs::exists(dir / ("checkpoint.bin.tmp-" + dead + "-0")));
+  EXPECT_TRUE(fs::exists(dir / "checkpoint.bin"));
+  fs::remove_all(dir);
+}
+
+// Issue 51, case 11: a lock file planted as a symlink had its target truncated.
+TEST(FolderLock, APlantedLockSymlinkIsReplacedNotFollowed) {
+  const fs::path dir = std::filesystem::temp_directory_path() / "hdr4d_folder_lock_link";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "victim") << "precious";
+  fs::create_symlink(dir / "victim", dir / FolderLock::kFileName);
+  { FolderLock lock(dir, "test"); }
+  std::ifstream in(dir / "victim");
+  std::string text;
+  std::getline(in, text);
+  EXPECT_EQ(text, "precious");
+  EXPECT_FALSE(fs::is_symlink(dir / FolderLock::kFileName));
+  fs::remove_all(dir);
+}
+}  // namespace
+}  // namespace hdr4d

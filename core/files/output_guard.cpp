@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "core/util/error.h"
+#include "core/files/dataset_folders.h"
 #include "core/files/file_access.h"
 
 namespace hdr4d {
@@ -54,6 +55,7 @@ struct Registry {
   Table files, folders;
   std::multiset<std::string> permits;
   std::unordered_map<std::string, std::string> folder_keys;  // folder as given -> its key
+  std::set<std::string> named;  // command-line arguments, absolute and normalised
 };
 
 Registry& TheRegistry() {
@@ -132,6 +134,41 @@ void CheckOutputFolder(const fs::path& folder) {
   if (const std::string* role = r.files.Match(key, id)) {
     Fail("{}: refusing to write: it is {}", folder.string(), *role);
   }
+  // Also when this command read no dataset: the folder itself tells (core/files/dataset_folders.h).
+  if (r.scopes > 0) {
+    if (const std::string dataset = DatasetOfImageFolder(key); !dataset.empty()) {
+      Fail("{}: refusing to write into this folder: it holds the images of dataset {} (ground "
+           "truth is never overwritten)", folder.string(), dataset);
+    }
+  }
+}
+
+namespace {
+std::string LexicalKey(const fs::path& path) {
+  std::error_code ec;
+  std::string key = fs::absolute(path, ec).lexically_normal().string();
+  while (key.size() > 1 && key.back() == '/') key.pop_back();
+  return key;
+}
+}  // namespace
+
+void NameOnCommandLine(const std::string& argument) {
+  if (argument.empty()) return;
+  // "--out=x" names x; "-o" alone names nothing that exists as a file anyway.
+  const std::size_t eq = argument.rfind("--", 0) == 0 ? argument.find('=') : std::string::npos;
+  const std::string value = eq == std::string::npos ? argument : argument.substr(eq + 1);
+  if (value.empty()) return;
+  const std::string key = LexicalKey(value);
+  Registry& r = TheRegistry();
+  const std::lock_guard<std::mutex> lock(r.mutex);
+  if (r.scopes > 0) r.named.insert(key);
+}
+
+bool NamedOnCommandLine(const fs::path& path) {
+  const std::string key = LexicalKey(path);
+  Registry& r = TheRegistry();
+  const std::lock_guard<std::mutex> lock(r.mutex);
+  return r.scopes == 0 || r.named.count(key) > 0;
 }
 
 bool SameFile(const fs::path& a, const fs::path& b) {
@@ -168,6 +205,7 @@ InputProtectionScope::~InputProtectionScope() {
   r.files = {};
   r.folders = {};
   r.folder_keys.clear();
+  r.named.clear();
 }
 
 }  // namespace hdr4d

@@ -34,8 +34,17 @@ void ProtectInput(const std::filesystem::path& path, const std::string& role);
 // directly inside a protected folder. `path` may be a symlink (its target is what is checked).
 void CheckOutput(const std::filesystem::path& path);
 // The same for a folder a command is about to fill (call it before the work starts): refused when
-// the folder is a protected folder or a protected file.
+// the folder is a protected folder or a protected file, or (inside a command) a dataset's image
+// folder found by looking (DatasetOfImageFolder), also where the command read no dataset.
 void CheckOutputFolder(const std::filesystem::path& folder);
+
+// Paths the user named on the command line (cli/app.cpp registers every argument). A symlink or
+// special file (FIFO, device) is written through only when its path was named so: one that is
+// merely found inside an output folder (a planted `checkpoint.bin -> victim`) is replaced by
+// the new file, never followed (core/files/atomic_file.cpp). Without a scope (library use)
+// every path counts as named.
+void NameOnCommandLine(const std::string& argument);
+bool NamedOnCommandLine(const std::filesystem::path& path);
 
 // True when `a` and `b` name the same file (same resolved path, or same device and inode).
 bool SameFile(const std::filesystem::path& a, const std::filesystem::path& b);

@@ -109,3 +109,48 @@ TEST(OutputGuard, SameFileSeesThroughLinks) {
 
 }  // namespace
 }  // namespace hdr4d
+
+namespace hdr4d {
+namespace {
+// Issue 51, case 10: `bench table --out SCENE/images` wrote among the ground truth because
+// bench table reads no dataset to register. A dataset's image folders are found by looking.
+TEST(OutputGuard, ADatasetsImageFoldersAreRefusedAlsoWhenNoDatasetWasRead) {
+  testing::TempDir dir;
+  fs::create_directories(dir / "S" / "images" / "cam0");
+  fs::create_directories(dir / "S" / "hdr");
+  fs::create_directories(dir / "S" / "renders");
+  testing::WriteTextFile(dir / "S" / "transforms_train.json",
+                         R"({"frames": [{"file_path": "images/cam0/a.png", "exr_file_path": "./hdr/a.exr"}]})");
+  const InputProtectionScope scope;
+  for (const fs::path& p : {dir / "S" / "images", dir / "S" / "images" / "cam0", dir / "S" / "hdr",
+                            dir / "S" / "hdr" / ".." / "images"}) {
+    const std::string error = testing::ErrorOf([&] { CheckOutputFolder(p); });
+    EXPECT_NE(error.find("it holds the images of dataset " + (dir / "S").string()), std::string::npos)
+        << p << ": " << error;
+  }
+  EXPECT_NO_THROW(CheckOutputFolder(dir / "S" / "renders"));
+  EXPECT_NO_THROW(CheckOutputFolder(dir / "S"));
+  EXPECT_NO_THROW(CheckOutputFolder(dir / "T"));
+}
+
+// Issue 51, case 11: only paths named on the command line are written through when they are
+// symlinks; one found inside an output folder is replaced and its target keeps its bytes.
+TEST(OutputGuard, OnlyNamedSymlinksAreWrittenThrough) {
+  testing::TempDir dir;
+  testing::WriteTextFile(dir / "victim", "precious");
+  fs::create_directories(dir / "out");
+  fs::create_symlink(dir / "victim", dir / "out" / "checkpoint.bin");
+  fs::create_symlink(dir / "victim", dir / "named.json");
+  const InputProtectionScope scope;
+  NameOnCommandLine("--out=" + (dir / "named.json").string());
+  NameOnCommandLine((dir / "out").string());
+  WriteTextFileAtomic(dir / "out" / "checkpoint.bin", "new");
+  EXPECT_FALSE(fs::is_symlink(dir / "out" / "checkpoint.bin"));
+  EXPECT_EQ(testing::ReadTextFile(dir / "out" / "checkpoint.bin"), "new");
+  EXPECT_EQ(testing::ReadTextFile(dir / "victim"), "precious");
+  WriteTextFileAtomic(dir / "named.json", "asked for");
+  EXPECT_TRUE(fs::is_symlink(dir / "named.json"));
+  EXPECT_EQ(testing::ReadTextFile(dir / "victim"), "asked for");
+}
+}  // namespace
+}  // namespace hdr4d

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <fstream>
 
+#include "core/files/file_access.h"
 #include "core/util/error.h"
 
 namespace hdr4d {
@@ -99,6 +100,7 @@ std::string Sha256Hex(std::string_view bytes) {
 }
 
 std::string Sha256File(const std::filesystem::path& path) {
+  RequireInputFile(path);  // hashing /dev/zero would never end
   std::ifstream file(path, std::ios::binary);
   if (!file) Fail("{}: cannot be read for its checksum", path.string());
   Sha256 hash;

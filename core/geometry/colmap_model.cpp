@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/files/file_access.h"
 #include "core/util/error.h"
 #include "core/files/json_util.h"
 
@@ -74,6 +75,7 @@ void Put(std::string& out, T value) {
 
 // Non-comment lines of a text model file, with their 1-based line numbers.
 std::vector<std::pair<int, std::string>> TextLines(const fs::path& path) {
+  RequireInputFile(path);  // a device or FIFO is refused before it is opened
   std::ifstream in(path);
   if (!in) Fail("{}: cannot open", path.string());
   std::vector<std::pair<int, std::string>> lines;

@@ -11,6 +11,7 @@
 #include <string>
 #include <string_view>
 
+#include "core/files/file_access.h"
 #include "core/util/error.h"
 #include "core/files/json_util.h"
 
@@ -288,6 +289,7 @@ std::string ReadAllBytes(const fs::path& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) Fail("{}: file not found", path.string());
   if (fs::is_directory(path, ec)) Fail("{}: is a folder, expected a PLY file", path.string());
+  RequireInputFile(path);  // a device or FIFO is refused before it is opened
   std::ifstream file(path, std::ios::binary);
   if (!file) Fail("{}: cannot open for reading", path.string());
   std::ostringstream buffer;

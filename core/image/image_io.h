@@ -42,7 +42,9 @@ struct ImageWriteOptions {
 bool IsHdrPath(const std::filesystem::path& path);
 
 // Reads any format OpenImageIO knows. EXR/HDR come back Encoding::kLinear, integer formats
-// (PNG, JPEG, ...) come back Encoding::kSrgb with values scaled to [0,1] as stored.
+// (PNG, JPEG, ...) come back Encoding::kSrgb with values scaled to [0,1] as stored. Alpha is
+// unassociated: RGB as stored, never multiplied by alpha on reading (eval ignores alpha; training
+// composites over the dataset background once, method/train/train_views.cpp).
 // Throws hdr4d::Error naming the file for a missing, unreadable, corrupt or non-finite image.
 Image ReadImage(const std::filesystem::path& path, const ImageReadOptions& options = {});
 

@@ -252,3 +252,24 @@ TEST(Image, SrgbConversionsInvertEachOther) {
 
 }  // namespace
 }  // namespace hdr4d
+
+namespace hdr4d {
+namespace {
+// Issue 51, case 14: OpenImageIO multiplied an RGBA PNG's colour by its alpha on reading (and
+// divided by it on writing), so a render with the right RGB at alpha 128 scored 11 dB.
+TEST(ImageIo, RgbaPngColourIsReadAsStoredNotPremultiplied) {
+  TempDir dir;
+  Image rgba(2, 2, 4, Encoding::kSrgb, 0.0f);
+  for (int p = 0; p < 4; ++p) {
+    rgba.data()[p * 4 + 0] = 0.8f;
+    rgba.data()[p * 4 + 1] = 0.6f;
+    rgba.data()[p * 4 + 2] = 0.4f;
+    rgba.data()[p * 4 + 3] = 128.0f / 255.0f;
+  }
+  WriteImage(dir / "a.png", rgba);
+  const Image back = ReadImage(dir / "a.png");
+  ASSERT_EQ(back.channels(), 4);
+  for (int c = 0; c < 4; ++c) EXPECT_NEAR(back.data()[c], rgba.data()[c], 0.5f / 255.0f) << c;
+}
+}  // namespace
+}  // namespace hdr4d

@@ -37,6 +37,7 @@ struct PairResult {
   MetricList metrics;
   bool identical = false;  // equal pixel values: every PSNR is +inf
   std::optional<LogShapeSums> fit_sums;  // behind the shape where the LDR fits (--ldr-fit)
+  std::map<std::string, std::string> undefined;  // key -> why it has no value for this pair
 };
 
 std::string Lower(std::string s) {
@@ -150,7 +151,11 @@ PairResult EvaluateFiles(const fs::path& pred_path,
         aligned.insert(aligned.end(), fit.begin(), fit.end());
       }
       for (auto& m : aligned) {
-        if (!std::isnan(m.second)) result.metrics.push_back(std::move(m));
+        if (std::isnan(m.second)) {
+          result.undefined[m.first] = UndefinedMetricReason(m.first);
+        } else {
+          result.metrics.push_back(std::move(m));
+        }
       }
     } else {
       result.metrics = LdrMetrics(pred_rgb, gt_rgb);
@@ -167,6 +172,7 @@ nlohmann::json PairJson(const PairResult& pair) {
   nlohmann::json out = nlohmann::json::object();
   out["name"] = pair.name;
   for (const auto& [key, value] : pair.metrics) out[key] = FiniteOrNull(value);
+  if (!pair.undefined.empty()) out["undefined"] = pair.undefined;
   return out;
 }
 
@@ -314,6 +320,7 @@ nlohmann::json EvaluatePaths(const fs::path& pred,
     if (probe.kind == PathKind::kMissing) Fail("{}: not found", p.string());
     if (probe.kind == PathKind::kUnknown || !probe.readable)
       Fail("{}: {}", p.string(), probe.problem);
+    if (probe.kind == PathKind::kOther) RequireInputFile(p);  // devices, FIFOs, sockets
   }
   const bool pred_dir = fs::is_directory(pred, ec);
   const bool gt_dir = fs::is_directory(gt, ec);
@@ -392,7 +399,7 @@ std::string FormatEvalTable(const nlohmann::json& result) {
   std::size_t name_width = 4;  // "mean"
   for (const auto& pair : pairs) {
     for (const auto& [key, value] : pair.items()) {
-      if (key != "name") present.insert(key);
+      if (key != "name" && key != "undefined") present.insert(key);
     }
     name_width = std::max(name_width, pair.value("name", std::string()).size());
   }

@@ -22,8 +22,9 @@
 //   "hdr_ldr_fit_fraction" (the HDR's shape where those renders reproduce their bracket; a
 //   render that cannot be read is an error naming it; `ldr_fit` because only the caller knows
 //   that the renders are at their brackets' exposures). A key whose value
-//   is undefined for a pair (the log-log slope of an image with one measured pixel) is left
-//   out of that pair.
+//   is undefined for a pair (the log-log slope of an image with one measured pixel, or of a
+//   constant truth) is left out of that pair's numbers and listed with its reason under the
+//   pair's "undefined" object (null stays reserved for +inf).
 // - Pairs are listed in sorted order of the ground-truth file name. "mean" is the arithmetic mean
 //   of the per-pair values of each key over the pairs that have the key (not a metric of the
 //   pooled error), except "hdr_log_slope_ldr_fit" and "hdr_log_corr_ldr_fit", which are pooled

@@ -119,6 +119,12 @@ std::vector<std::uint8_t> ReproducedInBrackets(const std::vector<Image>& truth,
   return mask;
 }
 
+// True when the first n values are all the same number.
+static bool AllEqual(const std::vector<double>& v, std::size_t n) {
+  return std::all_of(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(n),
+                     [&](double x) { return x == v[0]; });
+}
+
 HdrAlignment AlignHdr(const Image& pred, const Image& gt, const std::vector<std::uint8_t>* mask) {
   CheckHdrPair(pred, gt, mask);
   const int w = gt.width(), h = gt.height();
@@ -186,6 +192,9 @@ HdrAlignment AlignHdr(const Image& pred, const Image& gt, const std::vector<std:
     spp += dp * dp;
     sgp += dg * dp;
   }
+  // A constant truth has no spread: its sum of squares is rounding (1e-30 gave a slope of 5.72
+  // and a contrast of 1e15, issue 51 case 17), so it is taken as exactly zero.
+  if (AllEqual(log_gt, a.pixels)) sgg = sgp = 0;
   a.sums = {sgg, spp, sgp};
   if (sgg > 0) a.slope = sgp / sgg;
   if (sgg > 0) a.contrast = std::sqrt(spp / sgg);
@@ -262,6 +271,16 @@ void SetPooledLdrFitShape(const std::vector<LogShapeSums>& images, nlohmann::jso
   };
   set("hdr_log_slope_ldr_fit", pooled.slope);
   set("hdr_log_corr_ldr_fit", pooled.corr);
+}
+
+std::string UndefinedMetricReason(const std::string& key) {
+  if (key.rfind("hdr_log_corr", 0) == 0)
+    return "undefined: fewer than 2 measured pixels, or the ground truth's or the prediction's "
+           "log luminance is constant";
+  if (key.rfind("hdr_log_", 0) == 0)
+    return "undefined: fewer than 2 measured pixels, or the ground truth's log luminance is "
+           "constant (no spread to compare against)";
+  return "undefined for this pair";
 }
 
 }  // namespace hdr4d

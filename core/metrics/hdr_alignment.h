@@ -32,6 +32,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <nlohmann/json.hpp>
+#include <string>
 #include <vector>
 
 #include "core/image/image.h"
@@ -118,6 +119,10 @@ MetricList LdrFitHdrShape(const Image& pred,
                           const std::vector<std::uint8_t>& measured,
                           const std::vector<std::uint8_t>& reproduced,
                           LogShapeSums* sums = nullptr);
+
+// Why a key of the lists above is NaN (undefined) for a pair: what hdr4d eval writes under the
+// pair's "undefined" object in place of a number.
+std::string UndefinedMetricReason(const std::string& key);
 
 // Replaces `mean`'s "hdr_log_slope_ldr_fit" and "hdr_log_corr_ldr_fit" with the pooled
 // statistics of `images` (removes them when there are none).

@@ -341,3 +341,24 @@ TEST(HdrAlignment, BadInputsNameTheProblem) {
 
 }  // namespace
 }  // namespace hdr4d
+
+namespace hdr4d {
+namespace {
+// Issue 51, case 17: a constant truth gave hdr_log_slope 5.72 and hdr_log_contrast 1e15 from
+// the rounding of its mean; the answer is undefined.
+TEST(HdrAlignment, ConstantTruthLeavesTheShapeUndefined) {
+  for (const float level : {0.3f, 0.7f, 1.9f, 123.4f}) {
+    for (const int size : {7, 29, 64}) {
+      Image gt(size, size + 3, 3, Encoding::kLinear, level);
+      Image pred = gt;
+      for (std::size_t i = 0; i < pred.size(); ++i) pred.values()[i] = 0.1f + 0.01f * float(i % 97);
+      const HdrAlignment a = AlignHdr(pred, gt, nullptr);
+      EXPECT_TRUE(std::isnan(a.slope)) << level << " " << size << ": " << a.slope;
+      EXPECT_TRUE(std::isnan(a.contrast)) << level << " " << size << ": " << a.contrast;
+      EXPECT_TRUE(std::isnan(a.corr)) << level << " " << size << ": " << a.corr;
+    }
+  }
+  EXPECT_NE(UndefinedMetricReason("hdr_log_slope").find("constant"), std::string::npos);
+}
+}  // namespace
+}  // namespace hdr4d

@@ -10,6 +10,7 @@
 #include <limits>
 #include <string_view>
 
+#include "core/files/file_access.h"
 #include "core/files/json_util.h"
 #include "core/radiometry/channel_crf.h"
 #include "core/util/error.h"
@@ -282,6 +283,7 @@ std::unique_ptr<TableCrf> TableCrf::FromCodes(const std::vector<double>& x_of_co
 }
 
 std::unique_ptr<TableCrf> TableCrf::FromCsv(const std::string& path) {
+  RequireInputFile(path);  // a device or FIFO is refused before it is opened
   // calibrate's per-channel layout (code,r,g,b): one curve, each code's geometric mean.
   if (const auto columns = ReadPerChannelResponse(path)) {
     std::vector<double> x(columns->front().size());

@@ -8,6 +8,7 @@
 #include <string_view>
 
 #include "core/files/binary_stream.h"
+#include "core/files/file_access.h"
 #include "core/util/error.h"
 #include "core/files/json_util.h"
 
@@ -182,6 +183,7 @@ namespace {
 std::unique_ptr<char[]> ReadWholeFile(const fs::path& path, std::size_t* size) {
   std::error_code ec;
   if (!fs::exists(path, ec)) Fail("{}: checkpoint not found", path.string());
+  RequireInputFile(path);  // a device or FIFO is refused before it is opened
   std::ifstream file(path, std::ios::binary);
   if (!file) Fail("{}: cannot open for reading", path.string());
   const std::uintmax_t expected = fs::file_size(path, ec);
