@@ -3,10 +3,7 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
-#include <cstdio>
-
 #include "cli/app.h"
-#include "core/util/error.h"
 #include "method/raster/simd_dispatch.h"
 
 int main(int argc, char** argv) {
@@ -14,12 +11,7 @@ int main(int argc, char** argv) {
   spdlog::set_default_logger(spdlog::stderr_color_mt("hdr4d"));
   spdlog::set_pattern("%^[%l]%$ %v");
   // HDR4D_SIMD_TARGETS limits the kernels' SIMD targets for the whole run (before any kernel).
-  try {
-    hdr4d::method::ApplySimdTargetsFromEnvironment();
-  } catch (const hdr4d::Error& e) {
-    std::fprintf(stderr, "hdr4d: error: %s\n", e.what());
-    return 1;
-  }
+  if (!hdr4d::method::ApplySimdTargetsOrPrintError("hdr4d: error: ")) return 1;
   const auto app = hdr4d::cli::MakeApp();
   return hdr4d::cli::RunApp(*app, argc, argv);
 }

@@ -7,7 +7,7 @@
 # machine proves every path its users' machines may take, not only the one it picks itself.
 # Those passes run the tests of the code that dispatches (every Highway kernel is in method/):
 # the rasteriser, preprocessing, the Dynamic Tone Mapper's tone tables, Adam, the losses and the
-# batch gradients through all of them, about 1 min per target on two cores. Not the rest of
+# batch gradients through all of them, under a minute per target on two cores. Not the rest of
 # method/ (its training runs drive the same kernels end to end): all of method/ took 2.5 min
 # under AVX2 and 4 min under scalar, which would take CI (22 min) close to 30. Nor
 # core/: it is built once for the x86-64 baseline and dispatches nothing, so it would run the

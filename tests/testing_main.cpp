@@ -4,18 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
-#include <cstdlib>
 
-#include "core/util/error.h"
 #include "method/raster/simd_dispatch.h"
 
 int main(int argc, char** argv) {
-  try {
-    hdr4d::method::ApplySimdTargetsFromEnvironment();
-  } catch (const hdr4d::Error& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return 2;
-  }
+  if (!hdr4d::method::ApplySimdTargetsOrPrintError("error: ")) return 2;
   // stderr: CTest reads the test list from stdout.
   if (hdr4d::method::ProcessSimdTargets() != 0)
     std::fprintf(stderr, "SIMD target: %s\n", hdr4d::method::SimdTargetDescription().c_str());

@@ -3,18 +3,10 @@
 // AVX-512 machine. The target in use is in the report's context ("simd_target").
 #include <benchmark/benchmark.h>
 
-#include <cstdio>
-
-#include "core/util/error.h"
 #include "method/raster/simd_dispatch.h"
 
 int main(int argc, char** argv) {
-  try {
-    hdr4d::method::ApplySimdTargetsFromEnvironment();
-  } catch (const hdr4d::Error& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return 2;
-  }
+  if (!hdr4d::method::ApplySimdTargetsOrPrintError("error: ")) return 2;
   benchmark::AddCustomContext("simd_target", hdr4d::method::SimdTargetDescription());
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;

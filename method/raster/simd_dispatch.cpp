@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <cctype>
+#include <cstdio>
 #include <cstdlib>
 #include <vector>
 
@@ -112,6 +113,16 @@ void ApplySimdTargetsFromEnvironment() {
   const std::int64_t mask = value != nullptr ? ParseSimdTargets(value, CpuSimdTargets()) : 0;
   process_targets.store(mask);
   hwy::SetSupportedTargetsForTest(mask);  // 0 (unset or empty): Highway's own choice
+}
+
+bool ApplySimdTargetsOrPrintError(const char* prefix) {
+  try {
+    ApplySimdTargetsFromEnvironment();
+  } catch (const Error& e) {
+    std::fprintf(stderr, "%s%s\n", prefix, e.what());
+    return false;
+  }
+  return true;
 }
 
 std::int64_t ProcessSimdTargets() { return process_targets.load(); }

@@ -29,6 +29,10 @@ std::int64_t ParseSimdTargets(std::string_view value, std::int64_t available);
 // ParseSimdTargets does, leaving the restriction as it was.
 void ApplySimdTargetsFromEnvironment();
 
+// For a main: ApplySimdTargetsFromEnvironment, and on a bad value its error on stderr after
+// `prefix` (e.g. "hdr4d: error: "); false then, and the main exits with an error.
+bool ApplySimdTargetsOrPrintError(const char* prefix);
+
 // The mask ApplySimdTargetsFromEnvironment put in force, 0 when none. Code that changes
 // Highway's targets for a while (tests) restores this afterwards.
 std::int64_t ProcessSimdTargets();

@@ -90,6 +90,11 @@ TEST(SimdDispatch, ApplyingLimitsDispatchAndSaysSo) {
   EXPECT_TRUE(
       Contains(ErrorOf([] { ApplySimdTargetsFromEnvironment(); }), "HDR4D_SIMD_TARGETS=nonsense"));
   EXPECT_EQ(ActiveSimdTarget(), hwy::TargetName(HWY_STATIC_TARGET));  // unchanged by the error
+  ::testing::internal::CaptureStderr();
+  EXPECT_FALSE(ApplySimdTargetsOrPrintError("tool: error: "));
+  EXPECT_EQ(::testing::internal::GetCapturedStderr().rfind(
+                "tool: error: HDR4D_SIMD_TARGETS=nonsense: 'nonsense' is not", 0),
+            0u);
   // Unset: no restriction.
   ASSERT_EQ(unsetenv(kSimdTargetsVariable), 0);
   ApplySimdTargetsFromEnvironment();
