@@ -182,7 +182,8 @@ FrameResult ScoreFrame(const Expected& e,
   fr.camera_id = e.frame->camera_id;
   fr.exposure = e.hdr ? 0.0 : e.frame->exposure;
   for (const auto& [key, value] : pair.items()) {
-    if (key == "name") continue;
+    // "undefined" lists the metrics this pair has no value for (a constant truth), with why.
+    if (key == "name" || key == "undefined") continue;
     // EvaluatePair writes +inf (identical images) as null.
     fr.metrics[key] =
         value.is_null() ? std::numeric_limits<double>::infinity() : value.get<double>();
