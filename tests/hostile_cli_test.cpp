@@ -21,6 +21,7 @@
 #include <thread>
 
 #include "core/image/image_io.h"
+#include "tests/hostile_scene_fixture.h"
 #include "tests/testing.h"
 
 namespace hdr4d {
@@ -79,25 +80,7 @@ std::map<std::string, std::string> Snapshot(const fs::path& root) {
   return files;
 }
 
-// The issue's set-up: S = a small demo scene with its LDR images, R = a short run on it.
-class Hostile : public ::testing::Test {
- protected:
-  void SetUp() override {
-    auto r = RunHdr4d("make-demo-scene --out " + S() + " --cameras 4 --size 32 --timestamps 4 --spp 1");
-    ASSERT_EQ(r.exit_code, 0) << r.err;
-    r = RunHdr4d("synth-ldr --data " + S());
-    ASSERT_EQ(r.exit_code, 0) << r.err;
-  }
-  void TrainRun() {
-    const auto r = RunHdr4d("train --data " + S() + " --out " + R() + " --iterations 20 --threads 1");
-    ASSERT_EQ(r.exit_code, 0) << r.err;
-  }
-  std::string S() const { return (dir_ / "S").string(); }
-  std::string R() const { return (dir_ / "R").string(); }
-  fs::path operator/(const std::string& name) const { return dir_ / name; }
-
-  testing::TempDir dir_;
-};
+using Hostile = HostileScene;  // tests/hostile_scene_fixture.h: S, R, TrainRun()
 
 // --- Data loss ---------------------------------------------------------------------------------
 

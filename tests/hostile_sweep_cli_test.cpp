@@ -10,6 +10,7 @@
 #include <string>
 
 #include "core/image/image_io.h"
+#include "tests/hostile_scene_fixture.h"
 #include "tests/testing.h"
 
 namespace hdr4d {
@@ -20,25 +21,7 @@ using testing::ReadTextFile;
 using testing::RunHdr4d;
 using testing::RunHdr4dWith;
 
-// S = a small demo scene with its LDR images; R = a short run on it.
-class Sweep : public ::testing::Test {
- protected:
-  void SetUp() override {
-    auto r = RunHdr4d("make-demo-scene --out " + S() + " --cameras 4 --size 32 --timestamps 4 --spp 1");
-    ASSERT_EQ(r.exit_code, 0) << r.err;
-    r = RunHdr4d("synth-ldr --data " + S());
-    ASSERT_EQ(r.exit_code, 0) << r.err;
-  }
-  void TrainRun() {
-    const auto r = RunHdr4d("train --data " + S() + " --out " + R() + " --iterations 20 --threads 1");
-    ASSERT_EQ(r.exit_code, 0) << r.err;
-  }
-  std::string S() const { return (dir_ / "S").string(); }
-  std::string R() const { return (dir_ / "R").string(); }
-  fs::path operator/(const std::string& name) const { return dir_ / name; }
-
-  testing::TempDir dir_;
-};
+using Sweep = HostileScene;  // tests/hostile_scene_fixture.h: S, R, TrainRun()
 
 void ExpectRefused(const testing::CommandResult& r, const std::string& args, const std::string& part) {
   EXPECT_EQ(r.exit_code, 1) << args << "\n" << r.err;
