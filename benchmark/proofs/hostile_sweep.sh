@@ -156,9 +156,11 @@ mkdir -p O11 R11; ln -s ../victim O11/cam03_t000_e0.png; ln -s ../victim O11/cam
 ln -s ../victim R11/checkpoint.bin; ln -s ../victim R11/.hdr4d-lock; ln -s ../victim R11/config.json
 case_ok render --run R --out O11
 case_ok train --data S --out R11 --iterations 2 --threads 1
-mkdir -p T11; ln -s ../victim T11/scores.json
-case_ok eval S/hdr S/hdr --out T11/scores.json
 check "11: a planted link's target was written" same victim victim.orig
+# A link named on the command line is the user's own choice of target: written through.
+mkdir -p T11; ln -s ../victim11b T11/scores.json; echo keep > victim11b
+case_ok eval S/hdr S/hdr --out T11/scores.json
+check "11: an --out named on the command line is written through its link" grep -q identical_pairs victim11b
 check "11: the planted render link is still a link" test ! -L O11/cam03_t000_e0.png
 # 17: a constant HDR truth leaves the log-shape numbers undefined, with the reason
 oiiotool --pattern constant:color=2,2,2 32x32 3 -d half -o const.exr
