@@ -3,6 +3,8 @@
 # training runs and renders with both, then the checkpoints, the renders and results.json
 # compared by SHA-256, all without their wall-clock fields and the measured peak memory.
 #   bash benchmark/proofs/same_results.sh OLD_HDR4D NEW_HDR4D WORKDIR [ITERATIONS]
+# SAME_RESULTS_IGNORE=flip,hdr_flip leaves out results.json keys that one side adds by design
+# (metrics new since OLD); checkpoints and renders are always compared whole.
 # Runs: HDR-4DGS and HDR-GS on the built-in demo scene (LDR supervision, 8 cameras), and 4DGS
 # on ../shared/data/dnerf_lego_tiny when it is there. Exit status 1 when anything differs.
 set -euo pipefail
@@ -14,10 +16,11 @@ status=0
 
 # results.json without the wall-clock fields, as canonical JSON.
 strip_times() {
-  python3 -c 'import json,sys
+  python3 -c 'import json,os,sys
+ignore = {"fps", "peak_rss_mb"} | set(filter(None, os.environ.get("SAME_RESULTS_IGNORE", "").split(",")))
 def drop(x):
     if isinstance(x, dict):
-        return {k: drop(v) for k, v in x.items() if "seconds" not in k and k not in ("fps", "peak_rss_mb")}
+        return {k: drop(v) for k, v in x.items() if "seconds" not in k and k not in ignore}
     if isinstance(x, list):
         return [drop(v) for v in x]
     return x
