@@ -283,7 +283,9 @@ std::unique_ptr<TableCrf> TableCrf::FromCodes(const std::vector<double>& x_of_co
 }
 
 std::unique_ptr<TableCrf> TableCrf::FromCsv(const std::string& path) {
-  RequireInputFile(path);  // a device or FIFO is refused before it is opened
+  // A missing file, a device or a FIFO is refused before it is opened, saying what it was for.
+  if (const std::string problem = InputFileProblem(path); !problem.empty())
+    Fail("{}: cannot open CRF table: {}", path, problem);
   // calibrate's per-channel layout (code,r,g,b): one curve, each code's geometric mean.
   if (const auto columns = ReadPerChannelResponse(path)) {
     std::vector<double> x(columns->front().size());
