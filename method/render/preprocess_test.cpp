@@ -360,11 +360,12 @@ std::vector<std::vector<T>*> ParameterBuffers(GaussianModelT<T>& m) {
 
 // FastBackward (preprocess_fast.cpp), the whole fast backward behind PreprocessBackwardFast: the
 // gradient of every parameter buffer of a 4D and a 3D model against central differences in
-// double of the reference forward, on every compiled target. The loss dots fixed random splat
-// gradients (mean2d, conic, opacity, features) of the Gaussians the fast forward kept with the
-// splat outputs (the colour's view direction and dt detached, as the reference does), so its
-// gradient is exactly what the backward computes. Tolerance: float
-// arithmetic in the kernels against double differences, 2e-3 of the largest component.
+// double of the reference forward, on every compiled target, with the colour rows written to
+// the gradient and handed over through rows_done. The loss dots fixed random splat gradients
+// (mean2d, conic, opacity, features) of the Gaussians the fast forward kept with the splat
+// outputs (the colour's view direction and dt detached, as the reference does), so its gradient
+// is exactly what the backward computes. Tolerance: float arithmetic in the kernels against
+// double differences, 2e-3 of the largest component.
 TEST(Preprocess, FastBackwardMatchesFiniteDifferencesInDouble) {
   for (bool temporal : {true, false}) {
     SCOPED_TRACE(temporal ? "4D" : "3D");
@@ -426,6 +427,24 @@ TEST(Preprocess, FastBackwardMatchesFiniteDifferencesInDouble) {
       const std::vector<double> analytic = flatten(gd);
       kFd.ExpectMatch(Eigen::Map<const testing::FdVector>(analytic.data(), analytic.size()),
                       numeric);
+      // Again with the colour rows handed over from FastBackward's per-thread block.
+      GaussianGradients g_done;
+      g_done.ZerosLike(model, /*colour=*/false);
+      const std::size_t channels = model.channels, stride = model.rest_stride();
+      std::vector<float> dc(model.color_dc.size(), -1.0f), rest(model.color_rest.size(), -1.0f);
+      PreprocessBackwardFast(
+          model, ViewParams<float>::FromCamera(TestCamera()), kTime, options, fast, &g_done,
+          [&](std::int64_t b, std::int64_t e, const GradientRows& rows) {  // disjoint ranges
+            std::copy_n(rows.color_dc, (e - b) * channels, dc.begin() + b * channels);
+            std::copy_n(rows.color_rest, (e - b) * stride, rest.begin() + b * stride);
+          });
+      g_done.color_dc = dc;
+      g_done.color_rest = rest;
+      GaussianModelT<double> gd_done = ToDouble(g_done);
+      const std::vector<double> analytic_done = flatten(gd_done);
+      kFd.ExpectMatch(
+          Eigen::Map<const testing::FdVector>(analytic_done.data(), analytic_done.size()),
+          numeric);
     });
     EXPECT_GE(ran, MinimumTargetRuns());
   }
