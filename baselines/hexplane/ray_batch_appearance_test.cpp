@@ -49,7 +49,7 @@ HexPlaneModel Model(ColorModel color) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> u(-0.5f, 0.5f);
   for (float& v : m.exposure_offset) v = u(rng);  // distinct offsets per image
-  for (float& v : m.app_basis) v *= 3.0f;  // the planes' share of the colour grows
+  for (float& v : m.app_basis) v *= 3.0f;         // the planes' share of the colour grows
   // Every hidden unit on: the first layer's weights shrunk and its biases raised, the second's
   // made non-negative. The loss is then smooth (no ReLU kink within a step), which float
   // differences need to converge; the ReLU's own backward is app_mlp's (app_mlp_test.cpp).

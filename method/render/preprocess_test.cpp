@@ -385,7 +385,8 @@ TEST(Preprocess, FastBackwardMatchesFiniteDifferencesInDouble) {
     GaussianModelT<double> base = ToDouble(model);
     const auto flatten = [](GaussianModelT<double>& m) {
       std::vector<double> all;
-      for (const std::vector<double>* b : ParameterBuffers(m)) all.insert(all.end(), b->begin(), b->end());
+      for (const std::vector<double>* b : ParameterBuffers(m))
+        all.insert(all.end(), b->begin(), b->end());
       return all;
     };
     const std::vector<double> x0 = flatten(base);

@@ -137,7 +137,7 @@ TEST(ContextLearnerStages, OutputProjectionBackwardMatchesFiniteDifferences) {
     const std::size_t first = s.P.w_o, count = s.P.w1 - s.P.w_o;
     kFd.ExpectMatch(Slice(dp, first, count), s.Numeric(loss, first, count));
     ExpectZeroOutside(dp, first, s.P.w1);
-    kFd.ExpectMatch(Slice(dr1, 0, kD), s.Numeric(loss, s.P.b_o, kD));  // dL/dr1 = dL/db_o
+    kFd.ExpectMatch(Slice(dr1, 0, kD), s.Numeric(loss, s.P.b_o, kD));            // dL/dr1 = dL/db_o
     kFd.ExpectMatch(Slice(da, 0, kD), s.Numeric(loss, s.P.b_qkv + 2 * kD, kD));  // = dL/db_v
   }
 }

@@ -118,9 +118,10 @@ void Backward(const Frame& f, bool simd, FdVector* dvalues, FdVector* dcurves) {
   std::vector<T> dlh(lh.size()), dp(p.size(), T(0));
   core.MapBackward(lh.data(), kColours, w.data(), dlh.data());
   core.EndFrameBackward(dp.data());
-  *dvalues = Eigen::Map<const Eigen::Matrix<T, -1, 1>>(dlh.data(), dlh.size()).template cast<double>();
-  *dcurves = Eigen::Map<const Eigen::Matrix<T, -1, 1>>(dp.data() + f.CurveFirst(), f.CurveCount())
-                 .template cast<double>();
+  using Vector = Eigen::Matrix<T, -1, 1>;
+  *dvalues = Eigen::Map<const Vector>(dlh.data(), dlh.size()).template cast<double>();
+  *dcurves =
+      Eigen::Map<const Vector>(dp.data() + f.CurveFirst(), f.CurveCount()).template cast<double>();
 }
 
 // Double throughout: steps of 1e-6 (values) and 1e-6 (parameters) on smooth functions of size
