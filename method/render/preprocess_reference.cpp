@@ -7,6 +7,7 @@
 #include "method/gaussian/projection.h"
 #include "method/render/preprocess.h"
 #include "method/render/preprocess_common.h"
+#include "method/render/preprocess_reference_internal.h"
 
 namespace hdr4d::method {
 using namespace detail;
@@ -63,11 +64,9 @@ void PreprocessForwardReference(const GaussianModelT<T>& model,
   FinishPreprocess(options, model, visible_per_chunk, state);
 }
 
-namespace {
+namespace detail {
 
-// The geometry's backward of visible Gaussian i (conditioned as `c`) from the projection's
-// gradients dmean3, dcov3 and the marginal's: through the slice, the 4D (or 3D) covariance and
-// the rotation to the stored parameters, ADDED to `grads`.
+// Declared, with what it does, in preprocess_reference_internal.h.
 template <typename T>
 void GeometryBackward(const GaussianModelT<T>& model,
                       std::size_t i,
@@ -110,7 +109,15 @@ void GeometryBackward(const GaussianModelT<T>& model,
   for (int k = 0; k < 4; ++k) grads->rot_left[i * 4 + k] += dq[k];
 }
 
-}  // namespace
+#define HDR4D_INSTANTIATE_GEOMETRY_BACKWARD(T)                                                 \
+  template void GeometryBackward(const GaussianModelT<T>&, std::size_t, T,                    \
+                                 const ConditionalGaussian<T>&, const Vec3<T>&, const Mat3<T>&, \
+                                 T, GaussianGradientsT<T>*);
+HDR4D_INSTANTIATE_GEOMETRY_BACKWARD(float)
+HDR4D_INSTANTIATE_GEOMETRY_BACKWARD(double)
+#undef HDR4D_INSTANTIATE_GEOMETRY_BACKWARD
+
+}  // namespace detail
 
 template <typename T>
 void PreprocessBackwardReference(const GaussianModelT<T>& model,

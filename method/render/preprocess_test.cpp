@@ -18,6 +18,7 @@
 #include "method/gaussian/sh4d.h"
 #include "method/raster/simd_targets_for_test.h"
 #include "method/render/preprocess_simd.h"
+#include "tests/finite_difference.h"
 
 namespace hdr4d::method {
 namespace {
@@ -336,6 +337,120 @@ TEST(Preprocess, TheFastPathHoldsNoConditionalGaussians) {
   EXPECT_GT(state.num_visible, 0u);
 }
 
+GaussianModelT<double> ToDouble(const GaussianModel& m) {
+  GaussianModelT<double> d;
+  d.temporal = m.temporal;
+  d.color_mode = m.color_mode;
+  d.basis = m.basis;
+  d.channels = m.channels;
+  auto copy = [](const std::vector<float>& v) { return std::vector<double>(v.begin(), v.end()); };
+  d.xyz = copy(m.xyz), d.t = copy(m.t), d.log_scales = copy(m.log_scales);
+  d.rot_left = copy(m.rot_left), d.rot_right = copy(m.rot_right);
+  d.opacity_logit = copy(m.opacity_logit), d.color_dc = copy(m.color_dc);
+  d.color_rest = copy(m.color_rest);
+  return d;
+}
+
+// Every parameter buffer of a model (or of its gradient), in one order.
+template <typename T>
+std::vector<std::vector<T>*> ParameterBuffers(GaussianModelT<T>& m) {
+  return {&m.xyz, &m.t, &m.log_scales, &m.rot_left, &m.rot_right,
+          &m.opacity_logit, &m.color_dc, &m.color_rest};
+}
+
+// FastBackward (preprocess_fast.cpp), the whole fast backward behind PreprocessBackwardFast: the
+// gradient of every parameter buffer of a 4D and a 3D model against central differences in
+// double of the reference forward, on every compiled target, with the colour rows written to
+// the gradient and handed over through rows_done. The loss dots fixed random splat gradients
+// (mean2d, conic, opacity, features) of the Gaussians the fast forward kept with the splat
+// outputs (the colour's view direction and dt detached, as the reference does), so its gradient
+// is exactly what the backward computes. Tolerance: float arithmetic in the kernels against
+// double differences, 2e-3 of the largest component.
+TEST(Preprocess, FastBackwardMatchesFiniteDifferencesInDouble) {
+  for (bool temporal : {true, false}) {
+    SCOPED_TRACE(temporal ? "4D" : "3D");
+    GaussianModel model = Scene(5, false, temporal ? 21 : 22);
+    if (!temporal) model = Static(model);
+    const RenderOptions options = ColourOptions(1);
+    FrameState fast;
+    PreprocessForwardFast(model, ViewParams<float>::FromCamera(TestCamera()), kTime, options,
+                          &fast);
+    std::mt19937 rng(6);
+    RandomSplatGradients(fast.splats.radius, fast.splats.radius, rng, &fast.splat_grads);
+    const std::size_t n = model.size();
+    std::size_t visible = 0;
+    for (std::size_t i = 0; i < n; ++i) visible += fast.splats.radius[i] > 0;
+    ASSERT_GE(visible, 3u);
+    const ViewParams<double> view = ViewParams<double>::FromCamera(TestCamera());
+    GaussianModelT<double> base = ToDouble(model);
+    const auto flatten = [](GaussianModelT<double>& m) {
+      std::vector<double> all;
+      for (const std::vector<double>* b : ParameterBuffers(m))
+        all.insert(all.end(), b->begin(), b->end());
+      return all;
+    };
+    const std::vector<double> x0 = flatten(base);
+    // The colour's view direction and dt are detached (sh4d.h), so the features term reads the
+    // colours of `x` on the base geometry.
+    const auto loss = [&](const testing::FdVector& x) {
+      GaussianModelT<double> m = base;
+      int k = 0;
+      for (std::vector<double>* b : ParameterBuffers(m))
+        for (double& v : *b) v = x(k++);
+      GaussianModelT<double> colours = base;
+      colours.color_dc = m.color_dc;
+      colours.color_rest = m.color_rest;
+      FrameStateT<double> state, colour_state;
+      PreprocessForwardReference(m, view, double(kTime), options, &state);
+      PreprocessForwardReference(colours, view, double(kTime), options, &colour_state);
+      state.splats.features = colour_state.splats.features;
+      const SplatGradients& g = fast.splat_grads;
+      double l = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        if (fast.splats.radius[i] <= 0) continue;
+        for (int k = 0; k < 2; ++k) l += g.mean2d[2 * i + k] * state.splats.mean2d[2 * i + k];
+        for (int k = 0; k < 3; ++k) l += g.conic[3 * i + k] * state.splats.conic[3 * i + k];
+        l += g.opacity[i] * state.splats.opacity[i];
+        for (int k = 0; k < 3; ++k) l += g.features[3 * i + k] * state.splats.features[3 * i + k];
+      }
+      return l;
+    };
+    constexpr testing::FdCheck kFd{1e-6, 2e-3};
+    const testing::FdVector x = Eigen::Map<const testing::FdVector>(x0.data(), x0.size());
+    const testing::FdVector numeric = kFd.Gradient(loss, x);
+    ASSERT_GT(numeric.cwiseAbs().maxCoeff(), 1e-2);
+    const int ran = ForEachCompiledTarget([&] {
+      GaussianGradients g;
+      g.ZerosLike(model);
+      PreprocessBackwardFast(model, ViewParams<float>::FromCamera(TestCamera()), kTime, options,
+                             fast, &g);
+      GaussianModelT<double> gd = ToDouble(g);
+      const std::vector<double> analytic = flatten(gd);
+      kFd.ExpectMatch(Eigen::Map<const testing::FdVector>(analytic.data(), analytic.size()),
+                      numeric);
+      // Again with the colour rows handed over from FastBackward's per-thread block.
+      GaussianGradients g_done;
+      g_done.ZerosLike(model, /*colour=*/false);
+      const std::size_t channels = model.channels, stride = model.rest_stride();
+      std::vector<float> dc(model.color_dc.size(), -1.0f), rest(model.color_rest.size(), -1.0f);
+      PreprocessBackwardFast(
+          model, ViewParams<float>::FromCamera(TestCamera()), kTime, options, fast, &g_done,
+          [&](std::int64_t b, std::int64_t e, const GradientRows& rows) {  // disjoint ranges
+            std::copy_n(rows.color_dc, (e - b) * channels, dc.begin() + b * channels);
+            std::copy_n(rows.color_rest, (e - b) * stride, rest.begin() + b * stride);
+          });
+      g_done.color_dc = dc;
+      g_done.color_rest = rest;
+      GaussianModelT<double> gd_done = ToDouble(g_done);
+      const std::vector<double> analytic_done = flatten(gd_done);
+      kFd.ExpectMatch(
+          Eigen::Map<const testing::FdVector>(analytic_done.data(), analytic_done.size()),
+          numeric);
+    });
+    EXPECT_GE(ran, MinimumTargetRuns());
+  }
+}
+
 // NormalizeBackward (preprocess_simd.cpp), the fast path's backward through the normalisation
 // of both quaternions: its gradient with respect to the stored, unnormalised quaternions against
 // central differences in double of the reference forward, on every compiled target. The loss
@@ -348,26 +463,13 @@ TEST(Preprocess, NormalizeBackwardMatchesFiniteDifferencesInDouble) {
     model.rot_right[i] *= 0.6f;
   }
   const std::size_t n = model.size();
-  auto to_double = [](const GaussianModel& m) {
-    GaussianModelT<double> d;
-    d.temporal = m.temporal;
-    d.color_mode = m.color_mode;
-    d.basis = m.basis;
-    d.channels = m.channels;
-    auto copy = [](const std::vector<float>& v) { return std::vector<double>(v.begin(), v.end()); };
-    d.xyz = copy(m.xyz), d.t = copy(m.t), d.log_scales = copy(m.log_scales);
-    d.rot_left = copy(m.rot_left), d.rot_right = copy(m.rot_right);
-    d.opacity_logit = copy(m.opacity_logit), d.color_dc = copy(m.color_dc);
-    d.color_rest = copy(m.color_rest);
-    return d;
-  };
   const RenderOptions options = ColourOptions(1);
   FrameState fast;
   PreprocessForwardFast(model, ViewParams<float>::FromCamera(TestCamera()), kTime, options, &fast);
   std::mt19937 rng(5);
   RandomSplatGradients(fast.splats.radius, fast.splats.radius, rng, &fast.splat_grads);
   const ViewParams<double> view = ViewParams<double>::FromCamera(TestCamera());
-  const GaussianModelT<double> base = to_double(model);
+  const GaussianModelT<double> base = ToDouble(model);
   // The loss of one quaternion entry's value (the rest of the model as it is).
   auto loss = [&](bool left, std::size_t index, double value) {
     GaussianModelT<double> m = base;

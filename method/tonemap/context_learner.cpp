@@ -6,14 +6,13 @@
 #include <random>
 
 #include "core/util/error.h"
+#include "method/tonemap/context_learner_internal.h"
 #include "method/tonemap/mlp.h"
 
 namespace hdr4d::method {
+using namespace context_internal;
 namespace {
 
-constexpr int kIn = ContextLearnerShape::kInputs;
-constexpr int kD = ContextLearnerShape::kModelWidth;
-constexpr int kF = ContextLearnerShape::kFeedForwardWidth;
 constexpr double kLayerNormEps = 1e-5;
 
 // ---- small dense helpers (row-major W: rows x cols) ------------------------------------------
@@ -68,63 +67,6 @@ struct RecurrentLayout {
     b_ih = w_hh + std::size_t(g) * h * h;
     b_hh = b_ih + std::size_t(g) * h;
     total = b_hh + std::size_t(g) * h;
-  }
-};
-
-struct TransformerLayout {
-  std::size_t e, b_e, w_qkv, b_qkv, w_o, b_o, g1, be1, w1, b1, w2, b2, g2, be2, w_head, b_head,
-      total;
-  explicit TransformerLayout(int d) {
-    std::size_t o = 0;
-    auto take = [&o](std::size_t n) {
-      const std::size_t at = o;
-      o += n;
-      return at;
-    };
-    e = take(kD * kIn);
-    b_e = take(kD);
-    w_qkv = take(3 * kD * kD);
-    b_qkv = take(3 * kD);
-    w_o = take(kD * kD);
-    b_o = take(kD);
-    g1 = take(kD);
-    be1 = take(kD);
-    w1 = take(kF * kD);
-    b1 = take(kF);
-    w2 = take(kD * kF);
-    b2 = take(kD);
-    g2 = take(kD);
-    be2 = take(kD);
-    w_head = take(std::size_t(d) * kD);
-    b_head = take(d);
-    total = o;
-  }
-};
-
-// Tape offsets of the transformer for a window of `length` rows.
-struct TransformerTape {
-  std::size_t x, k, v, q, p, a, xhat1, inv1, y1, hid, xhat2, inv2, y2, total;
-  explicit TransformerTape(int length) {
-    std::size_t o = 0;
-    auto take = [&o](std::size_t n) {
-      const std::size_t at = o;
-      o += n;
-      return at;
-    };
-    x = take(std::size_t(length) * kD);
-    k = take(std::size_t(length) * kD);
-    v = take(std::size_t(length) * kD);
-    q = take(kD);
-    p = take(length);
-    a = take(kD);
-    xhat1 = take(kD);
-    inv1 = take(1);
-    y1 = take(kD);
-    hid = take(kF);
-    xhat2 = take(kD);
-    inv2 = take(1);
-    y2 = take(kD);
-    total = o;
   }
 };
 
@@ -385,8 +327,11 @@ void TransformerForward(const ContextLearnerShape& shape,
   MatVecAdd(params + P.w_head, shape.size, kD, y2, f);
 }
 
-// TransformerBackward's stages, last layer first; v: the forward's tape values, dp: ADDED to.
-// The head, the second norm and the feed-forward with its residual: dL/df to dL/dy1.
+}  // namespace
+
+namespace context_internal {
+
+// TransformerBackward's stages (declared, with what each does, in context_learner_internal.h).
 template <typename T>
 void FeedForwardBackward(const ContextLearnerShape& shape,
                          const TransformerLayout& P,
@@ -489,6 +434,22 @@ void AttentionBackward(const TransformerLayout& P,
   for (int i = 0; i < kD; ++i) dbq[i] += dq[i];
   MatTVecAdd(wq, kD, kD, dq, dx_last);
 }
+
+#define HDR4D_INSTANTIATE_STAGES(T)                                                            \
+  template void FeedForwardBackward<T>(const ContextLearnerShape&, const TransformerLayout&,  \
+                                       const TransformerTape&, const T*, const T*, const T*, \
+                                       T*, T*);                                              \
+  template void OutputProjectionBackward<T>(const TransformerLayout&, const TransformerTape&, \
+                                            const T*, const T*, const T*, T*, T*, T*);        \
+  template void AttentionBackward<T>(const TransformerLayout&, const TransformerTape&,        \
+                                     const T*, const T*, int, const T*, T*, T*);
+HDR4D_INSTANTIATE_STAGES(float)
+HDR4D_INSTANTIATE_STAGES(double)
+#undef HDR4D_INSTANTIATE_STAGES
+
+}  // namespace context_internal
+
+namespace {
 
 template <typename T>
 void TransformerBackward(const ContextLearnerShape& shape,

@@ -145,7 +145,8 @@ std::vector<std::size_t> AllIndices(std::size_t n) {
 }
 
 // The whole chain in double, tabulated and direct: the direct case checks
-// DtmCore::DirectValueBackward, the tabulated one the scalar table backward.
+// DtmCore::DirectValueBackward, the tabulated one DtmCore::ScalarChunkBackward (which
+// dtm_chunk_backward_test.cpp also checks alone, over several chunks).
 TEST(DynamicToneMapperChain, GradientsMatchFiniteDifferencesEveryLearner) {
   for (ContextKind kind :
        {ContextKind::kGru, ContextKind::kRnn, ContextKind::kLstm, ContextKind::kTransformer}) {
@@ -360,9 +361,11 @@ TEST(DynamicToneMapper, TabulatedAgreesWithDirect) {
   EXPECT_LT(diff, 0.02 * norm);
 }
 
-// The float SIMD loop of the tabulated path (detail::ToneTableBackward and its forward) against
-// the scalar loop, whose gradients the finite-difference tests above check (same maths, another
-// exp).
+// The float SIMD loop of the tabulated path (detail::ToneTableBackward and its forward, and the
+// scatter of SimdChunkTableBackward) against the scalar loop, whose gradients the
+// finite-difference tests above check (same maths, another exp), on the default target;
+// dtm_chunk_backward_test.cpp checks SimdChunkTableBackward against finite differences on every
+// compiled target.
 TEST(DynamicToneMapperChain, SimdMatchesScalar) {
   DtmShape shape;  // the defaults: GRU, 64 hidden, 1024 nodes
   DtmCore<float> simd(shape), scalar(shape);

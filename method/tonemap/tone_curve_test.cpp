@@ -185,6 +185,49 @@ TEST(ToneCurve, TableGradientsMatchFiniteDifferences) {
   }
 }
 
+// FirstLayersBackward (FrameToneCurve's private share of TableBackward: the first two layers'
+// weights W1, b1, W2 and the context f, through the per-unit prefix and suffix sums over the
+// segments) driven through TableBackward from a random gradient on every node value, against
+// central differences in double of the node values Prepare builds. The other paths of
+// TableBackward (b2, w3, b3) are checked by TableGradientsMatchFiniteDifferences above.
+TEST(ToneCurve, FirstLayersBackwardMatchesFiniteDifferences) {
+  for (int flat : {0, 3}) {  // with constant units (a = 0, on or off) too
+    SCOPED_TRACE(flat);
+    const Curve<double> c = RandomCurve<double>(10, 2, 40 + flat, 2.0, flat);
+    const int nodes = 37, H = c.shape.hidden, in = 1 + c.shape.context_size;
+    std::mt19937 rng(8);
+    std::uniform_real_distribution<double> u(-1, 1);
+    std::vector<double> dz(nodes);
+    for (double& g : dz) g = u(rng);
+    auto loss = [&](const std::vector<double>& params, const std::vector<double>& f) {
+      FrameToneCurve<double> curve;
+      curve.Prepare(c.shape, params.data(), f.data(), nodes);
+      double l = 0;
+      for (int j = 0; j < nodes; ++j) l += dz[j] * curve.node_values()[j];
+      return l;
+    };
+    FrameToneCurve<double> curve;
+    curve.Prepare(c.shape, c.params.data(), c.f.data(), nodes);
+    std::vector<double> dp(c.params.size(), 0.0), df(c.f.size(), 0.0);
+    curve.TableBackward(dz.data(), dp.data(), df.data());
+    // W1 (H x in), b1 (H), W2 (H x H): the layout's first block.
+    const std::size_t count = std::size_t(H) * in + H + std::size_t(H) * H;
+    const FdVector p0 = Eigen::Map<const FdVector>(c.params.data(), count);
+    const FdVector numeric_p = NumericGradient(
+        [&](const FdVector& head) {
+          std::vector<double> p = c.params;
+          std::copy(head.data(), head.data() + count, p.begin());
+          return loss(p, c.f);
+        },
+        p0, 1e-6);
+    ExpectGradientsMatch(Eigen::Map<const FdVector>(dp.data(), count), numeric_p, 1e-6);
+    const FdVector numeric_f = NumericGradient(
+        [&](const FdVector& f) { return loss(c.params, {f.data(), f.data() + f.size()}); },
+        Eigen::Map<const FdVector>(c.f.data(), c.f.size()), 1e-6);
+    ExpectGradientsMatch(Eigen::Map<const FdVector>(df.data(), df.size()), numeric_f, 1e-6);
+  }
+}
+
 TEST(ToneCurve, DirectGradientsMatchFiniteDifferences) {
   const Curve<double> c = RandomCurve<double>(16, 3, 30, 2.0);
   FrameToneCurve<double> curve;
