@@ -149,6 +149,22 @@ window.addEventListener('load', function () {
 </script>
 )";
 
+// Every table of the suite (with --methods: those with a selected row) and its every-metric
+// companion.
+std::string TablesHtml(const Suite& suite, const std::vector<RunSummary>& runs,
+                       const TableOptions& options, ReportSummary* summary) {
+  std::string h;
+  for (const TableSpec& spec : suite.tables) {
+    const Table table = BuildTable(spec, suite, runs, options);
+    if (!HasSelectedRows(table, options)) continue;
+    h += TableHtml(table);
+    h += "<details><summary>Every metric</summary>" +
+         TableHtml(BuildAllMetricsTable(spec, suite, runs, options)) + "</details>\n";
+    summary->tables += 2;
+  }
+  return h;
+}
+
 }  // namespace
 
 ReportSummary WriteReport(const Suite& suite, const ResultsStore& store, const ReportOptions& options) {
@@ -182,15 +198,7 @@ ReportSummary WriteReport(const Suite& suite, const ResultsStore& store, const R
       HtmlEscape(fmt::format("{}", fmt::join(machines, "; "))));
   body += "<nav><b>Contents:</b> <a href=\"#tables\">tables</a> · <a href=\"#pareto\">time against error</a> · <a href=\"#scenes\">scenes</a> · <a href=\"#stress\">stress</a></nav>\n";
 
-  body += "<h2 id=\"tables\">Tables</h2>\n";
-  for (const TableSpec& spec : suite.tables) {
-    const Table table = BuildTable(spec, suite, runs, options.tables);
-    if (!HasSelectedRows(table, options.tables)) continue;
-    body += TableHtml(table);
-    body += "<details><summary>Every metric</summary>" +
-            TableHtml(BuildAllMetricsTable(spec, suite, runs, options.tables)) + "</details>\n";
-    summary.tables += 2;
-  }
+  body += "<h2 id=\"tables\">Tables</h2>\n" + TablesHtml(suite, runs, options.tables, &summary);
 
   body += "<h2 id=\"pareto\">Run time against error</h2>\n";
   bool any_pareto = false;
