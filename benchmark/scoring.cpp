@@ -182,7 +182,8 @@ FrameResult ScoreFrame(const Expected& e,
   fr.camera_id = e.frame->camera_id;
   fr.exposure = e.hdr ? 0.0 : e.frame->exposure;
   for (const auto& [key, value] : pair.items()) {
-    if (key == "name") continue;
+    // Not metrics: the file's name, and which metrics are undefined on this pair (and why).
+    if (key == "name" || key == "undefined") continue;
     // EvaluatePair writes +inf (identical images) as null.
     fr.metrics[key] =
         value.is_null() ? std::numeric_limits<double>::infinity() : value.get<double>();
