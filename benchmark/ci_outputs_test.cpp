@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "benchmark/bench_test_util.h"
+#include "benchmark/results_store.h"
 #include "benchmark/suite.h"
 #include "tests/testing.h"
 
@@ -177,6 +178,92 @@ TEST(CiOutputs, ReportLoadsInHeadlessChromiumWithTablesAndImages) {
   EXPECT_EQ(shot_log.find("CONSOLE"), std::string::npos);
   EXPECT_GT(fs::file_size(shot), 50000u);
   fs::remove_all(profile);
+}
+
+// Headless Chromium on a page: the DOM after load (--dump-dom) or a screenshot, with its log.
+std::pair<ChildResult, std::string> Chromium(const fs::path& html, std::vector<std::string> extra,
+                                             const fs::path& log) {
+  const fs::path profile = log.parent_path() / "chromium-profile-submitted";
+  fs::remove_all(profile);
+  std::vector<std::string> argv = {"/usr/bin/chromium", "--headless", "--no-sandbox",
+                                   "--disable-gpu", "--disable-quic", "--no-first-run",
+                                   "--disable-background-networking", "--disable-component-update",
+                                   "--disable-sync", "--user-data-dir=" + profile.string(),
+                                   "--enable-logging=stderr", "--v=0", "--hide-scrollbars"};
+  argv.insert(argv.end(), extra.begin(), extra.end());
+  argv.push_back("file://" + fs::absolute(html).string());
+  fs::remove(log);
+  const ChildResult r = RunChild({.argv = argv, .log = log, .timeout_seconds = 120});
+  fs::remove_all(profile);
+  return {r, testing::ReadTextFile(log)};
+}
+
+// Issue 52's proof: the ci suite's store plus a method submitted under a new name (the renders
+// of HDR-4DGS's seed-0 runs, so its values are known) has its row in every table it fits, with
+// "external" and its coverage, a paired test over the two scenes, its renders in the report,
+// and `--methods` selects it (an unknown name is an error listing the known ones).
+TEST(CiOutputs, ASubmittedMethodUnderANewNameHasItsRowsAndItsRenders) {
+  const fs::path dir = Artifacts("ci"), store = dir / "submitted.db", log = dir / "submitted.log";
+  for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(store.string() + suffix);
+  {
+    const ResultsStore source(Store(), false);  // copied run by run: the ci store stays as it is
+    ResultsStore copy(store);
+    for (const std::string& id : source.RunIds("ok")) copy.InsertRun(source.Record(id));
+  }
+  std::map<std::string, fs::path> renders;  // scene -> HDR-4DGS (LDR), seed 0
+  for (const RunSummary& r : ResultsStore(store, false).Summaries("ci"))
+    if (r.label.method == "hdr4dgs" && r.label.supervision == "ldr" && r.label.seed == 0)
+      renders[r.label.scene] = fs::path(r.run_dir) / "renders";
+  ASSERT_EQ(renders.size(), 2u);
+  for (const auto& [scene, folder] : renders) {
+    const Command c = RunHdr4dArgs({"bench", "submit", "--store", store.string(), "--suite", "ci",
+                                    "--scene", scene, "--renders", folder.string(), "--method",
+                                    "NewNet", "--cache", (dir / "cache").string()}, log);
+    ASSERT_TRUE(c.result.ok()) << c.text;
+  }
+  const Command table = RunHdr4dArgs({"bench", "table", "ci", "--store", store.string()}, log);
+  ASSERT_TRUE(table.result.ok()) << table.text;
+  // Table 1 and the four ablation tables (LDR rows, HDR columns) each have the row.
+  EXPECT_EQ(CountLines(table.text, "| 13 | NewNet (external; 2/2 scenes, 1 seed) | LDR |"), 1) << table.text;
+  std::size_t rows = 0;
+  for (std::size_t at = 0; (at = table.text.find("| NewNet (external; 2/2 scenes, 1 seed) | LDR |", at)) != std::string::npos; ++at)
+    ++rows;
+  EXPECT_EQ(rows, LoadSuite("ci").tables.size()) << table.text;
+  EXPECT_NE(table.text.find("(over 2 scenes)"), std::string::npos) << table.text;
+  // --methods: NewNet and the reference rows only; an unknown name lists the known ones.
+  const Command only = RunHdr4dArgs({"bench", "table", "ci", "--store", store.string(), "--methods",
+                                     "NewNet", "--table", "table4"}, log);
+  ASSERT_TRUE(only.result.ok()) << only.text;
+  EXPECT_NE(only.text.find("| 1 | DTM (ours) | LDR |"), std::string::npos) << only.text;
+  EXPECT_NE(only.text.find("| 2 | NewNet (external; 2/2 scenes, 1 seed) | LDR |"), std::string::npos) << only.text;
+  EXPECT_EQ(only.text.find("Reinhard"), std::string::npos) << only.text;
+  const Command unknown = RunHdr4dArgs({"bench", "table", "ci", "--store", store.string(), "--methods", "NoSuchNet"}, log);
+  EXPECT_EQ(unknown.result.exit_code, 1);
+  EXPECT_NE(unknown.result.error_line.find("--methods NoSuchNet"), std::string::npos) << unknown.text;
+  EXPECT_NE(unknown.result.error_line.find("NewNet"), std::string::npos) << unknown.text;
+  // The report: its rows and its renders beside the others', every image loading.
+  const fs::path html = dir / "submitted_report.html";
+  const Command report = RunHdr4dArgs({"bench", "report", "ci", "--store", store.string(), "--out", html.string()}, log);
+  ASSERT_TRUE(report.result.ok()) << report.text;
+  const std::string page = testing::ReadTextFile(html);
+  EXPECT_NE(page.find("NewNet (external; 2/2 scenes, 1 seed)"), std::string::npos);
+  EXPECT_NE(page.find("alt=\"NewNet (ldr, external) LDR\""), std::string::npos);
+  EXPECT_NE(page.find("alt=\"NewNet (ldr, external) HDR error\""), std::string::npos);
+  if (std::system("command -v chromium >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "chromium is not installed (scripts/install-deps.sh installs it)";
+  const auto [dom_run, dom] = Chromium(html, {"--virtual-time-budget=10000", "--dump-dom"}, dir / "chromium-submitted-dom.log");
+  ASSERT_TRUE(dom_run.ok()) << dom;
+  EXPECT_NE(dom.find("data-broken-images=\"0\""), std::string::npos) << dom.substr(0, 2000);
+  EXPECT_EQ(dom.find("CONSOLE"), std::string::npos);
+  // A screenshot of the page narrowed to NewNet and HDR-4DGS, kept for a person to look at.
+  const fs::path narrow = dir / "submitted_report_newnet.html", shot = dir / "submitted_report_newnet.png";
+  ASSERT_TRUE(RunHdr4dArgs({"bench", "report", "ci", "--store", store.string(), "--out", narrow.string(),
+                            "--methods", "NewNet,hdr4dgs"}, log).result.ok());
+  fs::remove(shot);
+  const auto [shot_run, shot_log] = Chromium(narrow, {"--screenshot=" + shot.string(), "--window-size=1400,6000"},
+                                             dir / "chromium-submitted-shot.log");
+  ASSERT_TRUE(shot_run.ok()) << shot_log;
+  EXPECT_GT(fs::file_size(shot), 50000u);
 }
 
 }  // namespace

@@ -52,7 +52,7 @@ std::string TableHtml(const Table& t) {
   for (std::size_t i = 0; i < t.rows.size(); ++i) {
     const RowResult& r = t.rows[i];
     h += fmt::format("<tr{}><td>{}</td><td>{}</td><td>{}</td>", r.is_reference ? " class=\"ref\"" : "",
-                     i + 1, HtmlEscape(r.label), HtmlEscape(r.supervision));
+                     i + 1, HtmlEscape(RowName(r, t.scenes.size())), HtmlEscape(r.supervision));
     for (std::size_t c = 0; c < t.columns.size(); ++c) h += CellHtml(r.cells[c], t.columns[c]);
     h += "</tr>\n";
   }
@@ -83,8 +83,9 @@ std::string TableHtml(const Table& t) {
         h += fmt::format("<td>{:+.{}f}<br><span class=\"sd\">not testable (1 seed)</span></td>",
                          p.mean_difference, t.columns[c].digits);
       } else {
-        h += fmt::format("<td class=\"{}\">{:+.{}f}<br><span class=\"sd\">p = {:.2g}</span></td>",
-                         p.significant ? "sig" : "nsig", p.mean_difference, t.columns[c].digits, p.p);
+        h += fmt::format("<td class=\"{}\">{:+.{}f}<br><span class=\"sd\">p = {:.2g}{}</span></td>",
+                         p.significant ? "sig" : "nsig", p.mean_difference, t.columns[c].digits, p.p,
+                         p.over_scenes ? ", over scenes" : "");
       }
     }
     h += "</tr>";
@@ -148,6 +149,22 @@ window.addEventListener('load', function () {
 </script>
 )";
 
+// Every table of the suite (with --methods: those with a selected row) and its every-metric
+// companion.
+std::string TablesHtml(const Suite& suite, const std::vector<RunSummary>& runs,
+                       const TableOptions& options, ReportSummary* summary) {
+  std::string h;
+  for (const TableSpec& spec : suite.tables) {
+    const Table table = BuildTable(spec, suite, runs, options);
+    if (!HasSelectedRows(table, options)) continue;
+    h += TableHtml(table);
+    h += "<details><summary>Every metric</summary>" +
+         TableHtml(BuildAllMetricsTable(spec, suite, runs, options)) + "</details>\n";
+    summary->tables += 2;
+  }
+  return h;
+}
+
 }  // namespace
 
 ReportSummary WriteReport(const Suite& suite, const ResultsStore& store, const ReportOptions& options) {
@@ -157,6 +174,7 @@ ReportSummary WriteReport(const Suite& suite, const ResultsStore& store, const R
   CheckOutputFolder(options.out.has_parent_path() ? options.out.parent_path() : ".");
   ReportSummary summary;
   const std::vector<RunSummary> runs = SuiteRuns(store, suite);
+  CheckRowNames(suite, runs, options.tables);
   const std::string budget = options.tables.budget.empty() ? suite.budgets.back().Label() : options.tables.budget;
   const std::string variant = options.tables.variant.empty() ? suite.variants.front().name : options.tables.variant;
   std::set<std::string> versions, machines;
@@ -180,13 +198,7 @@ ReportSummary WriteReport(const Suite& suite, const ResultsStore& store, const R
       HtmlEscape(fmt::format("{}", fmt::join(machines, "; "))));
   body += "<nav><b>Contents:</b> <a href=\"#tables\">tables</a> · <a href=\"#pareto\">time against error</a> · <a href=\"#scenes\">scenes</a> · <a href=\"#stress\">stress</a></nav>\n";
 
-  body += "<h2 id=\"tables\">Tables</h2>\n";
-  for (const TableSpec& spec : suite.tables) {
-    body += TableHtml(BuildTable(spec, suite, runs, options.tables));
-    body += "<details><summary>Every metric</summary>" +
-            TableHtml(BuildAllMetricsTable(spec, suite, runs, options.tables)) + "</details>\n";
-    summary.tables += 2;
-  }
+  body += "<h2 id=\"tables\">Tables</h2>\n" + TablesHtml(suite, runs, options.tables, &summary);
 
   body += "<h2 id=\"pareto\">Run time against error</h2>\n";
   bool any_pareto = false;
@@ -209,7 +221,14 @@ ReportSummary WriteReport(const Suite& suite, const ResultsStore& store, const R
 
   body += "<h2 id=\"scenes\">Scenes</h2>\n";
   for (const SceneSpec& s : suite.scenes) {
-    body += SceneHtml(s.name, SceneRuns(runs, suite, s.name, budget, variant), store, &summary.images);
+    std::vector<const RunSummary*> shown = SceneRuns(runs, suite, s.name, budget, variant);
+    if (!options.tables.methods.empty()) {
+      const auto& keep = options.tables.methods;
+      std::erase_if(shown, [&](const RunSummary* r) {
+        return std::find(keep.begin(), keep.end(), r->label.method) == keep.end();
+      });
+    }
+    body += SceneHtml(s.name, shown, store, &summary.images);
     ++summary.scenes;
   }
 

@@ -24,7 +24,7 @@ namespace fs = std::filesystem;
 namespace {
 
 std::string Name(const RunSummary& r) {
-  return r.label.method + " (" + r.label.supervision + ")";
+  return r.label.method + " (" + r.label.supervision + (r.source == "submit" ? ", external" : "") + ")";
 }
 
 }  // namespace

@@ -73,7 +73,8 @@ double StudentTwoSidedP(double t, double dof) {
 std::string PairedTest::Verdict() const {
   if (!testable) return "not testable (one seed per scene: no seed noise to compare with)";
   if (seed_sd == 0 && mean_difference == 0) return "identical";
-  return fmt::format("{} (p = {:.3g})", significant ? "exceeds seed noise" : "within seed noise", p);
+  const char* noise = over_scenes ? "scene-to-scene noise" : "seed noise";
+  return fmt::format("{} {} (p = {:.3g})", significant ? "exceeds" : "within", noise, p);
 }
 
 PairedTest PairedSeedTest(const std::vector<PairedValue>& values, double alpha) {

@@ -37,6 +37,10 @@ struct PairedTest {
   double t = 0, dof = 0, p = 1;
   bool testable = false;
   bool significant = false;  // p < alpha
+  // Set by the tables where the seed test cannot decide (a submission with one seed): the
+  // pairs are scenes, each row's mean over its seeds there, and the noise the differences'
+  // spread over scenes (a paired t-test over scenes, n - 1 degrees of freedom).
+  bool over_scenes = false;
   std::string Verdict() const;  // "exceeds seed noise (p = 0.003)", ...
 };
 PairedTest PairedSeedTest(const std::vector<PairedValue>& values, double alpha = 0.05);

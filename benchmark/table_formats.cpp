@@ -96,7 +96,8 @@ std::string ToMarkdown(const Table& t) {
   md += "\n";
   for (std::size_t i = 0; i < t.rows.size(); ++i) {
     const RowResult& r = t.rows[i];
-    md += fmt::format("| {} | {} | {} |", i + 1, r.label, SupervisionLabel(r.supervision));
+    md += fmt::format("| {} | {} | {} |", i + 1, RowName(r, t.scenes.size()),
+                      SupervisionLabel(r.supervision));
     for (std::size_t c = 0; c < t.columns.size(); ++c)
       md += fmt::format(" {} |", CellText(r.cells[c], t.columns[c], true));
     md += "\n";
@@ -127,13 +128,16 @@ std::string PairedTestsMarkdown(const Table& t) {
     md += fmt::format("| {} |", r.label);
     for (std::size_t c : cols) {
       const PairedTest& p = r.tests[c];
+      const char* noise = p.over_scenes ? "scene-to-scene noise" : "seed noise";
       if (p.pairs == 0) {
         md += " - |";
       } else if (!p.testable) {
         md += fmt::format(" {:+.{}f}, n/a (1 seed) |", p.mean_difference, t.columns[c].digits);
       } else {
-        md += fmt::format(" {:+.{}f}, p = {:.2g}: {} |", p.mean_difference, t.columns[c].digits,
-                          p.p, p.significant ? "**exceeds seed noise**" : "within seed noise");
+        md += fmt::format(" {:+.{}f}, p = {:.2g}: {}{} |", p.mean_difference, t.columns[c].digits,
+                          p.p, p.significant ? fmt::format("**exceeds {}**", noise)
+                                             : fmt::format("within {}", noise),
+                          p.over_scenes ? fmt::format(" (over {} scenes)", p.pairs) : "");
       }
     }
     md += "\n";
@@ -173,7 +177,7 @@ std::string ToLatex(const Table& t) {
   tex += groups + " \\\\\n" + names + " \\\\\n\\midrule\n";
   for (std::size_t i = 0; i < t.rows.size(); ++i) {
     const RowResult& r = t.rows[i];
-    tex += fmt::format("{} & {} & {}", i + 1, LatexEscape(r.label),
+    tex += fmt::format("{} & {} & {}", i + 1, LatexEscape(RowName(r, t.scenes.size())),
                        LatexEscape(SupervisionLabel(r.supervision)));
     for (std::size_t c = 0; c < t.columns.size(); ++c) {
       std::string cell = CellText(r.cells[c], t.columns[c], false);
@@ -189,7 +193,8 @@ std::string ToLatex(const Table& t) {
 std::string ToCsv(const Table& t) {
   std::string csv =
       "table,row,label,method,supervision,column,key,mean,sd_over_seeds,runs,expected_runs,best,"
-      "diff_vs_reference,p_vs_reference,exceeds_seed_noise,protocol,budget\n";
+      "diff_vs_reference,p_vs_reference,exceeds_seed_noise,protocol,budget,external,"
+      "added_row,coverage,test_over\n";
   for (std::size_t i = 0; i < t.rows.size(); ++i) {
     const RowResult& r = t.rows[i];
     for (std::size_t c = 0; c < t.columns.size(); ++c) {
@@ -197,13 +202,16 @@ std::string ToCsv(const Table& t) {
       const PairedTest& p = r.tests[c];
       const Column& col = t.columns[c];
       csv += fmt::format(
-          "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", t.id, i + 1, CsvField(r.label),
+          "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", t.id, i + 1,
+          CsvField(r.label),
           CsvField(r.method), r.supervision, CsvField(HeaderOf(col)), col.key,
           !col.computable ? "not computable" : cell.has_value ? FormatValue(cell.mean, 6) : "",
           cell.has_spread ? FormatValue(cell.spread, 6) : "", cell.runs, cell.expected,
           cell.best ? 1 : 0, p.pairs ? FormatValue(p.mean_difference, 6) : "",
           p.testable ? fmt::format("{:.6g}", p.p) : "",
-          p.testable ? (p.significant ? "yes" : "no") : "", CsvField(t.protocol), t.budget);
+          p.testable ? (p.significant ? "yes" : "no") : "", CsvField(t.protocol), t.budget,
+          r.external ? 1 : 0, r.added ? 1 : 0, CsvField(CoverageText(r, t.scenes.size())),
+          p.testable ? (p.over_scenes ? "scenes" : "seeds") : "");
     }
   }
   return csv;

@@ -1,6 +1,7 @@
 #include "benchmark/table_output.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "core/files/atomic_file.h"
 #include "core/files/output_guard.h"
@@ -36,11 +37,15 @@ void OutputSuiteTables(const Suite& suite,
                        const std::function<void(const std::string&)>& print) {
   if (suite.tables.empty()) Fail("{}: the suite defines no tables", suite.file.string());
   if (!o.out.empty()) CheckOutputFolder(o.out);  // never among a dataset's images
+  CheckRowNames(suite, runs, o.tables);
   bool found = false;
+  int printed = 0;
   for (const TableSpec& spec : suite.tables) {
     if (!o.table.empty() && spec.id != o.table) continue;
     found = true;
     std::vector<Table> tables = {BuildTable(spec, suite, runs, o.tables)};
+    if (!HasSelectedRows(tables.front(), o.tables)) continue;  // --methods names none of its rows
+    ++printed;
     if (o.all_metrics) tables.push_back(BuildAllMetricsTable(spec, suite, runs, o.tables));
     OutputTables(tables, o, print);
     if (!o.per_scene) continue;
@@ -52,6 +57,9 @@ void OutputSuiteTables(const Suite& suite,
     }
   }
   if (!found) Fail("{}: no table '{}'", suite.file.string(), o.table);
+  if (printed == 0)
+    Fail("--methods {}: none of these is a row of {}", fmt::join(o.tables.methods, ","),
+         o.table.empty() ? "any table" : "table '" + o.table + "'");
 }
 
 }  // namespace hdr4d::bench

@@ -50,10 +50,13 @@ int GuessDirection(const std::string& key) {
   return 0;  // e.g. a slope, where the best is 1, not the largest
 }
 
+using MethodSup = std::pair<std::string, std::string>;
+
 struct Index {
   std::map<Key, const RunSummary*> ok;
-  std::map<std::pair<std::string, std::string>, int> failed;  // (method, sup) -> count
+  std::map<MethodSup, int> failed;  // (method, sup) -> count
   std::map<std::string, std::set<std::int64_t>> seeds_of_method;
+  std::set<MethodSup> submitted;  // (method, sup) with a run from `bench submit`
 };
 
 Index BuildIndex(const std::vector<RunSummary>& runs, const std::string& budget,
@@ -63,6 +66,7 @@ Index BuildIndex(const std::vector<RunSummary>& runs, const std::string& budget,
     const RunLabel& l = r.label;
     const bool external = r.source == "submit";
     if (!external && (l.budget != budget || l.variant != variant)) continue;
+    if (external) ix.submitted.insert({l.method, l.supervision});
     if (r.status != "ok") {
       ++ix.failed[{l.method, l.supervision}];
       continue;
@@ -147,22 +151,86 @@ RowResult BuildRow(const TableRow& row,
   rr.expected = static_cast<int>(t.scenes.size() * seeds.size());
   if (auto f = ix.failed.find({row.method, row.supervision}); f != ix.failed.end())
     rr.failed = f->second;
+  rr.external = ix.submitted.count({row.method, row.supervision}) > 0;
   RowValues& row_values = *values;
   row_values.resize(t.columns.size());
+  std::set<std::int64_t> seeds_seen;
   for (const std::string& scene : t.scenes) {
+    bool scene_seen = false;
     for (std::int64_t seed : seeds) {
       const auto it = ix.ok.find({row.method, row.supervision, scene, seed});
       if (it == ix.ok.end()) continue;
       ++rr.runs;
+      scene_seen = true;
+      seeds_seen.insert(seed);
       for (std::size_t c = 0; c < t.columns.size(); ++c) {
         if (!t.columns[c].computable) continue;
         if (const auto v = ValueOf(*it->second, t.columns[c])) row_values[c][{scene, seed}] = *v;
       }
     }
+    rr.scenes_with_runs += scene_seen;
   }
+  rr.seeds_with_runs.assign(seeds_seen.begin(), seeds_seen.end());
   for (std::size_t c = 0; c < t.columns.size(); ++c)
     rr.cells.push_back(SummariseCell(row_values[c], seeds, t.scenes, rr.expected));
   return rr;
+}
+
+// A (method, supervision) of the store fits a table when it has a finished run on one of the
+// table's scenes with a value in one of its quality columns, under a supervision the table's
+// rows use (the ablation tables are LDR-only; Table 1 takes every supervision).
+bool FitsTable(const MethodSup& ms, const TableSpec& spec, const Index& ix,
+               const std::vector<std::string>& scenes, const std::vector<Column>& columns) {
+  if (spec.layout != "main") {
+    bool supervision_used = spec.rows.empty();
+    for (const TableRow& r : spec.rows) supervision_used |= r.supervision == ms.second;
+    if (!supervision_used) return false;
+  }
+  const std::set<std::string> in_table(scenes.begin(), scenes.end());
+  for (const auto& [key, run] : ix.ok) {
+    if (std::get<0>(key) != ms.first || std::get<1>(key) != ms.second) continue;
+    if (!in_table.count(std::get<2>(key))) continue;
+    for (const Column& c : columns)
+      if (c.quality && c.computable && ValueOf(*run, c)) return true;
+  }
+  return false;
+}
+
+struct PlannedRow {
+  TableRow row;
+  bool added = false;
+};
+
+// The table's own rows, then every method of the store that no table of the suite names and
+// that fits this one (sorted by name), then options.methods' selection (the reference stays).
+std::vector<PlannedRow> PlanRows(const TableSpec& spec, const Suite& suite, const Index& ix,
+                                 const std::vector<std::string>& scenes,
+                                 const std::vector<Column>& columns, const TableOptions& options) {
+  std::vector<PlannedRow> rows;
+  for (const TableRow& r : spec.rows) rows.push_back({r, false});
+  std::set<std::string> named;  // methods some table of the suite places
+  for (const TableSpec& t : suite.tables)
+    for (const TableRow& r : t.rows) named.insert(r.method);
+  std::set<MethodSup> candidates;
+  for (const auto& [key, run] : ix.ok)
+    if (!named.count(std::get<0>(key))) candidates.insert({std::get<0>(key), std::get<1>(key)});
+  std::vector<MethodSup> fitting;
+  for (const MethodSup& ms : candidates)
+    if (FitsTable(ms, spec, ix, scenes, columns)) fitting.push_back(ms);
+  for (const MethodSup& ms : fitting) {
+    const MethodSpec* m = suite.FindMethod(ms.first);
+    std::string label = m && !m->label.empty() ? m->label : ms.first;
+    const auto same_method = std::count_if(fitting.begin(), fitting.end(),
+                                           [&](const MethodSup& o) { return o.first == ms.first; });
+    if (same_method > 1) label += " (" + SupervisionLabel(ms.second) + ")";
+    rows.push_back({{label, ms.first, ms.second}, true});
+  }
+  if (options.methods.empty()) return rows;
+  const std::set<std::string> keep(options.methods.begin(), options.methods.end());
+  std::erase_if(rows, [&](const PlannedRow& p) {
+    return p.row.label != spec.reference && !keep.count(p.row.method) && !keep.count(p.row.label);
+  });
+  return rows;
 }
 
 // Best per column, in the column's direction.
@@ -178,6 +246,23 @@ void MarkBest(Table* t) {
   }
 }
 
+using CellValues = std::map<std::pair<std::string, std::int64_t>, double>;
+
+// Where matched seeds cannot decide (one seed per scene, as a submission usually has): the
+// pairs are scenes, each row's mean over the seeds it has there, tested over scenes.
+PairedTest OverScenes(const CellValues& row, const CellValues& ref, double alpha) {
+  std::map<std::string, std::vector<double>> a, b;
+  for (const auto& [k, v] : row) a[k.first].push_back(v);
+  for (const auto& [k, v] : ref) b[k.first].push_back(v);
+  std::vector<PairedValue> pairs;
+  for (const auto& [scene, v] : a)
+    if (auto it = b.find(scene); it != b.end()) pairs.push_back({"", Mean(v), Mean(it->second)});
+  PairedTest t = PairedSeedTest(pairs, alpha);  // one block: a paired t-test over scenes
+  t.over_scenes = true;
+  t.scenes = static_cast<int>(pairs.size());
+  return t;
+}
+
 // Paired tests of every row's quality columns against the reference row, scene by scene.
 void PairedTests(const std::vector<RowValues>& values, double alpha, Table* t) {
   std::size_t ref = 0;
@@ -186,13 +271,18 @@ void PairedTests(const std::vector<RowValues>& values, double alpha, Table* t) {
   for (std::size_t i = 0; i < t->rows.size(); ++i) {
     for (std::size_t c = 0; c < t->columns.size(); ++c) {
       std::vector<PairedValue> pairs;
-      if (i != ref && t->columns[c].quality && t->columns[c].computable) {
+      const bool tested = i != ref && t->columns[c].quality && t->columns[c].computable;
+      if (tested) {
         for (const auto& [k, v] : values[i][c]) {
           if (auto it = values[ref][c].find(k); it != values[ref][c].end())
             pairs.push_back({k.first, v, it->second});
         }
       }
-      t->rows[i].tests.push_back(PairedSeedTest(pairs, alpha));
+      PairedTest test = PairedSeedTest(pairs, alpha);
+      if (tested && !test.testable) {
+        if (PairedTest s = OverScenes(values[i][c], values[ref][c], alpha); s.testable) test = s;
+      }
+      t->rows[i].tests.push_back(test);
     }
   }
 }
@@ -218,6 +308,17 @@ void AddFootnotes(const TableSpec& spec, const Suite& suite, Table* t) {
         "{}: no runs in the store; not methods of this suite: score their renders with `hdr4d "
         "bench submit --suite {} --method NAME --supervision ldr|hdr|ldr+hdr`.",
         fmt::format("{}", fmt::join(external, ", ")), suite.name));
+  }
+  std::vector<std::string> added;
+  for (const RowResult& r : t->rows)
+    if (r.added) added.push_back(r.label);
+  if (!added.empty()) {
+    t->footnotes.push_back(fmt::format(
+        "{}: not rows of this suite's tables; added from the store because they fit this "
+        "table's layout (external: scored with `hdr4d bench submit`). Their coverage is the "
+        "scenes of this table and the seeds they have; where one seed per scene leaves the seed "
+        "test undecided, the paired test is over scenes.",
+        fmt::join(added, ", ")));
   }
   for (const Column& c : t->columns) has_lpips |= !c.computable;
   if (any_incomplete)
@@ -252,14 +353,60 @@ Table Build(const TableSpec& spec,
                    : "the metric keys " + options.hdr_psnr_key + " and " + options.hdr_ssim_key;
   const Index ix = BuildIndex(runs, t.budget, t.variant);
   std::vector<RowValues> values;  // values[row][column][(scene, seed)]
-  for (const TableRow& row : spec.rows)
-    t.rows.push_back(BuildRow(row, spec, suite, ix, t, &values.emplace_back()));
+  for (const PlannedRow& p : PlanRows(spec, suite, ix, t.scenes, t.columns, options)) {
+    t.rows.push_back(BuildRow(p.row, spec, suite, ix, t, &values.emplace_back()));
+    t.rows.back().added = p.added;
+  }
   MarkBest(&t);
   PairedTests(values, options.alpha, &t);
   AddFootnotes(spec, suite, &t);
   return t;
 }
 }  // namespace
+
+std::string CoverageText(const RowResult& r, std::size_t table_scenes) {
+  const std::size_t seeds = r.seeds_with_runs.size();
+  return fmt::format("{}/{} scenes, {} seed{}", r.scenes_with_runs, table_scenes, seeds,
+                     seeds == 1 ? "" : "s");
+}
+
+std::string RowName(const RowResult& r, std::size_t table_scenes) {
+  if (r.external) return fmt::format("{} (external; {})", r.label, CoverageText(r, table_scenes));
+  if (r.added) return fmt::format("{} ({})", r.label, CoverageText(r, table_scenes));
+  return r.label;
+}
+
+std::vector<std::string> KnownRowNames(const Suite& suite, const std::vector<RunSummary>& runs,
+                                       const TableOptions& options) {
+  TableOptions all = options;
+  all.methods.clear();
+  std::set<std::string> names;
+  for (const TableSpec& spec : suite.tables) {
+    for (const RowResult& r : BuildTable(spec, suite, runs, all).rows) {
+      names.insert(r.label);
+      names.insert(r.method);
+    }
+  }
+  return {names.begin(), names.end()};
+}
+
+void CheckRowNames(const Suite& suite, const std::vector<RunSummary>& runs,
+                   const TableOptions& options) {
+  if (options.methods.empty()) return;
+  const std::vector<std::string> known = KnownRowNames(suite, runs, options);
+  for (const std::string& name : options.methods) {
+    if (std::find(known.begin(), known.end(), name) == known.end())
+      Fail("--methods {}: no row or method of that name in the tables of suite '{}' (known: {})",
+           name, suite.name, fmt::join(known, ", "));
+  }
+}
+
+bool HasSelectedRows(const Table& t, const TableOptions& options) {
+  if (options.methods.empty()) return true;
+  for (const RowResult& r : t.rows)
+    if (!r.is_reference) return true;
+  return false;
+}
 
 std::string SupervisionLabel(const std::string& s) {
   if (s == "ldr") return "LDR";
@@ -326,8 +473,11 @@ Table BuildAllMetricsTable(const TableSpec& spec, const Suite& suite,
   std::set<std::string> keys;
   std::set<std::pair<std::string, std::string>> rows;
   for (const TableRow& r : spec.rows) rows.insert({r.method, r.supervision});
+  std::set<std::string> named;  // methods some table places; the others may be added rows
+  for (const TableSpec& t : suite.tables)
+    for (const TableRow& r : t.rows) named.insert(r.method);
   for (const RunSummary& r : runs)
-    if (rows.count({r.label.method, r.label.supervision}))
+    if (rows.count({r.label.method, r.label.supervision}) || !named.count(r.label.method))
       for (const auto& [k, v] : r.metrics) keys.insert(k);
   // LDR keys first, then the HDR protocols, then anything newer, alphabetically.
   const std::vector<std::string> order = {"psnr", "psnr_channel_mean", "ssim", "flip", "mu_psnr",
@@ -358,13 +508,19 @@ std::string PerSceneMarkdown(const TableSpec& spec, const Suite& suite,
   const std::string variant = options.variant.empty() ? suite.variants.front().name : options.variant;
   const Index ix = BuildIndex(runs, budget, variant);
   const std::vector<std::string> scenes = GroupScenes(suite, spec.scene_group);
+  std::vector<TableRow> rows;
+  for (const PlannedRow& p : PlanRows(spec, suite, ix, scenes,
+                                      spec.layout == "main" ? MainColumns(options)
+                                                            : HdrColumns(options, true),
+                                      options))
+    rows.push_back(p.row);
   std::string md = fmt::format("{} {}, mean over seeds (best per scene in bold):\n\n", spec.id, column.key);
   md += "| scene (seeds) |";
-  for (const TableRow& r : spec.rows) md += fmt::format(" {} |", r.label);
+  for (const TableRow& r : rows) md += fmt::format(" {} |", r.label);
   md += "\n|---|";
-  for (std::size_t i = 0; i < spec.rows.size(); ++i) md += "---|";
+  for (std::size_t i = 0; i < rows.size(); ++i) md += "---|";
   md += "\n";
-  std::vector<std::vector<double>> scene_means(spec.rows.size());
+  std::vector<std::vector<double>> scene_means(rows.size());
   auto line = [&](const std::string& label, const std::vector<std::optional<double>>& v) {
     double best = column.direction >= 0 ? -INFINITY : INFINITY;
     for (const auto& x : v)
@@ -383,10 +539,10 @@ std::string PerSceneMarkdown(const TableSpec& spec, const Suite& suite,
   for (const std::string& scene : scenes) {
     std::vector<std::optional<double>> row;
     int seeds_seen = 0;
-    for (std::size_t i = 0; i < spec.rows.size(); ++i) {
+    for (std::size_t i = 0; i < rows.size(); ++i) {
       std::vector<double> v;
-      for (std::int64_t seed : RowSeeds(suite, ix, spec.rows[i].method)) {
-        const auto it = ix.ok.find({spec.rows[i].method, spec.rows[i].supervision, scene, seed});
+      for (std::int64_t seed : RowSeeds(suite, ix, rows[i].method)) {
+        const auto it = ix.ok.find({rows[i].method, rows[i].supervision, scene, seed});
         if (it == ix.ok.end()) continue;
         if (auto x = ValueOf(*it->second, column)) v.push_back(*x);
       }

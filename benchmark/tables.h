@@ -8,6 +8,12 @@
 // row by PairedSeedTest (benchmark/stats.h) on every quality column. LPIPS cannot be computed
 // here (no network weights) and says so. A companion table lists every metric key the runs
 // have, so metrics added to `hdr4d eval` later appear without code changes.
+//
+// Every method a row: a method of the store that no table of the suite names (a submission
+// under any name, or a suite method left out of the tables) gets its own row in every table
+// whose layout it fits (runs on the table's scenes, a supervision of the table's rows, a value
+// in one of its quality columns), marked external when it came through `bench submit`, with
+// its coverage (scenes and seeds it has).
 #pragma once
 
 #include <string>
@@ -51,7 +57,16 @@ struct RowResult {
   int runs = 0, failed = 0, expected = 0;
   std::vector<PairedTest> tests;  // per column, against the reference row
   bool is_reference = false;
+  bool external = false;  // its runs came through `bench submit`
+  bool added = false;     // not a row of the suite's table: a method of the store that fits it
+  int scenes_with_runs = 0;
+  std::vector<std::int64_t> seeds_with_runs;
 };
+// "3/8 scenes, 1 seed": the scenes of the table a row has runs on, and the seeds it has.
+std::string CoverageText(const RowResult& row, std::size_t table_scenes);
+// The row's name as the tables print it: its label, with "(external; 3/8 scenes, 1 seed)" for
+// a submission and the coverage for a row added from the store.
+std::string RowName(const RowResult& row, std::size_t table_scenes);
 
 struct Table {
   std::string id, title, note;
@@ -72,6 +87,9 @@ struct TableOptions {
   std::string budget;   // "" = the suite's last (largest) budget
   std::string variant;  // "" = the suite's first variant
   double alpha = 0.05;
+  // Rows to keep (`bench table --methods`): a row stays when its method or its label is named;
+  // the reference row always stays (the paired tests need it). Empty: every row.
+  std::vector<std::string> methods;
 };
 
 // Runs of the suite, plus external submissions (suite "external") on the same scene names.
@@ -82,6 +100,17 @@ Table BuildTable(const TableSpec& spec, const Suite& suite, const std::vector<Ru
 // Every metric key the table's rows have, one column each (no LPIPS, no cost columns).
 Table BuildAllMetricsTable(const TableSpec& spec, const Suite& suite,
                            const std::vector<RunSummary>& runs, const TableOptions& options);
+
+// Every method name and row label the suite's tables have for these runs (added rows
+// included), sorted: what `--methods` may name.
+std::vector<std::string> KnownRowNames(const Suite& suite, const std::vector<RunSummary>& runs,
+                                       const TableOptions& options);
+// Throws hdr4d::Error for a name of options.methods that is no row or method of any table,
+// listing the known ones.
+void CheckRowNames(const Suite& suite, const std::vector<RunSummary>& runs,
+                   const TableOptions& options);
+// Whether a table built with options.methods has a selected row besides its reference.
+bool HasSelectedRows(const Table& table, const TableOptions& options);
 
 // Per scene (rows: scenes and "mean over scenes", columns: the table's rows) of one column's
 // key: the mean over seeds, best per scene in bold (what tone_mapper_table.py printed).

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "core/util/error.h"
+
 namespace hdr4d::bench {
 namespace {
 
@@ -154,6 +156,93 @@ TEST(Tables, PerSceneTableHasAMeanLine) {
   const std::string md = PerSceneMarkdown(s.tables[1], s, Runs(), {}, t.columns[0]);
   EXPECT_NE(md.find("| s1 (3) |"), std::string::npos) << md;
   EXPECT_NE(md.find("| mean over scenes |"), std::string::npos) << md;
+}
+
+// A submission under a name no table knows: one seed on both scenes, 0.5 dB above B on s1
+// and 0.7 dB on s2, HDR metrics too.
+RunSummary Submitted(const std::string& method, const std::string& scene, double psnr,
+                     const std::string& supervision = "ldr") {
+  RunSummary r = Run(method, scene, 0, psnr, 15);
+  r.label.budget = "external";
+  r.label.supervision = supervision;
+  r.source = "submit";
+  r.run_id = "sub-" + method + scene + supervision;
+  return r;
+}
+
+TEST(Tables, EveryMethodGetsARowWhereItsLayoutFits) {
+  const Suite s = TableSuite();
+  std::vector<RunSummary> runs = Runs();
+  runs.push_back(Submitted("MyNet", "s1", 20.5));
+  runs.push_back(Submitted("MyNet", "s2", 24.7));
+  runs.push_back(Submitted("HdrOnly", "s1", 30, "hdr"));  // not a supervision of the ablation
+  const Table main = BuildTable(s.tables[0], s, runs, {});
+  ASSERT_EQ(main.rows.size(), 6u);  // A, B, Ext, D, then HdrOnly and MyNet, by name
+  const RowResult &hdr_only = main.rows[4], &mine = main.rows[5];
+  EXPECT_EQ(mine.label, "MyNet");
+  EXPECT_TRUE(mine.added && mine.external);
+  EXPECT_EQ(CoverageText(mine, main.scenes.size()), "2/2 scenes, 1 seed");
+  EXPECT_EQ(CoverageText(hdr_only, main.scenes.size()), "1/2 scenes, 1 seed");
+  EXPECT_EQ(RowName(mine, 2), "MyNet (external; 2/2 scenes, 1 seed)");
+  const std::size_t psnr = Column(main, "psnr");
+  EXPECT_NEAR(mine.cells[psnr].mean, 22.6, 1e-12);
+  EXPECT_EQ(mine.cells[psnr].expected, 2);  // its scenes x its one seed
+  // One seed: the seed test cannot decide, the test over scenes can (+0.5 and +0.7 against
+  // B's means over seeds, 20 and 24).
+  const PairedTest& t = mine.tests[psnr];
+  EXPECT_TRUE(t.testable && t.over_scenes) << t.Verdict();
+  EXPECT_EQ(t.pairs, 2);
+  EXPECT_NEAR(t.mean_difference, 0.6, 1e-12);
+  EXPECT_EQ(t.dof, 1);
+  EXPECT_NE(t.Verdict().find("scene-to-scene noise"), std::string::npos);
+  const std::string md = ToMarkdown(main);
+  EXPECT_NE(md.find("| 6 | MyNet (external; 2/2 scenes, 1 seed) | LDR |"), std::string::npos) << md;
+  EXPECT_NE(md.find("HdrOnly, MyNet: not rows of this suite's tables"), std::string::npos) << md;
+  EXPECT_NE(PairedTestsMarkdown(main).find("(over 2 scenes)"), std::string::npos);
+  const std::string csv = ToCsv(main);
+  EXPECT_NE(csv.find("external,added_row,coverage,test_over"), std::string::npos);
+  EXPECT_NE(csv.find(",1,1,\"2/2 scenes, 1 seed\",scenes"), std::string::npos) << csv;
+  // The ablation layout (HDR columns, LDR rows): MyNet fits, the HDR-supervised one does not.
+  const Table abl = BuildTable(s.tables[1], s, runs, {});
+  ASSERT_EQ(abl.rows.size(), 3u);
+  EXPECT_EQ(abl.rows[2].label, "MyNet");
+  // A suite method that no table names also gets its row; one with no runs on the table's
+  // scenes does not.
+  Suite with_c = s;
+  with_c.methods.push_back({.name = "c", .label = "C method"});
+  runs.push_back(bench::Run("c", "s1", 1, 21, 15));
+  runs.push_back(bench::Run("c", "r1", 0, 21, 15));
+  const Table m2 = BuildTable(with_c.tables[0], with_c, runs, {});
+  ASSERT_EQ(m2.rows.size(), 7u);
+  EXPECT_EQ(m2.rows[6].label, "C method");
+  EXPECT_FALSE(m2.rows[6].external);
+  EXPECT_EQ(RowName(m2.rows[6], 2), "C method (1/2 scenes, 1 seed)");
+  EXPECT_EQ(m2.rows[6].expected, 6);  // a suite method: the suite's seeds
+}
+
+TEST(Tables, MethodsSelectRowsAndUnknownNamesAreListed) {
+  const Suite s = TableSuite();
+  std::vector<RunSummary> runs = Runs();
+  runs.push_back(Submitted("MyNet", "s1", 20.5));
+  TableOptions o;
+  o.methods = {"MyNet", "A"};  // a method name and a row label
+  const Table t = BuildTable(s.tables[0], s, runs, o);
+  std::vector<std::string> labels;
+  for (const RowResult& r : t.rows) labels.push_back(r.label);
+  EXPECT_EQ(labels, (std::vector<std::string>{"A", "B", "MyNet"}));  // B: the reference stays
+  EXPECT_TRUE(HasSelectedRows(t, o));
+  EXPECT_NO_THROW(CheckRowNames(s, runs, o));
+  o.methods = {"B"};
+  EXPECT_FALSE(HasSelectedRows(BuildTable(s.tables[0], s, runs, o), o));
+  o.methods = {"MyNet", "Nope"};
+  try {
+    CheckRowNames(s, runs, o);
+    ADD_FAILURE() << "no error for an unknown name";
+  } catch (const Error& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("--methods Nope"), std::string::npos) << m;
+    EXPECT_NE(m.find("known: A, B, D, Ext, External, MyNet, a, b, d"), std::string::npos) << m;
+  }
 }
 
 }  // namespace

@@ -10,7 +10,8 @@ void AddBenchCommand(CLI::App& app) {
       "bench",
       "The benchmark harness: run suites of methods x scenes x settings x seeds into a results "
       "store, print the paper's tables, plot run time against error, write an HTML report, "
-      "stress-test numerics, score external renders, scale out with Slurm.");
+      "stress-test numerics, score external renders, compare two stores or code versions, scale out "
+      "with Slurm.");
   bench->require_subcommand(1);
   AddBenchRun(*bench);
   AddBenchTable(*bench);
@@ -18,6 +19,7 @@ void AddBenchCommand(CLI::App& app) {
   AddBenchReport(*bench);
   AddBenchStress(*bench);
   AddBenchSubmit(*bench);
+  AddBenchCompare(*bench);
   AddBenchSlurm(*bench);
 }
 

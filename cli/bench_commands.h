@@ -13,5 +13,6 @@ void AddBenchReport(CLI::App& bench);  // bench report: one HTML page
 void AddBenchStress(CLI::App& bench);  // bench stress: numerics and failure behaviour
 void AddBenchSubmit(CLI::App& bench);  // bench submit: external renders scored
 void AddBenchSlurm(CLI::App& bench);   // bench slurm, task, collect
+void AddBenchCompare(CLI::App& bench);  // bench compare: two stores or code versions
 
 }  // namespace hdr4d::cli

@@ -26,7 +26,8 @@ void AddBenchReport(CLI::App& bench) {
       "One self-contained HTML page: the suite's tables and paired tests, run time against "
       "error, per scene the renders of every method beside the ground truth with error maps, "
       "learned tone curves over time, the temporal luminance of a region, training curves, and "
-      "the stress suite's table.");
+      "the stress suite's table. Every method of the store has its rows and renders, submissions "
+      "(bench submit) marked external.");
   cmd->add_option("SUITE", a->suite, "Suite file or shipped suite name")->required()
       ->check(Text("a suite file or shipped suite name"));
   cmd->add_option("--store", a->store, "Results store")->required()
@@ -39,6 +40,11 @@ void AddBenchReport(CLI::App& bench) {
       ->check(Text("a budget label"));
   cmd->add_option("--metric", a->options.pareto_metric, "Quality metric of the time charts")->capture_default_str()
       ->check(Text("a metric key"));
+  cmd->add_option("--methods", a->options.tables.methods,
+                  "Only these rows and their renders: method names or row labels, comma-separated "
+                  "(as bench table --methods)")
+      ->delimiter(',')
+      ->check(Text("a method name or row label"));
   auto hdr_keys = std::make_shared<std::vector<std::string>>();
   cmd->add_option("--hdr-keys", *hdr_keys, "Two metric keys (PSNR,SSIM) for the tables' HDR columns")
       ->delimiter(',')

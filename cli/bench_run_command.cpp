@@ -1,10 +1,12 @@
 // `hdr4d bench run SUITE --store FILE`: every run of a suite not stored yet (benchmark/runner.h).
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <cstdint>
 #include <limits>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "benchmark/runner.h"
 #include "benchmark/suite.h"
@@ -55,6 +57,15 @@ void AddBenchRun(CLI::App& bench) {
       ->check(Integer(1));
   cmd->callback([a] {
     bench::Suite suite = bench::LoadSuite(a->suite);
+    if (a->filter.iterations > 0) {  // a shortened pass says so (the first paper pass ran 300)
+      std::vector<std::string> budgets;
+      for (const bench::Budget& b : suite.budgets) budgets.push_back(b.Label());
+      fmt::print(stderr,
+                 "bench run: --iterations {} replaces suite '{}''s budget ({}): the runs are "
+                 "labelled {}it, and `bench table` shows them with --budget {}it\n",
+                 a->filter.iterations, suite.name, fmt::join(budgets, ", "), a->filter.iterations,
+                 a->filter.iterations);
+    }
     bench::ApplyFilter(a->filter, &suite);
     a->runner.store = a->store;
     a->runner.runs_dir = a->runs_dir;

@@ -25,8 +25,9 @@ void AddBenchTable(CLI::App& bench) {
       "table",
       "The suite's tables from a results store: the layout of the paper's Tables 1-2 and the "
       "ablation Tables 4-7, means over scenes with the spread over seeds, best per column marked, "
-      "and paired tests against each table's reference row. Markdown on stdout, or with --out "
-      "every table as .md, .tex and .csv.");
+      "and paired tests against each table's reference row. Every method of the store gets a row in "
+      "each table whose layout it fits (submissions marked external, with their coverage). "
+      "Markdown on stdout, or with --out every table as .md, .tex and .csv.");
   cmd->add_option("SUITE", a->suite, "Suite file or shipped suite name")->required()
       ->check(Text("a suite file or shipped suite name"));
   cmd->add_option("--store", a->store, "Results store")->required()
@@ -56,6 +57,12 @@ void AddBenchTable(CLI::App& bench) {
     if (hdr_keys->size() == 2)
       a->options.tables.hdr_psnr_key = (*hdr_keys)[0], a->options.tables.hdr_ssim_key = (*hdr_keys)[1];
   });
+  cmd->add_option("--methods", a->options.tables.methods,
+                  "Only these rows: method names or row labels, comma-separated (the reference "
+                  "row stays for the paired tests; a table with none of them is left out; an "
+                  "unknown name is an error listing the known ones)")
+      ->delimiter(',')
+      ->check(Text("a method name or row label"));
   cmd->add_flag("--all-metrics", a->options.all_metrics, "Also a table of every metric key the runs have");
   cmd->add_flag("--per-scene", a->options.per_scene, "Also per-scene tables of each quality column");
   cmd->callback([a] {

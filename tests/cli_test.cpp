@@ -24,7 +24,8 @@ TEST(Cli, HelpListsEverySubcommand) {
     EXPECT_EQ(RunHdr4d(std::string(name) + " --help").exit_code, 0) << name;
   }
   const auto bench = RunHdr4d("bench --help");
-  for (const char* name : {"run", "table", "pareto", "report", "stress", "submit", "slurm", "collect"}) {
+  for (const char* name : {"run", "table", "pareto", "report", "stress", "submit", "compare", "slurm",
+                           "collect"}) {
     EXPECT_NE(bench.out.find(name), std::string::npos) << name;
     EXPECT_EQ(RunHdr4d(std::string("bench ") + name + " --help").exit_code, 0) << name;
   }
