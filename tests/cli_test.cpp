@@ -160,6 +160,13 @@ TEST(Cli, TrainRenderEvalExport) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(testing::ReadTextFile(dir / "slice.ply").rfind("ply\nformat binary_little_endian", 0),
             0u);
+  // LDR colours have no exposure: --exposure and --hdr are refused, not ignored (issue 56).
+  for (const char* flag : {"--exposure 2", "--hdr"}) {
+    r = RunHdr4d("export-ply --run " + run + " " + flag + " --out " + (dir / "e.ply").string());
+    EXPECT_EQ(r.exit_code, 1) << flag;
+    EXPECT_NE(r.err.find("has LDR colours"), std::string::npos) << flag << ": " << r.err;
+    EXPECT_FALSE(fs::exists(dir / "e.ply")) << flag;
+  }
   // An HDR head for an LDR-alone run of a scene without HDR truth: refused, the run untouched.
   const std::string ldr_run = (dir / "ldr").string();
   r = RunHdr4d("train --data " + scene + " --out " + ldr_run +

@@ -35,6 +35,16 @@ double Psnr3(const Image& a, const Image& b) {
   return mse > 0 ? 10 * std::log10(1 / mse) : 99;
 }
 
+// Standard deviation of the first three channels: a blank image would match a blank screenshot.
+double Spread(const Image& a) {
+  double sum = 0, sum2 = 0;
+  const double n = 3.0 * a.width() * a.height();
+  for (int y = 0; y < a.height(); ++y)
+    for (int x = 0; x < a.width(); ++x)
+      for (int c = 0; c < 3; ++c) sum += a.at(x, y, c), sum2 += a.at(x, y, c) * a.at(x, y, c);
+  return std::sqrt(std::max(sum2 / n - (sum / n) * (sum / n), 0.0));
+}
+
 // One trained run for every test here (training is the slow part).
 class ViewerCli : public ::testing::Test {
  protected:
@@ -92,6 +102,7 @@ TEST_F(ViewerCli, HdrPlyRoundTripsToTheRunsHdrRender) {
   EXPECT_GT(peak, 0.0);
   // The same Gaussians in float through an eigen-decomposition: 1e-4 of the peak at most.
   EXPECT_LT(max_error, 1e-4 * peak) << "max error " << max_error << ", peak " << peak;
+  std::printf("HDR .ply read back vs hdr4d render: max error %.3g of peak %.3g\n", max_error, peak);
   // The plain export refuses what it cannot honour: the HDR columns of an LDR-colour run are
   // tested in method/; here --exposure is honoured (a different exposure, a different DC).
   r = RunHdr4d(fmt::format("export-ply --run {} --time {} --exposure 8 --out {}", run(), kTime,
@@ -99,11 +110,34 @@ TEST_F(ViewerCli, HdrPlyRoundTripsToTheRunsHdrRender) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
 }
 
+// A screenshot of `page` in headless Chromium at the test camera 0, kTime, `exposure` and `mode`,
+// cropped to `width` x `height` (the window is larger: headless Chromium's smallest window; the
+// page puts the canvas at the top-left corner). Empty when Chromium failed.
+constexpr const char* kChromium = "/usr/bin/chromium";
+Image Screenshot(const fs::path& page, const std::string& mode, int width, int height,
+                 double exposure = kExposure) {
+  const fs::path shot = page.parent_path() / fmt::format("shot_{}.png", mode);
+  const std::string command = fmt::format(
+      "timeout 120 {} --headless --no-sandbox --use-gl=swiftshader --enable-unsafe-swiftshader "
+      "--hide-scrollbars --force-device-scale-factor=1 --window-size=400,400 "
+      "--screenshot={} 'file://{}#camera=test:0&time={}&exposure={}&mode={}&ui=0' >/dev/null 2>&1",
+      kChromium, shot.string(), fs::absolute(page).string(), kTime, exposure, mode);
+  if (std::system(command.c_str()) != 0) {
+    ADD_FAILURE() << command;
+    return {};
+  }
+  const Image full = ReadImage(shot);
+  Image got(width, height, 3, Encoding::kSrgb);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x)
+      for (int c = 0; c < 3; ++c) got.at(x, y, c) = full.at(x, y, c);
+  return got;
+}
+
 // Screenshots of the page at the test camera, time and exposure, LDR and HDR, against the run's
 // own renders of that view: 25 dB at least (issue 56); measured values are printed.
 TEST_F(ViewerCli, PageInHeadlessChromiumMatchesTheRunsRender) {
-  const char* chromium = "/usr/bin/chromium";
-  if (!fs::exists(chromium)) GTEST_SKIP() << "no " << chromium << ": the viewer's browser test needs Chromium";
+  if (!fs::exists(kChromium)) GTEST_SKIP() << "no " << kChromium << ": the viewer's browser test needs Chromium";
   const fs::path page = *dir_ / "view.html";
   auto r = RunHdr4d("view " + run() + " --out " + page.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -115,25 +149,43 @@ TEST_F(ViewerCli, PageInHeadlessChromiumMatchesTheRunsRender) {
       for (int c = 0; c < 3; ++c)
         hdr_want.at(x, y, c) = LinearToSrgb(std::clamp(float(hdr.at(x, y, c) * kExposure), 0.0f, 1.0f));
   for (const char* mode : {"ldr", "hdr"}) {
-    const fs::path shot = *dir_ / fmt::format("shot_{}.png", mode);
-    // The window is larger than the image (headless Chromium's smallest window); the page puts
-    // the canvas at the top-left corner and the comparison crops it.
-    const std::string command = fmt::format(
-        "timeout 120 {} --headless --no-sandbox --use-gl=swiftshader --enable-unsafe-swiftshader "
-        "--hide-scrollbars --force-device-scale-factor=1 --window-size=400,400 "
-        "--screenshot={} 'file://{}#camera=test:0&time={}&exposure={}&mode={}&ui=0' >/dev/null 2>&1",
-        chromium, shot.string(), fs::absolute(page).string(), kTime, kExposure, mode);
-    ASSERT_EQ(std::system(command.c_str()), 0) << command;
-    const Image full = ReadImage(shot);
     const Image& want = std::string(mode) == "ldr" ? ldr_want : hdr_want;
-    Image got(want.width(), want.height(), 3, Encoding::kSrgb);
-    for (int y = 0; y < want.height(); ++y)
-      for (int x = 0; x < want.width(); ++x)
-        for (int c = 0; c < 3; ++c) got.at(x, y, c) = full.at(x, y, c);
+    const Image got = Screenshot(page, mode, want.width(), want.height());
+    ASSERT_FALSE(got.empty());
+    EXPECT_GT(Spread(want), 0.02) << mode << ": the render is blank";
     const double psnr = Psnr3(got, want);
     std::printf("viewer %s screenshot vs hdr4d render: %.2f dB\n", mode, psnr);
     EXPECT_GE(psnr, 25.0) << mode;
   }
+  // The page honours the exposure: three stops more is far from this render.
+  const Image brighter = Screenshot(page, "ldr", ldr_want.width(), ldr_want.height(), 8 * kExposure);
+  ASSERT_FALSE(brighter.empty());
+  const double psnr_brighter = Psnr3(brighter, ldr_want);
+  std::printf("viewer ldr screenshot at 8x the exposure vs hdr4d render: %.2f dB\n", psnr_brighter);
+  EXPECT_LT(psnr_brighter, Psnr3(Screenshot(page, "ldr", ldr_want.width(), ldr_want.height()), ldr_want) - 6);
+}
+
+// A run with LDR colours (plain 4DGS): the page's LDR mode shows its colours as `render` does.
+TEST(ViewerCliLdr, LdrColourRunPageMatchesTheRunsRender) {
+  if (!fs::exists(kChromium)) GTEST_SKIP() << "no " << kChromium << ": the viewer's browser test needs Chromium";
+  testing::TempDir dir;
+  const std::string scene = (dir / "scene").string(), run = (dir / "run").string();
+  auto r = RunHdr4d("make-gaussian-scene --out " + scene + " --size 32 --gaussians 10 --cameras 4 --timestamps 3");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = RunHdr4d("train --data " + scene + " --out " + run + " --iterations 60 --random-points 500 --seed 2");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = RunHdr4d(fmt::format("render --run {} --split test --camera 0 --time {} --out {}", run, kTime,
+                           (dir / "render").string()));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = RunHdr4d("view " + run + " --out " + (dir / "view.html").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Image want = ReadImage(dir / "render" / fmt::format("test_cam000_t{:.4f}.png", kTime));
+  const Image got = Screenshot(dir / "view.html", "ldr", want.width(), want.height());
+  ASSERT_FALSE(got.empty());
+  EXPECT_GT(Spread(want), 0.02) << "the render is blank";
+  const double psnr = Psnr3(got, want);
+  std::printf("viewer screenshot of an LDR-colour run vs hdr4d render: %.2f dB\n", psnr);
+  EXPECT_GE(psnr, 25.0);
 }
 
 }  // namespace

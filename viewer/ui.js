@@ -65,6 +65,10 @@
     };
     const count = S.buildFrame(model, view, frame);
     renderer.draw(frame, count, state.camera, background(), hdr, state.exposure);
+    // Small cameras are shown enlarged (not in the bare view, whose pixels are the camera's).
+    const canvas = $('view');
+    canvas.style.width = document.body.classList.contains('bare') ? ''
+      : `${Math.max(state.camera.width, Math.min(640, 4 * state.camera.width))}px`;
     $('status').textContent = `${count} of ${model.n} Gaussians, ${(performance.now() - start).toFixed(0)} ms`;
     document.title = `${data.title} (t ${state.time.toFixed(3)})`;
   }
