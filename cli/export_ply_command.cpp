@@ -58,7 +58,13 @@ void Export(const ExportFlags& f) {
   }
   if (!(f.time >= 0 && f.time <= 1)) Fail("export-ply: --time {} is outside [0, 1]", f.time);
   const double e = f.exposure > 0 ? f.exposure : method::MedianExposure(loaded.dataset);
-  const method::ExportDisplay display{loaded.tone_mapper.get(),
+  // With --hdr the display columns are secondary: a whole-image mapper (Durand), which cannot map
+  // Gaussians, gives way to exposure x radiance as sRGB there instead of refusing the file.
+  const bool whole_image = loaded.tone_mapper && !loaded.tone_mapper->pointwise();
+  if (f.hdr && whole_image)
+    fmt::print("export-ply: the '{}' tone mapper maps whole images; display columns are exposure x "
+               "radiance as sRGB\n", loaded.tone_mapper->config().kind);
+  const method::ExportDisplay display{f.hdr && whole_image ? nullptr : loaded.tone_mapper.get(),
                                       {method::RadianceBank::TimeIndex(f.time, loaded.num_times),
                                        -1, static_cast<float>(std::log(e))}};
   method::HdrPlyExtension hdr{e_lo, e_hi, loaded.learned_background.value_or(std::vector<float>{}),
@@ -77,10 +83,10 @@ void AddExportPlyCommand(CLI::App& app) {
       "export-ply",
       "Write the 3D Gaussians a trained model shows at normalised time t as a standard 3DGS .ply "
       "for any 3DGS viewer: temporal colour and marginal folded in at t. LDR-colour models: their "
-      "SH coefficients, view dependence included. Log-HDR models: each Gaussian's "
-      "view-independent colour tone-mapped at --exposure (run's tone mapper, else exposure x "
-      "radiance as sRGB) as f_dc, f_rest zero (the view dependence does not survive the "
-      "nonlinear map); --hdr adds the exact log-radiance SH in extra columns. --dynamic writes "
+      "SH coefficients, view dependence included. Log-HDR models: each Gaussian's colour "
+      "tone-mapped at --exposure and t (run's tone mapper, else exposure x radiance as sRGB) in "
+      "64 directions, fitted with SH of the model's degree (f_dc, f_rest); --hdr adds the exact "
+      "log-radiance SH in extra columns. --dynamic writes "
       "the 4D model itself. Layouts: docs/hdr-ply.md");
   cmd->add_option("--run", flags->run, "Run folder (from hdr4d train)")
       ->required()

@@ -19,7 +19,7 @@ TEST(Cli, HelpListsEverySubcommand) {
   const auto r = RunHdr4d("--help");
   EXPECT_EQ(r.exit_code, 0);
   for (const char* name : {"dataset", "eval", "synth-ldr", "make-demo-scene", "merge-hdr",
-                           "make-gaussian-scene", "train", "render", "export-ply", "bench"}) {
+                           "make-gaussian-scene", "train", "render", "export-ply", "view", "bench"}) {
     EXPECT_NE(r.out.find(name), std::string::npos) << name;
     EXPECT_EQ(RunHdr4d(std::string(name) + " --help").exit_code, 0) << name;
   }

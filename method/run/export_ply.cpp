@@ -2,8 +2,10 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <optional>
 #include <string>
 #include <vector>
@@ -12,6 +14,7 @@
 #include "core/image/image.h"
 #include "core/util/error.h"
 #include "method/gaussian/constants.h"
+#include "method/gaussian/sh4d.h"
 #include "method/run/slice3d.h"
 
 namespace hdr4d::method {
@@ -61,9 +64,9 @@ std::vector<std::string> Columns(int rest_per_channel, bool hdr) {
 }
 
 // Gaussian i's row. `sh` holds its colour coefficients at the slice time (FoldedShCoefficients,
-// coefficient-major); a log-HDR model's display columns get the DC alone (mapped later,
-// MapDcToDisplay) and its extension columns the log-radiance SH, with the HDR head's log offset
-// `head_log` added to the DC.
+// coefficient-major); a log-HDR model's display columns get them too (replaced by the display
+// fit, FitDisplaySh) and its extension columns the log-radiance SH, with the HDR head's log
+// offset `head_log` added to the DC.
 void AppendRow(const GaussianModel& model,
                std::size_t i,
                const Slice3D& slice,
@@ -71,14 +74,13 @@ void AppendRow(const GaussianModel& model,
                const double* head_log,
                bool hdr,
                std::vector<float>* row) {
-  const bool log_hdr = model.color_mode != ColorMode::kLdr;
   const int functions = model.basis.sh_functions();
   for (int a = 0; a < 3; ++a) row->push_back(static_cast<float>(slice.mean[a]));
   for (int a = 0; a < 3; ++a) row->push_back(0.0f);  // normals (unused by viewers)
   for (int c = 0; c < 3; ++c) row->push_back(static_cast<float>(sh[c]));
   for (int c = 0; c < 3; ++c)
     for (int lm = 1; lm < functions; ++lm)
-      row->push_back(log_hdr ? 0.0f : static_cast<float>(sh[lm * 3 + c]));
+      row->push_back(static_cast<float>(sh[lm * 3 + c]));
   const double opacity =
       std::clamp(slice.marginal / (1.0 + std::exp(-static_cast<double>(model.opacity_logit[i]))),
                  1e-7, 1 - 1e-7);
@@ -93,24 +95,73 @@ void AppendRow(const GaussianModel& model,
     for (int lm = 1; lm < functions; ++lm) row->push_back(static_cast<float>(sh[lm * 3 + c]));
 }
 
-// A log-HDR model's display DC (columns 6..8 of each row): log-HDR colour -> display colour ->
-// the DC coefficient of that colour.
-void MapDcToDisplay(const ExportDisplay& display, std::size_t width, std::vector<float>* rows) {
-  const std::size_t n = rows->size() / width;
-  std::vector<float> log_hdr(n * 3), ldr(n * 3);
-  for (std::size_t r = 0; r < n; ++r)
-    for (int c = 0; c < 3; ++c) log_hdr[r * 3 + c] = kShC0 * (*rows)[r * width + 6 + c] + kColorOffset;
-  if (display.tone_mapper) {
-    display.tone_mapper->BeginFrame(display.frame);
-    display.tone_mapper->Map(log_hdr.data(), n, ldr.data());
-  } else {
-    const float exposure = std::exp(display.frame.log_exposure);
-    for (std::size_t k = 0; k < ldr.size(); ++k)
-      ldr[k] =
-          LinearToSrgb(std::clamp(std::exp(std::min(log_hdr[k], 30.0f)) * exposure, 0.0f, 1.0f));
+// Unit directions spread evenly over the sphere (a Fibonacci lattice).
+std::vector<Vec3<double>> SphereDirections(int n) {
+  std::vector<Vec3<double>> d;
+  const double golden = std::numbers::pi * (3 - std::sqrt(5.0));
+  for (int k = 0; k < n; ++k) {
+    const double z = 1 - 2 * (k + 0.5) / n, r = std::sqrt(std::max(0.0, 1 - z * z));
+    d.emplace_back(r * std::cos(golden * k), r * std::sin(golden * k), z);
   }
-  for (std::size_t r = 0; r < n; ++r)
-    for (int c = 0; c < 3; ++c) (*rows)[r * width + 6 + c] = (ldr[r * 3 + c] - kColorOffset) / kShC0;
+  return d;
+}
+
+// Display colours of log-HDR values: the run's tone mapper at the frame, or exposure x radiance
+// as sRGB.
+void ToDisplay(const ExportDisplay& display, const std::vector<float>& log_hdr, std::vector<float>* ldr) {
+  ldr->resize(log_hdr.size());
+  if (display.tone_mapper) {
+    display.tone_mapper->Map(log_hdr.data(), log_hdr.size() / 3, ldr->data());
+    return;
+  }
+  const float exposure = std::exp(display.frame.log_exposure);
+  for (std::size_t k = 0; k < ldr->size(); ++k)
+    (*ldr)[k] = LinearToSrgb(std::clamp(std::exp(std::min(log_hdr[k], 30.0f)) * exposure, 0.0f, 1.0f));
+}
+
+// A log-HDR model's display columns (6 .. 9 + 3 (F-1) of each row, holding its log-HDR SH): its
+// view-dependent log-HDR colour at kFitDirections directions through the display map, fitted by
+// least squares with SH of the same degree, so a 3DGS viewer shows the tone-mapped colour and
+// its view dependence (exact for a view-independent colour, close for a smooth one).
+void FitDisplaySh(const ExportDisplay& display, std::size_t width, int sh_degree,
+                  std::vector<float>* rows) {
+  constexpr int kFitDirections = 64;
+  const int f = (sh_degree + 1) * (sh_degree + 1);
+  const std::vector<Vec3<double>> dirs = SphereDirections(kFitDirections);
+  Eigen::MatrixXd y(kFitDirections, f);
+  double basis[16];
+  for (int k = 0; k < kFitDirections; ++k) {
+    EvalShBasis(dirs[k], sh_degree, basis);
+    for (int lm = 0; lm < f; ++lm) y(k, lm) = basis[lm];
+  }
+  const Eigen::MatrixXd fit = y.completeOrthogonalDecomposition().pseudoInverse();  // f x N
+  if (display.tone_mapper) display.tone_mapper->BeginFrame(display.frame);
+  const std::size_t n = rows->size() / width;
+  auto coef = [&](std::size_t r, int lm, int c) -> float& {
+    return (*rows)[r * width + (lm == 0 ? 6 + c : 9 + c * (f - 1) + lm - 1)];
+  };
+  std::vector<float> log_hdr, ldr;
+  constexpr std::size_t kChunk = 4096;  // rows per batch: bounded memory on large models
+  for (std::size_t r0 = 0; r0 < n; r0 += kChunk) {
+    const std::size_t r1 = std::min(n, r0 + kChunk);
+    log_hdr.assign((r1 - r0) * kFitDirections * 3, 0.0f);
+    for (std::size_t r = r0; r < r1; ++r)
+      for (int k = 0; k < kFitDirections; ++k)
+        for (int c = 0; c < 3; ++c) {
+          double v = kColorOffset;
+          for (int lm = 0; lm < f; ++lm) v += y(k, lm) * coef(r, lm, c);
+          log_hdr[((r - r0) * kFitDirections + k) * 3 + c] = static_cast<float>(v);
+        }
+    ToDisplay(display, log_hdr, &ldr);
+    for (std::size_t r = r0; r < r1; ++r)
+      for (int c = 0; c < 3; ++c)
+        for (int lm = 0; lm < f; ++lm) {
+          double v = 0;
+          for (int k = 0; k < kFitDirections; ++k)
+            v += fit(lm, k) * (ldr[((r - r0) * kFitDirections + k) * 3 + c] - kColorOffset);
+          coef(r, lm, c) = static_cast<float>(v);
+        }
+  }
 }
 
 // The header; the HDR extension's comments say what its columns hold and the scene's range.
@@ -124,8 +175,8 @@ std::string PlyHeader(std::size_t vertices,
         "comment hdr4d-hdr-ply 1: 3DGS layout plus f_hdr_dc_0..2 and f_hdr_rest_* (channel-major "
         "like f_rest): SH coefficients (3DGS order and constants) of the natural log of linear "
         "radiance, radiance(d) = exp(0.5 + sum_lm Y_lm(d) f_hdr_lm), d the unit direction from the "
-        "camera centre to the mean; f_dc/f_rest are display colours (tone-mapped DC, no view "
-        "dependence)\n";
+        "camera centre to the mean; f_dc/f_rest are display colours (the tone-mapped colour "
+        "fitted with SH over 64 directions)\n";
     header += fmt::format("comment hdr4d-time {} (slice: temporal colour and marginal folded in)\n",
                           time);
     header += fmt::format(
@@ -170,7 +221,7 @@ std::size_t ExportSlicePly(const GaussianModel& model,
     AppendRow(model, i, *slice, sh, head_log, hdr != nullptr, &rows);
     ++written;
   }
-  if (log_hdr && written > 0) MapDcToDisplay(*display, columns.size(), &rows);
+  if (log_hdr && written > 0) FitDisplaySh(*display, columns.size(), model.basis.max_sh_degree, &rows);
   // Background: the HDR head's offsets and factor apply to the backdrop's HDR as well.
   HdrPlyExtension stated = hdr ? *hdr : HdrPlyExtension{};
   if (hdr && head && stated.background_log_radiance.size() == 3) {
