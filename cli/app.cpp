@@ -130,6 +130,7 @@ std::unique_ptr<CLI::App> MakeApp() {
   AddTrainCommand(*app);
   AddRenderCommand(*app);
   AddExportPlyCommand(*app);
+  AddViewCommand(*app);
   AddToneCurvesCommand(*app);
   AddDatagenCommand(*app);
   AddCalibrateCommand(*app);

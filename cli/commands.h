@@ -15,6 +15,7 @@ void AddTrainCommand(CLI::App& app);          // train
 void AddRenderCommand(CLI::App& app);         // render
 void AddGaussianSceneCommand(CLI::App& app);  // make-gaussian-scene
 void AddExportPlyCommand(CLI::App& app);      // export-ply
+void AddViewCommand(CLI::App& app);           // view RUN
 void AddToneCurvesCommand(CLI::App& app);     // tone-curves
 void AddDatagenCommand(CLI::App& app);        // datagen
 void AddBenchCommand(CLI::App& app);          // bench run|table|pareto|report|stress|submit|...

@@ -19,7 +19,7 @@ TEST(Cli, HelpListsEverySubcommand) {
   const auto r = RunHdr4d("--help");
   EXPECT_EQ(r.exit_code, 0);
   for (const char* name : {"dataset", "eval", "synth-ldr", "make-demo-scene", "merge-hdr",
-                           "make-gaussian-scene", "train", "render", "export-ply", "bench"}) {
+                           "make-gaussian-scene", "train", "render", "export-ply", "view", "bench"}) {
     EXPECT_NE(r.out.find(name), std::string::npos) << name;
     EXPECT_EQ(RunHdr4d(std::string(name) + " --help").exit_code, 0) << name;
   }
@@ -161,6 +161,13 @@ TEST(Cli, TrainRenderEvalExport) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(testing::ReadTextFile(dir / "slice.ply").rfind("ply\nformat binary_little_endian", 0),
             0u);
+  // LDR colours have no exposure: --exposure and --hdr are refused, not ignored (issue 56).
+  for (const char* flag : {"--exposure 2", "--hdr"}) {
+    r = RunHdr4d("export-ply --run " + run + " " + flag + " --out " + (dir / "e.ply").string());
+    EXPECT_EQ(r.exit_code, 1) << flag;
+    EXPECT_NE(r.err.find("has LDR colours"), std::string::npos) << flag << ": " << r.err;
+    EXPECT_FALSE(fs::exists(dir / "e.ply")) << flag;
+  }
   // An HDR head for an LDR-alone run of a scene without HDR truth: refused, the run untouched.
   const std::string ldr_run = (dir / "ldr").string();
   r = RunHdr4d("train --data " + scene + " --out " + ldr_run +

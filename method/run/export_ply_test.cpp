@@ -84,7 +84,28 @@ TEST(ExportPly, LogHdrModelsNeedADisplayMapping) {
   const Ply p = Read(dir / "b.ply");
   const float expected = LinearToSrgb(std::exp(0.5f) * 0.25f);
   EXPECT_NEAR(p.values[6] * kShC0 + kColorOffset, expected, 1e-5f);
-  EXPECT_EQ(p.values[9], 0.0f);  // view-dependent terms do not survive the map
+  for (int k = 9; k < 54; ++k) EXPECT_NEAR(p.values[k], 0.0f, 1e-5f) << k;  // no view dependence
+}
+
+// A view-dependent log-HDR colour keeps its view dependence in the display columns: the fitted
+// SH give, in each direction, close to the display colour of the log-HDR colour there.
+TEST(ExportPly, LogHdrViewDependenceIsFittedInTheDisplayColumns) {
+  testing::TempDir dir;
+  GaussianModel m = TwoGaussians();
+  m.color_mode = ColorMode::kLogHdr;
+  m.color_dc.assign(m.color_dc.size(), 0.0f);
+  m.color_rest[(2 - 1) * 3 + 0] = 0.4f;  // red: + 0.4 Y_10 = 0.4 C1 z
+  const ExportDisplay display{nullptr, {0, -1, std::log(0.25f)}};
+  ASSERT_EQ(ExportSlicePly(m, 0.5f, 1.0f, dir / "v.ply", &display), 1u);
+  const Ply p = Read(dir / "v.ply");
+  const float c1 = 0.4886025f;
+  for (float z : {-1.0f, 0.0f, 1.0f}) {
+    const float want = LinearToSrgb(std::exp(0.5f + 0.4f * c1 * z) * 0.25f);
+    // Red's SH: DC at 6, degree 1 at 9 (y), 10 (z), 11 (x) with the 3DGS signs.
+    const float got = kColorOffset + kShC0 * p.values[6] + c1 * z * p.values[10];
+    EXPECT_NEAR(got, want, 0.01f) << "z " << z;
+  }
+  EXPECT_GT(std::abs(p.values[10]), 0.05f);  // the view dependence is there
 }
 
 }  // namespace
