@@ -42,11 +42,14 @@ void AppendGeometry(const CalibrationRecord& record, std::string& md, nlohmann::
 
 void AppendCameraAgreement(const CalibrationRecord& record, std::string& md, nlohmann::json& doc) {
   const CameraGains& g = *record.gains;
-  md += fmt::format("### Camera agreement\n\nOn {} sparse points seen by two or more cameras (first "
-                    "frame), the cameras' HDR differed from the points' mean by {:.1f}% (median) "
+  md += fmt::format("### Camera agreement\n\nOn {} sparse points seen by two or more cameras ({}), "
+                    "the cameras' HDR differed from the points' mean by {:.1f}% (median) "
                     "before the per-camera gains and {:.1f}% after{}.\n\n| camera | gain R | G | B |\n"
                     "|---|---|---|---|\n",
-                    g.points_used, 100 * g.disagreement_before, 100 * g.disagreement_after,
+                    g.points_used,
+                    g.from_static_images ? "their static images, in the first frame's HDR units"
+                                         : "the first frame's fused HDR",
+                    100 * g.disagreement_before, 100 * g.disagreement_after,
                     record.gains_applied ? " (applied to hdr/, the mean gain folded into `exposures`)"
                                          : " (not applied: --no-gain-correction)");
   for (std::size_t c = 0; c < g.gain.size() && c < record.rig->cameras.size(); ++c)
@@ -54,6 +57,7 @@ void AppendCameraAgreement(const CalibrationRecord& record, std::string& md, nlo
                       g.gain[c][0], g.gain[c][1], g.gain[c][2]);
   md += "\n";
   doc["camera_agreement"] = {{"points", g.points_used},
+                             {"sampled_in", g.from_static_images ? "static images" : "first frame"},
                              {"disagreement_before", g.disagreement_before},
                              {"disagreement_after", g.disagreement_after},
                              {"gains", g.gain}};

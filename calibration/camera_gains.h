@@ -18,6 +18,8 @@ struct CameraGains {
   // after dividing by the gains.
   double disagreement_before = 0, disagreement_after = 0;
   int points_used = 0;
+  // Sampled in the static images (the empty scene) rather than the first frame's fused HDR.
+  bool from_static_images = false;
   double Mean(int camera) const;  // mean of the three channel gains
 };
 

@@ -167,13 +167,16 @@ void CompareResponse(const fs::path& calibrated, const fs::path& truth, TruthCom
   out->response = true;
   for (int ch = 0; ch < 3; ++ch) {
     double max = 0, sum = 0;
+    int codes = 0;
     for (int z = kFirstCode; z <= kLastCode; ++z) {
+      if (!(expected[z][ch] > 0)) continue;  // at or below a black pedestal: no exposure to compare
       const double rel = recovered[z][ch] / expected[z][ch] - 1;
       max = std::max(max, std::abs(rel));
       sum += rel * rel;
+      ++codes;
     }
     out->response_max_relative[ch] = max;
-    out->response_rms_relative[ch] = std::sqrt(sum / (kLastCode - kFirstCode + 1));
+    out->response_rms_relative[ch] = codes > 0 ? std::sqrt(sum / codes) : 0.0;
   }
 }
 
@@ -182,6 +185,58 @@ struct HdrPair {
   fs::path calibrated, truth;
   const TruthCamera* truth_camera;
 };
+
+// The log-log slope of calibrated against true radiance (per channel means removed, one least-
+// squares fit over every measured value), and each camera's own scale: the median over its
+// values of scale x calibrated / truth per channel, and how far the cameras' scales spread
+// from their median (what gains should have made agree).
+void CompareHdrSlopeAndCameras(const std::vector<HdrPair>& pairs,
+                               const std::vector<std::pair<Image, Image>>& images,
+                               const std::vector<std::vector<char>>& measured, TruthComparison* out) {
+  std::array<double, 3> mean_t{}, mean_c{};
+  std::array<long, 3> n{};
+  std::vector<std::array<std::vector<double>, 3>> ratio(out->cameras.size());
+  for (int pass = 0; pass < 2; ++pass) {
+    double sxy = 0, sxx = 0;
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+      const auto& [cal, tru] = images[k];
+      for (std::size_t i = 0; i < cal.num_pixels(); ++i) {
+        if (!measured[k][i]) continue;
+        for (int ch = 0; ch < 3; ++ch) {
+          const double t = std::log(tru.data()[3 * i + ch]), c = std::log(cal.data()[3 * i + ch]);
+          if (pass == 0) {
+            mean_t[ch] += t;
+            mean_c[ch] += c;
+            ++n[ch];
+            ratio[pairs[k].camera][ch].push_back(std::exp(c - t) * out->hdr_scale[ch]);
+          } else {
+            sxy += (t - mean_t[ch]) * (c - mean_c[ch]);
+            sxx += (t - mean_t[ch]) * (t - mean_t[ch]);
+          }
+        }
+      }
+    }
+    if (pass == 0) {
+      for (int ch = 0; ch < 3; ++ch) {
+        mean_t[ch] /= std::max(n[ch], 1L);
+        mean_c[ch] /= std::max(n[ch], 1L);
+      }
+    } else {
+      out->hdr_loglog_slope = sxx > 0 ? sxy / sxx : 0.0;
+    }
+  }
+  double spread = 0;
+  for (int ch = 0; ch < 3; ++ch) {
+    std::vector<double> scales;
+    for (std::size_t c = 0; c < ratio.size(); ++c)
+      if (!ratio[c][ch].empty()) scales.push_back(out->cameras[c].hdr_scale[ch] = Quantile(&ratio[c][ch], 0.5));
+    if (scales.size() < 2) continue;
+    std::vector<double> sorted = scales;
+    const double median = Quantile(&sorted, 0.5);
+    for (double s : scales) spread = std::max(spread, std::abs(s / median - 1));
+  }
+  out->hdr_camera_disagreement = spread;
+}
 
 void CompareHdr(const std::vector<HdrPair>& pairs, TruthComparison* out) {
   // Pass 1: the scale per channel, the median of truth / calibrated over measured pixels.
@@ -221,6 +276,7 @@ void CompareHdr(const std::vector<HdrPair>& pairs, TruthComparison* out) {
   for (int ch = 0; ch < 3; ++ch) out->hdr_scale[ch] = Quantile(&ratios[ch], 0.5);
   // Pass 2: relative errors.
   std::vector<double> all;
+  std::vector<std::pair<double, double>> by_radiance;  // (true luminance-free value, error)
   std::vector<std::vector<double>> per_camera(out->cameras.size());
   for (std::size_t k = 0; k < pairs.size(); ++k) {
     const auto& [cal, tru] = images[k];
@@ -230,6 +286,7 @@ void CompareHdr(const std::vector<HdrPair>& pairs, TruthComparison* out) {
         const double t = tru.data()[3 * i + ch];
         const double rel = std::abs(out->hdr_scale[ch] * cal.data()[3 * i + ch] - t) / t;
         all.push_back(rel);
+        by_radiance.emplace_back(t / out->hdr_scale[ch], rel);
         per_camera[pairs[k].camera].push_back(rel);
       }
     }
@@ -242,6 +299,12 @@ void CompareHdr(const std::vector<HdrPair>& pairs, TruthComparison* out) {
       static_cast<double>(std::count_if(all.begin(), all.end(), [](double r) { return r <= 0.1; })) /
       static_cast<double>(all.size());
   out->hdr_median_relative = Quantile(&all, 0.5);
+  // The shadows: the darkest fifth of the measured values (in the calibrated scale of each
+  // channel, so that a colour cast does not pick one channel).
+  std::sort(by_radiance.begin(), by_radiance.end());
+  std::vector<double> dark;
+  for (std::size_t i = 0; i < by_radiance.size() / 5; ++i) dark.push_back(by_radiance[i].second);
+  out->hdr_dark_median_relative = dark.empty() ? 0.0 : Quantile(&dark, 0.5);
   out->hdr_p90_relative = Quantile(&all, 0.9);
   for (std::size_t c = 0; c < per_camera.size(); ++c) {
     if (per_camera[c].empty()) continue;
@@ -249,6 +312,7 @@ void CompareHdr(const std::vector<HdrPair>& pairs, TruthComparison* out) {
     out->cameras[c].hdr_values = static_cast<long>(per_camera[c].size());
     out->cameras[c].hdr_median_relative = Quantile(&per_camera[c], 0.5);
   }
+  CompareHdrSlopeAndCameras(pairs, images, measured, out);
 }
 
 }  // namespace
@@ -362,6 +426,7 @@ json TruthComparisonJson(const TruthComparison& c) {
     }
     if (e.hdr) {
       j["hdr_median_relative_error"] = e.hdr_median_relative;
+      j["hdr_scale_against_truth"] = e.hdr_scale;
       j["hdr_values"] = e.hdr_values;
     }
     cameras.push_back(j);
@@ -389,6 +454,12 @@ json TruthComparisonJson(const TruthComparison& c) {
                   {"median_relative_error", c.hdr_median_relative},
                   {"p90_relative_error", c.hdr_p90_relative},
                   {"within_10_percent", c.hdr_within_10_percent},
+                  {"loglog_slope", c.hdr_loglog_slope},
+                  {"dark_fifth_median_relative_error", c.hdr_dark_median_relative},
+                  {"camera_disagreement", c.hdr_camera_disagreement},
+                  {"camera_disagreement_definition",
+                   "max over cameras and channels of |camera scale / median camera scale - 1|, a "
+                   "camera's scale the median of calibrated / true radiance over its values"},
                   {"excluded_pixel_fraction", c.hdr_excluded_fraction}};
   }
   return out;
@@ -428,10 +499,13 @@ std::string TruthComparisonMarkdown(const TruthComparison& c) {
     md += fmt::format(
         "- fused HDR vs rendered EXR ({} frames, {} values, one scale per channel {:.4g} {:.4g} "
         "{:.4g}): median relative error {:.1f}%, 90th percentile {:.1f}%, {:.1f}% of values "
-        "within 10%; {:.1f}% of pixels excluded (outside the radiance the brackets measure)\n",
+        "within 10%; {:.1f}% of pixels excluded (outside the radiance the brackets measure); "
+        "log-log slope {:.3f}; the darkest fifth {:.1f}% (median); the cameras' scales against the "
+        "truth {:.1f}% apart at most\n",
         c.hdr_frames, c.hdr_values, c.hdr_scale[0], c.hdr_scale[1], c.hdr_scale[2],
         100 * c.hdr_median_relative, 100 * c.hdr_p90_relative, 100 * c.hdr_within_10_percent,
-        100 * c.hdr_excluded_fraction);
+        100 * c.hdr_excluded_fraction, c.hdr_loglog_slope, 100 * c.hdr_dark_median_relative,
+        100 * c.hdr_camera_disagreement);
   }
   for (const std::string& note : c.notes) md += "- " + note + "\n";
   return md;

@@ -47,6 +47,7 @@ struct CameraTruthError {
   bool hdr = false;
   double hdr_median_relative = 0;  // median over its values of |s c - truth| / truth
   long hdr_values = 0;
+  std::array<double, 3> hdr_scale{1, 1, 1};  // median of s c / truth per channel (1 = agrees)
 };
 
 struct TruthComparison {
@@ -65,6 +66,13 @@ struct TruthComparison {
   double hdr_median_relative = 0, hdr_p90_relative = 0, hdr_within_10_percent = 0;
   long hdr_values = 0;             // channel values compared
   double hdr_excluded_fraction = 0;  // pixels outside the measured radiance range
+  // Slope of log calibrated against log true radiance (1: no compression or stretch).
+  double hdr_loglog_slope = 0;
+  // Median relative error over the darkest fifth of the measured values (the shadows).
+  double hdr_dark_median_relative = 0;
+  // The cameras' disagreement against the truth: max over cameras and channels of
+  // |hdr_scale / the cameras' median - 1| (after calibrate's gains; 0 = they agree).
+  double hdr_camera_disagreement = 0;
   int hdr_frames = 0;
   std::vector<std::string> notes;  // what was not compared and why
 };

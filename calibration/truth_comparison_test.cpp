@@ -170,6 +170,44 @@ TEST(CompareWithTruth, ReportsTheErrorsPutIn) {
   EXPECT_EQ(TruthComparisonJson(c)["cameras"][3]["focal_error_relative"].get<double>(), c.cameras[3].focal_relative);
 }
 
+// Issue 54's figures: the fused HDR's log-log slope against the truth, the shadows, each
+// camera's own scale and how far the cameras' scales spread; a pedestal in the true response.
+TEST(CompareWithTruth, SlopeShadowsAndCamerasDisagreementAgainstTheTruth) {
+  Fixture f;
+  {
+    const TruthComparison c = CompareWithTruth(f.cal, f.truth);
+    EXPECT_NEAR(c.hdr_loglog_slope, 1.0, 0.01);
+    EXPECT_LT(c.hdr_camera_disagreement, 0.01);
+    EXPECT_NEAR(c.hdr_dark_median_relative, 0.02 * 0.6745, 0.005);
+    EXPECT_NEAR(c.cameras[2].hdr_scale[1], 1.0, 0.01);
+  }
+  // Compressed (x^0.9), camera 2 5% brighter than the others.
+  for (int c = 0; c < kCameras; ++c) {
+    const std::string name = fmt::format("cam{:02d}", c);
+    Image fused = ReadImage(f.truth / fmt::format("hdr/{}_t0000.exr", name));
+    for (float& v : fused.values()) v = std::pow(v, 0.9f) * (c == 2 ? 1.05f : 1.0f);
+    WriteImage(f.cal / "hdr" / name / "00000.exr", fused, {.format = PixelFormat::kFloat});
+  }
+  // A true response with a pedestal: codes up to 20 are no exposure and are not compared.
+  std::string text = "code,r,g,b\n";
+  for (int z = 0; z < 256; ++z) {
+    const double x = z <= 20 ? 0.0 : TrueInverse(z);
+    text += fmt::format("{},{},{},{}\n", z, x, x, x);
+  }
+  testing::WriteTextFile(f.truth / "response.csv", text);
+  const TruthComparison c = CompareWithTruth(f.cal, f.truth);
+  EXPECT_NEAR(c.hdr_loglog_slope, 0.9, 0.005);
+  EXPECT_NEAR(c.hdr_camera_disagreement, 0.05, 0.015);
+  EXPECT_NEAR(c.cameras[2].hdr_scale[0] / c.cameras[0].hdr_scale[0], 1.05, 0.02);
+  EXPECT_GT(c.hdr_dark_median_relative, c.hdr_median_relative);  // x^0.9 is furthest in the dark
+  for (int ch = 0; ch < 3; ++ch) EXPECT_TRUE(std::isfinite(c.response_max_relative[ch]));
+  EXPECT_NEAR(c.response_max_relative[0], 0.05, 1e-6);
+  const json j = TruthComparisonJson(c);
+  EXPECT_EQ(j["hdr"]["loglog_slope"].get<double>(), c.hdr_loglog_slope);
+  EXPECT_EQ(j["hdr"]["camera_disagreement"].get<double>(), c.hdr_camera_disagreement);
+  EXPECT_TRUE(Contains(TruthComparisonMarkdown(c), "log-log slope 0.90"));
+}
+
 TEST(CompareWithTruth, ComparesWhatIsThereAndSaysWhatIsNot) {
   Fixture f;
   fs::remove(f.cal / "rig.json");

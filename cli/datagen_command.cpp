@@ -2,6 +2,7 @@
 // datasets (HDR ground truth, multi-exposure LDR, JSON, point3d.ply, manifest).
 #include <fmt/format.h>
 
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -50,6 +51,62 @@ void PrintSceneResult(const datagen::SceneResult& r) {
   std::fflush(stdout);
 }
 
+// "WxH" or "B[:SIGMA]": a number, then optionally the separator and a second number. False for
+// anything else.
+bool ParsePair(const std::string& text, char separator, double* first, double* second) {
+  const std::size_t at = text.find(separator);
+  try {
+    std::size_t used = 0;
+    *first = std::stod(text.substr(0, at), &used);
+    if (used != text.substr(0, at).size()) return false;
+    if (at == std::string::npos) return true;  // the second keeps its default
+    *second = std::stod(text.substr(at + 1), &used);
+    return used == text.size() - at - 1;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+// The capture variants issue 54 tests calibrate on: size, dense brackets, pedestal, lenses.
+void AddCaptureVariantFlags(CLI::App* cmd, datagen::DatagenOptions* options) {
+  cmd->add_option_function<std::string>(
+         "--size",
+         [options](const std::string& text) {
+           double w = 0, h = 0;
+           if (text.find('x') == std::string::npos || !ParsePair(text, 'x', &w, &h) ||
+               w != std::floor(w) || h != std::floor(h) || w < 1 || h < 1 || w > 1e5 || h > 1e5)
+             throw CLI::ValidationError("--size", "'" + text + "': give WIDTHxHEIGHT, e.g. 320x240");
+           options->width = static_cast<int>(w);
+           options->height = static_cast<int>(h);
+         },
+         "With --capture: image size WIDTHxHEIGHT in pixels (64x48 to 8192x8192; the field of view "
+         "stays horizontal), instead of --width and the scene's aspect")
+      ->type_name("WxH");
+  cmd->add_option("--dense-brackets", options->dense_brackets,
+                  "With --capture: N brackets one stop apart centred on 2 s (3 to 20), instead of "
+                  "--brackets; with --black-level, a dense stack whose shadows test the fusion")
+      ->check(Integer(0, 20));
+  cmd->add_option_function<std::string>(
+         "--black-level",
+         [options](const std::string& text) {
+           double black = 0, noise = 0;
+           if (!ParsePair(text, ':', &black, &noise))
+             throw CLI::ValidationError("--black-level", "'" + text + "': give CODES or CODES:SIGMA, e.g. 16:1.5");
+           options->black_level = black;
+           options->black_noise = noise;
+         },
+         "With --capture: a sensor pedestal of B 8-bit codes (0 to 64) and Gaussian dark noise of "
+         "SIGMA codes around it (0 to 16), as B or B:SIGMA; recorded in truth/cameras.json")
+      ->type_name("B[:SIGMA]");
+  cmd->add_option("--lenses", options->lenses,
+                  "With --capture: none, distortion (each camera its own radial k1 in 0.03-0.10, k2 "
+                  "in 0-0.03, pincushion), vignetting (its own fall-off 1 - a r^2 to the corner, a "
+                  "in 0.05-0.25) or both; truth/cameras.json records them, truth/ keeps the "
+                  "pinhole renders")
+      ->check(OneOf(datagen::CaptureLensModes()))
+      ->capture_default_str();
+}
+
 // --capture and the flags that shape a capture.
 void AddCaptureFlags(CLI::App* cmd, datagen::DatagenOptions* options) {
   cmd->add_flag("--capture", options->capture,
@@ -81,6 +138,7 @@ void AddCaptureFlags(CLI::App* cmd, datagen::DatagenOptions* options) {
                   "the reference")
       ->check(OneOf(datagen::UnlikeCamerasModes()))
       ->capture_default_str();
+  AddCaptureVariantFlags(cmd, options);
 }
 
 }  // namespace

@@ -17,6 +17,7 @@
 #include "core/radiometry/ldr_synthesis.h"
 #include "datagen/blender_process.h"
 #include "datagen/blender_render.h"
+#include "datagen/capture_lens.h"
 #include "datagen/dataset_assembly.h"
 #include "datagen/output_folder.h"
 #include "datagen/scene_presets.h"
@@ -74,6 +75,19 @@ struct RigCamera {
   std::array<double, 3> gain = {1, 1, 1};
   double exponent = 1;
   std::unique_ptr<Crf> crf;
+  CaptureLens lens;
+};
+
+// The sensor every camera of the capture shares beyond the LDR synthesis's noise.
+struct Pedestal {
+  double black = 0, noise = 0;  // 8-bit codes
+};
+
+// What every image of the capture goes through besides its camera's own response and gains.
+struct CaptureSensor {
+  SensorNoise noise;
+  Pedestal pedestal;
+  PinholeIntrinsics intrinsics;  // of every camera (one make, one field of view)
 };
 
 // Camera 0 is the reference; the others draw their gains (about 0.74 to 1.35 per channel) and
@@ -84,6 +98,7 @@ std::vector<RigCamera> MakeRigCameras(const DatagenOptions& options, const std::
   const bool responses = options.unlike_cameras == "responses" || options.unlike_cameras == "both";
   std::mt19937_64 rng(SplitMix(options.seed ^ 0x756e6c696b65ULL));  // "unlike"
   std::uniform_real_distribution<double> log_gain(-0.3, 0.3), exponent(0.9, 1.1);
+  const std::vector<CaptureLens> lenses = DrawCaptureLenses(options.lenses, options.seed, count);
   std::vector<RigCamera> cameras;
   for (int c = 0; c < count; ++c) {
     RigCamera camera;
@@ -95,15 +110,16 @@ std::vector<RigCamera> MakeRigCameras(const DatagenOptions& options, const std::
     if (c > 0 && gains) camera.gain = g;
     if (c > 0 && responses) camera.exponent = e;
     camera.crf = std::make_unique<ExponentCrf>(ParseCrf(crf), camera.exponent);
+    camera.lens = lenses[c];
     cameras.push_back(std::move(camera));
   }
   return cameras;
 }
 
-// The image a camera records of `hdr`: its gains on the radiance, then exposure, noise, its
-// response and 8 bits.
+// The image a camera records of `hdr` (already through its lens): its gains on the radiance,
+// then exposure, noise, its response, the pedestal and 8 bits.
 Image Record(const Image& hdr, const RigCamera& camera, double exposure, const SensorNoise& noise,
-             std::uint64_t seed) {
+             const Pedestal& pedestal, std::uint64_t seed) {
   Image scaled = hdr.Rgb();
   float* v = scaled.data();
   for (std::size_t i = 0; i < scaled.size(); ++i) v[i] *= static_cast<float>(camera.gain[i % 3]);
@@ -111,19 +127,26 @@ Image Record(const Image& hdr, const RigCamera& camera, double exposure, const S
   ldr.exposure = exposure;
   ldr.noise = noise;
   ldr.noise.seed = seed;
-  ldr.bits = 8;
-  return SynthesizeLdr(scaled, *camera.crf, ldr);
+  if (pedestal.black == 0 && pedestal.noise == 0) {
+    ldr.bits = 8;
+    return SynthesizeLdr(scaled, *camera.crf, ldr);
+  }
+  ldr.bits = 0;  // quantised with the pedestal
+  return ApplyBlackLevel(SynthesizeLdr(scaled, *camera.crf, ldr), pedestal.black, pedestal.noise,
+                         SplitMix(seed ^ 0x626c61636bULL));  // "black"
 }
 
 // Calibrate's inverse-response format: code,r,g,b, exposure per code relative to code 128.
-void WriteResponseCsv(const fs::path& path, const Crf& crf) {
-  const double mid = crf.Inverse(128.0 / 255.0);
+// Codes at or below the pedestal `black` are exposure 0.
+void WriteResponseCsv(const fs::path& path, const Crf& crf, double black) {
+  auto display = [&](double z) { return std::clamp((z - black) / (255.0 - black), 0.0, 1.0); };
+  const double mid = crf.Inverse(display(128));
   std::string text =
       fmt::format("# inverse camera response (truth: {}): relative exposure per code, x(128) = 1\n"
                   "code,r,g,b\n",
                   crf.Spec());
   for (int z = 0; z < 256; ++z) {
-    const double x = crf.Inverse(z / 255.0) / mid;
+    const double x = crf.Inverse(display(z)) / mid;
     text += fmt::format("{},{:.9g},{:.9g},{:.9g}\n", z, x, x, x);
   }
   WriteTextFileAtomic(path, text);
@@ -135,7 +158,44 @@ json MatrixJson(const Eigen::Matrix4d& m) {
   return rows;
 }
 
+// --dense-brackets N: N times one stop apart, centred on 2 s.
+std::vector<double> DenseBrackets(int n) {
+  std::vector<double> times;
+  for (int k = 0; k < n; ++k) times.push_back(2.0 * std::exp2(k - (n - 1) / 2.0));
+  return times;
+}
+
 }  // namespace
+
+const std::vector<std::string>& CaptureLensModes() {
+  static const std::vector<std::string> modes = {"none", "distortion", "vignetting", "both"};
+  return modes;
+}
+
+const char* CaptureVariantFlag(const DatagenOptions& o) {
+  return o.height != 0                                  ? "--size"
+         : o.dense_brackets != 0                        ? "--dense-brackets"
+         : o.black_level != 0 || o.black_noise != 0     ? "--black-level"
+         : o.lenses != "none"                           ? "--lenses"
+                                                        : nullptr;
+}
+
+void ValidateCaptureVariant(const DatagenOptions& o) {
+  if (o.height < 0 || (o.height > 0 && o.width <= 0))
+    Fail("datagen: --size {}x{}: give both sides, positive", o.width, o.height);
+  if (o.height > 0 && (o.width < 64 || o.height < 48 || o.width > 8192 || o.height > 8192))
+    Fail("datagen: --size {}x{}: use 64x48 to 8192x8192", o.width, o.height);
+  if (o.dense_brackets != 0 && (o.dense_brackets < 3 || o.dense_brackets > 20))
+    Fail("datagen: --dense-brackets {}: use 3 to 20 brackets (one stop apart)", o.dense_brackets);
+  if (o.dense_brackets != 0 && !o.brackets.empty())
+    Fail("datagen: --dense-brackets and --brackets both give the exposure times; give one");
+  if (!(o.black_level >= 0 && o.black_level <= 64))
+    Fail("datagen: --black-level {}: use 0 to 64 codes", o.black_level);
+  if (!(o.black_noise >= 0 && o.black_noise <= 16))
+    Fail("datagen: --black-level noise {}: use 0 to 16 codes", o.black_noise);
+  if (std::find(CaptureLensModes().begin(), CaptureLensModes().end(), o.lenses) == CaptureLensModes().end())
+    Fail("datagen: --lenses {}: use none, distortion, vignetting or both", o.lenses);
+}
 
 ScenePreset CapturePreset(const DatagenOptions& options, const std::string& scene) {
   ScenePreset preset = ResolvePreset(scene, options.preset, options.width);
@@ -149,7 +209,9 @@ ScenePreset CapturePreset(const DatagenOptions& options, const std::string& scen
   preset.test_timestamps = 0;
   preset.layout = "capture";
   preset.extra_views = options.extra_views;
+  if (options.height > 0) preset.height = options.height;  // --size WxH
   if (!options.brackets.empty()) preset.exposures = options.brackets;
+  if (options.dense_brackets > 0) preset.exposures = DenseBrackets(options.dense_brackets);
   return preset;
 }
 
@@ -232,17 +294,18 @@ TruthDataset WriteTruthDataset(const ScenePreset& preset, const std::vector<Plan
 // The static images (rig cameras, then hand-held extra views); returns the extra views' truth.
 json WriteStillImages(const DatagenOptions& options, const ScenePreset& preset,
                       const std::vector<PlannedRender>& renders, const BlenderRender& run,
-                      const std::vector<RigCamera>& cameras, const SensorNoise& noise,
+                      const std::vector<RigCamera>& cameras, const CaptureSensor& sensor,
                       const fs::path& staging, int* images) {
   const int middle = static_cast<int>(preset.exposures.size()) / 2;
   json extra_views = json::array();
   for (int i = 0; i < preset.cameras + preset.extra_views; ++i) {
-    const Image hdr = ReadImage(staging / renders[i].hdr_file);
     const bool extra = i >= preset.cameras;
     const int j = i - preset.cameras;
-    // A hand-held camera is of the reference's make.
+    // A hand-held camera is of the reference's make, its lens too.
+    const RigCamera& camera = cameras[extra ? 0 : i];
+    const Image hdr = ApplyCaptureLens(ReadImage(staging / renders[i].hdr_file), camera.lens, sensor.intrinsics);
     WriteImage(staging / (extra ? CaptureExtraFile(j) : CaptureStaticFile(i)),
-               Record(hdr, cameras[extra ? 0 : i], preset.exposures[middle], noise,
+               Record(hdr, camera, preset.exposures[middle], sensor.noise, sensor.pedestal,
                       extra ? ImageSeed(options.seed, 3, j, 0, middle) : ImageSeed(options.seed, 2, i, 0, middle)),
                {.format = PixelFormat::kUint8});
     if (extra)
@@ -257,11 +320,14 @@ json WriteStillImages(const DatagenOptions& options, const ScenePreset& preset,
 
 void WriteBrackets(const DatagenOptions& options, const ScenePreset& preset,
                    const std::vector<PlannedRender>& sequence, const std::vector<RigCamera>& cameras,
-                   const SensorNoise& noise, const fs::path& staging, int* images) {
+                   const CaptureSensor& sensor, const fs::path& staging, int* images) {
   const fs::path truth = staging / kTruth;
-  const bool alike = options.unlike_cameras == "none";
+  const bool alike = options.unlike_cameras == "none" && options.lenses == "none" &&
+                     sensor.pedestal.black == 0 && sensor.pedestal.noise == 0;
   for (const PlannedRender& r : sequence) {
-    const Image hdr = alike ? Image() : ReadImage(truth / r.hdr_file);
+    const RigCamera& camera = cameras[r.camera_id];
+    const Image hdr = alike ? Image()
+                            : ApplyCaptureLens(ReadImage(truth / r.hdr_file), camera.lens, sensor.intrinsics);
     for (int k : r.exposure_indices) {
       const fs::path target = staging / CaptureBracketFile(r.camera_id, r.time_index, k);
       if (alike) {
@@ -270,7 +336,7 @@ void WriteBrackets(const DatagenOptions& options, const ScenePreset& preset,
         fs::copy_file(truth / LdrFileName(r, k), target, fs::copy_options::overwrite_existing);
       } else {
         WriteImage(target,
-                   Record(hdr, cameras[r.camera_id], preset.exposures[k], noise,
+                   Record(hdr, camera, preset.exposures[k], sensor.noise, sensor.pedestal,
                           ImageSeed(options.seed, 1, r.camera_id, r.time_index, k)),
                    {.format = PixelFormat::kUint8});
       }
@@ -284,7 +350,7 @@ void WriteBrackets(const DatagenOptions& options, const ScenePreset& preset,
 }
 
 json TruthCamera(const ScenePreset& preset, const std::vector<PlannedRender>& sequence, const Dataset& dataset,
-                 const RigCamera& camera, int c) {
+                 const RigCamera& camera, const Pedestal& pedestal, int c) {
   const double t_min = *std::min_element(preset.exposures.begin(), preset.exposures.end());
   const double t_max = *std::max_element(preset.exposures.begin(), preset.exposures.end());
   const Frame* first = nullptr;
@@ -295,10 +361,14 @@ json TruthCamera(const ScenePreset& preset, const std::vector<PlannedRender>& se
   for (const PlannedRender& r : sequence)
     if (r.camera_id == c) hdr_files[std::to_string(r.time_index)] = r.hdr_file;
   const PinholeIntrinsics& k = first->camera.intrinsics;
+  // Above the pedestal: the low code clears its noise (three widths) as well.
+  const double span = 255.0 - pedestal.black;
+  const double y_low = std::max(kLowCode, 3 * pedestal.noise) / span;
+  const double y_high = std::clamp((kHighCode - pedestal.black) / span, y_low, 1.0);
   json low = json::array(), high = json::array();
   for (int ch = 0; ch < 3; ++ch) {
-    low.push_back(camera.crf->Inverse(kLowCode / 255.0) / (t_max * camera.gain[ch]));
-    high.push_back(camera.crf->Inverse(kHighCode / 255.0) / (t_min * camera.gain[ch]));
+    low.push_back(camera.crf->Inverse(y_low) / (t_max * camera.gain[ch]));
+    high.push_back(camera.crf->Inverse(y_high) / (t_min * camera.gain[ch]));
   }
   return {{"name", camera.name},
           {"camera_id", c},
@@ -309,8 +379,9 @@ json TruthCamera(const ScenePreset& preset, const std::vector<PlannedRender>& se
           {"fy", k.fy},
           {"cx", k.cx},
           {"cy", k.cy},
-          {"k1", 0.0},
-          {"k2", 0.0},
+          {"k1", camera.lens.k1},
+          {"k2", camera.lens.k2},
+          {"vignetting", camera.lens.vignetting},
           {"transform_matrix", MatrixJson(first->camera.world_from_cam_gl)},
           {"gain", camera.gain},
           {"response_exponent", camera.exponent},
@@ -319,7 +390,9 @@ json TruthCamera(const ScenePreset& preset, const std::vector<PlannedRender>& se
           {"measured_radiance",
            {{"low", low},
             {"high", high},
-            {"note", fmt::format("radiance whose code is {} at the longest and {} at the shortest exposure",
+            {"note", fmt::format("radiance whose code is {} above the pedestal (or 3 noise widths) at "
+                                 "the longest and {} at the shortest exposure; at the image centre "
+                                 "(vignetting darkens the corners)",
                                  kLowCode, kHighCode)}}},
           {"static_hdr", fmt::format("static/{}.exr", camera.name)},
           {"hdr_files", hdr_files}};
@@ -328,10 +401,11 @@ json TruthCamera(const ScenePreset& preset, const std::vector<PlannedRender>& se
 // truth/cameras.json and the responses.
 void WriteTruthCameras(const DatagenOptions& options, const ScenePreset& preset,
                        const std::vector<PlannedRender>& sequence, const Dataset& dataset,
-                       const std::vector<RigCamera>& cameras, const SensorNoise& noise, json extra_views,
+                       const std::vector<RigCamera>& cameras, const CaptureSensor& sensor, json extra_views,
                        const fs::path& truth) {
   json truth_cameras = json::array();
-  for (int c = 0; c < preset.cameras; ++c) truth_cameras.push_back(TruthCamera(preset, sequence, dataset, cameras[c], c));
+  for (int c = 0; c < preset.cameras; ++c)
+    truth_cameras.push_back(TruthCamera(preset, sequence, dataset, cameras[c], sensor.pedestal, c));
   const int middle = static_cast<int>(preset.exposures.size()) / 2;
   WriteJsonFile(truth / "cameras.json",
                 {{"format", "hdr4d-capture-truth"},
@@ -341,13 +415,19 @@ void WriteTruthCameras(const DatagenOptions& options, const ScenePreset& preset,
                  {"exposures", preset.exposures},
                  {"static_exposure", preset.exposures[middle]},
                  {"unlike_cameras", options.unlike_cameras},
-                 {"noise", {{"full_well", noise.full_well}, {"read_sigma", noise.read_sigma}}},
+                 {"lenses", options.lenses},
+                 {"noise",
+                  {{"full_well", sensor.noise.full_well},
+                   {"read_sigma", sensor.noise.read_sigma},
+                   {"black_level_codes", sensor.pedestal.black},
+                   {"black_noise_codes", sensor.pedestal.noise}}},
                  {"cameras", truth_cameras},
                  {"extra_views", std::move(extra_views)}});
-  WriteResponseCsv(truth / "response.csv", *cameras[0].crf);
+  WriteResponseCsv(truth / "response.csv", *cameras[0].crf, sensor.pedestal.black);
   if (options.unlike_cameras == "responses" || options.unlike_cameras == "both") {
     for (const RigCamera& camera : cameras)
-      WriteResponseCsv(truth / fmt::format("response_{}.csv", camera.name), *camera.crf);
+      WriteResponseCsv(truth / fmt::format("response_{}.csv", camera.name), *camera.crf,
+                       sensor.pedestal.black);
   }
 }
 
@@ -381,7 +461,10 @@ json CaptureManifest(const DatagenOptions& options, const ScenePreset& preset, c
         {"extra_views", preset.extra_views},
         {"brackets", preset.exposures},
         {"static_images", "the scene at t = 0 without its actors, at the middle bracket"},
-        {"unlike_cameras", options.unlike_cameras}}},
+        {"unlike_cameras", options.unlike_cameras},
+        {"lenses", options.lenses},
+        {"black_level_codes", options.black_level},
+        {"black_noise_codes", options.black_noise}}},
       {"truth_dataset", {{"frames", truth.dataset.NumFrames()}, {"ldr_images", truth.ldr_images}}},
       {"ldr_synthesis",
        {{"crf_spec", ldr.crf},
@@ -423,10 +506,14 @@ SceneResult GenerateCapture(const DatagenOptions& options, const std::string& sc
 
   // The capture: what each camera records.
   const std::vector<RigCamera> cameras = MakeRigCameras(options, ldr.crf, preset.cameras);
+  const CaptureSensor sensor{
+      .noise = ldr.noise,
+      .pedestal = {.black = options.black_level, .noise = options.black_noise},
+      .intrinsics = truth.dataset.AllFrames().front()->camera.intrinsics};
   int images = 0;
-  json extra_views = WriteStillImages(options, preset, renders, run, cameras, ldr.noise, staging, &images);
-  WriteBrackets(options, preset, sequence, cameras, ldr.noise, staging, &images);
-  WriteTruthCameras(options, preset, sequence, truth.dataset, cameras, ldr.noise, std::move(extra_views),
+  json extra_views = WriteStillImages(options, preset, renders, run, cameras, sensor, staging, &images);
+  WriteBrackets(options, preset, sequence, cameras, sensor, staging, &images);
+  WriteTruthCameras(options, preset, sequence, truth.dataset, cameras, sensor, std::move(extra_views),
                     staging / kTruth);
 
   SceneResult result;

@@ -26,7 +26,11 @@
 // The rig: `cameras` on an arc 30 degrees apart around the scene, the last one lower and between
 // two of them (the held-out view). With unlike cameras each camera c > 0 multiplies the radiance
 // by its own gain per channel and/or bends the response to crf(x^e_c); camera 0 is the reference
-// whose response and gains truth/ holds as the dataset's.
+// whose response and gains truth/ holds as the dataset's. Variants for calibrate to be tested on:
+// --size WxH, --dense-brackets N (one stop apart), --black-level B[:SIGMA] (a pedestal with
+// dark noise), --lenses (each camera's own radial distortion and/or vignetting,
+// datagen/capture_lens.h); the bracket images go through them, truth/ keeps the pinhole renders
+// and records every number (cameras.json: k1, k2, vignetting; noise: the pedestal).
 #pragma once
 
 #include <string>
@@ -50,6 +54,14 @@ ScenePreset CapturePreset(const DatagenOptions& options, const std::string& scen
 // (truth/static/camCC.exr, `still`), the hand-held views (truth/static/extraNN.exr, camera ids
 // after the rig's), then PlanRenders(preset) under truth/.
 std::vector<PlannedRender> CaptureRenders(const ScenePreset& preset);
+
+// The capture-only flag `options` sets that a dataset cannot take (--size, --dense-brackets,
+// --black-level, --lenses), or nullptr.
+const char* CaptureVariantFlag(const DatagenOptions& options);
+// Throws hdr4d::Error for a capture variant out of range: --size below 64x48 or above 8192,
+// --dense-brackets outside 3..20 or with --brackets, a black level outside 0..64 codes or its
+// noise outside 0..16, an unknown --lenses mode.
+void ValidateCaptureVariant(const DatagenOptions& options);
 
 // The file names of the layout, relative to the capture folder.
 std::string CaptureCameraName(int camera);                      // camCC

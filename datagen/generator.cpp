@@ -57,7 +57,7 @@ void DatagenOptions::Validate() const {
                        : extra_views != 0        ? "--extra-views"
                        : !brackets.empty()       ? "--brackets"
                        : unlike_cameras != "none" ? "--unlike-cameras"
-                                                 : nullptr;
+                                                 : CaptureVariantFlag(*this);
     if (flag != nullptr)
       Fail("datagen: {} describes a capture rig and needs --capture (a dataset keeps its scene's "
            "own cameras and timestamps)", flag);
@@ -85,6 +85,7 @@ void DatagenOptions::Validate() const {
       }
     }
   }
+  if (capture) ValidateCaptureVariant(*this);
   if (capture && !pipeline.IsIdentity())
     Fail("datagen: --pipeline and --vignetting make datasets, not captures: a capture's cameras "
          "differ through --unlike-cameras");

@@ -61,6 +61,17 @@ struct DatagenOptions {
   // unlike sensors and white balance give), responses (each camera's response bent by its own
   // exponent, x^e with e in [0.9, 1.1]) or both. Camera 0 is always the reference.
   std::string unlike_cameras = "none";
+  // Capture: the image height with --size WxH (0 = the width times the scene's aspect).
+  int height = 0;
+  // Capture: N exposure times one stop apart, centred on 2 s (--dense-brackets; 0 = --brackets
+  // or the scene's).
+  int dense_brackets = 0;
+  // Capture: the sensor's black pedestal in 8-bit codes and the Gaussian noise around it in
+  // codes (--black-level B[:SIGMA]); 0 = none, the LDR synthesis's own codes.
+  double black_level = 0, black_noise = 0;
+  // Capture: each camera's lens: none, distortion (its own radial k1, k2, pincushion), vignetting
+  // (its own radial fall-off) or both (datagen/capture_lens.h).
+  std::string lenses = "none";
   // Throws hdr4d::Error for an unknown scene or preset, an empty output folder, negative
   // threads, samples or width, bad LDR settings, capture flags without --capture, or a capture
   // of "all", of fewer than 2 or more than 12 cameras, fewer than 2 frames, more than 100
@@ -73,6 +84,7 @@ struct DatagenOptions {
 inline constexpr int kCaptureCameras = 6;
 inline constexpr int kCaptureMaxCameras = 12;  // 30 degrees apart: 12 fill the circle
 const std::vector<std::string>& UnlikeCamerasModes();  // none, gains, responses, both
+const std::vector<std::string>& CaptureLensModes();    // none, distortion, vignetting, both
 
 struct SceneResult {
   std::string scene;

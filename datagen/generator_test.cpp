@@ -8,6 +8,7 @@
 #include <sys/stat.h>
 
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 
 #include "core/geometry/camera.h"
@@ -342,7 +343,8 @@ struct CaptureFixture {
   TempDir dir;
   DatagenOptions options;
   explicit CaptureFixture(const std::string& unlike = "none", int extra_views = 0,
-                          std::vector<double> brackets = {}) {
+                          std::vector<double> brackets = {},
+                          const std::function<void(DatagenOptions&)>& variant = {}) {
     options.scene = "room";
     options.preset = "ci";
     options.out = dir / "out";
@@ -353,6 +355,7 @@ struct CaptureFixture {
     options.unlike_cameras = unlike;
     options.extra_views = extra_views;
     options.brackets = std::move(brackets);
+    if (variant) variant(options);
     WriteCaptureFixture(dir / "fixture", CapturePreset(options, "room"));
     options.blender = WriteFakeBlender(dir.path(), dir / "fixture", "").string();
   }
@@ -485,6 +488,99 @@ TEST(Capture, HandHeldViewsAndOwnBracketsAreWritten) {
   const Dataset dataset = LoadDataset(root / "truth");
   for (const Frame* frame : dataset.AllFrames())
     EXPECT_EQ(frame->exposure, (std::vector<double>{0.5, 2, 8})[frame->exposure_index]);
+}
+
+// Issue 54's variants: a size of its own, dense brackets one stop apart, a pedestal with dark
+// noise, each camera's own lens; what was drawn is in the truth.
+TEST(Capture, VariantsGoThroughSizeBracketsPedestalAndLensesAndTheTruthRecordsThem) {
+  CaptureFixture f("none", 0, {}, [](DatagenOptions& o) {
+    o.width = 80;
+    o.height = 48;
+    o.dense_brackets = 5;
+    o.black_level = 16;
+    o.black_noise = 1.5;
+    o.lenses = "both";
+  });
+  const SceneResult result = GenerateScene(f.options, "room");
+  const fs::path root = f.Root();
+  EXPECT_EQ(result.brackets, 5);
+  const Image still = ReadImage(root / CaptureStaticFile(1));
+  EXPECT_EQ(still.width(), 80);
+  EXPECT_EQ(still.height(), 48);
+  EXPECT_EQ(ReadJsonFile(root / "exposures.json")["brackets"], json({0.5, 1.0, 2.0, 4.0, 8.0}));
+  const json truth = ReadJsonFile(root / "truth" / "cameras.json");
+  EXPECT_EQ(truth["lenses"], "both");
+  EXPECT_EQ(truth["noise"]["black_level_codes"], 16.0);
+  EXPECT_EQ(truth["noise"]["black_noise_codes"], 1.5);
+  for (const json& cam : truth["cameras"]) {
+    EXPECT_GE(cam["k1"].get<double>(), 0.03);
+    EXPECT_LE(cam["k1"].get<double>(), 0.10);
+    EXPECT_GE(cam["vignetting"].get<double>(), 0.05);
+    EXPECT_LE(cam["vignetting"].get<double>(), 0.25);
+    EXPECT_EQ(cam["width"], 80);
+  }
+  EXPECT_NE(truth["cameras"][0]["k1"], truth["cameras"][1]["k1"]);
+  // Codes at or below the pedestal are no exposure in the true response; code 128 is 1.
+  const std::string csv = testing::ReadTextFile(root / "truth" / "response.csv");
+  EXPECT_TRUE(Contains(csv, "\n16,0,0,0\n")) << csv.substr(0, 300);
+  EXPECT_TRUE(Contains(csv, "\n128,1,1,1\n"));
+  // The brackets are the cameras' own records, not the truth dataset's pinhole LDR images, and
+  // nothing falls far below the pedestal (six widths of its noise).
+  const Image bracket = ReadImage(root / CaptureBracketFile(0, 0, 0));
+  EXPECT_NE(testing::ReadTextFile(root / CaptureBracketFile(0, 0, 2)),
+            testing::ReadTextFile(root / "truth" / "images" / "cam00_t0000_e2.png"));
+  float lowest = 1;
+  for (std::size_t i = 0; i < bracket.size(); ++i) lowest = std::min(lowest, bracket.data()[i]);
+  EXPECT_GE(lowest * 255, 16 - 6 * 1.5);
+  const json manifest = ReadJsonFile(root / "manifest.json");
+  EXPECT_EQ(manifest["capture"]["lenses"], "both");
+  EXPECT_EQ(manifest["capture"]["black_level_codes"], 16.0);
+  EXPECT_EQ(manifest["render"]["height"], 48);
+}
+
+TEST(Capture, VariantFlagsAreCheckedAndNeedACapture) {
+  DatagenOptions o;
+  o.out = "x";
+  o.scene = "room";
+  o.width = 320;
+  o.height = 240;
+  EXPECT_TRUE(Contains(ErrorOf([&] { o.Validate(); }), "--size describes a capture rig"));
+  o.capture = true;
+  EXPECT_EQ(ErrorOf([&] { o.Validate(); }), "");
+  o.height = 20;
+  EXPECT_EQ(ErrorOf([&] { o.Validate(); }), "datagen: --size 320x20: use 64x48 to 8192x8192");
+  o.height = 240;
+  o.dense_brackets = 2;
+  EXPECT_TRUE(Contains(ErrorOf([&] { o.Validate(); }), "--dense-brackets 2: use 3 to 20"));
+  o.dense_brackets = 12;
+  o.brackets = {1, 2};
+  EXPECT_TRUE(Contains(ErrorOf([&] { o.Validate(); }), "give one"));
+  o.brackets = {};
+  o.black_level = 65;
+  EXPECT_TRUE(Contains(ErrorOf([&] { o.Validate(); }), "--black-level 65: use 0 to 64 codes"));
+  o.black_level = 16;
+  o.black_noise = -1;
+  EXPECT_TRUE(Contains(ErrorOf([&] { o.Validate(); }), "noise -1: use 0 to 16 codes"));
+  o.black_noise = 1.5;
+  o.lenses = "fisheye";
+  EXPECT_EQ(ErrorOf([&] { o.Validate(); }),
+            "datagen: --lenses fisheye: use none, distortion, vignetting or both");
+  o.lenses = "distortion";
+  EXPECT_EQ(ErrorOf([&] { o.Validate(); }), "");
+  EXPECT_EQ(CapturePreset(o, "room").exposures.size(), 12u);
+  EXPECT_EQ(CapturePreset(o, "room").height, 240);
+  // Through the command line: one line, exit 1, nothing written.
+  TempDir dir;
+  for (const std::string flags : {"--size 320", "--size 320x", "--black-level 16:x", "--lenses odd"}) {
+    const testing::CommandResult cli = testing::RunHdr4d(
+        "datagen --capture --scene room " + flags + " --out '" + (dir / "o").string() + "'");
+    EXPECT_EQ(cli.exit_code, 1) << flags;
+    EXPECT_TRUE(Contains(cli.err, flags.substr(0, flags.find(' ')))) << flags << ": " << cli.err;
+    EXPECT_FALSE(fs::exists(dir / "o"));
+  }
+  const testing::CommandResult help = testing::RunHdr4d("datagen --help");
+  for (const char* flag : {"--size", "--dense-brackets", "--black-level", "--lenses"})
+    EXPECT_TRUE(Contains(help.out, flag)) << flag;
 }
 
 TEST(Capture, BadFlagsAreClearErrors) {

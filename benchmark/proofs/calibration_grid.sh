@@ -1,13 +1,23 @@
 #!/usr/bin/env bash
 # `hdr4d calibrate` over a grid of synthetic capture variants and seeds (issue 54): for each
-# WIDTH:EXTRA:UNLIKE variant and each seed, `datagen --capture` (room, mini preset) then
-# `calibrate --truth`, and one table row of errors against the truth. Usage:
+# variant and each seed, `datagen --capture` (room, mini preset) then `calibrate --truth`, and
+# one table row of errors against the truth. Usage:
 #   bash benchmark/proofs/calibration_grid.sh BINARY WORKDIR
-# Settings from the environment (defaults in square brackets): VARIANTS ["320:0:none
-# 640:6:gains 640:12:responses 1280:3:both"] (width in pixels, 4:3 images; hand-held extra
-# views; unlike cameras none|gains|responses|both), SEEDS ["0"], CAMERAS [4], FRAMES [2],
-# BRACKETS [0.5,2,8], SAMPLES [16], THREADS [0 = every core]. WORKDIR is replaced; a variant
-# that fails is a row saying where, the grid goes on.
+# A variant is SIZE:EXTRA:UNLIKE[:LENSES[:BRACKETS[:BLACK]]]: SIZE WxH (or a width, 4:3);
+# EXTRA hand-held views; UNLIKE none|gains|responses|both; LENSES none|distortion|vignetting|both
+# [none]; BRACKETS a comma list of seconds or dN for --dense-brackets N [$BRACKETS]; BLACK
+# --black-level's B[:SIGMA] [none]. Settings from the environment (defaults in square brackets):
+# VARIANTS ["320x240:0:none 640x480:6:gains 640x480:12:responses:distortion 1280x720:3:both"],
+# SEEDS ["0"], CAMERAS [4], FRAMES [2], BRACKETS [0.5,2,8], SAMPLES [16], THREADS [0 = every core],
+# KEEP [0: 1 keeps each capture]. WORKDIR is replaced; a variant that fails is a row saying where,
+# the grid goes on. Columns: every static view registered (the rig's cameras must be, or
+# calibrate fails; hand-held views counted), rotation / centre / focal errors (max over
+# cameras), distortion kept, fused HDR log-log slope and median error against the render, and
+# the cameras' disagreement after gains three ways: the recovered gains against the true ones
+# (max over cameras and channels of their ratio over its geometric mean, 0 where the truth has
+# no gains), the spread of each camera's median calibrated/true radiance (truth_comparison's
+# camera_disagreement: response errors weighted by what each camera sees count too), and
+# calibrate's own on the shared sparse points (their texture's scatter counts too).
 set -uo pipefail
 if [ $# -ne 2 ]; then
   echo "usage: $0 BINARY WORKDIR" >&2
@@ -15,47 +25,72 @@ if [ $# -ne 2 ]; then
 fi
 hdr4d="$(realpath "$1")"
 work="$2"
-variants="${VARIANTS:-320:0:none 640:6:gains 640:12:responses 1280:3:both}"
+variants="${VARIANTS:-320x240:0:none 640x480:6:gains 640x480:12:responses:distortion 1280x720:3:both}"
 seeds="${SEEDS:-0}" cameras="${CAMERAS:-4}" frames="${FRAMES:-2}" brackets="${BRACKETS:-0.5,2,8}"
-samples="${SAMPLES:-16}" threads="${THREADS:-0}"
+samples="${SAMPLES:-16}" threads="${THREADS:-0}" keep="${KEEP:-0}"
 rm -rf "$work" && mkdir -p "$work"
 work="$(realpath "$work")"
-echo "| width | extra views | unlike | seed | registered (rung) | rotation max (deg) | centre max (% rig) | focal max | distortion kept | HDR median error | disagreement after gains | calibrate (s) |"
-echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
+echo "| size | extra views | unlike | lenses | brackets | seed | registered (rung) | rotation max (deg) | centre max (% rig) | focal max | distortion kept | HDR slope | HDR median error (darkest fifth) | gains vs truth | cameras' HDR scales vs truth | sparse-point disagreement before / after gains | calibrate (s) |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 for variant in $variants; do
-  IFS=: read -r width extra unlike <<< "$variant"
+  IFS=: read -r size extra unlike lenses bracket_spec black black_sigma <<< "$variant"
+  lenses="${lenses:-none}" bracket_spec="${bracket_spec:-$brackets}"
+  case "$size" in *x*) size_flag=(--size "$size") ;; *) size_flag=(--width "$size") ;; esac
+  case "$bracket_spec" in d*) bracket_flag=(--dense-brackets "${bracket_spec#d}") ;; *) bracket_flag=(--brackets "$bracket_spec") ;; esac
+  black_flag=()
+  [ -n "${black:-}" ] && black_flag=(--black-level "$black${black_sigma:+:$black_sigma}")
   for seed in $seeds; do
-    dir="$work/w${width}_e${extra}_${unlike}_s${seed}"
+    dir="$work/${size}_e${extra}_${unlike}_${lenses}_${bracket_spec//,/-}_s${seed}"
     mkdir -p "$dir"
-    if ! "$hdr4d" datagen --capture --scene room --preset mini --width "$width" --samples "$samples" \
-        --cameras "$cameras" --frames "$frames" --extra-views "$extra" --brackets "$brackets" \
-        --unlike-cameras "$unlike" --seed "$seed" --threads "$threads" --out "$dir/capture" \
-        > "$dir/datagen.log" 2>&1; then
-      echo "| $width | $extra | $unlike | $seed | datagen failed: $(tail -1 "$dir/datagen.log") |||||||||"
+    label="| $size | $extra | $unlike | $lenses | $bracket_spec${black:+, black $black${black_sigma:+:$black_sigma}} | $seed"
+    if ! nice "$hdr4d" datagen --capture --scene room --preset mini "${size_flag[@]}" --samples "$samples" \
+        --cameras "$cameras" --frames "$frames" --extra-views "$extra" "${bracket_flag[@]}" "${black_flag[@]}" \
+        --unlike-cameras "$unlike" --lenses "$lenses" --seed "$seed" --threads "$threads" \
+        --out "$dir/capture" > "$dir/datagen.log" 2>&1; then
+      echo "$label | datagen failed: $(tail -1 "$dir/datagen.log") ||||||||||"
       continue
     fi
     start=$(date +%s.%N)
-    if ! "$hdr4d" calibrate --capture "$dir/capture/room" --out "$dir/calibrated" \
+    if ! nice "$hdr4d" calibrate --capture "$dir/capture/room" --out "$dir/calibrated" \
         --truth "$dir/capture/room/truth" > "$dir/calibrate.log" 2>&1; then
-      echo "| $width | $extra | $unlike | $seed | calibrate failed: $(tail -1 "$dir/calibrate.log") |||||||||"
+      echo "$label | calibrate failed: $(tail -1 "$dir/calibrate.log") ||||||||||"
       continue
     fi
     seconds=$(echo "$(date +%s.%N) - $start" | bc)
-    python3 - "$dir" "$width" "$extra" "$unlike" "$seed" "$seconds" <<'PY'
+    python3 - "$dir" "$label" "$extra" "$seconds" <<'PY'
 import json, re, sys
-d, width, extra, unlike, seed, seconds = sys.argv[1:]
+d, label, extra, seconds = sys.argv[1:]
 c = json.load(open(f"{d}/calibrated/truth_comparison.json"))
 cal = json.load(open(f"{d}/calibrated/calibration.json"))
 report = open(f"{d}/calibrated/report.md").read()
 rung = re.search(r"rung (\d) of the registration ladder \(([^;]*);", report)
+helped = re.search(r"(\d+) extra image\(s\) helped", report)
 g, h = c.get("geometry", {}), c.get("hdr", {})
+nan = float("nan")
 kept = sum(1 for cam in cal.get("cameras", []) if cam.get("distortion_kept"))
 gains = cal.get("camera_agreement", {})
-print(f"| {width} | {extra} | {unlike} | {seed} | {'rung ' + rung.group(1) + ' (' + rung.group(2) + ')' if rung else '?'} | "
-      f"{g.get('max_rotation_error_deg', float('nan')):.3f} | {100 * g.get('max_position_error_relative', float('nan')):.2f} | "
-      f"{100 * g.get('max_focal_error_relative', float('nan')):.2f}% | {kept} of {len(cal.get('cameras', []))} | "
-      f"{100 * h.get('median_relative_error', float('nan')):.1f}% | {100 * gains.get('disagreement_after', float('nan')):.1f}% | "
+# The gains against the true ones: each camera's recovered / true gain per channel, over the
+# cameras' geometric mean (a calibration knows gains only up to one scale per channel).
+import math
+truth = json.load(open(f"{d}/capture/room/truth/cameras.json"))
+true_gain = {t["name"]: t["gain"] for t in truth["cameras"]}
+names = [cam["name"] for cam in json.load(open(f"{d}/calibrated/rig.json")).get("cameras", [])]
+gain_error = nan
+if gains.get("gains") and len(names) == len(gains["gains"]):
+    gain_error = 0
+    for ch in range(3):
+        r = [gains["gains"][i][ch] / true_gain[n][ch] for i, n in enumerate(names)]
+        mean = math.exp(sum(math.log(x) for x in r) / len(r))
+        gain_error = max(gain_error, max(abs(x / mean - 1) for x in r))
+views = f"cameras all, extra {helped.group(1) if helped else '?'}/{extra}"
+print(f"{label} | {views}, {'rung ' + rung.group(1) if rung else 'rung ?'} | "
+      f"{g.get('max_rotation_error_deg', nan):.3f} | {100 * g.get('max_position_error_relative', nan):.2f} | "
+      f"{100 * g.get('max_focal_error_relative', nan):.2f}% | {kept} of {len(cal.get('cameras', []))} | "
+      f"{h.get('loglog_slope', nan):.3f} | {100 * h.get('median_relative_error', nan):.1f}% ({100 * h.get('dark_fifth_median_relative_error', nan):.1f}%) | "
+      f"{100 * gain_error:.1f}% | {100 * h.get('camera_disagreement', nan):.1f}% | "
+      f"{100 * gains.get('disagreement_before', nan):.1f}% / {100 * gains.get('disagreement_after', nan):.1f}% | "
       f"{float(seconds):.0f} |")
 PY
+    [ "$keep" = 1 ] || rm -rf "$dir/capture/room/sequence" "$dir/calibrated/images"
   done
 done
