@@ -46,6 +46,7 @@ class HexPlaneTraining {
   void SetUp();
   void Restore();
   nlohmann::json RunConfig() const;
+  nlohmann::json CurveJson() const;
   void SaveCheckpoint(int iterations_done, double seconds) const;
   void FillPixelOrder();
   void NewEpoch(std::uint64_t seed);
@@ -73,6 +74,7 @@ class HexPlaneTraining {
   nlohmann::json stored_;  // a resumed run's config.json
   int start_iteration_ = 0;
   double start_seconds_ = 0;
+  std::vector<double> curve_;  // (iteration, loss, batch PSNR), about 100 points a run
   std::vector<Ray> rays_;
   std::vector<float> target_ldr_, target_hdr_;  // per ray: 3 values each
   std::vector<std::uint32_t> ray_view_;
@@ -189,6 +191,7 @@ void HexPlaneTraining::Restore() {
   }
   start_iteration_ = int(s.iteration);
   start_seconds_ = s.seconds;
+  curve_ = s.curve;
   spdlog::info("hexplane: resuming {} at iteration {}", file.string(), start_iteration_);
 }
 
@@ -201,6 +204,19 @@ nlohmann::json HexPlaneTraining::RunConfig() const {
           {"hexplane", c_.ToJson()}};
 }
 
+// The training curve as the Gaussian runs' results.json holds it (the harness reads it).
+nlohmann::json HexPlaneTraining::CurveJson() const {
+  nlohmann::json c = {{"iteration", nlohmann::json::array()},
+                      {"loss", nlohmann::json::array()},
+                      {"train_psnr", nlohmann::json::array()}};
+  for (std::size_t i = 0; i + 2 < curve_.size(); i += 3) {
+    c["iteration"].push_back(std::int64_t(curve_[i]));
+    c["loss"].push_back(FiniteOrNull(curve_[i + 1]));
+    c["train_psnr"].push_back(FiniteOrNull(curve_[i + 2]));
+  }
+  return c;
+}
+
 void HexPlaneTraining::SaveCheckpoint(int iterations_done, double seconds) const {
   HexPlaneTrainState s;
   s.iteration = iterations_done;
@@ -211,6 +227,7 @@ void HexPlaneTraining::SaveCheckpoint(int iterations_done, double seconds) const
   s.epoch_seed = epoch_seed_;
   s.next = next_;
   s.in_epoch = in_epoch_;
+  s.curve = curve_;
   SaveTrainingCheckpoint(o_.out / "checkpoint.bin", model_, *adam_, s);
 }
 
@@ -370,7 +387,8 @@ HexPlaneTrainSummary HexPlaneTraining::Finish(int iterations, double seconds) {
                                   {"final_train_batch_psnr", psnr_},
                                   {"threads", MaxThreads()},
                                   {"grid", model_.grid},
-                                  {"time_grid", model_.time_grid}};
+                                  {"time_grid", model_.time_grid},
+                                  {"curve", CurveJson()}};
   WriteJsonFile(o_.out / "results.json", results);
   return s;
 }
@@ -398,6 +416,8 @@ HexPlaneTrainSummary HexPlaneTraining::Run() {
               std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     progress.Advance(1, fmt::format("loss {:.5f} psnr {:.2f} samples {}/{}", loss_, psnr_,
                                     batch_.app_samples(), batch_.density_samples()));
+    if (done % std::max(1, c_.iterations / 100) == 0 || done == c_.iterations)
+      curve_.insert(curve_.end(), {double(done), loss_, psnr_});
     if (done == c_.iterations) break;
     if (o_.stop_after > 0 && done >= o_.stop_after) {
       SaveCheckpoint(done, seconds);  // interrupted: resumable, no results

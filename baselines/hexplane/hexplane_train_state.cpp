@@ -25,6 +25,7 @@ void SaveTrainingCheckpoint(const std::filesystem::path& file, const HexPlaneMod
     WritePod(out, std::uint8_t(state.in_epoch));
     WritePod(out, std::uint64_t(state.rng.size()));
     out.write(state.rng.data(), std::streamsize(state.rng.size()));
+    WriteArray(out, state.curve);
     adam.Write(out);
   });
 }
@@ -52,6 +53,8 @@ HexPlaneTrainState LoadTrainingCheckpoint(const std::filesystem::path& file,
   s.rng.resize(rng_size);
   in.read(s.rng.data(), std::streamsize(rng_size));
   if (!in) Fail("{}: cut short in the random generator", name);
+  ReadArrayOfAnyLength(in, std::uint64_t{3} << 24, name, "the training curve", &s.curve);
+  if (s.curve.size() % 3 != 0) Fail("{}: the training curve is not in triples", name);
   adam->Read(in, name);
   if (in.peek() != std::char_traits<char>::eof()) Fail("{}: unexpected bytes at the end", name);
   return s;

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "baselines/hexplane/hexplane_adam.h"
 #include "baselines/hexplane/hexplane_model.h"
@@ -22,6 +23,8 @@ struct HexPlaneTrainState {
   // permutation drawn yet when !in_epoch.
   std::uint64_t epoch_seed = 0, next = 0;
   bool in_epoch = false;
+  // The training curve so far: (iteration, loss, batch PSNR) triples, for results.json.
+  std::vector<double> curve;
 };
 
 void SaveTrainingCheckpoint(const std::filesystem::path& file, const HexPlaneModel& model,
