@@ -42,9 +42,33 @@ std::pair<float, float> DepthRangeOf(const SceneBox& box, const std::vector<Eige
   return {float(std::max(nearest - reach, 0.01 * box.half)), float(farthest + reach)};
 }
 
+std::vector<Eigen::Vector3f> PointsInAnyView(const std::vector<Eigen::Vector3f>& points,
+                                             const std::vector<Camera>& cameras) {
+  std::vector<Eigen::Vector3f> seen;
+  for (const Eigen::Vector3f& p : points) {
+    for (const Camera& c : cameras) {
+      const std::optional<Eigen::Vector3d> uvd = c.Project(p.cast<double>());
+      if (uvd && (*uvd)[0] >= 0 && (*uvd)[0] <= c.intrinsics.width && (*uvd)[1] >= 0 &&
+          (*uvd)[1] <= c.intrinsics.height) {
+        seen.push_back(p);
+        break;
+      }
+    }
+  }
+  return seen;
+}
+
 void ApplySceneBounds(const Dataset& dataset, HexPlaneConfig* config) {
   std::optional<SceneBox> box;
-  if (dataset.point_cloud_path) box = BoxAroundPoints(ReadPly(*dataset.point_cloud_path).positions);
+  if (dataset.point_cloud_path) {
+    // At most 32 training cameras, spread over the split: enough to tell the seen points.
+    std::vector<Camera> cameras;
+    const std::size_t n = dataset.train.size(), step = std::max<std::size_t>(1, n / 32);
+    for (std::size_t i = 0; i < n; i += step) cameras.push_back(dataset.train[i].camera);
+    const std::vector<Eigen::Vector3f> points = ReadPly(*dataset.point_cloud_path).positions;
+    box = BoxAroundPoints(PointsInAnyView(points, cameras));
+    if (!box) box = BoxAroundPoints(points);
+  }
   if (box) {
     std::vector<Eigen::Vector3d> centres;
     for (const Frame& f : dataset.train) centres.push_back(f.camera.Center());

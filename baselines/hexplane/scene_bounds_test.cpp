@@ -47,5 +47,19 @@ TEST(SceneBounds, DepthRangeHoldsTheBoxFromEveryCamera) {
   EXPECT_GT(far_in, near_in);
 }
 
+// A camera at z = 5 looking down -z at the origin (OpenGL convention: the camera looks along its
+// -z) sees the point at the origin, not one far to the side nor one behind it.
+TEST(SceneBounds, KeepsThePointsACameraSees) {
+  Camera c;
+  c.intrinsics.width = c.intrinsics.height = 100;
+  c.intrinsics.fx = c.intrinsics.fy = 100;
+  c.intrinsics.cx = c.intrinsics.cy = 50;
+  c.world_from_cam_gl = LookAtWorldFromCamGl({0, 0, 5}, {0, 0, 0});
+  const std::vector<Eigen::Vector3f> seen = PointsInAnyView(
+      {Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(50, 0, 0), Eigen::Vector3f(0, 0, 10)}, {c});
+  ASSERT_EQ(seen.size(), 1u);
+  EXPECT_EQ(seen[0], Eigen::Vector3f(0, 0, 0));
+}
+
 }  // namespace
 }  // namespace hdr4d::baselines::hexplane
