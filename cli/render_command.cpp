@@ -12,18 +12,18 @@ namespace hdr4d::cli {
 
 namespace {
 
-// A run of the grid family (HexPlane) renders through its own engine; true when `options.run` is
-// one. `one_view`: whether --time was given.
-bool RenderGridRunIfAsked(const method::RenderRunOptions& options, bool one_view) {
+// A run of the grid family (HexPlane) renders through its own engine, with the same options;
+// true when `options.run` is one.
+bool RenderGridRunIfAsked(const method::RenderRunOptions& options) {
   if (!baselines::hexplane::IsHexPlaneRun(options.run)) return false;
-  if (one_view || options.video_frames > 0 || !options.timing.empty())
-    Fail("render: --time, --video and --timing are not available for HexPlane runs yet");
   const ThreadLimit limit(options.threads);
   const int n = baselines::hexplane::RenderHexPlaneRun(
       {.run = options.run, .out = options.out, .split = options.split,
        .resolution = options.resolution, .exposure = options.exposure,
-       .write_hdr = options.write_hdr, .png_compression = options.png_compression});
-  fmt::print("render: wrote {} images\n", n);
+       .write_hdr = options.write_hdr, .png_compression = options.png_compression,
+       .time = options.time, .camera_index = options.camera_index,
+       .video_frames = options.video_frames, .fps = options.fps, .timing = options.timing});
+  if (!options.time && options.video_frames == 0) fmt::print("render: wrote {} images\n", n);
   return true;
 }
 
@@ -108,7 +108,7 @@ void AddRenderCommand(CLI::App& app) {
     options->run = *run;
     options->out = *out;
     method::ProtectRunInputs(*run);
-    if (RenderGridRunIfAsked(*options, time_option->count() > 0)) return;
+    if (RenderGridRunIfAsked(*options)) return;
     const int n = method::RenderRun(*options);
     fmt::print("render: wrote {} images\n", n);
   });

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include "baselines/hexplane/hexplane_config.h"
+#include "baselines/hexplane/hexplane_render.h"
 #include "baselines/scene_baselines.h"
 #include "cli/flags.h"
 #include "core/util/error.h"
@@ -44,11 +45,16 @@ std::shared_ptr<hp::HexPlaneTrainOptions> AddHexPlaneTrainFlags(CLI::App* cmd) {
   return o;
 }
 
-bool TrainHexPlaneIfAsked(CLI::App* cmd, const std::string& method,
-                          hp::HexPlaneTrainOptions o) {
+bool TrainHexPlaneIfAsked(CLI::App* cmd, std::string method, hp::HexPlaneTrainOptions o) {
+  // --resume of a grid run without --method: the run's own method.
+  if (cmd->get_option("--resume")->count() > 0 && cmd->get_option("--method")->count() == 0 &&
+      cmd->get_option("--out")->count() > 0) {
+    if (const auto run_method = hp::HexPlaneMethodOfRun(cmd->get_option("--out")->as<std::string>()))
+      method = *run_method;
+  }
   if (!hp::IsHexPlaneMethod(method)) return false;
   const auto given = [cmd](const char* flag) { return cmd->get_option(flag)->count() > 0; };
-  for (const char* flag : {"--resume", "--config", "--tone-mapper", "--batch-size",
+  for (const char* flag : {"--config", "--tone-mapper", "--batch-size",
                            "--max-gaussians", "--hdr-head", "--learn-background"}) {
     if (given(flag)) Fail("train: {} does not apply to --method {}", flag, method);
   }
@@ -65,7 +71,10 @@ bool TrainHexPlaneIfAsked(CLI::App* cmd, const std::string& method,
   if (given("--iterations")) o.iterations = cmd->get_option("--iterations")->as<int>();
   if (given("--seed")) o.seed = cmd->get_option("--seed")->as<std::int64_t>();
   if (given("--hdr-weight")) o.hdr_weight = cmd->get_option("--hdr-weight")->as<float>();
-  if (o.data.empty()) Fail("train: --data is required");
+  if (given("--checkpoint-every"))
+    o.checkpoint_every = cmd->get_option("--checkpoint-every")->as<int>();
+  o.resume = given("--resume");
+  if (o.data.empty() && !o.resume) Fail("train: --data is required");
   if (o.out.empty()) Fail("train: --out is required");
   const hp::HexPlaneTrainSummary s = hp::TrainHexPlane(o);
   fmt::print("train: {} iterations in {:.1f} s; test {}\n", s.iterations, s.train_seconds,

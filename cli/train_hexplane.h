@@ -18,8 +18,9 @@ std::vector<std::string> TrainMethodNames();
 std::shared_ptr<baselines::hexplane::HexPlaneTrainOptions> AddHexPlaneTrainFlags(CLI::App* cmd);
 
 // Trains a grid-family run when `method` is one of them (true), with the train command's shared
-// flags read from `cmd`; false for any other method.
-bool TrainHexPlaneIfAsked(CLI::App* cmd, const std::string& method,
+// flags read from `cmd`; false for any other method. --resume without --method resumes a grid
+// run as its own method.
+bool TrainHexPlaneIfAsked(CLI::App* cmd, std::string method,
                           baselines::hexplane::HexPlaneTrainOptions options);
 
 }  // namespace hdr4d::cli

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <vector>
 
+#include "baselines/hexplane/binary_io.h"
 #include "core/util/parallel.h"
 
 namespace hdr4d::baselines::hexplane {
@@ -18,6 +19,29 @@ class PlainAdam {
     v_.clear();
     step_ = 0;
   }
+  // The moments and step count, for a resumable checkpoint (hexplane_train_state.cpp); Read
+  // throws naming `file` for a cut or foreign state.
+  void Write(std::ostream& out) const {
+    WritePod(out, std::int64_t(step_));
+    WritePod(out, std::uint64_t(m_.size()));
+    for (std::size_t k = 0; k < m_.size(); ++k) {
+      WriteArray(out, m_[k]);
+      WriteArray(out, v_[k]);
+    }
+  }
+  void Read(std::istream& in, const std::string& file) {
+    const auto step = ReadPod<std::int64_t>(in, file, "the optimiser's step");
+    const auto slots = ReadPod<std::uint64_t>(in, file, "the optimiser's arrays");
+    if (step < 0 || step > (std::int64_t{1} << 40) || slots > 64)
+      Fail("{}: bad optimiser state (step {}, {} arrays)", file, step, slots);
+    step_ = int(step);
+    m_.assign(slots, {});
+    v_.assign(slots, {});
+    for (std::size_t k = 0; k < slots; ++k) {
+      ReadArrayOfAnyLength(in, std::uint64_t{1} << 34, file, "an optimiser moment", &m_[k]);
+      ReadArray(in, m_[k].size(), file, "an optimiser moment", &v_[k]);
+    }
+  }
   // Call once per iteration before the arrays' Update calls.
   void BeginStep() {
     ++step_;
@@ -28,6 +52,9 @@ class PlainAdam {
       m_.emplace_back(params->size(), 0.0f);
       v_.emplace_back(params->size(), 0.0f);
     }
+    if (m_[slot_].size() != params->size())  // a resumed state that does not fit the model
+      Fail("hexplane: optimiser array {} has {} values, the parameters {}", slot_,
+           m_[slot_].size(), params->size());
     std::vector<float>& m = m_[slot_];
     std::vector<float>& v = v_[slot_++];
     const float b1 = beta1_, b2 = beta2_;

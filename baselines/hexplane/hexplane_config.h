@@ -3,6 +3,7 @@
 // multiply-then-concat fusion, density straight from the planes).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -43,7 +44,8 @@ struct HexPlaneConfig {
   float beta1 = 0.9f, beta2 = 0.99f;
   int batch_rays = 4096;
   int iterations = 25000;
-  float box = 1.5f;  // the scene box [-box, box]^3
+  float box = 1.5f;  // the scene box: the cube center +- box (scene_bounds.h sets both)
+  std::array<float, 3> center{0.0f, 0.0f, 0.0f};
   float near = 2.0f, far = 6.0f;
   float background = 0.0f;
   std::uint64_t seed = 20220401;
@@ -62,7 +64,7 @@ struct HexPlaneConfig {
 const std::vector<std::string>& HexPlaneMethods();
 bool IsHexPlaneMethod(const std::string& name);
 // The method's preset; supervision "auto" (LDR, plus HDR where the scene has it), "ldr", "hdr"
-// or "ldr+hdr".
+// or "ldr+hdr". hexplane with "hdr" is HexPlane* (the hexplane-hdr preset and name).
 HexPlaneConfig HexPlanePreset(const std::string& method, const std::string& supervision,
                               bool scene_has_hdr);
 

@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <iosfwd>
 #include <vector>
 
 #include "baselines/hexplane/app_mlp.h"
@@ -60,6 +61,11 @@ struct HexPlaneModel {
 
   void Save(const std::filesystem::path& file) const;
   static HexPlaneModel Load(const std::filesystem::path& file, const HexPlaneConfig& config);
+  // The same bytes on a stream (a training checkpoint appends the trainer's state after them);
+  // `file` names the source in errors.
+  void Write(std::ostream& out) const;
+  static HexPlaneModel Read(std::istream& in, const std::filesystem::path& file,
+                            const HexPlaneConfig& config);
 };
 
 // Gradients with the model's shapes.

@@ -1,8 +1,9 @@
-// checkpoint.bin of a HexPlane run: a magic tag, the grid, then every array with its length, so
-// a truncated or foreign file is refused with its name instead of read as garbage.
+// checkpoint.bin of a HexPlane run: a magic tag, the grid, then every array with its length
+// (binary_io.h); a training checkpoint appends the trainer's state (hexplane_train_state.h).
 #include <cstring>
 #include <fstream>
 
+#include "baselines/hexplane/binary_io.h"
 #include "baselines/hexplane/hexplane_model.h"
 #include "core/files/atomic_file.h"
 #include "core/util/error.h"
@@ -12,49 +13,36 @@ namespace {
 
 constexpr char kMagic[8] = {'H', 'E', 'X', 'P', 'L', 'N', '0', '1'};
 
-template <typename V>
-void WriteArray(std::ostream& out, const std::vector<V>& v) {
-  const std::uint64_t n = v.size();
-  out.write(reinterpret_cast<const char*>(&n), sizeof n);
-  out.write(reinterpret_cast<const char*>(v.data()), std::streamsize(n * sizeof(V)));
-}
-
-template <typename V>
-void ReadArray(std::istream& in, std::size_t expected, const std::string& file, const char* what,
-               std::vector<V>* v) {
-  std::uint64_t n = 0;
-  in.read(reinterpret_cast<char*>(&n), sizeof n);
-  if (!in || n != expected)
-    Fail("{}: {} has {} values where the configuration gives {} (or the file is cut short)", file,
-         what, n, expected);
-  v->resize(n);
-  in.read(reinterpret_cast<char*>(v->data()), std::streamsize(n * sizeof(V)));
-  if (!in) Fail("{}: cut short in {}", file, what);
-}
-
 }  // namespace
 
 void HexPlaneModel::Save(const std::filesystem::path& file) const {
-  WriteFileAtomic(file, [&](std::ostream& out) {
-    out.write(kMagic, sizeof kMagic);
-    const std::int32_t header[5] = {grid[0], grid[1], grid[2], time_grid,
-                                    std::int32_t(exposure_offset.size())};
-    out.write(reinterpret_cast<const char*>(header), sizeof header);
-    for (const HexPlanes<float>* planes : {&density, &app})
-      for (const Plane<float>* p : planes->All()) WriteArray(out, p->data);
-    WriteArray(out, density_basis);
-    WriteArray(out, app_basis);
-    WriteArray(out, mlp);
-    WriteArray(out, exposure_offset);
-    const std::int32_t occ[3] = {occupancy.res[0], occupancy.res[1], occupancy.res[2]};
-    out.write(reinterpret_cast<const char*>(occ), sizeof occ);
-    WriteArray(out, occupancy.occupied);
-  });
+  WriteFileAtomic(file, [&](std::ostream& out) { Write(out); });
+}
+
+void HexPlaneModel::Write(std::ostream& out) const {
+  out.write(kMagic, sizeof kMagic);
+  const std::int32_t header[5] = {grid[0], grid[1], grid[2], time_grid,
+                                  std::int32_t(exposure_offset.size())};
+  out.write(reinterpret_cast<const char*>(header), sizeof header);
+  for (const HexPlanes<float>* planes : {&density, &app})
+    for (const Plane<float>* p : planes->All()) WriteArray(out, p->data);
+  WriteArray(out, density_basis);
+  WriteArray(out, app_basis);
+  WriteArray(out, mlp);
+  WriteArray(out, exposure_offset);
+  const std::int32_t occ[3] = {occupancy.res[0], occupancy.res[1], occupancy.res[2]};
+  out.write(reinterpret_cast<const char*>(occ), sizeof occ);
+  WriteArray(out, occupancy.occupied);
 }
 
 HexPlaneModel HexPlaneModel::Load(const std::filesystem::path& file, const HexPlaneConfig& config) {
   std::ifstream in(file, std::ios::binary);
   if (!in) Fail("{}: cannot open the HexPlane checkpoint", file.string());
+  return Read(in, file, config);
+}
+
+HexPlaneModel HexPlaneModel::Read(std::istream& in, const std::filesystem::path& file,
+                                  const HexPlaneConfig& config) {
   char magic[8];
   in.read(magic, sizeof magic);
   if (!in || std::memcmp(magic, kMagic, sizeof kMagic) != 0)
@@ -66,7 +54,7 @@ HexPlaneModel HexPlaneModel::Load(const std::filesystem::path& file, const HexPl
     Fail("{}: bad HexPlane grid header", file.string());
   HexPlaneModel m = Create(config, h[4]);
   m.Upsample({h[0], h[1], h[2]}, h[3]);  // shapes only: every value is read below
-  const std::string name = file.string();
+  const std::string name = file.string();  // for errors
   for (HexPlanes<float>* planes : {&m.density, &m.app})
     for (Plane<float>* p : planes->All()) ReadArray(in, p->data.size(), name, "a plane", &p->data);
   ReadArray(in, m.density_basis.size(), name, "the density basis", &m.density_basis);

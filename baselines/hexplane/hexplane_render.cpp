@@ -11,6 +11,7 @@
 #include "core/files/output_guard.h"
 #include "core/image/image_io.h"
 #include "core/metrics/metrics.h"
+#include "method/train/test_evaluation.h"
 #include "core/util/error.h"
 #include "core/util/progress.h"
 
@@ -31,10 +32,18 @@ Ray PixelRay(const Camera& camera, int x, int y, float time01, float log_exposur
   return r;
 }
 
+bool HasLdrOutput(const HexPlaneModel& m) {
+  return m.config.color == ColorModel::kLdr || m.config.ldr_loss;
+}
+
 void RenderView(const HexPlaneModel& m, const Camera& camera, float time01, double exposure,
                 int image_index, std::vector<float>* ldr, std::vector<float>* hdr) {
   const int w = camera.intrinsics.width, h = camera.intrinsics.height, K = RayChannels(m);
   const float log_exposure = float(std::log(std::max(exposure, 1e-30)));
+  if (ldr && !HasLdrOutput(m)) {
+    ldr->clear();
+    ldr = nullptr;
+  }
   if (ldr) ldr->assign(std::size_t(w) * h * 3, 0.0f);
   if (hdr) hdr->assign(K == 6 ? std::size_t(w) * h * 3 : 0, 0.0f);
   constexpr int kChunk = 8192;  // rays per batch: bounded memory whatever the image size
@@ -57,31 +66,11 @@ void RenderView(const HexPlaneModel& m, const Camera& camera, float time01, doub
 }
 
 nlohmann::json EvaluateHexPlane(const HexPlaneModel& m, const std::vector<method::TrainView>& views) {
-  std::map<std::string, double> sums;
-  std::map<std::string, int> counts;
-  std::vector<float> ldr, hdr, gt;
-  for (const method::TrainView& v : views) {
-    RenderView(m, v.camera, v.time, v.exposure, -1, &ldr, &hdr);
-    v.ToFloat(&gt);
-    const auto add = [&](const MetricList& list) {
-      for (const auto& [name, value] : list) {
-        if (!std::isfinite(value)) continue;
-        sums[name] += value;
-        ++counts[name];
-      }
-    };
-    add(LdrMetrics(DisplayImageFromBuffer(ldr.data(), v.width(), v.height(), 3),
-                   DisplayImageFromBuffer(gt.data(), v.width(), v.height(), 3)));
-    if (!hdr.empty() && v.hdr_path) {
-      Image truth = ReadImage(*v.hdr_path);
-      Image pred(v.width(), v.height(), 3, Encoding::kLinear);
-      std::copy(hdr.begin(), hdr.end(), pred.data());
-      if (truth.width() == pred.width() && truth.height() == pred.height()) add(HdrMetrics(pred, truth));
-    }
-  }
-  nlohmann::json j = nlohmann::json::object();
-  for (const auto& [name, sum] : sums) j[name] = sum / counts[name];
-  return j;
+  return method::EvaluateViews(
+      [&m](const method::TrainView& v, std::vector<float>* ldr, std::vector<float>* hdr) {
+        RenderView(m, v.camera, v.time, v.exposure, -1, ldr, hdr);
+      },
+      views);
 }
 
 }  // namespace hdr4d::baselines::hexplane

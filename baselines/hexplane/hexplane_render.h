@@ -19,27 +19,43 @@ namespace hdr4d::baselines::hexplane {
 // The ray of pixel (x, y) (its centre) of `camera` at normalised time `time01` in [0, 1].
 Ray PixelRay(const Camera& camera, int x, int y, float time01, float log_exposure, int image);
 
-// ldr: H x W x 3 (null: not kept); hdr: H x W x 3 linear radiance for log-HDR models (left
+// Whether the model renders an LDR image: HexPlane and HDR-HexPlane do; HexPlane* (log-HDR
+// colours trained on the HDR alone) has no trained tone mapper, so no LDR output.
+bool HasLdrOutput(const HexPlaneModel& m);
+
+// ldr: H x W x 3 (null: not kept; left empty without an LDR output); hdr: H x W x 3 linear radiance for log-HDR models (left
 // empty for an LDR model; may be null).
 void RenderView(const HexPlaneModel& m, const Camera& camera, float time01, double exposure,
                 int image_index, std::vector<float>* ldr, std::vector<float>* hdr);
 
-// Mean LDR metrics (hdr4d eval's keys) of the final LDR renders over `views`, plus the HDR
-// metrics where a view has HDR ground truth and the model HDR colours.
+// The test metrics of a Gaussian run's results.json (method/train/test_evaluation.h): LDR
+// metrics with FLIP, and where a view has HDR ground truth and the model HDR colours, Table 1's
+// HDR metrics, the scale-aligned ones and the HDR's log-log slope.
 nlohmann::json EvaluateHexPlane(const HexPlaneModel& m, const std::vector<method::TrainView>& views);
 
 struct HexPlaneRenderOptions {
   std::filesystem::path run, out;  // out: default RUN/renders/<split>
   std::string split = "test";
   int resolution = 0;  // 0: the run's
-  std::optional<double> exposure;
+  std::optional<double> exposure;  // default: each view's own; the median training one for video
   bool write_hdr = true;
   int png_compression = 1;
+  // As `hdr4d render` for Gaussian runs (method/run/render_split.h): one view of frame
+  // `camera_index` of the split at `time` (default out RUN/renders/time), or `video_frames`
+  // frames orbiting the scene while time runs 0..1 (RUN/video, MP4 with ffmpeg); `timing`: a JSON
+  // file of each split view's render time and the fps after the first view.
+  std::optional<float> time;
+  int camera_index = 0;
+  int video_frames = 0;
+  int fps = 24;
+  std::filesystem::path timing;
 };
 
 // True when RUN/config.json names a HexPlane method (then `hdr4d render` calls the function
 // below instead of the Gaussian renderer).
 bool IsHexPlaneRun(const std::filesystem::path& run);
+// The grid method RUN/config.json names, or nullopt when RUN is no HexPlane run.
+std::optional<std::string> HexPlaneMethodOfRun(const std::filesystem::path& run);
 // Returns the number of images written.
 int RenderHexPlaneRun(const HexPlaneRenderOptions& options);
 

@@ -8,10 +8,13 @@
 #include <cmath>
 #include <numeric>
 #include <random>
+#include <sstream>
 
 #include "baselines/hexplane/hexplane_adam.h"
 #include "baselines/hexplane/hexplane_render.h"
 #include "baselines/hexplane/ray_batch.h"
+#include "baselines/hexplane/hexplane_train_state.h"
+#include "baselines/hexplane/scene_bounds.h"
 #include "core/dataset/dataset.h"
 #include "core/files/json_util.h"
 #include "core/files/output_guard.h"
@@ -38,7 +41,15 @@ class HexPlaneTraining {
   HexPlaneTrainSummary Run();
 
  private:
+  void ReadRunToResume();
+  void CheckResumedConfig() const;
   void SetUp();
+  void Restore();
+  nlohmann::json RunConfig() const;
+  nlohmann::json CurveJson() const;
+  void SaveCheckpoint(int iterations_done, double seconds) const;
+  void FillPixelOrder();
+  void NewEpoch(std::uint64_t seed);
   void MakeBatch(std::mt19937_64* rng);
   double LossGradient(const std::vector<float>& out, std::vector<float>* dout);
   void Regularise(float lr_factor);
@@ -57,6 +68,13 @@ class HexPlaneTraining {
   RayBatch batch_;
   std::vector<std::uint64_t> order_;  // a permutation of every training pixel
   std::size_t next_ = 0;
+  std::uint64_t epoch_seed_ = 0;  // order_ is the identity shuffled by mt19937_64(epoch_seed_)
+  bool in_epoch_ = false;
+  std::mt19937_64 rng_;
+  nlohmann::json stored_;  // a resumed run's config.json
+  int start_iteration_ = 0;
+  double start_seconds_ = 0;
+  std::vector<double> curve_;  // (iteration, loss, batch PSNR), about 100 points a run
   std::vector<Ray> rays_;
   std::vector<float> target_ldr_, target_hdr_;  // per ray: 3 values each
   std::vector<std::uint32_t> ray_view_;
@@ -64,7 +82,58 @@ class HexPlaneTraining {
   double loss_ = 0, psnr_ = 0;
 };
 
+// --resume: the scene and the settings not given come from RUN/config.json.
+void HexPlaneTraining::ReadRunToResume() {
+  const std::filesystem::path config = o_.out / "config.json", checkpoint = o_.out / "checkpoint.bin";
+  if (!std::filesystem::exists(config) || !std::filesystem::exists(checkpoint))
+    Fail("train: --resume: {} has no config.json and checkpoint.bin to resume from",
+         o_.out.string());
+  stored_ = ReadJsonFile(config);
+  const JsonField f(stored_, config.string());
+  if (!stored_.is_object() || !stored_.contains("hexplane"))
+    Fail("{}: not a HexPlane run (no \"hexplane\" settings) to resume with --method {}",
+         config.string(), o_.method);
+  const std::string data = f["data"].String();
+  if (o_.data.empty()) o_.data = data;
+  if (std::filesystem::weakly_canonical(o_.data) != std::filesystem::weakly_canonical(data))
+    Fail("train: --resume: --data {} is not the run's scene {} ({})", o_.data.string(), data,
+         config.string());
+  if (!o_.resolution) o_.resolution = int(f.IntOr("resolution", 1, 1, 1 << 16));
+  if (!o_.background) o_.background = float(f.NumberOr("background", 0.0));
+  // The settings not given are the run's (a given one must agree: CheckResumedConfig).
+  const HexPlaneConfig run = HexPlaneConfig::FromJson(stored_["hexplane"], config.string());
+  if (o_.supervision == "auto")
+    o_.supervision = run.ldr_loss && run.hdr_loss ? "ldr+hdr" : run.hdr_loss ? "hdr" : "ldr";
+  if (!o_.iterations) o_.iterations = run.iterations;
+  if (!o_.batch_rays) o_.batch_rays = run.batch_rays;
+  if (!o_.voxels_init) o_.voxels_init = run.voxels_init;
+  if (!o_.voxels_final) o_.voxels_final = run.voxels_final;
+  if (!o_.time_grid_init) o_.time_grid_init = run.time_grid_init;
+  if (!o_.time_grid_final) o_.time_grid_final = run.time_grid_final;
+  if (!o_.seed) o_.seed = std::int64_t(run.seed);
+  if (!o_.hdr_weight) o_.hdr_weight = run.hdr_weight;
+}
+
+// A resumed run trains with its own settings: any given one that resolves differently is refused.
+void HexPlaneTraining::CheckResumedConfig() const {
+  const nlohmann::json now = RunConfig(), then = stored_;
+  std::vector<std::string> differ;
+  for (const char* key : {"method", "resolution", "background"})
+    if (now.value(key, nlohmann::json()) != then.value(key, nlohmann::json())) differ.push_back(key);
+  for (const auto& [key, value] : now["hexplane"].items())
+    if (!then["hexplane"].contains(key) || then["hexplane"][key] != value)
+      differ.push_back("hexplane." + key);
+  if (!differ.empty())
+    Fail("train: --resume: the options give other settings than {} has ({}); resume with the "
+         "run's own (or train a new run)",
+         (o_.out / "config.json").string(), fmt::join(differ, ", "));
+}
+
 void HexPlaneTraining::SetUp() {
+  if (o_.resume) ReadRunToResume();
+  if (!o_.resolution) o_.resolution = 1;
+  if (!o_.background) o_.background = 0.0f;
+  if (*o_.resolution < 1) Fail("train: resolution {} must be >= 1", *o_.resolution);
   dataset_ = LoadDataset(o_.data);
   bool has_hdr = !dataset_.train.empty();
   for (const Frame& f : dataset_.train) has_hdr = has_hdr && f.hdr_path.has_value();
@@ -77,14 +146,14 @@ void HexPlaneTraining::SetUp() {
   if (o_.time_grid_final) c_.time_grid_final = *o_.time_grid_final;
   if (o_.seed) c_.seed = std::uint64_t(*o_.seed);
   if (o_.hdr_weight) c_.hdr_weight = *o_.hdr_weight;
-  if (dataset_.near) c_.near = float(*dataset_.near);
-  if (dataset_.far) c_.far = float(*dataset_.far);
-  c_.background = o_.background;
+  ApplySceneBounds(dataset_, &c_);
+  c_.background = *o_.background;
   if (std::string p = c_.Validate(); !p.empty()) Fail("train: {}", p);
-  const float bg[3] = {o_.background, o_.background, o_.background};
-  train_ = method::LoadViews(dataset_, Split::kTrain, bg, c_.hdr_loss, o_.resolution);
+  if (o_.resume) CheckResumedConfig();
+  const float bg[3] = {c_.background, c_.background, c_.background};
+  train_ = method::LoadViews(dataset_, Split::kTrain, bg, c_.hdr_loss, *o_.resolution);
   if (train_.empty()) Fail("{}: no training views", dataset_.root.string());
-  test_ = method::CheckViews(dataset_, Split::kTest, bg, o_.resolution);
+  test_ = method::CheckViews(dataset_, Split::kTest, bg, *o_.resolution);
   for (const TrainView& v : train_) {
     float max_value = 0;
     if (c_.hdr_loss) {
@@ -98,26 +167,96 @@ void HexPlaneTraining::SetUp() {
   adam_.emplace(c_.beta1, c_.beta2);
   for (int it : c_.upsample_at) upsample_at_.push_back(c_.Scaled(it));
   for (int it : c_.occupancy_at) occupancy_at_.push_back(c_.Scaled(it));
+  rng_.seed(c_.seed);
 }
 
-// The next batch of the shuffled pixels (reshuffled when used up, as the reference's sampler).
-void HexPlaneTraining::MakeBatch(std::mt19937_64* rng) {
-  if (order_.empty()) {
-    for (std::size_t v = 0; v < train_.size(); ++v)
-      for (int p = 0; p < train_[v].width() * train_[v].height(); ++p)
-        order_.push_back((std::uint64_t(v) << 32) | std::uint64_t(p));
-    next_ = order_.size();
+// A resumed run's model, optimiser, generator and place in the pixel order.
+void HexPlaneTraining::Restore() {
+  const std::filesystem::path file = o_.out / "checkpoint.bin";
+  const HexPlaneTrainState s = LoadTrainingCheckpoint(file, c_, &model_, &*adam_);
+  if (int(model_.exposure_offset.size()) != (c_.color == ColorModel::kLdr ? 0 : int(train_.size())))
+    Fail("{}: {} exposure offsets for {} training views", file.string(),
+         model_.exposure_offset.size(), train_.size());
+  if (s.iteration > c_.iterations)
+    Fail("{}: {} iterations done, more than the run's {}", file.string(), s.iteration,
+         c_.iterations);
+  std::istringstream rng(s.rng);
+  rng >> rng_;
+  if (!rng) Fail("{}: the random generator's state does not read back", file.string());
+  if (s.in_epoch) {
+    NewEpoch(s.epoch_seed);
+    if (s.next > order_.size())
+      Fail("{}: pixel {} of {} in the order", file.string(), s.next, order_.size());
+    next_ = std::size_t(s.next);
   }
+  start_iteration_ = int(s.iteration);
+  start_seconds_ = s.seconds;
+  curve_ = s.curve;
+  spdlog::info("hexplane: resuming {} at iteration {}", file.string(), start_iteration_);
+}
+
+nlohmann::json HexPlaneTraining::RunConfig() const {
+  return {{"method", c_.method},
+          {"data", std::filesystem::absolute(o_.data).string()},
+          {"resolution", *o_.resolution},
+          {"background", c_.background},
+          {"hdr", {{"method", c_.method}}},
+          {"hexplane", c_.ToJson()}};
+}
+
+// The training curve as the Gaussian runs' results.json holds it (the harness reads it).
+nlohmann::json HexPlaneTraining::CurveJson() const {
+  nlohmann::json c = {{"iteration", nlohmann::json::array()},
+                      {"loss", nlohmann::json::array()},
+                      {"train_psnr", nlohmann::json::array()}};
+  for (std::size_t i = 0; i + 2 < curve_.size(); i += 3) {
+    c["iteration"].push_back(std::int64_t(curve_[i]));
+    c["loss"].push_back(FiniteOrNull(curve_[i + 1]));
+    c["train_psnr"].push_back(FiniteOrNull(curve_[i + 2]));
+  }
+  return c;
+}
+
+void HexPlaneTraining::SaveCheckpoint(int iterations_done, double seconds) const {
+  HexPlaneTrainState s;
+  s.iteration = iterations_done;
+  s.seconds = seconds;
+  std::ostringstream rng;
+  rng << rng_;
+  s.rng = rng.str();
+  s.epoch_seed = epoch_seed_;
+  s.next = next_;
+  s.in_epoch = in_epoch_;
+  s.curve = curve_;
+  SaveTrainingCheckpoint(o_.out / "checkpoint.bin", model_, *adam_, s);
+}
+
+void HexPlaneTraining::FillPixelOrder() {
+  order_.clear();
+  for (std::size_t v = 0; v < train_.size(); ++v)
+    for (int p = 0; p < train_[v].width() * train_[v].height(); ++p)
+      order_.push_back((std::uint64_t(v) << 32) | std::uint64_t(p));
+}
+
+// A fresh permutation of every training pixel, as the reference's sampler after each pass; drawn
+// from the identity by its own seed, so a checkpoint holds the seed instead of the permutation.
+void HexPlaneTraining::NewEpoch(std::uint64_t seed) {
+  FillPixelOrder();
+  std::mt19937_64 shuffle(seed);
+  std::shuffle(order_.begin(), order_.end(), shuffle);
+  epoch_seed_ = seed;
+  next_ = 0;
+  in_epoch_ = true;
+}
+
+// The next batch of the shuffled pixels.
+void HexPlaneTraining::MakeBatch(std::mt19937_64* rng) {
   rays_.clear();
   target_ldr_.clear();
   target_hdr_.clear();
   ray_view_.clear();
-  std::vector<float> mu;
   for (int k = 0; k < c_.batch_rays; ++k) {
-    if (next_ == order_.size()) {
-      std::shuffle(order_.begin(), order_.end(), *rng);
-      next_ = 0;
-    }
+    if (!in_epoch_ || next_ == order_.size()) NewEpoch((*rng)());
     const std::uint64_t id = order_[next_++];
     const std::uint32_t v = std::uint32_t(id >> 32), p = std::uint32_t(id & 0xffffffffu);
     const TrainView& view = train_[v];
@@ -232,14 +371,8 @@ void HexPlaneTraining::Schedules(int it) {
 }
 
 HexPlaneTrainSummary HexPlaneTraining::Finish(int iterations, double seconds) {
-  model_.Save(o_.out / "checkpoint.bin");
-  nlohmann::json config = {{"method", c_.method},
-                           {"data", std::filesystem::absolute(o_.data).string()},
-                           {"resolution", o_.resolution},
-                           {"background", o_.background},
-                           {"hdr", {{"method", c_.method}}},
-                           {"hexplane", c_.ToJson()}};
-  WriteJsonFile(o_.out / "config.json", config);
+  SaveCheckpoint(iterations, seconds);
+  WriteJsonFile(o_.out / "config.json", RunConfig());
   HexPlaneTrainSummary s;
   s.iterations = iterations;
   s.train_seconds = seconds;
@@ -254,7 +387,8 @@ HexPlaneTrainSummary HexPlaneTraining::Finish(int iterations, double seconds) {
                                   {"final_train_batch_psnr", psnr_},
                                   {"threads", MaxThreads()},
                                   {"grid", model_.grid},
-                                  {"time_grid", model_.time_grid}};
+                                  {"time_grid", model_.time_grid},
+                                  {"curve", CurveJson()}};
   WriteJsonFile(o_.out / "results.json", results);
   return s;
 }
@@ -262,31 +396,49 @@ HexPlaneTrainSummary HexPlaneTraining::Finish(int iterations, double seconds) {
 HexPlaneTrainSummary HexPlaneTraining::Run() {
   SetUp();
   std::filesystem::create_directories(o_.out);
-  std::mt19937_64 rng(c_.seed);
+  if (o_.resume) {
+    Restore();
+  } else {
+    // The settings first: a run killed before its end resumes from them.
+    std::filesystem::remove(o_.out / "results.json");
+    WriteJsonFile(o_.out / "config.json", RunConfig());
+  }
   Progress progress("train " + c_.method, c_.iterations, o_.progress);
+  progress.Advance(start_iteration_);
   const auto start = std::chrono::steady_clock::now();
-  double seconds = 0;
-  int it = 0;
-  for (; it < c_.iterations; ++it) {
-    Step(it, &rng);
-    Schedules(it);
-    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  double seconds = start_seconds_;
+  int done = start_iteration_;
+  while (done < c_.iterations) {
+    Step(done, &rng_);
+    Schedules(done);
+    ++done;
+    seconds = start_seconds_ +
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     progress.Advance(1, fmt::format("loss {:.5f} psnr {:.2f} samples {}/{}", loss_, psnr_,
                                     batch_.app_samples(), batch_.density_samples()));
-    if (o_.max_seconds > 0 && seconds >= o_.max_seconds) {
-      ++it;
-      break;
+    if (done % std::max(1, c_.iterations / 100) == 0 || done == c_.iterations)
+      curve_.insert(curve_.end(), {double(done), loss_, psnr_});
+    if (done == c_.iterations) break;
+    if (o_.stop_after > 0 && done >= o_.stop_after) {
+      SaveCheckpoint(done, seconds);  // interrupted: resumable, no results
+      progress.Finish();
+      return {.iterations = done, .train_seconds = seconds, .test_metrics = {}};
     }
+    if (o_.checkpoint_every > 0 && done % o_.checkpoint_every == 0) SaveCheckpoint(done, seconds);
+    if (o_.max_seconds > 0 && seconds >= o_.max_seconds) break;
   }
   progress.Finish();
-  return Finish(it, seconds);
+  return Finish(done, seconds);
 }
 
 }  // namespace
 
 HexPlaneTrainSummary TrainHexPlane(const HexPlaneTrainOptions& options) {
   if (options.out.empty()) Fail("train: --out is required");
-  if (options.resolution < 1) Fail("train: resolution {} must be >= 1", options.resolution);
+  if (options.resolution && *options.resolution < 1)
+    Fail("train: resolution {} must be >= 1", *options.resolution);
+  if (options.checkpoint_every < 0 || options.stop_after < 0)
+    Fail("train: checkpoint_every and stop_after must be >= 0");
   const ThreadLimit limit(options.threads);
   return HexPlaneTraining(options).Run();
 }

@@ -69,8 +69,8 @@ TEST(HexPlaneTrain, BadInputsAreErrors) {
   o.method = "hexplane-hdr";  // needs HDR ground truth, which this scene lacks
   EXPECT_NE(ErrorOf([&] { TrainHexPlane(o); }).find("no HDR ground truth"), std::string::npos);
   o.method = "hexplane";
-  o.supervision = "hdr";
-  EXPECT_NE(ErrorOf([&] { TrainHexPlane(o); }).find("LDR images only"), std::string::npos);
+  o.supervision = "ldr+hdr";
+  EXPECT_NE(ErrorOf([&] { TrainHexPlane(o); }).find("is neither"), std::string::npos);
   o.supervision = "auto";
   o.voxels_final = 10;  // below the initial grid
   EXPECT_NE(ErrorOf([&] { TrainHexPlane(o); }).find("voxels"), std::string::npos);

@@ -33,7 +33,7 @@ void RayBatch::Lane::March(const HexPlaneModel& m, const Ray& ray, const float* 
     float p[3];
     bool inside = true;
     for (int a = 0; a < 3; ++a) {
-      p[a] = (ray.origin[a] + ray.dir[a] * z) * inv_box;
+      p[a] = (ray.origin[a] + ray.dir[a] * z - c.center[a]) * inv_box;
       inside = inside && p[a] >= -1.0f && p[a] <= 1.0f;
     }
     if (!inside || !m.occupancy.Keeps(p)) continue;

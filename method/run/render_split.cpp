@@ -355,13 +355,7 @@ int RenderVideo(const RenderRunOptions& options,
   }
   progress.Finish();
   writer->Commit();
-  if (HaveFfmpeg()) {
-    const fs::path mp4 = EncodeVideo(dir, options.video_frames, options.fps);
-    fmt::print("render: {} frames and {}\n", options.video_frames, mp4.string());
-  } else {
-    fmt::print("render: {} frames in {} (install ffmpeg for an MP4)\n", options.video_frames,
-               dir.string());
-  }
+  FinishVideo(dir, options.video_frames, options.fps);
   return options.video_frames;
 }
 
@@ -405,6 +399,15 @@ int RenderSplitViews(const RenderRunOptions& options,
 }
 
 }  // namespace
+
+void FinishVideo(const fs::path& dir, int frames, int fps) {
+  if (HaveFfmpeg()) {
+    const fs::path mp4 = EncodeVideo(dir, frames, fps);
+    fmt::print("render: {} frames and {}\n", frames, mp4.string());
+  } else {
+    fmt::print("render: {} frames in {} (install ffmpeg for an MP4)\n", frames, dir.string());
+  }
+}
 
 int RenderRun(const RenderRunOptions& options) {
   CheckRenderOptions(options);

@@ -59,6 +59,10 @@ int RenderRun(const RenderRunOptions& options);
 // starting at the first training camera. Frame k of n is at angle 2 pi k / n.
 std::vector<Camera> OrbitCameras(const std::vector<Camera>& train_cameras, int frames);
 
+// A video's frames DIR/frame_%04d.png (0 .. frames - 1) encoded as DIR/video.mp4 when ffmpeg is
+// installed (through the atomic writer); says which on stdout.
+void FinishVideo(const std::filesystem::path& dir, int frames, int fps);
+
 // Everything a trained run needs to render: its configuration, scene, model and tone mapper.
 struct LoadedRun {
   nlohmann::json config;

@@ -79,6 +79,17 @@ MetricList GroupHdrMetrics(const std::vector<TrainView>& views,
 nlohmann::json EvaluateViews(ViewRenderer* renderer,
                              const std::vector<TrainView>& views,
                              bool with_flip) {
+  return EvaluateViews(
+      [renderer](const TrainView& v, std::vector<float>* ldr, std::vector<float>* hdr) {
+        const ToneFrame frame{v.time_index, -1, static_cast<float>(std::log(v.exposure))};
+        renderer->Render(v.camera, v.time, frame, ldr, hdr);
+      },
+      views, with_flip);
+}
+
+nlohmann::json EvaluateViews(const RenderViewFn& render,
+                             const std::vector<TrainView>& views,
+                             bool with_flip) {
   nlohmann::json mean = nlohmann::json::object();
   if (views.empty()) return mean;
   std::map<std::string, std::pair<double, int>> sums;
@@ -103,10 +114,9 @@ nlohmann::json EvaluateViews(ViewRenderer* renderer,
     std::optional<Image> prediction;
     for (std::size_t i : group) {
       const TrainView& v = views[i];
-      const ToneFrame frame{v.time_index, -1, static_cast<float>(std::log(v.exposure))};
       // The HDR image only where it is scored (the group's first view); the other brackets'
       // renders then blend the LDR channels alone (the same LDR image).
-      renderer->Render(v.camera, v.time, frame, &ldr, hdr_path && !prediction ? &hdr : nullptr);
+      render(v, &ldr, hdr_path && !prediction ? &hdr : nullptr);
       if (!ldr.empty()) {
         v.ToFloat(&gt);
         Image render = DisplayImageFromBuffer(ldr.data(), v.width(), v.height(), 3);

@@ -3,6 +3,7 @@
 // (raw and scale-aligned, core/metrics/hdr_alignment.h), averaged as hdr4d eval does.
 #pragma once
 
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <vector>
 
@@ -18,6 +19,15 @@ namespace hdr4d::method {
 // an evaluation, so the trainer computes them for results.json only, not for the test curve.
 // A metric that is not finite for a view (a slope with no measured pixel) is left out of its mean.
 nlohmann::json EvaluateViews(ViewRenderer* renderer,
+                             const std::vector<TrainView>& views,
+                             bool with_flip = true);
+
+// The same for any renderer (the grid family's, baselines/hexplane): `render` draws view `v` at
+// its own time and exposure into ldr (H x W x 3 in [0, 1], left empty when the model has no LDR
+// output) and, when hdr is not null, the linear HDR render (left empty for an LDR model).
+using RenderViewFn =
+    std::function<void(const TrainView& v, std::vector<float>* ldr, std::vector<float>* hdr)>;
+nlohmann::json EvaluateViews(const RenderViewFn& render,
                              const std::vector<TrainView>& views,
                              bool with_flip = true);
 
