@@ -156,10 +156,13 @@ mkdir -p O11 R11; ln -s ../victim O11/cam03_t000_e0.png; ln -s ../victim O11/cam
 ln -s ../victim R11/checkpoint.bin; ln -s ../victim R11/.hdr4d-lock; ln -s ../victim R11/config.json
 case_ok render --run R --out O11
 case_ok train --data S --out R11 --iterations 2 --threads 1 --overwrite
-mkdir -p T11; ln -s ../victim T11/scores.json
-case_ok eval S/hdr S/hdr --out T11/scores.json
 check "11: a planted link's target was written" same victim victim.orig
 check "11: the planted render link is still a link" test ! -L O11/cam03_t000_e0.png
+# A link the user names on the command line is written through (issue 11), not replaced.
+printf 'other\n' > victim2; mkdir -p T11; ln -s ../victim2 T11/scores.json
+case_ok eval S/hdr S/hdr --out T11/scores.json
+check "11: a link named on the command line was replaced" test -L T11/scores.json
+check "11: a link named on the command line was not written through" grep -q '"mean"' victim2
 # 17: a constant HDR truth leaves the log-shape numbers undefined, with the reason
 oiiotool --pattern constant:color=2,2,2 32x32 3 -d half -o const.exr
 oiiotool --pattern noise:type=uniform:min=0.1:max=4 32x32 3 -d half -o noise.exr
