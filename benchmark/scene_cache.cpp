@@ -12,6 +12,7 @@
 #include "benchmark/settings_flags.h"
 #include "core/dataset/dataset.h"
 #include "core/util/error.h"
+#include "core/dataset/dataset_checksum.h"
 #include "core/files/sha256.h"
 
 namespace hdr4d::bench {
@@ -142,21 +143,9 @@ PreparedScene PrepareScene(const SceneSpec& spec, const SceneCacheOptions& optio
 
 std::string DatasetChecksum(const fs::path& dir) {
   const Dataset d = LoadDataset(dir, {.image_check = ImageCheck::kNone, .require_test = false});
-  std::set<fs::path> files;
-  for (const char* name : {"transforms_train.json", "transforms_test.json", "transforms_val.json",
-                           "transforms.json", "point3d.ply"}) {
-    if (fs::exists(dir / name)) files.insert(dir / name);
-  }
-  for (const Frame* f : d.AllFrames()) {
-    files.insert(f->image_path);
-    if (f->hdr_path) files.insert(*f->hdr_path);
-  }
   std::string listing;
-  for (const fs::path& f : files) {
-    // A frame whose LDR image is not there yet (HDR-only scenes) is named, not hashed.
-    const std::string hash = fs::exists(f) ? Sha256File(f) : "absent";
+  for (const auto& [f, hash] : HashDatasetFiles(d))
     listing += fs::relative(f, dir).generic_string() + " " + hash + "\n";
-  }
   return Sha256Hex(listing);
 }
 

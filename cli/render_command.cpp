@@ -107,7 +107,7 @@ void AddRenderCommand(CLI::App& app) {
     options->write_hdr = !*no_hdr;
     options->run = *run;
     options->out = *out;
-    method::ProtectRunInputs(*run);
+    method::ProtectRunInputs(*run, method::RenderOutputFolder(*options));
     if (RenderGridRunIfAsked(*options)) return;
     const int n = method::RenderRun(*options);
     fmt::print("render: wrote {} images\n", n);

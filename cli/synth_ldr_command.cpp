@@ -31,6 +31,7 @@ struct SynthLdrArgs {
   std::uint64_t seed = 0;
   int bits = 8;
   bool keep_existing = false;
+  bool overwrite = false;
   double gain_drift = 0;
   CameraPipelineOptions pipeline;
 };
@@ -45,6 +46,7 @@ void Run(const SynthLdrArgs& a) {
         .noise = noise,
         .bits = a.bits,
         .overwrite = !a.keep_existing,
+        .replace_foreign = a.overwrite,
         .gain_drift = a.gain_drift,
         .pipeline = a.pipeline};
     options.pipeline.seed = a.seed;
@@ -122,6 +124,10 @@ void AddSynthLdrCommand(CLI::App& app) {
       ->check(OneOf({"0", "8", "16"}))
       ->capture_default_str();
   cmd->add_flag("--keep-existing", args->keep_existing, "Dataset mode: skip LDR images that exist");
+  cmd->add_flag("--overwrite", args->overwrite,
+                "Dataset mode: replace existing LDR images although the scene has no "
+                "synthesis.json (synth-ldr did not make them); without it they are refused")
+      ->excludes("--keep-existing");
   cmd->add_option("--gain-drift", args->gain_drift,
                   "Dataset mode: a hidden camera gain exp(D (t - 0.5)) over normalised time t "
                   "(auto-exposure-like; the JSON keeps the nominal exposures)")

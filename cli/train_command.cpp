@@ -15,6 +15,7 @@
 #include "cli/train_hexplane.h"
 #include "method/train/train_config.h"
 #include "method/train/train_options_table.h"
+#include "method/train/run_folder.h"
 #include "method/train/train_request.h"
 #include "method/train/trainer.h"
 
@@ -174,6 +175,8 @@ void AddRunFlags(CLI::App* cmd, TrainArgs* a) {
                 "own configuration (RUN/config.json): --data and every option not given come "
                 "from it; an option given that differs from it is refused before the scene is "
                 "read, except " + MayChangeOnResumeFlags());
+  cmd->add_flag("--overwrite", a->request.overwrite, method::OverwriteHelp())
+      ->excludes("--resume");
   a->method_flag =
       cmd->add_option(
              "--method", a->method,

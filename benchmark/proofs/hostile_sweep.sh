@@ -155,13 +155,14 @@ check "14: 16-bit RGBA at alpha 0.2 scores below 40 dB" python3 -c "import json,
 mkdir -p O11 R11; ln -s ../victim O11/cam03_t000_e0.png; ln -s ../victim O11/cam03_t000.exr
 ln -s ../victim R11/checkpoint.bin; ln -s ../victim R11/.hdr4d-lock; ln -s ../victim R11/config.json
 case_ok render --run R --out O11
-case_ok train --data S --out R11 --iterations 2 --threads 1
+case_ok train --data S --out R11 --iterations 2 --threads 1 --overwrite
 check "11: a planted link's target was written" same victim victim.orig
-# A link named on the command line is the user's own choice of target: written through.
-mkdir -p T11; ln -s ../victim11b T11/scores.json; echo keep > victim11b
-case_ok eval S/hdr S/hdr --out T11/scores.json
-check "11: an --out named on the command line is written through its link" grep -q identical_pairs victim11b
 check "11: the planted render link is still a link" test ! -L O11/cam03_t000_e0.png
+# A link the user names on the command line is written through (issue 11), not replaced.
+printf 'other\n' > victim2; mkdir -p T11; ln -s ../victim2 T11/scores.json
+case_ok eval S/hdr S/hdr --out T11/scores.json
+check "11: a link named on the command line was replaced" test -L T11/scores.json
+check "11: a link named on the command line was not written through" grep -q '"mean"' victim2
 # 17: a constant HDR truth leaves the log-shape numbers undefined, with the reason
 oiiotool --pattern constant:color=2,2,2 32x32 3 -d half -o const.exr
 oiiotool --pattern noise:type=uniform:min=0.1:max=4 32x32 3 -d half -o noise.exr
@@ -211,6 +212,94 @@ case_ err "refusing" bench table suite1.json --store st1.db --out S/hdr
 case_ err "refusing" bench pareto suite1.json --store st1.db --out S/hdr
 case_ err "refusing" bench pareto suite1.json --store st1.db --out S/images
 check "1: the suite file was replaced" grep -q '"name"' suite1.json
+
+# 2: a run's files and renders are inputs of every command that reads the run
+"$B" render --run R >/dev/null 2>&1
+case_ err "refusing" render --run R --timing R/results.json
+case_ err "refusing" render --run R --split train --timing R/renders/test/t.json
+case_ err "refusing" export-ply --run R --out R/results.json
+case_ err "refusing" export-ply --run R --out R/config.json
+case_ err "refusing" export-ply --run R --out R/renders/test/cam03_t000_e0.png
+case_ err "refusing" tone-curves --run R --out R/renders/test
+case_ok render --run R
+# 3: a new run never replaces an earlier one unless asked (--overwrite)
+case_ err "--overwrite" train --data S --out R --iterations 5 --threads 1
+mkdir -p R3; printf 'x' > R3/checkpoint.bin
+case_ err "--resume" train --data S --out R3 --iterations 5 --threads 1
+mkdir -p R3b; printf '{}' > R3b/results.json
+case_ err "--overwrite" train --data S --out R3b --iterations 5 --threads 1
+check "3: a refused train replaced a foreign checkpoint" grep -qx x R3/checkpoint.bin
+# 18: resuming a finished run rewrites nothing (case_ compares R byte for byte)
+case_ok train --out R --resume --threads 1
+# 15: --resume refuses a changed dataset, by name
+cp -r S S15; rm -f S15/synthesis.json.tmp*; "$B" train --data S15 --out R15 --iterations 10 --threads 1 >/dev/null 2>&1
+cp S15/images/cam00_t000_e0.png keep15.png; cp S15/images/cam01_t000_e0.png S15/images/cam00_t000_e0.png
+case_ err "changed" train --out R15 --resume --iterations 20 --threads 1
+cp keep15.png S15/images/cam00_t000_e0.png; cp S15/transforms_train.json keep15.json
+python3 -c "import json; d=json.load(open('S15/transforms_train.json')); d['frames'].reverse(); json.dump(d, open('S15/transforms_train.json','w'))"
+case_ err "frame 0 was" train --out R15 --resume --iterations 20 --threads 1
+cp keep15.json S15/transforms_train.json
+case_ok train --out R15 --resume --iterations 20 --threads 1
+# 4: renders keep the frames' sub-folders (images/camNN/...), eval pairs them by path
+cp -r S S4
+python3 - <<'PY'
+import json, os
+for split in ('train', 'test'):
+    p = f'S4/transforms_{split}.json'; d = json.load(open(p))
+    for f in d['frames']:
+        for k in ('file_path', 'exr_file_path'):
+            folder, name = os.path.split(f[k]); moved = os.path.join(folder, name[:5], name[6:])
+            os.makedirs(os.path.join('S4', folder, name[:5]), exist_ok=True)
+            if os.path.exists(os.path.join('S4', f[k])): os.rename(os.path.join('S4', f[k]), os.path.join('S4', moved))
+            f[k] = moved
+    json.dump(d, open(p, 'w'))
+PY
+"$B" train --data S4 --out R4 --iterations 10 --threads 1 >/dev/null 2>&1
+case_ok render --run R4 --split train --out O4
+check "4: renders of frames in sub-folders overwrote each other" test "$(find O4 -name '*.png' | wc -l)" -eq 36
+case_ok eval O4 S4/images --out e4.json
+check "4: eval did not pair each render with its own camera's truth" python3 -c "import json,sys; p=json.load(open('e4.json'))['pairs']; sys.exit(0 if len(p)==36 and p[0]['name']=='cam00/t000_e0.png' else 1)"
+# 6: synth-ldr never replaces LDR images it did not make without --overwrite
+cp -r S S6; rm S6/synthesis.json; cp S6/images/cam00_t000_e0.png keep6.png
+case_ err "synthesis.json" synth-ldr --data S6
+case_err_keep6() { cmp -s keep6.png S6/images/cam00_t000_e0.png; }
+check "6: synth-ldr replaced an LDR image it did not make" case_err_keep6
+case_ok synth-ldr --data S6 --overwrite
+# 18: merge-hdr of brackets clipped everywhere warns that the result is a constant
+cp -r S S18
+for f in S18/images/*.png; do oiiotool --pattern constant:color=1,1,1 32x32 3 -d uint8 -o "$f"; done
+"$B" merge-hdr --data S18 --out M18 2>m18.err >/dev/null
+check "18: merge-hdr of clipped brackets said nothing" grep -q "constant" m18.err
+# 12 and 20: a huge point cloud under a 3 GB limit, a full disk (a 64 KB file-size limit)
+REAL=$B
+printf '#!/bin/bash\nulimit -v 3000000; exec "%s" "$@"\n' "$REAL" > small_memory.sh
+printf '#!/bin/bash\ntrap "" XFSZ; ulimit -f 64; exec "%s" "$@"\n' "$REAL" > small_disk.sh
+chmod +x small_memory.sh small_disk.sh
+cp -r S S12
+python3 -c "n=3000000; open('S12/point3d.ply','wb').write(b'ply\nformat binary_little_endian 1.0\nelement vertex %d\nproperty float x\nproperty float y\nproperty float z\nend_header\n' % n + bytes(12*n))"
+B=$W/small_memory.sh
+case_ err "--max-gaussians" train --data S12 --out R12 --iterations 5 --threads 1
+check "12: a refused start left its run folder" test ! -e R12
+case_ok train --data S12 --out R12 --iterations 5 --threads 1 --max-gaussians 2000
+B=$REAL
+"$W/small_disk.sh" train --data S --out R20 --iterations 5 --threads 1 >/dev/null 2>r20.err; rc=$?
+check "20: train on a full disk did not end with exit 1" test $rc -eq 1
+check "20: a train that hit a full disk left its run folder" test ! -e R20
+mkdir -p R20b; cp R/config.json R20b/
+case_ err "no checkpoint.bin" train --out R20b --resume --threads 1
+# 24: appended bytes, an ffmpeg pattern in --out, a read-only scene
+cp -r R R24; rm -f R24/.hdr4d-lock; printf 'junk' >> R24/checkpoint.bin
+case_ err "appended" render --run R24 --out O24
+if command -v ffmpeg >/dev/null 2>&1; then
+  case_ok render --run R --video 3 --out 'V%02d'
+  check "24: render --video --out V%02d made no video" test -e 'V%02d/video.mp4'
+fi
+if command -v setpriv >/dev/null 2>&1 && setpriv --reuid=65534 --regid=65534 --clear-groups "$B" --version >/dev/null 2>&1; then
+  printf '#!/bin/bash\nexec setpriv --reuid=65534 --regid=65534 --clear-groups "%s" "$@"\n' "$REAL" > nobody.sh
+  chmod +x nobody.sh; chmod 755 "$W"; B=$W/nobody.sh
+  case_ err "read-only" synth-ldr --data S
+  B=$REAL
+fi
 
 echo "hostile sweep: $tried cases tried, $held held"
 for f in "${failed_cases[@]}"; do echo "  FAILED: $f"; done

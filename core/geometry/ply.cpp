@@ -361,6 +361,22 @@ void AppendVertex(const std::vector<double>& row,
 
 }  // namespace
 
+std::int64_t ReadPlyVertexCount(const fs::path& path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) Fail("{}: file not found", path.string());
+  RequireInputFile(path);  // a device or FIFO is refused before it is opened
+  std::ifstream file(path, std::ios::binary);
+  if (!file) Fail("{}: cannot open for reading", path.string());
+  // The header only: a header longer than this is not one hdr4d reads either.
+  std::string head(64 * 1024, '\0');
+  file.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(file.gcount()));
+  const Header header = ParseHeader(path, head);
+  for (const Element& e : header.elements)
+    if (e.name == "vertex") return e.count;
+  Fail("{}: bad PLY header: no vertex element", path.string());
+}
+
 PointCloud ReadPly(const fs::path& path) {
   const std::string bytes = ReadAllBytes(path);
   const std::string name = path.string();

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <filesystem>
 #include <vector>
 
@@ -26,6 +27,9 @@ struct PointCloud {
 // endian, list properties in the vertex element, a missing x/y/z), truncated data, an
 // unparsable ascii number and non-finite coordinates, colours or times.
 PointCloud ReadPly(const std::filesystem::path& path);
+// The number of points (vertex element count) from the header alone, without reading the data:
+// for a memory check before a huge cloud is read. Throws like ReadPly for a bad header.
+std::int64_t ReadPlyVertexCount(const std::filesystem::path& path);
 
 enum class PlyFormat { kBinaryLittleEndian, kAscii };
 

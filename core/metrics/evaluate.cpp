@@ -83,7 +83,11 @@ std::optional<BracketMasks> ReadBracketMasks(const fs::path& gt_path,
                                              int resolution,
                                              bool ldr_fit) {
   if (!brackets) return std::nullopt;
-  const auto it = brackets->find(gt_path.filename().string());
+  // By the ground truth's resolved path (datasets with sub-folders repeat file names), else by
+  // its file name (a hand-made map).
+  std::error_code ec;
+  auto it = brackets->find(fs::weakly_canonical(gt_path, ec).string());
+  if (it == brackets->end()) it = brackets->find(gt_path.filename().string());
   if (it == brackets->end() || it->second.empty()) return std::nullopt;
   std::vector<Image> ldr, truth_rendered, rendered;
   for (const fs::path& p : it->second) {
@@ -176,20 +180,26 @@ nlohmann::json PairJson(const PairResult& pair) {
   return out;
 }
 
+// The images in `folder` and its sub-folders (renders keep a dataset's sub-folder layout,
+// `cam0/x.png`), sorted by their path inside it.
 std::vector<fs::path> ListImages(const fs::path& folder) {
   std::vector<fs::path> images;
   std::error_code ec;
-  fs::directory_iterator it(folder, ec);
+  fs::recursive_directory_iterator it(folder, ec);
   if (ec) Fail("{}: cannot list folder: {}", folder.string(), ec.message());
-  for (; it != fs::directory_iterator(); it.increment(ec)) {
+  for (; it != fs::recursive_directory_iterator(); it.increment(ec)) {
     if (ec) Fail("{}: cannot list folder: {}", folder.string(), ec.message());
     std::error_code file_ec;
     if (it->is_regular_file(file_ec) && IsImagePath(it->path())) images.push_back(it->path());
   }
   if (ec) Fail("{}: cannot list folder: {}", folder.string(), ec.message());
-  std::sort(images.begin(), images.end(),
-            [](const fs::path& a, const fs::path& b) { return a.filename() < b.filename(); });
+  std::sort(images.begin(), images.end());
   return images;
+}
+
+// An image's name for pairing: its path inside the folder listed, with '/' separators.
+std::string NameIn(const fs::path& image, const fs::path& folder) {
+  return image.lexically_relative(folder).generic_string();
 }
 
 std::string JoinFirst(const std::vector<std::string>& names, std::size_t count) {
@@ -218,8 +228,9 @@ std::vector<std::pair<fs::path, fs::path>> MatchFolders(const fs::path& pred_dir
   std::map<std::string, std::vector<fs::path>> gt_by_stem;
   bool gt_has[2] = {false, false};  // [is HDR]
   for (const fs::path& g : ListImages(gt_dir)) {
-    gt_by_name[g.filename().string()] = g;
-    gt_by_stem[g.stem().string()].push_back(g);
+    const fs::path name = NameIn(g, gt_dir);
+    gt_by_name[name.generic_string()] = g;
+    gt_by_stem[(name.parent_path() / name.stem()).generic_string()].push_back(g);
     gt_has[IsHdrPath(g)] = true;
   }
   std::size_t other_kind_skipped = 0;
@@ -227,7 +238,7 @@ std::vector<std::pair<fs::path, fs::path>> MatchFolders(const fs::path& pred_dir
   std::vector<std::pair<fs::path, fs::path>> pairs;
   std::vector<std::string> missing;
   for (const fs::path& pred : preds) {
-    const std::string name = pred.filename().string();
+    const std::string name = NameIn(pred, pred_dir);
     if (!gt_has[IsHdrPath(pred)] && gt_has[!IsHdrPath(pred)]) {
       ++other_kind_skipped;
       continue;
@@ -237,10 +248,10 @@ std::vector<std::pair<fs::path, fs::path>> MatchFolders(const fs::path& pred_dir
       continue;
     }
     std::vector<std::string> same_kind, other_kind;
-    if (auto it = gt_by_stem.find(pred.stem().string()); it != gt_by_stem.end()) {
-      for (const fs::path& g : it->second) {
-        (IsHdrPath(g) == IsHdrPath(pred) ? same_kind : other_kind).push_back(g.filename().string());
-      }
+    const fs::path stem = fs::path(name).parent_path() / pred.stem();
+    if (auto it = gt_by_stem.find(stem.generic_string()); it != gt_by_stem.end()) {
+      for (const fs::path& g : it->second)
+        (IsHdrPath(g) == IsHdrPath(pred) ? same_kind : other_kind).push_back(NameIn(g, gt_dir));
     }
     if (same_kind.size() == 1) {
       pairs.emplace_back(pred, gt_dir / same_kind[0]);
@@ -272,8 +283,9 @@ std::vector<std::pair<fs::path, fs::path>> MatchFolders(const fs::path& pred_dir
     spdlog::warn("eval: {} of {} ground-truth images in {} have no prediction and are skipped",
                  unmatched, gt_by_name.size(), gt_dir.string());
   }
-  std::sort(pairs.begin(), pairs.end(),
-            [](const auto& a, const auto& b) { return a.second.filename() < b.second.filename(); });
+  std::sort(pairs.begin(), pairs.end(), [&gt_dir](const auto& a, const auto& b) {
+    return NameIn(a.second, gt_dir) < NameIn(b.second, gt_dir);
+  });
   return pairs;
 }
 
@@ -295,7 +307,7 @@ EvalBrackets DatasetBrackets(const fs::path& scene) {
   const Dataset dataset = LoadDataset(scene, {.image_check = ImageCheck::kNone});
   EvalBrackets out;
   for (const Frame* f : dataset.AllFrames()) {
-    if (f->hdr_path) out[f->hdr_path->filename().string()].push_back(f->image_path);
+    if (f->hdr_path) out[fs::weakly_canonical(*f->hdr_path).string()].push_back(f->image_path);
   }
   return out;
 }
@@ -346,6 +358,7 @@ nlohmann::json EvaluatePaths(const fs::path& pred,
   ParallelFor(static_cast<std::int64_t>(jobs.size()), 1, [&](std::int64_t i) {
     try {
       results[i] = EvaluateFiles(jobs[i].first, jobs[i].second, brackets, gt_resolution, ldr_fit);
+      if (gt_dir) results[i]->name = NameIn(jobs[i].second, gt);  // cam0/x.png: unique
     } catch (const std::exception& e) {
       errors[i] = e.what();
     }

@@ -43,12 +43,12 @@
 
 namespace hdr4d {
 
-// The LDR brackets of HDR ground-truth images: ground-truth file name -> the LDR images of the
-// same view at its exposures.
+// The LDR brackets of HDR ground-truth images: ground-truth resolved path (or, in a hand-made
+// map, file name) -> the LDR images of the same view at its exposures.
 using EvalBrackets = std::map<std::string, std::vector<std::filesystem::path>>;
 
 // The brackets of every frame of the dataset at `scene` with an exr_file_path (all splits),
-// keyed by the HDR file's name. Throws hdr4d::Error when the dataset cannot be read.
+// keyed by the HDR file's resolved path. Throws hdr4d::Error when the dataset cannot be read.
 EvalBrackets DatasetBrackets(const std::filesystem::path& scene);
 
 // One pair of image files: {"name": <gt file name>, <metric>: <value or null>, ...}. Throws
@@ -63,9 +63,11 @@ nlohmann::json EvaluatePair(const std::filesystem::path& pred,
                             int gt_resolution = 1);
 
 // `pred` and `gt` are both image files (one pair) or both folders. Folders: every image in the
-// pred folder (not recursive; non-image files are ignored) is paired with the ground truth of
-// the same file name, or else with the one ground truth of the same stem whose extension is of
-// the same kind (LDR with LDR, EXR/HDR with EXR/HDR). Ground-truth images without a prediction
+// pred folder and its sub-folders (non-image files are ignored) is paired with the ground truth
+// at the same path inside the gt folder (`cam0/x.png` with `cam0/x.png`, as `hdr4d render` keeps
+// a dataset's sub-folders), or else with the one ground truth of the same path and stem whose
+// extension is of the same kind (LDR with LDR, EXR/HDR with EXR/HDR); a pair's "name" is that
+// path. Ground-truth images without a prediction
 // are skipped with a warning (a dataset's image folder holds every split). A prediction without
 // ground truth, an empty pred folder, or a file paired with a folder throws hdr4d::Error naming
 // what is missing. Pairs are evaluated in parallel; the output

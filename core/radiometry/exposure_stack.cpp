@@ -1,8 +1,13 @@
 #include "core/radiometry/exposure_stack.h"
 
+#include <unistd.h>
+
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <map>
 #include <set>
@@ -158,6 +163,39 @@ void WriteManifest(const fs::path& root,
   WriteJsonFile(root / kManifestName, manifest);
 }
 
+// LDR images this command did not make (the scene has no synthesis.json: a capture's own
+// photographs, or images from another tool) are replaced only when asked (issue 51 §6).
+void RequireOwnLdrImages(const fs::path& root,
+                         const std::vector<const Frame*>& frames,
+                         const DatasetSynthesisOptions& options) {
+  if (!options.overwrite || options.replace_foreign || PathExists(root / kManifestName)) return;
+  std::vector<const Frame*> existing;
+  for (const Frame* f : frames)
+    if (PathExists(f->image_path)) existing.push_back(f);
+  if (existing.empty()) return;
+  Fail("{}: {} of its {} LDR images exist (e.g. {}) and the scene has no {}, so synth-ldr did "
+       "not make them: refusing to replace them; pass --overwrite to replace them, or "
+       "--keep-existing to write only the missing ones",
+       root.string(), existing.size(), frames.size(), existing.front()->file_path, kManifestName);
+}
+
+// A folder the images go into that cannot be written is named with the cause before any work,
+// not as the temporary file the first write fails on (issue 51 §24).
+void RequireWritableFolders(const std::vector<fs::path>& outputs) {
+  std::set<fs::path> folders;
+  for (const fs::path& f : outputs) folders.insert(f.parent_path().empty() ? "." : f.parent_path());
+  for (const fs::path& folder : folders) {
+    std::error_code ec;
+    if (!fs::is_directory(folder, ec)) continue;  // made by the writer, which names its problem
+    if (::access(folder.c_str(), W_OK) == 0) continue;
+    const int err = errno;
+    Fail("{}: cannot write the scene's LDR images into this folder: {}", folder.string(),
+         err == EROFS ? "it is on a read-only file system"
+         : err == EACCES ? "it is read-only for this user (permission denied)"
+                         : std::strerror(err));
+  }
+}
+
 }  // namespace
 
 int SynthesizeDatasetLdr(const fs::path& root, const DatasetSynthesisOptions& options) {
@@ -168,7 +206,10 @@ int SynthesizeDatasetLdr(const fs::path& root, const DatasetSynthesisOptions& op
   const std::vector<const Frame*> frames = FramesWithHdr(dataset, root);
   // Writing a dataset's LDR images is this command's job: the output guard lets exactly these
   // files through (core/files/output_guard.h), nothing else in the dataset's folders.
-  const OutputPermit permit(LdrOutputs(frames, root));
+  const std::vector<fs::path> outputs = LdrOutputs(frames, root);
+  RequireOwnLdrImages(root, frames, options);
+  RequireWritableFolders(outputs);
+  const OutputPermit permit(outputs);
   const std::map<fs::path, std::vector<const Frame*>> by_hdr = FramesByHdr(frames);
 
   const DatasetPipeline pipeline(options.pipeline, options.crf, frames);
@@ -234,6 +275,32 @@ Image MergeWithChannelCrfs(const std::vector<Image>& stack, const std::vector<do
   return merged;
 }
 
+// Whether any value of any bracket lies strictly inside (0, 1): a measurement, not a clip.
+bool AnyMeasuredValue(const std::vector<Image>& stack) {
+  for (const Image& image : stack)
+    for (float v : image.values())
+      if (v > 0.0f && v < 1.0f) return true;
+  return false;
+}
+
+// Brackets clipped everywhere merge to a constant that says nothing of the scene (issue 51 §18):
+// said once, naming the first such image and the count.
+void WarnUnmeasured(const std::vector<std::pair<fs::path, std::vector<const Frame*>>>& groups,
+                    const std::vector<char>& unmeasured) {
+  std::size_t count = 0;
+  const fs::path* first = nullptr;
+  for (std::size_t g = 0; g < groups.size(); ++g) {
+    if (!unmeasured[g]) continue;
+    if (!first) first = &groups[g].first;
+    ++count;
+  }
+  if (count == 0) return;
+  spdlog::warn("merge-hdr: {} of {} merged images (e.g. {}) have no pixel "
+               "measured in any exposure: every bracket is clipped at 0 or 1 everywhere, so the "
+               "merged HDR is a constant, not the scene's radiance",
+               count, groups.size(), first->filename().string());
+}
+
 }  // namespace
 
 int MergeDatasetExposures(const fs::path& root, const fs::path& out, const MergeOptions& options) {
@@ -277,6 +344,7 @@ int MergeDatasetExposures(const fs::path& root, const fs::path& out, const Merge
   std::vector<std::pair<fs::path, std::vector<const Frame*>>> groups(by_hdr.begin(), by_hdr.end());
   FileBatch batch;  // all merged images or none
   Progress progress("merge-hdr", static_cast<std::int64_t>(groups.size()));
+  std::vector<char> unmeasured(groups.size(), 0);
   ParallelFor(static_cast<std::int64_t>(groups.size()), 1, [&](std::int64_t g) {
     std::vector<Image> stack;
     std::vector<double> exposures;
@@ -284,12 +352,14 @@ int MergeDatasetExposures(const fs::path& root, const fs::path& out, const Merge
       stack.push_back(ReadImage(f->image_path).Rgb());
       exposures.push_back(f->exposure);
     }
+    unmeasured[g] = !AnyMeasuredValue(stack);
     WriteImage(out / groups[g].first.filename(), MergeWithChannelCrfs(stack, exposures, crfs),
                {.format = PixelFormat::kFloat, .batch = &batch});
     progress.Advance();
   });
   progress.Finish();
   batch.Commit();
+  WarnUnmeasured(groups, unmeasured);
   return static_cast<int>(groups.size());
 }
 

@@ -17,6 +17,9 @@ struct DatasetSynthesisOptions {
   SensorNoise noise;           // seed is mixed with each frame's split and index
   int bits = 8;
   bool overwrite = true;  // false: keep LDR images that already exist
+  // Replace existing LDR images although the scene has no synthesis.json (synth-ldr did not make
+  // them); without it such images are refused.
+  bool replace_foreign = false;
   // A hidden in-camera gain that changes over time, as auto-exposure compensation or in-camera
   // tone adjustments do: frame at normalised time t is exposed at exposure x
   // exp(gain_drift (t - 0.5)) while its JSON keeps the nominal exposure. 0 = a fixed response.

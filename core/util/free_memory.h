@@ -25,4 +25,10 @@ std::size_t PeakResidentBytes();
 // The machine's physical memory in bytes (sysconf), 0 where unknown.
 std::size_t PhysicalMemoryBytes();
 
+// What this process may still allocate, in bytes: the least of the memory the system has
+// available (/proc/meminfo MemAvailable), the address-space limit (RLIMIT_AS) less what the
+// process already maps, and its cgroup's limit (v2 memory.max) less what the cgroup uses. 0
+// where none of them is known.
+std::size_t AvailableMemoryBytes();
+
 }  // namespace hdr4d

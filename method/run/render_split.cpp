@@ -8,6 +8,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <future>
+#include <iterator>
+#include <map>
 #include <numbers>
 #include <optional>
 #include <sstream>
@@ -103,10 +105,35 @@ std::string LoadedRun::MethodName() const {
   return method != hdr->end() && method->is_string() ? method->get<std::string>() : "?";
 }
 
-void ProtectRunInputs(const fs::path& run) {
+void ProtectRunInputs(const fs::path& run, const fs::path& own_output) {
   const std::string role = fmt::format("a file of run {} that this command reads", run.string());
-  ProtectInputFile(run / "config.json", role);
-  ProtectInputFile(run / "checkpoint.bin", role);
+  for (const char* name : kRunFileNames) ProtectInputFile(run / name, role);
+  // Renders are what `hdr4d eval` scores: no other output may land among them. The folder this
+  // command renders into (and what lies below it) is its own to rewrite.
+  std::error_code ec;
+  const fs::path renders = run / "renders";
+  if (!fs::is_directory(renders, ec)) return;
+  const fs::path own_resolved = own_output.empty() ? fs::path() : fs::weakly_canonical(own_output, ec);
+  const auto own = [&](const fs::path& folder) {  // own_output or below it
+    if (own_resolved.empty()) return false;
+    std::error_code resolve_ec;
+    const fs::path rel = fs::weakly_canonical(folder, resolve_ec).lexically_relative(own_resolved);
+    return !rel.empty() && *rel.begin() != "..";
+  };
+  const std::string renders_role = fmt::format("the renders of run {} (inputs of eval)", run.string());
+  if (!own(renders)) ProtectInputFolder(renders, renders_role);
+  for (fs::recursive_directory_iterator it(renders, ec), end; !ec && it != end; it.increment(ec)) {
+    std::error_code type_ec;
+    if (it->is_directory(type_ec) && !it->is_symlink(type_ec) && !own(it->path()))
+      ProtectInputFolder(it->path(), renders_role);
+  }
+}
+
+fs::path RenderOutputFolder(const RenderRunOptions& options) {
+  if (!options.out.empty()) return options.out;
+  if (options.time) return options.run / "renders" / "time";
+  if (options.video_frames > 0) return options.run / "video";
+  return options.run / "renders" / options.split;
 }
 
 double MedianExposure(const Dataset& dataset) {
@@ -126,6 +153,14 @@ std::string ShellQuote(const std::string& text) {
   std::string quoted = "'";
   for (char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
   return quoted + "'";
+}
+
+// `text` as literal text inside an ffmpeg image-sequence pattern: its own '%' doubled (a folder
+// named 'V%02d' would otherwise be read as a frame number, issue 51 §24).
+std::string FfmpegPatternLiteral(const std::string& text) {
+  std::string literal;
+  for (char c : text) literal += c == '%' ? std::string("%%") : std::string(1, c);
+  return literal;
 }
 
 }  // namespace
@@ -208,6 +243,7 @@ void CheckRenderOptions(const RenderRunOptions& options) {
   if (options.camera_index < 0) Fail("render: camera {} must be >= 0", options.camera_index);
   if (options.exposure && !(*options.exposure > 0 && std::isfinite(*options.exposure)))
     Fail("render: --exposure {} must be a positive number of seconds", *options.exposure);
+  if (!options.timing.empty()) CheckOutput(options.timing);  // before the renders, not after
 }
 
 // Renders views and writes their files. A command's renders are moved into place together once
@@ -303,7 +339,7 @@ int RenderAtTime(const RenderRunOptions& options,
   }
   if (!(*options.time >= 0 && *options.time <= 1))
     Fail("render: --time {} is outside [0, 1]", *options.time);
-  const fs::path dir = options.out.empty() ? options.run / "renders" / "time" : options.out;
+  const fs::path dir = RenderOutputFolder(options);
   CheckOutputFolder(dir);
   const std::string stem =
       fmt::format("{}_cam{:03d}_t{:.4f}", options.split, options.camera_index, *options.time);
@@ -324,7 +360,8 @@ fs::path EncodeVideo(const fs::path& dir, int frames, int fps) {
     const std::string command = fmt::format(
         "ffmpeg -loglevel error -y -framerate {} -i {} -frames:v {} -vf "
         "'pad=ceil(iw/2)*2:ceil(ih/2)*2' -pix_fmt yuv420p -c:v libx264 -f mp4 {}",
-        fps, ShellQuote((dir / "frame_%04d.png").string()), frames, ShellQuote(tmp.string()));
+        fps, ShellQuote(FfmpegPatternLiteral(dir.string()) + "/frame_%04d.png"), frames,
+        ShellQuote(tmp.string()));
     if (std::system(command.c_str()) != 0)
       Fail("{}: ffmpeg failed to encode the frames in {}", mp4.string(), dir.string());
   });
@@ -344,7 +381,7 @@ int RenderVideo(const RenderRunOptions& options,
   std::vector<Camera> train_cameras;
   for (const Frame& f : run.dataset.train) train_cameras.push_back(f.camera);
   const std::vector<Camera> path = OrbitCameras(train_cameras, options.video_frames);
-  const fs::path dir = options.out.empty() ? options.run / "video" : options.out;
+  const fs::path dir = RenderOutputFolder(options);
   CheckOutputFolder(dir);
   Progress progress("render video", options.video_frames);
   for (int k = 0; k < options.video_frames; ++k) {
@@ -373,21 +410,54 @@ void WriteRenderTiming(const fs::path& path, const std::vector<double>& render_s
                        {"view_seconds", render_seconds}});
 }
 
-// Every view of the split, named like its ground truth.
+// Where a frame's render goes inside the output folder: its file's path below the dataset's
+// image folder (the path from the dataset's root without its first folder), so frames in
+// sub-folders (`images/cam0/x.png`, calibrate's layout) keep them and never overwrite each other
+// (issue 51 §4); a flat `images/x.png` stays `x.png`. A path that leaves the root keeps its name.
+fs::path RenderRelativePath(const fs::path& file, const fs::path& root) {
+  const fs::path rel = file.lexically_normal().lexically_relative(root.lexically_normal());
+  if (rel.empty() || *rel.begin() == ".." || rel.is_absolute()) return file.filename();
+  fs::path below;
+  for (auto it = std::next(rel.begin()); it != rel.end(); ++it) below /= *it;
+  return below.empty() ? rel : below;
+}
+
+// The LDR and HDR output paths of a frame, relative to the output folder.
+std::pair<fs::path, fs::path> RenderNames(const Frame& f, const fs::path& root) {
+  fs::path name = RenderRelativePath(f.image_path, root);
+  if (name.extension() != ".png") name += ".png";
+  fs::path hdr_name = f.hdr_path ? RenderRelativePath(*f.hdr_path, root)
+                                 : RenderRelativePath(f.image_path, root).replace_extension();
+  if (hdr_name.extension() != ".exr") hdr_name += ".exr";
+  return {name, hdr_name};
+}
+
+// Every view of the split, named like its ground truth (RenderNames); two frames that would
+// write one file are refused before any render.
 int RenderSplitViews(const RenderRunOptions& options,
+                     const Dataset& dataset,
                      const std::vector<Frame>& frames,
                      ViewFileWriter* writer) {
-  const fs::path out = options.out.empty() ? options.run / "renders" / options.split : options.out;
+  const fs::path out = RenderOutputFolder(options);
   CheckOutputFolder(out);  // before the first render: never among the dataset's images
+  // Output name -> the truth it stands for (the exposures of one view share their HDR render).
+  std::map<fs::path, std::pair<fs::path, const Frame*>> taken;
+  for (const Frame& f : frames) {
+    const auto [name, hdr_name] = RenderNames(f, dataset.root);
+    const fs::path hdr_truth = f.hdr_path ? *f.hdr_path : fs::path(f.image_path).replace_extension();
+    for (const auto& [n, truth] : {std::pair{name, f.image_path}, std::pair{hdr_name, hdr_truth}}) {
+      const auto [it, added] = taken.emplace(n, std::pair{truth, &f});
+      if (!added && it->second.first != truth) {
+        Fail("render: frames {} and {} of the {} split would both be rendered to {}: their "
+             "file names collide",
+             it->second.second->index, f.index, options.split, (out / n).string());
+      }
+    }
+  }
   Progress progress("render", static_cast<std::int64_t>(frames.size()));
   int written = 0;
   for (const Frame& f : frames) {
-    // Named like the ground truth so `hdr4d eval` pairs them: the LDR render as the frame's
-    // image, the HDR render as its EXR (or the image's stem + .exr when it has none).
-    fs::path name = f.image_path.filename();
-    if (name.extension() != ".png") name += ".png";
-    fs::path hdr_name = f.hdr_path ? f.hdr_path->filename() : f.image_path.stem();
-    if (hdr_name.extension() != ".exr") hdr_name += ".exr";
+    const auto [name, hdr_name] = RenderNames(f, dataset.root);
     written += writer->Render(f.camera, static_cast<float>(f.time),
                               options.exposure.value_or(f.exposure), out / name, out / hdr_name);
     progress.Advance();
@@ -422,7 +492,7 @@ int RenderRun(const RenderRunOptions& options) {
   ViewFileWriter writer(run, renderer.get(), options);
   if (options.time) return RenderAtTime(options, frames, &writer);
   if (options.video_frames > 0) return RenderVideo(options, run, *renderer, &writer);
-  return RenderSplitViews(options, frames, &writer);
+  return RenderSplitViews(options, run.dataset, frames, &writer);
 }
 
 }  // namespace hdr4d::method

@@ -104,8 +104,19 @@ void ReorderRun(const std::vector<std::uint32_t>& order, LoadedRun* run);
 std::unique_ptr<ViewRenderer> MakeRunRenderer(const LoadedRun& run);
 ToneFrame RunToneFrame(const LoadedRun& run, float time, double exposure);
 
-// For commands that only read a run (render, export-ply, tone-curves): its configuration and
-// checkpoint become protected inputs (core/files/output_guard.h), so no output of theirs replaces them.
-void ProtectRunInputs(const std::filesystem::path& run);
+// The files of a run folder that commands reading the run take as inputs (issue 51 §2).
+inline constexpr const char* kRunFileNames[] = {"config.json", "checkpoint.bin", "results.json",
+                                                "data_checksums.json"};
+
+// For commands that only read a run (render, export-ply, tone-curves): its files (kRunFileNames)
+// and its renders (every folder under RUN/renders but `own_output`, the folder the command itself
+// renders into, and those below it) become protected inputs (core/files/output_guard.h), so no
+// output of theirs replaces them.
+void ProtectRunInputs(const std::filesystem::path& run,
+                      const std::filesystem::path& own_output = {});
+
+// Where `hdr4d render` writes: --out, else RUN/renders/time (--time), RUN/video (--video) or
+// RUN/renders/<split>.
+std::filesystem::path RenderOutputFolder(const RenderRunOptions& options);
 
 }  // namespace hdr4d::method

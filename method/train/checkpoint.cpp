@@ -238,12 +238,36 @@ std::uint32_t ApplyHeader(const nlohmann::json& header, const fs::path& path, Ch
   return version;
 }
 
+// Where an intact checkpoint ends inside `bytes` that do not end with its trailer: the end of
+// the last trailer whose checksum matches the bytes before it, or 0 (then the file is truncated
+// or its end damaged, not appended to). Looks at the last 16 trailer magics at most.
+std::size_t IntactCheckpointEnd(std::string_view bytes, std::uint64_t header_size) {
+  const std::string_view magic(kTrailerMagic, 8);
+  std::size_t at = bytes.size() >= kTrailerSize ? bytes.size() - kTrailerSize : 0;
+  for (int tries = 0; tries < 16; ++tries) {
+    at = bytes.rfind(magic, at);
+    if (at == std::string_view::npos || at < header_size) return 0;
+    std::uint64_t stored = 0;
+    std::memcpy(&stored, bytes.data() + at + 8, 8);
+    if (stored == Fnv1a(bytes.data(), at)) return at + kTrailerSize;
+    if (at == 0) return 0;
+    --at;
+  }
+  return 0;
+}
+
 // Version 3's trailer: the checksum of every byte before it.
 void VerifyChecksum(std::string_view bytes, std::uint64_t header_size, const fs::path& path) {
   const std::size_t body = bytes.size() >= kTrailerSize ? bytes.size() - kTrailerSize : 0;
   std::uint64_t stored = 0;
-  if (body < header_size || std::memcmp(bytes.data() + body, kTrailerMagic, 8) != 0)
+  if (body < header_size || std::memcmp(bytes.data() + body, kTrailerMagic, 8) != 0) {
+    if (const std::size_t end = IntactCheckpointEnd(bytes, header_size); end > 0) {
+      Fail("{}: corrupt checkpoint: {} bytes were appended after its end (the checkpoint is "
+           "intact up to byte {}; something wrote to the file after hdr4d did)",
+           path.string(), bytes.size() - end, end);
+    }
     Fail("{}: truncated checkpoint (its checksum trailer is missing)", path.string());
+  }
   std::memcpy(&stored, bytes.data() + body + 8, 8);
   if (stored != Fnv1a(bytes.data(), body)) {
     Fail("{}: corrupt checkpoint (checksum mismatch: the file was damaged after it was written)",

@@ -128,6 +128,20 @@ std::vector<float> MeanSquaredDistanceToThreeNearest(const std::vector<Eigen::Ve
   return result;
 }
 
+void SubsamplePointCloud(PointCloud* cloud, std::size_t max_points) {
+  const std::size_t n = cloud->size();
+  if (max_points == 0 || n <= max_points) return;
+  PointCloud kept;
+  kept.positions.reserve(max_points);
+  for (std::size_t k = 0; k < max_points; ++k) {
+    const std::size_t i = static_cast<std::size_t>((static_cast<unsigned __int128>(k) * n) / max_points);
+    kept.positions.push_back(cloud->positions[i]);
+    if (cloud->has_colors()) kept.colors.push_back(cloud->colors[i]);
+    if (cloud->has_times()) kept.times.push_back(cloud->times[i]);
+  }
+  *cloud = std::move(kept);
+}
+
 GaussianModel InitialiseGaussians(const std::optional<PointCloud>& cloud,
                                   const InitOptions& options) {
   options.Validate();

@@ -32,6 +32,11 @@ struct InitOptions {
 // the reference uses simple-knn on the GPU). Floored at 1e-7 as the reference does.
 std::vector<float> MeanSquaredDistanceToThreeNearest(const std::vector<Eigen::Vector3f>& points);
 
+// --max-gaussians caps the initial cloud too: a cloud of N > max_points points keeps
+// max_points of them, evenly spread over the file's order (point floor(k N / max_points) for
+// k = 0, 1, ...), colours and times with them. Deterministic; a smaller cloud is kept whole.
+void SubsamplePointCloud(PointCloud* cloud, std::size_t max_points);
+
 // Points from `cloud` when given (colours and times used when present), else random ones.
 GaussianModel InitialiseGaussians(const std::optional<PointCloud>& cloud,
                                   const InitOptions& options);

@@ -66,6 +66,13 @@ nlohmann::json ReadSavedRunConfig(const fs::path& run) {
          file.string());
   nlohmann::json config = ReadJsonFile(file);
   if (!config.is_object()) Fail("{}: not a run configuration (expected a JSON object)", file.string());
+  // A start that failed before its first checkpoint (killed early, a full disk) has nothing to
+  // continue from: say so, not "checkpoint not found" (issue 51 §20).
+  if (!fs::exists(run / "checkpoint.bin", ec) && !fs::is_symlink(run / "checkpoint.bin", ec))
+    Fail("{}: the run has a configuration but no checkpoint.bin: it stopped before its first "
+         "checkpoint was written (killed early, or a write failed, e.g. a full disk), so there is "
+         "nothing to resume; start it again with --overwrite instead of --resume",
+         run.string());
   return config;
 }
 

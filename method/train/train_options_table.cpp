@@ -338,7 +338,10 @@ std::vector<TrainOption> RunRows() {
                 "Gaussian budget (the reference's densify_until_num_points): densification "
                 "never takes the count past N, keeping the clone/split candidates with the "
                 "largest gradients; 0 = no budget (default: 2 x the pixels of one training "
-                "view, of every view for a static scene, at least 32768; BENCHMARKS.md)")
+                "view, of every view for a static scene, at least 32768; BENCHMARKS.md). An N "
+                "given here also caps the initial point cloud: a larger point3d.ply is "
+                "subsampled to N points, evenly over the file's order (the default budget "
+                "leaves it whole)")
           .Range(ValueRange::Integer(0, std::int64_t{1} << 40))
           .UnsetWhen(Unset::kNegative)
           .Config("max_gaussians"),

@@ -69,6 +69,7 @@ TrainOptions ResolveTrainRequest(const TrainRequest& request, const MethodPreset
   ApplyGiven(request, OptionTarget::kRun, &options);
   options.out = request.out;
   options.resume = request.resume;
+  options.overwrite = request.overwrite;
   options.hdr = ResolveHdr(request, saved, preset, options);
   // Nothing HDR asked for: a scene with one exposure and no HDR truth trains plain 4DGS (a
   // resumed run trains what it started with).

@@ -24,6 +24,7 @@ struct GivenTrainOption {
 struct TrainRequest {
   std::filesystem::path out;  // --out
   bool resume = false;        // --resume
+  bool overwrite = false;     // --overwrite
   std::string config;         // --config FILE or preset; empty: none
   std::optional<std::string> method;    // --method, when given
   std::string default_method = "hdr4dgs";  // the method when none is given nor resumed

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include <string>
 
 #include "core/files/json_util.h"
@@ -102,6 +104,7 @@ TEST(TrainRequest, AResumedRunStartsFromItsRecord) {
   started.hdr.supervision = Supervision::kLdr;
   started.hdr.hdr_weight = 0.5f;
   WriteJsonFile(dir / "config.json", started.ToJson());
+  std::ofstream(dir / "checkpoint.bin") << "";  // a run to resume has one (read by the trainer)
   TrainRequest r = Request({{"--iterations", 40}, {"--hdr-head", true}});
   r.out = dir.path();
   r.resume = true;

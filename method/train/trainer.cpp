@@ -42,6 +42,9 @@
 #include "method/train/loop_state.h"
 #include "method/train/loss.h"
 #include "method/train/resume_check.h"
+#include "method/train/run_folder.h"
+#include "core/dataset/dataset_checksum.h"
+#include "method/train/memory_check.h"
 #include "method/train/test_evaluation.h"
 #include "method/train/tone_curve_watch.h"
 #include "method/train/train_options_table.h"
@@ -130,29 +133,6 @@ std::pair<int, int> ColorDegrees(int iteration, const GaussianModel& model, int 
   return {sh, time};
 }
 
-// Removes `folder` when the scope ends by an exception and `made` says this run created it
-// and nothing but the run lock is in it.
-class RemoveIfFailedEmpty {
- public:
-  RemoveIfFailedEmpty(fs::path folder, bool made)
-      : folder_(std::move(folder)), made_(made), exceptions_(std::uncaught_exceptions()) {}
-  ~RemoveIfFailedEmpty() {
-    if (!made_ || std::uncaught_exceptions() == exceptions_) return;
-    std::error_code ec;
-    for (const auto& entry : fs::directory_iterator(folder_, ec)) {
-      if (entry.path().filename() != FolderLock::kFileName) return;
-    }
-    if (!ec) fs::remove_all(folder_, ec);
-  }
-  RemoveIfFailedEmpty(const RemoveIfFailedEmpty&) = delete;
-  RemoveIfFailedEmpty& operator=(const RemoveIfFailedEmpty&) = delete;
-
- private:
-  fs::path folder_;
-  bool made_;
-  int exceptions_;
-};
-
 // One training run from set-up to results.json: Train() below reads top to bottom as set-up,
 // resume or initialise, the steps, and the final save (docs/ARCHITECTURE.md, "One training
 // step"). Members are declared in the order they are made.
@@ -179,10 +159,15 @@ class TrainingRun {
   // fitted to this very model).
   void FitHdrHeadIfAsked();
   TrainSummary Finish();
+  // A resumed run with no step left, a results.json and its HDR head (if asked) fitted: nothing
+  // to do (issue 51 §18); its results are reported as they are, no file is rewritten.
+  bool AlreadyFinished() const;
+  TrainSummary FinishedSummary() const;
 
  private:
   // SetUp's stages, in order.
   void CheckGivenAgainstSaved();
+  void CheckDataUnchanged();
   void LoadTrainingViews();
   void ResolveSchedules();
   void ResolveLearnedBackground();
@@ -219,11 +204,12 @@ class TrainingRun {
   OptimizationOptions opt_;  // the schedules resolved for this run
   bool temporal_ = false;
   std::optional<nlohmann::json> saved_config_;
+  DatasetRecord data_record_;  // RUN/data_checksums.json
   nlohmann::json config_;
   std::unique_ptr<ToneMapper> tone_mapper_;
   ResolvedHdrTraining resolved_;
   // The folder guard is declared before the lock: the lock goes first when a failure unwinds.
-  std::optional<RemoveIfFailedEmpty> cleanup_;
+  std::optional<CleanUpFailedStart> cleanup_;
   std::optional<FolderLock> lock_;
   fs::path checkpoint_path_;
   GaussianModel model_;
@@ -262,7 +248,15 @@ class TrainingRun {
 // configuration to record (a resumed run must match the one it continues).
 void TrainingRun::SetUp() {
   if (options_.resume) CheckGivenAgainstSaved();
+  else RequireFreshRunFolder(options_.out, options_.overwrite);  // before the scene is read
   dataset_.emplace(LoadDataset(options_.data, {.image_check = ImageCheck::kHeaders}));
+  data_record_ = RecordDataset(*dataset_);
+  if (options_.resume) CheckDataUnchanged();
+  if (!options_.resume && dataset_->point_cloud_path) {  // before any image is decoded
+    CheckInitialCloudFits(*dataset_->point_cloud_path,
+                          ReadPlyVertexCount(*dataset_->point_cloud_path),
+                          options_.optimization.max_gaussians, AvailableMemoryBytes());
+  }
   profile_ = ProfileScene(*dataset_);
   PickMethodForScene();
   num_times_ = DistinctTimes(*dataset_);
@@ -306,6 +300,22 @@ void TrainingRun::CheckGivenAgainstSaved() {
     o["f_dc_lr"] = options_.optimization.f_dc_lr_log_hdr;
   }
   RequireSameGivenConfig(*saved_config_, given, options_.out / "config.json");
+}
+
+// A run continues on the data it started with: a training image swapped for another of the same
+// size, or the frames reordered, is refused by name (issue 51 §15). Runs from before the record
+// have none to compare with.
+void TrainingRun::CheckDataUnchanged() {
+  const fs::path file = options_.out / kDataRecordName;
+  std::error_code ec;
+  if (!fs::exists(file, ec)) return;
+  const DatasetRecord before = DatasetRecord::FromJson(ReadJsonFile(file), file.string());
+  if (const std::string change = DescribeDatasetChange(before, data_record_); !change.empty()) {
+    Fail("{}: the dataset changed since the run {} started ({} records it): {}; --resume "
+         "continues a run on the data it started with (train a new run, e.g. with --overwrite, "
+         "on the changed data)",
+         options_.data.string(), options_.out.string(), file.string(), change);
+  }
 }
 
 // What each view computes, then the training views (with HDR targets where a term uses them)
@@ -402,8 +412,13 @@ void TrainingRun::OpenRunFolder() {
   const bool made_folder = !fs::exists(options_.out, ec);
   fs::create_directories(options_.out, ec);
   if (ec) Fail("{}: cannot create the run folder: {}", options_.out.string(), ec.message());
-  cleanup_.emplace(options_.out, made_folder);
+  // The clean-up is armed once the lock is ours: a writer that holds it owns what is there.
   lock_.emplace(options_.out, "hdr4d train --out " + options_.out.string());
+  cleanup_.emplace(options_.out, made_folder, /*fresh_run=*/!options_.resume);
+  if (!options_.resume) {
+    RequireFreshRunFolder(options_.out, options_.overwrite);  // again, now that the lock is held
+    if (options_.overwrite) RemovePreviousRun(options_.out);
+  }
   checkpoint_path_ = options_.out / kCheckpointName;
 }
 
@@ -444,6 +459,13 @@ void TrainingRun::ResumeOrInitialise() {
     init.color_mode = options_.hdr.color_mode;
     std::optional<PointCloud> cloud;
     if (dataset_->point_cloud_path) cloud = ReadPly(*dataset_->point_cloud_path);
+    // A budget asked for caps the initial cloud too (the default one leaves it whole).
+    if (cloud && options_.optimization.max_gaussians > 0 &&
+        cloud->size() > static_cast<std::size_t>(options_.optimization.max_gaussians)) {
+      spdlog::info("train: {} points in {}, subsampled to --max-gaussians {}", cloud->size(),
+                   dataset_->point_cloud_path->string(), options_.optimization.max_gaussians);
+      SubsamplePointCloud(&*cloud, static_cast<std::size_t>(options_.optimization.max_gaussians));
+    }
     model_ = InitialiseGaussians(cloud, init);
     if (resolved_.hdr && model_.color_mode == ColorMode::kLogHdr) {
       if (const auto level =
@@ -474,7 +496,33 @@ void TrainingRun::ResumeOrInitialise() {
       optimizer_->AddBackgroundGroup(background_->params(), background_->grads(),
                                      static_cast<float>(opt_.f_dc_lr) * kShC0);
   }
+  if (AlreadyFinished()) return;
   WriteJsonFile(options_.out / "config.json", config_);
+  WriteJsonFile(options_.out / kDataRecordName, data_record_.ToJson());
+}
+
+bool TrainingRun::AlreadyFinished() const {
+  std::error_code ec;
+  return options_.resume && !StepsLeft() && (!resolved_.hdr_head || head_current_) &&
+         fs::exists(options_.out / "results.json", ec);
+}
+
+TrainSummary TrainingRun::FinishedSummary() const {
+  const fs::path file = options_.out / "results.json";
+  const nlohmann::json results = ReadJsonFile(file);
+  if (!results.is_object()) Fail("{}: not a run's results (expected a JSON object)", file.string());
+  spdlog::warn("train: {} is finished ({} of {} iterations; {}): nothing to do and nothing "
+               "rewritten; give --iterations above {} to train further",
+               options_.out.string(), loop_.iteration, opt_.iterations, file.string(),
+               loop_.iteration);
+  TrainSummary summary;
+  summary.test_metrics = results.value("test", nlohmann::json::object());
+  summary.train_seconds = loop_.train_seconds;
+  summary.iterations = loop_.iteration;
+  summary.gaussians = model_.size();
+  summary.loss_curve = loop_.loss_curve;
+  summary.stopped_by_time = results.value("stopped_by_time", false);
+  return summary;
 }
 
 // --learn-background: the values saved in the checkpoint's trainer state when resuming, else
@@ -925,6 +973,7 @@ TrainSummary Train(const TrainOptions& options) {
   run.SetUp();
   run.OpenRunFolder();
   run.ResumeOrInitialise();
+  if (run.AlreadyFinished()) return run.FinishedSummary();
   run.ShowMethodNote();
   run.PrepareRendering();
   while (run.StepsLeft() && !run.OutOfTime()) run.Step();

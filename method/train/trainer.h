@@ -32,6 +32,9 @@ struct TrainOptions {
   // iteration that reaches it (the schedules still run over optimization.iterations).
   double max_seconds = 0;
   bool resume = false;       // continue from RUN/checkpoint.bin
+  // A new run in a folder holding an earlier one deletes its files first (run_folder.h); without
+  // it such a folder is refused.
+  bool overwrite = false;
   bool progress = true;
   float background = 0.0f;  // grey level behind the scene (the reference trains on black)
   // Learn one background colour with the scene (learned_background.h; not in the paper, whose
