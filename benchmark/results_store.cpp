@@ -115,7 +115,7 @@ ResultsStore::ResultsStore(const std::filesystem::path& path, bool create)
     Statement tables = db_.Prepare(
         "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name NOT IN "
         "('meta','runs','run_labels','frames','frame_metrics','frame_stats','series',"
-        "'stress_results')");
+        "'stress_results','claims')");
     tables.Step();
     if (tables.Int(0) > 0)
       Fail("{}: an SQLite database with other tables, not an hdr4d results store", path.string());
