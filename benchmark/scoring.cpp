@@ -182,7 +182,13 @@ FrameResult ScoreFrame(const Expected& e,
   fr.camera_id = e.frame->camera_id;
   fr.exposure = e.hdr ? 0.0 : e.frame->exposure;
   for (const auto& [key, value] : pair.items()) {
-    if (key == "name") continue;
+    // "undefined" ({metric: reason}, e.g. the HDR shape of a constant truth) holds no number: an
+    // undefined metric is left out of the frame, so means are over the frames that have it. It
+    // was read as a number and threw a raw json type_error.
+    if (key == "name" || key == "undefined") continue;
+    if (!value.is_null() && !value.is_number()) {
+      Fail("{}: evaluation key '{}' is {}, not a number", pred.string(), key, value.type_name());
+    }
     // EvaluatePair writes +inf (identical images) as null.
     fr.metrics[key] =
         value.is_null() ? std::numeric_limits<double>::infinity() : value.get<double>();
