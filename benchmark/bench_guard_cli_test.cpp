@@ -24,14 +24,14 @@ std::map<std::string, std::pair<std::uintmax_t, fs::file_time_type>> Listing(con
 }
 
 TEST(BenchGuard, BenchCommandsNeverWriteOverTheirInputsNorIntoADataset) {
-  testing::TempDir dir;
-  const fs::path store = dir / "y.db", scene = dir / "S";
+  testing::TempDir dir, logs;  // the commands' log outside the folder compared
+  const fs::path store = dir / "y.db", scene = dir / "S", log = logs / "log.txt";
   { ResultsStore created(store, true); }
   const fs::path suite = dir / "s.json";
   fs::copy_file(SuitesDir() / "ci.json", suite);
   ASSERT_TRUE(RunHdr4dArgs({"make-demo-scene", "--out", scene.string(), "--cameras", "2", "--size",
                             "16", "--timestamps", "2", "--spp", "1"},
-                           dir / "log.txt")
+                           log)
                   .result.ok());
   const auto before = Listing(dir.path());
   const std::vector<std::vector<std::string>> cases = {
@@ -42,7 +42,7 @@ TEST(BenchGuard, BenchCommandsNeverWriteOverTheirInputsNorIntoADataset) {
       {"bench", "pareto", suite.string(), "--store", store.string(), "--out", (scene / "hdr").string()},
   };
   for (const auto& args : cases) {
-    const Command c = RunHdr4dArgs(args, dir / "log.txt");
+    const Command c = RunHdr4dArgs(args, log);
     EXPECT_EQ(c.result.exit_code, 1) << args[1] << " " << args.back() << "\n" << c.text;
     EXPECT_NE(c.text.find("refusing to write"), std::string::npos) << args.back() << "\n" << c.text;
   }
