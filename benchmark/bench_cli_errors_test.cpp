@@ -32,6 +32,8 @@ TEST(BenchCliErrors, UserMistakesEndInOneLineAndCreateNothing) {
       {{"bench", "submit", "--store", store, "--method", "m", "--scene", (dir / "nowhere").string(),
         "--renders", dir.path().string()}, "nowhere"},
       {{"bench", "stress", "--out", (dir / "s").string(), "--case", "no-such-case"}, "no case 'no-such-case'"},
+      {{"bench", "submit", "--store", store, "--method", "../m", "--scene", dir.path().string(),
+        "--renders", dir.path().string()}, "--method: '../m' has a '/'"},
       {{"bench", "table", "ci", "--store", (dir / "not_a_db.db").string(), "--protocol", "max"}, "--protocol: expected one of own_max, gt_max, pu21, got 'max'"},
   };
   for (const auto& [args, names] : cases) {
@@ -64,6 +66,8 @@ TEST(BenchDryRun, ListsThePlanWithoutGeneratingScenes) {
   EXPECT_NE(c.text.find("scene 'lego' is not generated yet"), std::string::npos) << c.text;
   EXPECT_EQ(CountLines(c.text, "-"), 2) << c.text;  // one run per seed, no id yet
   EXPECT_EQ(c.text.find("generating scene"), std::string::npos) << c.text;
+  // Nor is a store created (issue 51, case 18).
+  EXPECT_FALSE(fs::exists(dir / "store.db"));
   bool generated = false;
   std::error_code ec;
   for (const auto& entry : fs::recursive_directory_iterator(dir / "cache", ec))

@@ -103,27 +103,39 @@ ResultsStore::ResultsStore(const std::filesystem::path& path, bool create)
           create) {
   // No command writes a file over the store it reads or fills (issue 51, case 1).
   ProtectInputFile(path, "the results store " + path.string() + " (an input of this command)");
-  Statement version = db_.Prepare("PRAGMA user_version");
-  version.Step();
-  const std::int64_t v = version.Int(0);
-  if (v > kSchemaVersion) {
-    Fail("{}: results store of schema version {}; this hdr4d reads up to {}", path.string(), v,
-         kSchemaVersion);
-  }
-  if (v == 0) {
+  // The statements are finished before the transaction: an open read of a snapshot that another
+  // process's schema creation made stale kept BEGIN IMMEDIATE busy until the busy timeout (two
+  // bench runs creating one store at once: "database is locked").
+  auto user_version = [&] {
+    Statement version = db_.Prepare("PRAGMA user_version");
+    version.Step();
+    return version.Int(0);
+  };
+  auto check_version = [&](std::int64_t v) {
+    if (v > kSchemaVersion) {
+      Fail("{}: results store of schema version {}; this hdr4d reads up to {}", path.string(), v,
+           kSchemaVersion);
+    }
+  };
+  check_version(user_version());
+  if (user_version() != 0) return;
+  Transaction t(&db_);
+  const std::int64_t v = user_version();  // again, under the write lock: another may have made it
+  check_version(v);
+  if (v != 0) return;
+  {
     // A database with tables of its own is not ours: refuse rather than mix schemas.
     Statement tables = db_.Prepare(
         "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name NOT IN "
         "('meta','runs','run_labels','frames','frame_metrics','frame_stats','series',"
-        "'stress_results')");
+        "'stress_results','claims')");
     tables.Step();
     if (tables.Int(0) > 0)
       Fail("{}: an SQLite database with other tables, not an hdr4d results store", path.string());
-    Transaction t(&db_);
-    db_.Exec(kSchema);
-    db_.Exec("PRAGMA user_version = " + std::to_string(kSchemaVersion));
-    t.Commit();
   }
+  db_.Exec(kSchema);
+  db_.Exec("PRAGMA user_version = " + std::to_string(kSchemaVersion));
+  t.Commit();
 }
 
 void ResultsStore::InsertLabels(const std::string& run_id, const std::vector<RunLabel>& labels,

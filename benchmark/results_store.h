@@ -12,6 +12,8 @@
 //   frame_stats    (run, frame, name) -> value: per-view values that are not metrics
 //   series         (run, name, index) -> (x, y): loss and PSNR curves, tone curves, ...
 //   stress_results the latest outcome of each stress case
+//   claims         run id -> the `bench run` working on it (pid, its start time, host, since
+//                  when), created on first use: two harnesses on one store never take one run
 // Every write is one transaction: a run appears with all its rows or not at all, and killing
 // the writer at any moment loses nothing committed before.
 #pragma once
@@ -48,6 +50,18 @@ struct StressOutcome {
   std::string code_version, finished_at;
 };
 
+// Who claims a run: a process on a host. `pid_start` (the process's start time, from
+// /proc/<pid>/stat) tells a live claim from a dead one whose pid was reused.
+struct ClaimOwner {
+  std::int64_t pid = 0;
+  std::string host, pid_start;
+  static ClaimOwner Self();
+};
+// "" when no process `pid` runs on this machine.
+std::string ProcessStartTime(std::int64_t pid);
+
+enum class ClaimResult { kClaimed, kTaken, kStored };
+
 class ResultsStore {
  public:
   // Opens or creates the store (creating its folder); throws hdr4d::Error naming the file when
@@ -55,6 +69,20 @@ class ResultsStore {
   explicit ResultsStore(const std::filesystem::path& path, bool create = true);
 
   const std::filesystem::path& path() const { return db_.path(); }
+  // How long one write waits for another connection's lock before it throws DatabaseBusy.
+  void SetBusyTimeout(int milliseconds);
+
+  // Claims run `run_id` for `owner` before it starts (issue 51, case 23), in one transaction:
+  // kStored when the store has it (status ok) already, kTaken when another live bench run holds
+  // it, else kClaimed. A claim is taken over when its process is gone (same host: no process
+  // with that pid and start time) or, from another host, when it is older than
+  // `max_age_seconds` (the run's time limit: that run is over by then).
+  ClaimResult Claim(const std::string& run_id, double max_age_seconds,
+                    const ClaimOwner& owner = ClaimOwner::Self());
+  // Drops `owner`'s claim on the run (nothing when it holds none).
+  void Release(const std::string& run_id, const ClaimOwner& owner = ClaimOwner::Self());
+  // The claims held now: run id -> owner.
+  std::map<std::string, ClaimOwner> Claims() const;
 
   // Writes the run and its labels in one transaction. A run already stored with status ok is
   // kept (only the labels are added) unless `replace`; a stored failure is replaced. A label

@@ -2,9 +2,17 @@
 
 #include <gtest/gtest.h>
 
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
 #include <cmath>
 #include <limits>
+#include <thread>
 
+#include "benchmark/kept_records.h"
+#include "benchmark/sqlite_db.h"
 #include "tests/testing.h"
 
 namespace hdr4d::bench {
@@ -139,6 +147,126 @@ TEST(RunRecord, MalformedRecordsNameTheFileAndKey) {
   j = Sample("r").ToJson();
   j["status"] = "maybe";
   EXPECT_NE(ErrorOf([&] { RunRecord::FromJson(j, "f.json"); }).find("status"), std::string::npos);
+}
+
+// An optional key of the wrong type gave a raw "[json.exception.type_error.302]" naming neither
+// the file nor the key (issue 51, case 24); a label that is a path is refused (case 9).
+TEST(RunRecord, WrongTypesOfOptionalKeysNameTheFileAndKey) {
+  const std::vector<std::pair<std::string, nlohmann::json>> cases = {
+      {"/iterations", "many"},          {"/gaussians", {1, 2}},
+      {"/git_describe", 3},             {"/config", "text"}, {"/machine", 1},
+      {"/frames/0/exposure", "bright"}, {"/frames/0/camera_id", "cam0"},
+      {"/frames/0/metrics", {1, 2}},    {"/series", 3},
+      {"/series/loss", "points"},       {"/frames", {{"a", 1}}},
+      {"/labels/0/method", "../../x"},  {"/labels/0/scene", "/tmp/victim"},
+  };
+  for (const auto& [pointer, value] : cases) {
+    nlohmann::json j = Sample("r").ToJson();
+    j[nlohmann::json::json_pointer(pointer)] = value;
+    std::string e;
+    try {
+      RunRecord::FromJson(j, "results/r.json");
+    } catch (const Error& error) {
+      e = error.what();
+    } catch (const std::exception& other) {
+      e = std::string("raw: ") + other.what();
+    }
+    const std::string key = pointer.substr(pointer.rfind('/') + 1);
+    EXPECT_EQ(e.rfind("results/r.json", 0), 0u) << pointer << ": " << e;
+    EXPECT_NE(e.find("'" + key + "'"), std::string::npos) << pointer << ": " << e;
+    EXPECT_EQ(e.find("json.exception"), std::string::npos) << pointer << ": " << e;
+  }
+}
+
+// A process that lives until it is killed: a live claim holder other than this test.
+pid_t StartSleeper() {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    execl("/bin/sleep", "sleep", "60", static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  return pid;
+}
+
+// Two bench runs on one store took the same runs (issue 51, case 23): a run is claimed in the
+// store, by one owner at a time, through two connections; the claim of a process that is gone
+// (or whose pid was reused) is taken over, and one from another host once it is older than the
+// run's time limit.
+TEST(RunClaims, OneOwnerAtATimeAndDeadClaimsAreTakenOver) {
+  TempDir dir;
+  ResultsStore a(dir / "s.db"), b(dir / "s.db");
+  const ClaimOwner me = ClaimOwner::Self();
+  ASSERT_FALSE(me.pid_start.empty());
+  const pid_t sleeper = StartSleeper();
+  ASSERT_GT(sleeper, 0);
+  const ClaimOwner other{sleeper, me.host, ProcessStartTime(sleeper)};
+  ASSERT_FALSE(other.pid_start.empty());
+  EXPECT_EQ(a.Claim("r1", 3600, me), ClaimResult::kClaimed);
+  EXPECT_EQ(b.Claim("r1", 3600, other), ClaimResult::kTaken);
+  EXPECT_EQ(a.Claim("r1", 3600, me), ClaimResult::kClaimed);  // its own claim
+  EXPECT_EQ(b.Claim("r2", 3600, other), ClaimResult::kClaimed);
+  EXPECT_EQ(a.Claim("r2", 3600, me), ClaimResult::kTaken);
+  kill(sleeper, SIGKILL);
+  waitpid(sleeper, nullptr, 0);
+  EXPECT_EQ(ProcessStartTime(sleeper), "");
+  EXPECT_EQ(a.Claim("r2", 3600, me), ClaimResult::kClaimed);  // its holder is gone
+  // This pid, but another process's start time: a reused pid, a stale claim.
+  EXPECT_EQ(b.Claim("r3", 3600, {me.pid, me.host, "1"}), ClaimResult::kClaimed);
+  EXPECT_EQ(a.Claim("r3", 3600, me), ClaimResult::kClaimed);
+  // Another host's claim: held while younger than the run's time limit.
+  EXPECT_EQ(b.Claim("r4", 3600, {4242, "elsewhere", "7"}), ClaimResult::kClaimed);
+  EXPECT_EQ(a.Claim("r4", 3600, me), ClaimResult::kTaken);
+  EXPECT_EQ(a.Claim("r4", 0, me), ClaimResult::kClaimed);
+  // A run stored meanwhile is not claimed at all.
+  b.InsertRun(Sample("r5"));
+  EXPECT_EQ(a.Claim("r5", 3600, me), ClaimResult::kStored);
+  a.Release("r1", me);
+  b.Release("r2", other);  // not its claim any more: nothing happens
+  const auto claims = b.Claims();
+  EXPECT_EQ(claims.count("r1"), 0u);
+  ASSERT_EQ(claims.count("r2"), 1u);
+  EXPECT_EQ(claims.at("r2").pid, me.pid);
+  EXPECT_EQ(claims.count("r5"), 0u);
+}
+
+// A store locked by another connection past the busy timeout threw a finished run away
+// (issue 51, case 22): the record is kept in the run's folder, the writer waits with growing
+// pauses, and a later attempt stores the kept record.
+TEST(KeptRecords, AStoreLockedPastTheTimeoutKeepsTheFinishedRun) {
+  TempDir dir;
+  ResultsStore store(dir / "s.db");
+  store.SetBusyTimeout(50);
+  const std::filesystem::path run_dir = dir / "runs" / "r1";
+  {
+    Database locker(dir / "s.db", false);
+    locker.Exec("BEGIN IMMEDIATE");
+    EXPECT_THROW(store.InsertRun(Sample("r1")), DatabaseBusy);
+    const auto start = std::chrono::steady_clock::now();
+    EXPECT_FALSE(StoreOrKeep(store, Sample("r1"), run_dir, {.attempts = 3, .first_pause_seconds = 0.05}));
+    // Three waits of 50 ms and pauses of 50 and 150 ms.
+    EXPECT_GE(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 0.3);
+    EXPECT_TRUE(std::filesystem::exists(run_dir / kKeptRecordName));
+    locker.Exec("ROLLBACK");
+  }
+  EXPECT_FALSE(store.HasRun("r1"));
+  const std::optional<RunRecord> kept = ReadKeptRecord(run_dir, "r1");
+  ASSERT_TRUE(kept);
+  EXPECT_EQ(kept->ToJson(), Sample("r1").ToJson());
+  EXPECT_FALSE(ReadKeptRecord(run_dir, "r2"));  // another run's folder: not taken
+  EXPECT_TRUE(StoreOrKeep(store, *kept, run_dir, {}));
+  EXPECT_EQ(store.Record("r1").ToJson(), Sample("r1").ToJson());
+  EXPECT_FALSE(std::filesystem::exists(run_dir / kKeptRecordName));
+
+  // A lock released during the pauses: stored by a later attempt.
+  Database locker(dir / "s.db", false);
+  locker.Exec("BEGIN IMMEDIATE");
+  std::thread release([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    locker.Exec("ROLLBACK");
+  });
+  EXPECT_TRUE(StoreOrKeep(store, Sample("r2"), dir / "runs" / "r2", {.attempts = 6, .first_pause_seconds = 0.05}));
+  release.join();
+  EXPECT_TRUE(store.HasRun("r2"));
 }
 
 }  // namespace

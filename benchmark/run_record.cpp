@@ -5,6 +5,8 @@
 #include <limits>
 #include <tuple>
 
+#include "benchmark/names.h"
+#include "core/files/json_util.h"
 #include "core/util/error.h"
 
 namespace hdr4d::bench {
@@ -29,12 +31,31 @@ double ToNumber(const nlohmann::json& j, const std::string& source, const std::s
 
 template <typename T>
 T Get(const nlohmann::json& j, const char* key, const std::string& source) {
+  if (!j.is_object()) Fail("{}: expected a JSON object, got {}", source, JsonPreview(j));
   if (!j.contains(key)) Fail("{}: key '{}' missing", source, key);
   try {
     return j.at(key).get<T>();
   } catch (const nlohmann::json::exception&) {
-    Fail("{}: key '{}' has the wrong type ({})", source, key, j.at(key).dump());
+    Fail("{}: key '{}' has the wrong type ({})", source, key, JsonPreview(j.at(key)));
   }
+}
+
+// An optional key: `fallback` when absent or null, else of type T or an error naming the key (a
+// raw "[json.exception.type_error.302]" named neither, issue 51, case 24).
+template <typename T>
+T Optional(const nlohmann::json& j, const char* key, T fallback, const std::string& source) {
+  if (!j.is_object()) Fail("{}: expected a JSON object, got {}", source, JsonPreview(j));
+  if (!j.contains(key) || j.at(key).is_null()) return fallback;
+  return Get<T>(j, key, source);
+}
+
+// A JSON value that must be an object or an array, named by its key when it is not.
+const nlohmann::json& Container(const nlohmann::json& j, bool object, const char* key,
+                                const std::string& source) {
+  if (object ? !j.is_object() : !j.is_array())
+    Fail("{}: key '{}' must be a JSON {}, got {}", source, key, object ? "object" : "array",
+         JsonPreview(j));
+  return j;
 }
 
 }  // namespace
@@ -53,6 +74,12 @@ RunLabel RunLabel::FromJson(const nlohmann::json& j, const std::string& source) 
   l.seed = Get<std::int64_t>(j, "seed", source);
   l.budget = Get<std::string>(j, "budget", source);
   l.variant = Get<std::string>(j, "variant", source);
+  // Labels name rows, files and folders: names only (issue 51, case 9); "" is the default variant.
+  for (auto [key, value] : {std::pair{"suite", &l.suite}, std::pair{"method", &l.method},
+                            std::pair{"scene", &l.scene}, std::pair{"supervision", &l.supervision},
+                            std::pair{"budget", &l.budget}, std::pair{"variant", &l.variant}}) {
+    if (value != &l.variant || !value->empty()) RequireName(*value, source + ": key '" + key + "'");
+  }
   return l;
 }
 
@@ -114,44 +141,51 @@ RunRecord RunRecord::FromJson(const nlohmann::json& j, const std::string& source
   if (r.status != "ok" && r.status != "failed")
     Fail("{}: key 'status' must be ok or failed, not '{}'", source, r.status);
   r.error = Get<std::string>(j, "error", source);
-  r.config = j.value("config", nlohmann::json::object());
+  r.config = Container(Optional(j, "config", nlohmann::json::object(), source), true, "config", source);
   r.code_version = Get<std::string>(j, "code_version", source);
-  r.git_describe = j.value("git_describe", "");
-  r.machine = j.value("machine", nlohmann::json::object());
+  r.git_describe = Optional<std::string>(j, "git_describe", "", source);
+  r.machine =
+      Container(Optional(j, "machine", nlohmann::json::object(), source), true, "machine", source);
   r.data_checksum = Get<std::string>(j, "data_checksum", source);
-  r.scene_dir = j.value("scene_dir", "");
-  r.run_dir = j.value("run_dir", "");
+  r.scene_dir = Optional<std::string>(j, "scene_dir", "", source);
+  r.run_dir = Optional<std::string>(j, "run_dir", "", source);
   for (auto [key, field] : {std::pair{"train_seconds", &r.train_seconds},
                             std::pair{"render_fps", &r.render_fps},
                             std::pair{"peak_rss_mb", &r.peak_rss_mb},
                             std::pair{"wall_seconds", &r.wall_seconds}}) {
     *field = ToNumber(j.value(key, nlohmann::json()), source, key);
   }
-  r.iterations = j.value("iterations", std::int64_t{-1});
-  r.gaussians = j.value("gaussians", std::int64_t{-1});
-  r.started_at = j.value("started_at", "");
-  r.finished_at = j.value("finished_at", "");
-  for (const nlohmann::json& l : Get<nlohmann::json>(j, "labels", source))
+  r.iterations = Optional<std::int64_t>(j, "iterations", -1, source);
+  r.gaussians = Optional<std::int64_t>(j, "gaussians", -1, source);
+  r.started_at = Optional<std::string>(j, "started_at", "", source);
+  r.finished_at = Optional<std::string>(j, "finished_at", "", source);
+  // Named copies: a range over a reference into a temporary would outlive it.
+  const nlohmann::json labels = Get<nlohmann::json>(j, "labels", source);
+  for (const nlohmann::json& l : Container(labels, false, "labels", source))
     r.labels.push_back(RunLabel::FromJson(l, source + ": labels"));
   if (r.labels.empty()) Fail("{}: key 'labels' is empty (a run must appear somewhere)", source);
-  for (const nlohmann::json& f : Get<nlohmann::json>(j, "frames", source)) {
+  const nlohmann::json frames = Get<nlohmann::json>(j, "frames", source);
+  for (const nlohmann::json& f : Container(frames, false, "frames", source)) {
     FrameResult fr;
     const std::string where = source + ": frames";
     fr.frame = Get<std::string>(f, "frame", where);
     fr.time = Get<double>(f, "time", where);
-    fr.camera_id = f.value("camera_id", std::int64_t{-1});
-    fr.exposure = f.value("exposure", 0.0);
+    fr.camera_id = Optional<std::int64_t>(f, "camera_id", -1, where);
+    fr.exposure = Optional(f, "exposure", 0.0, where);
     // Named copies: items() of a temporary would outlive it.
-    const nlohmann::json metrics = f.value("metrics", nlohmann::json::object());
-    const nlohmann::json stats = f.value("stats", nlohmann::json::object());
+    const nlohmann::json metrics = Optional(f, "metrics", nlohmann::json::object(), where);
+    const nlohmann::json stats = Optional(f, "stats", nlohmann::json::object(), where);
+    Container(metrics, true, "metrics", where);
+    Container(stats, true, "stats", where);
     for (const auto& [k, v] : metrics.items()) fr.metrics[k] = ToNumber(v, where + " " + fr.frame, k);
     for (const auto& [k, v] : stats.items()) fr.stats[k] = ToNumber(v, where + " " + fr.frame, k);
     r.frames.push_back(std::move(fr));
   }
-  const nlohmann::json series = j.value("series", nlohmann::json::object());
+  const nlohmann::json series = Optional(j, "series", nlohmann::json::object(), source);
+  Container(series, true, "series", source);
   for (const auto& [name, points] : series.items()) {
     Series& s = r.series[name];
-    for (const nlohmann::json& p : points) {
+    for (const nlohmann::json& p : Container(points, false, name.c_str(), source)) {
       if (!p.is_array() || p.size() != 2) Fail("{}: series '{}': points must be [x, y]", source, name);
       s.emplace_back(ToNumber(p[0], source, name), ToNumber(p[1], source, name));
     }

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 #include <signal.h>
+#include <spdlog/spdlog.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -17,6 +18,7 @@
 #include <thread>
 
 #include "benchmark/child_process.h"
+#include "benchmark/kept_records.h"
 #include "benchmark/machine.h"
 #include "benchmark/results_store.h"
 #include "benchmark/run_pipeline.h"
@@ -82,7 +84,7 @@ struct Progress {
   std::deque<const RunSpec*> queue;
   std::map<std::string, Running> running;
   double units_left = 0, units_done = 0, seconds_done = 0;
-  std::vector<std::string> failures;
+  std::vector<std::string> failures, kept;
   std::string last_line, fatal;
   RunnerSummary* summary = nullptr;
 };
@@ -110,29 +112,77 @@ void PrintDryRun(const std::vector<PreparedScene>& scenes,
   }
 }
 
-// Books one finished run (called under the mutex): counts, the failure list, the last line.
-// An exception from the harness itself (store not writable, ...) stops every worker.
-void Finished(Progress& p,
-              const RunSpec& run,
-              const std::optional<RunRecord>& record,
-              const std::string& error,
-              double took) {
-  if (!error.empty()) {
-    p.fatal = fmt::format("{}: {}", Describe(run.labels.front()), error);
+// What became of one run taken off the queue.
+struct Outcome {
+  enum class Kind { kRan, kTaken, kStoredElsewhere, kLockedOut } kind = Kind::kRan;
+  std::optional<RunRecord> record;  // kRan: nullopt when cancelled
+  bool stored = true;               // false: the store stayed locked, the record is kept
+  std::string error;                // from the harness itself (store not writable, ...)
+};
+
+// Books one run (called under the mutex): counts, the failure list, the last line. An exception
+// from the harness itself stops every worker.
+void Finished(Progress& p, const RunSpec& run, const Outcome& o, double took) {
+  using Kind = Outcome::Kind;
+  const std::string name = Describe(run.labels.front());
+  if (!o.error.empty()) {
+    p.fatal = fmt::format("{}: {}", name, o.error);
     g_cancel = true;
-  } else if (record) {
+  } else if (o.kind == Kind::kTaken) {
+    ++p.summary->taken;
+    p.last_line = fmt::format("{} is being run by another bench run", name);
+  } else if (o.kind == Kind::kStoredElsewhere) {
+    ++p.summary->already_done;
+  } else if (o.kind == Kind::kLockedOut) {
+    ++p.summary->locked_out;
+  } else if (o.record) {
     p.units_done += WorkUnits(run);
     p.seconds_done += took;
-    if (record->status == "ok") {
+    if (!o.stored) {
+      ++p.summary->kept;
+      p.kept.push_back(fmt::format("{} ({})", name, run.id));
+    }
+    if (o.record->status == "ok") {
       ++p.summary->done;
-      p.last_line = fmt::format("{} in {}", Describe(run.labels.front()), Duration(took));
+      p.last_line = fmt::format("{} in {}", name, Duration(took));
     } else {
       ++p.summary->failed;
-      p.failures.push_back(
-          fmt::format("{} ({}): {}", Describe(run.labels.front()), run.id, record->error));
-      p.last_line = fmt::format("FAILED {}", Describe(run.labels.front()));
+      p.failures.push_back(fmt::format("{} ({}): {}", name, run.id, o.record->error));
+      p.last_line = fmt::format("FAILED {}", name);
     }
   }
+}
+
+// One run: claimed in the store first (another bench run on the same store may hold it), then
+// a result kept from an earlier attempt is stored, or the run is made and its result stored
+// (kept in its folder while the store stays locked); the claim goes when it is done.
+Outcome TakeRun(const RunSpec& run, ResultsStore& store, const PipelineOptions& pipeline,
+                const std::function<void(const std::string&)>& on_stage) {
+  using Kind = Outcome::Kind;
+  const StoreWait wait;
+  ClaimResult claim = ClaimResult::kTaken;
+  // A run's time limit (and some) after it was claimed, its claim from another host is stale.
+  const double max_age = run.resources.minutes * 60 + 600;
+  if (!RetryWhileBusy([&] { claim = store.Claim(run.id, max_age); }, wait, &g_cancel))
+    return {.kind = Kind::kLockedOut};
+  if (claim == ClaimResult::kTaken) return {.kind = Kind::kTaken};
+  if (claim == ClaimResult::kStored) return {.kind = Kind::kStoredElsewhere};
+  Outcome o;
+  const fs::path dir = pipeline.runs_dir / run.id;
+  o.record = ReadKeptRecord(dir, run.id);
+  if (o.record) {
+    fmt::print(stderr, "bench: run {}: storing the result kept in {} (not run again)\n", run.id,
+               (dir / kKeptRecordName).string());
+  } else {
+    o.record = ExecuteRun(run, pipeline, on_stage);
+  }
+  if (o.record) o.stored = StoreOrKeep(store, *o.record, dir, wait, &g_cancel);
+  try {
+    store.Release(run.id);
+  } catch (const Error& e) {  // a claim left behind is taken over once this process is gone
+    spdlog::warn("bench: run {}: claim not released: {}", run.id, e.what());
+  }
+  return o;
 }
 
 // One worker: takes runs off the queue until it is empty or the harness is stopped, runs each
@@ -148,23 +198,21 @@ void Work(Progress& p, ResultsStore& store, const PipelineOptions& pipeline) {
       p.units_left -= WorkUnits(*run);
       p.running[run->id] = {run, "prepare", std::chrono::steady_clock::now()};
     }
-    std::optional<RunRecord> record;
-    std::string error;
+    Outcome outcome;
     try {
-      record = ExecuteRun(*run, pipeline, [&](const std::string& s) {
+      outcome = TakeRun(*run, store, pipeline, [&](const std::string& s) {
         std::lock_guard lock(p.mutex);
         p.running[run->id].stage = s;
       });
-      if (record) store.InsertRun(*record);
     } catch (const std::exception& e) {
-      error = e.what();
+      outcome.error = e.what();
     }
     std::lock_guard lock(p.mutex);
     const double took =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - p.running[run->id].start)
             .count();
     p.running.erase(run->id);
-    Finished(p, *run, record, error, took);
+    Finished(p, *run, outcome, took);
     p.changed.notify_all();
   }
 }
@@ -216,6 +264,24 @@ void ShowProgress(Progress& p, int jobs, std::chrono::steady_clock::time_point s
   }
 }
 
+// Runs left to another bench run on the same store, and finished runs the store could not take
+// (kept in their folders): said, and the latter are an error the next run resolves.
+void ReportUnstored(const Progress& p, const RunnerSummary& summary, const fs::path& store,
+                    const fs::path& runs_dir) {
+  if (summary.taken > 0) {
+    fmt::print(stderr, "bench: {} run(s) were being made by another bench run on {}; left to it\n",
+               summary.taken, store.string());
+  }
+  for (const std::string& k : p.kept) fmt::print(stderr, "bench: not stored (kept): {}\n", k);
+  if (p.fatal.empty() && (summary.kept > 0 || summary.locked_out > 0)) {
+    Fail("bench run: {} stayed locked by another program: {} finished run(s) are kept in "
+         "{}/<run id>/{} and {} run(s) were not started; the same command stores the kept "
+         "ones without running them again (or `hdr4d bench collect {} --store {}`)",
+         store.string(), summary.kept, runs_dir.string(), kKeptRecordName, summary.locked_out,
+         runs_dir.string(), store.string());
+  }
+}
+
 }  // namespace
 
 void ApplyFilter(const SuiteFilter& f, Suite* suite) {
@@ -259,7 +325,9 @@ RunnerSummary RunSuite(const Suite& suite, const RunnerOptions& options) {
   const fs::path runs_dir =
       options.runs_dir.empty() ? fs::path(options.store.string() + ".runs") : options.runs_dir;
   StopSignals signals;
-  ResultsStore store(options.store);
+  // A dry run reads the store when there is one; it creates none (issue 51, case 18).
+  std::optional<ResultsStore> store;
+  if (!options.dry_run || fs::exists(options.store)) store.emplace(options.store, !options.dry_run);
   // A dry run lists; it does not render scenes that are not in the cache yet.
   const std::vector<PreparedScene> scenes =
       PrepareScenes(suite, cache, true, /*generate=*/!options.dry_run);
@@ -269,10 +337,12 @@ RunnerSummary RunSuite(const Suite& suite, const RunnerOptions& options) {
   summary.planned = static_cast<int>(runs.size());
   Progress p;
   p.summary = &summary;
-  const std::set<std::string> ok = store.RunIds("ok"), failed = store.RunIds("failed");
+  const std::set<std::string> ok = store ? store->RunIds("ok") : std::set<std::string>{},
+                              failed = store ? store->RunIds("failed") : std::set<std::string>{};
   for (const RunSpec& r : runs) {
     if (ok.count(r.id) || (failed.count(r.id) && !options.retry_failed)) {
-      store.AddLabels(r.id, r.labels);  // this suite's names for a run made before
+      // This suite's names for a run made before (a dry run writes nothing).
+      if (!options.dry_run) store->AddLabels(r.id, r.labels);
       ++(ok.count(r.id) ? summary.already_done : summary.skipped_failed);
       continue;
     }
@@ -303,10 +373,11 @@ RunnerSummary RunSuite(const Suite& suite, const RunnerOptions& options) {
                                  .cancel = &g_cancel,
                                  .keep_checkpoint = options.keep_checkpoints};
   std::vector<std::thread> workers;
-  for (int j = 0; j < options.jobs; ++j) workers.emplace_back([&] { Work(p, store, pipeline); });
+  for (int j = 0; j < options.jobs; ++j) workers.emplace_back([&] { Work(p, *store, pipeline); });
   ShowProgress(p, options.jobs, start);
   for (std::thread& w : workers) w.join();
   for (const std::string& f : p.failures) fmt::print(stderr, "bench: failed: {}\n", f);
+  ReportUnstored(p, summary, options.store, runs_dir);
   if (!p.fatal.empty()) Fail("bench run stopped: {}", p.fatal);
   summary.interrupted = g_signal != 0;
   if (summary.interrupted) {

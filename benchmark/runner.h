@@ -3,7 +3,9 @@
 // cores divided between them, showing runs done / running / left and an ETA. Each finished run
 // is written to the store in one transaction as soon as it ends, so an interrupted suite loses
 // only the runs in progress (their folders stay, and training resumes from its last
-// checkpoint next time).
+// checkpoint next time). Each run is claimed in the store before it starts, so two harnesses on
+// one store share its runs instead of making the same ones in the same folders; a result the
+// store cannot take (locked by another program) is kept in the run's folder and stored later.
 #pragma once
 
 #include <filesystem>
@@ -38,6 +40,10 @@ struct RunnerOptions {
 
 struct RunnerSummary {
   int planned = 0, already_done = 0, done = 0, failed = 0, skipped_failed = 0;
+  // taken: claimed by another bench run on the same store (left to it); kept: finished, but the
+  // store stayed locked (the record is kept in the run's folder); locked_out: not started, the
+  // store stayed locked when it was to be claimed.
+  int taken = 0, kept = 0, locked_out = 0;
   bool interrupted = false;
 };
 

@@ -7,9 +7,11 @@
 #include <cmath>
 #include <cstdlib>
 #include <map>
+#include <optional>
 #include <set>
 
 #include "benchmark/child_process.h"
+#include "benchmark/kept_records.h"
 #include "benchmark/machine.h"
 #include "benchmark/results_store.h"
 #include "benchmark/run_pipeline.h"
@@ -204,20 +206,86 @@ bool RunSlurmTask(const fs::path& dir, int array, int index) {
   return record->status == "ok";
 }
 
+namespace {
+
+// plan.json's run ids with their labels; nullopt without a plan. A malformed plan is an error
+// naming it and the key.
+std::optional<std::map<std::string, std::vector<RunLabel>>> PlannedRuns(const fs::path& dir) {
+  const fs::path file = dir / "plan.json";
+  if (!fs::exists(file)) return std::nullopt;
+  const nlohmann::json plan = ReadJsonFile(file);
+  std::map<std::string, std::vector<RunLabel>> runs;
+  try {
+    for (const nlohmann::json& a : plan.at("arrays")) {
+      for (const nlohmann::json& t : a.at("tasks")) {
+        std::vector<RunLabel>& labels = runs[t.at("id").get<std::string>()];
+        for (const nlohmann::json& l : t.at("labels"))
+          labels.push_back(RunLabel::FromJson(l, file.string() + ": labels"));
+      }
+    }
+  } catch (const nlohmann::json::exception& e) {
+    Fail("{}: not a bench slurm plan (arrays[].tasks[] with id and labels): {}", file.string(),
+         e.what());
+  }
+  return runs;
+}
+
+// A result is merged only under the id its file is named after and, with a plan, only as the
+// planned run with the plan's labels: a result whose id matched neither was merged (issue 51,
+// case 18).
+void RequirePlanned(const RunRecord& r, const fs::path& file, const std::string& id,
+                    const std::optional<std::map<std::string, std::vector<RunLabel>>>& plan) {
+  if (r.id != id) {
+    Fail("{}: key 'id' is '{}', but this file holds the result of run {} only; not merged",
+         file.string(), r.id, id);
+  }
+  if (!plan) return;
+  const auto it = plan->find(r.id);
+  if (it == plan->end()) Fail("{}: run {} is not in {}; not merged", file.string(), r.id, "plan.json");
+  for (const RunLabel& l : r.labels) {
+    if (std::find(it->second.begin(), it->second.end(), l) == it->second.end()) {
+      Fail("{}: key 'labels': {}/{}/{}/{}/seed {} is not a label plan.json gives run {}; not merged",
+           file.string(), l.suite, l.method, l.scene, l.supervision, l.seed, r.id);
+    }
+  }
+}
+
+// The result files to merge, each with the run id it must hold: a bench slurm folder's
+// results/<id>.json, or the records a `bench run` kept in its runs folder, <id>/record.json, while
+// its store was locked (benchmark/kept_records.h).
+std::vector<std::pair<fs::path, std::string>> ResultFiles(const fs::path& dir) {
+  std::vector<std::pair<fs::path, std::string>> files;
+  if (fs::is_directory(dir / "results")) {
+    for (const auto& e : fs::directory_iterator(dir / "results"))
+      if (e.path().extension() == ".json") files.emplace_back(e.path(), e.path().stem().string());
+  } else if (fs::is_directory(dir)) {
+    for (const auto& e : fs::directory_iterator(dir))
+      if (fs::exists(e.path() / kKeptRecordName))
+        files.emplace_back(e.path() / kKeptRecordName, e.path().filename().string());
+  }
+  if (files.empty() && !fs::is_directory(dir / "results")) {
+    Fail("{}: no results folder (not a bench slurm folder) and no <run id>/{} (not the runs "
+         "folder of a bench run that kept results)", dir.string(), kKeptRecordName);
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+}  // namespace
+
 CollectSummary Collect(const fs::path& dir, const fs::path& store_path) {
-  if (!fs::is_directory(dir / "results")) Fail("{}: no results folder (not a bench slurm folder)", dir.string());
+  const std::vector<std::pair<fs::path, std::string>> files = ResultFiles(dir);
+  const auto plan = PlannedRuns(dir);
   ResultsStore store(store_path);
   const std::set<std::string> ok = store.RunIds("ok");
   CollectSummary s;
   std::vector<std::string> bad;
   std::set<std::string> seen;
-  std::vector<fs::path> files;
-  for (const auto& e : fs::directory_iterator(dir / "results"))
-    if (e.path().extension() == ".json") files.push_back(e.path());
-  std::sort(files.begin(), files.end());
-  for (const fs::path& f : files) {
+  // One bad file is reported and the others are merged all the same (issue 51, case 24).
+  for (const auto& [f, id] : files) {
     try {
       const RunRecord r = RunRecord::FromJson(ReadJsonFile(f), f.string());
+      RequirePlanned(r, f, id, plan);
       seen.insert(r.id);
       if (ok.count(r.id)) {
         store.AddLabels(r.id, r.labels);
@@ -228,13 +296,18 @@ CollectSummary Collect(const fs::path& dir, const fs::path& store_path) {
       ++(r.status == "ok" ? s.merged : s.failed_runs);
     } catch (const Error& e) {
       bad.push_back(e.what());
+      continue;
+    } catch (const std::exception& e) {  // never expected; named all the same
+      bad.push_back(f.string() + ": " + e.what());
+      continue;
     }
+    // Merged from a bench run's folder: the kept copy has served.
+    std::error_code ec;
+    if (f.filename() == kKeptRecordName) fs::remove(f, ec);
   }
-  if (fs::exists(dir / "plan.json")) {
-    const nlohmann::json plan = ReadJsonFile(dir / "plan.json");
-    for (const nlohmann::json& a : plan["arrays"])
-      for (const nlohmann::json& t : a["tasks"])
-        if (!seen.count(t["id"].get<std::string>()) && !ok.count(t["id"].get<std::string>())) ++s.missing;
+  if (plan) {
+    for (const auto& [id, labels] : *plan)
+      if (!seen.count(id) && !ok.count(id)) ++s.missing;
   }
   s.bad_files = static_cast<int>(bad.size());
   if (!bad.empty()) {

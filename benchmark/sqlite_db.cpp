@@ -11,7 +11,7 @@
 
 namespace hdr4d::bench {
 namespace {
-constexpr int kBusyTimeoutMs = 60000;
+bool IsBusy(int code) { return (code & 0xff) == SQLITE_BUSY || (code & 0xff) == SQLITE_LOCKED; }
 }  // namespace
 
 Database::Database(const std::filesystem::path& path, bool create) : path_(path) {
@@ -24,7 +24,7 @@ Database::Database(const std::filesystem::path& path, bool create) : path_(path)
     db_ = nullptr;
     Fail("{}: cannot open the results store: {}", path.string(), message);
   }
-  sqlite3_busy_timeout(db_, kBusyTimeoutMs);  // another harness on the same store: wait
+  sqlite3_busy_timeout(db_, busy_timeout_ms_);  // another harness on the same store: wait
   sqlite3_extended_result_codes(db_, 1);
   Exec("PRAGMA foreign_keys = ON");
   // A file that is not a database fails here, on its first read.
@@ -34,26 +34,36 @@ Database::Database(const std::filesystem::path& path, bool create) : path_(path)
 
 Database::~Database() { sqlite3_close_v2(db_); }
 
+void Database::SetBusyTimeout(int milliseconds) {
+  busy_timeout_ms_ = milliseconds;
+  sqlite3_busy_timeout(db_, milliseconds);
+}
+
 void Database::Throw(const std::string& what) const {
-  Fail("{}: {}: {}", path_.string(), what, sqlite3_errmsg(db_));
+  const std::string message = fmt::format("{}: {}: {}", path_.string(), what, sqlite3_errmsg(db_));
+  if (IsBusy(sqlite3_extended_errcode(db_))) throw DatabaseBusy(message);
+  throw Error(message);
 }
 
 void Database::ExecWhenFree(const std::string& sql) {
-  const auto give_up = std::chrono::steady_clock::now() + std::chrono::milliseconds(kBusyTimeoutMs);
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::milliseconds(busy_timeout_ms_);
   for (;;) {
     const int rc = sqlite3_exec(db_, sql.c_str(), nullptr, nullptr, nullptr);
     if (rc == SQLITE_OK) return;
-    if ((rc & 0xff) != SQLITE_BUSY || std::chrono::steady_clock::now() > give_up) Throw(sql);
+    if ((rc & 0xff) != SQLITE_BUSY || std::chrono::steady_clock::now() > give_up) Throw(sql.substr(0, 60));
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
 }
 
 void Database::Exec(const std::string& sql) {
   char* error = nullptr;
-  if (sqlite3_exec(db_, sql.c_str(), nullptr, nullptr, &error) != SQLITE_OK) {
-    const std::string message = error ? error : sqlite3_errmsg(db_);
+  if (const int rc = sqlite3_exec(db_, sql.c_str(), nullptr, nullptr, &error); rc != SQLITE_OK) {
+    const std::string message = fmt::format("{}: {}: {}", path_.string(),
+                                            sql.substr(0, sql.find('\n')),
+                                            error ? error : sqlite3_errmsg(db_));
     sqlite3_free(error);
-    Fail("{}: {}: {}", path_.string(), sql.substr(0, sql.find('\n')), message);
+    if (IsBusy(rc)) throw DatabaseBusy(message);
+    throw Error(message);
   }
 }
 

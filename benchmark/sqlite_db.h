@@ -8,12 +8,21 @@
 #include <optional>
 #include <string>
 
+#include "core/util/error.h"
+
 struct sqlite3;
 struct sqlite3_stmt;
 
 namespace hdr4d::bench {
 
 class Statement;
+
+// The database stayed locked by another connection past the busy timeout: nothing was written,
+// and the same write may succeed later (issue 51, case 22).
+class DatabaseBusy : public Error {
+ public:
+  using Error::Error;
+};
 
 class Database {
  public:
@@ -32,12 +41,16 @@ class Database {
   void ExecWhenFree(const std::string& sql);
   Statement Prepare(const std::string& sql);
   const std::filesystem::path& path() const { return path_; }
+  // How long a statement waits for another connection's lock (default 60 s).
+  void SetBusyTimeout(int milliseconds);
   sqlite3* handle() { return db_; }
+  // Throws DatabaseBusy when SQLite's last answer was busy or locked, else hdr4d::Error.
   [[noreturn]] void Throw(const std::string& what) const;
 
  private:
   std::filesystem::path path_;
   sqlite3* db_ = nullptr;
+  int busy_timeout_ms_ = 60000;
 };
 
 class Statement {

@@ -4,6 +4,7 @@
 
 #include "benchmark/child_process.h"
 #include "benchmark/machine.h"
+#include "benchmark/names.h"
 #include "benchmark/results_store.h"
 #include "benchmark/run_plan.h"
 #include "benchmark/scene_cache.h"
@@ -38,7 +39,7 @@ nlohmann::json ReadSubmissionMeta(const fs::path& path) {
 }
 
 RunRecord Submit(const SubmitOptions& o) {
-  if (o.method.empty()) Fail("bench submit: --method is empty");
+  RequireName(o.method, "bench submit: --method");  // a name in tables and paths, never a path
   const auto& modes = SupervisionModes();
   if (std::find(modes.begin(), modes.end(), o.supervision) == modes.end())
     Fail("bench submit: --supervision {} is not one of ldr, hdr, ldr+hdr", o.supervision);

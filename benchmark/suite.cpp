@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <set>
 
+#include "benchmark/names.h"
 #include "benchmark/settings_flags.h"
 #include "core/files/output_guard.h"
 #include "core/util/error.h"
@@ -58,6 +59,13 @@ class Obj {
     if (!j_[key].is_string() || j_[key].get<std::string>().empty())
       Fail("{}: must be a non-empty string, got {}", At(key), Short(j_[key]));
     return j_[key].get<std::string>();
+  }
+  // A string that names something (benchmark/names.h): never a path.
+  std::string Name(const std::string& key, const std::string& fallback = "",
+                   bool required = false) const {
+    std::string name = String(key, fallback, required);
+    RequireName(name, At(key));
+    return name;
   }
   double Number(const std::string& key, double fallback, double min) const {
     if (!Has(key)) return fallback;
@@ -124,8 +132,8 @@ SceneSpec ParseScene(const nlohmann::json& j, const std::string& where, const fs
   const Obj o(j, where);
   o.OnlyKeys({"name", "group", "path", "datagen", "builtin", "region"});
   SceneSpec s;
-  s.name = o.String("name", "", true);
-  s.group = o.String("group", "syn");
+  s.name = o.Name("name", "", true);
+  s.group = o.Name("group", "syn");
   const int kinds = o.Has("path") + o.Has("datagen") + o.Has("builtin");
   if (kinds != 1) Fail("{}: give exactly one of 'path', 'datagen' or 'builtin'", where);
   if (o.Has("path")) {
@@ -186,7 +194,10 @@ Budget ParseBudget(const nlohmann::json& j, const std::string& where) {
 std::vector<std::int64_t> ParseSeeds(const Obj& o) {
   std::vector<std::int64_t> seeds;
   std::set<std::int64_t> seen;
-  for (const nlohmann::json& v : o.Array("seeds", true)) {
+  const nlohmann::json& list = o.Array("seeds", true);
+  if (list.size() > kMaxSuiteRuns)
+    Fail("{}: {} seeds; a suite plans at most {} runs", o.At("seeds"), list.size(), kMaxSuiteRuns);
+  for (const nlohmann::json& v : list) {
     if (!v.is_number_integer() || v.get<std::int64_t>() < 0)
       Fail("{}: seeds are non-negative integers, got {}", o.At("seeds"), Obj::Short(v));
     if (!seen.insert(v.get<std::int64_t>()).second)
@@ -215,7 +226,7 @@ std::vector<Variant> ParseVariants(const Obj& o) {
   for (std::size_t i = 0; i < variants.size(); ++i) {
     const Obj v(variants[i], fmt::format("{}[{}]", o.At("variants"), i));
     v.OnlyKeys({"name", "train", "render"});
-    Variant var{v.String("name", "", true), Settings(v, "train", kReservedTrain),
+    Variant var{v.Name("name", "", true), Settings(v, "train", kReservedTrain),
                 Settings(v, "render", kReservedRender)};
     if (!names.insert(var.name).second) Fail("{}: variant '{}' twice", v.where(), var.name);
     out.push_back(std::move(var));
@@ -230,7 +241,7 @@ MethodSpec ParseMethod(const nlohmann::json& j,
   const Obj m(j, where);
   m.OnlyKeys({"name", "label", "supervision", "train", "render", "resources"});
   MethodSpec spec;
-  spec.name = m.String("name", "", true);
+  spec.name = m.Name("name", "", true);
   spec.label = m.String("label", spec.name);
   if (m.Has("supervision"))
     spec.supervision = Supervisions(m.Array("supervision", true), m.At("supervision"));
@@ -248,7 +259,7 @@ std::vector<TableRow> ParseRows(const Obj& t) {
   for (std::size_t r = 0; r < rows.size(); ++r) {
     const Obj row(rows[r], fmt::format("{}[{}]", t.At("rows"), r));
     row.OnlyKeys({"label", "method", "supervision"});
-    TableRow tr{row.String("label", ""), row.String("method", "", true),
+    TableRow tr{row.String("label", ""), row.Name("method", "", true),
                 row.String("supervision", "", true)};
     if (tr.label.empty()) tr.label = tr.method;
     Supervisions(nlohmann::json::array({tr.supervision}), row.At("supervision"));
@@ -263,12 +274,12 @@ TableSpec ParseTable(const nlohmann::json& j, const std::string& where) {
   const Obj t(j, where);
   t.OnlyKeys({"id", "title", "layout", "scenes", "rows", "reference", "note"});
   TableSpec spec;
-  spec.id = t.String("id", "", true);
+  spec.id = t.Name("id", "", true);
   spec.title = t.String("title", spec.id);
   spec.layout = t.String("layout", "main");
   if (spec.layout != "main" && spec.layout != "ablation")
     Fail("{}: layout '{}' is not main or ablation", t.At("layout"), spec.layout);
-  spec.scene_group = t.String("scenes", "syn");
+  spec.scene_group = t.Name("scenes", "syn");
   spec.note = t.String("note", "");
   spec.rows = ParseRows(t);
   spec.reference = t.String("reference", spec.rows.back().label);
@@ -276,6 +287,23 @@ TableSpec ParseTable(const nlohmann::json& j, const std::string& where) {
                    [&](const TableRow& r) { return r.label == spec.reference; }))
     Fail("{}: reference '{}' is not a row label", t.At("reference"), spec.reference);
   return spec;
+}
+
+// The runs a suite plans, refused above kMaxSuiteRuns before anything is planned: a dry run of
+// 10^6 seeds took 2.6 GB (issue 51, case 24). Counted in doubles: a product of axes cannot wrap.
+void RequirePlanSize(const Suite& s, const std::string& where) {
+  double per_scene_seed = 0;  // methods x their supervision modes
+  for (const MethodSpec& m : s.methods)
+    per_scene_seed += static_cast<double>((m.supervision.empty() ? s.supervision : m.supervision).size());
+  const double runs = per_scene_seed * static_cast<double>(s.scenes.size()) *
+                      static_cast<double>(s.seeds.size()) * static_cast<double>(s.budgets.size()) *
+                      static_cast<double>(s.variants.size());
+  if (runs > static_cast<double>(kMaxSuiteRuns)) {
+    Fail("{}: the suite plans {:.0f} runs ({} method x supervision, {} scenes, {} seeds, {} budgets, "
+         "{} variants); a suite plans at most {} runs: split it into smaller suites",
+         where, runs, per_scene_seed, s.scenes.size(), s.seeds.size(), s.budgets.size(),
+         s.variants.size(), kMaxSuiteRuns);
+  }
 }
 
 }  // namespace
@@ -315,7 +343,7 @@ Suite ParseSuite(const nlohmann::json& json, const fs::path& file) {
               "variants", "train", "render", "resources", "curve_points", "tables"});
   Suite s;
   s.file = file;
-  s.name = o.String("name", "", true);
+  s.name = o.Name("name", "", true);
   s.description = o.String("description", "");
   s.resources = o.Has("resources") ? ParseResources(o.Raw("resources"), o.At("resources"), {})
                                    : Resources{};
@@ -341,6 +369,7 @@ Suite ParseSuite(const nlohmann::json& json, const fs::path& file) {
       Fail("{}: method '{}' is listed twice", o.At("methods"), spec.name);
     s.methods.push_back(std::move(spec));
   }
+  RequirePlanSize(s, where);
   const nlohmann::json& tables = o.Array("tables", false);
   for (std::size_t i = 0; i < tables.size(); ++i) {
     const std::string at = fmt::format("{}[{}]", o.At("tables"), i);

@@ -90,6 +90,10 @@ struct Suite {
   const SceneSpec* FindScene(const std::string& name) const;
 };
 
+// The most runs one suite may plan (methods x supervision x scenes x seeds x budgets x
+// variants); the shipped suites plan at most 792. A larger suite is refused when it is read.
+inline constexpr std::size_t kMaxSuiteRuns = 10000;
+
 // Parses a suite; relative scene paths are taken from the suite file's folder.
 Suite ParseSuite(const nlohmann::json& json, const std::filesystem::path& file);
 // `name_or_path`: a file, or the name of a shipped suite (benchmark/suites/<name>.json, or

@@ -5,6 +5,7 @@
 #include <map>
 #include <set>
 
+#include "benchmark/names.h"
 #include "benchmark/scene_cache.h"
 #include "tests/testing.h"
 
@@ -57,6 +58,66 @@ TEST(Suite, EveryMistakeNamesTheFileAndTheKey) {
   const std::string e = ErrorFor(n);
   EXPECT_NE(e.find("/x/suite.json"), std::string::npos) << e;
   EXPECT_NE(e.find("'name' missing"), std::string::npos) << e;
+}
+
+// Names from a suite became paths: a table id "../../x" or an absolute path, a scene named
+// "../../../x", a method or variant with a '/' wrote outside --out (issue 51, case 9). Every
+// name is refused where the suite is read, naming the file and the key; spaces and dashes stay.
+TEST(Suite, NamesThatArePathsAreRefusedNamingTheKey) {
+  auto with = [](const char* pointer, nlohmann::json v) {
+    nlohmann::json j = Minimal();
+    j[nlohmann::json::json_pointer(pointer)] = v;
+    return j;
+  };
+  nlohmann::json table = Minimal();
+  table["tables"] = {{{"id", "ok"}, {"rows", {{{"method", "m"}, {"supervision", "ldr"}}}}}};
+  auto table_with = [&](const char* pointer, nlohmann::json v) {
+    nlohmann::json j = table;
+    j[nlohmann::json::json_pointer(pointer)] = v;
+    return j;
+  };
+  const std::vector<std::pair<nlohmann::json, std::string>> cases = {
+      {table_with("/tables/0/id", "../../x"), "suite.json.tables[0].id"},
+      {table_with("/tables/0/id", "/tmp/victim"), "suite.json.tables[0].id"},
+      {table_with("/tables/0/scenes", "a/b"), "suite.json.tables[0].scenes"},
+      {table_with("/tables/0/rows/0/method", "x/y"), "suite.json.tables[0].rows[0].method"},
+      {with("/scenes/0/name", "../../../x"), "suite.json.scenes[0].name"},
+      {with("/scenes/0/name", ".."), "suite.json.scenes[0].name"},
+      {with("/scenes/0/group", "g\\h"), "suite.json.scenes[0].group"},
+      {with("/methods/0/name", "hdr4dgs/ldr"), "suite.json.methods[0].name"},
+      {with("/variants", {{{"name", "grad/1e-3"}}}), "suite.json.variants[0].name"},
+      {with("/name", "suite\nrm -rf"), "suite.json.name"},
+      {with("/name", std::string(kMaxNameBytes + 1, 'a')), "suite.json.name"},
+  };
+  for (const auto& [suite, key] : cases) {
+    const std::string e = ErrorFor(suite);
+    EXPECT_NE(e.find("/x/" + key + ":"), std::string::npos) << key << ": " << e;
+  }
+  // Names, however odd, are still names.
+  const Suite s = ParseSuite(with("/methods/0/name", "HDR-4DGS (ours) 2"), "/x/suite.json");
+  EXPECT_EQ(s.methods[0].name, "HDR-4DGS (ours) 2");
+}
+
+// A suite of 10^6 seeds took 2.6 GB for a dry run; one planning more than kMaxSuiteRuns runs
+// (seeds alone or a product of axes) is refused up front, stating the limit (issue 51, case 24).
+TEST(Suite, HugeSuitesAreRefusedUpFrontWithTheLimit) {
+  nlohmann::json seeds = Minimal();
+  seeds["seeds"] = nlohmann::json::array();
+  for (int i = 0; i < 1000000; ++i) seeds["seeds"].push_back(i);
+  const std::string e = ErrorFor(seeds);
+  EXPECT_NE(e.find("/x/suite.json.seeds"), std::string::npos) << e;
+  EXPECT_NE(e.find(std::to_string(kMaxSuiteRuns)), std::string::npos) << e;
+  // 101 seeds x 100 methods x 1 scene x 1 budget: each axis is small, the product is not.
+  nlohmann::json product = Minimal();
+  product["seeds"] = nlohmann::json::array();
+  for (int i = 0; i < 101; ++i) product["seeds"].push_back(i);
+  product["methods"] = nlohmann::json::array();
+  for (int i = 0; i < 100; ++i) product["methods"].push_back({{"name", "m" + std::to_string(i)}});
+  const std::string p = ErrorFor(product);
+  EXPECT_NE(p.find("plans 10100 runs"), std::string::npos) << p;
+  EXPECT_NE(p.find("at most " + std::to_string(kMaxSuiteRuns)), std::string::npos) << p;
+  product["seeds"].erase(100);  // exactly the limit
+  EXPECT_EQ(ErrorFor(product), "");
 }
 
 TEST(Suite, UnknownSuiteNameListsTheShippedOnes) {

@@ -73,9 +73,10 @@ void AddBenchRun(CLI::App& bench) {
     const bench::RunnerSummary s = bench::RunSuite(suite, a->runner);
     if (a->runner.dry_run) return;
     fmt::print("bench run: suite '{}': {} runs planned, {} were stored already, {} done now, {} "
-               "failed{}\n",
+               "failed{}{}\n",
                suite.name, s.planned, s.already_done, s.done, s.failed,
-               s.skipped_failed ? fmt::format(" ({} earlier failures not retried)", s.skipped_failed) : "");
+               s.skipped_failed ? fmt::format(" ({} earlier failures not retried)", s.skipped_failed) : "",
+               s.taken ? fmt::format(", {} left to another bench run on the store", s.taken) : "");
     if (s.failed > 0)
       Fail("bench run: {} of {} runs failed (listed above; their errors are in {})", s.failed,
            s.done + s.failed, a->store);

@@ -212,6 +212,113 @@ case_ err "refusing" bench table suite1.json --store st1.db --out S/hdr
 case_ err "refusing" bench pareto suite1.json --store st1.db --out S/hdr
 case_ err "refusing" bench pareto suite1.json --store st1.db --out S/images
 check "1: the suite file was replaced" grep -q '"name"' suite1.json
+# 9: names from a suite are names, refused where the suite is read (dry runs: nothing is run)
+tiny() {  # tiny FILE [python statements on the suite s]: the demo scene, 1 method, 1 seed
+  python3 - "$1" "${2:-}" <<'PY'
+import json, sys
+s = {"name": "tiny", "seeds": [0], "budgets": [{"iterations": 20}],
+     "resources": {"cpus": 1, "memory_gb": 1, "minutes": 5},
+     "scenes": [{"name": "tiny", "builtin": {"scene": "demo", "flags": {"size": 24, "timestamps": 3,
+                 "cameras": 3, "spp": 1}, "synth": {"crf": "filmic", "seed": 1}}}],
+     "methods": [{"name": "4dgs", "train": {"method": "4dgs"}}],
+     "tables": [{"id": "t", "rows": [{"method": "4dgs", "supervision": "ldr"}]}]}
+exec(sys.argv[2])
+json.dump(s, open(sys.argv[1], "w"))
+PY
+}
+tiny n9a.json 's["tables"][0]["id"] = "../../x9"'
+tiny n9b.json 's["tables"][0]["id"] = "'"$W"'/x9abs"'
+tiny n9c.json 's["scenes"][0]["name"] = "../../../x9"'
+tiny n9d.json 's["methods"][0]["name"] = "4dgs/ldr"; s["tables"][0]["rows"][0]["method"] = "4dgs/ldr"'
+tiny n9e.json 's["variants"] = [{"name": "grad/1e-3"}]'
+tiny n9f.json 's["name"] = ".."'
+tiny n9g.json 's["scenes"][0]["group"] = "a\\b"'
+tiny n9h.json 's["tables"][0]["rows"][0]["method"] = "/etc/passwd"'
+case_ err "tables[0].id" bench run n9a.json --store st9.db --dry-run --cache C9
+case_ err "tables[0].id" bench table n9b.json --store st9.db --out T9
+case_ err "scenes[0].name" bench run n9c.json --store st9.db --dry-run --cache C9
+case_ err "methods[0].name" bench slurm n9d.json --out SL9
+case_ err "variants[0].name" bench run n9e.json --store st9.db --dry-run --cache C9
+case_ err "n9f.json.name" bench report n9f.json --store st9.db --out r9.html
+case_ err "scenes[0].group" bench run n9g.json --store st9.db --dry-run --cache C9
+case_ err "rows[0].method" bench pareto n9h.json --store st9.db --out P9
+check "9: a refused suite left a file" test ! -e x9abs -a ! -e ../x9 -a ! -e SL9 -a ! -e r9.html -a ! -e P9
+# 24: a suite planning more runs than the stated limit is refused before anything is planned
+tiny n24a.json 's["seeds"] = list(range(10**6))'
+tiny n24b.json 's["seeds"] = list(range(101)); s["methods"] = [{"name": "m%d" % i} for i in range(100)]'
+case_ err "at most 10000 runs" bench run n24a.json --store st24.db --dry-run --cache C9
+case_ err "plans 10100 runs" bench run n24b.json --store st24.db --dry-run --cache C9
+# 18: a dry run creates no store
+tiny t18.json
+case_ok bench run t18.json --store st18/s.db --dry-run --cache C9
+check "18: a dry run created the store" test ! -e st18
+# 18 and 24: bench collect names the file and key of a bad result, merges the others, exits 1
+collect_case() {  # collect_case "what" DIR WORDS...: exit 1, every WORDS in the output, good.json stored
+  local dir=$1; shift
+  tried=$((tried + 1))
+  local out rc=0 ok=1
+  out=$(timeout 120 "$B" bench collect "$dir" --store "$dir.db" 2>&1) || rc=$?
+  [ $rc -eq 1 ] || ok=0
+  for w in "$@"; do printf '%s' "$out" | grep -qF -- "$w" || ok=0; done
+  printf '%s' "$out" | grep -q 'json.exception' && ok=0
+  python3 -c "import sqlite3,sys; sys.exit(0 if sqlite3.connect('$dir.db').execute(\"select count(*) from runs where id='good'\").fetchone()[0] == 1 else 1)" || ok=0
+  if [ $ok -eq 1 ]; then held=$((held + 1)); else failed_cases+=("bench collect $dir -> exit $rc: $out"); fi
+}
+record() {  # record FILE ID [python statements on the record r]
+  python3 - "$1" "$2" "${3:-}" <<'PY'
+import json, sys
+r = {"id": sys.argv[2], "source": "slurm", "status": "ok", "error": "", "code_version": "v",
+     "data_checksum": "c", "frames": [], "labels": [{"suite": "s", "method": "m", "scene": "sc",
+     "supervision": "ldr", "seed": 0, "budget": "10it", "variant": ""}]}
+exec(sys.argv[3])
+json.dump(r, open(sys.argv[1], "w"))
+PY
+}
+mkdir -p J24a/results J24b/results J24c/results
+record J24a/results/good.json good; record J24a/results/a-typed.json a-typed 'r["iterations"] = "many"'
+record J24a/results/a-exposure.json a-exposure 'r["frames"] = [{"frame": "f", "time": 0, "exposure": "bright"}]'
+record J24a/results/a-series.json a-series 'r["series"] = {"loss": "points"}'
+collect_case J24a "a-typed.json: key 'iterations'" "key 'exposure'" "key 'loss'" "3 result file(s)"
+record J24b/results/good.json good; record J24b/results/misnamed.json someone-else
+record J24b/results/path.json path 'r["labels"][0]["scene"] = "../../x"'
+collect_case J24b "misnamed.json: key 'id'" "path.json: labels: key 'scene'" "2 result file(s)"
+python3 -c "import json; l={'suite':'s','method':'m','scene':'sc','supervision':'ldr','seed':0,'budget':'10it','variant':''}; json.dump({'arrays': [{'tasks': [{'id': 'good', 'labels': [l]}, {'id': 'relabelled', 'labels': [l]}]}]}, open('J24c/plan.json', 'w'))"
+record J24c/results/good.json good; record J24c/results/stray.json stray
+record J24c/results/relabelled.json relabelled 'r["labels"][0]["method"] = "other"'
+collect_case J24c "stray.json: run stray is not in plan.json" "relabelled.json: key 'labels'" "2 result file(s)"
+# 23: two bench runs on one store share its runs: each is trained once, stored once
+tiny t23.json 's["seeds"] = [0, 1]; s["methods"].append({"name": "hdr4dgs", "train": {"method": "hdr4dgs"}})'
+"$B" bench run t23.json --store warm23.db --cache C9 --methods 4dgs --seeds 0 --iterations 1 >/dev/null 2>&1
+timeout 600 "$B" bench run t23.json --store st23.db --cache C9 --threads 1 >o23a.txt 2>&1 & p1=$!
+timeout 600 "$B" bench run t23.json --store st23.db --cache C9 --threads 1 >o23b.txt 2>&1 & p2=$!
+wait $p1; r1=$?; wait $p2; r2=$?
+check "23: two bench runs on one store failed" test $r1 -eq 0 -a $r2 -eq 0
+check "23: two bench runs on one store made a run twice" test "$(cat o23a.txt o23b.txt | grep -o '[0-9]* done now' | awk '{s += $1} END {print s}')" = 4
+check "23: a run folder saw two trainings" test -z "$(for l in st23.db.runs/*/log.txt; do [ "$(grep -c '^\$ .* train ' "$l")" = 1 ] || echo "$l"; done)"
+# 22: a store locked for a while is waited for; a result kept while it was locked is stored by
+# the next bench run without training again
+python3 -c "import sqlite3,time; c=sqlite3.connect('st23.db', isolation_level=None); c.execute('BEGIN IMMEDIATE'); time.sleep(8)" & locker=$!
+sleep 1
+tiny t22.json 's["seeds"] = [2]'
+case_ok bench run t22.json --store st23.db --cache C9 --threads 1
+wait $locker
+id22=$(python3 -c "import sqlite3; print(sqlite3.connect('st23.db').execute('select run_id from run_labels where seed = 2').fetchone()[0])")
+mkdir -p "st22.db.runs/$id22"
+python3 - "$id22" <<'PY'
+import json, sqlite3, sys
+db = sqlite3.connect("st23.db")
+run = sys.argv[1]
+cols = [d[0] for d in db.execute("select * from runs where id = ?", (run,)).description]
+row = dict(zip(cols, db.execute("select * from runs where id = ?", (run,)).fetchone()))
+labels = [dict(zip(["suite", "method", "scene", "supervision", "seed", "budget", "variant"], l))
+          for l in db.execute("select suite, method, scene, supervision, seed, budget, variant from run_labels where run_id = ?", (run,))]
+rec = {k: row[k] for k in ["id", "source", "status", "error", "code_version", "git_describe", "data_checksum", "scene_dir", "run_dir", "iterations", "gaussians"]}
+rec.update(config=json.loads(row["config"]), machine=json.loads(row["machine"]), labels=labels, frames=[])
+json.dump(rec, open("st22.db.runs/%s/record.json" % run, "w"))
+PY
+case_ok bench run t22.json --store st22.db --cache C9 --threads 1
+check "22: a kept result was trained again" test ! -e "st22.db.runs/$id22/train"
+check "22: a kept result was not stored" python3 -c "import sqlite3,sys; sys.exit(0 if sqlite3.connect('st22.db').execute(\"select count(*) from runs where id='$id22'\").fetchone()[0] == 1 else 1)"
 
 # 2: a run's files and renders are inputs of every command that reads the run
 "$B" render --run R >/dev/null 2>&1

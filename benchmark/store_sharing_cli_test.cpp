@@ -1,0 +1,96 @@
+// One store, several writers (issue 51, cases 22 and 23): a finished run's result kept in its
+// folder while the store was locked is stored by the next `bench run` (or `bench collect` of the
+// runs folder) without running it again, and two `bench run`s started together on one store
+// share its runs: every run is trained once, in one folder, and stored once.
+#include <gtest/gtest.h>
+
+#include <regex>
+#include <thread>
+
+#include "benchmark/bench_test_util.h"
+#include "benchmark/kept_records.h"
+#include "benchmark/results_store.h"
+#include "core/files/json_util.h"
+#include "tests/testing.h"
+
+namespace hdr4d::bench {
+namespace {
+namespace fs = std::filesystem;
+using namespace testutil;
+
+// "N done now" of a bench run's last line.
+int DoneNow(const std::string& text) {
+  std::smatch m;
+  if (!std::regex_search(text, m, std::regex("(\\d+) done now"))) return -1;
+  return std::stoi(m[1]);
+}
+
+TEST(StoreSharing, AKeptResultIsStoredLaterWithoutRunningAgain) {
+  testing::TempDir dir;
+  const fs::path suite = dir / "suite.json", cache = dir / "cache", log = dir / "log.txt";
+  WriteTinySuite(suite, "kept", {{{"name", "4dgs"}, {"train", {{"method", "4dgs"}}}}}, {0}, 20);
+  const Command first = RunHdr4dArgs({"bench", "run", suite.string(), "--store", (dir / "a.db").string(),
+                                      "--cache", cache.string()}, log);
+  ASSERT_TRUE(first.result.ok()) << first.text;
+  const std::set<std::string> ids = ResultsStore(dir / "a.db", false).RunIds("ok");
+  ASSERT_EQ(ids.size(), 1u);
+  const std::string id = *ids.begin();
+  const RunRecord record = ResultsStore(dir / "a.db", false).Record(id);
+  // What a bench run leaves when its store stays locked: the record in the run's folder.
+  WriteJsonFile(dir / "b.db.runs" / id / kKeptRecordName, record.ToJson());
+  const Command later = RunHdr4dArgs({"bench", "run", suite.string(), "--store", (dir / "b.db").string(),
+                                      "--cache", cache.string()}, log);
+  ASSERT_TRUE(later.result.ok()) << later.text;
+  EXPECT_NE(later.text.find("storing the result kept in"), std::string::npos) << later.text;
+  EXPECT_FALSE(fs::exists(dir / "b.db.runs" / id / "train")) << "trained again";
+  EXPECT_FALSE(fs::exists(dir / "b.db.runs" / id / kKeptRecordName));
+  EXPECT_EQ(ResultsStore(dir / "b.db", false).Record(id).ToJson(), record.ToJson());
+  // `bench collect` of the runs folder stores a kept record too.
+  WriteJsonFile(dir / "c.runs" / id / kKeptRecordName, record.ToJson());
+  const Command collect = RunHdr4dArgs({"bench", "collect", (dir / "c.runs").string(), "--store",
+                                        (dir / "c.db").string()}, log);
+  ASSERT_TRUE(collect.result.ok()) << collect.text;
+  EXPECT_NE(collect.text.find("1 runs merged"), std::string::npos) << collect.text;
+  EXPECT_EQ(ResultsStore(dir / "c.db", false).Record(id).ToJson(), record.ToJson());
+}
+
+TEST(StoreSharing, TwoHarnessesOnOneStoreNeverTakeTheSameRun) {
+  testing::TempDir dir;
+  const fs::path suite = dir / "suite.json", cache = dir / "cache", store = dir / "store.db";
+  WriteTinySuite(suite, "shared",
+                 {{{"name", "4dgs"}, {"train", {{"method", "4dgs"}}}},
+                  {{"name", "hdr4dgs"}, {"train", {{"method", "hdr4dgs"}}}}},
+                 {0, 1}, 40);
+  // The scene first, so that both harnesses start their runs together.
+  const Command scene = RunHdr4dArgs({"bench", "run", suite.string(), "--store", (dir / "warm.db").string(),
+                                      "--cache", cache.string(), "--iterations", "1", "--methods", "4dgs",
+                                      "--seeds", "0"}, dir / "warm.txt");
+  ASSERT_TRUE(scene.result.ok()) << scene.text;
+  Command a, b;
+  auto run = [&](Command* c, const char* log) {
+    *c = RunHdr4dArgs({"bench", "run", suite.string(), "--store", store.string(), "--cache",
+                       cache.string(), "--threads", "1"}, dir / log, 600);
+  };
+  std::thread ta(run, &a, "a.txt"), tb(run, &b, "b.txt");
+  ta.join();
+  tb.join();
+  ASSERT_TRUE(a.result.ok()) << a.text;
+  ASSERT_TRUE(b.result.ok()) << b.text;
+  EXPECT_EQ(DoneNow(a.text) + DoneNow(b.text), 4) << a.text << b.text;
+  ResultsStore s(store, false);
+  EXPECT_EQ(s.RunIds("ok").size(), 4u);
+  EXPECT_TRUE(s.Claims().empty());
+  // One training per run folder (each child appends "$ <command>" to the run's log), and no
+  // renders made from a checkpoint another harness deleted.
+  for (const std::string& id : s.RunIds("ok")) {
+    const std::string text = testing::ReadTextFile(store.string() + ".runs/" + id + "/log.txt");
+    EXPECT_EQ(std::regex_search(text, std::regex("checkpoint.*not found|no checkpoint")), false) << text;
+    const std::regex train_line("(^|\\n)\\$ \\S+ train ");
+    const auto trainings = std::distance(
+        std::sregex_iterator(text.begin(), text.end(), train_line), std::sregex_iterator());
+    EXPECT_EQ(trainings, 1) << id << "\n" << text;
+  }
+}
+
+}  // namespace
+}  // namespace hdr4d::bench
