@@ -11,6 +11,7 @@
 
 #include "core/geometry/ply.h"
 #include "core/image/image_io.h"
+#include "tests/hostile_scene_fixture.h"
 #include "tests/testing.h"
 
 namespace hdr4d {
@@ -21,32 +22,16 @@ using testing::ReadTextFile;
 using testing::RunHdr4d;
 using testing::RunHdr4dWith;
 
-// S = a small demo scene with its LDR images; R = a short run on it.
-class RunSweep : public ::testing::Test {
+// HostileScene (tests/hostile_scene_fixture.h) with a train that takes any scene and flags.
+class RunSweep : public HostileScene {
  protected:
-  void SetUp() override {
-    auto r = RunHdr4d("make-demo-scene --out " + S() + " --cameras 4 --size 32 --timestamps 4 --spp 1");
-    ASSERT_EQ(r.exit_code, 0) << r.err;
-    r = RunHdr4d("synth-ldr --data " + S());
-    ASSERT_EQ(r.exit_code, 0) << r.err;
-  }
   std::string Train(const std::string& scene, const std::string& run, const std::string& more = "") {
     const auto r = RunHdr4d("train --data " + scene + " --out " + run +
                             " --iterations 20 --threads 1 " + more);
     EXPECT_EQ(r.exit_code, 0) << r.err;
     return r.err;
   }
-  std::string S() const { return (dir_ / "S").string(); }
-  std::string R() const { return (dir_ / "R").string(); }
-  fs::path operator/(const std::string& name) const { return dir_ / name; }
-
-  testing::TempDir dir_;
 };
-
-void ExpectRefused(const testing::CommandResult& r, const std::string& args, const std::string& part) {
-  EXPECT_EQ(r.exit_code, 1) << args << "\n" << r.err;
-  EXPECT_NE(r.err.find(part), std::string::npos) << args << "\nmissing: " << part << "\n" << r.err;
-}
 
 json ReadJson(const fs::path& file) { return json::parse(ReadTextFile(file)); }
 

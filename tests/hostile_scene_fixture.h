@@ -32,4 +32,13 @@ class HostileScene : public ::testing::Test {
   testing::TempDir dir_;
 };
 
+// A refused command: exit 1 and `part` in what it said. `dataset check` reports its problems on
+// stdout (it is the command's report), the others on stderr; either way the problem is named.
+inline void ExpectRefused(const testing::CommandResult& r, const std::string& args,
+                          const std::string& part) {
+  const std::string said = r.err + r.out;
+  EXPECT_EQ(r.exit_code, 1) << args << "\n" << said;
+  EXPECT_NE(said.find(part), std::string::npos) << args << "\nmissing: " << part << "\n" << said;
+}
+
 }  // namespace hdr4d

@@ -23,13 +23,6 @@ using testing::RunHdr4dWith;
 
 using Sweep = HostileScene;  // tests/hostile_scene_fixture.h: S, R, TrainRun()
 
-// `dataset check` reports its problems on stdout (it is the command's report), the others on
-// stderr; either way the problem must be named.
-void ExpectRefused(const testing::CommandResult& r, const std::string& args, const std::string& part) {
-  const std::string said = r.err + r.out;
-  EXPECT_EQ(r.exit_code, 1) << args << "\n" << said;
-  EXPECT_NE(said.find(part), std::string::npos) << args << "\nmissing: " << part << "\n" << said;
-}
 
 // Case 13: an image that is /dev/zero hung eval, dataset check and train forever at 100% CPU;
 // a FIFO blocks its reader. Both are refused by name before they are opened.
