@@ -128,11 +128,6 @@ std::vector<float> MeanSquaredDistanceToThreeNearest(const std::vector<Eigen::Ve
   return result;
 }
 
-bool PointTimesAreAllEqual(const PointCloud& cloud) {
-  const std::vector<float>& t = cloud.times;
-  return t.size() >= 2 && std::all_of(t.begin(), t.end(), [&](float v) { return v == t[0]; });
-}
-
 GaussianModel InitialiseGaussians(const std::optional<PointCloud>& cloud,
                                   const InitOptions& options) {
   options.Validate();
@@ -143,7 +138,7 @@ GaussianModel InitialiseGaussians(const std::optional<PointCloud>& cloud,
   if (cloud && cloud->size() >= 4) {
     positions = cloud->positions;
     colors = cloud->colors;
-    if (!PointTimesAreAllEqual(*cloud)) times = cloud->times;  // else drawn below
+    times = cloud->times;
   } else {
     std::uniform_real_distribution<float> u(-options.random_half_extent,
                                             options.random_half_extent);

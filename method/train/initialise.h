@@ -32,15 +32,7 @@ struct InitOptions {
 // the reference uses simple-knn on the GPU). Floored at 1e-7 as the reference does.
 std::vector<float> MeanSquaredDistanceToThreeNearest(const std::vector<Eigen::Vector3f>& points);
 
-// True when every point of `cloud` carries the same time (and there are two or more): such a
-// cloud says where the surfaces are, not when. datagen before issue 56 wrote t = 0 for every
-// point; starting every Gaussian at that one time leaves the rest of the sequence to be reached
-// by the temporal scale alone.
-bool PointTimesAreAllEqual(const PointCloud& cloud);
-
 // Points from `cloud` when given (colours and times used when present), else random ones.
-// Times: the cloud's, except where PointTimesAreAllEqual (the documented fallback): then drawn
-// uniformly in [time_min, time_max] as for a cloud without times.
 GaussianModel InitialiseGaussians(const std::optional<PointCloud>& cloud,
                                   const InitOptions& options);
 

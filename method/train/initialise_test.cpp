@@ -2,7 +2,6 @@
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -68,33 +67,6 @@ TEST(Initialise, PointCloudColoursAndTimesAreUsed) {
   EXPECT_NEAR(kShC0 * m.color_dc[2 * 3 + 2] + kColorOffset, 0.1f, 1e-6);
   // Points on a line 0.1 apart: interior points' 3 nearest are at 0.1, 0.1, 0.2.
   EXPECT_NEAR(std::exp(2 * m.log_scales[5 * 4]), (0.01f + 0.01f + 0.04f) / 3, 1e-6);
-}
-
-// A cloud with one time for every point (datagen before issue 56: all t = 0) gets its times
-// drawn as a cloud without times does; positions and colours are still the cloud's.
-TEST(Initialise, CloudWithOneTimeForEveryPointFallsBackToRandomTimes) {
-  PointCloud cloud;
-  for (int i = 0; i < 200; ++i) {
-    cloud.positions.emplace_back(0.01f * i, 0, 0);
-    cloud.colors.emplace_back(0.9f, 0.2f, 0.1f);
-    cloud.times.push_back(0.0f);
-  }
-  EXPECT_TRUE(PointTimesAreAllEqual(cloud));
-  InitOptions options;
-  const GaussianModel m = InitialiseGaussians(cloud, options);
-  ASSERT_EQ(m.size(), 200u);
-  float lo = 1e9f, hi = -1e9f;
-  for (std::size_t i = 0; i < m.size(); ++i) lo = std::min(lo, m.t[i]), hi = std::max(hi, m.t[i]);
-  EXPECT_GE(lo, options.time_min);
-  EXPECT_LE(hi, options.time_max);
-  EXPECT_GT(hi - lo, 0.9f);  // spread over the sequence, not all at 0
-  EXPECT_FLOAT_EQ(m.xyz[7 * 3], 0.07f);
-  EXPECT_NEAR(kShC0 * m.color_dc[0] + kColorOffset, 0.9f, 1e-6);
-  cloud.times[5] = 0.5f;  // two distinct times: the cloud's own
-  EXPECT_FALSE(PointTimesAreAllEqual(cloud));
-  const GaussianModel own = InitialiseGaussians(cloud, options);
-  EXPECT_EQ(own.t[0], 0.0f);
-  EXPECT_EQ(own.t[5], 0.5f);
 }
 
 TEST(Initialise, StaticModeHasNoTimeAxis) {

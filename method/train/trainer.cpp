@@ -444,12 +444,6 @@ void TrainingRun::ResumeOrInitialise() {
     init.color_mode = options_.hdr.color_mode;
     std::optional<PointCloud> cloud;
     if (dataset_->point_cloud_path) cloud = ReadPly(*dataset_->point_cloud_path);
-    if (cloud && init.temporal && cloud->size() >= 4 && PointTimesAreAllEqual(*cloud)) {
-      spdlog::info("train: every point of {} has time {}: times drawn uniformly in [{}, {}] "
-                   "instead (method/train/initialise.h)",
-                   dataset_->point_cloud_path->string(), cloud->times[0], init.time_min,
-                   init.time_max);
-    }
     model_ = InitialiseGaussians(cloud, init);
     if (resolved_.hdr && model_.color_mode == ColorMode::kLogHdr) {
       if (const auto level =
