@@ -151,7 +151,7 @@ void AddDatagenCommand(CLI::App& app) {
       "datagen",
       "Render HDR-4D-Syn-style dynamic HDR scenes with Blender (Cycles on the CPU, linear float "
       "EXR) and write each as a dataset: LDR at 0.125/2/32 s through a camera response with "
-      "noise, transforms_{train,test}.json, point3d.ply at t = 0, manifest.json with "
+      "noise, transforms_{train,test}.json, point3d.ply sampled over the scene's time, manifest.json with "
       "checksums.\n"
       "  hdr4d datagen --scene all --preset mini --out DATA     (DATA/<scene>/ per scene)\n"
       "  hdr4d datagen --capture --scene room --width 240 --out CAP   (a rig capture for "
@@ -182,6 +182,11 @@ void AddDatagenCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--samples", options->samples, "Cycles samples per pixel (0 = the preset's)")
       ->check(Integer(0, 1'000'000))
+      ->capture_default_str();
+  cmd->add_option("--points", options->points,
+                  "Surface points in point3d.ply, sampled over the scene's time (0 = the "
+                  "preset's: 2000 ci, 20000 mini, 100000 paper)")
+      ->check(Integer(0, 10'000'000))
       ->capture_default_str();
   cmd->add_option("--width", options->width,
                   "Image width in pixels (0 = the preset's; the height follows the scene)")

@@ -22,6 +22,7 @@ struct CheckArgs {
   bool json = false;
   bool full = false;
   bool reference_time = false;
+  std::string exposure_unit = "seconds";
 };
 
 int RunCheck(const CheckArgs& args) {
@@ -29,6 +30,7 @@ int RunCheck(const CheckArgs& args) {
   options.image_check = args.full ? ImageCheck::kFull : ImageCheck::kHeaders;
   options.time_normalisation =
       args.reference_time ? TimeNormalisation::kPerFileReference : TimeNormalisation::kGlobal;
+  options.exposure_unit = ParseExposureUnit(args.exposure_unit, "dataset check");
   options.show_progress = true;
   const DatasetReport report = CheckDataset(args.dir, options);
   const std::string out =
@@ -73,6 +75,11 @@ void AddCheck(CLI::App* dataset) {
   check->add_flag("--reference-time", args->reference_time,
                   "Normalise times per JSON file by its own maximum, as the reference code does "
                   "(default: by the maximum over all splits)");
+  check->add_option("--exposure-unit", args->exposure_unit,
+                    "How the frames' `exposures` numbers are read: seconds (HDR-4DGS) or stops "
+                    "(log2, seconds = 2**value, as HDR-HexPlane's JSON gives them)")
+      ->check(OneOf({"seconds", "stops"}))
+      ->capture_default_str();
   check->callback([args] {
     const int code = RunCheck(*args);
     if (code != 0) throw CLI::RuntimeError(code);

@@ -146,7 +146,8 @@ json RenderPlanJson(const ScenePreset& preset,
           {"width", preset.width},
           {"height", preset.height},        {"samples", preset.samples},
           {"threads", settings.threads},    {"camera_angle_x", preset.camera_angle_x},
-          {"points", preset.points},        {"points_file", kPointsFile},
+          {"points", preset.points},        {"point_times", PointSampleTimes(preset)},
+          {"points_file", kPointsFile},
           {"info_file", kInfoFile},         {"renders", items}};
   if (preset.layout != "scene") plan["layout"] = preset.layout;
   return plan;

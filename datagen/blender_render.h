@@ -18,10 +18,12 @@ namespace hdr4d::datagen {
 // File names inside a scene's folder.
 inline constexpr const char* kPlanFile = "render_plan.json";
 inline constexpr const char* kInfoFile = "render_info.json";
-inline constexpr const char* kPointsFile = "points_t0.bin";  // float32 x y z r g b per point
+// float32 x y z r g b t per point (x y z r g b at t = 0 before script version 2); the name is
+// kept from then.
+inline constexpr const char* kPointsFile = "points_t0.bin";
 inline constexpr const char* kLogFile = "blender.log";
 // Bumped when the plan, the scripts' output or the dataset they make changes meaning.
-inline constexpr int kPlanFormatVersion = 1;
+inline constexpr int kPlanFormatVersion = 2;  // 2: point_times (issue 56)
 
 struct BlenderSettings {
   std::string blender;      // see FindBlender

@@ -97,9 +97,36 @@ Dataset BuildDataset(const ScenePreset& preset,
   return dataset;
 }
 
-// point3d.ply from Blender's t = 0 surface samples (float32 x y z r g b per point).
+namespace {
+
+// The sample times render_info.json reports (script version 2 on: 7 floats per point, x y z r g
+// b t), or none (before: 6 floats per point, all at t = 0). A time outside (0, 1) is an error:
+// the official loader would drop its points.
+std::vector<double> ReportedPointTimes(const ScenePreset& preset, const json& info,
+                                       const fs::path& info_file) {
+  std::vector<double> times;
+  if (!info.contains("points") || !info["points"].contains("times")) return times;
+  const json& t = info["points"]["times"];
+  bool ok = t.is_array() && !t.empty();
+  for (std::size_t i = 0; ok && i < t.size(); ++i) {
+    ok = t[i].is_number() && t[i].get<double>() > 0 && t[i].get<double>() < 1;
+    if (ok) times.push_back(t[i].get<double>());
+  }
+  if (!ok) {
+    Fail("datagen: scene '{}': {}: points.times must be a non-empty list of times inside (0, 1)",
+         preset.scene, info_file.string());
+  }
+  return times;
+}
+
+}  // namespace
+
+// point3d.ply from Blender's surface samples: float32 x y z r g b t per point, sampled at the
+// plan's point_times (or x y z r g b at t = 0 from scripts before version 2).
 std::int64_t WritePointCloud(const ScenePreset& preset, const json& info, const fs::path& staging) {
   const fs::path path = staging / kPointsFile;
+  const std::vector<double> times = ReportedPointTimes(preset, info, staging / kInfoFile);
+  const std::size_t stride = times.empty() ? 6 : 7;
   std::ifstream file(path, std::ios::binary);
   if (!file) {
     Fail("datagen: scene '{}': {}: Blender exited without writing the surface points", preset.scene,
@@ -109,15 +136,20 @@ std::int64_t WritePointCloud(const ScenePreset& preset, const json& info, const 
   float v;
   while (file.read(reinterpret_cast<char*>(&v), sizeof(v))) values.push_back(v);
   const std::int64_t expected = info.contains("points") ? info["points"].value("count", -1) : -1;
-  if (values.size() % 6 != 0 || static_cast<std::int64_t>(values.size() / 6) != expected) {
-    Fail("datagen: scene '{}': {}: holds {} floats, expected 6 per point for {} points",
-         preset.scene, path.string(), values.size(), expected);
+  if (values.size() % stride != 0 || static_cast<std::int64_t>(values.size() / stride) != expected) {
+    Fail("datagen: scene '{}': {}: holds {} floats, expected {} per point for {} points",
+         preset.scene, path.string(), values.size(), stride, expected);
   }
   PointCloud cloud;
-  for (std::size_t i = 0; i < values.size(); i += 6) {
+  for (std::size_t i = 0; i < values.size(); i += stride) {
     cloud.positions.emplace_back(values[i], values[i + 1], values[i + 2]);
     cloud.colors.emplace_back(values[i + 3], values[i + 4], values[i + 5]);
-    cloud.times.push_back(0.0f);  // sampled at t = 0
+    const float t = stride == 7 ? values[i + 6] : 0.0f;
+    if (stride == 7 && !(t > 0 && t < 1)) {
+      Fail("datagen: scene '{}': {}: point {} has time {}, outside (0, 1)", preset.scene,
+           path.string(), i / stride, t);
+    }
+    cloud.times.push_back(t);
   }
   WritePly(staging / "point3d.ply", cloud);
   std::error_code ec;

@@ -1,6 +1,6 @@
 // Turning Blender's output into a dataset (ARCHITECTURE §3): the EXRs checked and rewritten without
-// Cycles' timing metadata, one Frame per render and exposure, point3d.ply from the t = 0 surface
-// samples.
+// Cycles' timing metadata, one Frame per render and exposure, point3d.ply from the surface
+// samples over the scene's time.
 #pragma once
 
 #include <cstdint>
@@ -31,8 +31,10 @@ Dataset BuildDataset(const ScenePreset& preset,
                      const nlohmann::json& info,
                      const std::filesystem::path& staging);
 
-// point3d.ply (with time = 0) from the script's surface samples, which are then removed.
-// Returns the number of points.
+// point3d.ply (x y z, uchar colour, float time) from the script's surface samples, which are
+// then removed: each point carries the time it was sampled at, inside (0, 1) (render_info.json's
+// points.times; t = 0 for a script before version 2, which reported none). Returns the number
+// of points. Throws hdr4d::Error naming the file for a wrong size or a time outside (0, 1).
 std::int64_t WritePointCloud(const ScenePreset& preset,
                              const nlohmann::json& info,
                              const std::filesystem::path& staging);

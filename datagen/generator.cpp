@@ -48,6 +48,10 @@ void DatagenOptions::Validate() const {
   if (threads < 0) Fail("datagen: --threads must be >= 0 (0 = every core), got {}", threads);
   if (samples < 0) Fail("datagen: --samples must be >= 0 (0 = the preset's), got {}", samples);
   if (width < 0) Fail("datagen: --width must be >= 0 (0 = the preset's), got {}", width);
+  if (points < 0 || points > 10'000'000)
+    Fail("datagen: --points must be in [0, 10^7] (0 = the preset's), got {}", points);
+  if (points != 0 && capture)
+    Fail("datagen: --points sets a dataset's point3d.ply; a capture keeps the preset's");
   if (std::find(UnlikeCamerasModes().begin(), UnlikeCamerasModes().end(), unlike_cameras) ==
       UnlikeCamerasModes().end())
     Fail("datagen: --unlike-cameras {}: use none, gains, responses or both", unlike_cameras);
@@ -184,7 +188,11 @@ json SceneManifest(const DatagenOptions& options,
         {"min_positive", result.range.min_positive},
         {"max", result.range.max},
         {"zero_fraction", result.range.zero_fraction}}},
-      {"points", {{"count", points}, {"time", 0.0}}},
+      {"points",
+       {{"count", points},
+        {"times", info.contains("points") && info["points"].contains("times")
+                      ? info["points"]["times"]
+                      : json::array({0.0})}}},
   };
 }
 
@@ -196,6 +204,7 @@ SceneResult GenerateScene(const DatagenOptions& options, const std::string& scen
   const auto start = std::chrono::steady_clock::now();
   ScenePreset preset = ResolvePreset(scene, options.preset, options.width);
   if (options.samples > 0) preset.samples = options.samples;
+  if (options.points > 0) preset.points = options.points;
   const std::vector<PlannedRender> renders = PlanRenders(preset);
   const fs::path final_dir = options.out / preset.scene;
   // Fail early on a missing Blender or scripts folder, before touching the output.

@@ -1,8 +1,9 @@
 // `hdr4d datagen`: renders a procedural scene with Blender (Cycles on the CPU, linear float EXR),
 // then makes the dataset around it: multi-exposure LDR images through core's LDR synthesis
 // (exposure, camera response, sensor noise, 8 bits), transforms_{train,test}.json in the layout
-// of ARCHITECTURE §3, point3d.ply sampled from the surfaces at t = 0, and manifest.json (versions,
-// preset, seed, render settings, dynamic range, SHA-256 of every file).
+// of ARCHITECTURE §3, point3d.ply sampled from the surfaces over the scene's time (each point
+// with its time inside (0, 1)), and manifest.json (versions, preset, seed, render settings,
+// dynamic range, SHA-256 of every file).
 //
 // Output of one scene, OUT/<scene>/:
 //   hdr/camCC_tTTTT.exr            one linear render per camera and timestamp
@@ -38,6 +39,7 @@ struct DatagenOptions {
   int threads = 0;          // Cycles threads; 0 = every core (the pixels do not depend on it)
   int samples = 0;          // Cycles samples per pixel; 0 = the preset's
   int width = 0;            // image width; 0 = the preset's (the height follows the aspect)
+  int points = 0;           // point3d.ply size; 0 = the preset's (not with --capture)
   // LDR synthesis, as the demo and HDR-4D-Syn-style data: a camera response, shot and read
   // noise, 8 bits. The noise seed is the scene seed. Unset: the scene's defaults (a filmic
   // response with full well 20000 and read noise 0.002; `studio` has its own, see SceneInfo).
@@ -73,7 +75,8 @@ struct DatagenOptions {
   // (its own radial fall-off) or both (datagen/capture_lens.h).
   std::string lenses = "none";
   // Throws hdr4d::Error for an unknown scene or preset, an empty output folder, negative
-  // threads, samples or width, bad LDR settings, capture flags without --capture, or a capture
+  // threads, samples, width or points (or points above 10^7 or with --capture), bad LDR
+  // settings, capture flags without --capture, or a capture
   // of "all", of fewer than 2 or more than 12 cameras, fewer than 2 frames, more than 100
   // extra views, or brackets that are not at least two increasing positive times.
   void Validate() const;

@@ -46,11 +46,13 @@ fs::path WriteFakeBlender(const fs::path& dir, const fs::path& fixture, const st
 }
 
 // What a successful Blender run leaves next to the plan for the ci airplane: small bright EXRs,
-// 50 surface points and render_info.json with cameras on a ring looking at the origin.
+// 50 surface points (x y z r g b t, 25 at t = 0.25 and 25 at t = 0.75, or `point_time` for all)
+// and render_info.json with cameras on a ring looking at the origin.
 void WriteFixture(const fs::path& fixture,
                   const ScenePreset& preset,
                   bool write_exrs = true,
-                  bool corrupt_exrs = false) {
+                  bool corrupt_exrs = false,
+                  std::optional<float> point_time = std::nullopt) {
   json renders = json::array();
   int i = 0;
   for (const PlannedRender& r : PlanRenders(preset)) {
@@ -75,13 +77,15 @@ void WriteFixture(const fs::path& fixture,
     }
   }
   WriteJsonFile(fixture / "render_info.json", {{"blender_version", "3.4.1"},
-                                               {"script_version", 1},
+                                               {"script_version", 2},
                                                {"camera_angle_x", preset.camera_angle_x},
-                                               {"points", {{"count", 50}}},
+                                               {"points", {{"count", 50}, {"times", {0.25, 0.75}}}},
                                                {"renders", renders}});
   std::vector<float> points;
-  for (int p = 0; p < 50; ++p)
-    points.insert(points.end(), {0.01f * p, -0.02f * p, 0.5f, 0.2f, 0.4f, 0.6f});
+  for (int p = 0; p < 50; ++p) {
+    const float t = point_time.value_or(p < 25 ? 0.25f : 0.75f);
+    points.insert(points.end(), {0.01f * p, -0.02f * p, 0.5f, 0.2f, 0.4f, 0.6f, t});
+  }
   std::ofstream(fixture / "points_t0.bin", std::ios::binary)
       .write(reinterpret_cast<const char*>(points.data()), points.size() * sizeof(float));
 }
@@ -131,14 +135,17 @@ TEST(Generator, WritesACompleteCheckedDatasetAroundTheRenders) {
   const PointCloud cloud = ReadPly(root / "point3d.ply");
   ASSERT_EQ(cloud.size(), 50u);
   ASSERT_TRUE(cloud.has_times());
-  for (float t : cloud.times) EXPECT_EQ(t, 0.0f);
+  for (int p = 0; p < 50; ++p) EXPECT_EQ(cloud.times[p], p < 25 ? 0.25f : 0.75f) << p;
   EXPECT_NEAR(cloud.positions[10].x(), 0.1f, 1e-6);
+  EXPECT_NEAR(cloud.colors[40].z(), 0.6f, 0.5f / 255);
 
   const json manifest = ReadJsonFile(root / "manifest.json");
   EXPECT_EQ(manifest["generator"], "hdr4d datagen");
   EXPECT_EQ(manifest["scene"], "airplane");
   EXPECT_EQ(manifest["preset"], "ci");
   EXPECT_EQ(manifest["seed"], 3);
+  EXPECT_EQ(manifest["points"]["count"], 50);
+  EXPECT_EQ(manifest["points"]["times"], json({0.25, 0.75}));
   EXPECT_EQ(manifest["blender_version"], "3.4.1");
   EXPECT_EQ(manifest["counts"]["train"]["ldr"], 5);
   EXPECT_EQ(manifest["ldr_synthesis"]["crf_spec"], "filmic:1.5,0.18");
@@ -226,6 +233,29 @@ TEST(Generator, MissingRenderInfoExrOrPointsIsAnErrorNamingTheFile) {
     const std::string error = ErrorOf([&] { GenerateScene(f.options, "airplane"); });
     EXPECT_TRUE(Contains(error, "points_t0.bin")) << error;
   }
+}
+
+// The official HDR-4DGS loader drops, when it subsamples, every point whose time is not
+// strictly inside (0, 1): a script that reported such a time is an error naming the file.
+TEST(Generator, PointTimesOutsideZeroOneAreAnErrorNamingTheFile) {
+  for (const float t : {0.0f, 1.0f, -0.5f}) {
+    Fixture f;
+    WriteFixture(f.dir / "fixture", f.preset, true, false, t);
+    f.options.blender = WriteFakeBlender(f.dir.path(), f.dir / "fixture", "").string();
+    const std::string error = ErrorOf([&] { GenerateScene(f.options, "airplane"); });
+    EXPECT_TRUE(Contains(error, "points_t0.bin")) << error;
+    EXPECT_TRUE(Contains(error, "outside (0, 1)")) << error;
+    EXPECT_FALSE(fs::exists(f.options.out / "airplane"));
+  }
+  Fixture f;  // a reported sample time outside (0, 1)
+  WriteFixture(f.dir / "fixture", f.preset);
+  json info = ReadJsonFile(f.dir / "fixture" / "render_info.json");
+  info["points"]["times"] = {0.0, 0.75};
+  WriteJsonFile(f.dir / "fixture" / "render_info.json", info);
+  f.options.blender = WriteFakeBlender(f.dir.path(), f.dir / "fixture", "").string();
+  const std::string error = ErrorOf([&] { GenerateScene(f.options, "airplane"); });
+  EXPECT_TRUE(Contains(error, "render_info.json")) << error;
+  EXPECT_TRUE(Contains(error, "inside (0, 1)")) << error;
 }
 
 TEST(Generator, CorruptExrOrBadRenderInfoIsAnError) {
@@ -665,6 +695,9 @@ TEST(Generator, OptionsAreValidated) {
   o.width = -1;
   EXPECT_TRUE(Contains(ErrorOf([&] { o.Validate(); }), "--width"));
   o.width = 0;
+  o.points = -1;
+  EXPECT_TRUE(Contains(ErrorOf([&] { o.Validate(); }), "--points"));
+  o.points = 0;
   o.crf = "bogus";
   EXPECT_FALSE(ErrorOf([&] { o.Validate(); }).empty());
   o.crf = "filmic";

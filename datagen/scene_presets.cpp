@@ -166,6 +166,13 @@ std::vector<int> TestTimeIndices(int total, int count) {
   return indices;
 }
 
+std::vector<double> PointSampleTimes(const ScenePreset& preset) {
+  const int slices = std::clamp(preset.timestamps(), 1, kMaxPointTimes);
+  std::vector<double> times;
+  for (int k = 0; k < slices; ++k) times.push_back((k + 0.5) / slices);
+  return times;
+}
+
 std::vector<PlannedRender> PlanRenders(const ScenePreset& preset) {
   const int total = preset.timestamps();
   HDR4D_CHECK(total >= 2 && preset.cameras >= 1);

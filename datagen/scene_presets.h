@@ -105,6 +105,13 @@ struct PlannedRender {
   bool still = false;
 };
 
+// The times point3d.ply's surfaces are sampled at (issue 56): the midpoints of min(timestamps,
+// kMaxPointTimes) equal slices of [0, 1], each strictly inside (0, 1) as the official HDR-4DGS
+// loader needs when it subsamples a cloud (it keeps only 0 < t < 1), and spread over the
+// scene's time so that every Gaussian does not start at t = 0. One time, 0.5, for one timestamp.
+inline constexpr int kMaxPointTimes = 8;
+std::vector<double> PointSampleTimes(const ScenePreset& preset);
+
 // Every render of a scene, ordered by time, then camera. A held-out camera's renders are test
 // views at every timestamp; the other cameras' are test views at the test timestamps.
 std::vector<PlannedRender> PlanRenders(const ScenePreset& preset);

@@ -177,5 +177,25 @@ TEST(ScenePresets, UnknownSceneOrPresetNamesTheKnownOnes) {
   EXPECT_NE(preset.find("mini"), std::string::npos) << preset;
 }
 
+// point3d.ply's sample times: inside (0, 1) (the official loader keeps only those when it
+// subsamples), spread evenly, at most kMaxPointTimes of them, one for a single timestamp.
+TEST(ScenePresets, PointSampleTimesAreInsideZeroOneAndSpread) {
+  EXPECT_EQ(PointSampleTimes(ResolvePreset("deer", "mini")),
+            (std::vector<double>{0.0625, 0.1875, 0.3125, 0.4375, 0.5625, 0.6875, 0.8125, 0.9375}));
+  EXPECT_EQ(PointSampleTimes(ResolvePreset("standup", "ci")),
+            (std::vector<double>{1 / 6.0, 0.5, 5 / 6.0}));  // 2 + 1 timestamps
+  ScenePreset still = ResolvePreset("deer", "ci");
+  still.train_timestamps = 1, still.test_timestamps = 0;
+  EXPECT_EQ(PointSampleTimes(still), std::vector<double>{0.5});
+  for (const std::string& scene : DefaultSceneNames()) {
+    for (const char* preset : {"ci", "mini", "paper"}) {
+      const std::vector<double> times = PointSampleTimes(ResolvePreset(scene, preset));
+      ASSERT_FALSE(times.empty());
+      EXPECT_LE(times.size(), static_cast<std::size_t>(kMaxPointTimes));
+      for (double t : times) EXPECT_TRUE(t > 0 && t < 1) << scene << " " << preset << " " << t;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace hdr4d::datagen

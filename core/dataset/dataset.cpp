@@ -34,6 +34,17 @@ Split ParseSplit(const std::string& name, const char* what) {
   Fail("{}: unknown split '{}' (use train, test or val)", what, name);
 }
 
+const char* ExposureUnitName(ExposureUnit unit) {
+  return unit == ExposureUnit::kStops ? "stops" : "seconds";
+}
+
+ExposureUnit ParseExposureUnit(const std::string& name, const char* what) {
+  for (ExposureUnit unit : {ExposureUnit::kSeconds, ExposureUnit::kStops}) {
+    if (name == ExposureUnitName(unit)) return unit;
+  }
+  Fail("{}: unknown exposure unit '{}' (use seconds or stops)", what, name);
+}
+
 std::vector<const Frame*> Dataset::AllFrames() const {
   std::vector<const Frame*> frames;
   frames.reserve(NumFrames());

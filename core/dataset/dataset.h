@@ -9,7 +9,8 @@
 //   fl_x, fl_y, cx, cy, w, h, near, far.
 // Per frame: file_path (relative to the root), transform_matrix (4x4 camera-to-world, Blender /
 //   OpenGL axes, see core/geometry/camera.h), time (required), exposures (seconds, > 0, default 1; a
-//   scalar or a one-element array), exr_file_path (optional HDR ground truth), optional
+//   scalar or a one-element array; log2 stops, seconds = 2**value, under ExposureUnit::kStops,
+//   as HDR-HexPlane's dataset/lego writes them: -3, -1, 1 under the same key), exr_file_path (optional HDR ground truth), optional
 //   fl_x, fl_y, cx, cy, w, h (per-frame wins over top level), and our extensions camera_id and
 //   exposure_index (non-negative integers, ignored by other readers).
 // file_path quirk: the reference appends ".png" unless the path ends in .png or jpeg (so a
@@ -55,6 +56,17 @@ enum class TimeNormalisation {
   kPerFileReference,  // the reference's way: each JSON file by its own largest time (if > 1)
 };
 
+// How a frame's `exposures` number is read. HDR-HexPlane's JSON gives log2 stops under the same
+// key as HDR-4DGS's seconds (no key tells them apart), so the unit is the reader's choice; a
+// scene read as seconds whose exposures are all small (|v| <= kStopsLookLimit) with some not
+// positive, one of them negative, is reported with the fix (--exposure-unit stops).
+enum class ExposureUnit { kSeconds, kStops };
+inline constexpr double kStopsLookLimit = 16;  // 2^16: a wider bracket than any camera's
+inline constexpr double kMaxStops = 60;        // |stops| read at most: 2^60 s stays finite
+const char* ExposureUnitName(ExposureUnit unit);  // "seconds", "stops"
+// Throws hdr4d::Error naming `what` (the command) for anything but seconds or stops.
+ExposureUnit ParseExposureUnit(const std::string& name, const char* what);
+
 struct Frame {
   Split split = Split::kTrain;
   int index = 0;                     // index in its JSON file's frames array
@@ -65,6 +77,7 @@ struct Frame {
   double time_raw = 0, time = 0;                  // time = normalised to [0,1]
   double exposure = 1;                            // seconds
   bool exposure_given = false;                    // the JSON had `exposures`
+  std::optional<double> exposure_written;  // its number as written (seconds or stops), if any
   int camera_id = -1, exposure_index = -1;        // -1 = not given
   Camera camera;
 };
@@ -78,6 +91,10 @@ struct Dataset {
   std::optional<double> near, far;
   std::optional<std::filesystem::path> point_cloud_path;  // root/point3d.ply if present
   double time_max_raw = 0;                                // largest raw time over every split
+  ExposureUnit exposure_unit = ExposureUnit::kSeconds;    // how `exposures` was read
+  // Read as seconds, the exposures were all small with some not positive: log2 stops, most
+  // likely (a problem says so); `exposure` then holds nothing meaningful.
+  bool exposures_look_like_stops = false;
 
   std::vector<const Frame*> AllFrames() const;  // train, test, val order
   const std::vector<Frame>& FramesOf(Split split) const;
@@ -103,6 +120,7 @@ enum class ImageCheck {
 struct DatasetLoadOptions {
   ImageCheck image_check = ImageCheck::kHeaders;
   TimeNormalisation time_normalisation = TimeNormalisation::kGlobal;
+  ExposureUnit exposure_unit = ExposureUnit::kSeconds;
   bool require_test = true;
   bool show_progress = false;  // a progress bar on stderr while checking (200+ frames) images
   // A read scene's files and image folders are refused as outputs for the rest of the command

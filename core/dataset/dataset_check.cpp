@@ -377,6 +377,7 @@ DatasetReport CheckDataset(const fs::path& root, const DatasetLoadOptions& optio
     return report;
   }
   SceneFiles scene = ReadSceneFiles(root, options, sink);
+  const bool stops_like = ReportStopsLikeExposures(scene, options, sink);
   if (!scene.files[0].parsed) {
     report.problems = sink.Sorted();
     return report;
@@ -392,6 +393,8 @@ DatasetReport CheckDataset(const fs::path& root, const DatasetLoadOptions& optio
   SetIntrinsics(frames, scene.files, sizes, options, sink);
   CheckDuplicates(scene.files, sink);
   Dataset dataset = AssembleDataset(root, scene, frames, options);
+  dataset.exposure_unit = options.exposure_unit;
+  dataset.exposures_look_like_stops = stops_like;
   AttachPointCloud(root, scene, sink, dataset, report);
   if (options.protect_inputs) ProtectScene(dataset, scene.json_files);
   report.dataset = std::move(dataset);

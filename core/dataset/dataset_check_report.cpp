@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <limits>
 #include <optional>
+#include <set>
+#include <vector>
 
 #include "core/dataset/scene_profile.h"
 
@@ -13,6 +15,35 @@ namespace {
 
 const char* HdrGroundTruth(const SceneProfile& profile) {
   return profile.has_hdr_gt ? "yes" : profile.partial_hdr_gt ? "partial" : "no";
+}
+
+// The distinct `exposures` numbers as the JSON wrote them (seconds or stops), ascending.
+std::vector<double> WrittenExposures(const Dataset& d) {
+  std::set<double> values;
+  for (const Frame* f : d.AllFrames()) {
+    if (f->exposure_written) values.insert(*f->exposure_written);
+  }
+  return {values.begin(), values.end()};
+}
+
+std::string JoinValues(const std::vector<double>& values) {
+  std::string out;
+  for (double v : values) out += (out.empty() ? "" : ", ") + fmt::format("{:g}", v);
+  return out;
+}
+
+// Seconds, with what was written when it was not seconds; never seconds for values that were
+// not read as such (+1 stop is not "1 s").
+std::string ExposureLine(const nlohmann::json& s, const SceneProfile& profile) {
+  const auto written = s["exposures_written"].get<std::vector<double>>();
+  if (s["exposures_look_like_stops"].get<bool>()) {
+    return fmt::format("not read: written as {} (log2 stops? see the problem above)",
+                       JoinValues(written));
+  }
+  const std::string as_written =
+      s["exposure_unit"] == "stops" ? "; written as " + JoinValues(written) + " stops" : "";
+  return fmt::format("{} distinct ({} s{})", profile.exposures.size(),
+                     JoinValues(profile.exposures), as_written);
 }
 
 nlohmann::json Summary(const DatasetReport& report, const SceneProfile& profile) {
@@ -35,6 +66,9 @@ nlohmann::json Summary(const DatasetReport& report, const SceneProfile& profile)
       {"frames", {{"train", d.train.size()}, {"test", d.test.size()}, {"val", d.val.size()}}},
       {"cameras", profile.num_cameras},
       {"exposures", profile.exposures},
+      {"exposure_unit", ExposureUnitName(d.exposure_unit)},
+      {"exposures_written", WrittenExposures(d)},
+      {"exposures_look_like_stops", d.exposures_look_like_stops},
       {"time_raw", {{"min", raw_min}, {"max", raw_max}}},
       {"time", {{"min", profile.time_min}, {"max", profile.time_max}}},
       {"hdr_gt", HdrGroundTruth(profile)},
@@ -52,10 +86,7 @@ std::string SummaryText(const nlohmann::json& s, const SceneProfile& profile) {
   line(fmt::format("  frames:      {} train, {} test, {} val", s["frames"]["train"].get<int>(),
                    s["frames"]["test"].get<int>(), s["frames"]["val"].get<int>()));
   line(fmt::format("  cameras:     {}", s["cameras"].get<int>()));
-  std::string exposures;
-  for (double e : profile.exposures)
-    exposures += (exposures.empty() ? "" : ", ") + fmt::format("{:g}", e);
-  line(fmt::format("  exposures:   {} distinct ({} s)", profile.exposures.size(), exposures));
+  line("  exposures:   " + ExposureLine(s, profile));
   line(fmt::format("  time:        raw [{:g}, {:g}], normalised [{:g}, {:g}]",
                    s["time_raw"]["min"].get<double>(), s["time_raw"]["max"].get<double>(),
                    profile.time_min, profile.time_max));

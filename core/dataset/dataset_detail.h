@@ -200,11 +200,19 @@ void ParseSplitFile(const fs::path& root,
                     const json& doc,
                     const Reader& r,
                     const ExposureTable* hdrnerf,
-                    bool time_optional = false);
+                    bool time_optional = false,
+                    ExposureUnit unit = ExposureUnit::kSeconds);
 // Reads every transforms file (and HDR-NeRF exposure file) of a native scene.
 SceneFiles ReadSceneFiles(const fs::path& root,
                           const DatasetLoadOptions& options,
                           ProblemSink& sink);
+// Read as seconds, exposures that are all small (|v| <= kStopsLookLimit) with some not positive,
+// at least one of them negative (a lone 0 among seconds is more likely a typo), are log2 stops,
+// most likely (HDR-HexPlane's -3, -1, 1): one problem, against the first file
+// with a non-positive one, says so with the fix. Returns whether it did.
+bool ReportStopsLikeExposures(const SceneFiles& scene,
+                              const DatasetLoadOptions& options,
+                              ProblemSink& sink);
 
 // ---- dataset_layouts.cpp: which layout a folder is ----------------------------------------
 

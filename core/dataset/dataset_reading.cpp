@@ -2,7 +2,9 @@
 // frame and key (ARCHITECTURE §3).
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "core/geometry/camera.h"
@@ -39,6 +41,26 @@ Eigen::Matrix4d ParseMatrix(const Reader& r, const json& obj, int frame) {
   return m;
 }
 
+// A frame's `exposures` number in `unit`: seconds must be positive, stops (seconds = 2**value)
+// finite and within +-kMaxStops. The number is kept as written either way.
+void ReadExposure(const Reader& r, int index, double value, ExposureUnit unit, Frame& f) {
+  f.exposure_written = value;
+  if (unit == ExposureUnit::kStops) {
+    if (!(std::isfinite(value) && std::abs(value) <= kMaxStops)) {
+      r.Problem(index, "exposures",
+                fmt::format("{} stops is not a finite number within +-{:g}", value, kMaxStops));
+      return;
+    }
+    f.exposure = std::exp2(value);
+  } else if (!(std::isfinite(value) && value > 0)) {
+    r.Problem(index, "exposures", fmt::format("must be positive and finite, got {}", value));
+    return;
+  } else {
+    f.exposure = value;
+  }
+  f.exposure_given = true;
+}
+
 // One frame's keys, over the file's top-level intrinsics; HDR-NeRF's exposures come later.
 PendingFrame ParseFrame(const fs::path& root,
                         const SplitFile& file,
@@ -47,6 +69,7 @@ PendingFrame ParseFrame(const fs::path& root,
                         const Reader& r,
                         const IntrinsicsKeys& top,
                         bool time_required,
+                        ExposureUnit unit,
                         bool* camera_angle_reported) {
   PendingFrame pending;
   pending.rank = SplitRank(file.split, false);
@@ -79,15 +102,11 @@ PendingFrame ParseFrame(const fs::path& root,
     const json* value = &*it;
     if (it->is_array() && it->size() == 1) value = &(*it)[0];
     if (!value->is_number()) {
-      r.Problem(index, "exposures", "expected a number (seconds), got " + Describe(*it));
+      r.Problem(index, "exposures",
+                fmt::format("expected a number ({}), got {}", ExposureUnitName(unit),
+                            Describe(*it)));
     } else {
-      const double e = value->get<double>();
-      if (!(std::isfinite(e) && e > 0)) {
-        r.Problem(index, "exposures", fmt::format("must be positive and finite, got {}", e));
-      } else {
-        f.exposure = e;
-        f.exposure_given = true;
-      }
+      ReadExposure(r, index, value->get<double>(), unit, f);
     }
   }
   if (std::optional<std::string> exr = r.String(obj, index, "exr_file_path")) {
@@ -148,7 +167,8 @@ void ParseSplitFile(const fs::path& root,
                     const json& doc,
                     const Reader& r,
                     const ExposureTable* hdrnerf,
-                    bool time_optional) {
+                    bool time_optional,
+                    ExposureUnit unit) {
   if (!doc.is_object()) {
     r.Problem(-1, "", "expected a JSON object at the top level, got " + Describe(doc));
     return;
@@ -189,7 +209,7 @@ void ParseSplitFile(const fs::path& root,
       continue;
     }
     PendingFrame pending =
-        ParseFrame(root, file, obj, index, r, top, time_required, &camera_angle_reported);
+        ParseFrame(root, file, obj, index, r, top, time_required, unit, &camera_angle_reported);
     if (hdrnerf != nullptr) {
       AddHdrNerfViews(root, pending, index, *hdrnerf, file);
       continue;
@@ -251,7 +271,8 @@ SceneFiles ReadSceneFiles(const fs::path& root,
       }
       if (!table) continue;
     }
-    ParseSplitFile(root, file, doc, r, table ? &*table : nullptr, nerfstudio);
+    ParseSplitFile(root, file, doc, r, table ? &*table : nullptr, nerfstudio,
+                   options.exposure_unit);
     if (nerfstudio && file.parsed) {
       CheckNerfstudioCameraModel(doc, r);
       SplitNerfstudio(root, doc, r, files);
@@ -259,6 +280,37 @@ SceneFiles ReadSceneFiles(const fs::path& root,
     }
   }
   return scene;
+}
+
+bool ReportStopsLikeExposures(const SceneFiles& scene,
+                              const DatasetLoadOptions& options,
+                              ProblemSink& sink) {
+  if (options.exposure_unit != ExposureUnit::kSeconds) return false;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  int count = 0, non_positive = 0, negative = 0;
+  const SplitFile* first = nullptr;  // the first file with a non-positive exposure
+  for (const SplitFile& file : scene.files) {
+    for (const PendingFrame& p : file.frames) {
+      if (!p.frame.exposure_written) continue;
+      const double v = *p.frame.exposure_written;
+      if (!(std::abs(v) <= kStopsLookLimit)) return false;  // also NaN
+      lo = std::min(lo, v), hi = std::max(hi, v), ++count;
+      negative += v < 0;
+      if (v <= 0) {
+        ++non_positive;
+        if (first == nullptr) first = &file;
+      }
+    }
+  }
+  if (first == nullptr || negative == 0) return false;  // a lone 0 is more likely a typo
+  const Reader r(sink, SplitRank(first->split, false), first->path);
+  r.Problem(-1, "exposures",
+            fmt::format("all {} exposures are small (in [{:g}, {:g}]) and {} are not positive: "
+                        "they look like log2 stops (HDR-HexPlane writes -3, -1, 1), not "
+                        "seconds; read them with --exposure-unit stops (seconds = 2**value: "
+                        "{:g} -> {:g} s, {:g} -> {:g} s)",
+                        count, lo, hi, non_positive, lo, std::exp2(lo), hi, std::exp2(hi)));
+  return true;
 }
 
 }  // namespace hdr4d::dataset_detail

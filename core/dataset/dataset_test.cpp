@@ -14,6 +14,7 @@
 #include "core/files/json_util.h"
 #include "core/files/output_guard.h"
 #include "core/geometry/ply.h"
+#include "core/dataset/dataset_check_report.h"
 #include "core/dataset/scene_profile.h"
 #include "tests/testing.h"
 
@@ -608,12 +609,105 @@ TEST(DatasetProblems, ZeroAndNegativeExposure) {
   scene.Frame("train", 2)["exposures"] = json::array({1, 2});
   scene.Write();
   const DatasetReport report = Check(scene);
-  EXPECT_EQ(report.problems.size(), 3u) << AllProblems(report);
+  // The three, and (all small, 0 and -2 not positive) that they may be log2 stops.
+  EXPECT_EQ(report.problems.size(), 4u) << AllProblems(report);
+  EXPECT_PROBLEM(report, "transforms_train.json", -1, "exposures", "look like log2 stops");
   EXPECT_PROBLEM(report, "transforms_train.json", 0, "exposures",
                  "must be positive and finite, got 0");
   EXPECT_PROBLEM(report, "transforms_test.json", 1, "exposures",
                  "must be positive and finite, got -2");
   EXPECT_PROBLEM(report, "transforms_train.json", 2, "exposures", "expected a number");
+}
+
+// HDR-HexPlane's dataset/lego layout (its first commit): near/far,
+// integer frame times and `exposures` as log2 stops (-3, -1, 1) under HDR-4DGS's key. A fixture
+// in that layout, written here.
+Scene HexPlaneStyleScene(const fs::path& root) {
+  Scene scene(root);
+  const int stops[3] = {-1, 1, -3};
+  for (const char* split : {"train", "test"}) {
+    scene.File(split)["near"] = 2;
+    scene.File(split)["far"] = 15;
+    for (int i = 0; i < 3; ++i) {
+      json& f = scene.Add(split, 8, 6, /*exr=*/false);
+      f["exposures"] = stops[i];
+      f["time"] = std::string(split) == "train" ? i + 1 : 5 * i;
+    }
+  }
+  scene.Write();
+  return scene;
+}
+
+TEST(DatasetExposureUnit, StopsReadAsSecondsAreRecognisedWithTheFix) {
+  TempDir dir;
+  const Scene scene = HexPlaneStyleScene(dir.path());
+  const DatasetReport report = Check(scene);
+  EXPECT_PROBLEM(report, "transforms_train.json", -1, "exposures",
+                 "all 6 exposures are small (in [-3, 1]) and 4 are not positive: they look like "
+                 "log2 stops");
+  EXPECT_PROBLEM(report, "transforms_train.json", -1, "exposures",
+                 "--exposure-unit stops (seconds = 2**value: -3 -> 0.125 s, 1 -> 2 s)");
+  EXPECT_PROBLEM(report, "transforms_train.json", 0, "exposures", "must be positive");
+  EXPECT_EQ(report.problems.size(), 5u) << AllProblems(report);
+  ASSERT_TRUE(report.dataset);
+  EXPECT_TRUE(report.dataset->exposures_look_like_stops);
+  // The summary never calls +1 stop "1 s": the written values, said to be unread.
+  const std::string text = DatasetReportText(report);
+  EXPECT_NE(text.find("exposures:   not read: written as -3, -1, 1 (log2 stops?"),
+            std::string::npos)
+      << text;
+  EXPECT_EQ(text.find("1 s"), std::string::npos) << text;
+  EXPECT_NE(text.find("exposures: not read (they look like log2 stops"), std::string::npos)
+      << text;
+  const json summary = DatasetReportJson(report)["summary"];
+  EXPECT_EQ(summary["exposures_written"], json({-3.0, -1.0, 1.0}));
+  EXPECT_TRUE(summary["exposures_look_like_stops"].get<bool>());
+}
+
+TEST(DatasetExposureUnit, StopsLoadAsTwoToTheValueSeconds) {
+  TempDir dir;
+  const Scene scene = HexPlaneStyleScene(dir.path());
+  const DatasetReport report = CheckDataset(
+      scene.root(), {.image_check = ImageCheck::kHeaders, .exposure_unit = ExposureUnit::kStops});
+  ASSERT_TRUE(report.ok()) << AllProblems(report);
+  const Dataset& d = *report.dataset;
+  EXPECT_EQ(d.exposure_unit, ExposureUnit::kStops);
+  EXPECT_FALSE(d.exposures_look_like_stops);
+  EXPECT_EQ(d.train[0].exposure, 0.5);
+  EXPECT_EQ(d.train[1].exposure, 2.0);
+  EXPECT_EQ(d.train[2].exposure, 0.125);
+  EXPECT_EQ(*d.train[2].exposure_written, -3.0);
+  EXPECT_TRUE(d.train[2].exposure_given);
+  EXPECT_EQ(*d.near, 2.0);
+  EXPECT_DOUBLE_EQ(d.test[2].time, 1.0);  // times 1..3 and 0, 5, 10: divided by 10
+  const std::string text = DatasetReportText(report);
+  EXPECT_NE(text.find("exposures:   3 distinct (0.125, 0.5, 2 s; written as -3, -1, 1 stops)"),
+            std::string::npos)
+      << text;
+  EXPECT_EQ(ParseExposureUnit("stops", "t"), ExposureUnit::kStops);
+  EXPECT_NE(testing::ErrorOf([] { ParseExposureUnit("ev", "dataset check"); }).find("seconds or stops"),
+            std::string::npos);
+}
+
+TEST(DatasetExposureUnit, StopsOutOfRangeAndSmallSecondsWithoutNegatives) {
+  TempDir dir;
+  {
+    const Scene scene = HexPlaneStyleScene(dir / "a");
+    json doc = ReadJsonFile(dir / "a/transforms_test.json");
+    doc["frames"][1]["exposures"] = 1e6;
+    WriteJsonFile(dir / "a/transforms_test.json", doc);
+    const DatasetReport report = CheckDataset(dir / "a", {.exposure_unit = ExposureUnit::kStops});
+    EXPECT_EQ(report.problems.size(), 1u) << AllProblems(report);
+    EXPECT_PROBLEM(report, "transforms_test.json", 1, "exposures", "not a finite number within");
+  }
+  // Seconds with a lone 0 (a typo, not stops): refused without the stops diagnosis.
+  Scene scene(dir / "b");
+  AddGoodFrames(scene);
+  scene.Frame("train", 1)["exposures"] = 0;
+  scene.Write();
+  const DatasetReport report = Check(scene);
+  EXPECT_EQ(report.problems.size(), 1u) << AllProblems(report);
+  EXPECT_FALSE(report.dataset->exposures_look_like_stops);
 }
 
 TEST(DatasetProblems, SingularMatrix) {
@@ -853,10 +947,12 @@ TEST(DatasetProblems, LoadErrorNamesTheFirstAndCountsTheRest) {
     LoadDataset(dir.path());
     FAIL() << "expected an error";
   } catch (const Error& e) {
+    // First the file's own problem: -1 everywhere looks like log2 stops (then 12 frames).
     const std::string message = e.what();
-    EXPECT_NE(message.find("frame 0: exposures"), std::string::npos) << message;
-    EXPECT_EQ(message.find("frame 1: exposures"), std::string::npos) << message;
-    EXPECT_NE(message.find("and 11 more problems"), std::string::npos) << message;
+    EXPECT_NE(message.find("exposures: all 13 exposures are small"), std::string::npos)
+        << message;
+    EXPECT_EQ(message.find("frame 0: exposures"), std::string::npos) << message;
+    EXPECT_NE(message.find("and 12 more problems"), std::string::npos) << message;
   }
 }
 

@@ -63,6 +63,8 @@ SceneProfile ProfileScene(const Dataset& dataset) {
       Distinct(times, [](double) { return kSameTimeTolerance; });
   p.exposures =
       Distinct(exposures, [](double v) { return kSameExposureRelTolerance * std::abs(v); });
+  p.exposures_unread = dataset.exposures_look_like_stops;
+  if (p.exposures_unread) p.exposures.clear();  // the defaults of refused values, not the scene's
   p.num_timestamps = static_cast<int>(distinct_times.size());
   p.dynamic = p.num_timestamps > 1;
   p.multi_exposure = p.exposures.size() > 1;
@@ -116,7 +118,9 @@ std::string SceneProfile::Describe() const {
                     "no temporal marginal, no temporal context)",
                     time_min));
   }
-  if (multi_exposure) {
+  if (exposures_unread) {
+    line("exposures: not read (they look like log2 stops, not seconds: --exposure-unit stops)");
+  } else if (multi_exposure) {
     line(
         fmt::format("multi-exposure: {} exposures ({} s): learns the tone curve from the "
                     "brackets",
@@ -161,6 +165,7 @@ nlohmann::json SceneProfile::ToJson() const {
       {"num_frames", num_frames},
       {"num_hdr_frames", num_hdr_frames},
       {"exposures", exposures},
+      {"exposures_unread", exposures_unread},
       {"time_min", time_min},
       {"time_max", time_max},
       {"width", width},

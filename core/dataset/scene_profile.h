@@ -21,7 +21,10 @@ struct SceneProfile {
   int num_timestamps = 0;  // distinct normalised times
   int num_frames = 0;
   int num_hdr_frames = 0;             // frames with an exr_file_path
-  std::vector<double> exposures;      // distinct, sorted ascending
+  std::vector<double> exposures;      // distinct, sorted ascending (seconds)
+  // The exposures were not read: written as seconds they look like log2 stops
+  // (Dataset::exposures_look_like_stops); `exposures` is then empty.
+  bool exposures_unread = false;
   double time_min = 0, time_max = 0;  // normalised
   int width = 0, height = 0;          // of the first frame (every frame shares it in a valid scene)
 

@@ -4,7 +4,8 @@
 #   blender -b --factory-startup --python-exit-code 1 -P render_scene.py -- --plan PLAN.json
 #
 # Paths in the plan are relative to its folder. Writes, next to the plan: every planned EXR,
-# the t = 0 surface points (float32 little-endian x y z r g b per point) and render_info.json
+# surface points sampled at the plan's point_times (float32 little-endian x y z r g b t per point)
+# and render_info.json
 # (Blender's version, the camera-to-world matrix of every render, marker positions).
 # Prints "HDR4D_RENDERING i n FILE" before and "HDR4D_RENDERED i n FILE" after each render, which
 # the driver turns into a progress bar.
@@ -13,6 +14,7 @@ import json
 import math
 import os
 import sys
+from array import array
 
 sys.dont_write_bytecode = True  # keep __pycache__ out of the source tree
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -22,7 +24,7 @@ import bpy  # noqa: E402
 import hdr4d_kit as kit  # noqa: E402
 import hdr4d_scenes  # noqa: E402
 
-SCRIPT_VERSION = 1
+SCRIPT_VERSION = 2  # 2: points over time (x y z r g b t)
 
 
 def parse_args():
@@ -36,13 +38,16 @@ def load_plan(path):
     with open(path) as f:
         plan = json.load(f)
     for key in ("scene", "seed", "rig", "cameras", "width", "height", "samples", "threads",
-                "camera_angle_x", "points", "points_file", "info_file", "renders"):
+                "camera_angle_x", "points", "point_times", "points_file", "info_file", "renders"):
         if key not in plan:
             raise ValueError(f"{path}: key '{key}' missing")
     if plan["scene"] not in hdr4d_scenes.SCENES:
         raise ValueError(f"{path}: unknown scene '{plan['scene']}'")
     if plan["rig"] not in ("monocular", "multiview"):
         raise ValueError(f"{path}: rig must be monocular or multiview")
+    times = plan["point_times"]
+    if not times or not all(isinstance(t, (int, float)) and 0 < t < 1 for t in times):
+        raise ValueError(f"{path}: point_times must be a non-empty list of times inside (0, 1)")
     if plan.get("layout", "scene") not in ("scene", "capture"):
         raise ValueError(f"{path}: layout must be scene or capture")
     return plan
@@ -181,6 +186,26 @@ def matrix_rows(matrix):
     return [[float(matrix[r][c]) for c in range(4)] for r in range(4)]
 
 
+def sample_points_over_time(scene_def, plan):
+    """plan["points"] surface points split evenly over plan["point_times"] (the first slices
+    take the remainder), each slice from the surfaces at its time and carrying that time: the
+    official loader keeps only points whose time is strictly inside its time span."""
+    times = plan["point_times"]
+    rng = kit.new_rng(plan["seed"], "points")
+    out = array("f")
+    for k, t in enumerate(times):
+        count = plan["points"] // len(times) + (1 if k < plan["points"] % len(times) else 0)
+        if count == 0:
+            continue
+        scene_def.update(t)
+        bpy.context.view_layer.update()
+        xyzrgb = kit.sample_surface_points(count, rng)
+        for i in range(0, len(xyzrgb), 6):
+            out.extend(xyzrgb[i:i + 6])
+            out.append(t)
+    return out
+
+
 def main():
     args = parse_args()
     plan_path = os.path.abspath(args.plan)
@@ -209,10 +234,8 @@ def main():
             kit.place_camera(obj, scene_def.target, azimuth, elevation, scene_def.distance)
         cameras[camera_id] = obj
 
-    # Surface points at t = 0 (the method's initialisation), before any render moves things.
-    scene_def.update(0.0)
-    bpy.context.view_layer.update()
-    points = kit.sample_surface_points(plan["points"], kit.new_rng(plan["seed"], "points"))
+    # Surface points over the scene's time (the method's initialisation), before any render.
+    points = sample_points_over_time(scene_def, plan)
     if sys.byteorder != "little":
         points.byteswap()
     with open(os.path.join(root, plan["points_file"]), "wb") as f:
@@ -255,7 +278,8 @@ def main():
         "scene": plan["scene"],
         "camera_angle_x": float(any_camera.data.angle_x),
         "width": plan["width"], "height": plan["height"],
-        "points": {"file": plan["points_file"], "count": len(points) // 6, "time": 0.0},
+        "points": {"file": plan["points_file"], "count": len(points) // 7,
+                   "times": plan["point_times"]},
         "objects": sorted(o.name for o in bpy.context.scene.objects),
         "renders": renders,
     }
