@@ -491,14 +491,8 @@ SceneResult GenerateCapture(const DatagenOptions& options, const std::string& sc
   const std::vector<PlannedRender> renders = CaptureRenders(preset);
 
   const fs::path final_dir = options.out / preset.scene;
-  FindBlender(options.blender);
-  FindScriptsDir(options.scripts_dir);
+  const BlenderSettings blender = options.FoundBlender();
   const fs::path staging = PrepareStaging(final_dir, preset.scene);
-  const BlenderSettings blender{.blender = options.blender,
-                                .scripts_dir = options.scripts_dir,
-                                .seed = options.seed,
-                                .threads = options.threads,
-                                .show_progress = options.show_progress};
   const BlenderRender run = RenderWithBlender(preset, renders, blender, staging);
   const LuminanceHistogram histogram = NormaliseExrs(preset, renders, staging);
   const DatasetSynthesisOptions ldr = options.LdrFor(preset.scene);

@@ -97,6 +97,16 @@ void DatagenOptions::Validate() const {
     LdrFor(name).Validate();
 }
 
+BlenderSettings DatagenOptions::FoundBlender() const {
+  FindBlender(blender);
+  FindScriptsDir(scripts_dir);
+  return {.blender = blender,
+          .scripts_dir = scripts_dir,
+          .seed = seed,
+          .threads = threads,
+          .show_progress = show_progress};
+}
+
 DatasetSynthesisOptions DatagenOptions::LdrFor(const std::string& name) const {
   const SceneInfo& info = FindScene(name);
   constexpr double kFullWell = 20000, kReadSigma = 0.002;  // the eight scenes' sensor
@@ -207,15 +217,8 @@ SceneResult GenerateScene(const DatagenOptions& options, const std::string& scen
   if (options.points > 0) preset.points = options.points;
   const std::vector<PlannedRender> renders = PlanRenders(preset);
   const fs::path final_dir = options.out / preset.scene;
-  // Fail early on a missing Blender or scripts folder, before touching the output.
-  FindBlender(options.blender);
-  FindScriptsDir(options.scripts_dir);
+  const BlenderSettings blender = options.FoundBlender();
   const fs::path staging = PrepareStaging(final_dir, preset.scene);
-  const BlenderSettings blender{.blender = options.blender,
-                                .scripts_dir = options.scripts_dir,
-                                .seed = options.seed,
-                                .threads = options.threads,
-                                .show_progress = options.show_progress};
   const BlenderRender run = RenderWithBlender(preset, renders, blender, staging);
   const json& info = run.info;
   const LuminanceHistogram histogram = NormaliseExrs(preset, renders, staging);

@@ -25,6 +25,7 @@
 
 #include "core/radiometry/exposure_stack.h"
 #include "core/radiometry/ldr_synthesis.h"
+#include "datagen/blender_render.h"
 #include "datagen/dynamic_range.h"
 
 namespace hdr4d::datagen {
@@ -82,6 +83,9 @@ struct DatagenOptions {
   void Validate() const;
   // The LDR synthesis of a scene: these options where set, else the scene's defaults.
   DatasetSynthesisOptions LdrFor(const std::string& scene) const;
+  // The Blender run's settings, after finding Blender and the scripts folder: a missing one
+  // fails here, before anything under --out is touched.
+  BlenderSettings FoundBlender() const;
 };
 
 inline constexpr int kCaptureCameras = 6;
