@@ -23,6 +23,11 @@ function(hdr4d_add_library name)
     # (HWY_TARGET_INCLUDE) and stay alone.
     set_target_properties(${target} PROPERTIES UNITY_BUILD ON UNITY_BUILD_BATCH_SIZE 8)
     foreach(src IN LISTS ARG_SOURCES)
+      # Only the folder's own .cpp files can be Highway's; a generated header (the viewer's
+      # assets) does not exist yet when CMake configures.
+      if(NOT src MATCHES "\\.cpp$" OR IS_ABSOLUTE "${src}")
+        continue()
+      endif()
       file(STRINGS ${CMAKE_CURRENT_SOURCE_DIR}/${src} hwy REGEX "HWY_TARGET_INCLUDE")
       if(hwy)
         set_source_files_properties(${src} TARGET_DIRECTORY ${target}
