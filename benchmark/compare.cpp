@@ -15,7 +15,7 @@ namespace hdr4d::bench {
 namespace {
 
 // suite, method, scene, supervision, budget, variant
-using ConfigKey = std::tuple<std::string, std::string, std::string, std::string, std::string,
+using CompareKey = std::tuple<std::string, std::string, std::string, std::string, std::string,
                              std::string>;
 using SeedRuns = std::map<std::int64_t, const RunSummary*>;
 
@@ -111,8 +111,8 @@ CompareSide VersionSide(const ResultsStore& store, const std::string& version) {
 
 namespace {
 
-std::map<ConfigKey, SeedRuns> ByConfiguration(const CompareSide& side, const CompareOptions& o) {
-  std::map<ConfigKey, SeedRuns> out;
+std::map<CompareKey, SeedRuns> ByConfiguration(const CompareSide& side, const CompareOptions& o) {
+  std::map<CompareKey, SeedRuns> out;
   for (const RunSummary& r : side.runs) {
     const RunLabel& l = r.label;
     if (r.status != "ok" || (!o.suite.empty() && l.suite != o.suite)) continue;
@@ -150,7 +150,7 @@ void AddPairs(const std::string& scene, const SeedRuns& a, const SeedRuns& b,
   }
 }
 
-CompareLine LineOf(const ConfigKey& k, const std::string& metric,
+CompareLine LineOf(const CompareKey& k, const std::string& metric,
                    const std::vector<PairedValue>& pairs, double alpha) {
   CompareLine line{std::get<0>(k), std::get<1>(k), std::get<2>(k), std::get<3>(k),
                    std::get<4>(k), std::get<5>(k), metric, DirectionOf(metric)};
@@ -176,7 +176,7 @@ CompareLine LineOf(const ConfigKey& k, const std::string& metric,
   return line;
 }
 
-std::string OnlyIn(const std::string& side, const std::vector<ConfigKey>& keys) {
+std::string OnlyIn(const std::string& side, const std::vector<CompareKey>& keys) {
   std::vector<std::string> names;
   for (std::size_t i = 0; i < keys.size() && i < 5; ++i)
     names.push_back(fmt::format("{}/{}/{}/{}", std::get<0>(keys[i]), std::get<1>(keys[i]),
@@ -197,10 +197,10 @@ std::string CompareLine::Verdict() const {
 
 Comparison Compare(const CompareSide& a, const CompareSide& b, const CompareOptions& o) {
   Comparison c{a.name, b.name, {}, {}, {}};
-  const std::map<ConfigKey, SeedRuns> ia = ByConfiguration(a, o), ib = ByConfiguration(b, o);
-  std::vector<ConfigKey> only_a, only_b;
+  const std::map<CompareKey, SeedRuns> ia = ByConfiguration(a, o), ib = ByConfiguration(b, o);
+  std::vector<CompareKey> only_a, only_b;
   // Per method (scene left empty): the pairs of every scene.
-  std::map<std::pair<ConfigKey, std::string>, std::vector<PairedValue>> per_method;
+  std::map<std::pair<CompareKey, std::string>, std::vector<PairedValue>> per_method;
   for (const auto& [key, runs_a] : ia) {
     const auto it = ib.find(key);
     if (it == ib.end()) {
@@ -212,7 +212,7 @@ Comparison Compare(const CompareSide& a, const CompareSide& b, const CompareOpti
       AddPairs(std::get<2>(key), runs_a, it->second, metric, &pairs);
       if (pairs.empty()) continue;
       c.per_configuration.push_back(LineOf(key, metric, pairs, o.alpha));
-      ConfigKey method_key = key;
+      CompareKey method_key = key;
       std::get<2>(method_key) = "";
       auto& all = per_method[{method_key, metric}];
       all.insert(all.end(), pairs.begin(), pairs.end());

@@ -32,7 +32,7 @@ std::string TestOver(const PairedTest& t) {
   return t.over_scenes ? "scenes" : "seeds";
 }
 
-std::string Table(const std::vector<CompareLine>& lines, bool with_scene) {
+std::string MarkdownLines(const std::vector<CompareLine>& lines, bool with_scene) {
   std::string md = with_scene ? "| Suite | Method | Scene | Supervision | Budget | Metric | A | B "
                                 "| B - A | Pairs | p | Verdict |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n"
                               : "| Suite | Method | Supervision | Budget | Metric | A | B | B - A "
@@ -76,11 +76,11 @@ std::string CompareMarkdown(const Comparison& c) {
       "direction where the difference exceeds the seed noise, \"undecided\" where it does not "
       "or one seed cannot tell.\n\n",
       c.a_name, c.b_name);
-  md += Table(c.per_configuration, true);
+  md += MarkdownLines(c.per_configuration, true);
   md += "\nPer method over every scene both have: pairs by scene and seed, blocked by scene "
         "(over scenes, each a mean over its seeds, where one seed per scene leaves no seed "
         "noise).\n\n";
-  md += Table(c.per_method, false);
+  md += MarkdownLines(c.per_method, false);
   if (!c.notes.empty()) {
     md += "\n";
     for (const std::string& n : c.notes) md += "- " + n + "\n";
