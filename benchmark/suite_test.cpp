@@ -144,9 +144,16 @@ TEST(Suite, ShippedSuitesCoverThePapersTables) {
   for (const TableSpec& t : paper.tables) ids.insert(t.id);
   EXPECT_EQ(ids, (std::set<std::string>{"table1", "table2", "table4", "table5", "table6", "table7"}));
   ASSERT_EQ(paper.methods.size(), ci.methods.size());
+  // The same settings, but for the grid methods' budget (rays per batch, grid sizes), which ci
+  // scales down with its images, and settings set to null (the grid methods switch off some).
+  const auto settings = [](nlohmann::json train) {
+    for (const char* budget : {"rays", "grid-voxels", "time-grid"}) train.erase(budget);
+    for (auto it = train.begin(); it != train.end();) it = it->is_null() ? train.erase(it) : ++it;
+    return train;
+  };
   for (std::size_t i = 0; i < paper.methods.size(); ++i) {
     EXPECT_EQ(paper.methods[i].name, ci.methods[i].name);
-    EXPECT_EQ(paper.methods[i].train, ci.methods[i].train);
+    EXPECT_EQ(settings(paper.methods[i].train), settings(ci.methods[i].train));
   }
   // Table 4 compares every tone mapper; Tables 6-7 every k and context learner of the paper.
   std::set<std::string> mappers, learners;
