@@ -4,6 +4,7 @@
 #include <cmath>
 #include <string>
 
+#include "benchmark/csv_field.h"
 #include "benchmark/compare.h"
 
 namespace hdr4d::bench {
@@ -54,16 +55,6 @@ std::string MarkdownLines(const std::vector<CompareLine>& lines, bool with_scene
     }
   }
   return md;
-}
-
-std::string CsvField(const std::string& s) {
-  if (s.find_first_of(",\"\n") == std::string::npos) return s;
-  std::string q = "\"";
-  for (char c : s) {
-    if (c == '"') q.push_back('"');
-    q.push_back(c);
-  }
-  return q + "\"";
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "benchmark/csv_field.h"
 #include "benchmark/tables.h"
 
 namespace hdr4d::bench {
@@ -71,17 +72,6 @@ std::string LatexEscape(const std::string& s) {
     }
   }
   return out;
-}
-
-std::string CsvField(const std::string& s) {
-  if (s.find_first_of(",\"\n") == std::string::npos) return s;
-  std::string q = "\"";
-  for (char c : s) {
-    if (c == '"') q.push_back('"');
-    q.push_back(c);
-  }
-  q.push_back('"');
-  return q;
 }
 
 }  // namespace
