@@ -96,9 +96,9 @@ TEST(App, TrainFlagsAreTheOptionTablesRows) {
     }
   }
   EXPECT_EQ(rows, 36);
-  // The five flags that are not options of the run, and the grid family's three
-  // (cli/train_hexplane.h: --rays, --grid-voxels, --time-grid).
-  EXPECT_EQ(train->get_options().size(), 36u + 5u + 3u + 1u);  // + --help
+  // The six flags that are not options of the run (--overwrite among them), and the grid
+  // family's three (cli/train_hexplane.h: --rays, --grid-voxels, --time-grid).
+  EXPECT_EQ(train->get_options().size(), 36u + 6u + 3u + 1u);  // + --help
 }
 
 TEST(App, ATrainFlagOutOfRangeIsRefusedInTheWordsOfItsHelp) {

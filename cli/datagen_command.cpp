@@ -81,7 +81,8 @@ void AddCaptureVariantFlags(CLI::App* cmd, datagen::DatagenOptions* options) {
          },
          "With --capture: image size WIDTHxHEIGHT in pixels (64x48 to 8192x8192; the field of view "
          "stays horizontal), instead of --width and the scene's aspect")
-      ->type_name("WxH");
+      ->type_name("WxH")
+      ->check(Text("WIDTHxHEIGHT"));  // parsed and range-checked by the function above
   cmd->add_option("--dense-brackets", options->dense_brackets,
                   "With --capture: N brackets one stop apart centred on 2 s (3 to 20), instead of "
                   "--brackets; with --black-level, a dense stack whose shadows test the fusion")
@@ -97,7 +98,8 @@ void AddCaptureVariantFlags(CLI::App* cmd, datagen::DatagenOptions* options) {
          },
          "With --capture: a sensor pedestal of B 8-bit codes (0 to 64) and Gaussian dark noise of "
          "SIGMA codes around it (0 to 16), as B or B:SIGMA; recorded in truth/cameras.json")
-      ->type_name("B[:SIGMA]");
+      ->type_name("B[:SIGMA]")
+      ->check(Text("B[:SIGMA]"));  // parsed by the function above; ranges in Validate()
   cmd->add_option("--lenses", options->lenses,
                   "With --capture: none, distortion (each camera its own radial k1 in 0.03-0.10, k2 "
                   "in 0-0.03, pincushion), vignetting (its own fall-off 1 - a r^2 to the corner, a "

@@ -305,7 +305,7 @@ bool ReportStopsLikeExposures(const SceneFiles& scene,
   if (first == nullptr || negative == 0) return false;  // a lone 0 is more likely a typo
   const Reader r(sink, SplitRank(first->split, false), first->path);
   r.Problem(-1, "exposures",
-            fmt::format("all {} exposures are small (in [{:g}, {:g}]) and {} are not positive: "
+            fmt::format("all {} exposures are small (in [{:g}, {:g}]) and {} not positive: "
                         "they look like log2 stops (HDR-HexPlane writes -3, -1, 1), not "
                         "seconds; read them with --exposure-unit stops (seconds = 2**value: "
                         "{:g} -> {:g} s, {:g} -> {:g} s)",
