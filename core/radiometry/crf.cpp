@@ -282,21 +282,45 @@ std::unique_ptr<TableCrf> TableCrf::FromCodes(const std::vector<double>& x_of_co
   return std::make_unique<TableCrf>(x_of_code, std::move(y), std::move(source));
 }
 
+namespace {
+
+// A CSV line's fields: split by commas, or by whitespace when the line has none.
+std::vector<std::string_view> SplitCsvFields(std::string_view text) {
+  std::vector<std::string_view> fields;
+  const bool commas = text.find(',') != std::string_view::npos;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    std::size_t end = commas ? text.find(',', start) : text.find_first_of(" \t", start);
+    if (end == std::string_view::npos) end = text.size();
+    const std::string_view field = Trim(text.substr(start, end - start));
+    if (!field.empty() || commas) fields.push_back(field);
+    start = end + 1;
+  }
+  return fields;
+}
+
+// One inverse response from calibrate's per-channel columns: each code's geometric mean over
+// the channels, kept strictly increasing.
+std::vector<double> GeometricMeanCurve(const std::vector<std::vector<double>>& columns) {
+  std::vector<double> x(columns.front().size());
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    double log_sum = 0;
+    for (const auto& column : columns) log_sum += std::log(std::max(column[i], 1e-300));
+    x[i] = i == 0 && columns.front()[0] == 0 ? 0.0 : std::exp(log_sum / columns.size());
+    if (i > 0) x[i] = std::max(x[i], std::nextafter(x[i - 1], 1e308));
+  }
+  return x;
+}
+
+}  // namespace
+
 std::unique_ptr<TableCrf> TableCrf::FromCsv(const std::string& path) {
   // A missing file, a device or a FIFO is refused before it is opened, saying what it was for.
   if (const std::string problem = InputFileProblem(path); !problem.empty())
     Fail("{}: cannot open CRF table: {}", path, problem);
   // calibrate's per-channel layout (code,r,g,b): one curve, each code's geometric mean.
-  if (const auto columns = ReadPerChannelResponse(path)) {
-    std::vector<double> x(columns->front().size());
-    for (std::size_t i = 0; i < x.size(); ++i) {
-      double log_sum = 0;
-      for (const auto& column : *columns) log_sum += std::log(std::max(column[i], 1e-300));
-      x[i] = i == 0 && columns->front()[0] == 0 ? 0.0 : std::exp(log_sum / columns->size());
-      if (i > 0) x[i] = std::max(x[i], std::nextafter(x[i - 1], 1e308));
-    }
-    return FromCodes(x, path);
-  }
+  if (const auto columns = ReadPerChannelResponse(path))
+    return FromCodes(GeometricMeanCurve(*columns), path);
   std::ifstream in(path);
   if (!in) Fail("{}: cannot open CRF table ({})", path, std::strerror(errno));
   std::vector<std::vector<double>> rows;
@@ -308,17 +332,7 @@ std::unique_ptr<TableCrf> TableCrf::FromCsv(const std::string& path) {
     ++line_number;
     const std::string_view text = Trim(line);
     if (text.empty() || text.front() == '#') continue;
-    // Fields split by commas, or by whitespace when the line has none.
-    std::vector<std::string_view> fields;
-    const bool commas = text.find(',') != std::string_view::npos;
-    std::size_t start = 0;
-    while (start <= text.size()) {
-      std::size_t end = commas ? text.find(',', start) : text.find_first_of(" \t", start);
-      if (end == std::string_view::npos) end = text.size();
-      const std::string_view field = Trim(text.substr(start, end - start));
-      if (!field.empty() || commas) fields.push_back(field);
-      start = end + 1;
-    }
+    const std::vector<std::string_view> fields = SplitCsvFields(text);
     std::vector<double> values(fields.size());
     bool numeric = true;
     for (std::size_t i = 0; i < fields.size(); ++i) numeric &= ParseDouble(fields[i], values[i]);
