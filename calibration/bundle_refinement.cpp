@@ -6,18 +6,21 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 
 #include "core/util/error.h"
 
 namespace hdr4d {
 namespace {
 
-// Residual of one observation: projected minus observed pixel (COLMAP's RADIAL model).
+// Residual of one observation: projected minus observed pixel (COLMAP's RADIAL model). The
+// focal length is a block of its own so that cameras of one model can share it; `k` is cx, cy,
+// k1, k2.
 struct ReprojectionError {
   Eigen::Vector2d observed;
 
   template <typename T>
-  bool operator()(const T* rotation, const T* translation, const T* k, const T* point, T* r) const {
+  bool operator()(const T* rotation, const T* translation, const T* f, const T* k, const T* point, T* r) const {
     T p[3];
     ceres::AngleAxisRotatePoint(rotation, point, p);
     for (int i = 0; i < 3; ++i) p[i] += translation[i];
@@ -29,14 +32,36 @@ struct ReprojectionError {
     }
     const T x = p[0] / p[2], y = p[1] / p[2];
     const T r2 = x * x + y * y;
-    const T d = T(1) + k[3] * r2 + k[4] * r2 * r2;
-    r[0] = k[0] * d * x + k[1] - T(observed.x());
-    r[1] = k[0] * d * y + k[2] - T(observed.y());
+    const T d = T(1) + k[2] * r2 + k[3] * r2 * r2;
+    r[0] = f[0] * d * x + k[0] - T(observed.x());
+    r[1] = f[0] * d * y + k[1] - T(observed.y());
     return true;
   }
 };
 
-double* Data(BundleIntrinsics& k) { return &k.f; }  // f, cx, cy, k1, k2 are contiguous
+double* Rest(BundleIntrinsics& k) { return &k.cx; }  // cx, cy, k1, k2 are contiguous
+
+// Holds what the options and the intrinsics say is not refined.
+void ConfigureIntrinsics(const BundleOptions& options, double* focal, BundleIntrinsics& k, ceres::Problem* problem) {
+  if (!problem->HasParameterBlock(Rest(k))) return;
+  if (!options.refine_intrinsics || k.fixed) {
+    problem->SetParameterBlockConstant(focal);
+    problem->SetParameterBlockConstant(Rest(k));
+    return;
+  }
+  std::vector<int> held;  // of cx, cy, k1, k2
+  if (!options.refine_principal_point) held.insert(held.end(), {0, 1});
+  if (k.hold_distortion) {
+    held.insert(held.end(), {2, 3});
+  } else if (k.hold_k2) {
+    held.push_back(3);
+  }
+  if (held.size() == 4) {
+    problem->SetParameterBlockConstant(Rest(k));
+  } else if (!held.empty()) {
+    problem->SetManifold(Rest(k), new ceres::SubsetManifold(4, held));
+  }
+}
 
 std::vector<double> RmsPerPose(const BundleProblem& problem, std::vector<int>* counts) {
   std::vector<double> sum(problem.poses.size(), 0.0);
@@ -76,30 +101,26 @@ BundleReport RefineBundle(BundleProblem* problem, const BundleOptions& options) 
   report.rms_before = RmsPerPose(*problem, &report.observations);
 
   ceres::Problem ceres_problem;
+  // One focal length per group, starting from the group's mean (std::map: stable addresses).
+  std::map<int, double> group_focal;
+  std::map<int, int> group_size;
+  for (const BundleIntrinsics& k : problem->intrinsics)
+    if (k.focal_group >= 0) group_focal[k.focal_group] += k.f, ++group_size[k.focal_group];
+  for (auto& [g, f] : group_focal) f /= group_size[g];
+  auto focal_of = [&](BundleIntrinsics& k) { return k.focal_group >= 0 ? &group_focal[k.focal_group] : &k.f; };
   for (BundleObservation& o : problem->observations) {
-    auto* cost = new ceres::AutoDiffCostFunction<ReprojectionError, 2, 3, 3, 5, 3>(
-        new ReprojectionError{o.pixel});
+    auto* cost = new ceres::AutoDiffCostFunction<ReprojectionError, 2, 3, 3, 1, 4, 3>(new ReprojectionError{o.pixel});
     BundlePose& pose = problem->poses[o.pose];
-    ceres_problem.AddResidualBlock(cost, new ceres::HuberLoss(options.huber_pixels),
-                                   pose.rotation.data(), pose.translation.data(),
-                                   Data(problem->intrinsics[o.intrinsics]), problem->points[o.point].data());
+    BundleIntrinsics& k = problem->intrinsics[o.intrinsics];
+    ceres_problem.AddResidualBlock(cost, new ceres::HuberLoss(options.huber_pixels), pose.rotation.data(),
+                                   pose.translation.data(), focal_of(k), Rest(k), problem->points[o.point].data());
   }
   for (BundlePose& pose : problem->poses) {
     if (!pose.fixed || !ceres_problem.HasParameterBlock(pose.rotation.data())) continue;
     ceres_problem.SetParameterBlockConstant(pose.rotation.data());
     ceres_problem.SetParameterBlockConstant(pose.translation.data());
   }
-  for (BundleIntrinsics& k : problem->intrinsics) {
-    if (!ceres_problem.HasParameterBlock(Data(k))) continue;
-    if (!options.refine_intrinsics || k.fixed) {
-      ceres_problem.SetParameterBlockConstant(Data(k));
-    } else {
-      std::vector<int> held;  // of f, cx, cy, k1, k2
-      if (!options.refine_principal_point) held.insert(held.end(), {1, 2});
-      if (k.hold_distortion) held.insert(held.end(), {3, 4});
-      if (!held.empty()) ceres_problem.SetManifold(Data(k), new ceres::SubsetManifold(5, held));
-    }
-  }
+  for (BundleIntrinsics& k : problem->intrinsics) ConfigureIntrinsics(options, focal_of(k), k, &ceres_problem);
   for (Eigen::Vector3d& p : problem->points)
     if (!options.refine_points && ceres_problem.HasParameterBlock(p.data()))
       ceres_problem.SetParameterBlockConstant(p.data());
@@ -125,6 +146,8 @@ BundleReport RefineBundle(BundleProblem* problem, const BundleOptions& options) 
   ceres::Solve(solver, &ceres_problem, &summary);
   report.iterations = static_cast<int>(summary.iterations.size());
   report.converged = summary.termination_type == ceres::CONVERGENCE;
+  for (BundleIntrinsics& k : problem->intrinsics)
+    if (k.focal_group >= 0) k.f = group_focal[k.focal_group];
   report.rms_after = RmsPerPose(*problem, nullptr);
   return report;
 }

@@ -19,6 +19,10 @@ struct BundleIntrinsics {
   double f = 1, cx = 0, cy = 0, k1 = 0, k2 = 0;  // contiguous: Ceres sees them as one block
   bool fixed = false;  // known from elsewhere (a calibration board): not refined
   bool hold_distortion = false;  // k1, k2 kept as they are (0: a distortion-free lens)
+  bool hold_k2 = false;          // k2 alone kept as it is (a one-term radial model)
+  // Intrinsics of one group (>= 0) share one focal length (cameras of one model); each keeps its
+  // own principal point and distortion. -1: its own focal length.
+  int focal_group = -1;
 };
 
 struct BundleObservation {

@@ -110,6 +110,8 @@ std::optional<Rig> RunGeometry(const Capture& capture, const CalibrateOptions& o
   rig_options.undistort_threshold_pixels = options.undistort_threshold_pixels;
   rig_options.shared_intrinsics = options.shared_intrinsics;
   rig_options.select_distortion = options.select_distortion;
+  rig_options.refine = options.refine_rig;
+  rig_options.select_shared_focal = options.select_shared_focal;
   rig_options.show_progress = options.show_progress;
   std::vector<BoardCalibration> boards;
   std::vector<std::string> board_notes;

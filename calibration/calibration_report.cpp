@@ -24,17 +24,20 @@ void AppendGeometry(const CalibrationRecord& record, std::string& md, nlohmann::
   doc["metres_per_unit"] = rig.metres_per_unit;
   doc["intrinsics_source"] = rig.intrinsics_source;
   md += "| camera | static images registered | observations | reprojection RMS before (px) | "
-        "after (px) | focal (px) | k1 | k2 | distortion kept (BIC gain) | max distortion (px) | undistorted |\n"
+        "after (px) | focal (px) | k1 | k2 | distortion kept (BIC gain over none) | max distortion (px) | undistorted |\n"
         "|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const RigCamera& c : rig.cameras) {
     md += fmt::format("| {} | {} | {} | {:.3f} | {:.3f} | {:.2f} | {:.4f} | {:.4f} | {} ({:.1f}) | {:.2f} | {} |\n",
                       c.name, c.static_images_registered, c.observations, c.rms_before,
                       c.rms_after, c.intrinsics.f, c.intrinsics.k1, c.intrinsics.k2,
-                      c.distortion_kept ? "yes" : "no", c.distortion_score, c.max_distortion_pixels,
+                      !c.distortion_kept ? "no" : c.distortion_terms == 1 ? "k1" : "k1, k2",
+                      c.distortion_score, c.max_distortion_pixels,
                       c.undistort ? "yes" : "no");
     doc["cameras"].push_back({{"name", c.name}, {"rms_before", c.rms_before},
                               {"rms_after", c.rms_after}, {"focal", c.intrinsics.f},
-                              {"distortion_kept", c.distortion_kept}, {"distortion_score", c.distortion_score},
+                              {"distortion_kept", c.distortion_kept}, {"distortion_terms", c.distortion_terms},
+                              {"focal_shared", c.focal_shared},
+                              {"distortion_score", c.distortion_score},
                               {"undistorted", c.undistort}});
   }
   md += fmt::format("\n{} points in point3d.ply.\n\n", rig.points.size());

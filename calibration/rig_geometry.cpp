@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 
@@ -174,40 +175,106 @@ std::map<int, std::pair<double, int>> CappedSse(const BundleProblem& problem, co
   return sse;
 }
 
-// Model selection of k1, k2 per intrinsics block: refine once more with the block's k1, k2
-// held at 0 (the others free, so that one camera's real distortion does not pull the shared
-// points) and keep them only where n ln(SSE0 / SSE1) exceeds 2 ln n (BIC for two
-// parameters). Blocks that drop them are zeroed and held in `rp` (to be refined again).
-// Returns whether any dropped.
+// Model selection of the radial terms per intrinsics block, nested: none, k1, k1 and k2. Each
+// smaller model is refined once more with its terms held at 0 (everything else free, so that one
+// camera's real distortion does not pull the shared points) and the model of least BIC is kept,
+// BIC = N ln(SSE / N) + p ln N over the N = 2n residual components of the block's n
+// observations (p = 0, 1, 2). k2 alone (k1 = 0) is no lens's model and not tried. Blocks that
+// drop terms are zeroed and held in `rp` (to be refined again). Returns whether any dropped.
+struct DistortionChoice {
+  int terms = 2;
+  double score = 0;  // BIC(none) - BIC(chosen)
+};
+
+DistortionChoice ChooseDistortion(const RigProblem& rp, int block, double sse2, int n) {
+  std::array<double, 3> sse{0, 0, sse2};
+  for (int terms : {0, 1}) {
+    BundleProblem smaller = rp.problem;
+    BundleIntrinsics& k = smaller.intrinsics[block];
+    k.k2 = 0;
+    k.hold_k2 = true;
+    if (terms == 0) k.k1 = 0, k.hold_distortion = true;
+    RefineBundle(&smaller);
+    sse[terms] = CappedSse(smaller, rp.rig_intrinsics).at(block).first;
+  }
+  const double big_n = 2.0 * std::max(n, 1);
+  const double floor = 1e-8 * big_n;  // (0.1 mpx)^2 per component: exact synthetic data
+  auto bic = [&](int p) { return big_n * std::log((sse[p] + floor) / big_n) + p * std::log(big_n); };
+  DistortionChoice choice{0, 0};
+  for (int p : {1, 2})
+    if (bic(p) < bic(choice.terms)) choice.terms = p;
+  choice.score = bic(0) - bic(choice.terms);
+  return choice;
+}
+
 bool SelectDistortion(RigProblem* rp, std::vector<RigCamera>* cameras) {
   const auto with_sse = CappedSse(rp->problem, rp->rig_intrinsics);
-  std::map<int, double> score_of;  // per block
-  for (const auto& [block, sse_n] : with_sse) {
-    if (rp->problem.intrinsics[block].fixed) continue;
-    BundleProblem without = rp->problem;
-    BundleIntrinsics& k = without.intrinsics[block];
-    k.k1 = k.k2 = 0;
-    k.hold_distortion = true;
-    RefineBundle(&without);
-    const auto [sse1, n] = sse_n;
-    const double sse0 = CappedSse(without, rp->rig_intrinsics).at(block).first;
-    const double floor = 1e-8 * n;  // (0.1 mpx)^2 per observation: exact synthetic data
-    score_of[block] = n * std::log((sse0 + floor) / (sse1 + floor)) - 2 * std::log(std::max(n, 2));
-  }
+  std::map<int, DistortionChoice> choice_of;  // per block
+  for (const auto& [block, sse_n] : with_sse)
+    if (!rp->problem.intrinsics[block].fixed && !rp->problem.intrinsics[block].hold_distortion)
+      choice_of[block] = ChooseDistortion(*rp, block, sse_n.first, sse_n.second);
   bool dropped = false;
   for (std::size_t c = 0; c < cameras->size(); ++c) {
-    const auto it = score_of.find(rp->rig_intrinsics[c]);
-    if (it == score_of.end()) continue;
+    const auto it = choice_of.find(rp->rig_intrinsics[c]);
+    if (it == choice_of.end()) continue;
     RigCamera& camera = (*cameras)[c];
-    camera.distortion_score = it->second;
-    camera.distortion_kept = it->second > 0;
-    if (camera.distortion_kept) continue;
+    camera.distortion_score = it->second.score;
+    camera.distortion_terms = it->second.terms;
+    camera.distortion_kept = it->second.terms > 0;
     BundleIntrinsics& k = rp->problem.intrinsics[it->first];
-    if (!k.hold_distortion) dropped = true;
-    k.k1 = k.k2 = 0;
-    k.hold_distortion = true;
+    if (it->second.terms < 2 && !k.hold_k2) dropped = true, k.k2 = 0, k.hold_k2 = true;
+    if (it->second.terms == 0) k.k1 = 0, k.hold_distortion = true;
   }
   return dropped;
+}
+
+// Sum of capped squared residuals and observations over `blocks`.
+std::pair<double, int> GroupSse(const BundleProblem& problem, const std::vector<int>& rig_intrinsics,
+                                const std::vector<int>& blocks) {
+  std::pair<double, int> total{0.0, 0};
+  for (const auto& [block, sse_n] : CappedSse(problem, rig_intrinsics))
+    if (std::find(blocks.begin(), blocks.end(), block) != blocks.end())
+      total.first += sse_n.first, total.second += sse_n.second;
+  return total;
+}
+
+// Per image size, the rig cameras' own (unfixed, unshared) intrinsics blocks; when one focal
+// length for all of them has a lower BIC than one each (N ln(SSE / N) + p ln N, N = 2n residual
+// components, C - 1 parameters fewer), `rp` takes the shared solution. Returns whether any did.
+bool SelectSharedFocal(RigProblem* rp, std::vector<RigCamera>* cameras, std::vector<std::string>* notes) {
+  std::map<std::pair<int, int>, std::vector<int>> blocks_of_size;
+  for (std::size_t c = 0; c < cameras->size(); ++c) {
+    const int block = rp->rig_intrinsics[c];
+    std::vector<int>& blocks = blocks_of_size[{(*cameras)[c].width, (*cameras)[c].height}];
+    const bool own = std::count(rp->rig_intrinsics.begin(), rp->rig_intrinsics.end(), block) == 1;
+    if (own && !rp->problem.intrinsics[block].fixed) blocks.push_back(block);
+  }
+  bool shared_any = false;
+  int group = 0;
+  for (const auto& [size, blocks] : blocks_of_size) {
+    if (blocks.size() < 2) continue;
+    BundleProblem shared = rp->problem;
+    for (int b : blocks) shared.intrinsics[b].focal_group = group;
+    RefineBundle(&shared);
+    const auto [sse_each, n] = GroupSse(rp->problem, rp->rig_intrinsics, blocks);
+    const double sse_shared = GroupSse(shared, rp->rig_intrinsics, blocks).first;
+    const double big_n = 2.0 * std::max(n, 1), floor = 1e-8 * big_n;
+    const double gain = big_n * std::log((sse_shared + floor) / (sse_each + floor)) -
+                        (static_cast<double>(blocks.size()) - 1) * std::log(big_n);  // BIC(shared) - BIC(each)
+    notes->push_back(fmt::format(
+        "{}x{} cameras: one focal length for {} of them {} (BIC {:+.1f} against one each; RMS {:.3f} against "
+        "{:.3f} px)", size.first, size.second, blocks.size(), gain <= 0 ? "explains the observations as well" :
+        "does not explain the observations: each keeps its own", gain, std::sqrt(sse_shared / std::max(n, 1)),
+        std::sqrt(sse_each / std::max(n, 1))));
+    if (gain > 0) continue;
+    rp->problem = std::move(shared);
+    for (std::size_t c = 0; c < cameras->size(); ++c)
+      if (std::find(blocks.begin(), blocks.end(), rp->rig_intrinsics[c]) != blocks.end())
+        (*cameras)[c].focal_shared = true;
+    shared_any = true;
+    ++group;
+  }
+  return shared_any;
 }
 
 // The report says why a camera ends with a larger reprojection RMS than COLMAP's.
@@ -243,14 +310,23 @@ Rig RigFromColmap(const ColmapModel& model, const std::vector<std::string>& came
   AddPoints(model, camera_names.size(), &rp, &rig);
   if (rp.problem.observations.empty()) Fail("COLMAP's model has no 3D points to refine the rig with");
 
-  BundleReport report = RefineBundle(&rp.problem);
+  BundleOptions bundle;
+  if (!options.refine) bundle.max_iterations = 0;  // the residuals of COLMAP's model, unchanged
+  BundleReport report = RefineBundle(&rp.problem, bundle);
   rig.refinement_iterations = report.iterations;
-  if (options.select_distortion && SelectDistortion(&rp, &rig.cameras)) {
-    const std::vector<double> colmap_rms = report.rms_before;
+  if (!options.refine) rig.notes.push_back("the rig is COLMAP's model as it is (--no-refinement)");
+  // One focal length for alike cameras is decided first, with every camera's k1, k2 free: a
+  // camera's own focal length absorbs much of its radial distortion (one pose each), a shared
+  // one cannot, so the distortion selection that follows sees it.
+  const std::vector<double> colmap_rms = report.rms_before;
+  auto refine_again = [&] {
     report = RefineBundle(&rp.problem);
     report.rms_before = colmap_rms;
     rig.refinement_iterations += report.iterations;
-  }
+  };
+  if (options.refine && options.select_shared_focal && SelectSharedFocal(&rp, &rig.cameras, &rig.notes))
+    refine_again();
+  if (options.refine && options.select_distortion && SelectDistortion(&rp, &rig.cameras)) refine_again();
   Normalise(rp.problem.points, &rig);
   for (std::size_t c = 0; c < rig.cameras.size(); ++c) {
     RigCamera& camera = rig.cameras[c];

@@ -29,7 +29,13 @@ struct RigCamera {
   bool board_intrinsics = false;  // intrinsics from a calibration board
   // Model selection: did k1, k2 explain the observations beyond noise (else held at 0)?
   bool distortion_kept = true;
-  double distortion_score = 0;  // n ln(SSE without / SSE with) - 2 ln n (BIC gain, > 0: keep)
+  int distortion_terms = 2;     // radial terms kept: 0 (none), 1 (k1), 2 (k1, k2)
+  // BIC of no distortion minus BIC of the model kept (> 0: a term was kept); BIC = N ln(SSE / N)
+  // + p ln N over the N = 2 x observations residual components, p the radial terms.
+  double distortion_score = 0;
+  // One focal length with the other rig cameras of its image size (they look like one model:
+  // BIC prefers one focal length to one each; or --shared-intrinsics).
+  bool focal_shared = false;
 };
 
 struct Rig {
@@ -59,6 +65,14 @@ struct RigOptions {
   // Keep k1, k2 of a camera only where they lower the reprojection error by more than their
   // two degrees of freedom explain (BIC); off: always keep COLMAP's distortion.
   bool select_distortion = true;
+  // Rig cameras of one image size share one focal length where that explains the observations
+  // as well as one each (BIC over their residuals, C - 1 fewer parameters): a focal length error
+  // of one camera moves its centre along its axis (a rig camera is seen in one pose), and cameras
+  // of one model have one focal length. Off: each camera its own.
+  bool select_shared_focal = true;
+  // Off: COLMAP's poses, intrinsics and points as they are, no Ceres refinement and no model
+  // selection (a diagnosis: what the refinement changes).
+  bool refine = true;
 };
 
 // Builds the rig for `camera_names` from `model`, whose image names are <camera>/<file> (any

@@ -17,6 +17,7 @@ constexpr double kF = 500;
 struct Lens {
   double k1 = 0;          // the truth
   double colmap_k1 = 0;   // what COLMAP's model claims
+  double f = kF;          // the true focal length (COLMAP's model starts from kF)
 };
 
 // Three cameras on an arc looking at a cloud of 300 points; pixels through each camera's true
@@ -55,7 +56,8 @@ ColmapModel MakeModel(const std::vector<Lens>& lenses) {
       const Eigen::Vector3d q = cam_from_world[c] * p.xyz;
       const double x = q.x() / q.z(), y = q.y() / q.z(), d = 1 + lenses[c].k1 * (x * x + y * y);
       ColmapImage& image = model.images[static_cast<int>(c) + 1];
-      image.points2d.emplace_back(kF * d * x + kW / 2.0 + noise(rng), kF * d * y + kH / 2.0 + noise(rng));
+      const double f = lenses[c].f;
+      image.points2d.emplace_back(f * d * x + kW / 2.0 + noise(rng), f * d * y + kH / 2.0 + noise(rng));
       image.point3d_ids.push_back(id);
       p.track.emplace_back(static_cast<int>(c) + 1, static_cast<int>(image.points2d.size()) - 1);
     }
@@ -93,6 +95,44 @@ TEST(RigGeometry, SharedIntrinsicsGiveOneFocalLength) {
   EXPECT_EQ(rig.cameras[0].intrinsics.f, rig.cameras[1].intrinsics.f);
   EXPECT_EQ(rig.cameras[0].intrinsics.f, rig.cameras[2].intrinsics.f);
   EXPECT_NEAR(rig.cameras[0].intrinsics.f, kF, 0.01 * kF);
+}
+
+// Cameras of one model: a focal length error of one camera (COLMAP's 4% here) is pulled to the
+// others' by one shared focal length, chosen by BIC; cameras whose focal lengths truly differ
+// (a 20% longer lens) keep their own.
+TEST(RigGeometry, AlikeCamerasShareOneFocalLengthOnlyWhereTheDataSaysSo) {
+  ColmapModel model = MakeModel({{0, 0}, {0, 0}, {0, 0}});
+  model.cameras[2].params[0] = 520;
+  Rig rig = RigFromColmap(model, {"cam0", "cam1", "cam2"});
+  for (const RigCamera& c : rig.cameras) {
+    EXPECT_TRUE(c.focal_shared) << c.name;
+    EXPECT_EQ(c.intrinsics.f, rig.cameras[0].intrinsics.f) << c.name;
+    EXPECT_NEAR(c.intrinsics.f, kF, 0.01 * kF) << c.name;
+  }
+  bool noted = false;
+  for (const std::string& note : rig.notes) noted |= note.find("one focal length for 3 of them explains") != std::string::npos;
+  EXPECT_TRUE(noted) << fmt::format("{}", fmt::join(rig.notes, "\n"));
+
+  rig = RigFromColmap(MakeModel({{0, 0}, {0, 0, 1.2 * kF}, {0, 0}}), {"cam0", "cam1", "cam2"});
+  for (const RigCamera& c : rig.cameras) EXPECT_FALSE(c.focal_shared) << c.name;
+  EXPECT_NEAR(rig.cameras[1].intrinsics.f, 1.2 * kF, 0.02 * kF);
+  EXPECT_NEAR(rig.cameras[0].intrinsics.f, kF, 0.02 * kF);
+
+  RigOptions separate;
+  separate.select_shared_focal = false;
+  EXPECT_FALSE(RigFromColmap(model, {"cam0", "cam1", "cam2"}, separate).cameras[0].focal_shared);
+}
+
+// Without refinement the rig is COLMAP's model as it is.
+TEST(RigGeometry, NoRefinementKeepsColmapsModel) {
+  ColmapModel model = MakeModel({{0, 0.01}, {0, 0}, {0, 0}});
+  model.cameras[2].params[0] = 520;
+  RigOptions as_is;
+  as_is.refine = false;
+  const Rig rig = RigFromColmap(model, {"cam0", "cam1", "cam2"}, as_is);
+  EXPECT_EQ(rig.cameras[1].intrinsics.f, 520);
+  EXPECT_EQ(rig.cameras[0].intrinsics.k1, 0.01);
+  EXPECT_EQ(rig.cameras[0].rms_after, rig.cameras[0].rms_before);
 }
 
 }  // namespace

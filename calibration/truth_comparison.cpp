@@ -117,6 +117,26 @@ const TruthCamera& FindTruth(const std::vector<TruthCamera>& cameras, const std:
   Fail("{}: camera {} is not in the truth's cameras.json", where.string(), name);
 }
 
+// Rotation errors that the centres' errors cannot tilt: after the rotation fitted to the
+// orientations, and between every pair of cameras (relative rotations need no alignment).
+void CompareOrientations(const Rig& rig, const std::vector<const TruthCamera*>& matched, TruthComparison* out) {
+  std::vector<Eigen::Matrix3d> from, to;
+  for (std::size_t i = 0; i < rig.cameras.size(); ++i) {
+    from.push_back(rig.cameras[i].world_from_cam_gl.topLeftCorner<3, 3>());
+    to.push_back(matched[i]->world_from_cam_gl.topLeftCorner<3, 3>());
+  }
+  const Eigen::Matrix3d a = AlignOrientations(from, to);
+  out->alignment_tilt_deg = RotationAngleDegrees(a, out->alignment.rotation);
+  for (std::size_t i = 0; i < from.size(); ++i) {
+    out->cameras[i].rotation_oriented_deg = RotationAngleDegrees(a * from[i], to[i]);
+    out->max_rotation_oriented_deg = std::max(out->max_rotation_oriented_deg, out->cameras[i].rotation_oriented_deg);
+    for (std::size_t j = i + 1; j < from.size(); ++j)
+      out->max_relative_rotation_deg =
+          std::max(out->max_relative_rotation_deg,
+                   RotationAngleDegrees(from[i].transpose() * from[j], to[i].transpose() * to[j]));
+  }
+}
+
 void CompareGeometry(const Rig& rig, const std::vector<TruthCamera>& truth, const fs::path& rig_file,
                      TruthComparison* out) {
   std::vector<Eigen::Vector3d> from, to;
@@ -159,6 +179,7 @@ void CompareGeometry(const Rig& rig, const std::vector<TruthCamera>& truth, cons
     out->mean_position_relative += e.position_relative / static_cast<double>(rig.cameras.size());
     out->max_focal_relative = std::max(out->max_focal_relative, e.focal_relative);
   }
+  CompareOrientations(rig, matched, out);
 }
 
 void CompareResponse(const fs::path& calibrated, const fs::path& truth, TruthComparison* out) {
@@ -346,6 +367,18 @@ Similarity AlignSimilarity(const std::vector<Eigen::Vector3d>& from,
   return out;
 }
 
+Eigen::Matrix3d AlignOrientations(const std::vector<Eigen::Matrix3d>& from,
+                                  const std::vector<Eigen::Matrix3d>& to) {
+  if (from.size() != to.size() || from.empty())
+    Fail("orientation alignment: {} rotations against {}", from.size(), to.size());
+  Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+  for (std::size_t i = 0; i < from.size(); ++i) sum += to[i] * from[i].transpose();
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(sum, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+  d(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1 : 1;
+  return svd.matrixU() * d * svd.matrixV().transpose();
+}
+
 double RotationAngleDegrees(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
   const double c = std::clamp(((a.transpose() * b).trace() - 1) / 2, -1.0, 1.0);
   return std::acos(c) * 180.0 / M_PI;
@@ -417,6 +450,7 @@ json TruthComparisonJson(const TruthComparison& c) {
     json j = {{"name", e.name}};
     if (e.geometry) {
       j["rotation_error_deg"] = e.rotation_deg;
+      j["rotation_error_oriented_deg"] = e.rotation_oriented_deg;
       j["position_error"] = e.position_error;
       j["position_error_relative"] = e.position_relative;
       j["focal"] = e.focal;
@@ -438,6 +472,14 @@ json TruthComparisonJson(const TruthComparison& c) {
                        {"similarity_scale", c.alignment.scale},
                        {"max_rotation_error_deg", c.max_rotation_deg},
                        {"mean_rotation_error_deg", c.mean_rotation_deg},
+                       {"max_rotation_error_oriented_deg", c.max_rotation_oriented_deg},
+                       {"max_relative_rotation_error_deg", c.max_relative_rotation_deg},
+                       {"alignment_tilt_deg", c.alignment_tilt_deg},
+                       {"rotation_error_definitions",
+                        "rotation_error: after the similarity fitted to the centres (their errors tilt it); "
+                        "oriented: after the rotation fitted to the orientations; relative: max over camera "
+                        "pairs of the error of R_i^T R_j (no alignment); alignment_tilt: angle between the two "
+                        "alignments"},
                        {"max_position_error_relative", c.max_position_relative},
                        {"mean_position_error_relative", c.mean_position_relative},
                        {"max_focal_error_relative", c.max_focal_relative}};
@@ -483,9 +525,12 @@ std::string TruthComparisonMarkdown(const TruthComparison& c) {
     md += fmt::format(
         "- geometry (after a similarity, scale {:.4g}): rotation error max {:.3f} deg, mean {:.3f} "
         "deg; position error max {:.2f}%, mean {:.2f}% of the rig size ({:.3g} units, the RMS "
-        "distance of the true centres from their centroid); focal error max {:.2f}%\n",
+        "distance of the true centres from their centroid); focal error max {:.2f}%; rotation error "
+        "max {:.3f} deg after the rotation fitted to the orientations, {:.3f} deg between camera pairs "
+        "(relative rotations), the centres' similarity tilted {:.3f} deg from the orientations'\n",
         c.alignment.scale, c.max_rotation_deg, c.mean_rotation_deg, 100 * c.max_position_relative,
-        100 * c.mean_position_relative, c.rig_size, 100 * c.max_focal_relative);
+        100 * c.mean_position_relative, c.rig_size, 100 * c.max_focal_relative, c.max_rotation_oriented_deg,
+        c.max_relative_rotation_deg, c.alignment_tilt_deg);
   }
   if (c.response) {
     md += fmt::format(

@@ -36,10 +36,16 @@ Similarity AlignSimilarity(const std::vector<Eigen::Vector3d>& from,
 // The angle in degrees of the rotation between two rotation matrices.
 double RotationAngleDegrees(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b);
 
+// The rotation A that minimises sum_i ||A from_i - to_i||_F (chordal L2 mean; SVD projection of
+// sum to_i from_i^T onto SO(3)). Throws hdr4d::Error for unequal counts or none.
+Eigen::Matrix3d AlignOrientations(const std::vector<Eigen::Matrix3d>& from,
+                                  const std::vector<Eigen::Matrix3d>& to);
+
 struct CameraTruthError {
   std::string name;
   bool geometry = false;
-  double rotation_deg = 0;      // after the similarity
+  double rotation_deg = 0;      // after the similarity fitted to the centres
+  double rotation_oriented_deg = 0;  // after the rotation fitted to the orientations
   double position_error = 0;    // after the similarity, in the truth's units
   double position_relative = 0; // position_error / rig size
   double focal = 0, focal_truth = 0, focal_relative = 0;  // pixels; |f - f_true| / f_true
@@ -55,7 +61,16 @@ struct TruthComparison {
   bool geometry = false;
   Similarity alignment;            // calibrated world -> truth world
   double rig_size = 0;             // RMS distance of the true centres from their centroid
-  double max_rotation_deg = 0, mean_rotation_deg = 0;
+  double max_rotation_deg = 0, mean_rotation_deg = 0;  // after the centres' similarity
+  // The same after the rotation that best maps the calibrated orientations onto the true ones
+  // (gauge-free: the centres' errors do not tilt it).
+  double max_rotation_oriented_deg = 0;
+  // Max over camera pairs of the angle between calibrated and true relative rotation
+  // R_i^T R_j (no alignment at all).
+  double max_relative_rotation_deg = 0;
+  // Angle between the centres' similarity rotation and the orientations' rotation: how much
+  // the centre errors tilt the similarity (a rig of few, nearly coplanar cameras amplifies them).
+  double alignment_tilt_deg = 0;
   double max_position_relative = 0, mean_position_relative = 0;
   double max_focal_relative = 0;
   bool response = false;

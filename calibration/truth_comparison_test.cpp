@@ -170,6 +170,42 @@ TEST(CompareWithTruth, ReportsTheErrorsPutIn) {
   EXPECT_EQ(TruthComparisonJson(c)["cameras"][3]["focal_error_relative"].get<double>(), c.cameras[3].focal_relative);
 }
 
+// The centre-fitted similarity of a few, nearly coplanar cameras tilts with their position
+// errors and charges the tilt to every camera's rotation; the orientation-fitted rotation and
+// the relative rotations do not (issue 54's rotation diagnosis). Camera 1's 2 degrees show in
+// all three.
+TEST(CompareWithTruth, RotationErrorsThatTheCentresDoNotTilt) {
+  Fixture f;
+  Rig rig = ReadRigJson(f.cal / "rig.json");
+  // Lift camera 0 and lower camera 3 by 1% of their distance: the similarity turns about the
+  // arc, the orientations stay as they were.
+  rig.cameras[0].world_from_cam_gl(2, 3) += 0.01;
+  rig.cameras[3].world_from_cam_gl(2, 3) -= 0.01;
+  WriteRigJson(f.cal / "rig.json", rig);
+  const TruthComparison c = CompareWithTruth(f.cal, f.truth);
+  ASSERT_TRUE(c.geometry);
+  EXPECT_GT(c.alignment_tilt_deg, 0.3);
+  EXPECT_GT(c.cameras[0].rotation_deg, 0.3);  // the tilt, charged to a camera that did not turn
+  EXPECT_LT(c.cameras[0].rotation_oriented_deg, 1.0);
+  EXPECT_NEAR(c.max_relative_rotation_deg, 2.0, 1e-6);  // camera 1 against the others
+  EXPECT_GT(c.max_rotation_oriented_deg, 1.0);
+  EXPECT_LT(c.max_rotation_oriented_deg, 2.0 + 1e-6);
+  const json j = TruthComparisonJson(c)["geometry"];
+  EXPECT_EQ(j["max_relative_rotation_error_deg"].get<double>(), c.max_relative_rotation_deg);
+  EXPECT_TRUE(Contains(TruthComparisonMarkdown(c), "between camera pairs")) << TruthComparisonMarkdown(c);
+}
+
+TEST(AlignOrientations, RecoversAWorldTurn) {
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(0.9, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
+  std::vector<Eigen::Matrix3d> from, to;
+  for (int i = 0; i < 3; ++i) {
+    from.push_back(Eigen::AngleAxisd(0.4 * i, Eigen::Vector3d(i, 1, 2).normalized()).toRotationMatrix());
+    to.push_back(turn * from.back());
+  }
+  EXPECT_LT((AlignOrientations(from, to) - turn).norm(), 1e-9);
+  EXPECT_TRUE(Contains(ErrorOf([&] { AlignOrientations({}, {}); }), "0 rotations against 0"));
+}
+
 // Issue 54's figures: the fused HDR's log-log slope against the truth, the shadows, each
 // camera's own scale and how far the cameras' scales spread; a pedestal in the true response.
 TEST(CompareWithTruth, SlopeShadowsAndCamerasDisagreementAgainstTheTruth) {

@@ -21,6 +21,7 @@ void AddBenchCommand(CLI::App& app) {
   AddBenchSubmit(*bench);
   AddBenchCompare(*bench);
   AddBenchSlurm(*bench);
+  AddBenchCalibration(*bench);
 }
 
 }  // namespace hdr4d::cli

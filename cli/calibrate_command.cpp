@@ -45,7 +45,8 @@ void AddRadiometryFlags(CLI::App* cmd, CalibrateOptions* options) {
 }
 
 // The lens model: undistortion, shared intrinsics, which distortion terms are kept.
-void AddLensFlags(CLI::App* cmd, CalibrateOptions* options, bool* keep_distortion) {
+void AddLensFlags(CLI::App* cmd, CalibrateOptions* options, bool* keep_distortion, bool* no_refinement,
+                  bool* separate_focal) {
   cmd->add_option("--undistort-threshold", options->undistort_threshold_pixels,
                   "Undistort images when lens distortion moves a pixel by more than this")
       ->capture_default_str()
@@ -57,6 +58,13 @@ void AddLensFlags(CLI::App* cmd, CalibrateOptions* options, bool* keep_distortio
       "--keep-distortion", *keep_distortion,
       "Keep COLMAP's k1, k2 for every camera (default: only where they explain the observations "
       "beyond noise, by BIC; a distortion-free lens is then not resampled)");
+  cmd->add_flag(
+      "--separate-focal", *separate_focal,
+      "Each camera its own focal length (default: cameras of one image size share one where that "
+      "explains the observations as well, by BIC: one model of camera)");
+  cmd->add_flag("--no-refinement", *no_refinement,
+                "Keep COLMAP's poses, intrinsics and points as they are (no Ceres refinement, no "
+                "distortion selection): to see what the refinement changes");
 }
 
 // --truth: the calibrated dataset against a synthetic capture's truth, printed and written.
@@ -81,6 +89,8 @@ void AddCalibrateCommand(CLI::App& app) {
   auto no_motion = std::make_shared<bool>(false);
   auto no_gains = std::make_shared<bool>(false);
   auto keep_distortion = std::make_shared<bool>(false);
+  auto no_refinement = std::make_shared<bool>(false);
+  auto separate_focal = std::make_shared<bool>(false);
   auto truth = std::make_shared<std::string>();
   CLI::App* cmd = app.add_subcommand(
       "calibrate",
@@ -107,7 +117,7 @@ void AddCalibrateCommand(CLI::App& app) {
       ->check(Text("a camera name"));
   AddGeometryFlags(cmd, options.get());
   AddRadiometryFlags(cmd, options.get());
-  AddLensFlags(cmd, options.get(), keep_distortion.get());
+  AddLensFlags(cmd, options.get(), keep_distortion.get(), no_refinement.get(), separate_focal.get());
   cmd->add_flag("--no-motion-detection", *no_motion,
                 "Average every bracket even where they disagree");
   cmd->add_option("--truth", *truth,
@@ -120,6 +130,8 @@ void AddCalibrateCommand(CLI::App& app) {
   cmd->callback([=] {
     options->correct_gains = !*no_gains;
     options->select_distortion = !*keep_distortion;
+    options->refine_rig = !*no_refinement;
+    options->select_shared_focal = !*separate_focal;
     options->capture = *capture;
     options->out = *out;
     if (!colmap_model->empty()) options->colmap_model = *colmap_model;

@@ -9,7 +9,9 @@
 # --black-level's B[:SIGMA] [none]. Settings from the environment (defaults in square brackets):
 # VARIANTS ["320x240:0:none 640x480:6:gains 640x480:12:responses:distortion 1280x720:3:both"],
 # SEEDS ["0"], CAMERAS [4], FRAMES [2], BRACKETS [0.5,2,8], SAMPLES [16], THREADS [0 = every core],
-# KEEP [0: 1 keeps each capture]. WORKDIR is replaced; a variant that fails is a row saying where,
+# KEEP [0: 1 keeps each capture], REUSE [0: 1 keeps WORKDIR and reuses each variant's capture and
+# the COLMAP model of its last calibration, so that calibrate alone reruns], CALIBRATE_FLAGS [more
+# flags of calibrate, e.g. --shared-intrinsics or --no-refinement]. Without REUSE WORKDIR is replaced; a variant that fails is a row saying where,
 # the grid goes on. Columns: every static view registered (the rig's cameras must be, or
 # calibrate fails; hand-held views counted), rotation / centre / focal errors (max over
 # cameras), distortion kept, fused HDR log-log slope and median error against the render, and
@@ -27,10 +29,12 @@ hdr4d="$(realpath "$1")"
 work="$2"
 variants="${VARIANTS:-320x240:0:none 640x480:6:gains 640x480:12:responses:distortion 1280x720:3:both}"
 seeds="${SEEDS:-0}" cameras="${CAMERAS:-4}" frames="${FRAMES:-2}" brackets="${BRACKETS:-0.5,2,8}"
-samples="${SAMPLES:-16}" threads="${THREADS:-0}" keep="${KEEP:-0}"
-rm -rf "$work" && mkdir -p "$work"
+samples="${SAMPLES:-16}" threads="${THREADS:-0}" keep="${KEEP:-0}" reuse="${REUSE:-0}"
+read -r -a calibrate_flags <<< "${CALIBRATE_FLAGS:-}"
+[ "$reuse" = 1 ] || rm -rf "$work"
+mkdir -p "$work"
 work="$(realpath "$work")"
-echo "| size | extra views | unlike | lenses | brackets | seed | registered (rung) | rotation max (deg) | centre max (% rig) | focal max | distortion kept | HDR slope | HDR median error (darkest fifth) | gains vs truth | cameras' HDR scales vs truth | sparse-point disagreement before / after gains | calibrate (s) |"
+echo "| size | extra views | unlike | lenses | brackets | seed | registered (rung) | rotation max (deg): centres' similarity / orientations' rotation / camera pairs | centre max (% rig) | focal max | distortion kept | HDR slope | HDR median error (darkest fifth) | gains vs truth | cameras' HDR scales vs truth | sparse-point disagreement before / after gains | calibrate (s) |"
 echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 for variant in $variants; do
   IFS=: read -r size extra unlike lenses bracket_spec black black_sigma <<< "$variant"
@@ -43,7 +47,19 @@ for variant in $variants; do
     dir="$work/${size}_e${extra}_${unlike}_${lenses}_${bracket_spec//,/-}_s${seed}"
     mkdir -p "$dir"
     label="| $size | $extra | $unlike | $lenses | $bracket_spec${black:+, black $black${black_sigma:+:$black_sigma}} | $seed"
-    if ! nice "$hdr4d" datagen --capture --scene room --preset mini "${size_flag[@]}" --samples "$samples" \
+    model_flag=()
+    if [ "$reuse" = 1 ] && [ -d "$dir/calibrated/colmap" ]; then
+      rm -rf "$dir/colmap" && mv "$dir/calibrated/colmap" "$dir/colmap"
+    fi
+    # The ladder stops at the first rung that registers everything: the last rung's model (when
+    # no rung did, calibrate took the one that registered most; this may then differ).
+    if [ "$reuse" = 1 ] && [ -d "$dir/colmap" ]; then
+      model="$(find "$dir/colmap" -name cameras.bin | sort | tail -1)"
+      [ -n "$model" ] && model_flag=(--colmap-model "$(dirname "$model")")
+    fi
+    if [ "$reuse" = 1 ] && [ -f "$dir/capture/room/truth/cameras.json" ]; then
+      :
+    elif ! nice "$hdr4d" datagen --capture --scene room --preset mini "${size_flag[@]}" --samples "$samples" \
         --cameras "$cameras" --frames "$frames" --extra-views "$extra" "${bracket_flag[@]}" "${black_flag[@]}" \
         --unlike-cameras "$unlike" --lenses "$lenses" --seed "$seed" --threads "$threads" \
         --out "$dir/capture" > "$dir/datagen.log" 2>&1; then
@@ -51,8 +67,9 @@ for variant in $variants; do
       continue
     fi
     start=$(date +%s.%N)
-    if ! nice "$hdr4d" calibrate --capture "$dir/capture/room" --out "$dir/calibrated" \
-        --truth "$dir/capture/room/truth" > "$dir/calibrate.log" 2>&1; then
+    rm -rf "$dir/calibrated"
+    if ! nice "$hdr4d" calibrate --capture "$dir/capture/room" --out "$dir/calibrated" "${model_flag[@]}" \
+        "${calibrate_flags[@]}" --truth "$dir/capture/room/truth" > "$dir/calibrate.log" 2>&1; then
       echo "$label | calibrate failed: $(tail -1 "$dir/calibrate.log") ||||||||||"
       continue
     fi
@@ -67,7 +84,8 @@ rung = re.search(r"rung (\d) of the registration ladder \(([^;]*);", report)
 helped = re.search(r"(\d+) extra image\(s\) helped", report)
 g, h = c.get("geometry", {}), c.get("hdr", {})
 nan = float("nan")
-kept = sum(1 for cam in cal.get("cameras", []) if cam.get("distortion_kept"))
+kept = ", ".join({0: "-", 1: "k1", 2: "k1k2"}[cam.get("distortion_terms", 2) if cam.get("distortion_kept") else 0]
+                 for cam in cal.get("cameras", []))
 gains = cal.get("camera_agreement", {})
 # The gains against the true ones: each camera's recovered / true gain per channel, over the
 # cameras' geometric mean (a calibration knows gains only up to one scale per channel).
@@ -84,8 +102,9 @@ if gains.get("gains") and len(names) == len(gains["gains"]):
         gain_error = max(gain_error, max(abs(x / mean - 1) for x in r))
 views = f"cameras all, extra {helped.group(1) if helped else '?'}/{extra}"
 print(f"{label} | {views}, {'rung ' + rung.group(1) if rung else 'rung ?'} | "
-      f"{g.get('max_rotation_error_deg', nan):.3f} | {100 * g.get('max_position_error_relative', nan):.2f} | "
-      f"{100 * g.get('max_focal_error_relative', nan):.2f}% | {kept} of {len(cal.get('cameras', []))} | "
+      f"{g.get('max_rotation_error_deg', nan):.3f} / {g.get('max_rotation_error_oriented_deg', nan):.3f} / "
+      f"{g.get('max_relative_rotation_error_deg', nan):.3f} | {100 * g.get('max_position_error_relative', nan):.2f} | "
+      f"{100 * g.get('max_focal_error_relative', nan):.2f}% | {kept} | "
       f"{h.get('loglog_slope', nan):.3f} | {100 * h.get('median_relative_error', nan):.1f}% ({100 * h.get('dark_fifth_median_relative_error', nan):.1f}%) | "
       f"{100 * gain_error:.1f}% | {100 * h.get('camera_disagreement', nan):.1f}% | "
       f"{100 * gains.get('disagreement_before', nan):.1f}% / {100 * gains.get('disagreement_after', nan):.1f}% | "

@@ -6,7 +6,8 @@
 // with its own Calibrate* response), and of OpenCV's Debevec response merged the way
 // MergeDebevec does (triangle weights, log domain) but with codes within three noise widths of
 // the black level weighted out: what MergeDebevec gives once its shadows are not lifted by the
-// short brackets' black codes.
+// short brackets' black codes. And the ratio from one bracket per region (the one that
+// exposes it best), which no weighting or black code enters.
 #include <opencv2/opencv.hpp>
 #include <opencv2/photo.hpp>
 
@@ -43,6 +44,38 @@ cv::Mat MergeAboveBlack(const std::vector<cv::Mat>& images, const std::vector<fl
   return out;
 }
 
+// Each region from the single bracket that exposes it best (the most pixels with every channel
+// in codes 40..220), read through `response` and divided by that bracket's time: no weights and
+// no black codes at all, so a check of any merge's ratio that only the response enters.
+double BestBracketMean(const std::vector<cv::Mat>& images, const std::vector<float>& times,
+                       const cv::Mat& response, const cv::Rect& region, int* chosen) {
+  int best = 0, best_count = -1;
+  for (std::size_t j = 0; j < images.size(); ++j) {
+    int count = 0;
+    for (int y = region.y; y < region.y + region.height; ++y)
+      for (int x = region.x; x < region.x + region.width; ++x) {
+        const cv::Vec3b v = images[j].at<cv::Vec3b>(y, x);
+        count += v[0] >= 40 && v[0] <= 220 && v[1] >= 40 && v[1] <= 220 && v[2] >= 40 && v[2] <= 220;
+      }
+    if (count > best_count) best_count = count, best = static_cast<int>(j);
+  }
+  *chosen = best;
+  double sum = 0;
+  for (int y = region.y; y < region.y + region.height; ++y)
+    for (int x = region.x; x < region.x + region.width; ++x)
+      for (int c = 0; c < 3; ++c) sum += response.at<cv::Vec3f>(images[best].at<cv::Vec3b>(y, x)[c])[c] / times[best];
+  return sum;
+}
+
+void PrintBestBracketRatio(const std::vector<cv::Mat>& images, const std::vector<float>& times,
+                           const cv::Mat& response, const char* name) {
+  int window_bracket = 0, wall_bracket = 0;
+  const double window = BestBracketMean(images, times, response, kWindow, &window_bracket) / kWindow.area();
+  const double wall = BestBracketMean(images, times, response, kWall, &wall_bracket) / kWall.area();
+  std::cout << "best single bracket per region, " << name << " response: window from " << times[window_bracket]
+            << " s, wall from " << times[wall_bracket] << " s: " << window / wall << "\n";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -64,6 +97,8 @@ int main(int argc, char** argv) {
   cv::createCalibrateRobertson()->process(images, robertson, times);
   cv::createMergeRobertson()->process(images, hdr, times, robertson);
   std::cout << "MergeRobertson " << Ratio(hdr) << "\n";
+  PrintBestBracketRatio(images, times, debevec, "OpenCV's Debevec");
+  PrintBestBracketRatio(images, times, robertson, "OpenCV's Robertson");
   for (double black : {16.0, 19.0})
     std::cout << "MergeDebevec's formula, codes near black " << black << " (sigma 1.5) weighted out "
               << Ratio(MergeAboveBlack(images, times, debevec, black, 1.5)) << "\n";
