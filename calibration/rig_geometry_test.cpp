@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <map>
 #include <random>
 
 namespace hdr4d {
@@ -97,30 +98,62 @@ TEST(RigGeometry, SharedIntrinsicsGiveOneFocalLength) {
   EXPECT_NEAR(rig.cameras[0].intrinsics.f, kF, 0.01 * kF);
 }
 
-// Cameras of one model: a focal length error of one camera (COLMAP's 4% here) is pulled to the
-// others' by one shared focal length, chosen by BIC; cameras whose focal lengths truly differ
-// (a 20% longer lens) keep their own.
+// One focal length for cameras of one image size, decided by BIC. Cameras whose focal lengths
+// truly differ (a 20% longer lens) keep their own; alike cameras get a decision in the notes and
+// focal lengths near the truth either way (on this model, 300 points seen by all three cameras,
+// one each wins narrowly: BIC +3.0; on the datagen rigs of docs/history/calibration.md one shared
+// won by 12-21). The shared solution itself is checked by forcing it (RefineBundle's focal_group).
 TEST(RigGeometry, AlikeCamerasShareOneFocalLengthOnlyWhereTheDataSaysSo) {
   ColmapModel model = MakeModel({{0, 0}, {0, 0}, {0, 0}});
   model.cameras[2].params[0] = 520;
   Rig rig = RigFromColmap(model, {"cam0", "cam1", "cam2"});
-  for (const RigCamera& c : rig.cameras) {
-    EXPECT_TRUE(c.focal_shared) << c.name;
-    EXPECT_EQ(c.intrinsics.f, rig.cameras[0].intrinsics.f) << c.name;
-    EXPECT_NEAR(c.intrinsics.f, kF, 0.01 * kF) << c.name;
-  }
+  for (const RigCamera& c : rig.cameras) EXPECT_NEAR(c.intrinsics.f, kF, 0.01 * kF) << c.name;
   bool noted = false;
-  for (const std::string& note : rig.notes) noted |= note.find("one focal length for 3 of them explains") != std::string::npos;
+  for (const std::string& note : rig.notes) noted |= note.find("one focal length for 3 of them") != std::string::npos;
   EXPECT_TRUE(noted) << fmt::format("{}", fmt::join(rig.notes, "\n"));
 
   rig = RigFromColmap(MakeModel({{0, 0}, {0, 0, 1.2 * kF}, {0, 0}}), {"cam0", "cam1", "cam2"});
   for (const RigCamera& c : rig.cameras) EXPECT_FALSE(c.focal_shared) << c.name;
   EXPECT_NEAR(rig.cameras[1].intrinsics.f, 1.2 * kF, 0.02 * kF);
   EXPECT_NEAR(rig.cameras[0].intrinsics.f, kF, 0.02 * kF);
+  bool refused = false;
+  for (const std::string& note : rig.notes) refused |= note.find("each keeps its own") != std::string::npos;
+  EXPECT_TRUE(refused) << fmt::format("{}", fmt::join(rig.notes, "\n"));
 
   RigOptions separate;
   separate.select_shared_focal = false;
-  EXPECT_FALSE(RigFromColmap(model, {"cam0", "cam1", "cam2"}, separate).cameras[0].focal_shared);
+  EXPECT_TRUE(RigFromColmap(model, {"cam0", "cam1", "cam2"}, separate).notes.empty());
+}
+
+// A focal group refines one focal length for its members (each keeps its own principal point
+// and distortion), pulling a 4% error in.
+TEST(RigGeometry, AFocalGroupRefinesOneFocalLength) {
+  BundleProblem problem;
+  const ColmapModel model = MakeModel({{0, 0}, {0, 0}, {0, 0}});
+  std::map<int, int> pose_of;
+  for (const auto& [id, image] : model.images) {
+    BundlePose pose;
+    const Eigen::AngleAxisd aa(image.cam_from_world_rotation);
+    pose.rotation = aa.angle() * aa.axis();
+    pose.translation = image.cam_from_world_translation;
+    pose.fixed = problem.poses.empty();
+    pose_of[id] = static_cast<int>(problem.poses.size());
+    problem.poses.push_back(pose);
+    problem.intrinsics.push_back({id == 2 ? 520.0 : kF, kW / 2.0, kH / 2.0, 0, 0});
+    problem.intrinsics.back().focal_group = 0;
+    problem.intrinsics.back().hold_distortion = true;
+  }
+  for (const auto& [id, point] : model.points) {
+    problem.points.push_back(point.xyz);
+    for (const auto& [image_id, idx] : point.track)
+      problem.observations.push_back({pose_of[image_id], pose_of[image_id], static_cast<int>(problem.points.size()) - 1,
+                                      model.images.at(image_id).points2d[idx]});
+  }
+  RefineBundle(&problem);
+  for (const BundleIntrinsics& k : problem.intrinsics) {
+    EXPECT_EQ(k.f, problem.intrinsics[0].f);
+    EXPECT_NEAR(k.f, kF, 0.005 * kF);
+  }
 }
 
 // Without refinement the rig is COLMAP's model as it is.
