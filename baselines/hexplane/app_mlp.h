@@ -4,8 +4,10 @@
 // units and a Linear to 3 outputs (sigmoid for LDR colour; linear for HDR-HexPlane's log
 // radiance). The last bias starts at zero (the reference's zero_init).
 //
-// Evaluated for a whole batch of samples at once as matrix products (Eigen's GEMM kernels use
-// the SIMD units): the MLP is where most of an iteration's arithmetic goes.
+// Evaluated for a whole batch of samples at once as matrix products: the MLP is where most of
+// an iteration's arithmetic goes. The templates below (Eigen) are the reference, in double for
+// the finite-difference tests; training and rendering run AppMlpForward/AppMlpBackward, the same
+// maths in float on the wide SIMD kernel of dense_simd.h (Eigen is built for the baseline ISA).
 #pragma once
 
 #include <Eigen/Core>
@@ -122,5 +124,13 @@ void BatchMlpBackward(const method::MlpShape& shape, const T* params, const RowM
     }
   }
 }
+
+// BatchMlpForward and BatchMlpBackward in float with their products on DenseProduct
+// (dense_simd.h): same arguments and results, to float rounding.
+void AppMlpForward(const method::MlpShape& shape, const float* params, const RowMatrix<float>& x,
+                   std::vector<RowMatrix<float>>* acts);
+void AppMlpBackward(const method::MlpShape& shape, const float* params, const RowMatrix<float>& x,
+                    const std::vector<RowMatrix<float>>& acts, const RowMatrix<float>& dL_dout,
+                    float* dL_dparams, RowMatrix<float>* dL_dx);
 
 }  // namespace hdr4d::baselines::hexplane

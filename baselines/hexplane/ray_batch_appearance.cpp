@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "baselines/hexplane/dense_simd.h"
 #include "baselines/hexplane/ray_batch_lane.h"
 #include "baselines/hexplane/volume_render.h"
 #include "baselines/sigmoid_tone_mapper.h"
@@ -33,14 +34,17 @@ void RayBatch::Lane::Appearance(const HexPlaneModel& m, const std::vector<Ray>& 
     for (int r = app_first[i]; r < app_first[i + 1]; ++r)
       AppProducts(m.app, MakePointTaps(m.app, &xyz[3 * app_sample[r]], RayOf(rays, i).time),
                   products.row(r).data(), scratch.data());
-  const Eigen::Map<const RowMatrix<float>> basis(m.app_basis.data(), D, P);
-  feat.noalias() = products * basis.transpose();
+  std::vector<float> basis_t(std::size_t(P) * D);  // P x D: the product's right operand
+  for (int d = 0; d < D; ++d)
+    for (int p = 0; p < P; ++p) basis_t[std::size_t(p) * D + d] = m.app_basis[std::size_t(d) * P + p];
+  feat.resize(M, D);
+  DenseProduct(M, D, P, products.data(), P, 1, basis_t.data(), D, feat.data(), D, false);
   const AppMlpShape shape = m.MlpShape();
   input.resize(M, shape.Inputs());
   for (int i = 0; i < num_rays; ++i)
     for (int r = app_first[i]; r < app_first[i + 1]; ++r)
       EncodeInput(shape, feat.row(r).data(), RayOf(rays, i).dir, input.row(r).data());
-  BatchMlpForward(shape.Layers(), m.mlp.data(), input, &acts);
+  AppMlpForward(shape.Layers(), m.mlp.data(), input, &acts);
   colour.assign(feature.size() * K, 0.0f);
   const RowMatrix<float>& y = acts.back();
   std::vector<float> ldr;
@@ -122,14 +126,14 @@ void RayBatch::Lane::AppearanceBackward(const HexPlaneModel& m, const std::vecto
       }
   }
   const AppMlpShape shape = m.MlpShape();
-  BatchMlpBackward(shape.Layers(), m.mlp.data(), input, acts, dout, grads->mlp.data(), &din);
+  AppMlpBackward(shape.Layers(), m.mlp.data(), input, acts, dout, grads->mlp.data(), &din);
   RowMatrix<float> dfeat(M, D);
   for (int r = 0; r < M; ++r)
     EncodeInputBackward(shape, feat.row(r).data(), din.row(r).data(), dfeat.row(r).data());
-  Eigen::Map<RowMatrix<float>> dbasis(grads->app_basis.data(), D, P);
-  dbasis.noalias() += dfeat.transpose() * products;
-  const Eigen::Map<const RowMatrix<float>> basis(m.app_basis.data(), D, P);
-  const RowMatrix<float> dproducts = dfeat * basis;
+  // dbasis += dfeat^T products (A(d, r) = dfeat(r, d)); dproducts = dfeat basis.
+  DenseProduct(D, P, M, dfeat.data(), 1, D, products.data(), P, grads->app_basis.data(), P, true);
+  RowMatrix<float> dproducts(M, P);
+  DenseProduct(M, P, D, dfeat.data(), D, 1, m.app_basis.data(), P, dproducts.data(), P, false);
   std::vector<float> scratch(4 * c.app_comps);
   for (int i = 0; i < end - begin; ++i)
     for (int r = app_first[i]; r < app_first[i + 1]; ++r)

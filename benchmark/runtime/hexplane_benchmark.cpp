@@ -3,7 +3,10 @@
 // appearance MLP over a batch of samples, forward and backward. The grid is the reference's
 // first (64^3, 16 time cells, 24 density and 48 appearance components); the points are spread
 // over the box, so the lookups miss the cache as a training batch's do.
-// Args: points per iteration (lookups) or MLP rows.
+// Args: points per iteration (lookups) or MLP rows; for the MLP, simd 0 runs the Eigen reference
+// (BatchMlpForward/Backward, Eigen built for the baseline ISA) and 1 the training path
+// (AppMlpForward/Backward on dense_simd.h, the target HDR4D_SIMD_TARGETS allows, named in the
+// benchmark's label).
 #include <benchmark/benchmark.h>
 
 #include <random>
@@ -11,6 +14,7 @@
 
 #include "baselines/hexplane/app_mlp.h"
 #include "baselines/hexplane/hex_field.h"
+#include "method/raster/simd_dispatch.h"
 
 namespace hdr4d::baselines::hexplane {
 namespace {
@@ -85,15 +89,23 @@ void BM_AppMlp(benchmark::State& state) {
   for (int i = 0; i < x.size(); ++i) x.data()[i] = g(rng);
   for (int i = 0; i < dout.size(); ++i) dout.data()[i] = 1e-3f * g(rng);
   std::vector<RowMatrix<float>> acts;
-  const bool backward = state.range(1) != 0;
+  const bool backward = state.range(1) != 0, simd = state.range(2) != 0;
   for (auto _ : state) {
-    BatchMlpForward(layers, params.data(), x, &acts);
-    if (backward) BatchMlpBackward(layers, params.data(), x, acts, dout, dparams.data(), &dx);
+    if (simd) {
+      AppMlpForward(layers, params.data(), x, &acts);
+      if (backward) AppMlpBackward(layers, params.data(), x, acts, dout, dparams.data(), &dx);
+    } else {
+      BatchMlpForward(layers, params.data(), x, &acts);
+      if (backward) BatchMlpBackward(layers, params.data(), x, acts, dout, dparams.data(), &dx);
+    }
     benchmark::DoNotOptimize(acts.back().data());
   }
   state.SetItemsProcessed(state.iterations() * n);
+  state.SetLabel(simd ? method::ActiveSimdTarget() : "Eigen");
 }
-BENCHMARK(BM_AppMlp)->ArgsProduct({{4096}, {0, 1}})->ArgNames({"rows", "backward"});
+BENCHMARK(BM_AppMlp)
+    ->ArgsProduct({{4096}, {0, 1}, {0, 1}})
+    ->ArgNames({"rows", "backward", "simd"});
 
 }  // namespace
 }  // namespace hdr4d::baselines::hexplane
