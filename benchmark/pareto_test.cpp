@@ -1,4 +1,5 @@
 #include "benchmark/pareto.h"
+#include "benchmark/report.h"
 
 #include <gtest/gtest.h>
 
@@ -55,6 +56,44 @@ TEST(Pareto, PointsAverageSeedsAndOverallNeedsEveryScene) {
   for (const ParetoPoint& p : overall) EXPECT_EQ(p.method, "m");
   const auto render = ParetoPoints(runs, suite, "mu_psnr", ParetoTime::kRender, "s1");
   EXPECT_DOUBLE_EQ(render.front().seconds, 10);  // ms per frame at 100 fps
+}
+
+// `bench report --methods` selects the runs of its charts (and the scenes' renders) as the
+// tables select rows: by method name, or by a table row's label (its method and supervision);
+// the charts' points are then those runs' alone.
+TEST(Pareto, ReportChartsShowTheSelectedMethodsOnly) {
+  const Suite suite = ParseSuite(nlohmann::json::parse(R"({"name": "t",
+      "scenes": [{"name": "s1", "path": "a"}],
+      "methods": [{"name": "m"}, {"name": "n"}, {"name": "o"}], "budgets": [{"iterations": 1}],
+      "tables": [{"id": "T", "title": "t", "rows": [{"label": "Row N", "method": "n",
+                  "supervision": "hdr"}, {"label": "Row M", "method": "m", "supervision": "ldr"}]}]})"),
+                                 "/x/t.json");
+  std::vector<RunSummary> runs;
+  for (const auto& [m, sup] : std::vector<std::pair<std::string, std::string>>{
+           {"m", "ldr"}, {"n", "hdr"}, {"n", "ldr"}, {"o", "ldr"}}) {
+    RunSummary r;
+    r.label = {"t", m, "s1", sup, 0, "1it", ""};
+    r.status = "ok";
+    r.source = "harness";
+    r.train_seconds = 10;
+    r.render_fps = 100;
+    r.metrics = {{"mu_psnr", 20.0}};
+    runs.push_back(r);
+  }
+  EXPECT_EQ(ReportSelectedRuns(runs, suite, {}).size(), 4u);
+  const auto labels = [&](const std::vector<std::string>& methods) {
+    std::vector<std::string> out;
+    for (const RunSummary& r : ReportSelectedRuns(runs, suite, methods))
+      out.push_back(r.label.method + "/" + r.label.supervision);
+    return out;
+  };
+  EXPECT_EQ(labels({"o"}), (std::vector<std::string>{"o/ldr"}));
+  EXPECT_EQ(labels({"Row N", "o"}), (std::vector<std::string>{"n/hdr", "o/ldr"}));
+  EXPECT_EQ(labels({"n"}), (std::vector<std::string>{"n/hdr", "n/ldr"}));
+  const auto points = ParetoPoints(ReportSelectedRuns(runs, suite, {"Row N"}), suite, "mu_psnr",
+                                   ParetoTime::kTraining, "s1");
+  ASSERT_EQ(points.size(), 1u);
+  EXPECT_EQ(points[0].method, "n");
 }
 
 }  // namespace

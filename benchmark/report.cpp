@@ -167,6 +167,22 @@ std::string TablesHtml(const Suite& suite, const std::vector<RunSummary>& runs,
 
 }  // namespace
 
+std::vector<RunSummary> ReportSelectedRuns(const std::vector<RunSummary>& runs, const Suite& suite,
+                                           const std::vector<std::string>& methods) {
+  if (methods.empty()) return runs;
+  const std::set<std::string> keep(methods.begin(), methods.end());
+  std::set<std::pair<std::string, std::string>> by_row;  // (method, supervision) of named rows
+  for (const TableSpec& t : suite.tables)
+    for (const TableRow& r : t.rows)
+      if (keep.count(r.label)) by_row.insert({r.method, r.supervision});
+  std::vector<RunSummary> selected;
+  for (const RunSummary& r : runs) {
+    if (keep.count(r.label.method) || by_row.count({r.label.method, r.label.supervision}))
+      selected.push_back(r);
+  }
+  return selected;
+}
+
 ReportSummary WriteReport(const Suite& suite, const ResultsStore& store, const ReportOptions& options) {
   // Before any work: the page goes neither over an input (the store, the suite: registered
   // where they are opened) nor among a dataset's images (issue 51, cases 1 and 10).
@@ -201,6 +217,8 @@ ReportSummary WriteReport(const Suite& suite, const ResultsStore& store, const R
   body += "<h2 id=\"tables\">Tables</h2>\n" + TablesHtml(suite, runs, options.tables, &summary);
 
   body += "<h2 id=\"pareto\">Run time against error</h2>\n";
+  // The charts and the renders show the rows --methods selects, as the tables do.
+  const std::vector<RunSummary> selected = ReportSelectedRuns(runs, suite, options.tables.methods);
   bool any_pareto = false;
   for (const ParetoTime time : {ParetoTime::kTraining, ParetoTime::kRender}) {
     std::vector<std::string> scenes = {""};
@@ -208,7 +226,7 @@ ReportSummary WriteReport(const Suite& suite, const ResultsStore& store, const R
     for (const std::string& scene : scenes) {
       std::vector<PlotSeries> series;
       PlotOptions o;
-      if (!ParetoChart(runs, suite, options.pareto_metric, time, scene, &series, &o)) continue;
+      if (!ParetoChart(selected, suite, options.pareto_metric, time, scene, &series, &o)) continue;
       o.width = scene.empty() ? 900 : 640;
       o.height = scene.empty() ? 560 : 420;
       o.font_scale = scene.empty() ? 2 : 1;
@@ -221,13 +239,7 @@ ReportSummary WriteReport(const Suite& suite, const ResultsStore& store, const R
 
   body += "<h2 id=\"scenes\">Scenes</h2>\n";
   for (const SceneSpec& s : suite.scenes) {
-    std::vector<const RunSummary*> shown = SceneRuns(runs, suite, s.name, budget, variant);
-    if (!options.tables.methods.empty()) {
-      const auto& keep = options.tables.methods;
-      std::erase_if(shown, [&](const RunSummary* r) {
-        return std::find(keep.begin(), keep.end(), r->label.method) == keep.end();
-      });
-    }
+    const std::vector<const RunSummary*> shown = SceneRuns(selected, suite, s.name, budget, variant);
     body += SceneHtml(s.name, shown, store, &summary.images);
     ++summary.scenes;
   }

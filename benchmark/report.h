@@ -9,6 +9,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "benchmark/results_store.h"
 #include "benchmark/suite.h"
@@ -25,6 +26,13 @@ struct ReportOptions {
 struct ReportSummary {
   int tables = 0, images = 0, scenes = 0, stress_cases = 0;
 };
+
+// The runs `--methods` (options.methods) selects for the report's charts and the scenes'
+// renders: a run whose method is named, or whose method and supervision a named row of the
+// suite's tables shows; every run when nothing is named. The tables keep their reference row
+// besides (their paired tests need it); a chart or render of it is shown only when named.
+std::vector<RunSummary> ReportSelectedRuns(const std::vector<RunSummary>& runs, const Suite& suite,
+                                           const std::vector<std::string>& methods);
 
 ReportSummary WriteReport(const Suite& suite, const ResultsStore& store, const ReportOptions& options);
 

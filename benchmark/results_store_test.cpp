@@ -269,5 +269,26 @@ TEST(KeptRecords, AStoreLockedPastTheTimeoutKeepsTheFinishedRun) {
   EXPECT_TRUE(store.HasRun("r2"));
 }
 
+// --series-points: each curve keeps at most N points, evenly spaced, first and last kept; a
+// curve already that short is kept as it is.
+TEST(ResultsStore, ThinnedSeriesKeepTheirEndsAndSpacing) {
+  RunRecord r;
+  for (int i = 0; i < 256; ++i) r.series["tone:0:r"].push_back({i * 0.1, i * 2.0});
+  r.series["loss"] = {{1, 5}, {2, 4}, {3, 3}};
+  ThinSeries(&r, 32);
+  const Series& tone = r.series["tone:0:r"];
+  ASSERT_EQ(tone.size(), 32u);
+  EXPECT_EQ(tone.front().second, 0.0);
+  EXPECT_EQ(tone.back().second, 510.0);
+  for (std::size_t k = 1; k < tone.size(); ++k) {
+    const double step = tone[k].second - tone[k - 1].second;  // 2 x an index step of 8 or 9
+    EXPECT_GE(step, 16.0);
+    EXPECT_LE(step, 18.0);
+  }
+  EXPECT_EQ(r.series["loss"].size(), 3u);
+  ThinSeries(&r, 2);
+  EXPECT_EQ(r.series["loss"], (Series{{1, 5}, {3, 3}}));
+}
+
 }  // namespace
 }  // namespace hdr4d::bench

@@ -31,6 +31,12 @@ nlohmann::json ArgumentFileHashes(const std::vector<std::string>& train,
 
 }  // namespace
 
+std::string IdentityKeyWithoutVersion(const nlohmann::json& identity) {
+  nlohmann::json rest = identity;
+  if (rest.is_object()) rest.erase("code_version");
+  return Sha256Hex(rest.dump());
+}
+
 std::vector<RunSpec> PlanRuns(const Suite& suite, const std::vector<PreparedScene>& scenes,
                               const std::string& code_version) {
   std::vector<RunSpec> runs;

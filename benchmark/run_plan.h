@@ -38,6 +38,11 @@ std::vector<RunSpec> PlanRuns(const Suite& suite,
                               const std::vector<PreparedScene>& scenes,
                               const std::string& code_version);
 
+// A run's identity without its code version, hashed: two runs with equal keys are the same
+// configuration on the same data made by two code versions (`bench run --any-code-version`,
+// for a suite run over several sessions whose code changes in between).
+std::string IdentityKeyWithoutVersion(const nlohmann::json& identity);
+
 // Budget iterations (or, with a seconds-only budget, the budget's seconds) still to do: the
 // unit of the ETA.
 double WorkUnits(const RunSpec& run);

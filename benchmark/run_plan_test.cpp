@@ -120,5 +120,27 @@ TEST(RunPlan, IdentityFollowsTheContentsOfAConfigFile) {
   EXPECT_NE(a[0].id, b[0].id);
   std::filesystem::remove(file);
 }
+// --any-code-version's key: the same run made by two code versions has one key; another
+// configuration or other data has another.
+TEST(RunPlan, IdentityKeyLeavesOutOnlyTheCodeVersion) {
+  const Suite s = TwoBySuite();
+  const auto scenes = Scenes(s);
+  const std::vector<RunSpec> v1 = PlanRuns(s, scenes, "v1");
+  const std::vector<RunSpec> v2 = PlanRuns(s, scenes, "v2");
+  const std::vector<RunSpec> other_data = PlanRuns(s, Scenes(s, "changed"), "v1");
+  ASSERT_EQ(v1.size(), v2.size());
+  std::set<std::string> keys;
+  for (std::size_t i = 0; i < v1.size(); ++i) {
+    EXPECT_NE(v1[i].id, v2[i].id);
+    EXPECT_EQ(IdentityKeyWithoutVersion(v1[i].identity), IdentityKeyWithoutVersion(v2[i].identity));
+    keys.insert(IdentityKeyWithoutVersion(v1[i].identity));
+    const bool scene_b = v1[i].scene == "b";
+    EXPECT_EQ(IdentityKeyWithoutVersion(other_data[i].identity) !=
+                  IdentityKeyWithoutVersion(v1[i].identity),
+              scene_b);
+  }
+  EXPECT_EQ(keys.size(), v1.size());  // every configuration its own key
+}
+
 }  // namespace
 }  // namespace hdr4d::bench

@@ -202,4 +202,20 @@ std::string UtcNow() {
   return buffer;
 }
 
+void ThinSeries(RunRecord* record, int points) {
+  HDR4D_CHECK(points >= 2);
+  for (auto& [name, series] : record->series) {
+    const std::size_t n = series.size();
+    if (n <= static_cast<std::size_t>(points)) continue;
+    Series kept;
+    for (int k = 0; k < points; ++k) {
+      // Index round(k (n - 1) / (points - 1)): 0 and n - 1 included, strictly increasing.
+      const std::size_t i = (static_cast<std::size_t>(k) * (n - 1) + (points - 1) / 2) /
+                            static_cast<std::size_t>(points - 1);
+      kept.push_back(series[i]);
+    }
+    series = std::move(kept);
+  }
+}
+
 }  // namespace hdr4d::bench

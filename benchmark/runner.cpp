@@ -87,6 +87,7 @@ struct Progress {
   std::vector<std::string> failures, kept;
   std::string last_line, fatal;
   RunnerSummary* summary = nullptr;
+  int series_points = 0;  // RunnerOptions::series_points
 };
 
 // --dry-run: every planned run with its id and whether it is stored, failed or still to run.
@@ -157,7 +158,7 @@ void Finished(Progress& p, const RunSpec& run, const Outcome& o, double took) {
 // a result kept from an earlier attempt is stored, or the run is made and its result stored
 // (kept in its folder while the store stays locked); the claim goes when it is done.
 Outcome TakeRun(const RunSpec& run, ResultsStore& store, const PipelineOptions& pipeline,
-                const std::function<void(const std::string&)>& on_stage) {
+                int series_points, const std::function<void(const std::string&)>& on_stage) {
   using Kind = Outcome::Kind;
   const StoreWait wait;
   ClaimResult claim = ClaimResult::kTaken;
@@ -176,6 +177,7 @@ Outcome TakeRun(const RunSpec& run, ResultsStore& store, const PipelineOptions& 
   } else {
     o.record = ExecuteRun(run, pipeline, on_stage);
   }
+  if (o.record && series_points > 0) ThinSeries(&*o.record, series_points);
   if (o.record) o.stored = StoreOrKeep(store, *o.record, dir, wait, &g_cancel);
   try {
     store.Release(run.id);
@@ -200,7 +202,7 @@ void Work(Progress& p, ResultsStore& store, const PipelineOptions& pipeline) {
     }
     Outcome outcome;
     try {
-      outcome = TakeRun(*run, store, pipeline, [&](const std::string& s) {
+      outcome = TakeRun(*run, store, pipeline, p.series_points, [&](const std::string& s) {
         std::lock_guard lock(p.mutex);
         p.running[run->id].stage = s;
       });
@@ -318,8 +320,52 @@ std::vector<PreparedScene> PrepareScenes(const Suite& suite,
   return scenes;
 }
 
+// --any-code-version: the store's ok runs by their identity without the code version.
+std::map<std::string, std::string> StoredByIdentityKey(const ResultsStore& store) {
+  std::map<std::string, std::string> out;
+  for (const std::string& id : store.RunIds("ok")) {
+    const nlohmann::json config = store.Config(id);
+    if (config.is_object() && config.contains("identity"))
+      out.emplace(IdentityKeyWithoutVersion(config["identity"]), id);
+  }
+  return out;
+}
+
+// The runs to take, in plan order: not stored (by this code version, or by any with
+// any_code_version), not failed before unless retried, at most max_runs of them. A stored run's
+// labels are pointed at it (this suite's names for a run made before; a dry run writes nothing).
+void QueueRuns(const std::vector<RunSpec>& runs, const RunnerOptions& options,
+               const std::set<std::string>& ok, const std::set<std::string>& failed,
+               ResultsStore* store, Progress* p) {
+  RunnerSummary& summary = *p->summary;
+  std::map<std::string, std::string> other_versions;
+  if (options.any_code_version && store) other_versions = StoredByIdentityKey(*store);
+  for (const RunSpec& r : runs) {
+    if (ok.count(r.id) || (failed.count(r.id) && !options.retry_failed)) {
+      if (!options.dry_run) store->AddLabels(r.id, r.labels);
+      ++(ok.count(r.id) ? summary.already_done : summary.skipped_failed);
+      continue;
+    }
+    if (const auto it = other_versions.find(IdentityKeyWithoutVersion(r.identity));
+        it != other_versions.end()) {
+      if (!options.dry_run) store->AddLabels(it->second, r.labels);
+      ++summary.already_done;
+      ++summary.stored_other_version;
+      continue;
+    }
+    if (options.max_runs > 0 && static_cast<int>(p->queue.size()) >= options.max_runs) {
+      ++summary.left_by_max;
+      continue;
+    }
+    p->queue.push_back(&r);
+  }
+}
+
 RunnerSummary RunSuite(const Suite& suite, const RunnerOptions& options) {
   if (options.jobs < 1) Fail("bench run: --jobs must be at least 1");
+  if (options.max_runs < 0) Fail("bench run: --max-runs must be >= 0 (0: every run)");
+  if (options.series_points < 0 || options.series_points == 1)
+    Fail("bench run: --series-points must be 0 (every point) or at least 2");
   if (options.threads < 0) Fail("bench run: --threads must be >= 0");
   const fs::path cache = options.cache_dir.empty() ? DefaultCacheDir() : options.cache_dir;
   const fs::path runs_dir =
@@ -337,26 +383,26 @@ RunnerSummary RunSuite(const Suite& suite, const RunnerOptions& options) {
   summary.planned = static_cast<int>(runs.size());
   Progress p;
   p.summary = &summary;
+  p.series_points = options.series_points;
   const std::set<std::string> ok = store ? store->RunIds("ok") : std::set<std::string>{},
                               failed = store ? store->RunIds("failed") : std::set<std::string>{};
-  for (const RunSpec& r : runs) {
-    if (ok.count(r.id) || (failed.count(r.id) && !options.retry_failed)) {
-      // This suite's names for a run made before (a dry run writes nothing).
-      if (!options.dry_run) store->AddLabels(r.id, r.labels);
-      ++(ok.count(r.id) ? summary.already_done : summary.skipped_failed);
-      continue;
-    }
-    p.queue.push_back(&r);
-  }
+  QueueRuns(runs, options, ok, failed, store ? &*store : nullptr, &p);
   const int threads =
       options.threads > 0 ? options.threads : std::max(1, AvailableCores() / options.jobs);
   fmt::print(stderr,
-             "bench: suite '{}': {} runs, {} already in the store{}, {} to run ({} job{} x {} "
+             "bench: suite '{}': {} runs, {} already in the store{}{}{}, {} to run ({} job{} x {} "
              "thread{}); store {}\n",
              suite.name, runs.size(), summary.already_done,
+             summary.stored_other_version
+                 ? fmt::format(" ({} by another code version)", summary.stored_other_version)
+                 : "",
              summary.skipped_failed ? fmt::format(", {} failed before (--retry-failed redoes them)",
                                                   summary.skipped_failed)
                                     : "",
+             summary.left_by_max
+                 ? fmt::format(", {} left for later (--max-runs {})", summary.left_by_max,
+                               options.max_runs)
+                 : "",
              p.queue.size(), options.jobs, options.jobs == 1 ? "" : "s", threads,
              threads == 1 ? "" : "s", options.store.string());
   if (options.dry_run) {

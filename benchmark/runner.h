@@ -36,10 +36,23 @@ struct RunnerOptions {
   bool retry_failed = false;
   bool keep_checkpoints = false;
   bool dry_run = false;  // print the plan, run nothing
+  // At most this many of the runs not stored yet, in plan order (0: all): a suite run a few
+  // runs at a time (scripts/bench-campaign.sh).
+  int max_runs = 0;
+  // A run counts as stored when the store has it from another code version: an ok run whose
+  // identity is the same but for the code version (IdentityKeyWithoutVersion). For a suite run
+  // over several sessions, whose code changes in between; the report lists the versions.
+  bool any_code_version = false;
+  // Each curve (loss, training PSNR, tone curves) stored at most this many points (0: as
+  // made; ThinSeries): a store committed with the repository (benchmark/results/).
+  int series_points = 0;
 };
 
 struct RunnerSummary {
   int planned = 0, already_done = 0, done = 0, failed = 0, skipped_failed = 0;
+  // stored_other_version: counted in already_done, stored by another code version
+  // (any_code_version); left_by_max: not started because of max_runs.
+  int stored_other_version = 0, left_by_max = 0;
   // taken: claimed by another bench run on the same store (left to it); kept: finished, but the
   // store stayed locked (the record is kept in the run's folder); locked_out: not started, the
   // store stayed locked when it was to be claimed.

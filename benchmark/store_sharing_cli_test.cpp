@@ -92,5 +92,47 @@ TEST(StoreSharing, TwoHarnessesOnOneStoreNeverTakeTheSameRun) {
   }
 }
 
+// A long suite over several sessions (scripts/bench-campaign.sh): --max-runs takes a few runs at
+// a time in the suite's order, and --any-code-version counts a run stored by an earlier code
+// version (the same configuration and data) as done instead of making it again.
+TEST(StoreSharing, MaxRunsAndRunsOfAnotherCodeVersion) {
+  testing::TempDir dir;
+  const fs::path suite = dir / "suite.json", cache = dir / "cache", log = dir / "log.txt";
+  WriteTinySuite(suite, "campaign", {{{"name", "4dgs"}, {"train", {{"method", "4dgs"}}}}}, {0, 1}, 20);
+  const auto bench_run = [&](const fs::path& store, std::vector<std::string> extra) {
+    std::vector<std::string> args = {"bench", "run", suite.string(), "--store", store.string(),
+                                     "--cache", cache.string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return RunHdr4dArgs(args, log);
+  };
+  const Command first = bench_run(dir / "a.db", {"--max-runs", "1"});
+  ASSERT_TRUE(first.result.ok()) << first.text;
+  EXPECT_EQ(DoneNow(first.text), 1) << first.text;
+  EXPECT_NE(first.text.find("1 left for later (--max-runs 1)"), std::string::npos) << first.text;
+  const std::set<std::string> ids = ResultsStore(dir / "a.db", false).RunIds("ok");
+  ASSERT_EQ(ids.size(), 1u);
+  // The same run as an earlier session's code version made it, in another store.
+  RunRecord old = ResultsStore(dir / "a.db", false).Record(*ids.begin());
+  ASSERT_EQ(old.labels.size(), 1u);
+  EXPECT_EQ(old.labels[0].seed, 0);  // the suite's order: seed 0 first
+  old.id = "0123456789abcdef0123";
+  old.code_version = "earlier";
+  old.config["identity"]["code_version"] = "earlier";
+  ResultsStore(dir / "b.db").InsertRun(old);
+  const Command plain = bench_run(dir / "b.db", {"--dry-run"});
+  ASSERT_TRUE(plain.result.ok()) << plain.text;
+  EXPECT_NE(plain.text.find("0 already in the store"), std::string::npos) << plain.text;
+  const Command any = bench_run(dir / "b.db", {"--any-code-version"});
+  ASSERT_TRUE(any.result.ok()) << any.text;
+  EXPECT_EQ(DoneNow(any.text), 1) << any.text;  // seed 1 only
+  EXPECT_NE(any.text.find("(1 by another code version)"), std::string::npos) << any.text;
+  const std::set<std::string> b = ResultsStore(dir / "b.db", false).RunIds("ok");
+  EXPECT_EQ(b.size(), 2u);
+  EXPECT_TRUE(b.count(old.id));
+  const Command bad = bench_run(dir / "b.db", {"--max-runs", "-1"});
+  EXPECT_FALSE(bad.result.ok()) << bad.text;
+  EXPECT_NE(bad.text.find("--max-runs"), std::string::npos) << bad.text;
+}
+
 }  // namespace
 }  // namespace hdr4d::bench

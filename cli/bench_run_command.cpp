@@ -46,6 +46,20 @@ void AddBenchRun(CLI::App& bench) {
   cmd->add_flag("--keep-checkpoints", a->runner.keep_checkpoints,
                 "Keep each run's checkpoint.bin (renders and curves are always kept)");
   cmd->add_flag("--dry-run", a->runner.dry_run, "List the runs and whether they are stored; run nothing");
+  cmd->add_option("--max-runs", a->runner.max_runs,
+                  "Run at most this many of the runs not stored yet, in the suite's order, then "
+                  "stop (0: all; a long suite a few runs at a time, scripts/bench-campaign.sh)")
+      ->capture_default_str()
+      ->check(Integer(0, std::numeric_limits<int>::max()));
+  cmd->add_option("--series-points", a->runner.series_points,
+                  "Store each curve (loss, training PSNR, tone curves) at most this many points "
+                  "(0: every point; a store small enough to commit, benchmark/results/)")
+      ->capture_default_str()
+      ->check(Integer(0, std::numeric_limits<int>::max()));
+  cmd->add_flag("--any-code-version", a->runner.any_code_version,
+                "Count a run as stored when the store has it from another code version (same "
+                "configuration and data): a suite run over several sessions whose code changes "
+                "in between; the report lists the code versions");
   cmd->add_option("--scenes", a->filter.scenes, "Only these scenes (a reduced pass)")->delimiter(',')
       ->check(Text("a scene name"));
   cmd->add_option("--methods", a->filter.methods, "Only these methods")->delimiter(',')

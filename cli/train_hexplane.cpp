@@ -54,8 +54,9 @@ bool TrainHexPlaneIfAsked(CLI::App* cmd, std::string method, hp::HexPlaneTrainOp
   }
   if (!hp::IsHexPlaneMethod(method)) return false;
   const auto given = [cmd](const char* flag) { return cmd->get_option(flag)->count() > 0; };
-  for (const char* flag : {"--config", "--tone-mapper", "--batch-size",
-                           "--max-gaussians", "--hdr-head", "--learn-background"}) {
+  for (const char* flag : {"--config", "--tone-mapper", "--batch-size", "--max-gaussians",
+                           "--hdr-head", "--learn-background", "--camera-correction",
+                           "--camera-correction-weight", "--camera-correction-lr"}) {
     if (given(flag)) Fail("train: {} does not apply to --method {}", flag, method);
   }
   o.method = method;

@@ -27,6 +27,7 @@
 #include "method/render/frame_render.h"
 #include "method/render/learned_background.h"
 #include "method/render/view_renderer.h"
+#include "method/tonemap/camera_correction.h"
 #include "method/tonemap/radiance_bank.h"
 #include "method/tonemap/tone_mapper_registry.h"
 #include "method/train/checkpoint.h"
@@ -35,6 +36,30 @@
 
 namespace hdr4d::method {
 namespace fs = std::filesystem;
+
+namespace {
+
+// --camera-correction runs: the tone mapper wrapped in the learned gains, and each frame's row.
+// The camera count the run recorded must be the dataset's (the data checks guard the images;
+// this guards the frames' cameras).
+void WrapCameraCorrection(const JsonField& config, const nlohmann::json& trainer,
+                          const std::string& checkpoint, LoadedRun* r) {
+  if (!r->tone_mapper) config["camera_correction"].Fail("the run has no tone mapper to correct");
+  r->correction_cameras = FindCorrectionCameras(r->dataset);
+  const int recorded = static_cast<int>(config["camera_correction_cameras"].Int(1, 1 << 20));
+  if (recorded != r->correction_cameras.count) {
+    config["camera_correction_cameras"].Fail(
+        fmt::format("the run learned gains for {} cameras, and the dataset's training split has "
+                    "{} now",
+                    recorded, r->correction_cameras.count));
+  }
+  auto wrapper = std::make_unique<CameraCorrectedToneMapper>(
+      std::move(r->tone_mapper), recorded, CameraCorrectionOptions{});
+  wrapper->FromJson(trainer, checkpoint);
+  r->tone_mapper = std::move(wrapper);
+}
+
+}  // namespace
 
 LoadedRun LoadRun(const fs::path& run, int resolution_override) {
   LoadedRun r;
@@ -95,6 +120,8 @@ LoadedRun LoadRun(const fs::path& run, int resolution_override) {
     std::istringstream state(c.tone_mapper_state);
     r.tone_mapper->Load(state, checkpoint_path.string());
   }
+  if (config.Has("camera_correction") && config["camera_correction"].Bool())
+    WrapCameraCorrection(config, c.trainer, checkpoint_path.string(), &r);
   return r;
 }
 
@@ -226,8 +253,9 @@ std::unique_ptr<ViewRenderer> MakeRunRenderer(const LoadedRun& run) {
       run.learned_background ? &*run.learned_background : nullptr, &run.hdr_head);
 }
 
-ToneFrame RunToneFrame(const LoadedRun& run, float time, double exposure) {
-  return {RadianceBank::TimeIndex(time, run.num_times), -1, static_cast<float>(std::log(exposure))};
+ToneFrame RunToneFrame(const LoadedRun& run, float time, double exposure, int camera_index) {
+  return {RadianceBank::TimeIndex(time, run.num_times), -1, static_cast<float>(std::log(exposure)),
+          camera_index};
 }
 
 namespace {
@@ -262,13 +290,15 @@ class ViewFileWriter {
 
   // Renders one view; writes the LDR image to ldr_path and the HDR one to hdr_path (each when
   // the model has that output and the path is not empty). Returns the number of files written.
+  // camera_index: the view's row of the run's camera correction (-1: none).
   int Render(const Camera& camera,
              float time,
              double exposure,
              const fs::path& ldr_path,
-             const fs::path& hdr_path) {
+             const fs::path& hdr_path,
+             int camera_index = -1) {
     const int w = camera.intrinsics.width, h = camera.intrinsics.height;
-    const ToneFrame frame = RunToneFrame(run_, time, exposure);
+    const ToneFrame frame = RunToneFrame(run_, time, exposure, camera_index);
     const auto start = std::chrono::steady_clock::now();
     // No HDR file to write (--no-hdr, video frames): the HDR channels are not blended.
     renderer_.Render(camera, time, frame, &ldr_,
@@ -332,6 +362,7 @@ class ViewFileWriter {
 // --time: one view, the camera of frame options.camera_index at options.time.
 int RenderAtTime(const RenderRunOptions& options,
                  const std::vector<Frame>& frames,
+                 const std::vector<int>& camera_rows,
                  ViewFileWriter* writer) {
   if (options.camera_index < 0 || options.camera_index >= static_cast<int>(frames.size())) {
     Fail("render: --camera {} is not a frame of the {} split (0..{})", options.camera_index,
@@ -345,7 +376,8 @@ int RenderAtTime(const RenderRunOptions& options,
       fmt::format("{}_cam{:03d}_t{:.4f}", options.split, options.camera_index, *options.time);
   const Frame& f = frames[options.camera_index];
   const int written = writer->Render(f.camera, *options.time, options.exposure.value_or(f.exposure),
-                                     dir / (stem + ".png"), dir / (stem + ".exr"));
+                                     dir / (stem + ".png"), dir / (stem + ".exr"),
+                                     camera_rows.empty() ? -1 : camera_rows[options.camera_index]);
   writer->Commit();
   fmt::print("render: {} ({} file{})\n", (dir / stem).string(), written, written == 1 ? "" : "s");
   return written;
@@ -434,9 +466,11 @@ std::pair<fs::path, fs::path> RenderNames(const Frame& f, const fs::path& root) 
 
 // Every view of the split, named like its ground truth (RenderNames); two frames that would
 // write one file are refused before any render.
+// camera_rows: each frame's row of the run's camera correction (empty: none).
 int RenderSplitViews(const RenderRunOptions& options,
                      const Dataset& dataset,
                      const std::vector<Frame>& frames,
+                     const std::vector<int>& camera_rows,
                      ViewFileWriter* writer) {
   const fs::path out = RenderOutputFolder(options);
   CheckOutputFolder(out);  // before the first render: never among the dataset's images
@@ -456,10 +490,12 @@ int RenderSplitViews(const RenderRunOptions& options,
   }
   Progress progress("render", static_cast<std::int64_t>(frames.size()));
   int written = 0;
-  for (const Frame& f : frames) {
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const Frame& f = frames[i];
     const auto [name, hdr_name] = RenderNames(f, dataset.root);
     written += writer->Render(f.camera, static_cast<float>(f.time),
-                              options.exposure.value_or(f.exposure), out / name, out / hdr_name);
+                              options.exposure.value_or(f.exposure), out / name, out / hdr_name,
+                              camera_rows.empty() ? -1 : camera_rows[i]);
     progress.Advance();
   }
   progress.Finish();
@@ -490,9 +526,10 @@ int RenderRun(const RenderRunOptions& options) {
   if (frames.empty())
     Fail("{}: the {} split has no frames", run.dataset.root.string(), options.split);
   ViewFileWriter writer(run, renderer.get(), options);
-  if (options.time) return RenderAtTime(options, frames, &writer);
+  if (options.time)
+    return RenderAtTime(options, frames, run.correction_cameras.Of(split), &writer);
   if (options.video_frames > 0) return RenderVideo(options, run, *renderer, &writer);
-  return RenderSplitViews(options, run.dataset, frames, &writer);
+  return RenderSplitViews(options, run.dataset, frames, run.correction_cameras.Of(split), &writer);
 }
 
 }  // namespace hdr4d::method

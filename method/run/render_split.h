@@ -17,6 +17,7 @@
 #include "method/render/hdr_head.h"
 #include "method/render/resolved_hdr_training.h"
 #include "method/render/view_renderer.h"
+#include "method/train/correction_cameras.h"
 #include "method/tonemap/tone_mapper.h"
 
 namespace hdr4d::method {
@@ -74,6 +75,9 @@ struct LoadedRun {
   float background = 0;
   std::optional<std::vector<float>> learned_background;  // runs trained with --learn-background
   HdrHead hdr_head;                                        // runs trained with --hdr-head
+  // Runs trained with --camera-correction: tone_mapper is the correction's wrapper, and each
+  // frame's camera row (RunToneFrame); count 0 otherwise.
+  CorrectionCameras correction_cameras;
   // The method's name from the configuration, or "?" (for messages).
   std::string MethodName() const;
 };
@@ -100,9 +104,10 @@ void OrderForRendering(LoadedRun* run);
 void ReorderRun(const std::vector<std::uint32_t>& order, LoadedRun* run);
 
 // The renderer `hdr4d render` draws a loaded run's views with (the run must outlive it), and the
-// tone-mapper frame of a view at `time` (in [0, 1]) with `exposure` seconds.
+// tone-mapper frame of a view at `time` (in [0, 1]) with `exposure` seconds, by the training
+// camera `camera_index` (a row of run.correction_cameras; -1: any other camera, uncorrected).
 std::unique_ptr<ViewRenderer> MakeRunRenderer(const LoadedRun& run);
-ToneFrame RunToneFrame(const LoadedRun& run, float time, double exposure);
+ToneFrame RunToneFrame(const LoadedRun& run, float time, double exposure, int camera_index = -1);
 
 // The files of a run folder that commands reading the run take as inputs (issue 51 §2).
 inline constexpr const char* kRunFileNames[] = {"config.json", "checkpoint.bin", "results.json",

@@ -31,6 +31,9 @@ struct ToneFrame {
   int time_index = 0;        // radiance-bank row of the view's timestamp, 0 .. num_times - 1
   int image_index = -1;      // training image (for per-image parameters); -1 for any other view
   float log_exposure = 0.f;  // natural log of the exposure time in seconds
+  // The view's row of a per-camera correction (camera_correction.h): the training camera that
+  // took it; -1 for a camera no training image came from (a held-out camera, a novel view).
+  int camera_index = -1;
 };
 
 // Everything that selects and sizes a tone mapper; saved in RUN/config.json.

@@ -98,7 +98,8 @@ FrameLoss HeadViewLoss(const HdrHeadFit& fit,
   b->dL_draster.resize(pixels * kChannels);
   view.HdrMuToFloat(&b->hdr_gt);  // no LDR term runs: the LDR image is not needed
   // The radiance bank is not written: the tone mapper's state stays the trained one.
-  stage.SetFrame({view.time_index, view.image_index, static_cast<float>(std::log(view.exposure))},
+  stage.SetFrame({view.time_index, view.image_index, static_cast<float>(std::log(view.exposure)),
+                  view.camera_index},
                  /*observe_bank=*/false);
   RenderForward(*fit.model, view.camera, view.time, render, &b->state, b->raster.data());
   return HdrFrameLoss(b->raster.data(), kChannels, view.width(), view.height(),

@@ -81,7 +81,8 @@ nlohmann::json EvaluateViews(ViewRenderer* renderer,
                              bool with_flip) {
   return EvaluateViews(
       [renderer](const TrainView& v, std::vector<float>* ldr, std::vector<float>* hdr) {
-        const ToneFrame frame{v.time_index, -1, static_cast<float>(std::log(v.exposure))};
+        const ToneFrame frame{v.time_index, -1, static_cast<float>(std::log(v.exposure)),
+                               v.camera_index};
         renderer->Render(v.camera, v.time, frame, ldr, hdr);
       },
       views, with_flip);

@@ -443,6 +443,32 @@ std::vector<TrainOption> CadenceRows() {
   };
 }
 
+// The learned per-camera correction (method/tonemap/camera_correction.h; issue 52). Runs from
+// before the option trained without it.
+std::vector<TrainOption> CameraCorrectionRows() {
+  return {
+      Row("camera_correction", Top(&TrainOptions::camera_correction))
+          .Switch("--camera-correction", true,
+                  "Learn a log gain per colour channel for each training camera, added to the "
+                  "tone curve's input and regularised towards none (not in the paper): cameras "
+                  "of a rig that differ in gain or white balance. Held-out times of a training "
+                  "camera render with its gains, other cameras with none. Needs a tone mapper")
+          .IfMissing(false),
+      Row("camera_correction_weight", Top(&TrainOptions::camera_correction_weight))
+          .Flag("--camera-correction-weight",
+                "Weight of the correction's pull towards no gain: weight x |d|^2 per camera "
+                "in the step")
+          .Range(ValueRange::Real(0, 1e6))
+          .ShowDefault()
+          .IfMissing(0.01),
+      Row("camera_correction_lr", Top(&TrainOptions::camera_correction_lr))
+          .Flag("--camera-correction-lr", "Adam's learning rate on the correction's log gains")
+          .Range(ValueRange::Real(1e-9, 10))
+          .ShowDefault()
+          .IfMissing(0.002),
+  };
+}
+
 // The colour model's tone mapper and branches, over the method's preset.
 std::vector<TrainOption> ToneMappingRows() {
   return {
@@ -566,7 +592,8 @@ std::vector<TrainOption> HdrTermRows() {
 // What `hdr4d train` takes on the command line, in the order of its help.
 std::vector<TrainOption> FlagRows() {
   std::vector<TrainOption> rows;
-  for (auto group : {RunRows, ScheduleRows, CadenceRows, ToneMappingRows, HdrTermRows}) {
+  for (auto group :
+       {RunRows, ScheduleRows, CadenceRows, CameraCorrectionRows, ToneMappingRows, HdrTermRows}) {
     for (TrainOption& row : group()) rows.push_back(std::move(row));
   }
   return rows;

@@ -56,7 +56,9 @@ TEST(TrainOptionsTable, RecordsTheKeysRunsHaveAlwaysRecorded) {
       "optimization.max_gaussians", "hdr.method", "hdr.color_mode", "hdr.force_static",
       "hdr.tone_mapper", "hdr.supervision", "hdr.pixel_branch", "hdr.gaussian_branch",
       "hdr.hdr_weight", "hdr.hdr_target", "hdr.hdr_geometry", "hdr.hdr_head",
-      "hdr.hdr_head_iterations", "hdr.pixel_log_epsilon"};
+      "hdr.hdr_head_iterations", "hdr.pixel_log_epsilon",
+      // issue 52: the per-camera correction
+      "camera_correction", "camera_correction_weight", "camera_correction_lr"};
   EXPECT_EQ(keys, expected);
   // Each value keeps its member's JSON type: a float's exact value, an unsigned seed, nulls.
   const json j = Recordable().ToJson();
@@ -156,7 +158,7 @@ TEST(TrainOptionsTable, EveryFlagIsOneRowWithHelpAndItsValues) {
     // A default the help shows is one the option accepts.
     if (row.show_default) EXPECT_EQ(row.Check(row.get(defaults)), "") << row.flag;
   }
-  EXPECT_EQ(flags.size(), 36u);
+  EXPECT_EQ(flags.size(), 39u);  // 36 + issue 52's three --camera-correction flags
   EXPECT_EQ(FindTrainOption("--no-learn-background"), FindTrainOption("learn_background"));
 }
 

@@ -22,6 +22,7 @@ struct TrainView {
   float time = 0;
   int time_index = 0;   // radiance-bank row of `time` (set by the trainer)
   int image_index = 0;  // position in its split
+  int camera_index = -1;  // its row of the per-camera correction (correction_cameras.h), if any
   double exposure = 1;
   std::string name;               // the image's file name (renders are written under it)
   std::vector<std::uint8_t> rgb;  // H x W x 3, display-encoded as stored; empty: not held

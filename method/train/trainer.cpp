@@ -33,10 +33,12 @@
 #include "method/render/frame_render.h"
 #include "method/render/hdr_color_stage.h"
 #include "method/render/learned_background.h"
+#include "method/tonemap/camera_correction.h"
 #include "method/tonemap/radiance_bank.h"
 #include "method/tonemap/tone_mapper_registry.h"
 #include "method/train/batch_gradients.h"
 #include "method/train/checkpoint.h"
+#include "method/train/correction_cameras.h"
 #include "method/train/hdr_head_fit.h"
 #include "method/train/hdr_loss.h"
 #include "method/train/loop_state.h"
@@ -171,6 +173,7 @@ class TrainingRun {
   void LoadTrainingViews();
   void ResolveSchedules();
   void ResolveLearnedBackground();
+  void StartCameraCorrection();
   void RecordConfig();
   double ViewLoss(const TrainView& view, int it, const float** ldr_out, std::size_t* pixels);
   double ForwardAndLoss(const TrainView& view, const float** ldr_out);
@@ -207,6 +210,8 @@ class TrainingRun {
   DatasetRecord data_record_;  // RUN/data_checksums.json
   nlohmann::json config_;
   std::unique_ptr<ToneMapper> tone_mapper_;
+  // --camera-correction: the wrapper tone_mapper_ holds (camera_correction.h), else null.
+  CameraCorrectedToneMapper* correction_ = nullptr;
   ResolvedHdrTraining resolved_;
   // The folder guard is declared before the lock: the lock goes first when a failure unwinds.
   std::optional<CleanUpFailedStart> cleanup_;
@@ -268,6 +273,7 @@ void TrainingRun::SetUp() {
     tone_mapper_ = MakeToneMapper(tc);
   }
   LoadTrainingViews();
+  StartCameraCorrection();
   ResolveSchedules();
   ResolveLearnedBackground();
   RecordConfig();
@@ -360,6 +366,32 @@ void TrainingRun::ResolveSchedules() {
                hdr.method);
 }
 
+// --camera-correction: each view's camera row, and the tone mapper wrapped in the correction.
+void TrainingRun::StartCameraCorrection() {
+  if (!options_.camera_correction) return;
+  if (!tone_mapper_) {
+    Fail("train: --camera-correction shifts the tone curve's input, and method '{}' has no tone "
+         "mapper",
+         options_.hdr.method);
+  }
+  const CorrectionCameras cameras = FindCorrectionCameras(*dataset_);
+  for (auto [views, rows] : {std::pair{&train_views_, &cameras.train},
+                             std::pair{&test_views_, &cameras.test}}) {
+    for (TrainView& v : *views) v.camera_index = (*rows)[v.image_index];
+  }
+  auto wrapper = std::make_unique<CameraCorrectedToneMapper>(
+      std::move(tone_mapper_), cameras.count,
+      CameraCorrectionOptions{.weight = options_.camera_correction_weight,
+                              .lr = options_.camera_correction_lr});
+  correction_ = wrapper.get();
+  tone_mapper_ = std::move(wrapper);
+  int held_out = 0;
+  for (int row : cameras.test) held_out += row < 0 ? 1 : 0;
+  spdlog::info("train: camera correction over {} training cameras ({} of {} test views from "
+               "other cameras: uncorrected)",
+               cameras.count, held_out, cameras.test.size());
+}
+
 // The learned background: as asked, else as the resumed run started (runs from before the
 // option recorded nothing and trained without it), else on.
 void TrainingRun::ResolveLearnedBackground() {
@@ -385,6 +417,7 @@ void TrainingRun::RecordConfig() {
   config_["num_times"] = num_times_;
   config_["resolved"] = resolved_.ToJson();
   if (tone_mapper_) config_["tone_mapper"] = tone_mapper_->config().ToJson();
+  if (correction_) config_["camera_correction_cameras"] = correction_->cameras();
   if (saved_config_) RequireSameConfig(*saved_config_, config_, options_.out / "config.json");
 }
 
@@ -450,6 +483,7 @@ void TrainingRun::ResumeOrInitialise() {
       std::istringstream tm_state(c.tone_mapper_state);
       tone_mapper_->Load(tm_state, checkpoint_path_.string());
     }
+    if (correction_) correction_->FromJson(c.trainer, checkpoint_path_.string());
     StartLearnedBackground(&c.trainer);
     spdlog::info("train: resuming {} at iteration {}", checkpoint_path_.string(), loop_.iteration);
   } else {
@@ -615,6 +649,7 @@ void TrainingRun::Step() {
       ColorDegrees(it, model_, opt_.sh_increase_interval);
   if (tone_mapper_) tone_mapper_->ZeroGrad();  // a batch adds every view's gradient to it
   if (background_) background_->ZeroGrad();
+  if (correction_) correction_->ZeroGrad();
   const float* ldr_out = nullptr;  // the final LDR image of the last view, for the PSNR shown
   std::size_t pixels = 0;
   if (opt_.batch_size == 1) {
@@ -656,7 +691,8 @@ double TrainingRun::ForwardAndLoss(const TrainView& view, const float** ldr_out)
                            static_cast<float>(opt_.lambda_dssim), dL_dimage_.data())
         .value;
   }
-  stage_->SetFrame({view.time_index, view.image_index, static_cast<float>(std::log(view.exposure))},
+  stage_->SetFrame({view.time_index, view.image_index, static_cast<float>(std::log(view.exposure)),
+                    view.camera_index},
                    /*observe_bank=*/true);
   RenderForward(model_, view.camera, view.time, render_, &state_, image_.data());
   const float* mu = nullptr;
@@ -754,6 +790,7 @@ double TrainingRun::BatchBackwardAndUpdate(int it, const float** ldr_out, std::s
     for (float& g : tone_mapper_->grads()) g *= inverse;
   if (background_)
     for (float& g : background_->grads()) g *= inverse;
+  if (correction_) correction_->ScaleGrad(inverse);
   const GradientRowsDone step_rows =
       optimizer_->Begin(DensifiesAt(it), ResetsOpacityAt(it), model_.size(), ActiveRestColumns());
   if (step_rows) {
@@ -791,6 +828,7 @@ void TrainingRun::FinishUpdate(int it, double loss_value) {
     ReturnFreedMemory();  // its temporaries (core/util/free_memory.h)
   }
   optimizer_->Finish();
+  if (correction_) correction_->Step();
   if (ResetsOpacityAt(it)) ResetOpacity(&model_, &optimizer_->adam());
 }
 
@@ -892,6 +930,7 @@ void TrainingRun::Save() {
   // The live model and optimiser are streamed into the file, not copied (checkpoint.h).
   nlohmann::json trainer = loop_.ToJson();
   if (background_) trainer[kLearnedBackgroundKey] = background_->params();
+  if (correction_) trainer[kCameraCorrectionKey] = correction_->ToJson();
   if (head_current_) trainer[kHdrHeadScaleKey] = head_.log_scale;
   if (head_current_ && !head_.background.empty())
     trainer[kHdrHeadBackgroundKey] = head_.background;
@@ -955,6 +994,8 @@ TrainSummary TrainingRun::Finish() {
       {"test_curve", loop_.test_curve},
       // What the run found wrong with itself at its end (a flat tone curve); empty when nothing.
       {"warnings", std::move(warnings)}};
+  // The learned gains, camera by camera (natural log, R G B): what the correction found.
+  if (correction_) results["camera_log_gains"] = correction_->log_gains();
   if (options_.test_every > 0) {
     nlohmann::json last = summary.test_metrics;
     last["iteration"] = loop_.iteration;

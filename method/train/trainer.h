@@ -44,6 +44,12 @@ struct TrainOptions {
   // sections: never worse beyond seed noise, +0.9 to +2.2 dB held-out where a sky is seen from
   // few cameras); a resumed run keeps what it started with (runs from before the option: off).
   std::optional<bool> learn_background;
+  // Learn a log gain per channel for each training camera, added to the tone curve's input
+  // (method/tonemap/camera_correction.h; not in the paper): a rig whose cameras differ in gain or
+  // white balance. Needs a tone mapper. Regulariser weight * |d|^2 and Adam's rate on d.
+  bool camera_correction = false;
+  double camera_correction_weight = 0.01;
+  double camera_correction_lr = 0.002;
   HdrTrainingOptions hdr;   // colour mode, tone mapper, supervision branches (plain 4DGS default)
   // When set: the options trained instead of `hdr` when every training frame has the same
   // exposure and no frame has HDR ground truth (nothing to recover an HDR from), with a note
