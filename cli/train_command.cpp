@@ -59,13 +59,14 @@ CLI::Validator RowValidator(const TrainOption& row) {
   }
   if (!row.accepts_auto) return InRange(row.range);
   // A number of the range, or the word auto (--iterations auto).
+  const CLI::Validator number = InRange(row.range);
   return CLI::Validator(
-      [number = InRange(row.range)](std::string& text) -> std::string {
+      [number](std::string& text) -> std::string {
         if (text == "auto") return "";
         std::string problem = number(text);
         return problem.empty() ? "" : problem + " or auto";
       },
-      "", "number or auto");
+      number.get_description() + " or auto", "number or auto");
 }
 
 // The text converted to the member's type exactly as CLI11 converts it into a variable of that

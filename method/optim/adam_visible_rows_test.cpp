@@ -68,8 +68,9 @@ TEST(AdamVisibleRows, CatchUpGivesDenseAdamsMomentsAfterKUnseenSteps) {
     EXPECT_EQ(adam.RowStep("xyz", 1), k + 2);
     for (int c = 0; c < 3; ++c) {
       const double m = adam.FirstMoment("xyz")[3 + c], v = adam.SecondMoment("xyz")[3 + c];
-      EXPECT_NEAR(m, ref[c].m, 1e-6 * std::abs(ref[c].m) + 1e-12) << "k " << k << " c " << c;
-      EXPECT_NEAR(v, ref[c].v, 1e-6 * std::abs(ref[c].v) + 1e-15) << "k " << k << " c " << c;
+      // Float rounding of terms near 0.1 (m can be far smaller: the gradient changes sign).
+      EXPECT_NEAR(m, ref[c].m, 1e-6 * std::abs(ref[c].m) + 1e-9) << "k " << k << " c " << c;
+      EXPECT_NEAR(v, ref[c].v, 1e-6 * std::abs(ref[c].v) + 1e-12) << "k " << k << " c " << c;
       // The parameter: step 1's value plus step k + 2's update from the caught-up moments.
       const int t = k + 2;
       const double m_hat = ref[c].m / (1 - std::pow(kBeta1, t));

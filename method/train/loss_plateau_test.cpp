@@ -56,7 +56,7 @@ TEST(LossPlateau, RisingLossStopsAndZeroLossIsGuarded) {
   std::vector<double> rising(400);
   for (int i = 0; i < 400; ++i) rising[i] = 0.1 + 1e-4 * i;
   EXPECT_TRUE(FindLossPlateau(rising, 0, 200, 0.0).has_value());
-  const auto zero = FindLossPlateau(std::vector<double>(400, 0.0), 0, 200, 0.0);
+  const auto zero = FindLossPlateau(std::vector<double>(400, 0.0), 0, 200, 1e-3);
   ASSERT_TRUE(zero.has_value());  // nothing left to improve: 0 gain, not a division by zero
   EXPECT_EQ(zero->improvement, 0.0);
   EXPECT_TRUE(std::isfinite(zero->improvement));

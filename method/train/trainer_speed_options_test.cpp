@@ -49,7 +49,8 @@ void ExpectSameState(const fs::path& a, const fs::path& b) {
   const Checkpoint ca = LoadCheckpoint(a / "checkpoint.bin");
   const Checkpoint cb = LoadCheckpoint(b / "checkpoint.bin");
   EXPECT_EQ(ca.model.xyz, cb.model.xyz);
-  EXPECT_EQ(ca.model.opacity, cb.model.opacity);
+  EXPECT_EQ(ca.model.opacity_logit, cb.model.opacity_logit);
+  EXPECT_EQ(ca.model.t, cb.model.t);
   EXPECT_EQ(ca.model.color_dc, cb.model.color_dc);
   EXPECT_EQ(ca.model.color_rest, cb.model.color_rest);
   EXPECT_TRUE(ca.adam_state == cb.adam_state);
