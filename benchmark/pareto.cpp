@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <set>
@@ -27,6 +28,31 @@ std::optional<double> TimeOf(const RunSummary& r, ParetoTime time) {
   return v;
 }
 
+// The front as one black line; with --reference points, each family's front (the default's in
+// black, the reference's in grey).
+void AddFrontSeries(const std::vector<ParetoPoint>& points, std::vector<PlotSeries>* series) {
+  const bool two = std::any_of(points.begin(), points.end(),
+                               [](const ParetoPoint& p) { return p.reference; }) &&
+                   std::any_of(points.begin(), points.end(),
+                               [](const ParetoPoint& p) { return !p.reference; });
+  for (const bool reference : two ? std::vector<bool>{false, true} : std::vector<bool>{false}) {
+    std::vector<const ParetoPoint*> front;
+    for (const ParetoPoint& p : points)
+      if (two ? (p.reference == reference && p.family_front) : p.front) front.push_back(&p);
+    std::sort(front.begin(), front.end(),
+              [](const ParetoPoint* a, const ParetoPoint* b) { return a->seconds < b->seconds; });
+    PlotSeries f;
+    f.name = !two ? "Pareto front" : reference ? "front: --reference" : "front: default";
+    f.style = PlotSeries::kLineMarkers;  // a front of one point still shows
+    f.color = reference ? std::array<float, 3>{0.55f, 0.55f, 0.55f} : std::array<float, 3>{0.f, 0.f, 0.f};
+    for (const ParetoPoint* p : front) {
+      f.x.push_back(p->seconds);
+      f.y.push_back(p->quality);
+    }
+    series->push_back(std::move(f));
+  }
+}
+
 }  // namespace
 
 std::string ParetoPoint::Config() const {
@@ -40,6 +66,27 @@ void MarkFront(std::vector<ParetoPoint>* points) {
              (q.seconds < p.seconds || q.quality > p.quality);
     });
   }
+}
+
+void MarkFamilyFronts(std::vector<ParetoPoint>* points) {
+  for (const bool family : {false, true}) {
+    std::vector<ParetoPoint> members;
+    for (const ParetoPoint& p : *points)
+      if (p.reference == family) members.push_back(p);
+    MarkFront(&members);
+    std::size_t k = 0;
+    for (ParetoPoint& p : *points)
+      if (p.reference == family) p.family_front = members[k++].front;
+  }
+}
+
+bool ReferenceVariant(const Suite& suite, const std::string& variant) {
+  for (const Variant& v : suite.variants) {
+    if (v.name != variant) continue;
+    const auto it = v.train.find("reference");
+    return it != v.train.end() && it->is_boolean() && it->get<bool>();
+  }
+  return false;
 }
 
 std::vector<ParetoPoint> ParetoPoints(const std::vector<RunSummary>& runs, const Suite& suite,
@@ -59,6 +106,7 @@ std::vector<ParetoPoint> ParetoPoints(const std::vector<RunSummary>& runs, const
   std::vector<ParetoPoint> points;
   for (const auto& [key, by_scene] : values) {
     ParetoPoint p{std::get<0>(key), std::get<1>(key), std::get<2>(key), std::get<3>(key), scene};
+    p.reference = ReferenceVariant(suite, p.variant);
     if (!scene.empty()) {
       const auto it = by_scene.find(scene);
       if (it == by_scene.end()) continue;
@@ -80,6 +128,7 @@ std::vector<ParetoPoint> ParetoPoints(const std::vector<RunSummary>& runs, const
     points.push_back(p);
   }
   MarkFront(&points);
+  MarkFamilyFronts(&points);
   return points;
 }
 
@@ -110,20 +159,7 @@ bool ParetoChart(const std::vector<RunSummary>& runs, const Suite& suite, const 
     }
     series.push_back(std::move(s));
   }
-  std::vector<const ParetoPoint*> front;
-  for (const ParetoPoint& p : points)
-    if (p.front) front.push_back(&p);
-  std::sort(front.begin(), front.end(),
-            [](const ParetoPoint* a, const ParetoPoint* b) { return a->seconds < b->seconds; });
-  PlotSeries f;
-  f.name = "Pareto front";
-  f.style = PlotSeries::kLineMarkers;  // a front of one point still shows
-  f.color = {0.f, 0.f, 0.f};
-  for (const ParetoPoint* p : front) {
-    f.x.push_back(p->seconds);
-    f.y.push_back(p->quality);
-  }
-  series.push_back(std::move(f));
+  AddFrontSeries(points, &series);
   *o = PlotOptions{};
   o->title = fmt::format("{}: {} vs {} time", scene.empty() ? "mean over scenes" : scene,
                          metric, time_name);
@@ -141,7 +177,11 @@ std::vector<fs::path> WritePareto(const std::vector<RunSummary>& runs, const Sui
   std::vector<std::string> scenes;
   for (const SceneSpec& s : suite.scenes) scenes.push_back(s.name);
   scenes.push_back("");  // overall
-  std::string csv = "scene,time,method,supervision,variant,budget,seeds,time_value,metric,value,front\n";
+  // `front` stays the last column (the overall front); family_front: the front of the point's
+  // family (reference: a --reference variant) alone.
+  std::string csv =
+      "scene,time,method,supervision,variant,budget,seeds,time_value,metric,value,family,"
+      "family_front,front\n";
   std::vector<fs::path> charts;
   bool any = false;
   for (const ParetoTime time : {ParetoTime::kTraining, ParetoTime::kRender}) {
@@ -151,9 +191,10 @@ std::vector<fs::path> WritePareto(const std::vector<RunSummary>& runs, const Sui
       if (points.empty()) continue;
       any = true;
       for (const ParetoPoint& p : points) {
-        csv += fmt::format("{},{},{},{},{},{},{},{:.6g},{},{:.6g},{}\n",
+        csv += fmt::format("{},{},{},{},{},{},{},{:.6g},{},{:.6g},{},{},{}\n",
                            scene.empty() ? "overall" : scene, time_name, p.method, p.supervision,
                            p.variant, p.budget, p.seeds, p.seconds, options.metric, p.quality,
+                           p.reference ? "reference" : "default", p.family_front ? 1 : 0,
                            p.front ? 1 : 0);
       }
       std::vector<PlotSeries> series;

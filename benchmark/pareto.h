@@ -22,6 +22,10 @@ struct ParetoPoint {
   double quality = 0;  // the metric (higher is better)
   int seeds = 0;
   bool front = false;
+  // The variant trains `hdr4d train --reference` (the paper-faithful configuration): its points
+  // have a front of their own beside the default's (issue 55), both drawn.
+  bool reference = false;
+  bool family_front = false;  // on the front of its family (reference or default) alone
   std::string Config() const;  // "method/supervision[/variant]"
 };
 
@@ -35,9 +39,14 @@ std::vector<ParetoPoint> ParetoPoints(const std::vector<RunSummary>& runs, const
 
 // Marks the points that no other point dominates (time <= and quality >=, one strictly).
 void MarkFront(std::vector<ParetoPoint>* points);
+// Sets family_front: the front of the --reference points and that of the others, apart.
+void MarkFamilyFronts(std::vector<ParetoPoint>* points);
+// Whether the suite's variant of this name trains with --reference.
+bool ReferenceVariant(const Suite& suite, const std::string& variant);
 
 // The chart of one scene ("" = overall) and time: one line per configuration through its
-// budgets, the front in black. False when there is no point to draw.
+// budgets, the front in black; with --reference variants, the default's front in black and the
+// reference's in grey. False when there is no point to draw.
 bool ParetoChart(const std::vector<RunSummary>& runs, const Suite& suite, const std::string& metric,
                  ParetoTime time, const std::string& scene, std::vector<PlotSeries>* series,
                  PlotOptions* options);

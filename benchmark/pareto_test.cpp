@@ -96,5 +96,45 @@ TEST(Pareto, ReportChartsShowTheSelectedMethodsOnly) {
   EXPECT_EQ(points[0].method, "n");
 }
 
+// A suite with a --reference variant: each family has its own front (issue 55), and the chart
+// draws both; the overall front is still one.
+TEST(Pareto, ReferenceVariantsHaveAFrontOfTheirOwn) {
+  const Suite suite = ParseSuite(nlohmann::json::parse(R"({"name": "t",
+      "scenes": [{"name": "s1", "path": "a"}], "methods": [{"name": "m"}],
+      "budgets": [{"iterations": 1}],
+      "variants": [{"name": "default"}, {"name": "reference", "train": {"reference": true}}]})"),
+                                 "/x/t.json");
+  EXPECT_TRUE(ReferenceVariant(suite, "reference"));
+  EXPECT_FALSE(ReferenceVariant(suite, "default"));
+  std::vector<RunSummary> runs;
+  auto add = [&](const std::string& variant, const std::string& budget, double secs, double q) {
+    RunSummary r;
+    r.label = {"t", "m", "s1", "ldr", 0, budget, variant};
+    r.status = "ok";
+    r.source = "harness";
+    r.train_seconds = secs;
+    r.metrics = {{"psnr", q}};
+    runs.push_back(r);
+  };
+  add("default", "1k", 10, 20);
+  add("default", "2k", 20, 24);
+  add("reference", "1k", 15, 20.5);  // slower, a little better: on both fronts
+  add("reference", "2k", 30, 23.5);  // beaten by the default's 2k: on its own family's front only
+  const auto points = ParetoPoints(runs, suite, "psnr", ParetoTime::kTraining, "s1");
+  ASSERT_EQ(points.size(), 4u);
+  for (const ParetoPoint& p : points) {
+    EXPECT_EQ(p.reference, p.variant == "reference");
+    EXPECT_TRUE(p.family_front) << p.variant << " " << p.budget;
+    EXPECT_EQ(p.front, !(p.variant == "reference" && p.budget == "2k")) << p.budget;
+  }
+  std::vector<PlotSeries> series;
+  PlotOptions o;
+  ASSERT_TRUE(ParetoChart(runs, suite, "psnr", ParetoTime::kTraining, "s1", &series, &o));
+  ASSERT_GE(series.size(), 2u);
+  EXPECT_EQ(series[series.size() - 2].name, "front: default");
+  EXPECT_EQ(series.back().name, "front: --reference");
+  EXPECT_EQ(series.back().x.size(), 2u);
+}
+
 }  // namespace
 }  // namespace hdr4d::bench

@@ -55,6 +55,10 @@ TEST(App, BadValuesAreRefusedWhileParsingNamingTheFlag) {
       {{"train", "--data", "d", "--out", "o", "--context-window", "0"}, "--context-window"},
       {{"train", "--data", "d", "--out", "o", "--context-size", "-1"}, "--context-size"},
       {{"train", "--data", "d", "--out", "o", "--iterations", "abc"}, "--iterations"},
+      {{"train", "--data", "d", "--out", "o", "--iterations", "0"}, "--iterations"},
+      {{"train", "--data", "d", "--out", "o", "--iterations", "automatic"}, "--iterations"},
+      {{"train", "--data", "d", "--out", "o", "--stop-tolerance", "1.5"}, "--stop-tolerance"},
+      {{"train", "--data", "d", "--out", "o", "--stop-window", "-1"}, "--stop-window"},
       {{"train", "--data", "d", "--out", "o", "--random-points", "0"}, "--random-points"},
       {{"train", "--data", "d", "--out", "o", "--background", "nan"}, "--background"},
       {{"render", "--run", "r", "--video", "0"}, "--video"},
@@ -95,10 +99,10 @@ TEST(App, TrainFlagsAreTheOptionTablesRows) {
           << row.flag << ": " << option->get_type_name();
     }
   }
-  EXPECT_EQ(rows, 36);
+  EXPECT_EQ(rows, 40);
   // The six flags that are not options of the run (--overwrite among them), and the grid
   // family's three (cli/train_hexplane.h: --rays, --grid-voxels, --time-grid).
-  EXPECT_EQ(train->get_options().size(), 36u + 6u + 3u + 1u);  // + --help
+  EXPECT_EQ(train->get_options().size(), 40u + 6u + 3u + 1u);  // + --help
 }
 
 TEST(App, ATrainFlagOutOfRangeIsRefusedInTheWordsOfItsHelp) {

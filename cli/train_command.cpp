@@ -55,8 +55,18 @@ CLI::Validator RowValidator(const TrainOption& row) {
     case OptionType::kText:
       return row.choices ? OneOf(row.choices()) : Text(row.what);
     default:
-      return InRange(row.range);
+      break;
   }
+  if (!row.accepts_auto) return InRange(row.range);
+  // A number of the range, or the word auto (--iterations auto).
+  const CLI::Validator number = InRange(row.range);
+  return CLI::Validator(
+      [number](std::string& text) -> std::string {
+        if (text == "auto") return "";
+        std::string problem = number(text);
+        return problem.empty() ? "" : problem + " or auto";
+      },
+      number.get_description() + " or auto", "number or auto");
 }
 
 // The text converted to the member's type exactly as CLI11 converts it into a variable of that
@@ -69,6 +79,7 @@ nlohmann::json Converted(const std::string& text) {
 }
 
 nlohmann::json GivenValue(const TableFlag& f) {
+  if (f.option->accepts_auto && f.text == "auto") return nlohmann::json("auto");
   switch (f.option->type) {
     case OptionType::kBool:
       return f.option->SwitchValue(/*off=*/!f.on);

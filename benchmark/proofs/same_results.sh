@@ -5,6 +5,8 @@
 #   bash benchmark/proofs/same_results.sh OLD_HDR4D NEW_HDR4D WORKDIR [ITERATIONS]
 # SAME_RESULTS_IGNORE=flip,hdr_flip leaves out results.json keys that one side adds by design
 # (metrics new since OLD); checkpoints and renders are always compared whole.
+# SAME_RESULTS_NEW_FLAGS="--reference" adds train flags to NEW's runs only (a configuration
+# OLD trains by default under a name it does not know; issue 55).
 # Runs: HDR-4DGS and HDR-GS on the built-in demo scene (LDR supervision, 8 cameras), and 4DGS
 # on ../shared/data/dnerf_lego_tiny when it is there. Exit status 1 when anything differs.
 set -euo pipefail
@@ -45,10 +47,12 @@ tree_hash() { (cd "$1" && find . -type f ! -name '*.json' ! -name '.hdr4d-lock' 
 run_pair() {  # name, data, then train flags
   local name=$1 data=$2; shift 2
   for side in old new; do
-    local bin=$OLD; [ "$side" = new ] && bin=$NEW
+    local bin=$OLD extra=(); [ "$side" = new ] && bin=$NEW
+    # shellcheck disable=SC2206
+    [ "$side" = new ] && extra=(${SAME_RESULTS_NEW_FLAGS:-})
     rm -rf "$WORK/$name-$side"
     "$bin" train --data "$data" --out "$WORK/$name-$side/run" --seed 0 --iterations "$ITERS" \
-      "$@" > "$WORK/$name-$side.log" 2>&1
+      "$@" "${extra[@]}" > "$WORK/$name-$side.log" 2>&1
     "$bin" render --run "$WORK/$name-$side/run" --out "$WORK/$name-$side/renders" \
       >> "$WORK/$name-$side.log" 2>&1
   done

@@ -133,6 +133,7 @@ static_assert(std::endian::native == std::endian::little,
 
 constexpr char kMagic[8] = {'H', 'D', 'R', '4', 'D', 'A', 'D', 'M'};
 constexpr std::uint32_t kVersion = 1;
+constexpr std::uint32_t kVersionRowSteps = 2;  // visible rows: each row's step
 // Sanity limits for reading: a corrupt count must give an error, not a huge allocation.
 constexpr std::uint32_t kMaxGroups = 1u << 16;
 constexpr std::uint32_t kMaxNameLength = 4096;
@@ -149,6 +150,11 @@ bool ChunkFinite(const float* values, std::size_t size) {
   return HWY_DYNAMIC_DISPATCH(FiniteKernel)(values, size);
 }
 }  // namespace
+
+bool detail::AdamUpdate(float* p, const float* g, float* m, float* v, std::size_t n,
+                        const StepConstants& c) {
+  return HWY_DYNAMIC_DISPATCH(AdamKernel)(p, g, m, v, n, c);
+}
 
 // ---- AdamOptions
 // ---------------------------------------------------------------------------------
@@ -168,6 +174,8 @@ std::string AdamOptions::Validate() const {
 Adam::Adam(const AdamOptions& options) : options_(options) {
   const std::string problem = options.Validate();
   if (!problem.empty()) Fail("Adam options: {}", problem);
+  decay1_ = detail::DecayPowers(options_.beta1);
+  decay2_ = detail::DecayPowers(options_.beta2);
 }
 
 Adam::State& Adam::Find(const std::string& name) {
@@ -248,6 +256,7 @@ detail::StepConstants Adam::NextStep(State& state) {
 }
 
 void Adam::StepState(State& state) {
+  CatchUp(state);  // visible rows: every row is stepped here
   const AdamGroup& g = state.group;
   HDR4D_CHECK(g.size == state.m.size());
   HDR4D_CHECK(g.size == 0 || (g.params != nullptr && g.grads != nullptr));
@@ -276,8 +285,18 @@ AdamRowStep Adam::BeginRowStep(const std::vector<std::string>& names, std::size_
     HDR4D_CHECK(g.size == 0 || g.params != nullptr);  // gradients may come only as rows
     HDR4D_CHECK(rows > 0 ? g.size % rows == 0 : g.size == 0);
     const std::size_t width = rows > 0 ? g.size / rows : 0;
+    if (!visible_rows_) CatchUp(s);
+    HDR4D_CHECK(s.seen.empty() || s.seen.size() == rows);
+    if (visible_rows_ && s.seen.size() != rows) s.seen.assign(rows, s.step);
     step.parts_.push_back(
         {g.name, g.params, g.grads, s.m.data(), s.v.data(), width, width, NextStep(s)});
+    if (visible_rows_) {
+      AdamRowStep::Part& part = step.parts_.back();
+      part.seen = s.seen.data();
+      part.step = s.step;
+      part.decay1 = &decay1_;
+      part.decay2 = &decay2_;
+    }
     step.bad_[k] = false;
   }
   return step;
@@ -299,7 +318,9 @@ void AdamRowStep::StepRows(std::int64_t begin,
       g = part.grads + first;
     }
     bool finite = true;
-    if (part.columns >= part.width) {
+    if (part.seen != nullptr) {
+      finite = StepVisibleRows(part, begin, end, g);
+    } else if (part.columns >= part.width) {
       finite = HWY_DYNAMIC_DISPATCH(AdamKernel)(part.params + first, g, part.m + first,
                                                 part.v + first, n, part.constants);
     } else if (part.columns > 0) {
@@ -350,6 +371,7 @@ std::string Adam::FirstNonFiniteGradient(const std::vector<std::string>& only) c
 
 void Adam::ResizeGroup(const std::string& name, std::size_t new_size) {
   State& s = Find(name);
+  CatchUp(s);
   s.m.resize(new_size, 0.0f);
   s.v.resize(new_size, 0.0f);
   s.group = AdamGroup{s.group.name, nullptr, nullptr, new_size, s.group.lr};
@@ -359,6 +381,7 @@ void Adam::GatherGroup(const std::string& name,
                        const std::vector<std::uint32_t>& keep,
                        std::size_t row_width) {
   State& s = Find(name);
+  CatchUp(s);
   HDR4D_CHECK(row_width > 0 && s.m.size() % row_width == 0);
   const std::size_t rows = s.m.size() / row_width;
   for (const std::uint32_t r : keep) HDR4D_CHECK(r < rows);
@@ -404,6 +427,7 @@ void Adam::PermuteRows(const std::string& name,
                        const std::vector<std::uint32_t>& order,
                        std::size_t row_width) {
   State& s = Find(name);
+  CatchUp(s);
   HDR4D_CHECK(row_width > 0 && s.m.size() == order.size() * row_width);
   HDR4D_CHECK(IsPermutation(order));
   PermuteRowsInPlace(s.m.data(), row_width, order);
@@ -412,6 +436,7 @@ void Adam::PermuteRows(const std::string& name,
 
 void Adam::ResetMoments(const std::string& name) {
   State& s = Find(name);
+  CatchUp(s);
   std::fill(s.m.begin(), s.m.end(), 0.0f);
   std::fill(s.v.begin(), s.v.end(), 0.0f);
 }
@@ -420,6 +445,7 @@ void Adam::ResetMoments(const std::string& name,
                         const std::vector<std::uint32_t>& rows,
                         std::size_t row_width) {
   State& s = Find(name);
+  CatchUp(s);
   HDR4D_CHECK(row_width > 0 && s.m.size() % row_width == 0);
   const std::size_t count = s.m.size() / row_width;
   for (std::uint32_t r : rows) {
@@ -435,7 +461,8 @@ void Adam::ResetMoments(const std::string& name,
 void Adam::Save(std::ostream& out) const {
   HashingWriter w(out);
   w.Bytes(kMagic, sizeof(kMagic));
-  w.Value(kVersion);
+  const bool rows_behind = AnyRowBehind();
+  w.Value(rows_behind ? kVersionRowSteps : kVersion);
   w.ResetHash();
   w.Value(options_.beta1);
   w.Value(options_.beta2);
@@ -449,6 +476,10 @@ void Adam::Save(std::ostream& out) const {
     w.Value(s.group.lr);
     w.Bytes(s.m.data(), s.m.size() * sizeof(float));
     w.Bytes(s.v.data(), s.v.size() * sizeof(float));
+    if (rows_behind) {
+      w.Value(static_cast<std::uint64_t>(s.seen.size()));
+      w.Bytes(s.seen.data(), s.seen.size() * sizeof(std::int64_t));
+    }
   }
   const std::uint64_t hash = w.hash();
   w.Value(hash);
@@ -462,6 +493,8 @@ std::uint64_t Adam::SavedSize() const {
   for (const State& s : groups_) {
     bytes += sizeof(std::uint32_t) + s.group.name.size() + sizeof(std::uint64_t) +
              sizeof(s.step) + sizeof(s.group.lr) + 2 * s.m.size() * sizeof(float);
+    if (AnyRowBehind())
+      bytes += sizeof(std::uint64_t) + s.seen.size() * sizeof(std::int64_t);
   }
   return bytes;
 }
@@ -470,17 +503,19 @@ namespace {
 
 // The header of a saved state: magic, version and the options (the checksum starts after the
 // version).
-AdamOptions ReadAdamHeader(HashingReader& r, const std::string& source) {
+AdamOptions ReadAdamHeader(HashingReader& r, const std::string& source,
+                           std::uint32_t* version_read) {
   char magic[sizeof(kMagic)];
   r.Bytes(magic, sizeof(magic), "the header");
   if (std::memcmp(magic, kMagic, sizeof(kMagic)) != 0) {
     Fail("{}: not an Adam optimiser state (bad magic; expected \"HDR4DADM\")", source);
   }
   const auto version = r.Value<std::uint32_t>("the version");
-  if (version != kVersion) {
-    Fail("{}: Adam state version {} is not supported (this build reads version {})", source,
-         version, kVersion);
+  if (version != kVersion && version != kVersionRowSteps) {
+    Fail("{}: Adam state version {} is not supported (this build reads versions {} and {})",
+         source, version, kVersion, kVersionRowSteps);
   }
+  *version_read = version;
   r.ResetHash();
   AdamOptions options;
   options.beta1 = r.Value<double>("beta1");
@@ -493,7 +528,8 @@ AdamOptions ReadAdamHeader(HashingReader& r, const std::string& source) {
 
 Adam::State Adam::ReadGroupState(HashingReader& r,
                                  std::uint32_t index,
-                                 const std::vector<State>& before) {
+                                 const std::vector<State>& before,
+                                 std::uint32_t version) {
   const std::string& source = r.source();
   State s;
   const std::string group_what = fmt::format("group {}", index);
@@ -519,6 +555,14 @@ Adam::State Adam::ReadGroupState(HashingReader& r,
   s.m = r.Floats(size, what + " first moments");
   s.v = r.Floats(size, what + " second moments");
   s.group.size = static_cast<std::size_t>(size);
+  if (version == kVersionRowSteps) {
+    const auto rows = r.Value<std::uint64_t>(what + " row count");
+    if (rows > size || (rows > 0 && size % rows != 0)) {
+      Fail("{}: Adam state {} has {} row steps for {} values (corrupt)", source, what, rows, size);
+    }
+    s.seen.resize(rows);
+    r.Bytes(s.seen.data(), rows * sizeof(std::int64_t), what + " row steps");
+  }
   return s;
 }
 
@@ -530,6 +574,12 @@ void Adam::CheckLoadedValues(const AdamOptions& options,
   for (const State& s : groups) {
     if (s.step < 0) {
       Fail("{}: Adam state group '{}' has a negative step count {}", source, s.group.name, s.step);
+    }
+    for (std::size_t row = 0; row < s.seen.size(); ++row) {
+      if (s.seen[row] < 0 || s.seen[row] > s.step) {
+        Fail("{}: Adam state group '{}' row {} was last stepped at {}, outside 0..{} (corrupt)",
+             source, s.group.name, row, s.seen[row], s.step);
+      }
     }
     if (!(s.group.lr >= 0.0f) || !std::isfinite(s.group.lr)) {
       Fail("{}: Adam state group '{}' has an invalid learning rate {}", source, s.group.name,
@@ -546,7 +596,8 @@ void Adam::CheckLoadedValues(const AdamOptions& options,
 
 void Adam::Load(std::istream& in, const std::string& source) {
   HashingReader r(in, source, "Adam state");
-  const AdamOptions options = ReadAdamHeader(r, source);
+  std::uint32_t version = 0;
+  const AdamOptions options = ReadAdamHeader(r, source, &version);
   const auto count = r.Value<std::uint32_t>("the group count");
   if (count > kMaxGroups) {
     Fail("{}: Adam state claims {} parameter groups (more than {}: corrupt)", source, count,
@@ -554,7 +605,7 @@ void Adam::Load(std::istream& in, const std::string& source) {
   }
   std::vector<State> groups;
   groups.reserve(count);
-  for (std::uint32_t i = 0; i < count; ++i) groups.push_back(ReadGroupState(r, i, groups));
+  for (std::uint32_t i = 0; i < count; ++i) groups.push_back(ReadGroupState(r, i, groups, version));
   r.VerifyChecksum();
   // Values the checksum cannot vouch for (a state written from a broken optimiser).
   CheckLoadedValues(options, groups, source);
@@ -570,6 +621,8 @@ void Adam::Load(std::istream& in, const std::string& source) {
   }
   options_ = options;
   groups_ = std::move(groups);
+  decay1_ = detail::DecayPowers(options_.beta1);
+  decay2_ = detail::DecayPowers(options_.beta2);
 }
 
 // ---- Helpers

@@ -29,6 +29,16 @@
 // arrays hold `rows` rows of equal width; the backward then calls StepRows on each block of rows
 // as soon as their gradients are final, while they are still in cache. The values are exactly
 // those of StepGroup (each element's update is independent of the others).
+//
+// Visible rows (SetVisibleRows, `hdr4d train --visible-adam`; issue 55): a row step skips every
+// row whose gradient is zero in that group (a Gaussian the view did not see) without reading
+// its moments or parameters, and remembers the step its moments were last brought to. When the
+// row has a gradient again, k steps later, its moments are first decayed as the k zero-gradient
+// steps of dense Adam would have decayed them, exactly up to rounding (m *= beta1^k,
+// v *= beta2^k), then stepped. This is NOT dense Adam: dense Adam also moves the parameter on
+// each of those k steps along its decaying momentum (by step_size m / (sqrt(v) + eps)); that
+// drift is skipped. Every operation that reads or reorders whole groups (Step, the surgery,
+// turning the mode off) first catches every row up; a checkpoint saves each row's step.
 #pragma once
 
 #include <atomic>
@@ -77,6 +87,20 @@ struct StepConstants {
   float eps;
   float step_size;  // lr / (1 - beta1^step)
 };
+// The element update of Adam (the kernel Step uses) on n elements; false when a gradient held a
+// NaN or an infinity (those vectors are left as they were).
+bool AdamUpdate(float* p, const float* g, float* m, float* v, std::size_t n,
+                const StepConstants& c);
+// beta^k as float (computed in double): a table for small k, pow beyond it.
+class DecayPowers {
+ public:
+  explicit DecayPowers(double beta = 0.0);
+  float operator()(std::int64_t k) const;
+
+ private:
+  double beta_;
+  std::vector<float> table_;
+};
 }  // namespace detail
 
 // One step of some groups, applied block of rows by block of rows (Adam::BeginRowStep). The Adam
@@ -111,7 +135,16 @@ class AdamRowStep {
     std::size_t width;    // floats per row
     std::size_t columns;  // the first floats of each row that are stepped (LimitColumns)
     detail::StepConstants constants;
+    // Visible rows: the step each row's moments were last brought to (null: dense), this
+    // step's count and the decay powers.
+    std::int64_t* seen = nullptr;
+    std::int64_t step = 0;
+    const detail::DecayPowers* decay1 = nullptr;
+    const detail::DecayPowers* decay2 = nullptr;
   };
+  // A visible-rows part's rows [begin, end) with gradient rows `g` (row `begin` first).
+  static bool StepVisibleRows(const Part& part, std::int64_t begin, std::int64_t end,
+                              const float* g);
   std::vector<Part> parts_;
   std::size_t rows_ = 0;
   std::unique_ptr<std::atomic<bool>[]> bad_;
@@ -146,7 +179,17 @@ class Adam {
   // the row-wise update that applies it (see "Fused row steps" above).
   AdamRowStep BeginRowStep(const std::vector<std::string>& names, std::size_t rows);
 
-  // The moments, for diagnostics and tests.
+  // Visible rows (see the top of this file): on for the row steps begun from now on. Turning it
+  // off catches every row up.
+  void SetVisibleRows(bool on);
+  bool visible_rows() const { return visible_rows_; }
+  // Brings every row's moments to its group's step (a no-op for rows already there).
+  void CatchUpAll();
+  // The step row `row` of the group was last brought to (its group's step unless visible rows
+  // skipped it since).
+  std::int64_t RowStep(const std::string& name, std::size_t row) const;
+
+  // The moments, for diagnostics and tests (with visible rows: as of each row's RowStep).
   const std::vector<float>& FirstMoment(const std::string& name) const;
   const std::vector<float>& SecondMoment(const std::string& name) const;
 
@@ -187,6 +230,9 @@ class Adam {
   //   "HDR4DADM" | u32 version (1) | f64 beta1, beta2, eps | u32 group count |
   //   per group: u32 name length, name bytes, u64 size, i64 step, f32 lr, f32 m[size],
   //   f32 v[size] | u64 FNV-1a (64-bit) of every byte after the version field.
+  // Version 2 (written only when a row lags its group's step, i.e. with visible rows) adds after
+  // each group's v: u64 row count (0: every row at the group's step), i64 row step[count].
+  // Version 1 is written otherwise, byte for byte as before.
   void Save(std::ostream& out) const;
   // The number of bytes Save writes, without writing them: a checkpoint streams the state into
   // its file behind this length instead of building it in memory first (1.3 KB per Gaussian).
@@ -202,14 +248,20 @@ class Adam {
     AdamGroup group;
     std::vector<float> m, v;
     std::int64_t step = 0;
+    // Visible rows: the step each row's moments were last brought to; empty: all at `step`.
+    std::vector<std::int64_t> seen;
   };
+  // Brings the group's rows to its step and empties `seen`.
+  void CatchUp(State& state) const;
   State& Find(const std::string& name);
   const State& Find(const std::string& name) const;
   // Load's parts: group `index`'s record (its name checked against the groups `before` it), and
   // the values the checksum cannot vouch for.
   static State ReadGroupState(HashingReader& r,
                               std::uint32_t index,
-                              const std::vector<State>& before);
+                              const std::vector<State>& before,
+                              std::uint32_t version);
+  bool AnyRowBehind() const;
   static void CheckLoadedValues(const AdamOptions& options,
                                 const std::vector<State>& groups,
                                 const std::string& source);
@@ -219,6 +271,8 @@ class Adam {
 
   AdamOptions options_;
   std::vector<State> groups_;
+  bool visible_rows_ = false;
+  detail::DecayPowers decay1_, decay2_;  // beta1^k, beta2^k
 };
 
 // True when every value is finite (no NaN, no +-infinity); true for size 0.

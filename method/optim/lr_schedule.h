@@ -156,6 +156,20 @@ struct OptimizationOptions {
   // the training images, set by the trainer (DefaultGaussianBudget).
   std::int64_t max_gaussians = kFollowRunLength;
 
+  // ---- Doing less where a scene does not need it (issue 55; `--reference` turns all off) ----
+  // Visible-set Adam: a Gaussian's rows are stepped only in the iterations that gave them a
+  // gradient; when it is seen again its moments' decay over the k steps it missed is caught up
+  // exactly (m *= beta1^k, v *= beta2^k). Not dense Adam: the parameter's drift during those
+  // steps (dense Adam keeps moving it along its momentum) is skipped (adam.h, "Visible rows").
+  bool visible_adam = false;
+  // --iterations auto: stop once the mean training loss over the last stop_window iterations
+  // has improved by less than stop_tolerance (relative) on the window before, both windows
+  // after densification ended (the model no longer grows). 0 = run all iterations.
+  int stop_window = 0;
+  double stop_tolerance = kDefaultStopTolerance;
+  static constexpr int kDefaultStopWindow = 1000;
+  static constexpr double kDefaultStopTolerance = 0.002;
+
   // The reference's values of the resolved fields (a 20000-iteration run on 400-pixel images).
   static constexpr int kRefPositionLrMaxSteps = 15000;
   static constexpr int kRefDensifyFrom = 500;
@@ -266,6 +280,10 @@ struct OptimizationOptions {
       return fmt::format("prune_opacity must be in [0, 1), got {}", prune_opacity);
     }
     if (!(e = positive_int("sh_increase_interval", sh_increase_interval)).empty()) return e;
+    if (stop_window < 0) return fmt::format("stop_window must be >= 0, got {}", stop_window);
+    if (!(stop_tolerance >= 0.0 && stop_tolerance <= 1.0)) {
+      return fmt::format("stop_tolerance must be in [0, 1], got {}", stop_tolerance);
+    }
     return "";
   }
 };

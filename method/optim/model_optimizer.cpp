@@ -9,7 +9,11 @@
 namespace hdr4d::method {
 
 ModelOptimizer::ModelOptimizer(const OptimizationOptions& options, double extent)
-    : options_(options), extent_(extent), adam_(AdamOptions{.eps = options.adam_eps}) {}
+    : options_(options), extent_(extent), adam_(AdamOptions{.eps = options.adam_eps}) {
+  // --visible-adam: the model's row steps skip the Gaussians a view did not see (adam.h,
+  // "Visible rows"); the tone mapper and the background are whole-group steps, always dense.
+  adam_.SetVisibleRows(options.visible_adam);
+}
 
 void ModelOptimizer::AddGroups(GaussianModel& model,
                                GaussianGradients& grads,

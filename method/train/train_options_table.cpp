@@ -173,6 +173,10 @@ class Row {
     r_.nullable = true;
     return *this;
   }
+  Row& AcceptsAuto() {
+    r_.accepts_auto = true;
+    return *this;
+  }
   Row& AsksForHdr() {
     r_.asks_for_hdr = true;
     return *this;
@@ -289,6 +293,21 @@ std::vector<std::string> HdrTargetNames() {
   return names;
 }
 
+// --iterations: a count, or "auto" (the run length stays the schedules' and becomes a cap; the
+// run stops when its loss has stopped improving: OptimizationOptions::stop_window).
+Access IterationsAccess() {
+  return {OptionType::kInt,
+          [](const TrainOptions& o) { return Json(o.optimization.iterations); },
+          [](TrainOptions* o, const Json& v) {
+            OptimizationOptions& opt = o->optimization;
+            if (v.is_string()) {  // "auto", checked by the row
+              if (opt.stop_window == 0) opt.stop_window = OptimizationOptions::kDefaultStopWindow;
+            } else {
+              opt.iterations = v.get<int>();
+            }
+          }};
+}
+
 // The run: its scene, length, seed, threads, image size, batch and Gaussians.
 std::vector<TrainOption> RunRows() {
   using O = OptimizationOptions;
@@ -297,13 +316,16 @@ std::vector<TrainOption> RunRows() {
       Row("data", DataAccess())
           .Flag("--data", "Scene folder (with --resume: the run's own by default)")
           .Names("a scene folder"),
-      Row("optimization.iterations", Opt(&O::iterations))
+      Row("optimization.iterations", IterationsAccess())
           .Flag("--iterations",
                 "Training iterations. The schedules (densification window, position "
                 "learning-rate decay, opacity resets) follow it: "
                 "the reference's values are those of 20000 iterations; a flag given below "
-                "wins over the scaling")
+                "wins over the scaling. auto: the schedules of the default length, and stop "
+                "once the training loss has stopped improving (--stop-window, "
+                "--stop-tolerance); results.json says when and why")
           .Range(count(1))
+          .AcceptsAuto()
           .ShowDefault()
           .Config("iterations")
           .MayChangeOnResume(),
@@ -469,6 +491,48 @@ std::vector<TrainOption> CameraCorrectionRows() {
   };
 }
 
+// Doing less where the scene does not need it (issue 55), and --reference, which does none of
+// it: the paper-faithful configuration. Kept together.
+std::vector<TrainOption> SpeedRows() {
+  using O = OptimizationOptions;
+  return {
+      Row("reference", Top(&TrainOptions::reference))
+          .Switch("--reference", true,
+                  "The paper-faithful configuration: dense Adam, every iteration asked for "
+                  "(the defaults before issue 55, bit for bit); refused with an option below")
+          .IfMissing(false)
+          .WhenGiven([](TrainOptions* o, const Json&) {
+            o->reference = true;
+            o->optimization.visible_adam = false;
+          }),
+      Row("optimization.visible_adam", Opt(&O::visible_adam))
+          .Switch("--visible-adam", true,
+                  "Step Adam only on the Gaussians a step saw, catching their moments' decay up "
+                  "exactly when they are seen again (not dense Adam: the drift of an unseen "
+                  "Gaussian along its momentum is skipped). --dense-adam: every Gaussian, every "
+                  "step, as the paper")
+          .Negatable("--dense-adam")
+          .IfMissing(false)
+          .Config("visible_adam"),
+      Row("optimization.stop_window", Opt(&O::stop_window))
+          .Flag("--stop-window",
+                "Iterations per window of --iterations auto: stop when the mean training loss "
+                "of the last window improved by less than --stop-tolerance on the window "
+                "before, both after densification ended (0: run every iteration; auto: 1000)")
+          .Range(ValueRange::Integer(0, kIntMax))
+          .IfMissing(0)
+          .MayChangeOnResume(),
+      Row("optimization.stop_tolerance", Opt(&O::stop_tolerance))
+          .Flag("--stop-tolerance",
+                "Relative improvement of the windowed training loss under which "
+                "--iterations auto stops")
+          .Range(ValueRange::Real(0, 1))
+          .ShowDefault()
+          .IfMissing(O::kDefaultStopTolerance)
+          .MayChangeOnResume(),
+  };
+}
+
 // The colour model's tone mapper and branches, over the method's preset.
 std::vector<TrainOption> ToneMappingRows() {
   return {
@@ -592,8 +656,8 @@ std::vector<TrainOption> HdrTermRows() {
 // What `hdr4d train` takes on the command line, in the order of its help.
 std::vector<TrainOption> FlagRows() {
   std::vector<TrainOption> rows;
-  for (auto group :
-       {RunRows, ScheduleRows, CadenceRows, CameraCorrectionRows, ToneMappingRows, HdrTermRows}) {
+  for (auto group : {RunRows, ScheduleRows, CadenceRows, SpeedRows, CameraCorrectionRows,
+                     ToneMappingRows, HdrTermRows}) {
     for (TrainOption& row : group()) rows.push_back(std::move(row));
   }
   return rows;
@@ -662,12 +726,13 @@ std::string TrainOption::Accepts() const {
     case OptionType::kJson:
       return "a JSON value";
     default:
-      return range.Describe();
+      return accepts_auto ? range.Describe() + " or auto" : range.Describe();
   }
 }
 
 std::string TrainOption::Check(const Json& value, bool allow_unset) const {
   if (value.is_null() && nullable) return "";
+  if (accepts_auto && value == "auto") return "";
   const bool number = value.is_number() && std::isfinite(value.get<double>());
   const double v = number ? value.get<double>() : 0.0;
   // The member's "not given" value (it then follows the run length, or the iterations).

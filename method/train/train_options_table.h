@@ -56,6 +56,8 @@ struct TrainOption {
   // Given, the run trains what was asked even where a scene has nothing HDR to recover
   // (TrainOptions::when_nothing_hdr).
   bool asks_for_hdr = false;
+  // A number that also accepts the word "auto" (--iterations auto), which set() understands.
+  bool accepts_auto = false;
   OptionTarget target = OptionTarget::kRun;
 
   // The member as JSON of its type; null: an unset optional; discarded: not recorded.

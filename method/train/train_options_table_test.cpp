@@ -58,7 +58,10 @@ TEST(TrainOptionsTable, RecordsTheKeysRunsHaveAlwaysRecorded) {
       "hdr.hdr_weight", "hdr.hdr_target", "hdr.hdr_geometry", "hdr.hdr_head",
       "hdr.hdr_head_iterations", "hdr.pixel_log_epsilon",
       // issue 52: the per-camera correction
-      "camera_correction", "camera_correction_weight", "camera_correction_lr"};
+      "camera_correction", "camera_correction_weight", "camera_correction_lr",
+      // issue 55
+      "reference", "optimization.visible_adam", "optimization.stop_window",
+      "optimization.stop_tolerance"};
   EXPECT_EQ(keys, expected);
   // Each value keeps its member's JSON type: a float's exact value, an unsigned seed, nulls.
   const json j = Recordable().ToJson();
@@ -97,11 +100,17 @@ TEST(TrainOptionsTable, ARecordReadsBackToTheSameOptions) {
 TEST(TrainOptionsTable, RecordsOfOlderRunsReadAsTheyTrained) {
   json old = Recordable().ToJson();
   old.erase("learn_background");
+  old.erase("reference");
+  for (const char* key : {"visible_adam", "stop_window", "stop_tolerance"})
+    old["optimization"].erase(key);
   for (const char* key : {"hdr_target", "hdr_geometry", "hdr_head", "hdr_head_iterations",
                           "pixel_log_epsilon"})
     old["hdr"].erase(key);
   const TrainOptions o = TrainOptions::FromJson(old, "/runs/old/config.json");
   EXPECT_EQ(o.learn_background, false);
+  EXPECT_FALSE(o.reference);  // runs from before issue 55 trained the paper's way
+  EXPECT_FALSE(o.optimization.visible_adam);
+  EXPECT_EQ(o.optimization.stop_window, 0);
   EXPECT_EQ(o.hdr.hdr_target, HdrTarget::kImageMax);
   EXPECT_TRUE(o.hdr.hdr_geometry);
   EXPECT_FALSE(o.hdr.hdr_head);
@@ -139,7 +148,8 @@ TEST(TrainOptionsTable, TheRangeAHelpStatesIsTheOneEveryCheckApplies) {
   ASSERT_NE(from, nullptr);
   EXPECT_EQ(from->Check(-1), "");
   EXPECT_EQ(from->Check(-1, /*allow_unset=*/false), "expected an integer >= 0, got -1");
-  EXPECT_EQ(FindTrainOption("--iterations")->Check(2.5), "expected an integer >= 1, got 2.5");
+  EXPECT_EQ(FindTrainOption("--iterations")->Check(2.5),
+            "expected an integer >= 1 or auto, got 2.5");
   EXPECT_EQ(FindTrainOption("--threads")->Check("4"),
             "expected an integer in [0, 4096], got \"4\"");
 }
@@ -158,7 +168,7 @@ TEST(TrainOptionsTable, EveryFlagIsOneRowWithHelpAndItsValues) {
     // A default the help shows is one the option accepts.
     if (row.show_default) EXPECT_EQ(row.Check(row.get(defaults)), "") << row.flag;
   }
-  EXPECT_EQ(flags.size(), 39u);  // 36 + issue 52's three --camera-correction flags
+  EXPECT_EQ(flags.size(), 43u);  // 36 + issue 55's four + issue 52's three --camera-correction flags
   EXPECT_EQ(FindTrainOption("--no-learn-background"), FindTrainOption("learn_background"));
 }
 
@@ -167,10 +177,55 @@ TEST(TrainOptionsTable, AResumedRunMayChangeHowLongAndHowFastOnly) {
   for (const TrainOption& row : TrainOptionTable())
     if (row.may_change_on_resume) may.insert(row.key);
   EXPECT_EQ(may, (std::set<std::string>{"threads", "test_every", "checkpoint_every", "max_seconds",
-                                        "optimization.iterations"}));
+                                        "optimization.iterations", "optimization.stop_window",
+                                        "optimization.stop_tolerance"}));
   EXPECT_TRUE(MayChangeOnResume("optimization.iterations"));
   EXPECT_FALSE(MayChangeOnResume("iterations"));
   EXPECT_FALSE(MayChangeOnResume("seed"));
+}
+
+// --iterations auto keeps the run length (the schedules' and the cap) and turns the stop rule on
+// with its stated window; a number is a number; any other word is refused.
+TEST(TrainOptionsTable, IterationsAutoTurnsTheStopRuleOn) {
+  const TrainOption* iterations = FindTrainOption("--iterations");
+  ASSERT_NE(iterations, nullptr);
+  EXPECT_EQ(iterations->Check("auto"), "");
+  EXPECT_EQ(iterations->Check("Auto"), "expected an integer >= 1 or auto, got \"Auto\"");
+  TrainOptions o;
+  iterations->set(&o, "auto");
+  EXPECT_EQ(o.optimization.iterations, 20000);
+  EXPECT_EQ(o.optimization.stop_window, OptimizationOptions::kDefaultStopWindow);
+  EXPECT_EQ(o.optimization.stop_tolerance, OptimizationOptions::kDefaultStopTolerance);
+  o.optimization.stop_window = 250;  // a window given stays
+  iterations->set(&o, "auto");
+  EXPECT_EQ(o.optimization.stop_window, 250);
+  iterations->set(&o, 3000);
+  EXPECT_EQ(o.optimization.iterations, 3000);
+  EXPECT_EQ(o.optimization.stop_window, 250);
+  EXPECT_EQ(FindTrainOption("--stop-tolerance")->Check(1.5), "expected a number in [0, 1], got 1.5");
+  EXPECT_EQ(FindTrainOption("--stop-window")->Check(-3, false), "expected an integer >= 0, got -3");
+}
+
+// --reference: the paper's configuration, recorded; an option that does less is refused with it.
+TEST(TrainOptionsTable, ReferenceIsRecordedAndRefusesTheOptionsThatDoLess) {
+  const TrainOption* reference = FindTrainOption("--reference");
+  ASSERT_NE(reference, nullptr);
+  TrainOptions o = Recordable();
+  o.optimization.visible_adam = true;
+  reference->set_given(&o, true);
+  EXPECT_TRUE(o.reference);
+  EXPECT_FALSE(o.optimization.visible_adam);
+  EXPECT_EQ(o.Validate(), "");
+  EXPECT_EQ(o.ToJson()["reference"], true);
+  EXPECT_TRUE(TrainOptions::FromJson(o.ToJson(), "/runs/a/config.json").reference);
+  o.optimization.visible_adam = true;
+  EXPECT_NE(o.Validate().find("drop --visible-adam"), std::string::npos) << o.Validate();
+  o.optimization.visible_adam = false;
+  o.optimization.stop_window = 1000;
+  EXPECT_NE(o.Validate().find("drop --iterations auto"), std::string::npos) << o.Validate();
+  // A resumed run cannot change what it learns: --visible-adam is not one a resume may change.
+  EXPECT_FALSE(MayChangeOnResume("reference"));
+  EXPECT_FALSE(MayChangeOnResume("optimization.visible_adam"));
 }
 
 }  // namespace

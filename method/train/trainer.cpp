@@ -39,6 +39,7 @@
 #include "method/train/batch_gradients.h"
 #include "method/train/checkpoint.h"
 #include "method/train/correction_cameras.h"
+#include "method/train/loss_plateau.h"
 #include "method/train/hdr_head_fit.h"
 #include "method/train/hdr_loss.h"
 #include "method/train/loop_state.h"
@@ -63,6 +64,12 @@ std::string TrainOptions::Validate() const {
   if (std::string p = CheckTrainOptionValues(*this); !p.empty()) return p;
   if (std::string p = optimization.Validate(); !p.empty()) return p;
   if (std::string p = hdr.Validate(); !p.empty()) return p;
+  if (reference && optimization.visible_adam)
+    return "reference: --reference trains the paper's configuration, which steps Adam densely; "
+           "drop --visible-adam (or --reference)";
+  if (reference && optimization.stop_window > 0)
+    return "reference: --reference trains every iteration asked for; drop --iterations auto "
+           "and --stop-window (or --reference)";
   return "";
 }
 
@@ -154,7 +161,13 @@ class TrainingRun {
   void ResumeOrInitialise();
   void PrepareRendering();
   void ReserveForBudget();
-  bool StepsLeft() const { return loop_.iteration < opt_.iterations; }
+  // Iterations left, and (--iterations auto) the loss still improving.
+  bool StepsLeft() const { return loop_.iteration < opt_.iterations && !Plateau(); }
+  std::optional<LossPlateau> Plateau() const {
+    return FindLossPlateau(loop_.loss_curve, opt_.densify_until, opt_.stop_window,
+                           opt_.stop_tolerance);
+  }
+  nlohmann::json StopRecord() const;
   bool OutOfTime() const;
   void Step();
   // --hdr-head: fits the HDR head after the last iteration (unless the checkpoint's head was
@@ -556,6 +569,8 @@ TrainSummary TrainingRun::FinishedSummary() const {
   summary.gaussians = model_.size();
   summary.loss_curve = loop_.loss_curve;
   summary.stopped_by_time = results.value("stopped_by_time", false);
+  summary.stopped_flat = results.contains("stopped") && results["stopped"].is_object() &&
+                         results["stopped"].value("reason", "") == "loss_plateau";
   return summary;
 }
 
@@ -968,7 +983,12 @@ TrainSummary TrainingRun::Finish() {
   Save();
   ReleaseTrainingState();
   TrainSummary summary;
-  summary.stopped_by_time = loop_.iteration < opt_.iterations;
+  summary.stopped_flat = Plateau().has_value();
+  if (summary.stopped_flat)
+    spdlog::info("train: --iterations auto: the training loss stopped improving (less than {} "
+                 "over {} iterations); stopped at iteration {} of {}",
+                 opt_.stop_tolerance, opt_.stop_window, loop_.iteration, opt_.iterations);
+  summary.stopped_by_time = loop_.iteration < opt_.iterations && !summary.stopped_flat;
   summary.test_metrics = EvaluateTestViews(/*with_flip=*/true);
   summary.train_seconds = loop_.train_seconds;
   summary.iterations = loop_.iteration;
@@ -996,6 +1016,7 @@ TrainSummary TrainingRun::Finish() {
       {"warnings", std::move(warnings)}};
   // The learned gains, camera by camera (natural log, R G B): what the correction found.
   if (correction_) results["camera_log_gains"] = correction_->log_gains();
+  if (opt_.stop_window > 0) results["stopped"] = StopRecord();
   if (options_.test_every > 0) {
     nlohmann::json last = summary.test_metrics;
     last["iteration"] = loop_.iteration;
@@ -1003,6 +1024,28 @@ TrainSummary TrainingRun::Finish() {
   }
   WriteJsonFile(options_.out / "results.json", results);
   return summary;
+}
+
+// --iterations auto: why the loop ended, at which iteration, and the rule it was under.
+nlohmann::json TrainingRun::StopRecord() const {
+  nlohmann::json r = {{"rule", fmt::format("mean training loss over windows of {} iterations "
+                                           "after densification (until {}) improving by less "
+                                           "than {} (relative)",
+                                           opt_.stop_window, opt_.densify_until,
+                                           opt_.stop_tolerance)},
+                      {"window", opt_.stop_window},
+                      {"tolerance", opt_.stop_tolerance},
+                      {"iteration", loop_.iteration},
+                      {"max_iterations", opt_.iterations}};
+  if (const std::optional<LossPlateau> p = Plateau()) {
+    r["reason"] = "loss_plateau";
+    r["previous_window_loss"] = p->previous;
+    r["last_window_loss"] = p->last;
+    r["improvement"] = p->improvement;
+  } else {
+    r["reason"] = loop_.iteration < opt_.iterations ? "max_seconds" : "max_iterations";
+  }
+  return r;
 }
 
 }  // namespace

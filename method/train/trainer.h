@@ -32,6 +32,10 @@ struct TrainOptions {
   // iteration that reaches it (the schedules still run over optimization.iterations).
   double max_seconds = 0;
   bool resume = false;       // continue from RUN/checkpoint.bin
+  // --reference: the paper-faithful configuration (the defaults before issue 55, bit for bit):
+  // every option that does less than the paper's training (visible-set Adam, --iterations auto)
+  // off; Validate refuses one of them given with it.
+  bool reference = false;
   // A new run in a folder holding an earlier one deletes its files first (run_folder.h); without
   // it such a folder is refused.
   bool overwrite = false;
@@ -75,6 +79,7 @@ struct TrainSummary {
   std::size_t gaussians = 0;
   std::vector<double> loss_curve;  // per iteration
   bool stopped_by_time = false;    // max_seconds ended the loop before optimization.iterations
+  bool stopped_flat = false;       // --iterations auto ended it (the loss stopped improving)
 };
 
 // Runs (or resumes) training; writes RUN/config.json, RUN/checkpoint.bin, RUN/results.json.

@@ -1,0 +1,30 @@
+#include "method/train/loss_plateau.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+
+namespace hdr4d::method {
+
+std::optional<LossPlateau> FindLossPlateau(const std::vector<double>& loss_curve,
+                                           int densify_until,
+                                           int window,
+                                           double tolerance) {
+  if (window <= 0) return std::nullopt;
+  const std::size_t n = loss_curve.size();
+  const auto w = static_cast<std::size_t>(window);
+  if (n % w != 0 || n < 2 * w) return std::nullopt;
+  if (static_cast<long long>(n) - 2 * static_cast<long long>(w) < std::max(densify_until, 0))
+    return std::nullopt;
+  double previous = 0, last = 0;
+  for (std::size_t i = n - 2 * w; i < n - w; ++i) previous += loss_curve[i];
+  for (std::size_t i = n - w; i < n; ++i) last += loss_curve[i];
+  previous /= static_cast<double>(w);
+  last /= static_cast<double>(w);
+  // A loss at (or below) zero has nothing left to improve; the division is guarded.
+  const double improvement = previous > 1e-300 ? (previous - last) / previous : 0.0;
+  if (!(improvement < tolerance)) return std::nullopt;
+  return LossPlateau{static_cast<int>(n), previous, last, improvement};
+}
+
+}  // namespace hdr4d::method

@@ -1,0 +1,135 @@
+// Issue 55's training options end to end on a tiny scene: --reference is the old defaults bit for
+// bit, visible-set Adam resumes exactly, and --iterations auto stops at the same iteration
+// whether or not the run was interrupted.
+#include <gtest/gtest.h>
+
+#include "core/files/json_util.h"
+#include "method/run/gaussian_scene.h"
+#include "method/train/checkpoint.h"
+#include "method/train/trainer.h"
+#include "tests/testing.h"
+
+namespace hdr4d::method {
+namespace {
+namespace fs = std::filesystem;
+using hdr4d::testing::TempDir;
+
+// As trainer_test's SmallRun: densification, opacity resets and the colour schedule within a
+// few dozen iterations.
+TrainOptions TinyRun(const fs::path& scene, const fs::path& run, int iterations) {
+  TrainOptions o;
+  o.data = scene;
+  o.out = run;
+  o.seed = 5;
+  o.progress = false;
+  o.init.num_random_points = 400;
+  OptimizationOptions& opt = o.optimization;
+  opt.iterations = iterations;
+  opt.densify_from = 10;
+  opt.densification_interval = 10;
+  opt.densify_until = 50;
+  opt.opacity_reset_interval = 30;
+  opt.sh_increase_interval = 10;
+  opt.position_lr_max_steps = 60;
+  opt.densify_grad_threshold = 1e-5;
+  return o;
+}
+
+// Eight cameras at five times: a view sees part of the model (4D Gaussians outside its time).
+void MakeTinyScene(const fs::path& root) {
+  GaussianSceneOptions s;
+  s.size = 24;
+  s.num_gaussians = 12;
+  s.num_cameras = 4;
+  s.num_timestamps = 5;
+  MakeGaussianScene(s, root);
+}
+
+void ExpectSameState(const fs::path& a, const fs::path& b) {
+  const Checkpoint ca = LoadCheckpoint(a / "checkpoint.bin");
+  const Checkpoint cb = LoadCheckpoint(b / "checkpoint.bin");
+  EXPECT_EQ(ca.model.xyz, cb.model.xyz);
+  EXPECT_EQ(ca.model.opacity_logit, cb.model.opacity_logit);
+  EXPECT_EQ(ca.model.t, cb.model.t);
+  EXPECT_EQ(ca.model.color_dc, cb.model.color_dc);
+  EXPECT_EQ(ca.model.color_rest, cb.model.color_rest);
+  EXPECT_TRUE(ca.adam_state == cb.adam_state);
+  EXPECT_EQ(ca.extra_floats, cb.extra_floats);
+}
+
+TEST(TrainerSpeedOptions, ReferenceIsTheOldDefaultsBitForBit) {
+  TempDir dir;
+  MakeTinyScene(dir / "scene");
+  TrainOptions reference = TinyRun(dir / "scene", dir / "reference", 60);
+  reference.reference = true;
+  TrainOptions old = TinyRun(dir / "scene", dir / "old", 60);
+  old.optimization.visible_adam = false;  // the defaults before issue 55, set explicitly
+  old.optimization.stop_window = 0;
+  const TrainSummary a = Train(reference);
+  const TrainSummary b = Train(old);
+  EXPECT_EQ(a.loss_curve, b.loss_curve);
+  ExpectSameState(dir / "reference", dir / "old");
+  EXPECT_EQ(ReadJsonFile(dir / "reference" / "config.json")["reference"], true);
+  // The dense optimiser's state is the format of before (version 1), byte for byte.
+  const Checkpoint c = LoadCheckpoint(dir / "reference" / "checkpoint.bin");
+  ASSERT_GT(c.adam_state.size(), 12u);
+  EXPECT_EQ(c.adam_state[8], 1);
+  EXPECT_FALSE(ReadJsonFile(dir / "reference" / "results.json").contains("stopped"));
+}
+
+TEST(TrainerSpeedOptions, VisibleAdamDiffersFromDenseAndResumesExactly) {
+  TempDir dir;
+  MakeTinyScene(dir / "scene");
+  auto run = [&](const char* name, int iterations, bool visible) {
+    TrainOptions o = TinyRun(dir / "scene", dir / name, iterations);
+    o.optimization.visible_adam = visible;
+    return o;
+  };
+  const TrainSummary dense = Train(run("dense", 60, false));
+  const TrainSummary straight = Train(run("straight", 60, true));
+  EXPECT_NE(dense.loss_curve, straight.loss_curve) << "no Gaussian was ever unseen";
+  Train(run("split", 37, true));  // between densifications, rows behind their step
+  TrainOptions rest = run("split", 60, true);
+  rest.resume = true;
+  const TrainSummary resumed = Train(rest);
+  EXPECT_EQ(resumed.loss_curve, straight.loss_curve);
+  ExpectSameState(dir / "split", dir / "straight");
+}
+
+TEST(TrainerSpeedOptions, IterationsAutoStopsDeterministicallyAndResumes) {
+  TempDir dir;
+  MakeTinyScene(dir / "scene");
+  auto run = [&](const char* name, int iterations) {
+    TrainOptions o = TinyRun(dir / "scene", dir / name, iterations);
+    o.optimization.stop_window = 10;
+    o.optimization.stop_tolerance = 0.9;  // any window not 90% better than the one before
+    return o;
+  };
+  const TrainSummary a = Train(run("a", 400));
+  // Both windows after densify_until (50): the first check is at 70.
+  EXPECT_EQ(a.iterations, 70);
+  EXPECT_TRUE(a.stopped_flat);
+  EXPECT_FALSE(a.stopped_by_time);
+  const nlohmann::json stopped = ReadJsonFile(dir / "a" / "results.json")["stopped"];
+  EXPECT_EQ(stopped["reason"], "loss_plateau");
+  EXPECT_EQ(stopped["iteration"], 70);
+  EXPECT_EQ(stopped["window"], 10);
+  EXPECT_LT(stopped["improvement"].get<double>(), 0.9);
+  const TrainSummary b = Train(run("b", 400));
+  EXPECT_EQ(b.loss_curve, a.loss_curve);
+  // Interrupted at 65 and resumed: the same stop, the same state.
+  Train(run("c", 65));
+  TrainOptions rest = run("c", 400);
+  rest.resume = true;
+  const TrainSummary c = Train(rest);
+  EXPECT_EQ(c.iterations, 70);
+  EXPECT_EQ(c.loss_curve, a.loss_curve);
+  ExpectSameState(dir / "c", dir / "a");
+  // A run that stopped is finished: resumed again, nothing is trained.
+  const TrainSummary again = Train(rest);
+  EXPECT_EQ(again.iterations, 70);
+  EXPECT_TRUE(again.stopped_flat);
+}
+
+}  // namespace
+}  // namespace hdr4d::method
