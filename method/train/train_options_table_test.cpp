@@ -42,8 +42,9 @@ TEST(TrainOptionsTable, RecordsTheKeysRunsHaveAlwaysRecorded) {
   std::set<std::string> keys;
   Leaves(Recordable().ToJson(), "", &keys);
   const std::set<std::string> expected = {
-      "data", "seed", "threads", "resolution", "test_every", "checkpoint_every", "max_seconds",
-      "background", "learn_background", "init.num_random_points", "init.random_half_extent",
+      "data", "exposure_unit", "seed", "threads", "resolution", "test_every", "checkpoint_every",
+      "max_seconds", "background", "learn_background", "init.num_random_points",
+      "init.random_half_extent",
       "init.initial_opacity", "optimization.iterations", "optimization.batch_size",
       "optimization.position_lr_init", "optimization.position_lr_final",
       "optimization.position_lr_max_steps", "optimization.t_lr_init", "optimization.f_dc_lr",
@@ -156,7 +157,7 @@ TEST(TrainOptionsTable, EveryFlagIsOneRowWithHelpAndItsValues) {
     // A default the help shows is one the option accepts.
     if (row.show_default) EXPECT_EQ(row.Check(row.get(defaults)), "") << row.flag;
   }
-  EXPECT_EQ(flags.size(), 36u);
+  EXPECT_EQ(flags.size(), 37u);  // --exposure-unit the 37th (issue 56)
   EXPECT_EQ(FindTrainOption("--no-learn-background"), FindTrainOption("learn_background"));
 }
 
