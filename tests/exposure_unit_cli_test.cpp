@@ -137,8 +137,9 @@ TEST_F(ExposureUnitCli, SceneCommandsTakeTheUnit) {
 
 TEST_F(ExposureUnitCli, GridMethodRecordsAndRendersInTheUnit) {
   const std::string run = (dir_ / "hex").string();
-  auto r = RunHdr4d("train --method hexplane --data " + stops_ + " --out " + run +
-                    " --exposure-unit stops --iterations 3 --threads 1");
+  auto r = RunHdr4d(
+      "train --method hexplane --data " + stops_ + " --out " + run +
+      " --exposure-unit stops --iterations 3 --threads 1 --rays 256 --grid-voxels 4096 8192");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(ReadJsonFile(fs::path(run) / "config.json")["exposure_unit"], "stops");
   r = RunHdr4d("render --run " + run + " --split test");
