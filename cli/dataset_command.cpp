@@ -22,7 +22,7 @@ struct CheckArgs {
   bool json = false;
   bool full = false;
   bool reference_time = false;
-  std::string exposure_unit = "seconds";
+  ExposureUnit exposure_unit = ExposureUnit::kSeconds;
 };
 
 int RunCheck(const CheckArgs& args) {
@@ -30,7 +30,7 @@ int RunCheck(const CheckArgs& args) {
   options.image_check = args.full ? ImageCheck::kFull : ImageCheck::kHeaders;
   options.time_normalisation =
       args.reference_time ? TimeNormalisation::kPerFileReference : TimeNormalisation::kGlobal;
-  options.exposure_unit = ParseExposureUnit(args.exposure_unit, "dataset check");
+  options.exposure_unit = args.exposure_unit;
   options.show_progress = true;
   const DatasetReport report = CheckDataset(args.dir, options);
   const std::string out =
@@ -44,11 +44,13 @@ struct PreviewArgs {
   std::string dir;
   std::string out;
   PreviewOptions options;
+  ExposureUnit exposure_unit = ExposureUnit::kSeconds;
 };
 
 void RunPreview(const PreviewArgs& args) {
-  const Dataset dataset =
-      LoadDataset(args.dir, {.image_check = ImageCheck::kHeaders, .require_test = false});
+  const Dataset dataset = LoadDataset(args.dir, {.image_check = ImageCheck::kHeaders,
+                                                 .exposure_unit = args.exposure_unit,
+                                                 .require_test = false});
   const Preview preview = MakeDatasetPreview(dataset, args.options);
   WriteImage(args.out, preview.sheet);
   fmt::print("{}", DescribePreview(preview, args.out));
@@ -75,11 +77,7 @@ void AddCheck(CLI::App* dataset) {
   check->add_flag("--reference-time", args->reference_time,
                   "Normalise times per JSON file by its own maximum, as the reference code does "
                   "(default: by the maximum over all splits)");
-  check->add_option("--exposure-unit", args->exposure_unit,
-                    "How the frames' `exposures` numbers are read: seconds (HDR-4DGS) or stops "
-                    "(log2, seconds = 2**value, as HDR-HexPlane's JSON gives them)")
-      ->check(OneOf({"seconds", "stops"}))
-      ->capture_default_str();
+  AddExposureUnitOption(check, &args->exposure_unit);
   check->callback([args] {
     const int code = RunCheck(*args);
     if (code != 0) throw CLI::RuntimeError(code);
@@ -110,6 +108,7 @@ void AddPreview(CLI::App* dataset) {
                    "Timestamps shown, evenly sampled")
       ->check(Integer(1, 1000))
       ->capture_default_str();
+  AddExposureUnitOption(preview, &preview_args->exposure_unit);
   preview->callback([preview_args] { RunPreview(*preview_args); });
 }
 

@@ -23,6 +23,7 @@ struct EvalOptions {
   bool json = false;
   std::string out;
   std::string data;
+  ExposureUnit exposure_unit = ExposureUnit::kSeconds;  // of --data
   bool ldr_fit = false;
   int resolution = 1;
 };
@@ -101,6 +102,7 @@ void AddEvalCommand(CLI::App& app) {
                   "Scene of the HDR ground truth: its LDR brackets decide the measured pixels of "
                   "the aligned HDR metrics")
       ->check(Text("a dataset folder"));
+  AddExposureUnitOption(sub, &options->exposure_unit);
   sub->add_flag("--ldr-fit", options->ldr_fit,
                 "With --data: the prediction folder's LDR images are renders of the brackets at "
                 "their own exposures (hdr4d render without --exposure); adds the HDR's shape "
@@ -120,7 +122,7 @@ void AddEvalCommand(CLI::App& app) {
     if (options->ldr_fit && options->data.empty())
       Fail("eval: --ldr-fit needs --data SCENE (the LDR brackets the renders are compared with)");
     EvalBrackets brackets;
-    if (!options->data.empty()) brackets = DatasetBrackets(options->data);
+    if (!options->data.empty()) brackets = DatasetBrackets(options->data, options->exposure_unit);
     const nlohmann::json result =
         EvaluatePaths(options->pred, options->gt, options->data.empty() ? nullptr : &brackets,
                       options->resolution, options->ldr_fit);

@@ -107,4 +107,15 @@ CLI::Validator OneOf(const std::vector<std::string>& names) {
       fmt::format("{{{}}}", fmt::join(names, ",")), "one-of");
 }
 
+CLI::Option* AddExposureUnitOption(CLI::App* cmd, ExposureUnit* unit) {
+  return cmd
+      ->add_option_function<std::string>(
+          "--exposure-unit",
+          [unit](const std::string& name) { *unit = ParseExposureUnit(name, "--exposure-unit"); },
+          kExposureUnitHelp)
+      ->check(
+          OneOf({ExposureUnitName(ExposureUnit::kSeconds), ExposureUnitName(ExposureUnit::kStops)}))
+      ->default_str(ExposureUnitName(*unit));
+}
+
 }  // namespace hdr4d::cli

@@ -6,11 +6,11 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
-
 #include <cstdint>
 #include <limits>
 #include <string>
 
+#include "core/dataset/dataset.h"
 #include "core/util/value_range.h"
 
 namespace hdr4d::cli {
@@ -32,5 +32,8 @@ CLI::Validator InRange(const ValueRange& range);
 CLI::Validator Text(const std::string& what);
 // One of `names`.
 CLI::Validator OneOf(const std::vector<std::string>& names);
+// --exposure-unit seconds|stops on a command that reads a scene, setting `unit` (which keeps its
+// value when the flag is not given): the same flag, help and check on every such command.
+CLI::Option* AddExposureUnitOption(CLI::App* cmd, ExposureUnit* unit);
 
 }  // namespace hdr4d::cli

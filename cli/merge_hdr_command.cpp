@@ -26,6 +26,7 @@ void AddMergeHdrCommand(CLI::App& app) {
   cmd->add_option("--split", options->split, "train, test, val or all")
       ->check(OneOf({"train", "test", "val", "all"}))
       ->capture_default_str();
+  AddExposureUnitOption(cmd, &options->exposure_unit);
   cmd->callback([options, data, out] {
     const int n = MergeDatasetExposures(*data, *out, *options);
     fmt::print("merge-hdr: wrote {} HDR images to {}\n", n, *out);

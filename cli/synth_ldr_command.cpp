@@ -34,6 +34,8 @@ struct SynthLdrArgs {
   bool overwrite = false;
   double gain_drift = 0;
   CameraPipelineOptions pipeline;
+  ExposureUnit exposure_unit = ExposureUnit::kSeconds;  // of --data's scene
+  bool exposure_unit_given = false;  // refused for one image (its --exposure is in seconds)
 };
 
 void Run(const SynthLdrArgs& a) {
@@ -41,14 +43,14 @@ void Run(const SynthLdrArgs& a) {
   if (!a.data.empty()) {
     if (!a.input.empty() || !a.output.empty())
       Fail("synth-ldr: give either --data DIR or IN --out OUT, not both");
-    DatasetSynthesisOptions options{
-        .crf = a.crf,
-        .noise = noise,
-        .bits = a.bits,
-        .overwrite = !a.keep_existing,
-        .replace_foreign = a.overwrite,
-        .gain_drift = a.gain_drift,
-        .pipeline = a.pipeline};
+    DatasetSynthesisOptions options{.crf = a.crf,
+                                    .noise = noise,
+                                    .bits = a.bits,
+                                    .overwrite = !a.keep_existing,
+                                    .replace_foreign = a.overwrite,
+                                    .gain_drift = a.gain_drift,
+                                    .pipeline = a.pipeline,
+                                    .exposure_unit = a.exposure_unit};
     options.pipeline.seed = a.seed;
     const int n = SynthesizeDatasetLdr(a.data, options);
     fmt::print(
@@ -58,6 +60,10 @@ void Run(const SynthLdrArgs& a) {
   }
   if (a.input.empty() || a.output.empty())
     Fail("synth-ldr: give IN and --out OUT, or --data DIR (see --help)");
+  if (a.exposure_unit_given)
+    Fail(
+        "synth-ldr: --exposure-unit reads a scene's exposures (--data DIR); one image's "
+        "--exposure is in seconds");
   if (!a.pipeline.IsIdentity())
     Fail("synth-ldr: --pipeline and --vignetting need --data DIR (a pipeline plans over the "
          "whole sequence)");
@@ -103,6 +109,7 @@ void AddSynthLdrCommand(CLI::App& app) {
       ->check(Text("an output image"));
   cmd->add_option("--data", args->data, "Dataset folder: synthesise every frame's LDR image")
       ->check(Text("a scene folder"));
+  CLI::Option* unit = AddExposureUnitOption(cmd, &args->exposure_unit);
   cmd->add_option("--exposure,-e", args->exposure, "Exposure time in seconds (single-image mode)")
       ->check(PositiveReal())
       ->capture_default_str();
@@ -134,8 +141,9 @@ void AddSynthLdrCommand(CLI::App& app) {
       ->check(Real(-20, 20))
       ->capture_default_str();
   auto pipeline = std::make_shared<PipelineFlags>(cmd, args->pipeline);
-  cmd->callback([args, pipeline] {
+  cmd->callback([args, pipeline, unit] {
     pipeline->Check();
+    args->exposure_unit_given = unit->count() > 0;
     Run(*args);
   });
 }

@@ -69,6 +69,9 @@ bool TrainHexPlaneIfAsked(CLI::App* cmd, std::string method, hp::HexPlaneTrainOp
   if (given("--max-seconds")) o.max_seconds = cmd->get_option("--max-seconds")->as<double>();
   if (given("--background")) o.background = cmd->get_option("--background")->as<float>();
   if (given("--supervision")) o.supervision = cmd->get_option("--supervision")->as<std::string>();
+  if (given("--exposure-unit"))
+    o.exposure_unit =
+        ParseExposureUnit(cmd->get_option("--exposure-unit")->as<std::string>(), "train");
   if (given("--iterations")) o.iterations = cmd->get_option("--iterations")->as<int>();
   if (given("--seed")) o.seed = cmd->get_option("--seed")->as<std::int64_t>();
   if (given("--hdr-weight")) o.hdr_weight = cmd->get_option("--hdr-weight")->as<float>();

@@ -45,7 +45,9 @@ LoadedHexPlaneRun LoadHexPlaneRun(const fs::path& run, int resolution_override) 
                      ? resolution_override
                      : static_cast<int>(config.IntOr("resolution", 1, 1, 1 << 16));
   r.dataset = LoadDataset(config["data"].String(),
-                          {.image_check = ImageCheck::kNone, .require_test = false});
+                          {.image_check = ImageCheck::kNone,
+                           .exposure_unit = RecordedExposureUnit(j, config_path.string()),
+                           .require_test = false});
   r.model = HexPlaneModel::Load(run / "checkpoint.bin", r.config);
   return r;
 }

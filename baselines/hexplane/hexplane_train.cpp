@@ -112,6 +112,11 @@ void HexPlaneTraining::ReadRunToResume() {
   if (!o_.time_grid_final) o_.time_grid_final = run.time_grid_final;
   if (!o_.seed) o_.seed = std::int64_t(run.seed);
   if (!o_.hdr_weight) o_.hdr_weight = run.hdr_weight;
+  const ExposureUnit unit = RecordedExposureUnit(stored_, config.string());
+  if (o_.exposure_unit && *o_.exposure_unit != unit)
+    Fail("train: --resume: --exposure-unit {} is not the run's ({}: {})",
+         ExposureUnitName(*o_.exposure_unit), config.string(), ExposureUnitName(unit));
+  o_.exposure_unit = unit;
 }
 
 // A resumed run trains with its own settings: any given one that resolves differently is refused.
@@ -134,7 +139,8 @@ void HexPlaneTraining::SetUp() {
   if (!o_.resolution) o_.resolution = 1;
   if (!o_.background) o_.background = 0.0f;
   if (*o_.resolution < 1) Fail("train: resolution {} must be >= 1", *o_.resolution);
-  dataset_ = LoadDataset(o_.data);
+  if (!o_.exposure_unit) o_.exposure_unit = ExposureUnit::kSeconds;
+  dataset_ = LoadDataset(o_.data, {.exposure_unit = *o_.exposure_unit});
   bool has_hdr = !dataset_.train.empty();
   for (const Frame& f : dataset_.train) has_hdr = has_hdr && f.hdr_path.has_value();
   c_ = HexPlanePreset(o_.method, o_.supervision, has_hdr);
@@ -198,6 +204,7 @@ void HexPlaneTraining::Restore() {
 nlohmann::json HexPlaneTraining::RunConfig() const {
   return {{"method", c_.method},
           {"data", std::filesystem::absolute(o_.data).string()},
+          {"exposure_unit", ExposureUnitName(o_.exposure_unit.value_or(ExposureUnit::kSeconds))},
           {"resolution", *o_.resolution},
           {"background", c_.background},
           {"hdr", {{"method", c_.method}}},

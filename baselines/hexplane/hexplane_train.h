@@ -8,12 +8,16 @@
 #include <optional>
 #include <string>
 
+#include "core/dataset/dataset.h"
+
 namespace hdr4d::baselines::hexplane {
 
 struct HexPlaneTrainOptions {
   std::filesystem::path data, out;
   std::string method = "hexplane";
   std::string supervision = "auto";  // auto, ldr, hdr, ldr+hdr
+  // How the scene's `exposures` are read: unset, seconds (a resumed run: its own); recorded.
+  std::optional<ExposureUnit> exposure_unit;
   int threads = 0;
   std::optional<int> resolution;   // 1 unless resumed (then the run's)
   std::optional<float> background;  // 0 unless resumed (then the run's)

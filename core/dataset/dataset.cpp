@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cctype>
 #include <iterator>
+#include <nlohmann/json.hpp>
 #include <string_view>
 
 #include "core/util/error.h"
@@ -43,6 +44,22 @@ ExposureUnit ParseExposureUnit(const std::string& name, const char* what) {
     if (name == ExposureUnitName(unit)) return unit;
   }
   Fail("{}: unknown exposure unit '{}' (use seconds or stops)", what, name);
+}
+
+const char* const kExposureUnitHelp =
+    "How the scene's `exposures` numbers are read: seconds (HDR-4DGS) or stops (log2, "
+    "seconds = 2**value, as HDR-HexPlane's JSON gives them)";
+
+ExposureUnit RecordedExposureUnit(const nlohmann::json& config, const std::string& config_path) {
+  if (!config.is_object()) return ExposureUnit::kSeconds;  // the caller reports the file
+  const auto it = config.find("exposure_unit");
+  if (it == config.end()) return ExposureUnit::kSeconds;  // a run from before the key
+  if (it->is_string()) {
+    for (ExposureUnit unit : {ExposureUnit::kSeconds, ExposureUnit::kStops}) {
+      if (it->get<std::string>() == ExposureUnitName(unit)) return unit;
+    }
+  }
+  Fail("{}: exposure_unit: expected \"seconds\" or \"stops\", got {}", config_path, it->dump());
 }
 
 std::vector<const Frame*> Dataset::AllFrames() const {

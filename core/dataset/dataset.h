@@ -38,6 +38,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -66,6 +67,14 @@ inline constexpr double kMaxStops = 60;        // |stops| read at most: 2^60 s s
 const char* ExposureUnitName(ExposureUnit unit);  // "seconds", "stops"
 // Throws hdr4d::Error naming `what` (the command) for anything but seconds or stops.
 ExposureUnit ParseExposureUnit(const std::string& name, const char* what);
+// The help of --exposure-unit, one text for every command that reads a scene (cli/flags.h,
+// train's option table).
+extern const char* const kExposureUnitHelp;
+// The unit a run folder's config.json records its scene's exposures in (key "exposure_unit",
+// written by train; a run from before the key: seconds), so that render, view, export and
+// --resume read the scene as training did. Throws hdr4d::Error naming `config_path` and the
+// key for a value that is not "seconds" or "stops".
+ExposureUnit RecordedExposureUnit(const nlohmann::json& config, const std::string& config_path);
 
 struct Frame {
   Split split = Split::kTrain;

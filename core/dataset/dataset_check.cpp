@@ -411,9 +411,11 @@ Dataset LoadDataset(const fs::path& root, const DatasetLoadOptions& options) {
   // One line, as every user-facing error: the first problem, and where to see the rest.
   std::string message = report.problems.front().ToString();
   if (report.problems.size() > 1) {
-    message += fmt::format(" (and {} more problem{}: run `hdr4d dataset check {}` for all)",
-                           report.problems.size() - 1, report.problems.size() == 2 ? "" : "s",
-                           root.string());
+    message +=
+        fmt::format(" (and {} more problem{}: run `hdr4d dataset check {}{}` for all)",
+                    report.problems.size() - 1, report.problems.size() == 2 ? "" : "s",
+                    options.exposure_unit == ExposureUnit::kStops ? "--exposure-unit stops " : "",
+                    root.string());
   }
   throw Error(message);
 }

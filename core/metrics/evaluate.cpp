@@ -303,8 +303,9 @@ const std::vector<std::string>& KnownKeys() {
 
 }  // namespace
 
-EvalBrackets DatasetBrackets(const fs::path& scene) {
-  const Dataset dataset = LoadDataset(scene, {.image_check = ImageCheck::kNone});
+EvalBrackets DatasetBrackets(const fs::path& scene, ExposureUnit unit) {
+  const Dataset dataset =
+      LoadDataset(scene, {.image_check = ImageCheck::kNone, .exposure_unit = unit});
   EvalBrackets out;
   for (const Frame* f : dataset.AllFrames()) {
     if (f->hdr_path) out[fs::weakly_canonical(*f->hdr_path).string()].push_back(f->image_path);

@@ -41,6 +41,8 @@
 #include <string>
 #include <vector>
 
+#include "core/dataset/dataset.h"
+
 namespace hdr4d {
 
 // The LDR brackets of HDR ground-truth images: ground-truth resolved path (or, in a hand-made
@@ -49,7 +51,9 @@ using EvalBrackets = std::map<std::string, std::vector<std::filesystem::path>>;
 
 // The brackets of every frame of the dataset at `scene` with an exr_file_path (all splits),
 // keyed by the HDR file's resolved path. Throws hdr4d::Error when the dataset cannot be read.
-EvalBrackets DatasetBrackets(const std::filesystem::path& scene);
+// `unit`: how the scene's exposures are read (its --exposure-unit).
+EvalBrackets DatasetBrackets(const std::filesystem::path& scene,
+                             ExposureUnit unit = ExposureUnit::kSeconds);
 
 // One pair of image files: {"name": <gt file name>, <metric>: <value or null>, ...}. Throws
 // hdr4d::Error naming both files for a missing/unreadable image, an LDR file paired with an HDR

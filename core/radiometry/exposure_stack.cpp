@@ -201,8 +201,9 @@ void RequireWritableFolders(const std::vector<fs::path>& outputs) {
 int SynthesizeDatasetLdr(const fs::path& root, const DatasetSynthesisOptions& options) {
   options.Validate();
   const std::unique_ptr<Crf> crf = ParseCrf(options.crf);
-  const Dataset dataset =
-      LoadDataset(root, {.image_check = ImageCheck::kNone, .require_test = false});
+  const Dataset dataset = LoadDataset(root, {.image_check = ImageCheck::kNone,
+                                             .exposure_unit = options.exposure_unit,
+                                             .require_test = false});
   const std::vector<const Frame*> frames = FramesWithHdr(dataset, root);
   // Writing a dataset's LDR images is this command's job: the output guard lets exactly these
   // files through (core/files/output_guard.h), nothing else in the dataset's folders.
@@ -323,8 +324,9 @@ int MergeDatasetExposures(const fs::path& root, const fs::path& out, const Merge
   const std::vector<std::unique_ptr<Crf>> crfs = ParseChannelCrfs(crf_spec);
   for (const auto& crf : crfs)
     if (!crf->Invertible()) Fail("merge-hdr: the camera response '{}' is not invertible", crf_spec);
-  const Dataset dataset =
-      LoadDataset(root, {.image_check = ImageCheck::kHeaders, .require_test = false});
+  const Dataset dataset = LoadDataset(root, {.image_check = ImageCheck::kHeaders,
+                                             .exposure_unit = options.exposure_unit,
+                                             .require_test = false});
 
   std::map<fs::path, std::vector<const Frame*>> by_hdr;
   for (const Frame* f : FramesOfSplit(dataset, options.split)) {

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <string>
 
+#include "core/dataset/dataset.h"
 #include "core/radiometry/camera_pipeline.h"
 #include "core/radiometry/crf.h"
 #include "core/radiometry/ldr_synthesis.h"
@@ -28,6 +29,7 @@ struct DatasetSynthesisOptions {
   // The camera pipeline (core/radiometry/camera_pipeline.h); the default, fixed, is the plain
   // response above. Recorded in synthesis.json under "pipeline" unless it is the identity.
   CameraPipelineOptions pipeline;
+  ExposureUnit exposure_unit = ExposureUnit::kSeconds;  // how the scene's exposures are read
   void Validate() const;
 };
 
@@ -39,6 +41,7 @@ int SynthesizeDatasetLdr(const std::filesystem::path& root, const DatasetSynthes
 struct MergeOptions {
   std::string crf;  // empty: the one recorded in <root>/synthesis.json
   std::string split = "test";
+  ExposureUnit exposure_unit = ExposureUnit::kSeconds;  // how the scene's exposures are read
   void Validate() const;
 };
 

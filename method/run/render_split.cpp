@@ -68,7 +68,9 @@ LoadedRun LoadRun(const fs::path& run, int resolution_override) {
   // Typed reads name the file and the key of a value that is missing or of the wrong type.
   const JsonField config(r.config, config_path.string());
   r.dataset = LoadDataset(config["data"].String(),
-                          {.image_check = ImageCheck::kNone, .require_test = false});
+                          {.image_check = ImageCheck::kNone,
+                           .exposure_unit = RecordedExposureUnit(r.config, config_path.string()),
+                           .require_test = false});
   // A run trained at --resolution R renders every split at it (runs from before: 1), unless
   // the caller asks for another.
   const int run_resolution = static_cast<int>(config.IntOr("resolution", 1, 1, 1 << 16));

@@ -9,6 +9,7 @@
 #include <limits>
 #include <type_traits>
 
+#include "core/dataset/dataset.h"
 #include "core/util/error.h"
 #include "method/tonemap/tone_mapper_registry.h"
 
@@ -316,6 +317,13 @@ std::vector<TrainOption> RunRows() {
       Row("data", DataAccess())
           .Flag("--data", "Scene folder (with --resume: the run's own by default)")
           .Names("a scene folder"),
+      Row("exposure_unit", Top(&TrainOptions::exposure_unit))
+          .Flag("--exposure-unit", kExposureUnitHelp)
+          .Choices(std::vector<std::string>{ExposureUnitName(ExposureUnit::kSeconds),
+                                            ExposureUnitName(ExposureUnit::kStops)})
+          .ShowDefault()
+          .Config("exposure_unit")
+          .IfMissing(ExposureUnitName(ExposureUnit::kSeconds)),  // runs from before: seconds
       Row("optimization.iterations", IterationsAccess())
           .Flag("--iterations",
                 "Training iterations. The schedules (densification window, position "

@@ -42,8 +42,9 @@ TEST(TrainOptionsTable, RecordsTheKeysRunsHaveAlwaysRecorded) {
   std::set<std::string> keys;
   Leaves(Recordable().ToJson(), "", &keys);
   const std::set<std::string> expected = {
-      "data", "seed", "threads", "resolution", "test_every", "checkpoint_every", "max_seconds",
-      "background", "learn_background", "init.num_random_points", "init.random_half_extent",
+      "data", "exposure_unit", "seed", "threads", "resolution", "test_every", "checkpoint_every",
+      "max_seconds", "background", "learn_background", "init.num_random_points",
+      "init.random_half_extent",
       "init.initial_opacity", "optimization.iterations", "optimization.batch_size",
       "optimization.position_lr_init", "optimization.position_lr_final",
       "optimization.position_lr_max_steps", "optimization.t_lr_init", "optimization.f_dc_lr",
@@ -168,7 +169,7 @@ TEST(TrainOptionsTable, EveryFlagIsOneRowWithHelpAndItsValues) {
     // A default the help shows is one the option accepts.
     if (row.show_default) EXPECT_EQ(row.Check(row.get(defaults)), "") << row.flag;
   }
-  EXPECT_EQ(flags.size(), 43u);  // 36 + issue 55's four + issue 52's three --camera-correction flags
+  EXPECT_EQ(flags.size(), 44u);  // 36 + issue 55's four + issue 52's three + issue 56's --exposure-unit
   EXPECT_EQ(FindTrainOption("--no-learn-background"), FindTrainOption("learn_background"));
 }
 

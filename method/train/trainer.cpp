@@ -267,7 +267,9 @@ class TrainingRun {
 void TrainingRun::SetUp() {
   if (options_.resume) CheckGivenAgainstSaved();
   else RequireFreshRunFolder(options_.out, options_.overwrite);  // before the scene is read
-  dataset_.emplace(LoadDataset(options_.data, {.image_check = ImageCheck::kHeaders}));
+  dataset_.emplace(LoadDataset(
+      options_.data, {.image_check = ImageCheck::kHeaders,
+                      .exposure_unit = ParseExposureUnit(options_.exposure_unit, "train")}));
   data_record_ = RecordDataset(*dataset_);
   if (options_.resume) CheckDataUnchanged();
   if (!options_.resume && dataset_->point_cloud_path) {  // before any image is decoded

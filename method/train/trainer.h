@@ -18,6 +18,9 @@ namespace hdr4d::method {
 
 struct TrainOptions {
   std::filesystem::path data;  // scene folder
+  // How the scene's `exposures` are read ("seconds" or "stops", core/dataset/dataset.h);
+  // recorded, so render and --resume read the scene the same way.
+  std::string exposure_unit = "seconds";
   std::filesystem::path out;   // run folder
   OptimizationOptions optimization;
   InitOptions init;  // seed, random point count, ...
