@@ -13,6 +13,7 @@
 #include "method/run/render_split.h"
 #include "method/train/checkpoint.h"
 #include "method/train/correction_cameras.h"
+#include "method/train/tiny_run_test_util.h"
 #include "method/train/trainer.h"
 #include "tests/testing.h"
 
@@ -44,31 +45,16 @@ TEST(CorrectionCameras, IdsThenPosesAndOtherCamerasGetNone) {
 }
 
 void MakeScene(const fs::path& root) {
-  DemoSceneOptions s;
-  s.width = s.height = 16;
-  s.num_timestamps = 3;
-  s.num_cameras = 3;  // two training cameras, the last one held out
-  s.samples_per_axis = 1;
-  MakeDemoScene(s, root);
-  DatasetSynthesisOptions ldr;
-  ldr.noise.seed = 1;
-  SynthesizeDatasetLdr(root, ldr);
+  train_testing::MakeTinyHdrScene(root, 16);  // two training cameras, the last one held out
 }
 
 TrainOptions CorrectedRun(const fs::path& scene, const fs::path& run, int iterations) {
-  TrainOptions o;
-  o.data = scene;
-  o.out = run;
-  o.seed = 5;
-  o.progress = false;
+  TrainOptions o = train_testing::TinyRunOptions(scene, run, iterations, /*seed=*/5);
   o.init.num_random_points = 300;
   OptimizationOptions& opt = o.optimization;
-  opt.iterations = iterations;
-  opt.densify_from = 10;
-  opt.densification_interval = 10;
   opt.densify_until = 40;
-  opt.sh_increase_interval = 10;
-  opt.position_lr_max_steps = 60;
+  opt.opacity_reset_interval = OptimizationOptions{}.opacity_reset_interval;  // the defaults
+  opt.densify_grad_threshold = OptimizationOptions{}.densify_grad_threshold;
   o.hdr.method = "hdr4dgs";
   o.hdr.color_mode = ColorMode::kLogHdr;
   o.hdr.tone_mapper = ToneMapperConfig{};

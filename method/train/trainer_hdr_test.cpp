@@ -24,6 +24,7 @@
 #include "method/train/checkpoint.h"
 #include "method/train/hdr_head_fit.h"
 #include "method/train/hdr_loss.h"
+#include "method/train/tiny_run_test_util.h"
 #include "method/train/train_views.h"
 #include "method/train/trainer.h"
 #include "method/render/view_renderer.h"
@@ -36,33 +37,13 @@ using hdr4d::testing::ErrorOf;
 using hdr4d::testing::TempDir;
 
 void MakeHdrScene(const fs::path& root, int size = 24) {
-  DemoSceneOptions s;
-  s.width = s.height = size;
-  s.num_timestamps = 3;
-  s.num_cameras = 3;
-  s.samples_per_axis = 1;
-  MakeDemoScene(s, root);
-  DatasetSynthesisOptions ldr;
-  ldr.noise.seed = 1;
-  SynthesizeDatasetLdr(root, ldr);
+  train_testing::MakeTinyHdrScene(root, size);
 }
 
 TrainOptions HdrRun(const fs::path& scene, const fs::path& run, int iterations) {
-  TrainOptions o;
-  o.data = scene;
-  o.out = run;
-  o.seed = 5;
-  o.progress = false;
+  TrainOptions o = train_testing::TinyRunOptions(scene, run, iterations, /*seed=*/5);
   o.init.num_random_points = 300;
-  OptimizationOptions& opt = o.optimization;
-  opt.iterations = iterations;
-  opt.densify_from = 10;
-  opt.densification_interval = 10;
-  opt.densify_until = 40;
-  opt.opacity_reset_interval = 30;
-  opt.sh_increase_interval = 10;
-  opt.position_lr_max_steps = 60;
-  opt.densify_grad_threshold = 1e-5;
+  o.optimization.densify_until = 40;
   o.hdr.method = "hdr4dgs";
   o.hdr.color_mode = ColorMode::kLogHdr;
   o.hdr.tone_mapper = ToneMapperConfig{};

@@ -6,6 +6,7 @@
 #include "core/files/json_util.h"
 #include "method/run/gaussian_scene.h"
 #include "method/train/checkpoint.h"
+#include "method/train/tiny_run_test_util.h"
 #include "method/train/trainer.h"
 #include "tests/testing.h"
 
@@ -14,25 +15,9 @@ namespace {
 namespace fs = std::filesystem;
 using hdr4d::testing::TempDir;
 
-// As trainer_test's SmallRun: densification, opacity resets and the colour schedule within a
-// few dozen iterations.
+// As trainer_test's SmallRun, another seed.
 TrainOptions TinyRun(const fs::path& scene, const fs::path& run, int iterations) {
-  TrainOptions o;
-  o.data = scene;
-  o.out = run;
-  o.seed = 5;
-  o.progress = false;
-  o.init.num_random_points = 400;
-  OptimizationOptions& opt = o.optimization;
-  opt.iterations = iterations;
-  opt.densify_from = 10;
-  opt.densification_interval = 10;
-  opt.densify_until = 50;
-  opt.opacity_reset_interval = 30;
-  opt.sh_increase_interval = 10;
-  opt.position_lr_max_steps = 60;
-  opt.densify_grad_threshold = 1e-5;
-  return o;
+  return train_testing::TinyRunOptions(scene, run, iterations, /*seed=*/5);
 }
 
 // Eight cameras at five times: a view sees part of the model (4D Gaussians outside its time).

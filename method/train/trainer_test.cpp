@@ -6,6 +6,7 @@
 #include "core/files/json_util.h"
 #include "method/run/gaussian_scene.h"
 #include "method/train/checkpoint.h"
+#include "method/train/tiny_run_test_util.h"
 #include "tests/testing.h"
 
 namespace hdr4d::method {
@@ -17,22 +18,7 @@ using hdr4d::testing::TempDir;
 // A tiny known scene and options that reach densification, opacity reset and the SH schedule
 // within a few dozen iterations.
 TrainOptions SmallRun(const fs::path& scene, const fs::path& run, int iterations) {
-  TrainOptions o;
-  o.data = scene;
-  o.out = run;
-  o.seed = 3;
-  o.progress = false;
-  o.init.num_random_points = 400;
-  OptimizationOptions& opt = o.optimization;
-  opt.iterations = iterations;
-  opt.densify_from = 10;
-  opt.densification_interval = 10;
-  opt.densify_until = 50;
-  opt.opacity_reset_interval = 30;
-  opt.sh_increase_interval = 10;
-  opt.position_lr_max_steps = 60;
-  opt.densify_grad_threshold = 1e-5;  // densify often on this tiny scene
-  return o;
+  return train_testing::TinyRunOptions(scene, run, iterations, /*seed=*/3);
 }
 
 void MakeScene(const fs::path& root) {
