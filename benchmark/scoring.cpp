@@ -18,14 +18,6 @@ namespace {
 
 constexpr int kRegionGrid = 8;
 
-bool IsImageFile(const fs::path& p) {
-  std::string e = p.extension().string();
-  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return std::tolower(c); });
-  static const std::set<std::string> kExt = {".png", ".jpg", ".jpeg", ".exr", ".hdr",
-                                             ".tif", ".tiff", ".bmp", ".tga", ".webp"};
-  return kExt.count(e) > 0;
-}
-
 // Mean luminance of the region (fractions) of an image: linear luminance for HDR, luma of the
 // stored values for LDR.
 double RegionMean(const Image& image, const std::array<double, 4>& r) {
@@ -158,7 +150,7 @@ void RefuseExtraImages(const std::vector<Expected>& ldr,
   std::vector<std::string> extra;
   for (const auto& entry : fs::directory_iterator(renders)) {
     const std::string name = entry.path().filename().string();
-    if (entry.is_regular_file() && IsImageFile(entry.path()) && !expected_names.count(name))
+    if (entry.is_regular_file() && IsImagePath(entry.path()) && !expected_names.count(name))
       extra.push_back(name);
   }
   std::sort(extra.begin(), extra.end());

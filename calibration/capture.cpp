@@ -1,6 +1,5 @@
 #include "calibration/capture.h"
 
-#include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -10,6 +9,7 @@
 #include <regex>
 #include <set>
 
+#include "core/image/image_io.h"
 #include "core/util/error.h"
 #include "core/files/json_util.h"
 
@@ -18,19 +18,12 @@ namespace fs = std::filesystem;
 
 namespace {
 
-bool IsImageFile(const fs::path& path) {
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext == ".jpg" || ext == ".jpeg" || ext == ".png" || ext == ".tif" || ext == ".tiff" ||
-         ext == ".exr";
-}
-
 std::vector<fs::path> ImagesIn(const fs::path& folder) {
   std::vector<fs::path> images;
   std::error_code ec;
   if (!fs::is_directory(folder, ec)) return images;
   for (const auto& entry : fs::directory_iterator(folder))
-    if (entry.is_regular_file() && IsImageFile(entry.path())) images.push_back(entry.path());
+    if (entry.is_regular_file() && IsImagePath(entry.path())) images.push_back(entry.path());
   std::sort(images.begin(), images.end());
   return images;
 }
@@ -43,19 +36,6 @@ std::vector<std::string> SubfoldersOf(const fs::path& folder) {
     if (entry.is_directory()) names.push_back(entry.path().filename().string());
   std::sort(names.begin(), names.end());
   return names;
-}
-
-std::optional<double> ExifExposure(const fs::path& path) {
-  auto input = OIIO::ImageInput::open(path.string());
-  if (!input) Fail("{}: cannot read the image header ({})", path.string(), OIIO::geterror());
-  const OIIO::ParamValue* p = input->spec().find_attribute("ExposureTime");
-  std::optional<double> value;
-  if (p) {
-    const float t = input->spec().get_float_attribute("ExposureTime", 0.0f);
-    if (t > 0 && std::isfinite(t)) value = t;
-  }
-  input->close();
-  return value;
 }
 
 struct Sidecar {
@@ -110,7 +90,7 @@ double ExposureOf(const Sidecar& sidecar, const std::string& camera, const fs::p
   if (auto it = sidecar.per_image.find(camera + "/" + file.filename().string()); it != sidecar.per_image.end())
     return it->second;
   if (bracket < static_cast<int>(sidecar.brackets.size())) return sidecar.brackets[bracket];
-  if (auto exif = ExifExposure(file)) return *exif;
+  if (auto exif = ReadExposureTime(file)) return *exif;
   Fail("{}: camera {}, frame {}: no exposure time (no EXIF ExposureTime and no entry in "
        "exposures.json)", file.string(), camera, frame);
 }

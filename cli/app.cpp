@@ -31,9 +31,6 @@ void PrintError(const std::string& message) {
     }
   }
   while (!line.empty() && (line.back() == ' ' || line.back() == ';')) line.pop_back();
-  // Image libraries keep errors of their own and print them at exit unless they are fetched:
-  // fetch them now so that this line stays the last one.
-  DiscardImageLibraryErrors();
   std::fflush(stdout);
   std::fprintf(stderr, "hdr4d: error: %s\n", line.c_str());
   std::fflush(stderr);

@@ -7,7 +7,7 @@ PACKAGES=(
   # build
   cmake ninja-build g++ pkg-config lld
   # core: images, maths, parallelism, JSON, CLI, logging
-  libopenimageio-dev libopenexr-dev openimageio-tools libeigen3-dev libtbb-dev
+  libopenexr-dev libpng-dev libjpeg-dev libtiff-dev libexif-dev libeigen3-dev libtbb-dev
   nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
@@ -18,6 +18,9 @@ PACKAGES=(
   slurm-wlm munge
   # method: SIMD kernels with runtime dispatch
   libhwy-dev
+  # benchmark/proofs/hostile_sweep.sh makes its odd images with oiiotool (hdr4d itself does not
+  # link OpenImageIO: core/image/image_formats.h)
+  openimageio-tools
   # hdr4d render --video encodes MP4 with ffmpeg
   ffmpeg
   # hdr4d datagen renders its scenes with Blender (bpy scripts in datagen/blender; they use

@@ -58,7 +58,7 @@ void BM_ReadPng8(benchmark::State& state) {
 BENCHMARK(BM_ReadPng8)->Unit(benchmark::kMillisecond);
 
 // An 8-bit PNG of smooth content, as a render is (noise would be incompressible at any level),
-// at zlib level state.range(0) (-1: OpenImageIO's default, 6); the file size is a counter.
+// at zlib level state.range(0) (-1: libpng's default, 6); the file size is a counter.
 void BM_WritePng8(benchmark::State& state) {
   Image hdr(kSize, kSize, 3);
   for (int y = 0; y < kSize; ++y)

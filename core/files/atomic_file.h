@@ -31,7 +31,7 @@ class TrackedTemporary;  // core/files/temporary_cleanup.h
 void WriteFileAtomic(const std::filesystem::path& path,
                      const std::function<void(std::ostream&)>& write);
 
-// The same for writers that need a file name (OpenImageIO): `fill(tmp)` writes the complete file
+// The same for writers that need a file name (the image formats): `fill(tmp)` writes the complete file
 // at `tmp` (whose name ends in ".tmp-<pid>-<n>", not in the target's extension).
 void WriteFileAtomicAt(const std::filesystem::path& path,
                        const std::function<void(const std::filesystem::path& tmp)>& fill);

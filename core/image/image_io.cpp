@@ -1,7 +1,5 @@
 #include "core/image/image_io.h"
 
-#include <OpenImageIO/imageio.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -12,11 +10,12 @@
 #include "core/files/atomic_file.h"
 #include "core/util/error.h"
 #include "core/files/file_access.h"
+#include "core/image/image_formats.h"
 #include "core/image/png_structure.h"
 
 namespace hdr4d {
 namespace fs = std::filesystem;
-namespace OIIO = OIIO_NAMESPACE;
+namespace formats = image_formats;
 
 namespace {
 
@@ -25,75 +24,84 @@ std::string Lower(std::string s) {
   return s;
 }
 
-// OpenImageIO may pile several lines into one error; the first says what went wrong.
-std::string FirstLine(std::string text) {
-  const std::size_t end = text.find('\n');
-  if (end != std::string::npos) text.resize(end);
-  return text;
-}
-
-bool HasPngSignature(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  char magic[4] = {};
-  return in.read(magic, 4) && std::memcmp(magic, "\x89PNG", 4) == 0;
-}
-
+// Checks what every reader needs (a readable file, not a folder; a PNG structurally sound, since
+// libpng would print its own line for a broken one) and names the format by the first bytes.
 // `whole_file`: the pixels will be decoded, so a PNG is checked up to its last chunk.
-std::unique_ptr<OIIO::ImageInput> OpenInput(const fs::path& path, bool whole_file) {
+formats::FileFormat OpenInput(const fs::path& path, bool whole_file) {
   if (std::string problem = InputFileProblem(path); !problem.empty()) {
     if (ProbePath(path).kind == PathKind::kFolder) problem = "is a folder, expected an image";
     Fail("{}: {}", path.string(), problem);
   }
-  // libpng prints a line of its own on stderr for a broken file: such files never reach it.
-  if (HasPngSignature(path)) {
+  const formats::FileFormat format = formats::SniffFormat(path);
+  if (format == formats::FileFormat::kPng) {
     if (std::string problem = PngStructureProblem(path, whole_file); !problem.empty())
       Fail("{}: cannot read image: {}", path.string(), problem);
   }
-  // Colour channels as stored: OpenImageIO's default multiplies RGB by alpha on reading a PNG
-  // (issue 51, case 14), so eval scored a render with the right RGB at alpha 128 as 11 dB and
-  // training, compositing over the background afterwards, learned rgb x alpha^2.
-  OIIO::ImageSpec config;
-  config.attribute("oiio:UnassociatedAlpha", 1);
-  auto in = OIIO::ImageInput::open(path.string(), &config);
-  if (!in) {
-    std::string why = FirstLine(OIIO::geterror());
-    if (why.empty()) why = "not a readable image";
-    Fail("{}: cannot read image: {}", path.string(), why);
-  }
-  return in;
+  if (format == formats::FileFormat::kUnknown)
+    Fail("{}: cannot read image: not an EXR, PNG, JPEG, TIFF or Radiance HDR file",
+         path.string());
+  return format;
 }
 
 }  // namespace
+
+namespace image_formats {
+
+FileFormat SniffFormat(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  unsigned char m[10] = {};
+  in.read(reinterpret_cast<char*>(m), sizeof(m));
+  const std::streamsize n = in.gcount();
+  const auto starts = [&](const char* magic, std::size_t size) {
+    return n >= static_cast<std::streamsize>(size) && std::memcmp(m, magic, size) == 0;
+  };
+  if (starts("\x76\x2f\x31\x01", 4)) return FileFormat::kExr;
+  if (starts("\x89PNG", 4)) return FileFormat::kPng;
+  if (starts("\xff\xd8\xff", 3)) return FileFormat::kJpeg;
+  if (starts("II*\0", 4) || starts("MM\0*", 4)) return FileFormat::kTiff;
+  if (starts("#?RADIANCE", 10) || starts("#?RGBE", 6)) return FileFormat::kRgbe;
+  return FileFormat::kUnknown;
+}
+
+}  // namespace image_formats
 
 bool IsHdrPath(const fs::path& path) {
   const std::string ext = Lower(path.extension().string());
   return ext == ".exr" || ext == ".hdr";
 }
 
+bool IsImagePath(const fs::path& path) {
+  static const char* const kExtensions[] = {".png", ".jpg", ".jpeg", ".exr",
+                                            ".hdr", ".tif", ".tiff"};
+  const std::string ext = Lower(path.extension().string());
+  return std::any_of(std::begin(kExtensions), std::end(kExtensions),
+                     [&](const char* known) { return ext == known; });
+}
+
 ImageSpecInfo ReadImageSpec(const fs::path& path) {
-  auto in = OpenInput(path, /*whole_file=*/false);
-  const OIIO::ImageSpec& spec = in->spec();
-  return {spec.width, spec.height, spec.nchannels, spec.format.is_floating_point()};
+  formats::Header h;
+  switch (OpenInput(path, /*whole_file=*/false)) {
+    case formats::FileFormat::kExr: h = formats::ReadExrHeader(path); break;
+    case formats::FileFormat::kPng: h = formats::ReadPngHeader(path); break;
+    case formats::FileFormat::kJpeg: h = formats::ReadJpegHeader(path); break;
+    case formats::FileFormat::kTiff: h = formats::ReadTiffHeader(path); break;
+    case formats::FileFormat::kRgbe: h = formats::ReadRgbeHeader(path); break;
+    case formats::FileFormat::kUnknown: break;  // OpenInput refused it
+  }
+  return {h.width, h.height, h.channels, h.is_float};
 }
 
 Image ReadImage(const fs::path& path, const ImageReadOptions& options) {
-  auto in = OpenInput(path, /*whole_file=*/true);
-  const OIIO::ImageSpec& spec = in->spec();
-  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) {
-    Fail("{}: image has no pixels ({}x{}x{})", path.string(), spec.width, spec.height,
-         spec.nchannels);
+  Image image;
+  switch (OpenInput(path, /*whole_file=*/true)) {
+    case formats::FileFormat::kExr: image = formats::ReadExr(path); break;
+    case formats::FileFormat::kPng: image = formats::ReadPng(path); break;
+    case formats::FileFormat::kJpeg: image = formats::ReadJpeg(path); break;
+    case formats::FileFormat::kTiff: image = formats::ReadTiff(path); break;
+    case formats::FileFormat::kRgbe: image = formats::ReadRgbe(path); break;
+    case formats::FileFormat::kUnknown: break;
   }
-  // Integer formats are display-encoded values; float formats hold linear radiance.
-  const bool is_float = spec.format.is_floating_point();
-  Image image(spec.width, spec.height, spec.nchannels,
-              is_float ? Encoding::kLinear : Encoding::kSrgb);
-  // OIIO converts integer pixels to float in [0,1] (value / max code).
-  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.data())) {
-    std::string why = FirstLine(in->geterror());
-    if (why.empty()) why = "truncated or corrupt pixel data";
-    Fail("{}: cannot decode image: {}", path.string(), why);
-  }
-  in->close();
+  if (image.empty()) Fail("{}: image has no pixels", path.string());
   if (options.require_finite) {
     const long bad = FirstNonFinite(image);
     if (bad >= 0) {
@@ -113,66 +121,34 @@ void WriteImage(const fs::path& path, const Image& image, const ImageWriteOption
   if (!exr && !png && !jpeg) {
     Fail("{}: unsupported output format '{}' (use .exr, .png, .jpg)", path.string(), ext);
   }
-  OIIO::TypeDesc type = OIIO::TypeDesc::UINT8;
-  switch (options.format) {
-    case PixelFormat::kAuto:
-      type = exr ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::UINT8;
-      break;
-    case PixelFormat::kUint8:
-      type = OIIO::TypeDesc::UINT8;
-      break;
-    case PixelFormat::kUint16:
-      type = OIIO::TypeDesc::UINT16;
-      break;
-    case PixelFormat::kHalf:
-      type = OIIO::TypeDesc::HALF;
-      break;
-    case PixelFormat::kFloat:
-      type = OIIO::TypeDesc::FLOAT;
-      break;
-  }
-  if (exr && !type.is_floating_point()) Fail("{}: EXR is written as half or float", path.string());
-  if (!exr && type.is_floating_point())
+  PixelFormat format = options.format;
+  if (format == PixelFormat::kAuto) format = exr ? PixelFormat::kHalf : PixelFormat::kUint8;
+  const bool is_float = format == PixelFormat::kHalf || format == PixelFormat::kFloat;
+  if (exr && !is_float) Fail("{}: EXR is written as half or float", path.string());
+  if (!exr && is_float)
     Fail("{}: {} stores integers; use .exr for float pixels", path.string(), ext);
-  if (jpeg && type != OIIO::TypeDesc::UINT8) Fail("{}: JPEG is 8 bit only", path.string());
+  if (jpeg && format != PixelFormat::kUint8) Fail("{}: JPEG is 8 bit only", path.string());
   if (jpeg && image.channels() != 1 && image.channels() != 3) {
     Fail("{}: JPEG needs 1 or 3 channels, image has {}", path.string(), image.channels());
   }
 
   // Integer formats: clamp to [0,1] explicitly so NaN and out-of-range values have one defined
-  // result.
-  const float* pixels = image.data();
-  std::vector<float> clamped;
+  // result. Alpha is written as stored: RGB is never divided by it on the way out.
+  Image clamped;
   if (!exr) {
-    clamped = image.values();
-    for (float& v : clamped) v = std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f);
-    pixels = clamped.data();
+    clamped = image;
+    for (float& v : clamped.values()) v = std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f);
   }
-
-  OIIO::ImageSpec spec(image.width(), image.height(), image.channels(), type);
-  if (jpeg) spec.attribute("Compression", "jpeg:" + std::to_string(options.jpeg_quality));
-  if (exr) spec.attribute("compression", "zip");
-  if (png && options.png_compression >= 0)
-    spec.attribute("png:compressionLevel", std::min(options.png_compression, 9));
-  // No capture date in the header: OpenImageIO would stamp the current time, and equal images
-  // written at different times would differ byte for byte (reproducible datasets need them equal).
-  spec.attribute("DateTime", "");
-  // RGB is written as stored, as ReadImage reads it: not divided by alpha on the way out.
-  if (image.channels() == 4) spec.attribute("oiio:UnassociatedAlpha", 1);
-  if (!exr)
-    spec.attribute("oiio:ColorSpace", image.encoding() == Encoding::kSrgb ? "sRGB" : "Linear");
-  // The temporary file has no image extension, so the writer is chosen by the target's.
+  // The temporary file has no image extension, so the format comes from the target's. No
+  // writer stamps a date: equal images written at different times are equal byte for byte.
   const auto fill = [&](const fs::path& tmp) {
-    auto out = OIIO::ImageOutput::create(path.string());
-    if (!out) Fail("{}: no writer for this format: {}", path.string(), OIIO::geterror());
-    if (!out->open(tmp.string(), spec)) {
-      Fail("{}: cannot open for writing: {}", path.string(), FirstLine(out->geterror()));
-    }
-    const bool wrote = out->write_image(OIIO::TypeDesc::FLOAT, pixels);
-    const std::string why = FirstLine(out->geterror());
-    const bool closed = out->close();
-    if (!wrote || !closed) {
-      Fail("{}: write failed: {}", path.string(), why.empty() ? "unknown I/O error" : why);
+    if (exr) {
+      formats::WriteExr(path, tmp, image, format == PixelFormat::kHalf);
+    } else if (png) {
+      formats::WritePng(path, tmp, clamped, format == PixelFormat::kUint16 ? 16 : 8,
+                        std::min(options.png_compression, 9));
+    } else {
+      formats::WriteJpeg(path, tmp, clamped, options.jpeg_quality);
     }
   };
   if (options.batch != nullptr) {
@@ -181,7 +157,5 @@ void WriteImage(const fs::path& path, const Image& image, const ImageWriteOption
     WriteFileAtomicAt(path, fill);
   }
 }
-
-void DiscardImageLibraryErrors() { OIIO::geterror(/*clear=*/true); }
 
 }  // namespace hdr4d

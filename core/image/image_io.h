@@ -1,10 +1,11 @@
-// Reading and writing images through OpenImageIO: OpenEXR (half or float), PNG (8 or 16 bit),
-// JPEG. Errors name the file and the problem; writes go through WriteFileAtomic (temporary file,
+// Reading and writing images: OpenEXR (half or float), PNG (8 or 16 bit), JPEG; TIFF and Radiance
+// HDR are read too (image_formats.h: one file per format, each on its own library). Errors name the file and the problem; writes go through WriteFileAtomic (temporary file,
 // output guard, write-through for links and devices), so a failed write never leaves a
 // truncated image behind.
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 
 #include "core/image/image.h"
@@ -29,7 +30,7 @@ class FileBatch;
 struct ImageWriteOptions {
   PixelFormat format = PixelFormat::kAuto;
   int jpeg_quality = 95;
-  // PNG only: zlib level 0 (none) .. 9 (smallest); -1 keeps OpenImageIO's default (6). Level 1
+  // PNG only: zlib level 0 (none) .. 9 (smallest); -1 keeps libpng's default (6). Level 1
   // writes an 800x800 render about 3x faster for files 30-45% larger
   // (docs/history/render-speed.md).
   int png_compression = -1;
@@ -41,7 +42,10 @@ struct ImageWriteOptions {
 // True for file names whose format stores linear HDR values (.exr, .hdr).
 bool IsHdrPath(const std::filesystem::path& path);
 
-// Reads any format OpenImageIO knows. EXR/HDR come back Encoding::kLinear, integer formats
+// True for the file names ReadImage reads (.png, .jpg/.jpeg, .exr, .hdr, .tif/.tiff).
+bool IsImagePath(const std::filesystem::path& path);
+
+// Reads EXR, PNG, JPEG, TIFF (8/16-bit, float) and Radiance HDR, told apart by their first bytes. EXR/HDR come back Encoding::kLinear, integer formats
 // (PNG, JPEG, ...) come back Encoding::kSrgb with values scaled to [0,1] as stored. Alpha is
 // unassociated: RGB as stored, never multiplied by alpha on reading (eval ignores alpha; training
 // composites over the dataset background once, method/train/train_views.cpp).
@@ -65,8 +69,8 @@ void WriteImage(const std::filesystem::path& path,
                 const Image& image,
                 const ImageWriteOptions& options = {});
 
-// Fetches and drops the error messages OpenImageIO still holds (it prints unfetched ones when
-// the program exits, which would put them after hdr4d's own error line).
-void DiscardImageLibraryErrors();
+// The exposure time in seconds the file records, if any: EXIF ExposureTime of a JPEG or TIFF,
+// expTime of an EXR header. Throws like ReadImage for an unreadable file.
+std::optional<double> ReadExposureTime(const std::filesystem::path& path);
 
 }  // namespace hdr4d

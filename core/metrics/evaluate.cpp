@@ -40,18 +40,6 @@ struct PairResult {
   std::map<std::string, std::string> undefined;  // key -> why it has no value for this pair
 };
 
-std::string Lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
-  return s;
-}
-
-// Files a folder evaluation considers; anything else (JSON, logs, videos) is ignored.
-bool IsImagePath(const fs::path& path) {
-  static const std::set<std::string> kExtensions = {".png", ".jpg",  ".jpeg", ".exr", ".hdr",
-                                                    ".tif", ".tiff", ".bmp",  ".tga", ".webp"};
-  return kExtensions.count(Lower(path.extension().string())) > 0;
-}
-
 const char* KindName(const Image& image) {
   return image.encoding() == Encoding::kLinear ? "HDR, float" : "LDR, integer";
 }
@@ -190,6 +178,7 @@ std::vector<fs::path> ListImages(const fs::path& folder) {
   for (; it != fs::recursive_directory_iterator(); it.increment(ec)) {
     if (ec) Fail("{}: cannot list folder: {}", folder.string(), ec.message());
     std::error_code file_ec;
+    // Only files ReadImage reads: JSON, logs and videos beside the images are ignored.
     if (it->is_regular_file(file_ec) && IsImagePath(it->path())) images.push_back(it->path());
   }
   if (ec) Fail("{}: cannot list folder: {}", folder.string(), ec.message());
@@ -221,7 +210,7 @@ std::vector<std::pair<fs::path, fs::path>> MatchFolders(const fs::path& pred_dir
   if (preds.empty()) {
     Fail(
         "{}: no predicted images in this folder (looked for .png, .jpg, .jpeg, .exr, .hdr, "
-        ".tif, .tiff, .bmp, .tga, .webp)",
+        ".tif, .tiff)",
         pred_dir.string());
   }
   std::map<std::string, fs::path> gt_by_name;
