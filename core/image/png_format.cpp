@@ -75,31 +75,30 @@ bool PngFinishRead(PngSession& s, png_bytepp rows) {
   return true;
 }
 
-void OpenPngForReading(const fs::path& path, PngSession& s) {
+// Opens the file and reads its header (with the expansions set): what both readers start with.
+Header StartPng(const fs::path& path, PngSession& s, int* bits) {
   s.file = std::fopen(path.c_str(), "rb");
   if (s.file == nullptr) Fail("{}: cannot open: {}", path.string(), std::strerror(errno));
   s.png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &s, PngOnError, PngOnWarning);
   if (s.png != nullptr) s.info = png_create_info_struct(s.png);
   if (s.png == nullptr || s.info == nullptr) Fail("{}: cannot read image: out of memory", path.string());
+  Header header;
+  if (!PngStartRead(s, &header, bits)) Fail("{}: cannot read image: {}", path.string(), s.error);
+  return header;
 }
 
 }  // namespace
 
 Header ReadPngHeader(const fs::path& path) {
   PngSession s;
-  OpenPngForReading(path, s);
-  Header header;
   int bits = 0;
-  if (!PngStartRead(s, &header, &bits)) Fail("{}: cannot read image: {}", path.string(), s.error);
-  return header;
+  return StartPng(path, s, &bits);
 }
 
 Image ReadPng(const fs::path& path) {
   PngSession s;
-  OpenPngForReading(path, s);
-  Header h;
   int bits = 0;
-  if (!PngStartRead(s, &h, &bits)) Fail("{}: cannot read image: {}", path.string(), s.error);
+  const Header h = StartPng(path, s, &bits);
   if (h.width <= 0 || h.height <= 0 || h.channels <= 0)
     Fail("{}: image has no pixels ({}x{}x{})", path.string(), h.width, h.height, h.channels);
   const std::size_t row_bytes = static_cast<std::size_t>(h.width) * h.channels * (bits / 8);
