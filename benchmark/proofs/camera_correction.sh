@@ -17,7 +17,9 @@
 #   SEEDS       default 0,1,2
 #   ITERATIONS  default 3000
 # Environment: HDR4D (default build/cli/hdr4d), MINI (default /work/data/mini: `hdr4d datagen
-# --scene all --preset mini --out MINI`).
+# --scene all --preset mini --out MINI), ANY_CODE_VERSION=1 (runs an earlier code version stored
+# in WORK's store count as done: `bench run --any-code-version`, to add seeds over sessions; the
+# pairs stay within one version, each seed's two rows being run together).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 work="${1:?usage: camera_correction.sh WORK [SCENES] [SEEDS] [ITERATIONS]}"
@@ -93,6 +95,8 @@ cat >"$work/camera-correction.json" <<EOF
            "position-lr-steps": {"of_iterations": 1}},
  "tables": [$(table ae-camera), $(table rig-mismatch)]}
 EOF
-"$hdr4d" bench run "$work/camera-correction.json" --store "$work/store.sqlite" --jobs 1
+resume=()
+[[ ${ANY_CODE_VERSION:-0} == 1 ]] && resume=(--any-code-version)
+"$hdr4d" bench run "$work/camera-correction.json" --store "$work/store.sqlite" --jobs 1 "${resume[@]}"
 "$hdr4d" bench table "$work/camera-correction.json" --store "$work/store.sqlite" --all-metrics
 "$hdr4d" bench table "$work/camera-correction.json" --store "$work/store.sqlite" --per-scene
