@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include "benchmark/report_findings.h"
 #include "benchmark/tables.h"
 #include "core/util/error.h"
 #include "tests/testing.h"
@@ -190,6 +191,22 @@ TEST(Findings, ThroughAStoreAndBadTables) {
   o.table = "";
   o.metrics = {};
   EXPECT_THROW(BuildFindings(s, {}, o), Error);
+}
+
+TEST(Findings, DefaultClaimAndTheReportSection) {
+  const Suite s = FindingSuite();
+  TableSpec plain = s.tables[1];
+  plain.finding.clear();
+  EXPECT_EQ(FindingClaim(plain), "R beats each other row");
+  int images = 0, tables = 0;
+  const std::string html = FindingsHtml(s, Runs(-1.0, -2.0), {}, &images, &tables);
+  EXPECT_NE(html.find("<td><b>holds</b></td>"), std::string::npos) << html.substr(0, 2000);
+  EXPECT_EQ(images, 1);  // one chart per table: held-out LDR
+  EXPECT_EQ(tables, 1);
+  EXPECT_NE(html.find("data:image/svg+xml"), std::string::npos);
+  Suite no_ablation = s;
+  no_ablation.tables.resize(1);  // the main table only
+  EXPECT_EQ(FindingsHtml(no_ablation, Runs(-1.0, -2.0), {}, &images, &tables), "");
 }
 
 }  // namespace
