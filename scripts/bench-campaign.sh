@@ -99,7 +99,7 @@ trap stop INT TERM HUP
 extra=()
 [[ -n $cache ]] && extra+=(--cache "$cache")
 done_runs=0
-echo "bench-campaign: $(date -Is) suite $name, store $store, seeds $seeds, runs ${runs_left:-all}, until ${until:-no limit}"
+echo "bench-campaign: $(date -Is) suite $name, store $store, seeds $seeds, runs $( ((runs_left)) && echo "$runs_left" || echo "no limit"), until ${until:-no limit}"
 for group in $groups; do
   while :; do
     if (( runs_left > 0 && done_runs >= runs_left )); then
