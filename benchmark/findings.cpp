@@ -134,6 +134,8 @@ Finding OneFinding(const TableSpec& spec, const Suite& suite, const std::vector<
   }
   Coverage(values, t.scenes, &f);
   Decide(&f);
+  if (col == t.columns.size())  // a key no run of the table has (mistyped, or not computed)
+    f.why = fmt::format("no run of the table has the metric '{}'", metric);
   return f;
 }
 

@@ -129,6 +129,12 @@ TEST(Findings, CoverageAndOneSeed) {
   EXPECT_EQ(one.verdict, "undecided");
   EXPECT_EQ(one.against[0].outcome, "not testable");
   EXPECT_NE(one.why.find("no pairs with two seeds"), std::string::npos) << one.why;
+  // A metric no run has.
+  FindingsOptions typo;
+  typo.metrics = {"psnrr"};
+  const Finding missing = BuildFindings(s, Runs(-1.0, -2.0), typo).at(0);
+  EXPECT_EQ(missing.verdict, "undecided");
+  EXPECT_EQ(missing.why, "no run of the table has the metric 'psnrr'");
   // No runs at all.
   const Finding none = Only(BuildFindings(s, {}, {}), "psnr");
   EXPECT_EQ(none.verdict, "undecided");
