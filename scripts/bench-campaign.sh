@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs a long benchmark suite a few runs at a time, over as many sessions as it takes, into a
-# results store outside the repository (default <runs folder>/<suite>.sqlite: about 120 KB a
-# run with curves at 8 points, so the 792 runs of `pipelines` would be about 95 MB, too large
+# results store outside the repository (default <runs folder>/<suite>.sqlite: 67-120 KB a
+# run with curves at 8 points, so the 792 runs of `pipelines` would be 50-95 MB, too large
 # for git; benchmark/results/README.md). Commit what `hdr4d bench findings` and `bench table`
 # make of it instead. It resumes from whatever the store holds, commits nothing, and stops
 # cleanly:
