@@ -127,7 +127,7 @@ Finding OneFinding(const TableSpec& spec, const Suite& suite, const std::vector<
       f.reference_spread = has ? r.cells[col].spread : 0;
       continue;
     }
-    FindingComparison c{r.label, r.method, has ? r.cells[col].mean : 0};
+    FindingComparison c{r.label, r.method, has ? r.cells[col].mean : 0, has};
     if (col < t.columns.size()) c.test = r.tests[col];
     c.outcome = OutcomeOf(c.test, f.direction);
     f.against.push_back(std::move(c));
@@ -185,7 +185,9 @@ std::string FindingsMarkdown(const std::vector<Finding>& findings) {
   for (const Finding& f : findings) {
     std::vector<std::string> rows;
     for (const FindingComparison& c : f.against) {
-      if (!c.test.testable) {
+      if (!c.has_value) {
+        rows.push_back(fmt::format("{}: no runs", c.label));
+      } else if (!c.test.testable) {
         rows.push_back(fmt::format("{} {:.3f}, not testable", c.label, c.mean));
       } else {
         rows.push_back(fmt::format("{} {:.3f}, {:+.3f}, p = {:.2g}{}", c.label, c.mean,

@@ -35,6 +35,7 @@ struct FindingsOptions {
 struct FindingComparison {
   std::string label, method;
   double mean = 0;     // the row's table cell
+  bool has_value = false;  // false: the row has no run with this metric
   PairedTest test;     // row - reference, pairs by scene and seed
   // "reference better", "row better", "within noise", "identical" (every pair equal), "not
   // testable"

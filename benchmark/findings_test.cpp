@@ -140,6 +140,7 @@ TEST(Findings, CoverageAndOneSeed) {
   EXPECT_EQ(none.verdict, "undecided");
   EXPECT_TRUE(none.scenes_covered.empty());
   EXPECT_NE(FindingsMarkdown({none}).find("R (no runs)"), std::string::npos);
+  EXPECT_NE(FindingsMarkdown({none}).find("X: no runs; Y: no runs"), std::string::npos);
   EXPECT_TRUE(FindingChart(s, {}, none, {}).first.empty());
 }
 

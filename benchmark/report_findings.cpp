@@ -13,6 +13,10 @@ namespace {
 std::string FindingRowHtml(const Finding& f) {
   std::string against;
   for (const FindingComparison& c : f.against) {
+    if (!c.has_value) {
+      against += HtmlEscape(c.label) + ": no runs<br>";
+      continue;
+    }
     against += fmt::format("{} {:.3f}", HtmlEscape(c.label), c.mean);
     if (c.test.testable)
       against += fmt::format(" ({:+.3f}, p = {:.2g})", c.test.mean_difference, c.test.p);
