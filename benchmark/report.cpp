@@ -9,6 +9,7 @@
 #include <set>
 
 #include "benchmark/pareto.h"
+#include "benchmark/report_findings.h"
 #include "benchmark/report_images.h"
 #include "benchmark/run_pipeline.h"
 #include "benchmark/scoring.h"
@@ -212,9 +213,13 @@ ReportSummary WriteReport(const Suite& suite, const ResultsStore& store, const R
       HtmlEscape(fs::absolute(store.path()).string()), UtcNow(), runs.size(), ok, failed,
       HtmlEscape(fmt::format("{}", fmt::join(versions, ", "))),
       HtmlEscape(fmt::format("{}", fmt::join(machines, "; "))));
-  body += "<nav><b>Contents:</b> <a href=\"#tables\">tables</a> · <a href=\"#pareto\">time against error</a> · <a href=\"#scenes\">scenes</a> · <a href=\"#stress\">stress</a></nav>\n";
+  body += "<nav><b>Contents:</b> <a href=\"#tables\">tables</a> · <a href=\"#findings\">findings</a> · <a href=\"#pareto\">time against error</a> · <a href=\"#scenes\">scenes</a> · <a href=\"#stress\">stress</a></nav>\n";
 
   body += "<h2 id=\"tables\">Tables</h2>\n" + TablesHtml(suite, runs, options.tables, &summary);
+  const std::string findings =
+      FindingsHtml(suite, runs, options.tables, &summary.images, &summary.tables);
+  body += "<h2 id=\"findings\">Findings</h2>\n" +
+          (findings.empty() ? std::string("<p>The suite has no ablation table: no finding to state.</p>\n") : findings);
 
   body += "<h2 id=\"pareto\">Run time against error</h2>\n";
   // The charts and the renders show the rows --methods selects, as the tables do.

@@ -91,10 +91,13 @@ struct Progress {
 };
 
 // --dry-run: every planned run with its id and whether it is stored, failed or still to run.
+// `other_versions` (--any-code-version): the runs another code version stored, by identity
+// without the version; they count as stored ("stored*"), as the real run counts them.
 void PrintDryRun(const std::vector<PreparedScene>& scenes,
                  const std::vector<RunSpec>& runs,
                  const std::set<std::string>& ok,
-                 const std::set<std::string>& failed) {
+                 const std::set<std::string>& failed,
+                 const std::map<std::string, std::string>& other_versions) {
   for (const PreparedScene& s : scenes) {
     if (!s.ready) {
       fmt::print(stderr,
@@ -108,9 +111,14 @@ void PrintDryRun(const std::vector<PreparedScene>& scenes,
       fmt::print("{:<16}  {:<7} {}\n", "-", "to run", Describe(r.labels.front()));
       continue;
     }
-    const char* state = ok.count(r.id) ? "stored" : failed.count(r.id) ? "failed" : "to run";
+    const char* state = ok.count(r.id)                                         ? "stored"
+                        : other_versions.count(IdentityKeyWithoutVersion(r.identity)) ? "stored*"
+                        : failed.count(r.id)                                     ? "failed"
+                                                                                 : "to run";
     fmt::print("{}  {:<7} {}\n", r.id, state, Describe(r.labels.front()));
   }
+  if (!other_versions.empty())
+    fmt::print("stored*: stored by another code version, counted as done (--any-code-version)\n");
 }
 
 // What became of one run taken off the queue.
@@ -336,10 +344,9 @@ std::map<std::string, std::string> StoredByIdentityKey(const ResultsStore& store
 // labels are pointed at it (this suite's names for a run made before; a dry run writes nothing).
 void QueueRuns(const std::vector<RunSpec>& runs, const RunnerOptions& options,
                const std::set<std::string>& ok, const std::set<std::string>& failed,
-               ResultsStore* store, Progress* p) {
+               const std::map<std::string, std::string>& other_versions, ResultsStore* store,
+               Progress* p) {
   RunnerSummary& summary = *p->summary;
-  std::map<std::string, std::string> other_versions;
-  if (options.any_code_version && store) other_versions = StoredByIdentityKey(*store);
   for (const RunSpec& r : runs) {
     if (ok.count(r.id) || (failed.count(r.id) && !options.retry_failed)) {
       if (!options.dry_run) store->AddLabels(r.id, r.labels);
@@ -386,7 +393,9 @@ RunnerSummary RunSuite(const Suite& suite, const RunnerOptions& options) {
   p.series_points = options.series_points;
   const std::set<std::string> ok = store ? store->RunIds("ok") : std::set<std::string>{},
                               failed = store ? store->RunIds("failed") : std::set<std::string>{};
-  QueueRuns(runs, options, ok, failed, store ? &*store : nullptr, &p);
+  std::map<std::string, std::string> other_versions;  // identity without version -> stored id
+  if (options.any_code_version && store) other_versions = StoredByIdentityKey(*store);
+  QueueRuns(runs, options, ok, failed, other_versions, store ? &*store : nullptr, &p);
   const int threads =
       options.threads > 0 ? options.threads : std::max(1, AvailableCores() / options.jobs);
   fmt::print(stderr,
@@ -406,7 +415,7 @@ RunnerSummary RunSuite(const Suite& suite, const RunnerOptions& options) {
              p.queue.size(), options.jobs, options.jobs == 1 ? "" : "s", threads,
              threads == 1 ? "" : "s", options.store.string());
   if (options.dry_run) {
-    PrintDryRun(scenes, runs, ok, failed);
+    PrintDryRun(scenes, runs, ok, failed, other_versions);
     return summary;
   }
   if (p.queue.empty()) return summary;

@@ -122,6 +122,16 @@ TEST(StoreSharing, MaxRunsAndRunsOfAnotherCodeVersion) {
   const Command plain = bench_run(dir / "b.db", {"--dry-run"});
   ASSERT_TRUE(plain.result.ok()) << plain.text;
   EXPECT_NE(plain.text.find("0 already in the store"), std::string::npos) << plain.text;
+  // The dry run lists the earlier version's run as stored, as the real run counts it.
+  const Command listed = bench_run(dir / "b.db", {"--dry-run", "--any-code-version"});
+  ASSERT_TRUE(listed.result.ok()) << listed.text;
+  EXPECT_NE(listed.text.find("(1 by another code version), 1 to run"), std::string::npos) << listed.text;
+  EXPECT_EQ(CountLines(listed.text, "stored*:"), 1) << listed.text;
+  std::size_t to_run = 0, stored_other = 0;
+  for (std::size_t at = 0; (at = listed.text.find("  to run ", at)) != std::string::npos; ++at) ++to_run;
+  for (std::size_t at = 0; (at = listed.text.find("  stored* ", at)) != std::string::npos; ++at) ++stored_other;
+  EXPECT_EQ(to_run, 1u) << listed.text;
+  EXPECT_EQ(stored_other, 1u) << listed.text;
   const Command any = bench_run(dir / "b.db", {"--any-code-version"});
   ASSERT_TRUE(any.result.ok()) << any.text;
   EXPECT_EQ(DoneNow(any.text), 1) << any.text;  // seed 1 only

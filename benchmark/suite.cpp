@@ -272,7 +272,7 @@ std::vector<TableRow> ParseRows(const Obj& t) {
 
 TableSpec ParseTable(const nlohmann::json& j, const std::string& where) {
   const Obj t(j, where);
-  t.OnlyKeys({"id", "title", "layout", "scenes", "rows", "reference", "note"});
+  t.OnlyKeys({"id", "title", "layout", "scenes", "rows", "reference", "note", "finding"});
   TableSpec spec;
   spec.id = t.Name("id", "", true);
   spec.title = t.String("title", spec.id);
@@ -281,6 +281,7 @@ TableSpec ParseTable(const nlohmann::json& j, const std::string& where) {
     Fail("{}: layout '{}' is not main or ablation", t.At("layout"), spec.layout);
   spec.scene_group = t.Name("scenes", "syn");
   spec.note = t.String("note", "");
+  spec.finding = t.String("finding", "");
   spec.rows = ParseRows(t);
   spec.reference = t.String("reference", spec.rows.back().label);
   if (std::none_of(spec.rows.begin(), spec.rows.end(),

@@ -70,6 +70,9 @@ struct TableSpec {
   std::vector<TableRow> rows;
   std::string reference;  // row label the paired tests compare with (default: the last row)
   std::string note;
+  // The paper's finding the table tests, in words (`bench findings`; "" = "<reference> beats
+  // each other row").
+  std::string finding;
 };
 
 struct Suite {

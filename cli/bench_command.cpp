@@ -10,7 +10,7 @@ void AddBenchCommand(CLI::App& app) {
       "bench",
       "The benchmark harness: run suites of methods x scenes x settings x seeds into a results "
       "store, print the paper's tables, plot run time against error, write an HTML report, "
-      "stress-test numerics, score external renders, compare two stores or code versions, scale out "
+      "stress-test numerics, score external renders, compare two stores or code versions, state the paper's findings as verdicts, scale out "
       "with Slurm.");
   bench->require_subcommand(1);
   AddBenchRun(*bench);
@@ -20,6 +20,7 @@ void AddBenchCommand(CLI::App& app) {
   AddBenchStress(*bench);
   AddBenchSubmit(*bench);
   AddBenchCompare(*bench);
+  AddBenchFindings(*bench);
   AddBenchSlurm(*bench);
   AddBenchCalibration(*bench);
 }

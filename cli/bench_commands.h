@@ -14,6 +14,7 @@ void AddBenchStress(CLI::App& bench);  // bench stress: numerics and failure beh
 void AddBenchSubmit(CLI::App& bench);  // bench submit: external renders scored
 void AddBenchSlurm(CLI::App& bench);   // bench slurm, task, collect
 void AddBenchCompare(CLI::App& bench);  // bench compare: two stores or code versions
+void AddBenchFindings(CLI::App& bench);  // bench findings: the paper's findings as verdicts
 void AddBenchCalibration(CLI::App& bench);  // bench calibration: calibrate over capture variants
 
 }  // namespace hdr4d::cli

@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# Runs a long benchmark suite a few runs at a time, over as many sessions as it takes, into the
-# results store committed with the repository (benchmark/results/<suite>.sqlite: results only,
-# renders and checkpoints stay outside the repository). It resumes from whatever the store
-# holds, commits nothing (commit the store yourself when it has stopped), and stops cleanly:
+# Runs a long benchmark suite a few runs at a time, over as many sessions as it takes, into a
+# results store outside the repository (default <runs folder>/<suite>.sqlite: 67-120 KB a
+# run with curves at 8 points, so the 792 runs of `pipelines` would be 50-95 MB, too large
+# for git; benchmark/results/README.md). Commit what `hdr4d bench findings` and `bench table`
+# make of it instead. It resumes from whatever the store holds, commits nothing, and stops
+# cleanly:
 # at --until a run in progress is interrupted (SIGINT: `bench run` stores nothing half-made and
 # redoes that run next time), so the store is consistent whenever the script ends.
 #
@@ -13,8 +15,10 @@
 # (`bench run --any-code-version`; the report lists every code version the store holds).
 #
 # Usage: bash scripts/bench-campaign.sh SUITE [--runs N] [--until HH:MM] [--seeds 0,1,2]
-#          [--hdr4d BIN] [--runs-dir DIR] [--cache DIR] [--store FILE] [--foreground]
+#          [--hdr4d BIN] [--runs-dir DIR] [--cache DIR] [--store FILE] [--series-points N]
+#          [--foreground]
 #   --runs N      stop after N more runs (default: no limit)
+#   --series-points N  curves stored at N points (default 8; 0: every point)
 #   --until HH:MM start no run after this time today, interrupt the one in progress at it
 #   --foreground  run here instead of in the background (nice 19, nohup; the log and pid file
 #                 go to the runs folder, the script prints where)
@@ -23,12 +27,12 @@
 set -euo pipefail
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-usage() { sed -n '2,24p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit "${1:-2}"; }
+usage() { sed -n '2,26p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit "${1:-2}"; }
 [[ $# -ge 1 && $1 != -* ]] || usage
 suite="$1"
 shift
 runs_left=0 until="" seeds="0,1,2" hdr4d="$root/build/cli/hdr4d" foreground=0 cache=""
-runs_dir="" store=""
+runs_dir="" store="" series_points=8
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --runs) runs_left="$2"; shift 2 ;;
@@ -38,19 +42,21 @@ while [[ $# -gt 0 ]]; do
     --runs-dir) runs_dir="$2"; shift 2 ;;
     --cache) cache="$2"; shift 2 ;;
     --store) store="$2"; shift 2 ;;
+    --series-points) series_points="$2"; shift 2 ;;
     --foreground) foreground=1; shift ;;
     -h|--help) usage 0 ;;
     *) echo "bench-campaign: unknown option '$1'" >&2; usage ;;
   esac
 done
 [[ $runs_left =~ ^[0-9]+$ ]] || { echo "bench-campaign: --runs '$runs_left' must be a count" >&2; exit 2; }
+[[ $series_points =~ ^[0-9]+$ ]] || { echo "bench-campaign: --series-points '$series_points' must be a count" >&2; exit 2; }
 [[ -x $hdr4d ]] || { echo "bench-campaign: no hdr4d binary at $hdr4d (build it, or give --hdr4d)" >&2; exit 2; }
 suite_file="$root/benchmark/suites/$suite.json"
 [[ -f $suite_file ]] || suite_file="$suite"
 [[ -f $suite_file ]] || { echo "bench-campaign: no suite '$suite' (benchmark/suites/*.json or a file)" >&2; exit 2; }
 name="$(basename "$suite_file" .json)"
-store="${store:-$root/benchmark/results/$name.sqlite}"
 runs_dir="${runs_dir:-${HDR4D_CAMPAIGN_RUNS:-$HOME/.cache/hdr4d/campaign}/$name}"
+store="${store:-$runs_dir/$name.sqlite}"
 deadline=0
 if [[ -n $until ]]; then
   deadline="$(date -d "$until" +%s)" || { echo "bench-campaign: --until '$until' is not a time" >&2; exit 2; }
@@ -61,7 +67,7 @@ log="$runs_dir/campaign.log"
 
 if (( ! foreground )); then
   args=("$suite_file" --runs "$runs_left" --seeds "$seeds" --hdr4d "$hdr4d" --runs-dir "$runs_dir"
-        --store "$store" --foreground)
+        --store "$store" --series-points "$series_points" --foreground)
   [[ -n $until ]] && args+=(--until "$until")
   [[ -n $cache ]] && args+=(--cache "$cache")
   nohup nice -n 19 bash "${BASH_SOURCE[0]}" "${args[@]}" >>"$log" 2>&1 &
@@ -93,7 +99,7 @@ trap stop INT TERM HUP
 extra=()
 [[ -n $cache ]] && extra+=(--cache "$cache")
 done_runs=0
-echo "bench-campaign: $(date -Is) suite $name, store $store, seeds $seeds, runs ${runs_left:-all}, until ${until:-no limit}"
+echo "bench-campaign: $(date -Is) suite $name, store $store, seeds $seeds, runs $( ((runs_left)) && echo "$runs_left" || echo "no limit"), until ${until:-no limit}"
 for group in $groups; do
   while :; do
     if (( runs_left > 0 && done_runs >= runs_left )); then
@@ -108,7 +114,7 @@ for group in $groups; do
     out="$runs_dir/last-bench-run.txt"
     set +e
     "${limit[@]}" "$hdr4d" bench run "$suite_file" --store "$store" --runs-dir "$runs_dir" \
-      --scenes "$group" --seeds "$seeds" --max-runs 1 --any-code-version --series-points 32 --jobs 1 "${extra[@]}" \
+      --scenes "$group" --seeds "$seeds" --max-runs 1 --any-code-version --series-points "$series_points" --jobs 1 "${extra[@]}" \
       >"$out" 2>&1 &
     child=$!
     wait "$child"

@@ -5,7 +5,8 @@
 # (each camera its own meter and gain) and `rig-mismatch` (each camera its own gain, response
 # and colour matrix), and HDR-4DGS (DTM) trains on each with and without the correction under
 # LDR supervision, the pipelines suite's settings, through `hdr4d bench`: one ablation table per
-# pipeline with the paired test (pairs by scene and seed) against DTM without it.
+# pipeline with the paired test (pairs by scene and seed) against DTM without it, and the
+# verdict lines with a chart per pipeline (`bench findings`, into WORK/findings).
 #
 # Usage: bash benchmark/proofs/camera_correction.sh WORK [SCENES] [SEEDS] [ITERATIONS]
 #   WORK        a folder for the scene copies, the suite, the store and the runs
@@ -17,7 +18,9 @@
 #   SEEDS       default 0,1,2
 #   ITERATIONS  default 3000
 # Environment: HDR4D (default build/cli/hdr4d), MINI (default /work/data/mini: `hdr4d datagen
-# --scene all --preset mini --out MINI`).
+# --scene all --preset mini --out MINI), ANY_CODE_VERSION=1 (runs an earlier code version stored
+# in WORK's store count as done: `bench run --any-code-version`, to add seeds over sessions; the
+# pairs stay within one version, each seed's two rows being run together).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 work="${1:?usage: camera_correction.sh WORK [SCENES] [SEEDS] [ITERATIONS]}"
@@ -73,6 +76,7 @@ table() {  # one ablation table of a pipeline's scenes
   cat <<EOF
 {"id": "correction-$1", "title": "Learned per-camera correction, $1", "layout": "ablation",
  "scenes": "$1", "reference": "DTM",
+ "finding": "DTM without the correction beats DTM with it ('does not hold' where the correction wins)",
  "rows": [{"label": "DTM + camera correction", "method": "dtm-cc", "supervision": "ldr"},
           {"label": "DTM", "method": "dtm", "supervision": "ldr"}],
  "note": "LDR-only supervision; the correction's gains are learned per training camera and used for its held-out times."}
@@ -93,6 +97,10 @@ cat >"$work/camera-correction.json" <<EOF
            "position-lr-steps": {"of_iterations": 1}},
  "tables": [$(table ae-camera), $(table rig-mismatch)]}
 EOF
-"$hdr4d" bench run "$work/camera-correction.json" --store "$work/store.sqlite" --jobs 1
+resume=()
+[[ ${ANY_CODE_VERSION:-0} == 1 ]] && resume=(--any-code-version)
+"$hdr4d" bench run "$work/camera-correction.json" --store "$work/store.sqlite" --jobs 1 "${resume[@]}"
 "$hdr4d" bench table "$work/camera-correction.json" --store "$work/store.sqlite" --all-metrics
 "$hdr4d" bench table "$work/camera-correction.json" --store "$work/store.sqlite" --per-scene
+"$hdr4d" bench findings "$work/camera-correction.json" --store "$work/store.sqlite" \
+  --metrics psnr,mu_psnr_aligned,flip --out "$work/findings"
