@@ -7,6 +7,7 @@
 
 #include "baselines/hexplane/hexplane_render.h"
 #include "baselines/hexplane/hexplane_run.h"
+#include "baselines/hexplane/heap_policy.h"
 #include "core/dataset/dataset.h"
 #include "core/files/atomic_file.h"
 #include "core/files/json_util.h"
@@ -173,6 +174,7 @@ int RenderSplit(const HexPlaneRenderOptions& o, const LoadedHexPlaneRun& run,
 
 int RenderHexPlaneRun(const HexPlaneRenderOptions& options) {
   if (options.video_frames < 0) Fail("render: video frames {} must be >= 1", options.video_frames);
+  KeepFreedHeap();  // each chunk's matrices reuse the last chunk's pages (heap_policy.h)
   const LoadedHexPlaneRun run = LoadHexPlaneRun(options.run, options.resolution);
   const Split split = ParseSplit(options.split, "render");
   const std::vector<Frame>& frames = run.dataset.FramesOf(split);

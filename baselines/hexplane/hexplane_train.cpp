@@ -1,4 +1,5 @@
 #include "baselines/hexplane/hexplane_train.h"
+#include "baselines/hexplane/heap_policy.h"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -446,6 +447,7 @@ HexPlaneTrainSummary TrainHexPlane(const HexPlaneTrainOptions& options) {
     Fail("train: resolution {} must be >= 1", *options.resolution);
   if (options.checkpoint_every < 0 || options.stop_after < 0)
     Fail("train: checkpoint_every and stop_after must be >= 0");
+  KeepFreedHeap();  // each step's matrices reuse the last step's pages (heap_policy.h)
   const ThreadLimit limit(options.threads);
   return HexPlaneTraining(options).Run();
 }

@@ -1,0 +1,134 @@
+#!/usr/bin/env bash
+# The grid family's proof (issue 53), at a stated budget, resumable: every finished run is kept
+# and skipped when the script is started again, so a later session continues where one stopped.
+#   1. dnerf: the real D-NeRF lego (SHARED/data/dnerf_lego_tiny, 100 px): HexPlane and our 4DGS
+#      (`train` without --method: 4dgs on a one-exposure LDR scene), DNERF_ITERATIONS each; test
+#      PSNR/SSIM from each run's results.json, CPU time from /usr/bin/time.
+#   2. mini: the `paper` suite's HexPlane (LDR; HDR = HexPlane*), HDR-HexPlane (LDR, LDR+HDR) and
+#      4DGS rows on the datagen `mini` scenes, seed 0, ITERATIONS each (the suite's 1024 rays and
+#      reduced grid for the grid methods), into WORKDIR/paper.sqlite (`bench run` skips what the
+#      store has: resume by running this again), then Table 1 of that store.
+#   3. sides: a side-by-side PNG per scene: truth | HexPlane | HDR-HexPlane LDR | HDR-HexPlane
+#      LDR+HDR | 4DGS, first held-out view (ffmpeg's hstack; python3 reads the JSON).
+# Usage: bash benchmark/proofs/hexplane_proof.sh BINARY WORKDIR
+# Settings from the environment: PARTS ["dnerf mini sides"], ITERATIONS [300], DNERF_ITERATIONS
+# [500], RAYS and GRID (D-NeRF HexPlane: rays, voxels at start and end) [1024, "32768 262144",
+# as the suite's grid rows; the reference's: 4096, "262144 8000000"], THREADS [2], SCENES [the
+# eight], MINI (the generated scenes) [/work/data/mini], SHARED [/work/shared].
+# WORKDIR/cache/datagen/mini-s0/<scene> link to MINI's scenes, so `bench run` finds them
+# generated (nothing is written into MINI).
+set -euo pipefail
+if [ $# -ne 2 ]; then
+  echo "usage: $0 BINARY WORKDIR" >&2
+  exit 2
+fi
+hdr4d="$(realpath "$1")"
+work="$2"
+[ -x "$hdr4d" ] || { echo "$0: $1: not an executable" >&2; exit 2; }
+parts="${PARTS:-dnerf mini sides}"
+iterations="${ITERATIONS:-300}" dnerf_iterations="${DNERF_ITERATIONS:-500}"
+rays="${RAYS:-1024}" grid="${GRID:-32768 262144}" threads="${THREADS:-2}"
+scenes="${SCENES:-airplane deer hook jump lego mutant standup tank}"
+mini="${MINI:-/work/data/mini}" shared="${SHARED:-/work/shared}"
+mkdir -p "$work"
+work="$(realpath "$work")"
+
+timed() {  # LOG COMMAND...: run, appending user/sys/wall seconds to LOG
+  local log="$1"
+  shift
+  /usr/bin/time -f "cpu_user %U cpu_sys %S wall %e" -a -o "$log" "$@"
+}
+
+# One training run of the D-NeRF part; skipped when its results.json exists.
+dnerf_run() {  # NAME ARGS...
+  local name="$1"
+  shift
+  local out="$work/dnerf/$name"
+  if [ -f "$out/results.json" ]; then
+    echo "  $name: done before, skipped"
+    return
+  fi
+  mkdir -p "$work/dnerf"
+  rm -f "$work/dnerf/$name.time"
+  timed "$work/dnerf/$name.time" "$hdr4d" train --data "$shared/data/dnerf_lego_tiny" \
+    --out "$out" --overwrite --iterations "$dnerf_iterations" --threads "$threads" "$@" \
+    > "$work/dnerf/$name.log" 2>&1
+  "$hdr4d" render --run "$out" --split test --out "$out/renders/test" > /dev/null 2>&1
+}
+
+if [[ " $parts " == *" dnerf "* ]]; then
+  echo "== 1. D-NeRF lego (100 px): $dnerf_iterations iterations, $threads threads"
+  dnerf_run hexplane --method hexplane --rays "$rays" --grid-voxels $grid
+  dnerf_run 4dgs
+  for name in hexplane 4dgs; do
+    python3 - "$work/dnerf/$name" "$work/dnerf/$name.time" <<'EOF'
+import json, sys
+r = json.load(open(sys.argv[1] + "/results.json"))
+t = dict(zip(*[iter(open(sys.argv[2]).read().split())] * 2))
+cpu = float(t["cpu_user"]) + float(t["cpu_sys"])
+it = r.get("iterations", 0)
+print(f"  {sys.argv[1].rsplit('/', 1)[-1]:9s} test PSNR {r['test']['psnr']:.2f} dB, SSIM "
+      f"{r['test']['ssim']:.3f}; {it} iterations, {cpu:.0f} CPU-s ({cpu / max(it, 1):.3f} per "
+      f"iteration), wall {float(t['wall']):.0f} s")
+EOF
+  done
+fi
+
+if [[ " $parts " == *" mini "* ]]; then
+  echo "== 2. datagen mini ($scenes): the paper suite's grid rows and 4DGS, $iterations iterations"
+  mkdir -p "$work/cache/datagen/mini-s0"
+  for s in $scenes; do
+    [ -f "$mini/$s/transforms_train.json" ] || { echo "$0: $mini/$s: no scene" >&2; exit 2; }
+    ln -sfn "$mini/$s" "$work/cache/datagen/mini-s0/$s"
+  done
+  # One scene at a time, so an interrupted pass leaves whole scenes behind it.
+  for s in $scenes; do
+    timed "$work/bench_$s.time" "$hdr4d" bench run paper --store "$work/paper.sqlite" \
+      --cache "$work/cache" --methods HexPlane HDR-HexPlane 4dgs --scenes "$s" --seeds 0 \
+      --iterations "$iterations" --threads "$threads" --series-points 50 --keep-checkpoints \
+      > "$work/bench_$s.log" 2>&1 || echo "  $s: bench run failed, see $work/bench_$s.log"
+    echo "  $s: $(tail -n 1 "$work/bench_$s.log")"
+  done
+  "$hdr4d" bench table paper --store "$work/paper.sqlite" --out "$work/tables" > /dev/null
+  echo "  tables: $work/tables"
+fi
+
+stack() {  # OUT IN...: the images side by side (ffmpeg), or a note when one is missing
+  local out="$1"
+  shift
+  for f in "$@"; do [ -f "$f" ] || { echo "  $out: $f missing, not written"; return; }; done
+  local args=()
+  for f in "$@"; do args+=(-i "$f"); done
+  ffmpeg -loglevel error -y "${args[@]}" -filter_complex "hstack=inputs=$#" "$out"
+  echo "  $out"
+}
+
+if [[ " $parts " == *" sides "* ]]; then
+  echo "== 3. side-by-side PNGs (truth | HexPlane | HDR-HexPlane LDR | LDR+HDR | 4DGS): $work/sides"
+  mkdir -p "$work/sides"
+  d="$work/dnerf"
+  first="$(ls "$d/hexplane/renders/test" 2> /dev/null | grep '\.png$' | head -n 1 || true)"
+  [ -n "$first" ] && stack "$work/sides/dnerf_lego.png" \
+    "$shared/data/dnerf_lego_tiny/images/$first" "$d/hexplane/renders/test/$first" \
+    "$d/4dgs/renders/test/$first"
+  # The bench runs: RUNS/<id>/train/config.json names the method, supervision and scene.
+  for s in $scenes; do
+    declare -A dir=()
+    for c in "$work"/paper.sqlite.runs/*/train/config.json; do
+      [ -f "$c" ] || continue
+      key="$(python3 -c 'import json,sys; c=json.load(open(sys.argv[1]))
+h=c.get("hexplane",{}); m=c.get("method",h.get("method",""))
+sup="ldr+hdr" if h.get("ldr_loss") and h.get("hdr_loss") else "hdr" if h.get("hdr_loss") else "ldr"
+print(c["data"].rstrip("/").rsplit("/",1)[-1], m, sup)' "$c")"
+      read -r scene method sup <<< "$key"
+      [ "$scene" = "$s" ] && dir["$method/$sup"]="$(dirname "$(dirname "$c")")/renders"
+    done
+    first="$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["frames"][0]["file_path"])' \
+      "$mini/$s/transforms_test.json")"
+    stack "$work/sides/$s.png" "$mini/$s/$first" "${dir[hexplane/ldr]:-none}/$(basename "$first")" \
+      "${dir[hdr-hexplane/ldr]:-none}/$(basename "$first")" \
+      "${dir[hdr-hexplane/ldr+hdr]:-none}/$(basename "$first")" \
+      "${dir[4dgs/ldr]:-none}/$(basename "$first")"
+    unset dir
+  done
+fi
