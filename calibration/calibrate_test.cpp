@@ -277,6 +277,8 @@ TEST(Calibrate, SyntheticRigBecomesADataset) {
   const nlohmann::json report = nlohmann::json::parse(testing::ReadTextFile(dir / "out" / "calibration.json"));
   EXPECT_GT(report["camera_agreement"]["disagreement_before"].get<double>(), 0.05);
   EXPECT_LT(report["camera_agreement"]["disagreement_after"].get<double>(), 0.01);
+  // Gains from every other point, checked on the rest: the calibration's own error (no texture).
+  EXPECT_LT(report["camera_agreement"]["held_out_bias"].get<double>(), 0.01);
   for (const char* name : {"report.md", "response.csv", "response.png", "rig.json", "calibration.json"})
     EXPECT_TRUE(fs::exists(dir / "out" / name)) << name;
   EXPECT_NE(testing::ReadTextFile(dir / "out" / "report.md").find("reprojection RMS"), std::string::npos);
@@ -500,6 +502,39 @@ TEST(Calibrate, RegistrationLadderClimbsUntilEveryCameraRegisters) {
   for (std::size_t at = steps.find("mapper"); at != std::string::npos; at = steps.find("mapper", at + 1)) ++mappers;
   EXPECT_EQ(mappers, 5);
   EXPECT_FALSE(fs::exists(dir / "out2"));
+}
+
+// Issue 54: every rung registers everything, but the cameras hold few points (a rig without
+// hand-held views): the ladder goes on to the sequence frames' rung and keeps its model, which
+// gives the weakest camera more observations; with no more there, the first rung's model stays.
+TEST(Calibrate, RegistrationLadderTriesSequenceFramesForWeakCameras) {
+  testing::TempDir dir;
+  WriteCapture(dir / "capture", dir / "model");
+  ColmapModel few = ReadColmapModel(dir / "model");
+  for (std::int64_t id = 1; id <= 20; ++id) few.points.erase(id);
+  for (auto& [id, image] : few.images)
+    for (std::int64_t& point : image.point3d_ids)
+      if (!few.points.count(point)) point = -1;
+  WriteColmapModel(dir / "few", few, ColmapFormat::kText);
+  auto fake = [&](const fs::path& sequence_model) {
+    return FakeColmap(dir.path(), "step=$1; shift; images=; out=\n"
+                                  "while [ $# -gt 0 ]; do case \"$1\" in --image_path) images=$2;; --output_path) out=$2;; esac; shift; done\n"
+                                  "[ \"$step\" = mapper ] || exit 0\n"
+                                  "case \"$images\" in */rung5/*) cp -r '" + sequence_model.string() + "' \"$out/0\";;\n"
+                                  "  *) cp -r '" + (dir / "few").string() + "' \"$out/0\";; esac");
+  };
+  auto result = testing::RunHdr4d(GeometryArgs(dir / "capture", dir / "out", fake(dir / "model")));
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  std::string report = testing::ReadTextFile(dir / "out" / "report.md");
+  EXPECT_NE(report.find("rung 5 of the registration ladder (sequence frames"), std::string::npos) << report;
+  EXPECT_NE(report.find("1. defaults: all registered, weakest camera"), std::string::npos) << report;
+  EXPECT_EQ(report.find("2. more features"), std::string::npos) << report;  // straight to the sequence rung
+
+  result = testing::RunHdr4d(GeometryArgs(dir / "capture", dir / "out2", fake(dir / "few")));
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  report = testing::ReadTextFile(dir / "out2" / "report.md");
+  EXPECT_NE(report.find("rung 1 of the registration ladder (defaults"), std::string::npos) << report;
+  EXPECT_NE(report.find("5. sequence frames: all registered"), std::string::npos) << report;
 }
 
 // Running, not a zombie nobody has reaped yet.
