@@ -72,18 +72,40 @@ int WeakestCameraObservations(const Capture& capture, const ColmapModel& model) 
 
 // The images of the sequence rung: each rig camera's folder holds its static images and its
 // sequence frames' middle brackets (one camera, one pose: the rig does not move), and extra/.
-fs::path SequenceImageFolder(const Capture& capture, const fs::path& folder) {
+// Pairs worth matching among them: images of two different cameras (one camera's images share
+// one pose: no baseline to triangulate from), and sequence frames only with frames of the same
+// time (the actors move between frames). `groups[i]` = (camera, time: -1 static) of names[i].
+std::vector<std::pair<std::string, std::string>> SequenceMatchPairs(const std::vector<std::string>& names,
+                                                                    const std::vector<std::pair<int, int>>& groups) {
+  std::vector<std::pair<std::string, std::string>> pairs;
+  for (std::size_t i = 0; i < names.size(); ++i)
+    for (std::size_t j = i + 1; j < names.size(); ++j)
+      if (groups[i].first != groups[j].first && groups[i].second == groups[j].second)
+        pairs.emplace_back(names[i], names[j]);
+  return pairs;
+}
+
+fs::path SequenceImageFolder(const Capture& capture, const fs::path& folder,
+                             std::vector<std::pair<std::string, std::string>>* pairs) {
+  std::vector<std::string> names;
+  std::vector<std::pair<int, int>> groups;  // (camera, frame index; -1 static), extra views camera -1
   fs::create_directories(folder);
   // File links only: COLMAP's image listing does not enter linked folders.
   for (const fs::path& image : capture.extra_images) {
     fs::create_directories(folder / "extra");
     fs::create_symlink(fs::absolute(image), folder / "extra" / image.filename());
+    names.push_back("extra/" + image.filename().string());
+    groups.emplace_back(-1 - static_cast<int>(names.size()), -1);  // each extra view its own pose
   }
+  int camera_index = 0;
   for (const CaptureCamera& camera : capture.cameras) {
     const fs::path target = folder / camera.name;
     fs::create_directories(target);
-    for (const fs::path& image : camera.static_images)
+    for (const fs::path& image : camera.static_images) {
       fs::create_symlink(fs::absolute(image), target / image.filename());
+      names.push_back(camera.name + "/" + image.filename().string());
+      groups.emplace_back(camera_index, -1);
+    }
     // The shortest bracket finds features in the highlights, the longest in the shadows; a
     // dense bracket adds little beyond these three (and each image costs exhaustive matching).
     for (const CaptureFrame& frame : camera.frames) {
@@ -95,9 +117,13 @@ fs::path SequenceImageFolder(const Capture& capture, const fs::path& folder) {
       for (const std::size_t k : picks) {
         const fs::path& source = frame.brackets[k];
         fs::create_symlink(fs::absolute(source), target / ("seq_" + source.filename().string()));
+        names.push_back(camera.name + "/seq_" + source.filename().string());
+        groups.emplace_back(camera_index, frame.index);
       }
     }
+    ++camera_index;
   }
+  *pairs = SequenceMatchPairs(names, groups);
   return folder;
 }
 
@@ -119,7 +145,7 @@ fs::path RunLadderRung(const Capture& capture, const fs::path& workspace,
   run.match_args = rung.match_args;
   run.map_args = rung.map_args;
   const fs::path rung_dir = workspace / fmt::format("rung{}", r + 1);
-  const fs::path images = rung.sequence_frames ? SequenceImageFolder(capture, rung_dir / "images")
+  const fs::path images = rung.sequence_frames ? SequenceImageFolder(capture, rung_dir / "images", &run.match_pairs)
                                                : capture.root / "static";
   return RunColmap(images, rung_dir, run);
 }
@@ -153,15 +179,7 @@ LadderResult RegisterWithLadder(const Capture& capture, const fs::path& workspac
         best.unregistered = missing;
         best.weakest_observations = weakest;
       }
-      if (missing.empty() && (weakest >= kWeakCameraObservations || rung.sequence_frames || !have_frames)) return best;
-      if (missing.empty()) {
-        // Everything registered, but a camera holds too few points for its intrinsics: its
-        // sequence frames (one pose) add the static scene in other exposures and the actors.
-        spdlog::info("calibrate: COLMAP rung {} registered everything, but one camera has only {} observations; "
-                     "trying its sequence frames", r + 1, weakest);
-        while (r + 1 < ladder.size() && !ladder[r + 1].sequence_frames) ++r;
-        continue;
-      }
+      if (missing.empty()) return best;
     } catch (const ColmapNoModel& e) {
       best.attempts.push_back(fmt::format("{}. {}: no model", r + 1, rung.name));
       last_error = e;

@@ -13,11 +13,13 @@
 //                    short and long brackets add features in highlights and shadows, and the
 //                    actors seen by every camera at one time add cross-camera points
 // The first rung that registers every rig camera and every extra view wins; otherwise the one
-// that registered most. A rung that registers everything but leaves a rig camera with fewer than
-// kWeakCameraObservations triangulated observations (too few to pin its focal length and
-// distortion: a camera without hand-held views around it) goes on to rung 5, and the model whose
-// weakest camera has more observations wins. A camera that no rung registers fails with the
-// error of RigFromColmap (it truly shares no view). The report names the rung.
+// that registered most (at equal, the one whose weakest camera has more observations). A camera
+// that no rung registers fails with the error of RigFromColmap (it truly shares no view). The
+// report names the rung and each rung's weakest camera. A rig camera with fewer than
+// kWeakCameraObservations triangulated observations (no hand-held views around it) is named in
+// the report: too few to pin its focal length and distortion. Going on to rung 5 for such a
+// camera was measured and made the geometry worse (docs/history/calibration.md, fourth pass):
+// COLMAP gives each sequence frame its own pose, and those poses drift.
 #pragma once
 
 #include <filesystem>
