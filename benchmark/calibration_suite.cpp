@@ -99,8 +99,13 @@ std::string RegistrationOf(const fs::path& calibrated) {
   const std::string source = rig.value("model_source", "");
   std::smatch rung;
   const bool laddered = std::regex_search(source, rung, std::regex("rung (\\d+) of the registration ladder"));
-  return fmt::format("all cameras, extra {}, {}", rig.value("extra_images_registered", 0),
-                     laddered ? "rung " + rung[1].str() : std::string("given model"));
+  int weakest = -1;
+  for (const auto& camera : rig.value("cameras", nlohmann::json::array()))
+    if (camera.contains("observations") && camera["observations"].is_number_integer())
+      weakest = weakest < 0 ? camera["observations"].get<int>() : std::min(weakest, camera["observations"].get<int>());
+  return fmt::format("all cameras, extra {}, {}{}", rig.value("extra_images_registered", 0),
+                     laddered ? "rung " + rung[1].str() : std::string("given model"),
+                     weakest >= 0 ? fmt::format(", weakest camera {} obs.", weakest) : std::string());
 }
 
 std::string DistortionOf(const nlohmann::json& calibration) {
@@ -173,8 +178,10 @@ CalibrationRow ReadCalibrationRow(const fs::path& calibrated, const CalibrationT
   r.hdr_dark = CalibrationNumber(h, "dark_fifth_median_relative_error", truth_file);
   r.camera_disagreement = CalibrationNumber(h, "camera_disagreement", truth_file);
   r.distortion = DistortionOf(cal);
-  if (cal.contains("camera_agreement"))
+  if (cal.contains("camera_agreement")) {
     r.sparse_disagreement_after = CalibrationNumber(cal["camera_agreement"], "disagreement_after", cal_file);
+    r.held_out_bias = cal["camera_agreement"].value("held_out_bias", 0.0);
+  }
   if (cal.contains("seconds"))
     r.calibrate_seconds = cal["seconds"].value("geometry", 0.0) + cal["seconds"].value("radiometry", 0.0);
   r.missed = MissedTargets(r, targets);
@@ -185,7 +192,7 @@ std::string CalibrationTableMarkdown(const std::vector<CalibrationRow>& rows) {
   std::string md =
       "| variant | seed | registered | rotation max (deg): pairs / orientations / centres' similarity | "
       "centre max (% rig) | focal max | distortion kept | HDR slope | HDR median (darkest fifth) | "
-      "cameras' HDR scales vs truth | sparse points after gains | calibrate (s) | targets |\n"
+      "cameras' HDR scales vs truth | sparse points after gains: scatter / held-out bias | calibrate (s) | targets |\n"
       "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const CalibrationRow& r : rows) {
     if (!r.failed.empty()) {
@@ -194,10 +201,10 @@ std::string CalibrationTableMarkdown(const std::vector<CalibrationRow>& rows) {
     }
     md += fmt::format(
         "| {} | {} | {} | {:.3f} / {:.3f} / {:.3f} | {:.2f} | {:.2f}% | {} | {:.3f} | {:.1f}% ({:.1f}%) | {:.1f}% | "
-        "{:.1f}% | {:.0f} | {} |\n",
+        "{:.1f}% / {:.1f}% | {:.0f} | {} |\n",
         r.variant, r.seed, r.registration, r.rotation_pairs_deg, r.rotation_oriented_deg, r.rotation_centres_deg,
         100 * r.centre_relative, 100 * r.focal_relative, r.distortion, r.slope, 100 * r.hdr_median, 100 * r.hdr_dark,
-        100 * r.camera_disagreement, 100 * r.sparse_disagreement_after, r.calibrate_seconds,
+        100 * r.camera_disagreement, 100 * r.sparse_disagreement_after, 100 * r.held_out_bias, r.calibrate_seconds,
         r.missed.empty() ? std::string("all met") : fmt::format("missed: {}", fmt::join(r.missed, ", ")));
   }
   return md;
@@ -206,12 +213,13 @@ std::string CalibrationTableMarkdown(const std::vector<CalibrationRow>& rows) {
 std::string CalibrationTableCsv(const std::vector<CalibrationRow>& rows) {
   std::string csv =
       "variant,seed,failed,rotation_pairs_deg,rotation_oriented_deg,rotation_centres_deg,centre_relative,"
-      "focal_relative,distortion,slope,hdr_median,hdr_dark,camera_disagreement,sparse_after,calibrate_seconds,missed\n";
+      "focal_relative,distortion,slope,hdr_median,hdr_dark,camera_disagreement,sparse_after,held_out_bias,"
+      "calibrate_seconds,missed\n";
   for (const CalibrationRow& r : rows)
-    csv += fmt::format("{},{},\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{}\n", r.variant, r.seed, r.failed,
+    csv += fmt::format("{},{},\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", r.variant, r.seed, r.failed,
                        r.rotation_pairs_deg, r.rotation_oriented_deg, r.rotation_centres_deg, r.centre_relative,
                        r.focal_relative, r.distortion, r.slope, r.hdr_median, r.hdr_dark, r.camera_disagreement,
-                       r.sparse_disagreement_after, r.calibrate_seconds, fmt::join(r.missed, " "));
+                       r.sparse_disagreement_after, r.held_out_bias, r.calibrate_seconds, fmt::join(r.missed, " "));
   return csv;
 }
 

@@ -49,7 +49,8 @@ struct CalibrationRow {
   double centre_relative = 0, focal_relative = 0;
   std::string distortion;  // per camera: "-", "k1" or "k1k2"
   double slope = 0, hdr_median = 0, hdr_dark = 0, camera_disagreement = 0;
-  double sparse_disagreement_after = 0;
+  double sparse_disagreement_after = 0;  // calibrate's, on its sparse points (texture included)
+  double held_out_bias = 0;  // calibrate's gains checked on held-out points (no truth needed)
   double calibrate_seconds = 0;
   std::vector<std::string> missed;  // targets not met (empty: all met)
 };

@@ -40,6 +40,68 @@ std::optional<std::array<double, 3>> Sample(const RigCamera& camera, const Image
   return out;
 }
 
+using GainSamples = std::vector<std::vector<std::pair<int, std::array<double, 3>>>>;
+using LogGains = std::vector<std::array<double, 3>>;
+
+// Median over (point, camera) of |radiance / the point's mean - 1| after dividing by the gains.
+double GainDisagreement(const GainSamples& samples, const LogGains& log_gain) {
+  std::vector<double> d;
+  for (const auto& seen : samples)
+    for (int ch = 0; ch < 3; ++ch) {
+      double mean = 0;
+      for (const auto& [c, v] : seen) mean += v[ch] - log_gain[c][ch];
+      mean /= seen.size();
+      for (const auto& [c, v] : seen) d.push_back(std::abs(std::exp(v[ch] - log_gain[c][ch] - mean) - 1));
+    }
+  return Median(d);
+}
+
+// Each camera's median log residual against the points' mean, over the points of one parity
+// (0 or 1; 2 = all), with `log_gain` divided out first.
+LogGains MedianResiduals(const GainSamples& samples, const LogGains& log_gain, int parity) {
+  const std::size_t nc = log_gain.size();
+  LogGains out(nc, {0, 0, 0});
+  for (int ch = 0; ch < 3; ++ch) {
+    std::vector<std::vector<double>> residuals(nc);
+    for (std::size_t p = 0; p < samples.size(); ++p) {
+      if (parity != 2 && static_cast<int>(p % 2) != parity) continue;
+      double mean = 0;
+      for (const auto& [c, v] : samples[p]) mean += v[ch] - log_gain[c][ch];
+      mean /= samples[p].size();
+      for (const auto& [c, v] : samples[p]) residuals[c].push_back(v[ch] - log_gain[c][ch] - mean);
+    }
+    for (std::size_t c = 0; c < nc; ++c) out[c][ch] = Median(residuals[c]);
+  }
+  return out;
+}
+
+// Gains whose geometric mean is 1 per channel, from the points of one parity (2 = all).
+LogGains SolveLogGains(const GainSamples& samples, std::size_t nc, int parity) {
+  LogGains log_gain(nc, {0, 0, 0});
+  for (int iteration = 0; iteration < 10; ++iteration) {
+    const LogGains step = MedianResiduals(samples, log_gain, parity);
+    for (int ch = 0; ch < 3; ++ch) {
+      double centre = 0;
+      for (std::size_t c = 0; c < nc; ++c) centre += log_gain[c][ch] += step[c][ch];
+      centre /= nc;
+      for (std::size_t c = 0; c < nc; ++c) log_gain[c][ch] -= centre;
+    }
+  }
+  return log_gain;
+}
+
+// Gains from the points of one parity, each camera's remaining median bias on the other's:
+// texture and reprojection scatter average out in the median, what is left is the gains' error.
+double HeldOutBias(const GainSamples& samples, std::size_t nc) {
+  double worst = 0;
+  for (int parity = 0; parity < 2; ++parity) {
+    const LogGains bias = MedianResiduals(samples, SolveLogGains(samples, nc, parity), 1 - parity);
+    for (const auto& b : bias)
+      for (const double x : b) worst = std::max(worst, std::abs(std::exp(x) - 1));
+  }
+  return worst;
+}
+
 }  // namespace
 
 double CameraGains::Mean(int camera) const {
@@ -53,7 +115,7 @@ CameraGains EstimateCameraGains(const Rig& rig, const std::vector<Image>& hdr) {
   CameraGains result;
   result.gain.assign(nc, {1.0, 1.0, 1.0});
   // samples[p] = (camera, log rgb) for every camera that saw point p and where it projects.
-  std::vector<std::vector<std::pair<int, std::array<double, 3>>>> samples;
+  GainSamples samples;
   for (std::size_t p = 0; p < rig.points.size(); ++p) {
     if (p >= rig.visibility.size()) break;
     std::vector<std::pair<int, std::array<double, 3>>> seen;
@@ -64,35 +126,12 @@ CameraGains EstimateCameraGains(const Rig& rig, const std::vector<Image>& hdr) {
   result.points_used = static_cast<int>(samples.size());
   if (samples.size() < 10 || nc < 2) return result;
 
-  std::vector<std::array<double, 3>> log_gain(nc, {0, 0, 0});
-  auto disagreement = [&]() {
-    std::vector<double> d;
-    for (const auto& seen : samples)
-      for (int ch = 0; ch < 3; ++ch) {
-        double mean = 0;
-        for (const auto& [c, v] : seen) mean += v[ch] - log_gain[c][ch];
-        mean /= seen.size();
-        for (const auto& [c, v] : seen) d.push_back(std::abs(std::exp(v[ch] - log_gain[c][ch] - mean) - 1));
-      }
-    return Median(d);
-  };
-  result.disagreement_before = disagreement();
-  for (int iteration = 0; iteration < 10; ++iteration) {
-    for (int ch = 0; ch < 3; ++ch) {
-      std::vector<std::vector<double>> residuals(nc);
-      for (const auto& seen : samples) {
-        double mean = 0;
-        for (const auto& [c, v] : seen) mean += v[ch] - log_gain[c][ch];
-        mean /= seen.size();
-        for (const auto& [c, v] : seen) residuals[c].push_back(v[ch] - mean);
-      }
-      double centre = 0;
-      for (std::size_t c = 0; c < nc; ++c) centre += log_gain[c][ch] = Median(residuals[c]);
-      centre /= nc;
-      for (std::size_t c = 0; c < nc; ++c) log_gain[c][ch] -= centre;  // geometric mean 1
-    }
-  }
-  result.disagreement_after = disagreement();
+  result.disagreement_before = GainDisagreement(samples, LogGains(nc, {0, 0, 0}));
+  // Iterated: each camera's median residual against the points' mean, the mean then
+  // recomputed without the gains found so far.
+  const LogGains log_gain = SolveLogGains(samples, nc, 2);
+  result.disagreement_after = GainDisagreement(samples, log_gain);
+  if (samples.size() >= 20) result.held_out_bias = HeldOutBias(samples, nc);
   for (std::size_t c = 0; c < nc; ++c)
     for (int ch = 0; ch < 3; ++ch) result.gain[c][ch] = std::exp(log_gain[c][ch]);
   return result;

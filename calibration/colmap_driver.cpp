@@ -7,6 +7,7 @@
 
 #include "calibration/colmap_process.h"
 #include "core/geometry/colmap_model.h"
+#include "core/files/atomic_file.h"
 #include "core/util/error.h"
 #include "core/util/progress.h"
 
@@ -78,7 +79,15 @@ fs::path RunColmap(const fs::path& image_root, const fs::path& workspace,
   progress.Advance(1, "features");
   std::vector<std::string> match = with_db({"--SiftMatching.use_gpu", "0", "--SiftMatching.num_threads", threads});
   match.insert(match.end(), options.match_args.begin(), options.match_args.end());
-  RunStep(options, "exhaustive_matcher", match, workspace);
+  if (options.match_pairs.empty()) {
+    RunStep(options, "exhaustive_matcher", match, workspace);
+  } else {
+    std::string list;
+    for (const auto& [a, b] : options.match_pairs) list += a + " " + b + "\n";
+    WriteTextFileAtomic(workspace / "match_pairs.txt", list);
+    match.insert(match.end(), {"--match_list_path", (workspace / "match_pairs.txt").string(), "--match_type", "pairs"});
+    RunStep(options, "matches_importer", match, workspace);
+  }
   progress.Advance(1, "matches");
   std::vector<std::string> map = with_db({"--image_path", image_root.string(), "--output_path",
                                           (workspace / "sparse").string(), "--Mapper.num_threads", threads});

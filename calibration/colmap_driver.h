@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/util/error.h"
@@ -21,6 +22,8 @@ struct ColmapRunOptions {
   bool show_progress = true;
   // Further arguments of each step (a rung of calibration/registration_ladder.h).
   std::vector<std::string> extract_args, match_args, map_args;
+  // Image pairs to match (names relative to the image root); empty: every pair (exhaustive).
+  std::vector<std::pair<std::string, std::string>> match_pairs;
 };
 
 // COLMAP ran but left no model (too few matches): a rung of the ladder may still succeed.

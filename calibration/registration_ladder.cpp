@@ -35,7 +35,7 @@ std::vector<LadderRung> MakeLadder() {
                        "--Mapper.init_min_num_inliers", "30", "--Mapper.min_num_matches", "8"};
   rungs[4] = rungs[3];
   rungs[4].name = "sequence frames";
-  rungs[4].why = "the rig cameras' sequence frames (middle bracket) beside their static images";
+  rungs[4].why = "the rig cameras' sequence frames (shortest, middle and longest bracket) beside their static images";
   rungs[4].sequence_frames = true;
   return rungs;
 }
@@ -57,25 +57,73 @@ std::vector<std::string> Unregistered(const Capture& capture, const ColmapModel&
   return missing;
 }
 
+// The fewest triangulated observations of any rig camera (over all its images: one pose).
+int WeakestCameraObservations(const Capture& capture, const ColmapModel& model) {
+  int weakest = -1;
+  for (const CaptureCamera& camera : capture.cameras) {
+    int count = 0;
+    for (const auto& [id, image] : model.images)
+      if (image.name.rfind(camera.name + "/", 0) == 0)
+        for (const std::int64_t point : image.point3d_ids) count += model.points.count(point) ? 1 : 0;
+    weakest = weakest < 0 ? count : std::min(weakest, count);
+  }
+  return std::max(weakest, 0);
+}
+
 // The images of the sequence rung: each rig camera's folder holds its static images and its
 // sequence frames' middle brackets (one camera, one pose: the rig does not move), and extra/.
-fs::path SequenceImageFolder(const Capture& capture, const fs::path& folder) {
+// Pairs worth matching among them: images of two different cameras (one camera's images share
+// one pose: no baseline to triangulate from), and sequence frames only with frames of the same
+// time (the actors move between frames). `groups[i]` = (camera, time: -1 static) of names[i].
+std::vector<std::pair<std::string, std::string>> SequenceMatchPairs(const std::vector<std::string>& names,
+                                                                    const std::vector<std::pair<int, int>>& groups) {
+  std::vector<std::pair<std::string, std::string>> pairs;
+  for (std::size_t i = 0; i < names.size(); ++i)
+    for (std::size_t j = i + 1; j < names.size(); ++j)
+      if (groups[i].first != groups[j].first && groups[i].second == groups[j].second)
+        pairs.emplace_back(names[i], names[j]);
+  return pairs;
+}
+
+fs::path SequenceImageFolder(const Capture& capture, const fs::path& folder,
+                             std::vector<std::pair<std::string, std::string>>* pairs) {
+  std::vector<std::string> names;
+  std::vector<std::pair<int, int>> groups;  // (camera, frame index; -1 static), extra views camera -1
   fs::create_directories(folder);
   // File links only: COLMAP's image listing does not enter linked folders.
   for (const fs::path& image : capture.extra_images) {
     fs::create_directories(folder / "extra");
     fs::create_symlink(fs::absolute(image), folder / "extra" / image.filename());
+    names.push_back("extra/" + image.filename().string());
+    groups.emplace_back(-1 - static_cast<int>(names.size()), -1);  // each extra view its own pose
   }
+  int camera_index = 0;
   for (const CaptureCamera& camera : capture.cameras) {
     const fs::path target = folder / camera.name;
     fs::create_directories(target);
-    for (const fs::path& image : camera.static_images)
+    for (const fs::path& image : camera.static_images) {
       fs::create_symlink(fs::absolute(image), target / image.filename());
-    for (const CaptureFrame& frame : camera.frames) {
-      const fs::path& source = frame.brackets[frame.brackets.size() / 2];
-      fs::create_symlink(fs::absolute(source), target / ("seq_" + source.filename().string()));
+      names.push_back(camera.name + "/" + image.filename().string());
+      groups.emplace_back(camera_index, -1);
     }
+    // The shortest bracket finds features in the highlights, the longest in the shadows; a
+    // dense bracket adds little beyond these three (and each image costs exhaustive matching).
+    for (const CaptureFrame& frame : camera.frames) {
+      std::vector<std::size_t> order(frame.brackets.size());
+      for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+      if (frame.exposures.size() == order.size())
+        std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return frame.exposures[a] < frame.exposures[b]; });
+      const std::set<std::size_t> picks = {order.front(), order[order.size() / 2], order.back()};
+      for (const std::size_t k : picks) {
+        const fs::path& source = frame.brackets[k];
+        fs::create_symlink(fs::absolute(source), target / ("seq_" + source.filename().string()));
+        names.push_back(camera.name + "/seq_" + source.filename().string());
+        groups.emplace_back(camera_index, frame.index);
+      }
+    }
+    ++camera_index;
   }
+  *pairs = SequenceMatchPairs(names, groups);
   return folder;
 }
 
@@ -86,32 +134,50 @@ const std::vector<LadderRung>& RegistrationLadder() {
   return ladder;
 }
 
+namespace {
+
+// One rung's COLMAP run: the model folder (ColmapNoModel when COLMAP reconstructed nothing).
+fs::path RunLadderRung(const Capture& capture, const fs::path& workspace,
+                                      const ColmapRunOptions& options, std::size_t r) {
+  const LadderRung& rung = RegistrationLadder()[r];
+  ColmapRunOptions run = options;
+  run.extract_args = rung.extract_args;
+  run.match_args = rung.match_args;
+  run.map_args = rung.map_args;
+  const fs::path rung_dir = workspace / fmt::format("rung{}", r + 1);
+  const fs::path images = rung.sequence_frames ? SequenceImageFolder(capture, rung_dir / "images", &run.match_pairs)
+                                               : capture.root / "static";
+  return RunColmap(images, rung_dir, run);
+}
+
+}  // namespace
+
 LadderResult RegisterWithLadder(const Capture& capture, const fs::path& workspace, const ColmapRunOptions& options) {
   LadderResult best;
   std::optional<std::size_t> best_missing;
   std::optional<ColmapNoModel> last_error;
   const auto& ladder = RegistrationLadder();
+  const bool have_frames = !capture.cameras.front().frames.empty();
   for (std::size_t r = 0; r < ladder.size(); ++r) {
     const LadderRung& rung = ladder[r];
-    if (rung.sequence_frames && capture.cameras.front().frames.empty()) break;
-    ColmapRunOptions run = options;
-    run.extract_args = rung.extract_args;
-    run.match_args = rung.match_args;
-    run.map_args = rung.map_args;
-    const fs::path rung_dir = workspace / fmt::format("rung{}", r + 1);
-    const fs::path images = rung.sequence_frames ? SequenceImageFolder(capture, rung_dir / "images")
-                                                 : capture.root / "static";
+    if (rung.sequence_frames && !have_frames) break;
     try {
-      const fs::path model = RunColmap(images, rung_dir, run);
-      const std::vector<std::string> missing = Unregistered(capture, ReadColmapModel(model));
-      best.attempts.push_back(fmt::format("{}. {}: {}", r + 1, rung.name,
-                                          missing.empty() ? "all registered" : fmt::format("missing {}", fmt::join(missing, ", "))));
-      if (!best_missing || missing.size() < *best_missing) {
+      const fs::path folder = RunLadderRung(capture, workspace, options, r);
+      const ColmapModel model = ReadColmapModel(folder);
+      const std::vector<std::string> missing = Unregistered(capture, model);
+      const int weakest = WeakestCameraObservations(capture, model);
+      best.attempts.push_back(fmt::format("{}. {}: {}, weakest camera {} observations", r + 1, rung.name,
+                                          missing.empty() ? "all registered" : fmt::format("missing {}", fmt::join(missing, ", ")),
+                                          weakest));
+      // Fewer missing wins; at equal, the model whose weakest camera has more observations.
+      if (!best_missing || missing.size() < *best_missing ||
+          (missing.size() == *best_missing && weakest > best.weakest_observations)) {
         best_missing = missing.size();
-        best.model_folder = model;
+        best.model_folder = folder;
         best.rung = static_cast<int>(r + 1);
         best.rung_name = rung.name;
         best.unregistered = missing;
+        best.weakest_observations = weakest;
       }
       if (missing.empty()) return best;
     } catch (const ColmapNoModel& e) {

@@ -7,11 +7,19 @@
 //                    viewpoint change) and guided matching (more inliers per pair)
 //   4. relaxed       the mapper registers an image from 12 inliers (30) at a 10% inlier ratio
 //                    (25%), starts from 30 inliers (100) and keeps pairs of 8 matches (15)
-//   5. sequence      the rig cameras' own sequence frames (the middle bracket of each) join
-//                    their static images: the scene's static parts match across cameras
+//   5. sequence      the rig cameras' own sequence frames (shortest, middle and longest bracket
+//                    of each) join their static images in the camera's folder (one pose, one
+//                    set of intrinsics): the scene's static parts match across cameras, the
+//                    short and long brackets add features in highlights and shadows, and the
+//                    actors seen by every camera at one time add cross-camera points
 // The first rung that registers every rig camera and every extra view wins; otherwise the one
-// that registered most. A camera that no rung registers fails with the error of RigFromColmap
-// (it truly shares no view). The report names the rung.
+// that registered most (at equal, the one whose weakest camera has more observations). A camera
+// that no rung registers fails with the error of RigFromColmap (it truly shares no view). The
+// report names the rung and each rung's weakest camera. A rig camera with fewer than
+// kWeakCameraObservations triangulated observations (no hand-held views around it) is named in
+// the report: too few to pin its focal length and distortion. Going on to rung 5 for such a
+// camera was measured and made the geometry worse (docs/history/calibration.md, fourth pass):
+// COLMAP gives each sequence frame its own pose, and those poses drift.
 #pragma once
 
 #include <filesystem>
@@ -22,6 +30,9 @@
 #include "calibration/colmap_driver.h"
 
 namespace hdr4d {
+
+// Below this many triangulated observations a rig camera counts as weakly registered.
+constexpr int kWeakCameraObservations = 300;
 
 struct LadderRung {
   std::string name, why;
@@ -38,6 +49,7 @@ struct LadderResult {
   std::string rung_name;
   std::vector<std::string> attempts;    // one line per rung tried: what it registered
   std::vector<std::string> unregistered;  // rig cameras / extra views still missing (best effort)
+  int weakest_observations = 0;  // the fewest triangulated observations of one rig camera
 };
 
 // Runs the ladder in `workspace` (a folder per rung) until everything registers. Throws the
