@@ -246,19 +246,21 @@ void AccumulateStats(const std::vector<float>& mean2d_grad,
                      const std::vector<int>& radius,
                      int width,
                      int height,
-                     DensifyStats* stats) {
-  HDR4D_CHECK(stats != nullptr && width > 0 && height > 0);
+                     DensifyStats* stats,
+                     int reduction) {
+  HDR4D_CHECK(stats != nullptr && width > 0 && height > 0 && reduction >= 1);
   const std::size_t n = radius.size();
   HDR4D_CHECK(mean2d_grad.size() == 2 * n && stats->grad_accum.size() == n &&
               stats->denom.size() == n && stats->max_radii.size() == n);
   // d(pixel)/d(NDC) = size / 2, so the NDC gradient is the pixel one times size / 2.
-  const double sx = 0.5 * width, sy = 0.5 * height;
+  const double sx = 0.5 * width / reduction, sy = 0.5 * height / reduction;
   for (std::size_t i = 0; i < n; ++i) {
     if (radius[i] <= 0) continue;
     const double gx = mean2d_grad[2 * i] * sx, gy = mean2d_grad[2 * i + 1] * sy;
     stats->grad_accum[i] += static_cast<float>(std::sqrt(gx * gx + gy * gy));
     stats->denom[i] += 1.0f;
-    stats->max_radii[i] = std::max(stats->max_radii[i], static_cast<float>(radius[i]));
+    stats->max_radii[i] =
+        std::max(stats->max_radii[i], static_cast<float>(radius[i] * reduction));
   }
 }
 
@@ -271,12 +273,13 @@ void BatchStats::Begin(std::size_t n) {
 void BatchStats::Add(const std::vector<float>& mean2d_grad,
                      const std::vector<int>& radius,
                      int width,
-                     int height) {
+                     int height,
+                     int reduction) {
   DensifyStats view;
   view.grad_accum = std::move(norm_sum_);
   view.denom = std::move(count_);
   view.max_radii = std::move(max_radius_);
-  AccumulateStats(mean2d_grad, radius, width, height, &view);
+  AccumulateStats(mean2d_grad, radius, width, height, &view, reduction);
   norm_sum_ = std::move(view.grad_accum);
   count_ = std::move(view.denom);
   max_radius_ = std::move(view.max_radii);

@@ -118,11 +118,16 @@ struct DensifyStats {
 // it adds |(gx W/2, gy H/2)| — the gradient with respect to the NDC mean the reference's
 // rasteriser reports, on which its threshold 2e-4 is defined — and counts the view; max_radii
 // keeps the largest radius. Sizes must agree with stats (checked).
+// reduction f > 1 (--coarse-to-fine): the view was rendered at 1/f of the training images'
+// size. Its norm is divided by f and its radii multiplied by f, so both are in the units of the
+// full-size images the threshold and the screen-size prune were resolved for (the threshold
+// goes as 1 / image size: OptimizationOptions::Resolved).
 void AccumulateStats(const std::vector<float>& mean2d_grad,
                      const std::vector<int>& radius,
                      int width,
                      int height,
-                     DensifyStats* stats);
+                     DensifyStats* stats,
+                     int reduction = 1);
 
 // The statistics of one batch of views (the reference's batch_size > 1 path,
 // add_densification_stats_grad): each view's loss is divided by the batch size B, the per-view
@@ -137,7 +142,8 @@ class BatchStats {
   void Add(const std::vector<float>& mean2d_grad,
            const std::vector<int>& radius,
            int width,
-           int height);
+           int height,
+           int reduction = 1);
   void AddTo(DensifyStats* stats) const;  // sizes must agree (checked)
 
  private:

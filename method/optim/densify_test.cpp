@@ -216,6 +216,22 @@ TEST(ModelGroups, NamesWidthsAndRates) {
 
 // ---- Statistics ------------------------------------------------------------------------------
 
+// --coarse-to-fine: a view rendered at 1/2 of the training size (200 x 150 for 400 x 300) adds
+// its NDC norm over 2 (the threshold goes as 1 / image size) and its radii times 2 (full-size
+// pixels, as the screen-size prune reads them).
+TEST(DensifyStats, AReducedViewAddsInFullSizeUnits) {
+  DensifyStats full, reduced;
+  full.Reset(2);
+  reduced.Reset(2);
+  const std::vector<float> g = {1.5e-6f, -8e-6f / 3.0f, 0.0f, 0.0f};
+  AccumulateStats(g, {4, 0}, 200, 150, &full);
+  AccumulateStats(g, {4, 0}, 200, 150, &reduced, 2);
+  EXPECT_NEAR(reduced.grad_accum[0], 0.5f * full.grad_accum[0], 1e-12f);
+  EXPECT_EQ(reduced.max_radii[0], 8.0f);
+  EXPECT_EQ(reduced.denom, full.denom);
+  EXPECT_EQ(reduced.grad_accum[1], 0.0f);
+}
+
 TEST(DensifyStats, AccumulatesNdcGradientNormsOfVisibleGaussians) {
   GTEST_FLAG_SET(death_test_style, "threadsafe");
   DensifyStats stats;

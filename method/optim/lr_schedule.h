@@ -167,6 +167,10 @@ struct OptimizationOptions {
   // after densification ended (the model no longer grows). 0 = run all iterations.
   int stop_window = 0;
   double stop_tolerance = kDefaultStopTolerance;
+  // Coarse-to-fine images: the first coarse_to_fine iterations render and supervise at 1/4 of
+  // the images' size (first half) and 1/2 (second half) where the size divides
+  // (method/train/coarse_images.h). 0 = full size throughout.
+  int coarse_to_fine = 0;
   static constexpr int kDefaultStopWindow = 1000;
   static constexpr double kDefaultStopTolerance = 0.002;
 

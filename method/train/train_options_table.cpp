@@ -512,6 +512,7 @@ std::vector<TrainOption> SpeedRows() {
           .WhenGiven([](TrainOptions* o, const Json&) {
             o->reference = true;
             o->optimization.visible_adam = false;
+            o->optimization.coarse_to_fine = 0;
           }),
       Row("optimization.visible_adam", Opt(&O::visible_adam))
           .Switch("--visible-adam", true,
@@ -538,6 +539,14 @@ std::vector<TrainOption> SpeedRows() {
           .ShowDefault()
           .IfMissing(O::kDefaultStopTolerance)
           .MayChangeOnResume(),
+      Row("optimization.coarse_to_fine", Opt(&O::coarse_to_fine))
+          .Flag("--coarse-to-fine",
+                "Iterations at the start that train on reduced images: 1/4 of the size over "
+                "the first half of them, 1/2 over the rest, where the factor divides the "
+                "image's width and height (0: full size throughout, as the paper)")
+          .Range(ValueRange::Integer(0, kIntMax))
+          .IfMissing(0)
+          .Config("coarse_to_fine"),
   };
 }
 

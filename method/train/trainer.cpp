@@ -38,6 +38,7 @@
 #include "method/tonemap/tone_mapper_registry.h"
 #include "method/train/batch_gradients.h"
 #include "method/train/checkpoint.h"
+#include "method/train/coarse_images.h"
 #include "method/train/correction_cameras.h"
 #include "method/train/loss_plateau.h"
 #include "method/train/hdr_head_fit.h"
@@ -67,6 +68,9 @@ std::string TrainOptions::Validate() const {
   if (reference && optimization.visible_adam)
     return "reference: --reference trains the paper's configuration, which steps Adam densely; "
            "drop --visible-adam (or --reference)";
+  if (reference && optimization.coarse_to_fine > 0)
+    return "reference: --reference trains at full size from the start; drop --coarse-to-fine "
+           "(or --reference)";
   if (reference && optimization.stop_window > 0)
     return "reference: --reference trains every iteration asked for; drop --iterations auto "
            "and --stop-window (or --reference)";
@@ -245,6 +249,10 @@ class TrainingRun {
   FrameState state_;
   HdrLossScratch scratch_;
   std::vector<float> image_, gt_, hdr_mu_, dL_dimage_;
+  // The current view's camera as rendered: its own, or with the intrinsics of the reduced image
+  // when --coarse-to-fine reduces it by coarse_ (coarse_images.h).
+  Camera camera_;
+  int coarse_ = 1;
   // --no-hdr-geometry: dL/dimage without the HDR term, which the geometry's gradient takes, and
   // whether the current view's loss wrote it.
   std::vector<float> dL_dgeometry_;
@@ -685,10 +693,14 @@ void TrainingRun::Step() {
 // The view's buffers, its forward and loss; a non-finite loss stops training.
 double TrainingRun::ViewLoss(const TrainView& view, int it, const float** ldr_out,
                              std::size_t* pixels) {
-  *pixels = static_cast<std::size_t>(view.width()) * view.height();
+  coarse_ = CoarseFactor(it, opt_.coarse_to_fine, view.width(), view.height());
+  camera_ = view.camera;
+  if (coarse_ > 1) camera_.intrinsics = DownscaledIntrinsics(view.camera.intrinsics, coarse_);
+  *pixels = static_cast<std::size_t>(camera_.intrinsics.width) * camera_.intrinsics.height;
   image_.resize(*pixels * raster_channels_);
   dL_dimage_.resize(*pixels * raster_channels_);
   view.ToFloat(&gt_);
+  BoxReduceInPlace(&gt_, view.width(), view.height(), 3, coarse_);
   const double loss_value = ForwardAndLoss(view, ldr_out);
   if (!std::isfinite(loss_value)) {
     Fail("train: iteration {}: the loss is {} (view {}); stopped, the last good checkpoint is {}",
@@ -701,20 +713,23 @@ double TrainingRun::ViewLoss(const TrainView& view, int it, const float** ldr_ou
 // image the loss made (null under HDR-only supervision).
 double TrainingRun::ForwardAndLoss(const TrainView& view, const float** ldr_out) {
   geometry_split_ = false;
+  const int width = camera_.intrinsics.width, height = camera_.intrinsics.height;
   if (!resolved_.hdr_colors) {
-    RenderForward(model_, view.camera, view.time, render_, &state_, image_.data());
+    RenderForward(model_, camera_, view.time, render_, &state_, image_.data());
     *ldr_out = image_.data();
-    return PhotometricLoss(image_.data(), gt_.data(), view.width(), view.height(), 3,
+    return PhotometricLoss(image_.data(), gt_.data(), width, height, 3,
                            static_cast<float>(opt_.lambda_dssim), dL_dimage_.data())
         .value;
   }
   stage_->SetFrame({view.time_index, view.image_index, static_cast<float>(std::log(view.exposure)),
                     view.camera_index},
                    /*observe_bank=*/true);
-  RenderForward(model_, view.camera, view.time, render_, &state_, image_.data());
+  RenderForward(model_, camera_, view.time, render_, &state_, image_.data());
   const float* mu = nullptr;
   if (!view.hdr_mu.empty()) {
     view.HdrMuToFloat(&hdr_mu_);
+    // Reduced as mu values (the log-like target), not as radiance: a coarse step's target only.
+    BoxReduceInPlace(&hdr_mu_, view.width(), view.height(), 3, coarse_);
     mu = hdr_mu_.data();
   }
   float* geometry = nullptr;
@@ -723,7 +738,7 @@ double TrainingRun::ForwardAndLoss(const TrainView& view, const float** ldr_out)
     geometry = dL_dgeometry_.data();
   }
   const FrameLoss loss =
-      HdrFrameLoss(image_.data(), raster_channels_, view.width(), view.height(), gt_.data(), mu,
+      HdrFrameLoss(image_.data(), raster_channels_, width, height, gt_.data(), mu,
                    tone_mapper_.get(), terms_, &scratch_, dL_dimage_.data(), geometry);
   geometry_split_ = loss.geometry_split;
   // The loss already made the final LDR image: the 2D branch for whole-image mappers, else the
@@ -770,12 +785,12 @@ std::size_t TrainingRun::ActiveRestColumns() const {
 void TrainingRun::BackwardAndUpdate(const TrainView& view, int it, double loss_value) {
   const GradientRowsDone step_rows =
       optimizer_->Begin(DensifiesAt(it), ResetsOpacityAt(it), model_.size(), ActiveRestColumns());
-  RenderBackward(model_, view.camera, view.time, render_, &state_, dL_dimage_.data(), &grads_,
+  RenderBackward(model_, camera_, view.time, render_, &state_, dL_dimage_.data(), &grads_,
                  step_rows, GeometryGradient());
   if (tone_mapper_) tone_mapper_->EndFrameBackward();
   if (it < opt_.densify_until)
-    AccumulateStats(state_.splat_grads.mean2d, state_.screen_radius, view.width(), view.height(),
-                    &stats_);
+    AccumulateStats(state_.splat_grads.mean2d, state_.screen_radius, camera_.intrinsics.width,
+                    camera_.intrinsics.height, &stats_, coarse_);
   FinishUpdate(it, loss_value);
 }
 
@@ -793,13 +808,13 @@ double TrainingRun::BatchBackwardAndUpdate(int it, const float** ldr_out, std::s
   for (int b = 0; b < batch; ++b) {
     const TrainView& view = train_views_[loop_.NextView(train_views_.size())];
     loss_sum += ViewLoss(view, it, ldr_out, pixels);
-    RenderBackward(model_, view.camera, view.time, render_, &state_, dL_dimage_.data(),
+    RenderBackward(model_, camera_, view.time, render_, &state_, dL_dimage_.data(),
                    &view_grads_, {}, GeometryGradient());
     if (tone_mapper_) tone_mapper_->EndFrameBackward();
     AddGradients(view_grads_, &grads_);
     if (it < opt_.densify_until)
-      batch_stats_.Add(state_.splat_grads.mean2d, state_.screen_radius, view.width(),
-                       view.height());
+      batch_stats_.Add(state_.splat_grads.mean2d, state_.screen_radius,
+                       camera_.intrinsics.width, camera_.intrinsics.height, coarse_);
   }
   const float inverse = 1.0f / static_cast<float>(batch);
   ScaleGradients(inverse, &grads_);

@@ -3,6 +3,8 @@
 // whether or not the run was interrupted.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "core/files/json_util.h"
 #include "method/run/gaussian_scene.h"
 #include "method/train/checkpoint.h"
@@ -114,6 +116,31 @@ TEST(TrainerSpeedOptions, IterationsAutoStopsDeterministicallyAndResumes) {
   const TrainSummary again = Train(rest);
   EXPECT_EQ(again.iterations, 70);
   EXPECT_TRUE(again.stopped_flat);
+}
+
+// --coarse-to-fine: the first iterations train on reduced images (the tiny scene's 24 px: 6 px
+// up to 20, 12 px up to 40), which changes the run; a run interrupted inside the coarse part
+// resumes bit for bit.
+TEST(TrainerSpeedOptions, CoarseToFineDiffersFromFullSizeAndResumesExactly) {
+  TempDir dir;
+  MakeTinyScene(dir / "scene");
+  auto run = [&](const char* name, int iterations, int coarse) {
+    TrainOptions o = TinyRun(dir / "scene", dir / name, iterations);
+    o.optimization.coarse_to_fine = coarse;
+    return o;
+  };
+  const TrainSummary full = Train(run("full", 60, 0));
+  const TrainSummary straight = Train(run("straight", 60, 40));
+  ASSERT_EQ(straight.loss_curve.size(), 60u);
+  EXPECT_NE(full.loss_curve[0], straight.loss_curve[0]);
+  for (double loss : straight.loss_curve) EXPECT_TRUE(std::isfinite(loss));
+  EXPECT_EQ(ReadJsonFile(dir / "straight" / "config.json")["optimization"]["coarse_to_fine"], 40);
+  Train(run("split", 27, 40));
+  TrainOptions rest = run("split", 60, 40);
+  rest.resume = true;
+  const TrainSummary resumed = Train(rest);
+  EXPECT_EQ(resumed.loss_curve, straight.loss_curve);
+  ExpectSameState(dir / "split", dir / "straight");
 }
 
 }  // namespace
