@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <regex>
+#include <set>
 #include <thread>
 
 #include "benchmark/bench_test_util.h"
@@ -52,6 +53,50 @@ TEST(StoreSharing, AKeptResultIsStoredLaterWithoutRunningAgain) {
   ASSERT_TRUE(collect.result.ok()) << collect.text;
   EXPECT_NE(collect.text.find("1 runs merged"), std::string::npos) << collect.text;
   EXPECT_EQ(ResultsStore(dir / "c.db", false).Record(id).ToJson(), record.ToJson());
+}
+
+// A campaign on a machine that keeps nothing (scripts/bench-campaign.sh): `bench export` writes
+// each finished run as results/<id>.json, `bench collect` of that folder gives a new store the
+// same records, and a second export changes no file (the folder is kept in git).
+TEST(StoreSharing, ExportedRecordsMakeTheSameStoreElsewhere) {
+  testing::TempDir dir;
+  const fs::path suite = dir / "suite.json", cache = dir / "cache", log = dir / "log.txt";
+  WriteTinySuite(suite, "moved", {{{"name", "4dgs"}, {"train", {{"method", "4dgs"}}}}}, {0, 1}, 20);
+  const fs::path a = dir / "a.db", b = dir / "b.db", records = dir / "records";
+  const Command run = RunHdr4dArgs({"bench", "run", suite.string(), "--store", a.string(), "--cache",
+                                    cache.string()}, log);
+  ASSERT_TRUE(run.result.ok()) << run.text;
+  const Command out = RunHdr4dArgs({"bench", "export", a.string(), "--suite", "moved", "--out",
+                                    records.string()}, log);
+  ASSERT_TRUE(out.result.ok()) << out.text;
+  EXPECT_NE(out.text.find("2 run records written, 0 unchanged"), std::string::npos) << out.text;
+  const std::set<std::string> ids = ResultsStore(a, false).RunIds("ok");
+  ASSERT_EQ(ids.size(), 2u);
+  for (const std::string& id : ids) EXPECT_TRUE(fs::exists(records / "results" / (id + ".json"))) << id;
+  const auto stamp = fs::last_write_time(records / "results" / (*ids.begin() + ".json"));
+
+  const Command in = RunHdr4dArgs({"bench", "collect", records.string(), "--store", b.string()}, log);
+  ASSERT_TRUE(in.result.ok()) << in.text;
+  EXPECT_NE(in.text.find("2 runs merged"), std::string::npos) << in.text;
+  const ResultsStore sa(a, false), sb(b, false);
+  for (const std::string& id : ids) EXPECT_EQ(sb.Record(id).ToJson(), sa.Record(id).ToJson()) << id;
+  // The new store needs no run: the harness finds both stored.
+  const Command dry = RunHdr4dArgs({"bench", "run", suite.string(), "--store", b.string(), "--cache",
+                                    cache.string(), "--dry-run"}, log);
+  ASSERT_TRUE(dry.result.ok()) << dry.text;
+  EXPECT_EQ(dry.text.find("to run"), std::string::npos) << dry.text;
+
+  const Command again = RunHdr4dArgs({"bench", "export", b.string(), "--out", records.string()}, log);
+  ASSERT_TRUE(again.result.ok()) << again.text;
+  EXPECT_NE(again.text.find("0 run records written, 2 unchanged"), std::string::npos) << again.text;
+  EXPECT_EQ(fs::last_write_time(records / "results" / (*ids.begin() + ".json")), stamp);
+
+  // A store that is not there is named, and nothing is written.
+  const Command missing = RunHdr4dArgs({"bench", "export", (dir / "none.db").string(), "--out",
+                                        (dir / "empty").string()}, log);
+  EXPECT_FALSE(missing.result.ok());
+  EXPECT_NE(missing.text.find("none.db"), std::string::npos) << missing.text;
+  EXPECT_FALSE(fs::exists(dir / "empty" / "results"));
 }
 
 TEST(StoreSharing, TwoHarnessesOnOneStoreNeverTakeTheSameRun) {

@@ -22,6 +22,7 @@ void AddBenchCommand(CLI::App& app) {
   AddBenchCompare(*bench);
   AddBenchFindings(*bench);
   AddBenchSlurm(*bench);
+  AddBenchExport(*bench);
   AddBenchCalibration(*bench);
 }
 

@@ -16,5 +16,6 @@ void AddBenchSlurm(CLI::App& bench);   // bench slurm, task, collect
 void AddBenchCompare(CLI::App& bench);  // bench compare: two stores or code versions
 void AddBenchFindings(CLI::App& bench);  // bench findings: the paper's findings as verdicts
 void AddBenchCalibration(CLI::App& bench);  // bench calibration: calibrate over capture variants
+void AddBenchExport(CLI::App& bench);  // bench export: a store as run record files (bench collect reads them)
 
 }  // namespace hdr4d::cli

@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
-# Runs a long benchmark suite a few runs at a time, over as many sessions as it takes, into a
-# results store outside the repository (default <runs folder>/<suite>.sqlite: 67-120 KB a
-# run with curves at 8 points, so the 792 runs of `pipelines` would be 50-95 MB, too large
-# for git; benchmark/results/README.md). Commit what `hdr4d bench findings` and `bench table`
-# make of it instead. It resumes from whatever the store holds, commits nothing, and stops
-# cleanly:
+# Runs a long benchmark suite a few runs at a time, over as many sessions (and machines) as it
+# takes. The working store is outside the repository (default <runs folder>/<suite>.sqlite);
+# every finished run is also written as a record file into the repository,
+# benchmark/results/<suite>/results/<run id>.json (`hdr4d bench export`; about 20 KB a run,
+# written once), and a new session's store starts from those files (`hdr4d bench collect`), so
+# committing that folder is what carries the campaign from one machine to the next
+# (benchmark/results/README.md). It resumes from whatever the store and the record files hold,
+# commits nothing, and stops cleanly:
 # at --until a run in progress is interrupted (SIGINT: `bench run` stores nothing half-made and
 # redoes that run next time), so the store is consistent whenever the script ends.
 #
@@ -16,10 +18,13 @@
 #
 # Usage: bash scripts/bench-campaign.sh SUITE [--runs N] [--until HH:MM] [--seeds 0,1,2]
 #          [--hdr4d BIN] [--runs-dir DIR] [--cache DIR] [--store FILE] [--series-points N]
-#          [--foreground]
+#          [--records DIR] [--scenes A,B] [--methods M1,M2] [--foreground]
 #   --runs N      stop after N more runs (default: no limit)
 #   --series-points N  curves stored at N points (default 8; 0: every point)
+#   --records DIR the run record files' folder (default benchmark/results/<suite>; "none": none)
 #   --until HH:MM start no run after this time today, interrupt the one in progress at it
+#   --scenes A,B  only these scenes, one at a time in this order (default: every base-scene group)
+#   --methods M1,M2  only these suite methods (e.g. one table's rows first: its verdict sooner)
 #   --foreground  run here instead of in the background (nice 19, nohup; the log and pid file
 #                 go to the runs folder, the script prints where)
 # Environment: HDR4D_CAMPAIGN_RUNS (default ~/.cache/hdr4d/campaign) holds each suite's run
@@ -27,12 +32,12 @@
 set -euo pipefail
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-usage() { sed -n '2,26p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit "${1:-2}"; }
+usage() { sed -n '2,31p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit "${1:-2}"; }
 [[ $# -ge 1 && $1 != -* ]] || usage
 suite="$1"
 shift
 runs_left=0 until="" seeds="0,1,2" hdr4d="$root/build/cli/hdr4d" foreground=0 cache=""
-runs_dir="" store="" series_points=8
+runs_dir="" store="" series_points=8 records="" scenes="" methods=""
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --runs) runs_left="$2"; shift 2 ;;
@@ -43,6 +48,9 @@ while [[ $# -gt 0 ]]; do
     --cache) cache="$2"; shift 2 ;;
     --store) store="$2"; shift 2 ;;
     --series-points) series_points="$2"; shift 2 ;;
+    --records) records="$2"; shift 2 ;;
+    --scenes) scenes="$2"; shift 2 ;;
+    --methods) methods="$2"; shift 2 ;;
     --foreground) foreground=1; shift ;;
     -h|--help) usage 0 ;;
     *) echo "bench-campaign: unknown option '$1'" >&2; usage ;;
@@ -57,6 +65,7 @@ suite_file="$root/benchmark/suites/$suite.json"
 name="$(basename "$suite_file" .json)"
 runs_dir="${runs_dir:-${HDR4D_CAMPAIGN_RUNS:-$HOME/.cache/hdr4d/campaign}/$name}"
 store="${store:-$runs_dir/$name.sqlite}"
+records="${records:-$root/benchmark/results/$name}"
 deadline=0
 if [[ -n $until ]]; then
   deadline="$(date -d "$until" +%s)" || { echo "bench-campaign: --until '$until' is not a time" >&2; exit 2; }
@@ -67,9 +76,11 @@ log="$runs_dir/campaign.log"
 
 if (( ! foreground )); then
   args=("$suite_file" --runs "$runs_left" --seeds "$seeds" --hdr4d "$hdr4d" --runs-dir "$runs_dir"
-        --store "$store" --series-points "$series_points" --foreground)
+        --store "$store" --series-points "$series_points" --records "$records" --foreground)
   [[ -n $until ]] && args+=(--until "$until")
   [[ -n $cache ]] && args+=(--cache "$cache")
+  [[ -n $scenes ]] && args+=(--scenes "$scenes")
+  [[ -n $methods ]] && args+=(--methods "$methods")
   nohup nice -n 19 bash "${BASH_SOURCE[0]}" "${args[@]}" >>"$log" 2>&1 &
   echo $! >"$runs_dir/campaign.pid"
   echo "bench-campaign: suite $name in the background (pid $!, nice 19); log $log; store $store"
@@ -92,12 +103,24 @@ for base in order:
     print(",".join(members[base]))
 EOF
 )"
+[[ -n $scenes ]] && groups="${scenes//,/ }"
+
+# The runs earlier sessions committed join the store first; each new one is written out as soon
+# as it is stored, so an interrupted session loses at most the run in progress.
+export_records() {
+  [[ $records == none ]] && return 0
+  "$hdr4d" bench export "$store" --suite "$name" --out "$records" | sed 's/^/bench-campaign: /'
+}
+if [[ $records != none && -d $records/results ]]; then
+  "$hdr4d" bench collect "$records" --store "$store" | sed 's/^/bench-campaign: /'
+fi
 
 child=0
 stop() { (( child )) && kill -INT "$child" 2>/dev/null; wait "$child" 2>/dev/null || true; exit 130; }
 trap stop INT TERM HUP
 extra=()
 [[ -n $cache ]] && extra+=(--cache "$cache")
+[[ -n $methods ]] && extra+=(--methods "$methods")
 done_runs=0
 echo "bench-campaign: $(date -Is) suite $name, store $store, seeds $seeds, runs $( ((runs_left)) && echo "$runs_left" || echo "no limit"), until ${until:-no limit}"
 for group in $groups; do
@@ -134,6 +157,7 @@ for group in $groups; do
     fi
     read -r ok_now failed_now <<<"$made"
     (( ok_now + failed_now > 0 )) || break  # this group is complete: the next one
+    (( ok_now > 0 )) && export_records
     done_runs=$(( done_runs + ok_now + failed_now ))
   done
 done
