@@ -47,7 +47,7 @@ HexPlaneConfig HexPlaneConfig::FromJson(const nlohmann::json& j, const std::stri
   HEXPLANE_FIELDS(HEXPLANE_FROM)
 #undef HEXPLANE_FROM
   if (j.contains("center")) read("center", &c.center);  // runs before scene boxes: the origin
-  // Runs before the learned backgrounds composite over the fixed one.
+  // Runs written before the learned backgrounds lack the key: theirs is the fixed one.
   if (j.contains("background_model")) read("background_model", &c.background_model);
   std::string color;
   read("color", &color);

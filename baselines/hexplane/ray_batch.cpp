@@ -82,7 +82,8 @@ void RayBatch::Lane::BackgroundBackward(const HexPlaneModel& m, const std::vecto
   for (int i = 0; i < end - begin; ++i) {
     const Ray& ray = RayOf(rays, i);
     float dbg[6];  // out = ... + T_n background
-    for (int k = 0; k < K; ++k) dbg[k] = transmittance[i] * dL_dout[std::size_t(begin + i) * K + k];
+    const float* dout = dL_dout + std::size_t(begin + i) * K;
+    for (int k = 0; k < K; ++k) dbg[k] = transmittance[i] * dout[k];
     float doffset = 0;
     hexplane::BackgroundBackward(n, ray.dir, K, m.OffsetOf(ray.image), ray.log_exposure,
                                  kMaxLogRadiance, &background_pre[3 * std::size_t(i)], dbg,
