@@ -101,8 +101,8 @@ TEST(App, TrainFlagsAreTheOptionTablesRows) {
   }
   EXPECT_EQ(rows, 45);  // 36 + issue 55 (5) + issue 52 (3) + issue 56 (--exposure-unit)
   // The six flags that are not options of the run (--overwrite among them), and the grid
-  // family's three (cli/train_hexplane.h: --rays, --grid-voxels, --time-grid).
-  EXPECT_EQ(train->get_options().size(), 45u + 6u + 3u + 1u);  // + --help
+  // family's four (cli/train_hexplane.h: --rays, --grid-voxels, --time-grid, --grid-background).
+  EXPECT_EQ(train->get_options().size(), 45u + 6u + 4u + 1u);  // + --help
 }
 
 TEST(App, ATrainFlagOutOfRangeIsRefusedInTheWordsOfItsHelp) {

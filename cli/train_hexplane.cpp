@@ -42,6 +42,12 @@ std::shared_ptr<hp::HexPlaneTrainOptions> AddHexPlaneTrainFlags(CLI::App* cmd) {
          "Grid methods: time cells at the start and at the end (the reference's 16 24)")
       ->expected(2)
       ->check(Integer(2, 1 << 16));
+  cmd->add_option_function<std::string>(
+         "--grid-background", [o](const std::string& v) { o->background_model = v; },
+         "Grid methods: what rays that miss the scene see: fixed (the reference: --background), "
+         "learned (one learned colour) or environment (learned from the view direction); "
+         "neither learned one depends on time")
+      ->check(CLI::IsMember({"fixed", "learned", "environment"}));
   return o;
 }
 
@@ -52,8 +58,13 @@ bool TrainHexPlaneIfAsked(CLI::App* cmd, std::string method, hp::HexPlaneTrainOp
     if (const auto run_method = hp::HexPlaneMethodOfRun(cmd->get_option("--out")->as<std::string>()))
       method = *run_method;
   }
-  if (!hp::IsHexPlaneMethod(method)) return false;
   const auto given = [cmd](const char* flag) { return cmd->get_option(flag)->count() > 0; };
+  if (!hp::IsHexPlaneMethod(method)) {
+    for (const char* flag : {"--rays", "--grid-voxels", "--time-grid", "--grid-background"})
+      if (given(flag))
+        Fail("train: {} applies to the grid methods only (--method {})", flag, method);
+    return false;
+  }
   for (const char* flag : {"--config", "--tone-mapper", "--batch-size", "--max-gaussians",
                            "--hdr-head", "--learn-background", "--camera-correction",
                            "--camera-correction-weight", "--camera-correction-lr"}) {

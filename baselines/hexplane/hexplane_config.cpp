@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "baselines/hexplane/background_env.h"
 #include "core/util/error.h"
 
 namespace hdr4d::baselines::hexplane {
@@ -27,6 +28,7 @@ nlohmann::json HexPlaneConfig::ToJson() const {
 #undef HEXPLANE_TO
   j["color"] = color == ColorModel::kLdr ? "ldr" : "log-hdr";
   j["center"] = center;
+  j["background_model"] = background_model;
   return j;
 }
 
@@ -45,6 +47,8 @@ HexPlaneConfig HexPlaneConfig::FromJson(const nlohmann::json& j, const std::stri
   HEXPLANE_FIELDS(HEXPLANE_FROM)
 #undef HEXPLANE_FROM
   if (j.contains("center")) read("center", &c.center);  // runs before scene boxes: the origin
+  // Runs written before the learned backgrounds lack the key: theirs is the fixed one.
+  if (j.contains("background_model")) read("background_model", &c.background_model);
   std::string color;
   read("color", &color);
   if (color != "ldr" && color != "log-hdr")
@@ -72,6 +76,9 @@ std::string HexPlaneConfig::Validate() const {
     if (!std::isfinite(x)) return "the box centre must be finite";
   if (!(step_ratio > 0) || !(distance_scale > 0)) return "step_ratio, distance_scale must be > 0";
   if (!(background >= 0 && background <= 1)) return "background must be within [0, 1]";
+  if (BackgroundBasisSize(background_model) < 0)
+    return fmt::format("background model '{}' is none of fixed, learned, environment",
+                       background_model);
   if (!(lr_grid > 0 && lr_nn > 0 && lr_decay_ratio > 0 && lr_offset >= 0))
     return "learning rates must be positive";
   if (!(beta1 >= 0 && beta1 < 1 && beta2 >= 0 && beta2 < 1)) return "betas must be in [0, 1)";

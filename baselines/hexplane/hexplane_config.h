@@ -48,6 +48,10 @@ struct HexPlaneConfig {
   std::array<float, 3> center{0.0f, 0.0f, 0.0f};
   float near = 2.0f, far = 6.0f;
   float background = 0.0f;
+  // What a ray sees behind the box: "fixed" (the reference: `background` in every channel),
+  // "learned" (one learned colour) or "environment" (a learned function of the view direction);
+  // neither learned one depends on time (background_env.h).
+  std::string background_model = "fixed";
   std::uint64_t seed = 20220401;
 
   nlohmann::json ToJson() const;

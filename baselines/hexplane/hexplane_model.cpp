@@ -4,6 +4,7 @@
 #include <cmath>
 #include <fstream>
 
+#include "baselines/hexplane/background_env.h"
 #include "baselines/hexplane/volume_render.h"
 #include "core/files/atomic_file.h"
 #include "core/util/error.h"
@@ -71,6 +72,20 @@ HexPlaneModel HexPlaneModel::Create(const HexPlaneConfig& config, int num_train_
   for (float& v : m.app_basis) v = float(u(rng));
   m.mlp = InitAppMlp(m.MlpShape(), config.seed + 3);
   if (config.color == ColorModel::kLogHdr) m.exposure_offset.assign(num_train_images, 0.0f);
+  // A learned background starts uniform at the fixed one (kept off the sigmoid's flat ends; the
+  // log-HDR model's at a radiance of at least 0.05).
+  const int n = BackgroundBasisSize(config.background_model);
+  if (n > 0) {
+    const float b = std::clamp(config.background, 0.05f, 0.95f);
+    const float pre = config.color == ColorModel::kLdr
+                          ? std::log(b / (1.0f - b))
+                          : std::log(std::max(config.background, 0.05f));
+    const float up[3] = {0.0f, 0.0f, 1.0f};  // degree 0 is the same in every direction
+    float y0;
+    BackgroundBasis(up, 1, &y0);
+    m.background.assign(std::size_t(n) * 3, 0.0f);
+    for (int k = 0; k < 3; ++k) m.background[k] = pre / y0;
+  }
   return m;
 }
 
@@ -123,12 +138,13 @@ HexPlaneGrads::HexPlaneGrads(const HexPlaneModel& m)
       density_basis(m.density_basis.size(), 0.0f),
       app_basis(m.app_basis.size(), 0.0f),
       mlp(m.mlp.size(), 0.0f),
-      exposure_offset(m.exposure_offset.size(), 0.0f) {}
+      exposure_offset(m.exposure_offset.size(), 0.0f),
+      background(m.background.size(), 0.0f) {}
 
 void HexPlaneGrads::SetZero() {
   density.SetZero();
   app.SetZero();
-  for (auto* v : {&density_basis, &app_basis, &mlp, &exposure_offset})
+  for (auto* v : {&density_basis, &app_basis, &mlp, &exposure_offset, &background})
     std::fill(v->begin(), v->end(), 0.0f);
 }
 
@@ -144,6 +160,7 @@ void HexPlaneGrads::Add(const HexPlaneGrads& o) {
   add(app_basis, o.app_basis);
   add(mlp, o.mlp);
   add(exposure_offset, o.exposure_offset);
+  add(background, o.background);
 }
 
 }  // namespace hdr4d::baselines::hexplane

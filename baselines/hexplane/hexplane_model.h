@@ -42,6 +42,7 @@ struct HexPlaneModel {
   std::vector<float> app_basis;      // app_dim x (3 app_comps), row-major
   std::vector<float> mlp;
   std::vector<float> exposure_offset;  // one per training image (log-HDR colours)
+  std::vector<float> background;       // n x 3 coefficients of a learned background, or none
   OccupancyGrid occupancy;
 
   // Fresh parameters at the initial grid.
@@ -71,7 +72,7 @@ struct HexPlaneModel {
 // Gradients with the model's shapes.
 struct HexPlaneGrads {
   HexPlanes<float> density, app;
-  std::vector<float> density_basis, app_basis, mlp, exposure_offset;
+  std::vector<float> density_basis, app_basis, mlp, exposure_offset, background;
   explicit HexPlaneGrads(const HexPlaneModel& m);
   void SetZero();
   void Add(const HexPlaneGrads& other);

@@ -33,6 +33,8 @@ void HexPlaneModel::Write(std::ostream& out) const {
   const std::int32_t occ[3] = {occupancy.res[0], occupancy.res[1], occupancy.res[2]};
   out.write(reinterpret_cast<const char*>(occ), sizeof occ);
   WriteArray(out, occupancy.occupied);
+  // Only a learned background (the configuration says which): older checkpoints read as before.
+  if (!background.empty()) WriteArray(out, background);
 }
 
 HexPlaneModel HexPlaneModel::Load(const std::filesystem::path& file, const HexPlaneConfig& config) {
@@ -71,6 +73,8 @@ HexPlaneModel HexPlaneModel::Read(std::istream& in, const std::filesystem::path&
   ReadArray(in, cells, name, "the occupancy grid", &m.occupancy.occupied);
   if (cells > 0 && (occ[0] < 2 || occ[1] < 2 || occ[2] < 2))
     Fail("{}: occupancy grid under 2 cells along an axis", name);
+  if (!m.background.empty())
+    ReadArray(in, m.background.size(), name, "the learned background", &m.background);
   return m;
 }
 

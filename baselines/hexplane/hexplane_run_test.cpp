@@ -105,6 +105,31 @@ TEST(HexPlaneRun, ResumeContinuesExactly) {
 }
 
 // Save, load, save: the same bytes, model and trainer state both.
+// A learned background (--grid-background environment) is trained, recorded in the run's
+// configuration and carried by the checkpoint; a model without one reads as before.
+TEST(HexPlaneRun, ALearnedBackgroundIsTrainedSavedAndReadBack) {
+  TempDir dir;
+  MakeLdrScene(dir / "scene");
+  HexPlaneTrainOptions o = SmallRun(dir / "scene", dir / "run", 40);
+  o.background_model = "environment";
+  o.stop_after = 7;
+  TrainHexPlane(o);
+  const LoadedHexPlaneRun run = LoadHexPlaneRun(dir / "run");
+  EXPECT_EQ(run.config.background_model, "environment");
+  ASSERT_EQ(run.model.background.size(), 27u);
+  bool moved = false;  // it starts uniform: only the degree-0 terms are non-zero
+  for (std::size_t i = 3; i < run.model.background.size(); ++i)
+    moved = moved || run.model.background[i] != 0.0f;
+  EXPECT_TRUE(moved);
+  HexPlaneModel model;
+  PlainAdam adam(run.config.beta1, run.config.beta2);
+  const HexPlaneTrainState state =
+      LoadTrainingCheckpoint(dir / "run" / "checkpoint.bin", run.config, &model, &adam);
+  EXPECT_EQ(model.background, run.model.background);
+  SaveTrainingCheckpoint(dir / "again.bin", model, adam, state);
+  EXPECT_TRUE(Bytes(dir / "again.bin") == Bytes(dir / "run" / "checkpoint.bin"));
+}
+
 TEST(HexPlaneRun, CheckpointRoundTripsBitForBit) {
   TempDir dir;
   MakeLdrScene(dir / "scene");

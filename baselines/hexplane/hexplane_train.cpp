@@ -113,6 +113,7 @@ void HexPlaneTraining::ReadRunToResume() {
   if (!o_.time_grid_final) o_.time_grid_final = run.time_grid_final;
   if (!o_.seed) o_.seed = std::int64_t(run.seed);
   if (!o_.hdr_weight) o_.hdr_weight = run.hdr_weight;
+  if (!o_.background_model) o_.background_model = run.background_model;
   const ExposureUnit unit = RecordedExposureUnit(stored_, config.string());
   if (o_.exposure_unit && *o_.exposure_unit != unit)
     Fail("train: --resume: --exposure-unit {} is not the run's ({}: {})",
@@ -153,6 +154,7 @@ void HexPlaneTraining::SetUp() {
   if (o_.time_grid_final) c_.time_grid_final = *o_.time_grid_final;
   if (o_.seed) c_.seed = std::uint64_t(*o_.seed);
   if (o_.hdr_weight) c_.hdr_weight = *o_.hdr_weight;
+  if (o_.background_model) c_.background_model = *o_.background_model;
   ApplySceneBounds(dataset_, &c_);
   c_.background = *o_.background;
   if (std::string p = c_.Validate(); !p.empty()) Fail("train: {}", p);
@@ -348,6 +350,8 @@ void HexPlaneTraining::Step(int it, std::mt19937_64* rng) {
   adam_->Update(&model_.mlp, grads_->mlp, lr_nn);
   if (!model_.exposure_offset.empty())
     adam_->Update(&model_.exposure_offset, grads_->exposure_offset, c_.lr_offset * lr_factor);
+  // A handful of values seen by every ray that misses the scene: the planes' rate.
+  if (!model_.background.empty()) adam_->Update(&model_.background, grads_->background, lr_grid);
 }
 
 // After iteration `it`: the occupancy grid, then the upsampling, at the reference's iterations

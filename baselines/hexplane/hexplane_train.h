@@ -34,6 +34,7 @@ struct HexPlaneTrainOptions {
   std::optional<int> iterations, batch_rays, time_grid_init, time_grid_final;
   std::optional<std::int64_t> voxels_init, voxels_final, seed;
   std::optional<float> hdr_weight;
+  std::optional<std::string> background_model;  // fixed, learned, environment (background_env.h)
 };
 
 struct HexPlaneTrainSummary {

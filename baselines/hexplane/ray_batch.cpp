@@ -5,6 +5,7 @@
 #include <cmath>
 #include <optional>
 
+#include "baselines/hexplane/background_env.h"
 #include "baselines/hexplane/volume_render.h"
 #include "baselines/sigmoid_tone_mapper.h"
 #include "core/util/parallel.h"
@@ -57,6 +58,41 @@ void RayBatch::Lane::March(const HexPlaneModel& m, const Ray& ray, const float* 
   first.push_back(int(feature.size()));
 }
 
+void RayBatch::Lane::Background(const HexPlaneModel& m, const std::vector<Ray>& rays) {
+  const int K = RayChannels(m), num_rays = end - begin;
+  background.resize(std::size_t(num_rays) * K);
+  if (m.background.empty()) {
+    std::fill(background.begin(), background.end(), m.config.background);
+    return;
+  }
+  background_pre.resize(std::size_t(num_rays) * 3);
+  const int n = int(m.background.size() / 3);
+  for (int i = 0; i < num_rays; ++i) {
+    const Ray& ray = RayOf(rays, i);
+    BackgroundForward(m.background.data(), n, ray.dir, K, m.OffsetOf(ray.image), ray.log_exposure,
+                      kMaxLogRadiance, &background_pre[3 * std::size_t(i)],
+                      &background[std::size_t(i) * K]);
+  }
+}
+
+void RayBatch::Lane::BackgroundBackward(const HexPlaneModel& m, const std::vector<Ray>& rays,
+                                        const float* dL_dout) {
+  if (m.background.empty()) return;
+  const int K = RayChannels(m), n = int(m.background.size() / 3);
+  for (int i = 0; i < end - begin; ++i) {
+    const Ray& ray = RayOf(rays, i);
+    float dbg[6];  // out = ... + T_n background
+    const float* dout = dL_dout + std::size_t(begin + i) * K;
+    for (int k = 0; k < K; ++k) dbg[k] = transmittance[i] * dout[k];
+    float doffset = 0;
+    hexplane::BackgroundBackward(n, ray.dir, K, m.OffsetOf(ray.image), ray.log_exposure,
+                                 kMaxLogRadiance, &background_pre[3 * std::size_t(i)], dbg,
+                                 grads->background.data(), &doffset);
+    if (ray.image >= 0 && ray.image < int(grads->exposure_offset.size()))
+      grads->exposure_offset[ray.image] += doffset;
+  }
+}
+
 RayBatch::RayBatch() = default;
 RayBatch::~RayBatch() = default;
 
@@ -68,8 +104,6 @@ void RayBatch::Forward(const HexPlaneModel& m, const std::vector<Ray>& rays, con
   lanes_.resize(lanes);
   const int K = RayChannels(m);
   out->assign(std::size_t(n) * K, 0.0f);
-  const float bg[6] = {m.config.background, m.config.background, m.config.background,
-                       m.config.background, m.config.background, m.config.background};
   ParallelFor(lanes, 1, [&](std::int64_t l) {
     if (!lanes_[l]) lanes_[l] = std::make_unique<Lane>();
     Lane& lane = *lanes_[l];
@@ -81,11 +115,12 @@ void RayBatch::Forward(const HexPlaneModel& m, const std::vector<Ray>& rays, con
       v->clear();
     for (int r = lane.begin; r < lane.end; ++r) lane.March(m, rays[r], jitter);
     lane.Appearance(m, rays, jitter ? kExploreSamples : 0, jitter ? jitter[0] : 0.0f);
+    lane.Background(m, rays);
     for (int r = lane.begin; r < lane.end; ++r) {
       const int i = r - lane.begin, b = lane.first[i];
       Composite(lane.weight.data() + b, lane.colour.data() + std::size_t(b) * K,
-                lane.first[i + 1] - b, K, lane.transmittance[i], bg,
-                out->data() + std::size_t(r) * K);
+                lane.first[i + 1] - b, K, lane.transmittance[i],
+                lane.background.data() + std::size_t(i) * K, out->data() + std::size_t(r) * K);
     }
   });
 }

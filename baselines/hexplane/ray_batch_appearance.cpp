@@ -73,14 +73,13 @@ void RayBatch::Lane::Backward(const HexPlaneModel& m, const std::vector<Ray>& ra
                               const float* dL_dout) {
   const HexPlaneConfig& c = m.config;
   const int K = RayChannels(m);
-  const float bg[6] = {c.background, c.background, c.background,
-                       c.background, c.background, c.background};
   std::vector<float> dcolour(colour.size()), dfeature(feature.size());
   std::vector<float> scratch(4 * c.density_comps);
   for (int i = 0; i < end - begin; ++i) {
     const int b = first[i], n = first[i + 1] - b;
     CompositeBackward(feature.data() + b, delta.data() + b, alpha.data() + b, weight.data() + b,
-                      colour.data() + std::size_t(b) * K, n, K, c.density_shift, bg,
+                      colour.data() + std::size_t(b) * K, n, K, c.density_shift,
+                      background.data() + std::size_t(i) * K,
                       dL_dout + std::size_t(begin + i) * K, dcolour.data() + std::size_t(b) * K,
                       dfeature.data() + b);
     for (int s = b; s < b + n; ++s) {
@@ -90,6 +89,7 @@ void RayBatch::Lane::Backward(const HexPlaneModel& m, const std::vector<Ray>& ra
                              dfeature[s], &grads->density, &grads->density_basis, scratch.data());
     }
   }
+  BackgroundBackward(m, rays, dL_dout);
   AppearanceBackward(m, rays, dcolour);
 }
 

@@ -1,8 +1,9 @@
 // RayBatch::Lane::AppearanceBackward (ray_batch_appearance.cpp), the backward of the appearance
 // half of a ray batch: planes -> basis matrix -> MLP -> colour (LDR sigmoid, or log radiance with
 // HDR = exp and LDR = sigmoid(ln radiance + ln exposure + offset)). It alone writes the gradients
-// of the appearance planes, the appearance basis, the MLP and the exposure offsets, so these are
-// checked here, through RayBatch::Backward with the density path held fixed (only appearance
+// of the appearance planes, the appearance basis, the MLP and the exposure offsets (with the
+// learned background of background_env.h beside it, whose coefficients are checked too), so these
+// are checked here, through RayBatch::Backward with the density path held fixed (only appearance
 // parameters move, so the samples, their weights and the set that gets a colour stay the same).
 //
 // The model and the batch are float only (HexPlaneModel holds float parameters; its parts have
@@ -27,8 +28,9 @@
 namespace hdr4d::baselines::hexplane {
 namespace {
 
-HexPlaneModel Model(ColorModel color) {
+HexPlaneModel Model(ColorModel color, const std::string& background_model = "fixed") {
   HexPlaneConfig c;
+  c.background_model = background_model;
   c.method = color == ColorModel::kLdr ? "hexplane" : "hdr-hexplane";
   c.color = color;
   c.voxels_init = c.voxels_final = 6 * 6 * 6;
@@ -40,7 +42,10 @@ HexPlaneModel Model(ColorModel color) {
   c.init_scale = 0.8f;
   c.init_shift = 0.9f;  // a dense medium: many samples get a colour
   c.density_shift = 0.0f;
-  c.distance_scale = 1.0f;
+  // With a learned background, a thinner medium so that the sky shows behind it (a ray keeps
+  // a fair share of its transmittance to the end, and the background's gradient is far above
+  // float noise).
+  c.distance_scale = background_model == "fixed" ? 1.0f : 0.1f;
   c.near = 1.0f;
   c.far = 4.0f;
   c.box = 1.0f;
@@ -49,6 +54,7 @@ HexPlaneModel Model(ColorModel color) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> u(-0.5f, 0.5f);
   for (float& v : m.exposure_offset) v = u(rng);  // distinct offsets per image
+  for (float& v : m.background) v += u(rng);      // a sky that varies with the direction
   for (float& v : m.app_basis) v *= 3.0f;         // the planes' share of the colour grows
   // Every hidden unit on: the first layer's weights shrunk and its biases raised, the second's
   // made non-negative. The loss is then smooth (no ReLU kink within a step), which float
@@ -86,13 +92,16 @@ struct Group {
 };
 template <typename Model>
 std::vector<Group> AppearanceGroups(Model* m) {
-  std::vector<Group> groups(4);
+  std::vector<Group> groups(5);
   groups[0].name = "app planes";
   for (auto* plane : m->app.All())
     for (float& v : plane->data) groups[0].values.push_back(&v);
   const std::pair<const char*, std::vector<float>*> flat[] = {
-      {"app basis", &m->app_basis}, {"mlp", &m->mlp}, {"exposure offsets", &m->exposure_offset}};
-  for (int k = 0; k < 3; ++k) {
+      {"app basis", &m->app_basis},
+      {"mlp", &m->mlp},
+      {"exposure offsets", &m->exposure_offset},
+      {"background", &m->background}};
+  for (int k = 0; k < 4; ++k) {
     groups[1 + k].name = flat[k].first;
     for (float& v : *flat[k].second) groups[1 + k].values.push_back(&v);
   }
@@ -113,8 +122,8 @@ double Loss(const HexPlaneModel& m, const std::vector<Ray>& rays, std::vector<fl
   return l;
 }
 
-void CheckAppearanceBackward(ColorModel color) {
-  HexPlaneModel m = Model(color);
+void CheckAppearanceBackward(ColorModel color, const std::string& background_model = "fixed") {
+  HexPlaneModel m = Model(color, background_model);
   const std::vector<Ray> rays = Rays();
   std::vector<float> weights;
   Loss(m, rays, &weights);
@@ -136,6 +145,7 @@ void CheckAppearanceBackward(ColorModel color) {
       for (const float* v : grads[k].values) EXPECT_EQ(*v, 0.0f);  // unused by LDR colours
       continue;
     }
+    if (p.empty()) continue;  // no learned background
     std::vector<float> dir(p.size()), orig(p.size());
     double analytic = 0;
     for (std::size_t i = 0; i < p.size(); ++i) {
@@ -161,6 +171,14 @@ TEST(RayBatchAppearance, AppearanceBackwardMatchesFiniteDifferencesLdr) {
 }
 TEST(RayBatchAppearance, AppearanceBackwardMatchesFiniteDifferencesLogHdr) {
   CheckAppearanceBackward(ColorModel::kLogHdr);
+}
+// With a learned environment behind the box (background_env.h): its coefficients, and the
+// exposure offsets that now also reach the sky.
+TEST(RayBatchAppearance, BackwardMatchesFiniteDifferencesWithAnEnvironmentLdr) {
+  CheckAppearanceBackward(ColorModel::kLdr, "environment");
+}
+TEST(RayBatchAppearance, BackwardMatchesFiniteDifferencesWithAnEnvironmentLogHdr) {
+  CheckAppearanceBackward(ColorModel::kLogHdr, "environment");
 }
 
 }  // namespace

@@ -25,12 +25,18 @@ struct RayBatch::Lane {
   int begin = 0, end = 0;           // rays [begin, end)
   std::vector<int> first, app_first;  // per ray (+1): first sample, first appearance row
   std::vector<float> xyz, feature, delta, alpha, weight, colour, transmittance;
+  std::vector<float> background, background_pre;  // per ray: K channels, 3 pre-activations
   std::vector<int> app_sample;  // appearance row -> sample
   RowMatrix<float> products, feat, input, dout, din;
   std::vector<RowMatrix<float>> acts;
   std::optional<HexPlaneGrads> grads;
 
   void March(const HexPlaneModel& m, const Ray& ray, const float* jitter);
+  // The background behind each ray of the lane (the fixed one, or background_env.h's).
+  void Background(const HexPlaneModel& m, const std::vector<Ray>& rays);
+  // Adds the learned background's gradients for the lane's rays, dL_dout of the whole batch.
+  void BackgroundBackward(const HexPlaneModel& m, const std::vector<Ray>& rays,
+                          const float* dL_dout);
   // explore > 0: that many more samples per ray below the weight threshold also get their
   // colour, spread evenly along the ray from `offset` (a fraction of the stride, in [0, 1)).
   void Appearance(const HexPlaneModel& m, const std::vector<Ray>& rays, int explore = 0,

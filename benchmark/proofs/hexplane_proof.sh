@@ -15,6 +15,7 @@
 # [500], RAYS and GRID (D-NeRF HexPlane: rays, voxels at start and end) [1024, "32768 262144",
 # as the suite's grid rows; the reference's: 4096, "262144 8000000"], THREADS [2], SCENES [the
 # eight], MINI (the generated scenes) [/work/data/mini], SHARED [/work/shared].
+# A Gaussian run's config.json names its method under "hdr" (a grid run's at the top).
 # WORKDIR/cache/datagen/mini-s0/<scene> link to MINI's scenes, so `bench run` finds them
 # generated (nothing is written into MINI).
 set -euo pipefail
@@ -89,7 +90,9 @@ if [[ " $parts " == *" mini "* ]]; then
       > "$work/bench_$s.log" 2>&1 || echo "  $s: bench run failed, see $work/bench_$s.log"
     echo "  $s: $(tail -n 1 "$work/bench_$s.log")"
   done
-  "$hdr4d" bench table paper --store "$work/paper.sqlite" --out "$work/tables" > /dev/null
+  # --iterations relabels the runs (e.g. 100it): the table shows that budget.
+  "$hdr4d" bench table paper --store "$work/paper.sqlite" --out "$work/tables" \
+    --budget "${iterations}it" > /dev/null
   echo "  tables: $work/tables"
 fi
 
@@ -117,7 +120,7 @@ if [[ " $parts " == *" sides "* ]]; then
     for c in "$work"/paper.sqlite.runs/*/train/config.json; do
       [ -f "$c" ] || continue
       key="$(python3 -c 'import json,sys; c=json.load(open(sys.argv[1]))
-h=c.get("hexplane",{}); m=c.get("method",h.get("method",""))
+h=c.get("hexplane",{}); m=c.get("method") or c.get("hdr",{}).get("method","")
 sup="ldr+hdr" if h.get("ldr_loss") and h.get("hdr_loss") else "hdr" if h.get("hdr_loss") else "ldr"
 print(c["data"].rstrip("/").rsplit("/",1)[-1], m, sup)' "$c")"
       read -r scene method sup <<< "$key"
