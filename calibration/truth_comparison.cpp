@@ -380,8 +380,17 @@ Eigen::Matrix3d AlignOrientations(const std::vector<Eigen::Matrix3d>& from,
 }
 
 double RotationAngleDegrees(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
-  const double c = std::clamp(((a.transpose() * b).trace() - 1) / 2, -1.0, 1.0);
-  return std::acos(c) * 180.0 / M_PI;
+  // The nearest rotation to a^T b first: the truth's matrices come from Blender in float32, off
+  // orthonormal by ~6e-8, enough to move (trace - 1) / 2 by ~1e-7: acos then reads angles of
+  // 0.01 deg wrong by half and clamps those under ~0.03 deg to exactly 0 (issue 54's 0.000 deg
+  // row). Then atan2 of the axis part against the trace part, which keeps small angles where
+  // acos of a cosine near 1 does not.
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(a.transpose() * b, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+  d(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1 : 1;
+  const Eigen::Matrix3d r = svd.matrixU() * d * svd.matrixV().transpose();
+  const Eigen::Vector3d axis(r(2, 1) - r(1, 2), r(0, 2) - r(2, 0), r(1, 0) - r(0, 1));
+  return std::atan2(axis.norm(), r.trace() - 1) * 180.0 / M_PI;
 }
 
 TruthComparison CompareWithTruth(const fs::path& calibrated, const fs::path& truth) {

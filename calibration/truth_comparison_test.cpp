@@ -63,6 +63,24 @@ TEST(RotationAngleDegrees, IsTheAngleBetween) {
   EXPECT_NEAR(RotationAngleDegrees(a, a), 0.0, 1e-6);
 }
 
+// Issue 54's 480x360 row read 0.000 deg between every camera pair: the truth's rotations are
+// Blender's float32 matrices, a hair off orthonormal, and acos((trace - 1) / 2) clamped every
+// small angle to 0. A tenth of the 0.25 deg target must still read as itself.
+TEST(RotationAngleDegrees, KeepsSmallAnglesOfSlightlyNonOrthonormalMatrices) {
+  const Eigen::Matrix3d a = Eigen::AngleAxisd(1.1, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
+  for (const double degrees : {0.02, 0.005}) {
+    const Eigen::Matrix3d b =
+        a * Eigen::AngleAxisd(degrees * M_PI / 180, Eigen::Vector3d(0.3, 1, -0.2).normalized()).toRotationMatrix();
+    EXPECT_NEAR(RotationAngleDegrees(a, b), degrees, 1e-6);
+    EXPECT_NEAR(RotationAngleDegrees(a, (1 + 1e-6) * b), degrees, 1e-6) << "a matrix scaled by 1 + 1e-6";
+    const Eigen::Matrix3d b32 = b.cast<float>().cast<double>();  // as Blender writes it
+    EXPECT_NEAR(RotationAngleDegrees(a, b32), degrees, 2e-4) << "float32 rounding";
+    EXPECT_NEAR(RotationAngleDegrees(b32, a), degrees, 2e-4);
+  }
+  EXPECT_NEAR(RotationAngleDegrees(a, a * Eigen::AngleAxisd(M_PI - 1e-9, Eigen::Vector3d::UnitX()).toRotationMatrix()),
+              180.0, 1e-6);
+}
+
 constexpr int kW = 40, kH = 30, kCameras = 4;
 constexpr double kF = 50;
 
