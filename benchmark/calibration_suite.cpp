@@ -174,6 +174,8 @@ CalibrationRow ReadCalibrationRow(const fs::path& calibrated, const CalibrationT
   r.centre_relative = CalibrationNumber(g, "max_position_error_relative", truth_file);
   r.focal_relative = CalibrationNumber(g, "max_focal_error_relative", truth_file);
   r.slope = CalibrationNumber(h, "loglog_slope", truth_file);
+  r.slope_render = h.value("loglog_slope_render", -1.0);
+  r.slope_render_floor = h.value("loglog_slope_render_floor", -1.0);
   r.hdr_median = CalibrationNumber(h, "median_relative_error", truth_file);
   r.hdr_dark = CalibrationNumber(h, "dark_fifth_median_relative_error", truth_file);
   r.camera_disagreement = CalibrationNumber(h, "camera_disagreement", truth_file);
@@ -191,7 +193,7 @@ CalibrationRow ReadCalibrationRow(const fs::path& calibrated, const CalibrationT
 std::string CalibrationTableMarkdown(const std::vector<CalibrationRow>& rows) {
   std::string md =
       "| variant | seed | registered | rotation max (deg): pairs / orientations / centres' similarity | "
-      "centre max (% rig) | focal max | distortion kept | HDR slope | HDR median (darkest fifth) | "
+      "centre max (% rig) | focal max | distortion kept | HDR slope (against the render; a perfect calibration there) | HDR median (darkest fifth) | "
       "cameras' HDR scales vs truth | sparse points after gains: scatter / held-out bias | calibrate (s) | targets |\n"
       "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const CalibrationRow& r : rows) {
@@ -200,10 +202,12 @@ std::string CalibrationTableMarkdown(const std::vector<CalibrationRow>& rows) {
       continue;
     }
     md += fmt::format(
-        "| {} | {} | {} | {:.3f} / {:.3f} / {:.3f} | {:.2f} | {:.2f}% | {} | {:.3f} | {:.1f}% ({:.1f}%) | {:.1f}% | "
+        "| {} | {} | {} | {:.3f} / {:.3f} / {:.3f} | {:.2f} | {:.2f}% | {} | {:.3f}{} | {:.1f}% ({:.1f}%) | {:.1f}% | "
         "{:.1f}% / {:.1f}% | {:.0f} | {} |\n",
         r.variant, r.seed, r.registration, r.rotation_pairs_deg, r.rotation_oriented_deg, r.rotation_centres_deg,
-        100 * r.centre_relative, 100 * r.focal_relative, r.distortion, r.slope, 100 * r.hdr_median, 100 * r.hdr_dark,
+        100 * r.centre_relative, 100 * r.focal_relative, r.distortion, r.slope,
+        r.slope_render < 0 ? std::string() : fmt::format(" ({:.3f}; {:.3f})", r.slope_render, r.slope_render_floor),
+        100 * r.hdr_median, 100 * r.hdr_dark,
         100 * r.camera_disagreement, 100 * r.sparse_disagreement_after, 100 * r.held_out_bias, r.calibrate_seconds,
         r.missed.empty() ? std::string("all met") : fmt::format("missed: {}", fmt::join(r.missed, ", ")));
   }
@@ -213,12 +217,12 @@ std::string CalibrationTableMarkdown(const std::vector<CalibrationRow>& rows) {
 std::string CalibrationTableCsv(const std::vector<CalibrationRow>& rows) {
   std::string csv =
       "variant,seed,failed,rotation_pairs_deg,rotation_oriented_deg,rotation_centres_deg,centre_relative,"
-      "focal_relative,distortion,slope,hdr_median,hdr_dark,camera_disagreement,sparse_after,held_out_bias,"
+      "focal_relative,distortion,slope,slope_render,slope_render_floor,hdr_median,hdr_dark,camera_disagreement,sparse_after,held_out_bias,"
       "calibrate_seconds,missed\n";
   for (const CalibrationRow& r : rows)
-    csv += fmt::format("{},{},\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", r.variant, r.seed, r.failed,
+    csv += fmt::format("{},{},\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", r.variant, r.seed, r.failed,
                        r.rotation_pairs_deg, r.rotation_oriented_deg, r.rotation_centres_deg, r.centre_relative,
-                       r.focal_relative, r.distortion, r.slope, r.hdr_median, r.hdr_dark, r.camera_disagreement,
+                       r.focal_relative, r.distortion, r.slope, r.slope_render, r.slope_render_floor, r.hdr_median, r.hdr_dark, r.camera_disagreement,
                        r.sparse_disagreement_after, r.held_out_bias, r.calibrate_seconds, fmt::join(r.missed, " "));
   return csv;
 }

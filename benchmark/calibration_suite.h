@@ -49,6 +49,9 @@ struct CalibrationRow {
   double centre_relative = 0, focal_relative = 0;
   std::string distortion;  // per camera: "-", "k1" or "k1k2"
   double slope = 0, hdr_median = 0, hdr_dark = 0, camera_disagreement = 0;
+  // The slope against the raw render and what a perfect calibration reads there (the resampling
+  // of distorted cameras alone); -1 where the comparison predates them.
+  double slope_render = -1, slope_render_floor = -1;
   double sparse_disagreement_after = 0;  // calibrate's, on its sparse points (texture included)
   double held_out_bias = 0;  // calibrate's gains checked on held-out points (no truth needed)
   double calibrate_seconds = 0;

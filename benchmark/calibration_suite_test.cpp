@@ -29,6 +29,10 @@ TEST(CalibrationSuite, ShippedGridParses) {
   EXPECT_EQ(g.name, "calibration");
   EXPECT_GE(g.variants.size(), 6u);
   EXPECT_EQ(g.variants.front().name, "small");
+  // Issue 54's proof run: seed 7, which no pass tuned on.
+  const CalibrationGrid proof = LoadCalibrationGrid(SuitesDir() / "calibration-untuned.json");
+  EXPECT_EQ(proof.seeds, std::vector<int>{7});
+  EXPECT_GE(proof.variants.size(), 7u);
 }
 
 TEST(CalibrationSuite, BadGridsNameTheFileAndKey) {
@@ -84,6 +88,14 @@ TEST(CalibrationSuite, ARowFromAFinishedVariant) {
   EXPECT_TRUE(Has(CalibrationTableMarkdown({r}), "| v | 0 | all cameras, extra 3, rung 2 | 0.200 / 0.300 / 0.800 | 0.40 | 0.60% | - k1 | 1.010 |"))
       << CalibrationTableMarkdown({r});
   EXPECT_TRUE(Has(CalibrationTableMarkdown({r}), "all met"));
+  // The slope against the raw render and a perfect calibration's there, where the comparison has them.
+  nlohmann::json truth = ReadJsonFile(dir.path() / "truth_comparison.json");
+  truth["hdr"]["loglog_slope_render"] = 0.9;
+  truth["hdr"]["loglog_slope_render_floor"] = 0.905;
+  WriteJsonFile(dir.path() / "truth_comparison.json", truth);
+  r = ReadCalibrationRow(dir.path(), {});
+  EXPECT_TRUE(Has(CalibrationTableMarkdown({r}), "| 1.010 (0.900; 0.905) |")) << CalibrationTableMarkdown({r});
+  EXPECT_TRUE(r.missed.empty());
 
   WriteFinishedVariant(dir.path(), 0.4, 0.9);
   r = ReadCalibrationRow(dir.path(), {});

@@ -8,9 +8,13 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <optional>
 #include <sstream>
 
 #include "calibration/rig_geometry.h"
+#include "calibration/undistort.h"
 #include "core/util/error.h"
 #include "core/image/image_io.h"
 #include "core/files/json_util.h"
@@ -67,7 +71,8 @@ Eigen::Matrix4d MatrixFromJson(const json& m, const fs::path& file, const std::s
 
 struct TruthCamera {
   std::string name;
-  double fx = 0, cx = 0, cy = 0;
+  double fx = 0, fy = 0, cx = 0, cy = 0;
+  double k1 = 0, k2 = 0;  // the capture's lens (RADIAL, normalised coordinates); 0: a pinhole
   int width = 0, height = 0;
   Eigen::Matrix4d world_from_cam_gl;
   std::array<double, 3> low{}, high{};
@@ -88,6 +93,9 @@ std::vector<TruthCamera> ReadTruthCameras(const fs::path& truth) {
       TruthCamera c;
       c.name = j.at("name").get<std::string>();
       c.fx = j.at("fx").get<double>();
+      c.fy = j.value("fy", c.fx);
+      c.k1 = j.value("k1", 0.0);
+      c.k2 = j.value("k2", 0.0);
       c.cx = j.at("cx").get<double>();
       c.cy = j.at("cy").get<double>();
       c.width = j.at("width").get<int>();
@@ -205,31 +213,66 @@ struct HdrPair {
   std::size_t camera;  // index into out->cameras
   fs::path calibrated, truth;
   const TruthCamera* truth_camera;
+  const RigCamera* rig_camera;  // null without rig.json
 };
 
-// The log-log slope of calibrated against true radiance (per channel means removed, one least-
-// squares fit over every measured value), and each camera's own scale: the median over its
-// values of scale x calibrated / truth per channel, and how far the cameras' scales spread
-// from their median (what gains should have made agree).
-void CompareHdrSlopeAndCameras(const std::vector<HdrPair>& pairs,
-                               const std::vector<std::pair<Image, Image>>& images,
-                               const std::vector<std::vector<char>>& measured, TruthComparison* out) {
+// The render as the calibrated camera delivers it: through the capture's true lens (each pixel's
+// distorted ray undistorted, the render sampled bilinearly there, as datagen does) and then
+// through calibrate's own undistortion with its calibrated intrinsics, when it resampled: the
+// radiance the calibrated camera should deliver in its own geometry. Against it the HDR figures
+// measure the radiometry alone (the geometry figures measure the rest); against the render
+// itself, each bilinear resampling's blur of the texture and any residual distortion lower a
+// pixel-by-pixel log-log slope too. Vignetting is not applied: calibrate does not correct it.
+bool HasLens(const TruthCamera& t) { return t.k1 != 0 || t.k2 != 0; }
+
+Image TruthAsCalibrated(const Image& render, const TruthCamera& t, const RigCamera* c) {
+  Image out = render;
+  if (HasLens(t)) {
+    // OpenCV's pixel centres are at integers, ours at +0.5.
+    const cv::Matx33d k(t.fx, 0, t.cx - 0.5, 0, t.fy > 0 ? t.fy : t.fx, t.cy - 0.5, 0, 0, 1);
+    std::vector<cv::Point2f> pixels;
+    pixels.reserve(render.num_pixels());
+    for (int y = 0; y < render.height(); ++y)
+      for (int x = 0; x < render.width(); ++x) pixels.emplace_back(static_cast<float>(x), static_cast<float>(y));
+    std::vector<cv::Point2f> rays;
+    cv::undistortPoints(pixels, rays, k, cv::Vec4d(t.k1, t.k2, 0, 0), cv::noArray(), k,
+                        cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 1e-6));
+    // Bilinear in double (cv::remap rounds positions to 1/32 pixel, which shows on a texture).
+    const int w = render.width(), h = render.height();
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const cv::Point2f& ray = rays[static_cast<std::size_t>(y) * w + x];
+        const double u = std::clamp(static_cast<double>(ray.x), 0.0, w - 1.0);
+        const double v = std::clamp(static_cast<double>(ray.y), 0.0, h - 1.0);
+        const int x0 = std::min(static_cast<int>(u), w - 1), y0 = std::min(static_cast<int>(v), h - 1);
+        const int x1 = std::min(x0 + 1, w - 1), y1 = std::min(y0 + 1, h - 1);
+        const double fx = u - x0, fy = v - y0;
+        for (int ch = 0; ch < render.channels(); ++ch)
+          out.at(x, y, ch) = static_cast<float>(
+              (1 - fy) * ((1 - fx) * render.at(x0, y0, ch) + fx * render.at(x1, y0, ch)) +
+              fy * ((1 - fx) * render.at(x0, y1, ch) + fx * render.at(x1, y1, ch)));
+      }
+  }
+  return c && c->undistort ? Undistort(out, c->intrinsics) : out;
+}
+
+// The log-log slope of calibrated against true radiance: per channel means removed, one least-
+// squares fit over every measured value. `truth` is each pair's reference image.
+double LogLogSlope(const std::vector<Image>& calibrated, const std::vector<Image>& truth,
+                   const std::vector<std::vector<char>>& measured) {
   std::array<double, 3> mean_t{}, mean_c{};
   std::array<long, 3> n{};
-  std::vector<std::array<std::vector<double>, 3>> ratio(out->cameras.size());
+  double sxy = 0, sxx = 0;
   for (int pass = 0; pass < 2; ++pass) {
-    double sxy = 0, sxx = 0;
-    for (std::size_t k = 0; k < pairs.size(); ++k) {
-      const auto& [cal, tru] = images[k];
-      for (std::size_t i = 0; i < cal.num_pixels(); ++i) {
+    for (std::size_t k = 0; k < calibrated.size(); ++k) {
+      for (std::size_t i = 0; i < calibrated[k].num_pixels(); ++i) {
         if (!measured[k][i]) continue;
         for (int ch = 0; ch < 3; ++ch) {
-          const double t = std::log(tru.data()[3 * i + ch]), c = std::log(cal.data()[3 * i + ch]);
+          const double t = std::log(truth[k].data()[3 * i + ch]), c = std::log(calibrated[k].data()[3 * i + ch]);
           if (pass == 0) {
             mean_t[ch] += t;
             mean_c[ch] += c;
             ++n[ch];
-            ratio[pairs[k].camera][ch].push_back(std::exp(c - t) * out->hdr_scale[ch]);
           } else {
             sxy += (t - mean_t[ch]) * (c - mean_c[ch]);
             sxx += (t - mean_t[ch]) * (t - mean_t[ch]);
@@ -237,15 +280,25 @@ void CompareHdrSlopeAndCameras(const std::vector<HdrPair>& pairs,
         }
       }
     }
-    if (pass == 0) {
-      for (int ch = 0; ch < 3; ++ch) {
-        mean_t[ch] /= std::max(n[ch], 1L);
-        mean_c[ch] /= std::max(n[ch], 1L);
-      }
-    } else {
-      out->hdr_loglog_slope = sxx > 0 ? sxy / sxx : 0.0;
+    for (int ch = 0; pass == 0 && ch < 3; ++ch) {
+      mean_t[ch] /= std::max(n[ch], 1L);
+      mean_c[ch] /= std::max(n[ch], 1L);
     }
   }
+  return sxx > 0 ? sxy / sxx : 0.0;
+}
+
+// Each camera's own scale: the median over its values of scale x calibrated / truth per channel,
+// and how far the cameras' scales spread from their median (what gains should have made agree).
+void CompareCameraScales(const std::vector<HdrPair>& pairs, const std::vector<Image>& calibrated,
+                         const std::vector<Image>& truth, const std::vector<std::vector<char>>& measured,
+                         TruthComparison* out) {
+  std::vector<std::array<std::vector<double>, 3>> ratio(out->cameras.size());
+  for (std::size_t k = 0; k < pairs.size(); ++k)
+    for (std::size_t i = 0; i < calibrated[k].num_pixels(); ++i)
+      for (int ch = 0; measured[k][i] && ch < 3; ++ch)
+        ratio[pairs[k].camera][ch].push_back(calibrated[k].data()[3 * i + ch] / truth[k].data()[3 * i + ch] *
+                                             out->hdr_scale[ch]);
   double spread = 0;
   for (int ch = 0; ch < 3; ++ch) {
     std::vector<double> scales;
@@ -262,21 +315,29 @@ void CompareHdrSlopeAndCameras(const std::vector<HdrPair>& pairs,
 void CompareHdr(const std::vector<HdrPair>& pairs, TruthComparison* out) {
   // Pass 1: the scale per channel, the median of truth / calibrated over measured pixels.
   std::array<std::vector<double>, 3> ratios;
-  std::vector<std::pair<Image, Image>> images;
+  std::vector<Image> calibrated, truth, render, floor;  // truth: as calibrated (TruthAsCalibrated)
   std::vector<std::vector<char>> measured;
   long pixels = 0, excluded = 0;
   for (const HdrPair& p : pairs) {
     Image cal = ReadImage(p.calibrated).Rgb();
-    Image tru = ReadImage(p.truth).Rgb();
-    if (!cal.SameShape(tru))
+    Image raw = ReadImage(p.truth).Rgb();
+    if (!cal.SameShape(raw))
       Fail("{}: {} pixels, the rendered {} has {}", p.calibrated.string(), cal.ShapeString(),
-           p.truth.string(), tru.ShapeString());
+           p.truth.string(), raw.ShapeString());
+    Image tru = TruthAsCalibrated(raw, *p.truth_camera, p.rig_camera);
+    // A perfect geometric calibration's reference: the resampling alone.
+    RigCamera exact;
+    exact.intrinsics = {p.truth_camera->fx, p.truth_camera->cx, p.truth_camera->cy, p.truth_camera->k1,
+                        p.truth_camera->k2};
+    exact.undistort = HasLens(*p.truth_camera);
+    floor.push_back(TruthAsCalibrated(raw, *p.truth_camera, &exact));
+    out->hdr_resampled_frames += HasLens(*p.truth_camera) || (p.rig_camera && p.rig_camera->undistort);
     std::vector<char> use(cal.num_pixels(), 0);
     for (std::size_t i = 0; i < cal.num_pixels(); ++i) {
       bool ok = true;
       for (int ch = 0; ch < 3; ++ch) {
         const double t = tru.data()[3 * i + ch], c = cal.data()[3 * i + ch];
-        ok &= t >= p.truth_camera->low[ch] && t <= p.truth_camera->high[ch] && c > 0;
+        ok &= t >= p.truth_camera->low[ch] && t <= p.truth_camera->high[ch] && c > 0 && raw.data()[3 * i + ch] > 0;
       }
       use[i] = ok;
       ++pixels;
@@ -287,7 +348,9 @@ void CompareHdr(const std::vector<HdrPair>& pairs, TruthComparison* out) {
       for (int ch = 0; ch < 3; ++ch)
         ratios[ch].push_back(tru.data()[3 * i + ch] / static_cast<double>(cal.data()[3 * i + ch]));
     }
-    images.emplace_back(std::move(cal), std::move(tru));
+    calibrated.push_back(std::move(cal));
+    truth.push_back(std::move(tru));
+    render.push_back(std::move(raw));
     measured.push_back(std::move(use));
   }
   if (ratios[0].empty()) {
@@ -300,7 +363,7 @@ void CompareHdr(const std::vector<HdrPair>& pairs, TruthComparison* out) {
   std::vector<std::pair<double, double>> by_radiance;  // (true luminance-free value, error)
   std::vector<std::vector<double>> per_camera(out->cameras.size());
   for (std::size_t k = 0; k < pairs.size(); ++k) {
-    const auto& [cal, tru] = images[k];
+    const Image &cal = calibrated[k], &tru = truth[k];
     for (std::size_t i = 0; i < cal.num_pixels(); ++i) {
       if (!measured[k][i]) continue;
       for (int ch = 0; ch < 3; ++ch) {
@@ -333,7 +396,10 @@ void CompareHdr(const std::vector<HdrPair>& pairs, TruthComparison* out) {
     out->cameras[c].hdr_values = static_cast<long>(per_camera[c].size());
     out->cameras[c].hdr_median_relative = Quantile(&per_camera[c], 0.5);
   }
-  CompareHdrSlopeAndCameras(pairs, images, measured, out);
+  out->hdr_loglog_slope = LogLogSlope(calibrated, truth, measured);
+  out->hdr_loglog_slope_render = LogLogSlope(calibrated, render, measured);
+  out->hdr_loglog_slope_render_floor = LogLogSlope(floor, render, measured);
+  CompareCameraScales(pairs, calibrated, truth, measured, out);
 }
 
 }  // namespace
@@ -380,8 +446,17 @@ Eigen::Matrix3d AlignOrientations(const std::vector<Eigen::Matrix3d>& from,
 }
 
 double RotationAngleDegrees(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
-  const double c = std::clamp(((a.transpose() * b).trace() - 1) / 2, -1.0, 1.0);
-  return std::acos(c) * 180.0 / M_PI;
+  // The nearest rotation to a^T b first: the truth's matrices come from Blender in float32, off
+  // orthonormal by ~6e-8, enough to move (trace - 1) / 2 by ~1e-7: acos then reads angles of
+  // 0.01 deg wrong by half and clamps those under ~0.03 deg to exactly 0 (issue 54's 0.000 deg
+  // row). Then atan2 of the axis part against the trace part, which keeps small angles where
+  // acos of a cosine near 1 does not.
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(a.transpose() * b, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+  d(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1 : 1;
+  const Eigen::Matrix3d r = svd.matrixU() * d * svd.matrixV().transpose();
+  const Eigen::Vector3d axis(r(2, 1) - r(1, 2), r(0, 2) - r(2, 0), r(1, 0) - r(0, 1));
+  return std::atan2(axis.norm(), r.trace() - 1) * 180.0 / M_PI;
 }
 
 TruthComparison CompareWithTruth(const fs::path& calibrated, const fs::path& truth) {
@@ -390,8 +465,9 @@ TruthComparison CompareWithTruth(const fs::path& calibrated, const fs::path& tru
   for (const TruthCamera& t : truth_cameras) out.cameras.push_back({.name = t.name});
 
   const fs::path rig_file = calibrated / "rig.json";
+  std::optional<Rig> read_rig;
   if (fs::exists(rig_file)) {
-    const Rig rig = ReadRigJson(rig_file);
+    const Rig& rig = read_rig.emplace(ReadRigJson(rig_file));
     // Results in the rig's camera order, which is the capture's (sorted names).
     std::vector<CameraTruthError> ordered;
     for (const RigCamera& c : rig.cameras) {
@@ -431,7 +507,7 @@ TruthComparison CompareWithTruth(const fs::path& calibrated, const fs::path& tru
       const auto it = t.hdr_files.find(frame);
       if (it == t.hdr_files.end())
         Fail("{}: camera {} has no frame {} in the truth", entry.path().string(), t.name, frame);
-      pairs.push_back({c, entry.path(), truth / it->second, &t});
+      pairs.push_back({c, entry.path(), truth / it->second, &t, read_rig ? read_rig->Find(t.name) : nullptr});
     }
   }
   std::sort(pairs.begin(), pairs.end(),
@@ -497,6 +573,15 @@ json TruthComparisonJson(const TruthComparison& c) {
                   {"p90_relative_error", c.hdr_p90_relative},
                   {"within_10_percent", c.hdr_within_10_percent},
                   {"loglog_slope", c.hdr_loglog_slope},
+                  {"loglog_slope_render", c.hdr_loglog_slope_render},
+                  {"loglog_slope_render_floor", c.hdr_loglog_slope_render_floor},
+                  {"resampled_frames", c.hdr_resampled_frames},
+                  {"reference",
+                   "the rendered EXR through the capture's true lens and then calibrate's own "
+                   "undistortion (resampled_frames of them; the others as rendered); "
+                   "loglog_slope_render is the slope against the render itself, "
+                   "loglog_slope_render_floor that of a perfect calibration (the true lens undistorted "
+                   "with itself: the resampling's blur alone)"},
                   {"dark_fifth_median_relative_error", c.hdr_dark_median_relative},
                   {"camera_disagreement", c.hdr_camera_disagreement},
                   {"camera_disagreement_definition",
@@ -545,11 +630,14 @@ std::string TruthComparisonMarkdown(const TruthComparison& c) {
         "- fused HDR vs rendered EXR ({} frames, {} values, one scale per channel {:.4g} {:.4g} "
         "{:.4g}): median relative error {:.1f}%, 90th percentile {:.1f}%, {:.1f}% of values "
         "within 10%; {:.1f}% of pixels excluded (outside the radiance the brackets measure); "
-        "log-log slope {:.3f}; the darkest fifth {:.1f}% (median); the cameras' scales against the "
-        "truth {:.1f}% apart at most\n",
+        "log-log slope {:.3f} ({:.3f} against the render itself, where a perfect calibration reads {:.3f}; "
+        "{} frames' reference resampled through the true lens and calibrate's undistortion); the darkest fifth {:.1f}% (median); the cameras' "
+        "scales against the truth {:.1f}% apart at most\n",
         c.hdr_frames, c.hdr_values, c.hdr_scale[0], c.hdr_scale[1], c.hdr_scale[2],
         100 * c.hdr_median_relative, 100 * c.hdr_p90_relative, 100 * c.hdr_within_10_percent,
-        100 * c.hdr_excluded_fraction, c.hdr_loglog_slope, 100 * c.hdr_dark_median_relative,
+        100 * c.hdr_excluded_fraction, c.hdr_loglog_slope, c.hdr_loglog_slope_render, c.hdr_loglog_slope_render_floor,
+        c.hdr_resampled_frames,
+        100 * c.hdr_dark_median_relative,
         100 * c.hdr_camera_disagreement);
   }
   for (const std::string& note : c.notes) md += "- " + note + "\n";

@@ -6,7 +6,8 @@
 //               principal point against the truth
 //   response:   the recovered inverse response against the true one, both x(128) = 1, over the
 //               codes 16..240
-//   HDR:        every fused frame against its rendered EXR after one scale per colour channel
+//   HDR:        every fused frame against its rendered EXR (through the true lens and calibrate's
+//               undistortion where either resampled it) after one scale per colour channel
 //               (a calibration knows radiance only up to scale), over the pixels whose radiance
 //               the brackets measure (truth/cameras.json's measured_radiance)
 #pragma once
@@ -81,8 +82,13 @@ struct TruthComparison {
   double hdr_median_relative = 0, hdr_p90_relative = 0, hdr_within_10_percent = 0;
   long hdr_values = 0;             // channel values compared
   double hdr_excluded_fraction = 0;  // pixels outside the measured radiance range
-  // Slope of log calibrated against log true radiance (1: no compression or stretch).
-  double hdr_loglog_slope = 0;
+  // Slope of log calibrated against log true radiance (1: no compression or stretch). The
+  // reference is the render as the calibrated camera delivers it: through the capture's true lens
+  // and calibrate's own undistortion (both bilinear resamplings, which blur the texture), so that a
+  // perfect calibration reads 1; hdr_loglog_slope_render is against the render itself, and
+  // hdr_loglog_slope_render_floor what a perfect calibration reads there (the resampling alone).
+  double hdr_loglog_slope = 0, hdr_loglog_slope_render = 0, hdr_loglog_slope_render_floor = 0;
+  int hdr_resampled_frames = 0;  // frames whose reference was resampled (a lens or undistortion)
   // Median relative error over the darkest fifth of the measured values (the shadows).
   double hdr_dark_median_relative = 0;
   // The cameras' disagreement against the truth: max over cameras and channels of
