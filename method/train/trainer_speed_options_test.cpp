@@ -143,5 +143,37 @@ TEST(TrainerSpeedOptions, CoarseToFineDiffersFromFullSizeAndResumesExactly) {
   ExpectSameState(dir / "split", dir / "straight");
 }
 
+// --prune-contribution removes Gaussians the plain run keeps, and its statistics (the largest
+// blending weights since the last densification) travel in the checkpoint: a run interrupted
+// between two densifications resumes bit for bit.
+TEST(TrainerSpeedOptions, PruneContributionPrunesMoreAndResumesExactly) {
+  TempDir dir;
+  MakeTinyScene(dir / "scene");
+  auto run = [&](const char* name, int iterations, double threshold) {
+    TrainOptions o = TinyRun(dir / "scene", dir / name, iterations);
+    o.optimization.prune_contribution = threshold;
+    return o;
+  };
+  Train(run("plain", 60, 0.0));
+  const TrainSummary straight = Train(run("straight", 60, 0.05));
+  const std::size_t plain_count = LoadCheckpoint(dir / "plain" / "checkpoint.bin").model.size();
+  const std::size_t pruned_count =
+      LoadCheckpoint(dir / "straight" / "checkpoint.bin").model.size();
+  EXPECT_LT(pruned_count, plain_count);
+  EXPECT_GT(pruned_count, 0u);
+  EXPECT_EQ(ReadJsonFile(dir / "straight" / "config.json")["optimization"]["prune_contribution"],
+            0.05);
+  Train(run("split", 27, 0.05));
+  TrainOptions rest = run("split", 60, 0.05);
+  rest.resume = true;
+  const TrainSummary resumed = Train(rest);
+  EXPECT_EQ(resumed.loss_curve, straight.loss_curve);
+  ExpectSameState(dir / "split", dir / "straight");
+  // --reference refuses it.
+  TrainOptions both = run("both", 60, 0.05);
+  both.reference = true;
+  EXPECT_NE(both.Validate(), "");
+}
+
 }  // namespace
 }  // namespace hdr4d::method
