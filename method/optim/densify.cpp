@@ -222,6 +222,7 @@ void ReserveModelRows(GaussianModel& model,
     adam->ReserveGroup(g.name, rows * g.width);
   }
   for (auto* v : {&stats->grad_accum, &stats->denom, &stats->max_radii}) v->reserve(rows);
+  if (!stats->max_weight.empty()) stats->max_weight.reserve(rows);
   BindModelGroups(model, grads, adam);
 }
 
@@ -231,6 +232,7 @@ void DensifyStats::Reset(std::size_t n) {
   grad_accum.assign(n, 0.0f);
   denom.assign(n, 0.0f);
   max_radii.assign(n, 0.0f);
+  if (!max_weight.empty()) max_weight.assign(n, 0.0f);
 }
 
 std::vector<float> DensifyStats::MeanGradient() const {
@@ -262,6 +264,12 @@ void AccumulateStats(const std::vector<float>& mean2d_grad,
     stats->max_radii[i] =
         std::max(stats->max_radii[i], static_cast<float>(radius[i] * reduction));
   }
+}
+
+void AccumulateMaxWeight(const std::vector<float>& view_max_weight, DensifyStats* stats) {
+  HDR4D_CHECK(stats != nullptr && view_max_weight.size() == stats->max_weight.size());
+  for (std::size_t i = 0; i < view_max_weight.size(); ++i)
+    stats->max_weight[i] = std::max(stats->max_weight[i], view_max_weight[i]);
 }
 
 void BatchStats::Begin(std::size_t n) {
@@ -315,6 +323,9 @@ std::string DensifyParams::Validate() const {
   if (!(max_screen_size >= 0.0f && std::isfinite(max_screen_size))) {
     return fmt::format("max_screen_size must be finite and >= 0, got {}", max_screen_size);
   }
+  if (!(min_contribution >= 0.0f && min_contribution < 1.0f)) {
+    return fmt::format("min_contribution must be in [0, 1), got {}", min_contribution);
+  }
   return "";
 }
 
@@ -332,6 +343,13 @@ DensifyParams DensifyParamsAt(const OptimizationOptions& unresolved,
   const bool late = iteration > options.opacity_reset_interval;
   p.max_screen_size = late ? kMaxScreenSize : 0.0f;
   p.prune_large_world = late;
+  // An opacity reset leaves every opacity at 0.01, so every blending weight low until they grow
+  // back: the contribution test waits as long after a reset as densification waits after the
+  // start (densify_from).
+  const int since_reset = iteration % options.opacity_reset_interval;
+  const bool after_reset = iteration > options.opacity_reset_interval &&
+                           since_reset <= options.densify_from;
+  p.min_contribution = after_reset ? 0.0f : static_cast<float>(options.prune_contribution);
   return p;
 }
 
@@ -487,11 +505,23 @@ KeptRows SelectSurvivors(const GaussianModel& model,
     if (test_radii && max_radius > params.max_screen_size) return true;
     return params.prune_large_world && MaxSpatialScale(log_scales) > world_limit;
   };
+  // Pruning by contribution: seen, never blended above the threshold, not a clone source.
+  std::vector<std::uint8_t> clone_source;
+  if (params.min_contribution > 0.0f) {
+    HDR4D_CHECK(stats.max_weight.size() == model.size());
+    clone_source.assign(model.size(), 0);
+    for (std::uint32_t i : candidates.clones) clone_source[i] = 1;
+  }
+  const auto faint = [&](std::size_t i) {
+    return params.min_contribution > 0.0f && clone_source[i] == 0 && stats.denom[i] > 0.0f &&
+           stats.max_weight[i] < params.min_contribution;
+  };
   KeptRows kept;
   std::size_t& count = *pruned_count;
   for (std::size_t i = 0; i < model.size(); ++i) {
     if (candidates.is_parent[i]) continue;
-    if (pruned(&model.log_scales[4 * i], model.opacity_logit[i], stats.max_radii[i])) {
+    if (faint(i) ||
+        pruned(&model.log_scales[4 * i], model.opacity_logit[i], stats.max_radii[i])) {
       ++count;
     } else {
       kept.originals.push_back(static_cast<std::uint32_t>(i));

@@ -105,9 +105,12 @@ struct DensifyStats {
   std::vector<float> grad_accum;
   std::vector<float> denom;
   std::vector<float> max_radii;
+  // --prune-contribution only (else empty): the largest blending weight alpha T the Gaussian
+  // had at any pixel of the views since the last densification (AccumulateMaxWeight).
+  std::vector<float> max_weight;
 
   std::size_t size() const { return denom.size(); }
-  // n Gaussians, all statistics zero.
+  // n Gaussians, all statistics zero; max_weight is kept (n zeros) only when it was tracked.
   void Reset(std::size_t n);
   // accum / denom, 0 where the Gaussian was never visible.
   std::vector<float> MeanGradient() const;
@@ -128,6 +131,10 @@ void AccumulateStats(const std::vector<float>& mean2d_grad,
                      int height,
                      DensifyStats* stats,
                      int reduction = 1);
+
+// max_weight of every Gaussian raised to the view's (SplatGradients::max_weight: the largest
+// alpha T at any pixel of the view). Sizes must agree (checked).
+void AccumulateMaxWeight(const std::vector<float>& view_max_weight, DensifyStats* stats);
 
 // The statistics of one batch of views (the reference's batch_size > 1 path,
 // add_densification_stats_grad): each view's loss is divided by the batch size B, the per-view
@@ -166,6 +173,11 @@ struct DensifyParams {
   // never takes the count past it. Of the clone / split candidates only the ones with the
   // largest mean gradient are kept (each adds one Gaussian); at or over the budget none is.
   std::size_t max_gaussians = 0;
+  // Pruning by contribution (--prune-contribution, issue 55; 0 = off): an original Gaussian that
+  // was visible in some view since the last densification (denom > 0) but whose largest blending
+  // weight there (stats.max_weight) stayed below this is pruned; clone sources and split parents
+  // are not tested (their gradient asked for more of them). Needs stats.max_weight when > 0.
+  float min_contribution = 0.0f;
 
   // "" when usable, else the problem: threshold >= 0, percent_dense in (0, 1], extent > 0,
   // min_opacity in [0, 1), max_screen_size >= 0, all finite.
@@ -194,7 +206,8 @@ struct DensifyResult {
 //    log-scales minus log(1.6) (the reference's / (0.8 N)), everything else copied; the parent
 //    goes. Clones are never split (the reference pads their gradient with 0).
 //  PRUNE (after both, over all) sigmoid(logit) < min_opacity, or max_radii > max_screen_size (if
-//    > 0 and keep_radii_for_prune), or (prune_large_world and max spatial scale > 0.1 extent).
+//    > 0 and keep_radii_for_prune), or (prune_large_world and max spatial scale > 0.1 extent);
+//    with min_contribution > 0 also originals seen but never blended above it (above).
 // Adam: survivors keep their moments, new Gaussians get zero moments, step counts are kept;
 // every group is rebound to the model and to `grads`, which is resized to the new count and
 // zeroed. `stats` is reset to zeros of the new size. params must be valid, stats the model's

@@ -488,6 +488,43 @@ TEST(Densify, PruneOnlyLowOpacityByDefault) {
   }
 }
 
+// --prune-contribution: a Gaussian seen since the last densification whose largest blending
+// weight stayed below the threshold goes; one never seen, a clone source and a split parent are
+// not judged by it; off (0) nothing is pruned by it.
+TEST(Densify, PruneByContributionRemovesOnlySeenFaintOriginals) {
+  for (const float threshold : {0.0f, 0.01f}) {
+    auto s = MakeSetup(6, true, 9);
+    s->stats.max_weight.assign(6, 0.5f);
+    s->stats.denom.assign(6, 1.0f);
+    s->stats.max_weight[0] = 0.005f;  // seen, faint: pruned
+    s->stats.max_weight[1] = 0.02f;   // seen, above: kept
+    s->stats.max_weight[2] = 0.0f;    // never seen: kept
+    s->stats.denom[2] = 0.0f;
+    s->stats.max_weight[3] = 0.001f;  // faint but a clone source: kept, and cloned
+    SetGrad(s->stats, 3, 1.0f);
+    s->stats.max_weight[4] = 0.0f;  // faint but a split parent: its children replace it
+    SetGrad(s->stats, 4, 1.0f);
+    SetScale(s->model, 4, 0.05f);
+    const GaussianModel before = s->model;
+    DensifyParams params;
+    params.min_contribution = threshold;
+    std::mt19937_64 rng(1);
+    const DensifyResult r =
+        DensifyAndPrune(&s->model, &s->grads, &s->adam, &s->stats, params, &rng);
+    EXPECT_EQ(r.cloned, 1u);
+    EXPECT_EQ(r.split, 1u);
+    EXPECT_EQ(r.pruned, threshold > 0 ? 1u : 0u);
+    // Originals 0 (unless pruned), 1, 2, 3, 5, then the clone of 3 and 4's two children.
+    ASSERT_EQ(s->model.size(), threshold > 0 ? 7u : 8u);
+    ExpectConsistent(*s);
+    const std::size_t first = threshold > 0 ? 1 : 0;
+    ExpectSameGaussian(s->model, 0, before, first);
+    ExpectSameGaussian(s->model, 4 - first, before, 5);
+    // The statistics start again, max_weight still tracked.
+    EXPECT_EQ(s->stats.max_weight, std::vector<float>(s->model.size(), 0.0f));
+  }
+}
+
 TEST(Densify, PruneEverythingLeavesAnEmptyConsistentModel) {
   auto s = MakeSetup(3, true, 8);
   for (float& v : s->model.opacity_logit) v = -10.0f;
@@ -698,6 +735,20 @@ TEST(Densify, ParamsFollowTheReferenceSchedule) {
   EXPECT_EQ(late.max_screen_size, 20.0f);
   EXPECT_TRUE(late.prune_large_world);
   EXPECT_EQ(late.Validate(), "");
+  EXPECT_EQ(late.min_contribution, 0.0f);  // off unless asked
+}
+
+// The contribution prune pauses for densify_from iterations (500 in a 20000-iteration run)
+// after each opacity reset (every 3000), while the reset opacities grow back.
+TEST(Densify, ContributionPrunePausesAfterAnOpacityReset) {
+  OptimizationOptions opt;
+  opt.prune_contribution = 0.01;
+  EXPECT_FLOAT_EQ(DensifyParamsAt(opt, 1.0, 2800).min_contribution, 0.01f);
+  EXPECT_FLOAT_EQ(DensifyParamsAt(opt, 1.0, 3000).min_contribution, 0.01f);  // before the reset
+  EXPECT_EQ(DensifyParamsAt(opt, 1.0, 3100).min_contribution, 0.0f);
+  EXPECT_EQ(DensifyParamsAt(opt, 1.0, 3500).min_contribution, 0.0f);
+  EXPECT_FLOAT_EQ(DensifyParamsAt(opt, 1.0, 3600).min_contribution, 0.01f);
+  EXPECT_EQ(DensifyParamsAt(opt, 1.0, 6200).min_contribution, 0.0f);
 }
 
 TEST(Densify, BadArgumentsAreCaught) {

@@ -171,6 +171,10 @@ struct OptimizationOptions {
   // the images' size (first half) and 1/2 (second half) where the size divides
   // (method/train/coarse_images.h). 0 = full size throughout.
   int coarse_to_fine = 0;
+  // Pruning by contribution: at a densification step, a Gaussian seen since the last one whose
+  // largest blending weight alpha T at any pixel of those views stayed below this is pruned
+  // (DensifyParams::min_contribution). 0 = off.
+  double prune_contribution = 0.0;
   static constexpr int kDefaultStopWindow = 1000;
   static constexpr double kDefaultStopTolerance = 0.002;
 

@@ -58,8 +58,10 @@ void ReorderGaussians(const std::vector<std::uint32_t>& order,
     if (width > 0) buffers.emplace_back(groups[k]->data(), width);
   }
   if (stats != nullptr && stats->size() == order.size()) {
-    for (std::vector<float>* v : {&stats->grad_accum, &stats->denom, &stats->max_radii})
-      buffers.emplace_back(v->data(), 1);
+    for (std::vector<float>* v :
+         {&stats->grad_accum, &stats->denom, &stats->max_radii, &stats->max_weight}) {
+      if (!v->empty()) buffers.emplace_back(v->data(), 1);  // max_weight: only when tracked
+    }
   }
   std::vector<const char*> moments;  // the Adam groups, reordered through Adam (one job each)
   if (adam != nullptr) {

@@ -128,6 +128,7 @@ void BackwardTileReference(const SplatBuffersT<T>& splats,
                            const T* dL_dfinal_T,
                            T* slots,
                            T* tile_bg,
+                           T* weights,
                            int tile) {
   const int channels = splats.channels;
   const int stride = SlotStride(channels);
@@ -137,6 +138,7 @@ void BackwardTileReference(const SplatBuffersT<T>& splats,
   std::fill(slots + static_cast<std::size_t>(start) * stride,
             slots + static_cast<std::size_t>(end) * stride, T(0));
   if (tile_bg != nullptr) std::fill(tile_bg, tile_bg + channels, T(0));
+  if (weights != nullptr) std::fill(weights + start, weights + end, T(0));
   const T* mean = splats.mean2d.data();
   const T* conic = splats.conic.data();
   const T* opacity = splats.opacity.data();
@@ -173,6 +175,7 @@ void BackwardTileReference(const SplatBuffersT<T>& splats,
         if (alpha < T(kMinAlpha)) continue;
         transmittance = transmittance / (T(1) - alpha);
         const T dchannel_dcolor = alpha * transmittance;
+        if (weights != nullptr) weights[idx] = std::max(weights[idx], dchannel_dcolor);
         const T* f = features + static_cast<std::size_t>(g) * channels;
         T* slot = slots + static_cast<std::size_t>(idx) * stride;
         T dL_dalpha = T(0);
@@ -210,12 +213,14 @@ void PrepareGradients(std::size_t n, int channels, SplatGradientsT<T>* grads) {
   prepare(grads->conic, 3 * n);
   prepare(grads->opacity, n);
   prepare(grads->features, n * static_cast<std::size_t>(channels));
+  HDR4D_CHECK(grads->max_weight.empty() || grads->max_weight.size() == n);
 }
 
 // Sums every listed Gaussian's entry slots in ascending tile order into `grads` (+=), and the
 // per-tile background partials in tile order into dL_dbackground (+=). The slots are indexed by
 // point_list entry, or, when `streamed`, already in per-Gaussian order (RasterState::entry_slots):
-// the same values summed in the same order, read contiguously.
+// the same values summed in the same order, read contiguously. `weights` (nullable, indexed like
+// the slots): each entry's largest blending weight, maxed into grads->max_weight.
 template <typename T>
 void ReduceGradients(const RasterState& bins,
                      int channels,
@@ -223,6 +228,7 @@ void ReduceGradients(const RasterState& bins,
                      const T* tile_bg,
                      SplatGradientsT<T>* grads,
                      T* dL_dbackground,
+                     const T* weights,
                      bool streamed = false) {
   const int stride = SlotStride(channels);
   const std::int64_t visible = static_cast<std::int64_t>(bins.depth_order.size());
@@ -268,6 +274,12 @@ void ReduceGradients(const RasterState& bins,
         grads->opacity[g] += sum[detail::kSlotOpacity];
         T* gf = grads->features.data() + g * channels;
         for (int c = 0; c < channels; ++c) gf[c] += sum[detail::kSlotFeatures + c];
+        if (weights != nullptr) {
+          T largest = grads->max_weight[g];
+          for (int k = k0; k < k1; ++k)
+            largest = std::max(largest, weights[streamed ? k : bins.point_entries[k]]);
+          grads->max_weight[g] = largest;
+        }
       }
     };
     if constexpr (kStride > 0) {
@@ -315,13 +327,17 @@ void BackwardReferenceWithScratch(const SplatBuffersT<T>& splats,
   slots.resize(bins.num_entries() * SlotStride(channels));
   tile_bg.resize(static_cast<std::size_t>(bins.num_tiles()) * channels);
   T* bg_partials = dL_dbackground != nullptr ? tile_bg.data() : nullptr;
+  std::vector<T> weights;
+  if (!grads->max_weight.empty()) weights.resize(bins.num_entries());
+  T* entry_weights = weights.empty() ? nullptr : weights.data();
   ParallelFor(bins.num_tiles(), 1, [&](std::int64_t tile) {
     BackwardTileReference(splats, bins, background, final_T, n_contrib, dL_dimage,
                           dL_dgeometry != nullptr ? dL_dgeometry : dL_dimage, dL_dfinal_T,
                           slots.data(), bg_partials ? bg_partials + tile * channels : nullptr,
-                          static_cast<int>(tile));
+                          entry_weights, static_cast<int>(tile));
   });
-  ReduceGradients(bins, channels, slots.data(), bg_partials, grads, dL_dbackground);
+  ReduceGradients(bins, channels, slots.data(), bg_partials, grads, dL_dbackground,
+                  static_cast<const T*>(entry_weights));
 }
 
 // The settings' background, or zeros, without allocating in a steady state.
@@ -507,6 +523,10 @@ void BlendBackward(const SplatBuffers& splats,
   job.entry_slots = state->entry_slots.data();
   job.tile_background_grad =
       dL_dbackground != nullptr ? state->tile_background_grad.data() : nullptr;
+  if (!grads->max_weight.empty()) {
+    ResizeScratch(&state->entry_max_weight, state->num_entries());
+    job.entry_max_weight = state->entry_max_weight.data();
+  }
   if (!state->packed_ready) PackSplats(job, state);
   job.packed = state->packed_splats.data();
   job.tile_records = job.packed + static_cast<std::size_t>(state->num_gaussians) *
@@ -515,7 +535,7 @@ void BlendBackward(const SplatBuffers& splats,
   ParallelFor(state->num_tiles(), 1,
               [&](std::int64_t tile) { detail::BackwardTileSimd(job, static_cast<int>(tile)); });
   ReduceGradients<float>(*state, channels, state->entry_gradients.data(), job.tile_background_grad,
-                         grads, dL_dbackground, /*streamed=*/true);
+                         grads, dL_dbackground, job.entry_max_weight, /*streamed=*/true);
 }
 
 template void BlendForwardReference<float>(

@@ -145,6 +145,7 @@ struct TileJob {
   float* entry_gradients = nullptr;           // SlotStride(channels) per entry
   const std::int32_t* entry_slots = nullptr;  // where each entry's slot goes (RasterState)
   float* tile_background_grad = nullptr;      // channels per tile; nullable
+  float* entry_max_weight = nullptr;  // nullable: per entry (at its slot) the largest alpha T
   // Per-Gaussian records of the SIMD kernels (PackedStride(channels) floats per Gaussian),
   // written by PackSplatsSimd for the Gaussians listed in some tile (a non-empty rectangle in
   // rects, RasterState::rects).

@@ -898,7 +898,11 @@ void BackwardTileImpl(const TileJob& job, int tile) {
   const auto slot_of = [&](int j) {
     return job.entry_gradients + static_cast<std::size_t>(slot_index[j]) * slot_stride;
   };
-  for (int j = tile_max; j < count; ++j) std::fill_n(slot_of(j), slot_stride, 0.0f);
+  float* const max_weight = job.entry_max_weight;  // nullable, indexed like the slots
+  for (int j = tile_max; j < count; ++j) {
+    std::fill_n(slot_of(j), slot_stride, 0.0f);
+    if (max_weight != nullptr) max_weight[slot_index[j]] = 0.0f;
+  }
   const float* rec;
   if (job.tile_records_ready) {
     rec = job.tile_records + static_cast<std::size_t>(start) * stride;
@@ -939,6 +943,7 @@ void BackwardTileImpl(const TileJob& job, int tile) {
     const V log2o = hn::Set(d, r[kRecLog2Opacity]);
     V grad[kGradCount];
     for (int k = 0; k < kGradCount; ++k) grad[k] = hn::Zero(d);
+    V w_max = hn::Zero(d);  // the largest blending weight, kept only with max_weight
     if constexpr (kC == 0) {
       for (int c = 0; c < channels; ++c) hn::Store(hn::Zero(d), d, gf_mem + c * lanes);
     }
@@ -972,6 +977,7 @@ void BackwardTileImpl(const TileJob& job, int tile) {
         const V T = hn::Mul(T_old, inv);  // transmittance in front of this Gaussian
         hn::Store(hn::IfThenElse(m, T, T_old), d, T_plane + off);
         const V w = hn::IfThenElseZero(m, hn::Mul(alpha, T));
+        if (max_weight != nullptr) w_max = hn::Max(w_max, w);
         V F = hn::Zero(d);
         for (int c = 0; c < channels; ++c) {
           const V dp = hn::Load(d, dpix + c * kTilePixels + off);
@@ -1003,6 +1009,8 @@ void BackwardTileImpl(const TileJob& job, int tile) {
         grad[kSumUdydy] = hn::MulAdd(udy, dy, grad[kSumUdydy]);
       }
     float* slot = slot_of(j);
+    if (max_weight != nullptr)
+      max_weight[slot_index[j]] = any ? hn::GetLane(hn::MaxOfLanes(d, w_max)) : 0.0f;
     if (!any) {
       std::fill(slot, slot + slot_stride, 0.0f);
       continue;

@@ -581,6 +581,33 @@ TEST_P(RasterBlendCases, BackwardAccumulatesIntoGradients) {
   EXPECT_NE(once.features[1], 0.0f);
 }
 
+// The backward's largest blending weight per Gaussian (--prune-contribution): a max of alpha T
+// over the frame's pixels, raised into what the buffer holds, and nothing when it is empty.
+TEST_P(RasterBlendCases, MaxWeightIsTheLargestAlphaTimesTransmittance) {
+  // Two wide Gaussians on one pixel centre (front 0.5, back 0.5: the back one's weight is
+  // 0.5 x 0.5 at that centre and less elsewhere), one alone in another tile (0.3), one culled.
+  SplatBuffers s = OneGaussian(5.5f, 5.5f, 0.5f, {1, 0, 0}, 1, 4, 0.01f, 0, 0.01f);
+  Append(&s, OneGaussian(5.5f, 5.5f, 0.5f, {0, 1, 0}, 2, 4, 0.01f, 0, 0.01f));
+  Append(&s, OneGaussian(24.5f, 24.5f, 0.3f, {0, 0, 1}));
+  Append(&s, OneGaussian(24.5f, 8.5f, 0.7f, {0, 0, 1}, 1, /*radius=*/0));
+  const RasterSettings settings = Settings(32, 32, {}, GetParam());
+  std::vector<float> image(32 * 32 * 3);
+  RasterState state;
+  RasterizeForward(s, settings, &state, image.data());
+  const std::vector<float> dL(image.size(), 1.0f);
+  SplatGradients grads;
+  grads.max_weight = {0.0f, 0.0f, 0.0f, 0.9f};  // a value already there is only raised
+  BlendBackward(s, settings, &state, dL.data(), nullptr, &grads, nullptr);
+  ASSERT_EQ(grads.max_weight.size(), 4u);
+  EXPECT_NEAR(grads.max_weight[0], 0.5f, 1e-6);
+  EXPECT_NEAR(grads.max_weight[1], 0.25f, 1e-6);
+  EXPECT_NEAR(grads.max_weight[2], 0.3f, 1e-6);
+  EXPECT_EQ(grads.max_weight[3], 0.9f);
+  SplatGradients untracked;
+  BlendBackward(s, settings, &state, dL.data(), nullptr, &untracked, nullptr);
+  EXPECT_TRUE(untracked.max_weight.empty());
+}
+
 TEST_P(RasterBlendCases, EmptySceneIsBackground) {
   SplatBuffers s;
   s.channels = 2;
@@ -709,6 +736,36 @@ Comparison CompareSplats(
 
 Comparison CompareBackends(const SceneOptions& o, unsigned seed, bool with_T_loss) {
   return CompareSplats(Convert<float>(RandomScene(o, seed)), o.width, o.height, seed, with_T_loss);
+}
+
+// The largest blending weights of the fast path against the scalar path's, on random scenes of
+// both channel kinds (templated 3, run-time 5). Pixels that branch differently (CompareSplats)
+// may move a weight by about the fast exp's error.
+TEST(RasterBlendSimd, MaxWeightMatchesScalar) {
+  for (int channels : {3, 5}) {
+    SceneOptions o;
+    o.count = 60;
+    o.channels = channels;
+    const SplatBuffers s = Convert<float>(RandomScene(o, 90 + channels));
+    SplatGradients grads[2];
+    int k = 0;
+    for (RasterBackend backend : {RasterBackend::kScalar, RasterBackend::kSimd}) {
+      const RasterSettings settings = Settings(o.width, o.height, {}, backend);
+      std::vector<float> image(static_cast<std::size_t>(o.width) * o.height * channels);
+      RasterState state;
+      RasterizeForward(s, settings, &state, image.data());
+      const std::vector<float> dL(image.size(), 1.0f);
+      grads[k].max_weight.assign(s.size(), 0.0f);
+      BlendBackward(s, settings, &state, dL.data(), nullptr, &grads[k], nullptr);
+      ++k;
+    }
+    int blended = 0;
+    for (std::size_t g = 0; g < s.size(); ++g) {
+      EXPECT_NEAR(grads[1].max_weight[g], grads[0].max_weight[g], 1e-5) << "Gaussian " << g;
+      blended += grads[0].max_weight[g] > 0.0f;
+    }
+    EXPECT_GT(blended, 20);  // the scene is not empty
+  }
 }
 
 // A geometry image (BlendBackward's dL_dimage_geometry) drives dL/dalpha alone: the means,

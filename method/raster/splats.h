@@ -77,6 +77,11 @@ struct SplatGradientsT {
   std::vector<T> conic;     // N x 3 (dL/da, dL/db, dL/dc; see the note at the top)
   std::vector<T> opacity;   // N
   std::vector<T> features;  // N x channels
+  // Optional (--prune-contribution, issue 55): when sized N before a backward, the backward
+  // raises each entry to the largest blending weight alpha T the Gaussian had at any pixel of the
+  // frame (a max, not a sum; 0 where it blended nowhere). Empty: not tracked, no cost. SetZero
+  // leaves it alone.
+  std::vector<T> max_weight;
   // Sizes every buffer for n Gaussians and sets it to zero (no reallocation when the size holds).
   void SetZero(std::size_t n, int channels) {
     mean2d.assign(2 * n, T(0));
@@ -151,6 +156,7 @@ struct RasterState {
   std::vector<float> packed_splats;         // kSimd forward: per-Gaussian kernel records, reused by
   bool packed_ready = false;                // the backward (reset by BinSplats, kScalar)
   std::vector<float> entry_gradients;       // backward: one gradient slot per entry
+  std::vector<float> entry_max_weight;      // backward with max_weight: one value per entry
   std::vector<float> tile_background_grad;  // backward: dL/dbackground per tile
 
   int num_tiles() const { return tiles_x * tiles_y; }

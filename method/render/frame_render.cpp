@@ -19,6 +19,17 @@ RasterSettings SettingsFor(const Camera& camera, const RenderOptions& options, i
   return settings;
 }
 
+// The backward keeps the largest blending weights only when asked (they cost a max per pixel
+// vector and a value per tile entry).
+template <typename T>
+void TrackMaxWeight(const RenderOptions& options, std::size_t n, SplatGradientsT<T>* grads) {
+  if (options.track_max_weight) {
+    grads->max_weight.assign(n, T(0));
+  } else {
+    grads->max_weight.clear();
+  }
+}
+
 }  // namespace
 
 void RenderForward(const GaussianModel& model,
@@ -48,6 +59,7 @@ void RenderBackward(const GaussianModel& model,
                     const float* dL_dimage_geometry) {
   const int features = state->splats.channels;
   state->splat_grads.SetZero(model.size(), features);
+  TrackMaxWeight(options, model.size(), &state->splat_grads);
   RasterSettings settings = SettingsFor(camera, options, features);
   float* dL_dbackground = nullptr;
   if (options.background_source) {
@@ -99,6 +111,7 @@ void RenderBackwardReference(const GaussianModelT<T>& model,
   const RasterSettings settings = SettingsFor(camera, options, model.channels);
   const std::vector<T> background(settings.background.begin(), settings.background.end());
   state->splat_grads.SetZero(model.size(), model.channels);
+  TrackMaxWeight(options, model.size(), &state->splat_grads);
   BlendBackwardReference(state->splats, state->raster, background.data(), state->final_T.data(),
                          state->n_contrib.data(), dL_dimage, static_cast<const T*>(nullptr),
                          &state->splat_grads, static_cast<T*>(nullptr));

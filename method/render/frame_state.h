@@ -58,6 +58,9 @@ struct RenderOptions {
   // false for a render no backward follows (ViewRenderer): binning and blend then keep
   // nothing for one (RasterSettings::keep_records); RenderBackward of such a frame is a bug.
   bool backward_follows = true;
+  // --prune-contribution (issue 55): the backward also keeps, per Gaussian, the largest blending
+  // weight alpha T it had at any pixel of the frame, in splat_grads.max_weight (SplatGradientsT).
+  bool track_max_weight = false;
 };
 
 // The 3D Gaussian a 4D one (or a 3D one in static mode) presents at the frame's time, with the

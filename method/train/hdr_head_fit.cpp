@@ -13,7 +13,9 @@ namespace hdr4d::method {
 
 HdrHead ReadHdrHead(const Checkpoint& c, std::size_t gaussians, const std::string& path) {
   HdrHead head;
-  if (c.extra_floats.size() <= kHdrHeadSection) return head;
+  // No section, or an empty one (a run that stores sections after it without a head).
+  if (c.extra_floats.size() <= kHdrHeadSection || c.extra_floats[kHdrHeadSection].empty())
+    return head;
   head.offset = c.extra_floats[kHdrHeadSection];
   if (head.offset.size() != gaussians * 3) {
     Fail("{}: the HDR head has {} offsets for {} Gaussians (expected 3 per Gaussian)", path,

@@ -513,6 +513,7 @@ std::vector<TrainOption> SpeedRows() {
             o->reference = true;
             o->optimization.visible_adam = false;
             o->optimization.coarse_to_fine = 0;
+            o->optimization.prune_contribution = 0.0;
           }),
       Row("optimization.visible_adam", Opt(&O::visible_adam))
           .Switch("--visible-adam", true,
@@ -547,6 +548,15 @@ std::vector<TrainOption> SpeedRows() {
           .Range(ValueRange::Integer(0, kIntMax))
           .IfMissing(0)
           .Config("coarse_to_fine"),
+      Row("optimization.prune_contribution", Opt(&O::prune_contribution))
+          .Flag("--prune-contribution",
+                "At each densification also prune the Gaussians seen since the last one whose "
+                "largest blending weight (alpha x transmittance) at any pixel of those views "
+                "stayed below this (0: off, as the paper; not within densify-from iterations "
+                "of an opacity reset)")
+          .Range(ValueRange::Real(0, 0.999))
+          .IfMissing(0.0)
+          .Config("prune_contribution"),
   };
 }
 

@@ -62,7 +62,8 @@ TEST(TrainOptionsTable, RecordsTheKeysRunsHaveAlwaysRecorded) {
       "camera_correction", "camera_correction_weight", "camera_correction_lr",
       // issue 55
       "reference", "optimization.visible_adam", "optimization.stop_window",
-      "optimization.stop_tolerance", "optimization.coarse_to_fine"};
+      "optimization.stop_tolerance", "optimization.coarse_to_fine",
+      "optimization.prune_contribution"};
   EXPECT_EQ(keys, expected);
   // Each value keeps its member's JSON type: a float's exact value, an unsigned seed, nulls.
   const json j = Recordable().ToJson();
@@ -102,7 +103,8 @@ TEST(TrainOptionsTable, RecordsOfOlderRunsReadAsTheyTrained) {
   json old = Recordable().ToJson();
   old.erase("learn_background");
   old.erase("reference");
-  for (const char* key : {"visible_adam", "stop_window", "stop_tolerance", "coarse_to_fine"})
+  for (const char* key : {"visible_adam", "stop_window", "stop_tolerance", "coarse_to_fine",
+                          "prune_contribution"})
     old["optimization"].erase(key);
   for (const char* key : {"hdr_target", "hdr_geometry", "hdr_head", "hdr_head_iterations",
                           "pixel_log_epsilon"})
@@ -113,6 +115,7 @@ TEST(TrainOptionsTable, RecordsOfOlderRunsReadAsTheyTrained) {
   EXPECT_FALSE(o.optimization.visible_adam);
   EXPECT_EQ(o.optimization.stop_window, 0);
   EXPECT_EQ(o.optimization.coarse_to_fine, 0);
+  EXPECT_EQ(o.optimization.prune_contribution, 0.0);
   EXPECT_EQ(o.hdr.hdr_target, HdrTarget::kImageMax);
   EXPECT_TRUE(o.hdr.hdr_geometry);
   EXPECT_FALSE(o.hdr.hdr_head);
@@ -170,7 +173,7 @@ TEST(TrainOptionsTable, EveryFlagIsOneRowWithHelpAndItsValues) {
     // A default the help shows is one the option accepts.
     if (row.show_default) EXPECT_EQ(row.Check(row.get(defaults)), "") << row.flag;
   }
-  EXPECT_EQ(flags.size(), 45u);  // 36 + issue 55's five + issue 52's three + issue 56's --exposure-unit
+  EXPECT_EQ(flags.size(), 46u);  // 36 + issue 55's six + issue 52's three + issue 56's --exposure-unit
   EXPECT_EQ(FindTrainOption("--no-learn-background"), FindTrainOption("learn_background"));
 }
 
@@ -215,10 +218,12 @@ TEST(TrainOptionsTable, ReferenceIsRecordedAndRefusesTheOptionsThatDoLess) {
   TrainOptions o = Recordable();
   o.optimization.visible_adam = true;
   o.optimization.coarse_to_fine = 500;
+  o.optimization.prune_contribution = 0.02;
   reference->set_given(&o, true);
   EXPECT_TRUE(o.reference);
   EXPECT_FALSE(o.optimization.visible_adam);
   EXPECT_EQ(o.optimization.coarse_to_fine, 0);
+  EXPECT_EQ(o.optimization.prune_contribution, 0.0);
   EXPECT_EQ(o.Validate(), "");
   EXPECT_EQ(o.ToJson()["reference"], true);
   EXPECT_TRUE(TrainOptions::FromJson(o.ToJson(), "/runs/a/config.json").reference);
@@ -231,6 +236,10 @@ TEST(TrainOptionsTable, ReferenceIsRecordedAndRefusesTheOptionsThatDoLess) {
   o.optimization.coarse_to_fine = 100;
   EXPECT_NE(o.Validate().find("drop --coarse-to-fine"), std::string::npos) << o.Validate();
   EXPECT_FALSE(MayChangeOnResume("optimization.coarse_to_fine"));
+  o.optimization.coarse_to_fine = 0;
+  o.optimization.prune_contribution = 0.02;
+  EXPECT_NE(o.Validate().find("drop --prune-contribution"), std::string::npos) << o.Validate();
+  EXPECT_FALSE(MayChangeOnResume("optimization.prune_contribution"));
   // A resumed run cannot change what it learns: --visible-adam is not one a resume may change.
   EXPECT_FALSE(MayChangeOnResume("reference"));
   EXPECT_FALSE(MayChangeOnResume("optimization.visible_adam"));

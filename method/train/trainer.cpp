@@ -71,6 +71,9 @@ std::string TrainOptions::Validate() const {
   if (reference && optimization.coarse_to_fine > 0)
     return "reference: --reference trains at full size from the start; drop --coarse-to-fine "
            "(or --reference)";
+  if (reference && optimization.prune_contribution > 0)
+    return "reference: --reference prunes by opacity only; drop --prune-contribution (or "
+           "--reference)";
   if (reference && optimization.stop_window > 0)
     return "reference: --reference trains every iteration asked for; drop --iterations auto "
            "and --stop-window (or --reference)";
@@ -95,6 +98,10 @@ int DistinctTimes(const Dataset& dataset) {
 }
 
 namespace {
+
+// --prune-contribution's blending-weight statistics in a checkpoint: the extra float section after
+// the HDR head's (an empty head section when the run has none).
+constexpr std::size_t kMaxWeightSection = kHdrHeadSection + 1;
 
 constexpr const char* kCheckpointName = "checkpoint.bin";
 
@@ -496,6 +503,13 @@ void TrainingRun::ResumeOrInitialise() {
     stats_.grad_accum = std::move(c.extra_floats[0]);
     stats_.denom = std::move(c.extra_floats[1]);
     stats_.max_radii = std::move(c.extra_floats[2]);
+    if (opt_.prune_contribution > 0) {
+      if (c.extra_floats.size() <= kMaxWeightSection ||
+          c.extra_floats[kMaxWeightSection].size() != model_.size())
+        Fail("{}: checkpoint has no blending-weight statistics for --prune-contribution",
+             checkpoint_path_.string());
+      stats_.max_weight = std::move(c.extra_floats[kMaxWeightSection]);
+    }
     if (model_.color_mode != options_.hdr.color_mode) {
       Fail("{}: the checkpoint's colour model does not match method '{}'",
            checkpoint_path_.string(), options_.hdr.method);
@@ -532,6 +546,7 @@ void TrainingRun::ResumeOrInitialise() {
                      std::exp(*level), std::exp(shift));
       }
     }
+    if (opt_.prune_contribution > 0) stats_.max_weight.assign(model_.size(), 0.0f);
     stats_.Reset(model_.size());
     OrderByTime();  // before the optimiser's groups exist: the model alone
     StartLearnedBackground(nullptr);
@@ -672,6 +687,7 @@ void TrainingRun::Step() {
   optimizer_->SetIteration(it);
   std::tie(render_.sh_degree, render_.time_degree) =
       ColorDegrees(it, model_, opt_.sh_increase_interval);
+  render_.track_max_weight = opt_.prune_contribution > 0 && it < opt_.densify_until;
   if (tone_mapper_) tone_mapper_->ZeroGrad();  // a batch adds every view's gradient to it
   if (background_) background_->ZeroGrad();
   if (correction_) correction_->ZeroGrad();
@@ -791,6 +807,7 @@ void TrainingRun::BackwardAndUpdate(const TrainView& view, int it, double loss_v
   if (it < opt_.densify_until)
     AccumulateStats(state_.splat_grads.mean2d, state_.screen_radius, camera_.intrinsics.width,
                     camera_.intrinsics.height, &stats_, coarse_);
+  if (render_.track_max_weight) AccumulateMaxWeight(state_.splat_grads.max_weight, &stats_);
   FinishUpdate(it, loss_value);
 }
 
@@ -815,6 +832,7 @@ double TrainingRun::BatchBackwardAndUpdate(int it, const float** ldr_out, std::s
     if (it < opt_.densify_until)
       batch_stats_.Add(state_.splat_grads.mean2d, state_.screen_radius,
                        camera_.intrinsics.width, camera_.intrinsics.height, coarse_);
+    if (render_.track_max_weight) AccumulateMaxWeight(state_.splat_grads.max_weight, &stats_);
   }
   const float inverse = 1.0f / static_cast<float>(batch);
   ScaleGradients(inverse, &grads_);
@@ -924,7 +942,13 @@ nlohmann::json TrainingRun::EvaluateTestViews(bool with_flip) {
 std::vector<const std::vector<float>*> TrainingRun::ExtraFloats() const {
   std::vector<const std::vector<float>*> extra = {&stats_.grad_accum, &stats_.denom,
                                                   &stats_.max_radii};
-  if (head_current_) extra.push_back(&head_.offset);  // at kHdrHeadSection
+  static const std::vector<float> kNoHead;
+  if (head_current_) {
+    extra.push_back(&head_.offset);  // at kHdrHeadSection
+  } else if (opt_.prune_contribution > 0) {
+    extra.push_back(&kNoHead);  // an empty section: no head
+  }
+  if (opt_.prune_contribution > 0) extra.push_back(&stats_.max_weight);  // at kMaxWeightSection
   return extra;
 }
 

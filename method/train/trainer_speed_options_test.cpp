@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 
 #include "core/files/json_util.h"
 #include "method/run/gaussian_scene.h"
@@ -44,6 +45,20 @@ void ExpectSameState(const fs::path& a, const fs::path& b) {
   EXPECT_EQ(ca.extra_floats, cb.extra_floats);
 }
 
+// A run of `run(name, iterations)` stopped at `split_at` and resumed to the end gives the same
+// losses as `straight` (the uninterrupted run in dir / "straight") and the same final state.
+void ExpectResumesExactly(const std::function<TrainOptions(const char*, int)>& run,
+                          int split_at,
+                          const TrainSummary& straight,
+                          const fs::path& dir) {
+  Train(run("split", split_at));
+  TrainOptions rest = run("split", static_cast<int>(straight.loss_curve.size()));
+  rest.resume = true;
+  const TrainSummary resumed = Train(rest);
+  EXPECT_EQ(resumed.loss_curve, straight.loss_curve);
+  ExpectSameState(dir / "split", dir / "straight");
+}
+
 TEST(TrainerSpeedOptions, ReferenceIsTheOldDefaultsBitForBit) {
   TempDir dir;
   MakeTinyScene(dir / "scene");
@@ -75,12 +90,9 @@ TEST(TrainerSpeedOptions, VisibleAdamDiffersFromDenseAndResumesExactly) {
   const TrainSummary dense = Train(run("dense", 60, false));
   const TrainSummary straight = Train(run("straight", 60, true));
   EXPECT_NE(dense.loss_curve, straight.loss_curve) << "no Gaussian was ever unseen";
-  Train(run("split", 37, true));  // between densifications, rows behind their step
-  TrainOptions rest = run("split", 60, true);
-  rest.resume = true;
-  const TrainSummary resumed = Train(rest);
-  EXPECT_EQ(resumed.loss_curve, straight.loss_curve);
-  ExpectSameState(dir / "split", dir / "straight");
+  // Split between densifications, rows behind their step.
+  ExpectResumesExactly([&](const char* name, int it) { return run(name, it, true); }, 37,
+                       straight, dir.path());
 }
 
 TEST(TrainerSpeedOptions, IterationsAutoStopsDeterministicallyAndResumes) {
@@ -135,12 +147,36 @@ TEST(TrainerSpeedOptions, CoarseToFineDiffersFromFullSizeAndResumesExactly) {
   EXPECT_NE(full.loss_curve[0], straight.loss_curve[0]);
   for (double loss : straight.loss_curve) EXPECT_TRUE(std::isfinite(loss));
   EXPECT_EQ(ReadJsonFile(dir / "straight" / "config.json")["optimization"]["coarse_to_fine"], 40);
-  Train(run("split", 27, 40));
-  TrainOptions rest = run("split", 60, 40);
-  rest.resume = true;
-  const TrainSummary resumed = Train(rest);
-  EXPECT_EQ(resumed.loss_curve, straight.loss_curve);
-  ExpectSameState(dir / "split", dir / "straight");
+  ExpectResumesExactly([&](const char* name, int it) { return run(name, it, 40); }, 27,
+                       straight, dir.path());
+}
+
+// --prune-contribution removes Gaussians the plain run keeps, and its statistics (the largest
+// blending weights since the last densification) travel in the checkpoint: a run interrupted
+// between two densifications resumes bit for bit.
+TEST(TrainerSpeedOptions, PruneContributionPrunesMoreAndResumesExactly) {
+  TempDir dir;
+  MakeTinyScene(dir / "scene");
+  auto run = [&](const char* name, int iterations, double threshold) {
+    TrainOptions o = TinyRun(dir / "scene", dir / name, iterations);
+    o.optimization.prune_contribution = threshold;
+    return o;
+  };
+  Train(run("plain", 60, 0.0));
+  const TrainSummary straight = Train(run("straight", 60, 0.05));
+  const std::size_t plain_count = LoadCheckpoint(dir / "plain" / "checkpoint.bin").model.size();
+  const std::size_t pruned_count =
+      LoadCheckpoint(dir / "straight" / "checkpoint.bin").model.size();
+  EXPECT_LT(pruned_count, plain_count);
+  EXPECT_GT(pruned_count, 0u);
+  EXPECT_EQ(ReadJsonFile(dir / "straight" / "config.json")["optimization"]["prune_contribution"],
+            0.05);
+  ExpectResumesExactly([&](const char* name, int it) { return run(name, it, 0.05); }, 27,
+                       straight, dir.path());
+  // --reference refuses it.
+  TrainOptions both = run("both", 60, 0.05);
+  both.reference = true;
+  EXPECT_NE(both.Validate(), "");
 }
 
 }  // namespace
