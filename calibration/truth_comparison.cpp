@@ -312,6 +312,35 @@ void CompareCameraScales(const std::vector<HdrPair>& pairs, const std::vector<Im
   out->hdr_camera_disagreement = spread;
 }
 
+// A perfect geometric calibration's reference: the render through the true lens and its own
+// undistortion, the resampling alone.
+Image TruthAsPerfectlyCalibrated(const Image& render, const TruthCamera& t) {
+  RigCamera exact;
+  exact.intrinsics = {t.fx, t.cx, t.cy, t.k1, t.k2};
+  exact.undistort = HasLens(t);
+  return TruthAsCalibrated(render, t, &exact);
+}
+
+// Which pixels the brackets measure (every channel of the truth within the camera's measured
+// radiance range, calibrated and rendered values positive); appends their truth / calibrated
+// ratios per channel to `ratios`.
+std::vector<char> MeasuredPixels(const Image& cal, const Image& tru, const Image& raw,
+                                 const TruthCamera& camera, std::array<std::vector<double>, 3>* ratios) {
+  std::vector<char> use(cal.num_pixels(), 0);
+  for (std::size_t i = 0; i < cal.num_pixels(); ++i) {
+    bool ok = true;
+    for (int ch = 0; ch < 3; ++ch) {
+      const double t = tru.data()[3 * i + ch], c = cal.data()[3 * i + ch];
+      ok &= t >= camera.low[ch] && t <= camera.high[ch] && c > 0 && raw.data()[3 * i + ch] > 0;
+    }
+    use[i] = ok;
+    if (!ok) continue;
+    for (int ch = 0; ch < 3; ++ch)
+      (*ratios)[ch].push_back(tru.data()[3 * i + ch] / static_cast<double>(cal.data()[3 * i + ch]));
+  }
+  return use;
+}
+
 void CompareHdr(const std::vector<HdrPair>& pairs, TruthComparison* out) {
   // Pass 1: the scale per channel, the median of truth / calibrated over measured pixels.
   std::array<std::vector<double>, 3> ratios;
@@ -325,29 +354,11 @@ void CompareHdr(const std::vector<HdrPair>& pairs, TruthComparison* out) {
       Fail("{}: {} pixels, the rendered {} has {}", p.calibrated.string(), cal.ShapeString(),
            p.truth.string(), raw.ShapeString());
     Image tru = TruthAsCalibrated(raw, *p.truth_camera, p.rig_camera);
-    // A perfect geometric calibration's reference: the resampling alone.
-    RigCamera exact;
-    exact.intrinsics = {p.truth_camera->fx, p.truth_camera->cx, p.truth_camera->cy, p.truth_camera->k1,
-                        p.truth_camera->k2};
-    exact.undistort = HasLens(*p.truth_camera);
-    floor.push_back(TruthAsCalibrated(raw, *p.truth_camera, &exact));
+    floor.push_back(TruthAsPerfectlyCalibrated(raw, *p.truth_camera));
     out->hdr_resampled_frames += HasLens(*p.truth_camera) || (p.rig_camera && p.rig_camera->undistort);
-    std::vector<char> use(cal.num_pixels(), 0);
-    for (std::size_t i = 0; i < cal.num_pixels(); ++i) {
-      bool ok = true;
-      for (int ch = 0; ch < 3; ++ch) {
-        const double t = tru.data()[3 * i + ch], c = cal.data()[3 * i + ch];
-        ok &= t >= p.truth_camera->low[ch] && t <= p.truth_camera->high[ch] && c > 0 && raw.data()[3 * i + ch] > 0;
-      }
-      use[i] = ok;
-      ++pixels;
-      if (!ok) {
-        ++excluded;
-        continue;
-      }
-      for (int ch = 0; ch < 3; ++ch)
-        ratios[ch].push_back(tru.data()[3 * i + ch] / static_cast<double>(cal.data()[3 * i + ch]));
-    }
+    std::vector<char> use = MeasuredPixels(cal, tru, raw, *p.truth_camera, &ratios);
+    pixels += static_cast<long>(use.size());
+    excluded += static_cast<long>(std::count(use.begin(), use.end(), 0));
     calibrated.push_back(std::move(cal));
     truth.push_back(std::move(tru));
     render.push_back(std::move(raw));

@@ -115,6 +115,32 @@ void ForwardTileReference(const SplatBuffersT<T>& splats,
   }
 }
 
+// Zeroes what one tile of the reference backward writes: its entries' slots and, where kept,
+// their largest blending weights and the tile's background partials.
+template <typename T>
+void ClearTileOutputs(int start, int end, int stride, int channels, T* slots, T* tile_bg,
+                      T* weights) {
+  std::fill(slots + static_cast<std::size_t>(start) * stride,
+            slots + static_cast<std::size_t>(end) * stride, T(0));
+  if (tile_bg != nullptr) std::fill(tile_bg, tile_bg + channels, T(0));
+  if (weights != nullptr) std::fill(weights + start, weights + end, T(0));
+}
+
+// One pixel's gradient of a Gaussian's 2D mean, conic and opacity, from dL/dalpha through
+// alpha = opacity x G, G = exp(power) (offset dx, dy from the pixel; conic q).
+template <typename T>
+void AddGeometrySlots(T opacity, T G, T dx, T dy, const T* q, T dL_dalpha, T* slot) {
+  const T dL_dG = opacity * dL_dalpha;
+  const T gdx = G * dx;
+  const T gdy = G * dy;
+  slot[detail::kSlotMean] += dL_dG * (-gdx * q[0] - gdy * q[1]);
+  slot[detail::kSlotMean + 1] += dL_dG * (-gdy * q[2] - gdx * q[1]);
+  slot[detail::kSlotConic] += T(-0.5) * gdx * dx * dL_dG;
+  slot[detail::kSlotConic + 1] += -gdx * dy * dL_dG;
+  slot[detail::kSlotConic + 2] += T(-0.5) * gdy * dy * dL_dG;
+  slot[detail::kSlotOpacity] += G * dL_dalpha;
+}
+
 // One tile of the reference backward: fills the tile's entry slots (overwritten) and, when
 // tile_bg is non-null, its channels partial sums of dL/dbackground.
 template <typename T>
@@ -135,10 +161,7 @@ void BackwardTileReference(const SplatBuffersT<T>& splats,
   const TileBounds b = BoundsOf(bins, tile);
   const int start = bins.tile_ranges[tile];
   const int end = bins.tile_ranges[tile + 1];
-  std::fill(slots + static_cast<std::size_t>(start) * stride,
-            slots + static_cast<std::size_t>(end) * stride, T(0));
-  if (tile_bg != nullptr) std::fill(tile_bg, tile_bg + channels, T(0));
-  if (weights != nullptr) std::fill(weights + start, weights + end, T(0));
+  ClearTileOutputs(start, end, stride, channels, slots, tile_bg, weights);
   const T* mean = splats.mean2d.data();
   const T* conic = splats.conic.data();
   const T* opacity = splats.opacity.data();
@@ -188,15 +211,7 @@ void BackwardTileReference(const SplatBuffersT<T>& splats,
         dL_dalpha *= transmittance;
         last_alpha = alpha;
         dL_dalpha += (-T_final / (T(1) - alpha)) * dL_dT_final;
-        const T dL_dG = opacity[g] * dL_dalpha;
-        const T gdx = G * dx;
-        const T gdy = G * dy;
-        slot[detail::kSlotMean] += dL_dG * (-gdx * q[0] - gdy * q[1]);
-        slot[detail::kSlotMean + 1] += dL_dG * (-gdy * q[2] - gdx * q[1]);
-        slot[detail::kSlotConic] += T(-0.5) * gdx * dx * dL_dG;
-        slot[detail::kSlotConic + 1] += -gdx * dy * dL_dG;
-        slot[detail::kSlotConic + 2] += T(-0.5) * gdy * dy * dL_dG;
-        slot[detail::kSlotOpacity] += G * dL_dalpha;
+        AddGeometrySlots(opacity[g], G, dx, dy, q, dL_dalpha, slot);
       }
     }
   }
@@ -214,6 +229,27 @@ void PrepareGradients(std::size_t n, int channels, SplatGradientsT<T>* grads) {
   prepare(grads->opacity, n);
   prepare(grads->features, n * static_cast<std::size_t>(channels));
   HDR4D_CHECK(grads->max_weight.empty() || grads->max_weight.size() == n);
+}
+
+// Raises `largest` to the blending weights of entries k0..k1 (indexed like the slots).
+template <typename T>
+void MaxIntoWeight(const RasterState& bins, const T* weights, int k0, int k1, bool streamed,
+                   T* largest) {
+  T m = *largest;
+  for (int k = k0; k < k1; ++k) m = std::max(m, weights[streamed ? k : bins.point_entries[k]]);
+  *largest = m;
+}
+
+// dL/dbackground += the per-tile partials, summed in tile order.
+template <typename T>
+void AddTileBackgrounds(const RasterState& bins, int channels, const T* tile_bg,
+                        T* dL_dbackground) {
+  for (int c = 0; c < channels; ++c) {
+    T sum = T(0);
+    for (int t = 0; t < bins.num_tiles(); ++t)
+      sum += tile_bg[static_cast<std::size_t>(t) * channels + c];
+    dL_dbackground[c] += sum;
+  }
 }
 
 // Sums every listed Gaussian's entry slots in ascending tile order into `grads` (+=), and the
@@ -274,12 +310,8 @@ void ReduceGradients(const RasterState& bins,
         grads->opacity[g] += sum[detail::kSlotOpacity];
         T* gf = grads->features.data() + g * channels;
         for (int c = 0; c < channels; ++c) gf[c] += sum[detail::kSlotFeatures + c];
-        if (weights != nullptr) {
-          T largest = grads->max_weight[g];
-          for (int k = k0; k < k1; ++k)
-            largest = std::max(largest, weights[streamed ? k : bins.point_entries[k]]);
-          grads->max_weight[g] = largest;
-        }
+        if (weights != nullptr)
+          MaxIntoWeight(bins, weights, k0, k1, streamed, &grads->max_weight[g]);
       }
     };
     if constexpr (kStride > 0) {
@@ -300,14 +332,7 @@ void ReduceGradients(const RasterState& bins,
         return reduce.template operator()<0>(begin, end);
     }
   });
-  if (dL_dbackground != nullptr) {
-    for (int c = 0; c < channels; ++c) {
-      T sum = T(0);
-      for (int t = 0; t < bins.num_tiles(); ++t)
-        sum += tile_bg[static_cast<std::size_t>(t) * channels + c];
-      dL_dbackground[c] += sum;
-    }
-  }
+  if (dL_dbackground != nullptr) AddTileBackgrounds(bins, channels, tile_bg, dL_dbackground);
 }
 
 template <typename T>

@@ -170,6 +170,7 @@ class TrainingRun {
   std::string method_note_;
   void OpenRunFolder();
   void ResumeOrInitialise();
+  void RestoreDensifyStats(Checkpoint* c);
   void PrepareRendering();
   void ReserveForBudget();
   // Iterations left, and (--iterations auto) the loss still improving.
@@ -485,6 +486,25 @@ void TrainingRun::OpenRunFolder() {
   checkpoint_path_ = options_.out / kCheckpointName;
 }
 
+// The checkpoint's extra float sections: densification statistics, the HDR head, and
+// --prune-contribution's blending weights.
+void TrainingRun::RestoreDensifyStats(Checkpoint* c) {
+  if (c->extra_floats.size() < 3)
+    Fail("{}: checkpoint has no densification statistics", checkpoint_path_.string());
+  head_ = ReadHdrHead(*c, model_.size(), checkpoint_path_.string());
+  head_current_ = !head_.empty();
+  stats_.grad_accum = std::move(c->extra_floats[0]);
+  stats_.denom = std::move(c->extra_floats[1]);
+  stats_.max_radii = std::move(c->extra_floats[2]);
+  if (opt_.prune_contribution > 0) {
+    if (c->extra_floats.size() <= kMaxWeightSection ||
+        c->extra_floats[kMaxWeightSection].size() != model_.size())
+      Fail("{}: checkpoint has no blending-weight statistics for --prune-contribution",
+           checkpoint_path_.string());
+    stats_.max_weight = std::move(c->extra_floats[kMaxWeightSection]);
+  }
+}
+
 // The model, optimiser and loop state from the checkpoint, or a new model from the point cloud
 // (or random points); then RUN/config.json.
 void TrainingRun::ResumeOrInitialise() {
@@ -496,20 +516,7 @@ void TrainingRun::ResumeOrInitialise() {
     std::istringstream adam_state(c.adam_state);
     optimizer_->Load(adam_state, checkpoint_path_.string());
     loop_.FromJson(c.trainer, checkpoint_path_, train_views_.size());
-    if (c.extra_floats.size() < 3)
-      Fail("{}: checkpoint has no densification statistics", checkpoint_path_.string());
-    head_ = ReadHdrHead(c, model_.size(), checkpoint_path_.string());
-    head_current_ = !head_.empty();
-    stats_.grad_accum = std::move(c.extra_floats[0]);
-    stats_.denom = std::move(c.extra_floats[1]);
-    stats_.max_radii = std::move(c.extra_floats[2]);
-    if (opt_.prune_contribution > 0) {
-      if (c.extra_floats.size() <= kMaxWeightSection ||
-          c.extra_floats[kMaxWeightSection].size() != model_.size())
-        Fail("{}: checkpoint has no blending-weight statistics for --prune-contribution",
-             checkpoint_path_.string());
-      stats_.max_weight = std::move(c.extra_floats[kMaxWeightSection]);
-    }
+    RestoreDensifyStats(&c);
     if (model_.color_mode != options_.hdr.color_mode) {
       Fail("{}: the checkpoint's colour model does not match method '{}'",
            checkpoint_path_.string(), options_.hdr.method);
