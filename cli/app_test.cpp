@@ -99,10 +99,10 @@ TEST(App, TrainFlagsAreTheOptionTablesRows) {
           << row.flag << ": " << option->get_type_name();
     }
   }
-  EXPECT_EQ(rows, 46);  // 36 + issue 55 (6) + issue 52 (3) + issue 56 (--exposure-unit)
+  EXPECT_EQ(rows, 47);  // 36 + issue 55 (6) + issue 52 (4) + issue 56 (--exposure-unit)
   // The six flags that are not options of the run (--overwrite among them), and the grid
   // family's four (cli/train_hexplane.h: --rays, --grid-voxels, --time-grid, --grid-background).
-  EXPECT_EQ(train->get_options().size(), 46u + 6u + 4u + 1u);  // + --help
+  EXPECT_EQ(train->get_options().size(), 47u + 6u + 4u + 1u);  // + --help
 }
 
 TEST(App, ATrainFlagOutOfRangeIsRefusedInTheWordsOfItsHelp) {

@@ -13,7 +13,7 @@ namespace hdr4d::method {
 namespace {
 
 constexpr char kDtmMagic[8] = {'H', 'D', 'R', '4', 'D', 'D', 'T', 'M'};
-constexpr std::uint32_t kDtmVersion = 1;
+constexpr std::uint32_t kDtmVersion = 2;  // 2: the bank's written flags
 constexpr std::uint32_t kMaxConfigBytes = 1u << 20;
 
 const ToneMapperConfig& Checked(const ToneMapperConfig& config) {
@@ -53,7 +53,8 @@ void DynamicToneMapper::BeginFrame(const ToneFrame& frame) {
   if (core_.has_pending_gradient()) core_.EndFrameBackward(grads_.data());
   const int length = RadianceBank::WindowLength(frame.time_index, config_.context_window);
   window_.resize(std::size_t(length) * RadianceBank::kColumns);
-  bank_.Window(frame.time_index, config_.context_window, window_.data());
+  bank_.Window(frame.time_index, config_.context_window, window_.data(),
+               config_.unseen_rows == "interpolate" ? UnseenRows::kInterpolate : UnseenRows::kZero);
   core_.BeginFrame(params_.data(), window_.data(), length, frame.log_exposure);
 }
 
@@ -90,6 +91,7 @@ void DynamicToneMapper::Save(std::ostream& out) const {
   w.Bytes(params_.data(), params_.size() * sizeof(float));
   w.Value(static_cast<std::uint32_t>(bank_.size()));
   w.Bytes(bank_.rows().data(), bank_.rows().size() * sizeof(float));
+  w.Bytes(bank_.written_rows().data(), bank_.written_rows().size());
   w.Value(w.hash());
 }
 
@@ -101,9 +103,9 @@ void DynamicToneMapper::Load(std::istream& in, const std::string& source) {
     Fail("{}: not a Dynamic Tone Mapper state (bad magic; expected \"HDR4DDTM\")", source);
   }
   const auto version = r.Value<std::uint32_t>("the version");
-  if (version != kDtmVersion) {
-    Fail("{}: tone mapper state version {} is not supported (this build reads version {})", source,
-         version, kDtmVersion);
+  if (version != 1 && version != kDtmVersion) {
+    Fail("{}: tone mapper state version {} is not supported (this build reads versions 1 and {})",
+         source, version, kDtmVersion);
   }
   r.ResetHash();
   const auto json_size = r.Value<std::uint32_t>("the configuration size");
@@ -125,6 +127,8 @@ void DynamicToneMapper::Load(std::istream& in, const std::string& source) {
   }
   const std::vector<float> bank =
       r.Floats(std::uint64_t(rows) * RadianceBank::kColumns, "the radiance bank");
+  std::vector<std::uint8_t> written(rows, 0);
+  if (version >= 2) r.Bytes(written.data(), written.size(), "the radiance bank's written flags");
   r.VerifyChecksum();
 
   nlohmann::json json;
@@ -147,6 +151,7 @@ void DynamicToneMapper::Load(std::istream& in, const std::string& source) {
   differs("curve_hidden", saved.curve_hidden, config_.curve_hidden);
   differs("monotone_curves", saved.monotone_curves, config_.monotone_curves);
   differs("num_times", saved.num_times, config_.num_times);
+  differs("unseen_rows", saved.unseen_rows, config_.unseen_rows);
   for (std::size_t i = 0; i < params.size(); ++i) {
     if (!std::isfinite(params[i])) {
       Fail("{}: tone mapper state has a non-finite parameter (index {})", source, i);
@@ -158,9 +163,16 @@ void DynamicToneMapper::Load(std::istream& in, const std::string& source) {
            i / RadianceBank::kColumns);
     }
   }
+  for (std::size_t i = 0; i < written.size(); ++i) {
+    if (written[i] > 1) {
+      Fail("{}: tone mapper state has a bad radiance bank written flag (row {})", source, i);
+    }
+  }
+  // Version 1 saved no flags: a row is written where it is not all zero.
+  if (version == 1) written = RadianceBank::WrittenWhereNonZero(bank);
   // Commit: nothing below can fail.
   std::copy(params.begin(), params.end(), params_.begin());
-  bank_.SetRows(bank);
+  bank_.SetRows(bank, written);
   core_.Invalidate();
 }
 

@@ -3,13 +3,16 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <random>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
+#include "core/files/binary_stream.h"
 #include "core/util/error.h"
 #include "core/util/parallel.h"
 #include "method/tonemap/dtm_core.h"
@@ -513,6 +516,74 @@ TEST(DynamicToneMapper, SaveLoadRoundTrip) {
   EXPECT_EQ(direct.params(), a.params());
 }
 
+// A held-out frame's timestamp on a monocular scene: rows 0, 2 and 4.. are never written. With
+// unseen_rows "interpolate" the context is that of a bank holding, there, the interpolation in
+// time of the written rows (the nearest one past an end); with "zero", of the bank as it is.
+TEST(DynamicToneMapper, UnwrittenRowsReadAsTheConfigSays) {
+  ToneMapperConfig c = Config(6);
+  ASSERT_EQ(c.unseen_rows, "interpolate");  // the default
+  DynamicToneMapper interpolate(c);
+  c.unseen_rows = "zero";
+  DynamicToneMapper zero(c);
+  const float r1[3] = {1, 2, 3}, r3[3] = {3, -2, 5}, r2[3] = {2, 0, 4}, none[3] = {0, 0, 0};
+  for (DynamicToneMapper* m : {&interpolate, &zero}) {
+    m->ObserveMeanLogHdr(1, r1);
+    m->ObserveMeanLogHdr(3, r3);
+    m->BeginFrame({4, -1, 0.0f});
+  }
+  DynamicToneMapper filled(Config(6)), zeros(Config(6));
+  for (auto [row, v, z] : {std::tuple{0, r1, none}, {1, r1, r1}, {2, r2, none}, {3, r3, r3}}) {
+    filled.ObserveMeanLogHdr(row, v);
+    zeros.ObserveMeanLogHdr(row, z);
+  }
+  filled.BeginFrame({4, -1, 0.0f});
+  zeros.BeginFrame({4, -1, 0.0f});
+  EXPECT_EQ(interpolate.context(), filled.context());
+  EXPECT_EQ(zero.context(), zeros.context());
+  EXPECT_NE(interpolate.context(), zero.context());
+
+  // The flags travel with the state: a loaded mapper reads the same context.
+  DynamicToneMapper loaded(Config(6));
+  ASSERT_EQ(LoadError(loaded, Saved(interpolate)), "");
+  EXPECT_EQ(loaded.bank().written_rows(), (std::vector<std::uint8_t>{0, 1, 0, 1, 0, 0}));
+  loaded.BeginFrame({4, -1, 0.0f});
+  EXPECT_EQ(loaded.context(), interpolate.context());
+  // A state saved with one policy does not load into the other.
+  EXPECT_NE(LoadError(zero, Saved(interpolate)).find("unseen_rows = interpolate"),
+            std::string::npos);
+}
+
+// A version-1 state (no written flags, no unseen_rows key) loads with rows written where they
+// are not all zero.
+TEST(DynamicToneMapper, LoadsAVersionOneState) {
+  ToneMapperConfig c = Config(4);
+  c.unseen_rows = "zero";  // what a version-1 config without the key means
+  DynamicToneMapper source(c);
+  const float r[3] = {1, 2, 3};
+  source.ObserveMeanLogHdr(2, r);
+  const std::string v2 = Saved(source);
+  // Version 1: the same bytes without the flags (4 rows), the config without the key.
+  std::string body = v2.substr(12, v2.size() - 12 - 4 - 8);
+  const std::string key = ",\"unseen_rows\":\"zero\"";
+  const std::size_t at = body.find(key);
+  ASSERT_NE(at, std::string::npos);
+  body.erase(at, key.size());
+  const std::uint32_t json_size = *reinterpret_cast<const std::uint32_t*>(body.data()) - key.size();
+  std::memcpy(body.data(), &json_size, sizeof(json_size));
+  std::stringstream v1;
+  HashingWriter w(v1);
+  w.Bytes("HDR4DDTM", 8);
+  w.Value(std::uint32_t{1});
+  w.ResetHash();
+  w.Bytes(body.data(), body.size());
+  w.Value(w.hash());
+  DynamicToneMapper m(c);
+  std::stringstream in(v1.str());
+  ASSERT_EQ(ErrorOf([&] { m.Load(in, "old/tone_mapper.bin"); }), "");
+  EXPECT_EQ(m.bank().written_rows(), (std::vector<std::uint8_t>{0, 0, 1, 0}));
+  EXPECT_EQ(m.params(), source.params());
+}
+
 TEST(DynamicToneMapper, LoadRejectsBadStateAndKeepsTheMapper) {
   DynamicToneMapper source(Config());
   FillBank(source, 17);
@@ -536,8 +607,8 @@ TEST(DynamicToneMapper, LoadRejectsBadStateAndKeepsTheMapper) {
   magic[3] = 'x';
   EXPECT_NE(LoadError(m, magic).find("bad magic"), std::string::npos);
   std::string version = good;
-  version[8] = 2;
-  EXPECT_NE(LoadError(m, version).find("version 2"), std::string::npos);
+  version[8] = 3;
+  EXPECT_NE(LoadError(m, version).find("version 3"), std::string::npos);
 
   ToneMapperConfig c = Config();
   c.context_window = 10;  // same sizes, another structure

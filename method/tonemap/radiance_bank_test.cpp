@@ -97,13 +97,72 @@ TEST(RadianceBank, TimeIndexQuantisesNormalisedTime) {
   }
 }
 
+// Rows `rows` of a bank of `size`, numbered as NumberedBank; the others never written.
+RadianceBank BankWithRows(int size, const std::vector<int>& rows) {
+  RadianceBank bank(size);
+  for (int i : rows) {
+    const float v[3] = {float(i), 10.0f * i, 100.0f * i};
+    EXPECT_TRUE(bank.Write(i, v));
+  }
+  return bank;
+}
+
+std::vector<float> FirstColumn(const std::vector<float>& window) {
+  std::vector<float> out;
+  for (std::size_t r = 0; r < window.size() / 3; ++r) out.push_back(window[r * 3]);
+  return out;
+}
+
+TEST(RadianceBank, UnwrittenRowsReadAsZerosOrInterpolatedInTime) {
+  // A monocular scene's held-out frames: rows 2 and 6 never written, 3 between two of them.
+  const RadianceBank bank = BankWithRows(9, {0, 1, 4, 5, 7, 8});
+  EXPECT_FALSE(bank.written(2));
+  EXPECT_TRUE(bank.written(4));
+  EXPECT_EQ(FirstColumn(bank.Window(8, 8)), (std::vector<float>{0, 1, 0, 0, 4, 5, 0, 7}));
+  const std::vector<float> w = bank.Window(8, 8, UnseenRows::kInterpolate);
+  EXPECT_EQ(FirstColumn(w), (std::vector<float>{0, 1, 2, 3, 4, 5, 6, 7}));
+  EXPECT_FLOAT_EQ(w[2 * 3 + 1], 20.0f);  // every column interpolates
+  EXPECT_FLOAT_EQ(w[3 * 3 + 2], 300.0f);
+  // Past either end: the nearest written row.
+  const RadianceBank ends = BankWithRows(6, {2, 3});
+  EXPECT_EQ(FirstColumn(ends.Window(5, 5, UnseenRows::kInterpolate)),
+            (std::vector<float>{2, 2, 2, 3, 3}));
+  // Nothing written yet: zeros either way.
+  EXPECT_EQ(RadianceBank(4).Window(3, 3, UnseenRows::kInterpolate), std::vector<float>(9, 0.0f));
+  // A written row of zeros is a value, not a gap.
+  RadianceBank zero = BankWithRows(3, {0, 2});
+  const float z[3] = {0, 0, 0};
+  zero.Write(2, z);
+  EXPECT_EQ(FirstColumn(zero.Window(2, 2, UnseenRows::kInterpolate)), (std::vector<float>{0, 0}));
+}
+
 TEST(RadianceBank, SaveLoadRoundTrip) {
-  const RadianceBank bank = NumberedBank(6);
+  RadianceBank bank = BankWithRows(6, {1, 2, 4});
+  const float z[3] = {0, 0, 0};
+  bank.Write(5, z);  // written, and zero
   std::stringstream s;
   bank.Save(s);
   RadianceBank loaded(6);
   loaded.Load(s, "bank.bin");
   EXPECT_EQ(loaded.rows(), bank.rows());
+  EXPECT_EQ(loaded.written_rows(), bank.written_rows());
+  EXPECT_TRUE(loaded.written(5));
+  EXPECT_FALSE(loaded.written(3));
+}
+
+TEST(RadianceBank, LoadsVersionOneWithRowsWrittenWhereNotZero) {
+  std::stringstream s;
+  HashingWriter w(s);
+  w.Bytes("HDR4DBNK", 8);
+  w.Value(std::uint32_t{1});
+  w.ResetHash();
+  w.Value(std::uint32_t{3});
+  const float rows[9] = {1, 2, 3, 0, 0, 0, 0, -0.5f, 0};
+  w.Bytes(rows, sizeof(rows));
+  w.Value(w.hash());
+  RadianceBank bank(3);
+  bank.Load(s, "old.bin");
+  EXPECT_EQ(bank.written_rows(), (std::vector<std::uint8_t>{1, 0, 1}));
 }
 
 std::string Saved(const RadianceBank& bank) {
@@ -132,6 +191,9 @@ TEST(RadianceBank, LoadRejectsBadDataAndKeepsTheBank) {
   std::string corrupt = good;
   corrupt[20] ^= 0x10;  // inside the rows
   EXPECT_NE(LoadError(bank, corrupt).find("checksum"), std::string::npos);
+  std::string flag = good;
+  flag[good.size() - 9] = 7;  // the last written flag, before the checksum
+  EXPECT_NE(LoadError(bank, flag).find("checksum"), std::string::npos);
   std::string magic = good;
   magic[0] = 'X';
   EXPECT_NE(LoadError(bank, magic).find("bad magic"), std::string::npos);
@@ -152,6 +214,19 @@ TEST(RadianceBank, LoadRejectsBadDataAndKeepsTheBank) {
   w.Bytes(rows, sizeof(rows));
   w.Value(w.hash());
   EXPECT_NE(LoadError(bank, s.str()).find("row 1 has a non-finite"), std::string::npos);
+
+  std::stringstream f;  // version 2 with a flag that is neither 0 nor 1
+  HashingWriter fw(f);
+  fw.Bytes("HDR4DBNK", 8);
+  fw.Value(std::uint32_t{2});
+  fw.ResetHash();
+  fw.Value(std::uint32_t{3});
+  const float zeros[9] = {};
+  fw.Bytes(zeros, sizeof(zeros));
+  const std::uint8_t flags[3] = {1, 7, 0};
+  fw.Bytes(flags, sizeof(flags));
+  fw.Value(fw.hash());
+  EXPECT_NE(LoadError(bank, f.str()).find("row 1 has a bad written flag"), std::string::npos);
 
   EXPECT_EQ(bank.rows(), before);
   EXPECT_EQ(LoadError(bank, good), "");

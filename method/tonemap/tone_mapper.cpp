@@ -42,10 +42,11 @@ std::string CheckRange(const char* key, long long value, long long lo, long long
   return "";
 }
 
-constexpr std::array<std::string_view, 12> kKeys = {
+constexpr std::array<std::string_view, 13> kKeys = {
     "kind",         "num_times",    "num_images", "context_learner", "context_window",
     "context_size", "curve_hidden", "tabulated",  "table_nodes",     "seed",
-    "monotone_curves", "monotone_form"};
+    "monotone_curves", "monotone_form", "unseen_rows"};
+constexpr std::array<std::string_view, 2> kUnseenRows = {"interpolate", "zero"};
 // The construction of monotone curves (monotone_mlp.h). Configs with monotone curves and no
 // form are from the earlier all-positive (convex) construction, which is gone.
 constexpr std::string_view kMonotoneForm = "rising+falling";
@@ -90,6 +91,9 @@ std::string ToneMapperConfig::Validate() const {
     return fmt::format("context_learner must be one of {} (got '{}')", Join(kContextLearners),
                        context_learner);
   }
+  if (!OneOf(unseen_rows, kUnseenRows)) {
+    return fmt::format("unseen_rows must be one of {} (got '{}')", Join(kUnseenRows), unseen_rows);
+  }
   for (const std::string& problem : {
            CheckRange("num_times", num_times, 1, kMaxTimes),
            CheckRange("num_images", num_images, 0, kMaxImages),
@@ -114,7 +118,8 @@ nlohmann::json ToneMapperConfig::ToJson() const {
           {"tabulated", tabulated},
           {"table_nodes", table_nodes},
           {"seed", seed},
-          {"monotone_curves", monotone_curves}};
+          {"monotone_curves", monotone_curves},
+          {"unseen_rows", unseen_rows}};
   if (monotone_curves) j["monotone_form"] = kMonotoneForm;
   return j;
 }
@@ -167,6 +172,8 @@ ToneMapperConfig ToneMapperConfig::FromJson(const nlohmann::json& json, const st
            kMonotoneForm);
     }
   }
+  // Runs from before the key existed read unwritten bank rows as zeros.
+  c.unseen_rows = json.contains("unseen_rows") ? ReadString(json, source, "unseen_rows") : "zero";
   const std::string problem = c.Validate();
   if (!problem.empty()) Fail("{}: tone mapper config: {}", source, problem);
   return c;

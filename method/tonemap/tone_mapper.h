@@ -56,6 +56,11 @@ struct ToneMapperConfig {
   // rising curve, and the monotone one adds nothing measurable (docs/history/accuracy.md). A
   // config.json without the key means false.
   bool monotone_curves = false;
+  // How the context learner reads a radiance-bank row no training view wrote (radiance_bank.h):
+  // "interpolate" (the default) between the nearest written rows in time, or "zero" as the
+  // bank holds it (before issue 52's fix; --reference). A config.json without the key means
+  // "zero".
+  std::string unseen_rows = "interpolate";
   std::uint64_t seed = 0;  // initial weights
 
   // "" when valid, else a message naming the bad field.

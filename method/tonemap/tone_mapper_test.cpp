@@ -43,6 +43,7 @@ TEST(ToneMapperConfig, ValidateNamesTheBadField) {
       {[](ToneMapperConfig& c) { c.curve_hidden = 0; }, "curve_hidden"},
       {[](ToneMapperConfig& c) { c.curve_hidden = 5000; }, "curve_hidden"},
       {[](ToneMapperConfig& c) { c.table_nodes = 1; }, "table_nodes"},
+      {[](ToneMapperConfig& c) { c.unseen_rows = "guess"; }, "unseen_rows"},
   };
   for (const Case& k : cases) {
     ToneMapperConfig c;
@@ -75,8 +76,9 @@ TEST(ToneMapperConfig, JsonRoundTripKeepsEveryKey) {
   c.table_nodes = 333;
   c.seed = std::numeric_limits<std::uint64_t>::max();
   c.monotone_curves = true;
+  c.unseen_rows = "zero";
   const nlohmann::json json = c.ToJson();
-  EXPECT_EQ(json.size(), 12u);  // monotone_form only with monotone curves
+  EXPECT_EQ(json.size(), 13u);  // monotone_form only with monotone curves
   // Through text, as config.json is read back.
   const ToneMapperConfig r = ToneMapperConfig::FromJson(nlohmann::json::parse(json.dump()), "x");
   EXPECT_EQ(r.kind, c.kind);
@@ -90,7 +92,13 @@ TEST(ToneMapperConfig, JsonRoundTripKeepsEveryKey) {
   EXPECT_EQ(r.table_nodes, c.table_nodes);
   EXPECT_EQ(r.seed, c.seed);
   EXPECT_EQ(r.monotone_curves, c.monotone_curves);
+  EXPECT_EQ(r.unseen_rows, c.unseen_rows);
   EXPECT_EQ(r.ToJson(), json);
+  // Unwritten bank rows interpolate by default; a config.json without the key read them as zeros.
+  EXPECT_EQ(ToneMapperConfig().unseen_rows, "interpolate");
+  nlohmann::json before = ToneMapperConfig().ToJson();
+  before.erase("unseen_rows");
+  EXPECT_EQ(ToneMapperConfig::FromJson(before, "x").unseen_rows, "zero");
   // Free curves (the reference's) are the default, and what a config.json without the key had.
   EXPECT_FALSE(ToneMapperConfig().monotone_curves);
   nlohmann::json old = c.ToJson();
@@ -107,7 +115,7 @@ TEST(ToneMapperConfig, JsonRoundTripKeepsEveryKey) {
 TEST(ToneMapperConfig, FromJsonNamesSourceAndKey) {
   const nlohmann::json good = ToneMapperConfig().ToJson();
   for (const auto& item : good.items()) {
-    if (item.key() == "monotone_curves") continue;  // optional: see above
+    if (item.key() == "monotone_curves" || item.key() == "unseen_rows") continue;  // optional
     nlohmann::json j = good;
     j.erase(item.key());
     const std::string e = FromJsonError(j);
@@ -134,6 +142,8 @@ TEST(ToneMapperConfig, FromJsonNamesSourceAndKey) {
       {"curve_hidden", "64"},
       {"tabulated", 1},
       {"monotone_curves", "yes"},
+      {"unseen_rows", "guess"},
+      {"unseen_rows", 0},
       {"table_nodes", 1},
       {"seed", -1},
       {"seed", 0.5},

@@ -507,13 +507,16 @@ std::vector<TrainOption> SpeedRows() {
       Row("reference", Top(&TrainOptions::reference))
           .Switch("--reference", true,
                   "The paper-faithful configuration: dense Adam, every iteration asked for "
-                  "(the defaults before issue 55, bit for bit); refused with an option below")
+                  "(the defaults before issue 55, bit for bit; the radiance bank's unseen rows "
+                  "read as zeros); refused with an option below")
           .IfMissing(false)
           .WhenGiven([](TrainOptions* o, const Json&) {
             o->reference = true;
             o->optimization.visible_adam = false;
             o->optimization.coarse_to_fine = 0;
             o->optimization.prune_contribution = 0.0;
+            // A tone mapper given later gets it in ResolveTrainRequest.
+            if (o->hdr.tone_mapper) o->hdr.tone_mapper->unseen_rows = "zero";
           }),
       Row("optimization.visible_adam", Opt(&O::visible_adam))
           .Switch("--visible-adam", true,
@@ -599,6 +602,13 @@ std::vector<TrainOption> ToneMappingRows() {
           .Flag("--context-size", "Context vector size d")
           .Range(ValueRange::Integer(1, 64))
           .ShowDefault(),
+      ToneRow("unseen_rows", Tone(&ToneMapperConfig::unseen_rows))
+          .Flag("--unseen-bank-rows",
+                "How the Dynamic Tone Mapper's context reads a radiance-bank row no training "
+                "view writes (a held-out frame's own timestamp on a monocular scene): "
+                "interpolate (default) between the nearest written rows in time, or zero, as "
+                "before (--reference; BENCHMARKS.md, issue 52)")
+          .Choices(std::vector<std::string>{"interpolate", "zero"}),
       ToneRow("monotone_curves", Tone(&ToneMapperConfig::monotone_curves))
           .Switch("--monotone-tone-curves", true,
                   "Tone-curve MLPs (dtm, mlp) non-decreasing in log exposure by construction "

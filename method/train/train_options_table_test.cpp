@@ -173,7 +173,7 @@ TEST(TrainOptionsTable, EveryFlagIsOneRowWithHelpAndItsValues) {
     // A default the help shows is one the option accepts.
     if (row.show_default) EXPECT_EQ(row.Check(row.get(defaults)), "") << row.flag;
   }
-  EXPECT_EQ(flags.size(), 46u);  // 36 + issue 55's six + issue 52's three + issue 56's --exposure-unit
+  EXPECT_EQ(flags.size(), 47u);  // 36 + issue 55's six + issue 52's four + issue 56's --exposure-unit
   EXPECT_EQ(FindTrainOption("--no-learn-background"), FindTrainOption("learn_background"));
 }
 
@@ -224,6 +224,7 @@ TEST(TrainOptionsTable, ReferenceIsRecordedAndRefusesTheOptionsThatDoLess) {
   EXPECT_FALSE(o.optimization.visible_adam);
   EXPECT_EQ(o.optimization.coarse_to_fine, 0);
   EXPECT_EQ(o.optimization.prune_contribution, 0.0);
+  EXPECT_EQ(o.hdr.tone_mapper->unseen_rows, "zero");
   EXPECT_EQ(o.Validate(), "");
   EXPECT_EQ(o.ToJson()["reference"], true);
   EXPECT_TRUE(TrainOptions::FromJson(o.ToJson(), "/runs/a/config.json").reference);

@@ -71,6 +71,10 @@ TrainOptions ResolveTrainRequest(const TrainRequest& request, const MethodPreset
   options.resume = request.resume;
   options.overwrite = request.overwrite;
   options.hdr = ResolveHdr(request, saved, preset, options);
+  // --reference reads the radiance bank's unwritten rows as zeros, as before (radiance_bank.h).
+  if (options.reference && !saved && options.hdr.tone_mapper &&
+      !request.Given("--unseen-bank-rows"))
+    options.hdr.tone_mapper->unseen_rows = "zero";
   // Nothing HDR asked for: a scene with one exposure and no HDR truth trains plain 4DGS (a
   // resumed run trains what it started with).
   bool asked_for_hdr = request.method.has_value();

@@ -59,6 +59,26 @@ TEST(TrainRequest, GivenOptionsLieOverTheConfigurationOverTheDefaults) {
   EXPECT_FALSE(o.learn_background);  // unset: the run decides
 }
 
+// The radiance bank's unwritten rows: interpolated by default, zeros under --reference (as
+// before), and the two together refused.
+TEST(TrainRequest, ReferenceReadsUnwrittenBankRowsAsZeros) {
+  TrainRequest r = Request({{"--data", "/scene"}});
+  r.method = "hdr4dgs";
+  EXPECT_EQ(ResolveTrainRequest(r, Preset).hdr.tone_mapper->unseen_rows, "interpolate");
+  r = Request({{"--data", "/scene"}, {"--reference", true}});
+  r.method = "hdr4dgs";
+  const TrainOptions reference = ResolveTrainRequest(r, Preset);
+  EXPECT_EQ(reference.hdr.tone_mapper->unseen_rows, "zero");
+  EXPECT_EQ(reference.Validate(), "");
+  r = Request({{"--data", "/scene"}, {"--reference", true}, {"--unseen-bank-rows", "interpolate"}});
+  r.method = "hdr4dgs";
+  EXPECT_NE(ResolveTrainRequest(r, Preset).Validate().find("drop --unseen-bank-rows"),
+            std::string::npos);
+  r = Request({{"--data", "/scene"}, {"--unseen-bank-rows", "zero"}});
+  r.method = "hdr4dgs";
+  EXPECT_EQ(ResolveTrainRequest(r, Preset).hdr.tone_mapper->unseen_rows, "zero");
+}
+
 TEST(TrainRequest, NothingHdrAskedForFallsBackToThePlainMethodOnAPlainScene) {
   const TrainOptions o = ResolveTrainRequest(
       Request({{"--data", "/scene"}, {"--hdr-target", "scene-log"}, {"--seed", 3u}}), Preset);

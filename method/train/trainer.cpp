@@ -74,6 +74,10 @@ std::string TrainOptions::Validate() const {
   if (reference && optimization.prune_contribution > 0)
     return "reference: --reference prunes by opacity only; drop --prune-contribution (or "
            "--reference)";
+  if (reference && hdr.tone_mapper && hdr.tone_mapper->kind == "dtm" &&
+      hdr.tone_mapper->unseen_rows != "zero")
+    return "reference: --reference reads the radiance bank's unwritten rows as zeros; drop "
+           "--unseen-bank-rows (or --reference)";
   if (reference && optimization.stop_window > 0)
     return "reference: --reference trains every iteration asked for; drop --iterations auto "
            "and --stop-window (or --reference)";
