@@ -101,6 +101,23 @@ void Coverage(const std::vector<SeedValues>& rows, const std::vector<std::string
   if (shared) f->seeds.assign(shared->begin(), shared->end());
 }
 
+// The reference's seed spread over the covered scenes, where its table cell has none (not
+// every scene of the table has runs yet): the sample sd over the shared seeds of the mean over
+// those scenes.
+void SpreadOverCoveredScenes(const SeedValues& reference, Finding* f) {
+  if (f->seeds.size() < 2 || f->scenes_covered.empty()) return;
+  std::vector<double> seed_means;
+  for (std::int64_t seed : f->seeds) {
+    std::vector<double> per_scene;
+    for (const std::string& scene : f->scenes_covered)
+      if (auto it = reference.find({scene, seed}); it != reference.end()) per_scene.push_back(it->second);
+    if (per_scene.size() != f->scenes_covered.size()) return;
+    seed_means.push_back(Mean(per_scene));
+  }
+  f->reference_spread = SampleStdDev(seed_means);
+  f->reference_spread_scope = "covered";
+}
+
 Finding OneFinding(const TableSpec& spec, const Suite& suite, const std::vector<RunSummary>& runs,
                    const std::string& metric, const FindingsOptions& o) {
   TableOptions to;
@@ -116,6 +133,8 @@ Finding OneFinding(const TableSpec& spec, const Suite& suite, const std::vector<
     if (t.columns[c].key == metric) col = c;
   f.direction = col < t.columns.size() && t.columns[col].direction < 0 ? -1 : 1;
   std::vector<SeedValues> values;
+  std::optional<std::size_t> reference_values;
+  bool reference_has_spread = false;
   for (const RowResult& r : t.rows) {
     if (r.added) continue;
     const TableRow row{r.label, r.method, r.supervision};
@@ -125,6 +144,8 @@ Finding OneFinding(const TableSpec& spec, const Suite& suite, const std::vector<
       f.reference_has_value = has;
       f.reference_mean = has ? r.cells[col].mean : 0;
       f.reference_spread = has ? r.cells[col].spread : 0;
+      reference_has_spread = has && r.cells[col].has_spread;
+      reference_values = values.size() - 1;
       continue;
     }
     FindingComparison c{r.label, r.method, has ? r.cells[col].mean : 0, has};
@@ -133,6 +154,9 @@ Finding OneFinding(const TableSpec& spec, const Suite& suite, const std::vector<
     f.against.push_back(std::move(c));
   }
   Coverage(values, t.scenes, &f);
+  f.reference_spread_scope = reference_has_spread ? "all" : "none";
+  if (!reference_has_spread && reference_values)
+    SpreadOverCoveredScenes(values[*reference_values], &f);
   Decide(&f);
   if (col == t.columns.size())  // a key no run of the table has (mistyped, or not computed)
     f.why = fmt::format("no run of the table has the metric '{}'", metric);
@@ -151,6 +175,13 @@ std::string CoverageLine(const Finding& f) {
 }
 
 }  // namespace
+
+std::string ReferenceText(const Finding& f) {
+  if (!f.reference_has_value) return f.reference + " (no runs)";
+  if (f.reference_spread_scope == "none") return fmt::format("{} {:.3f}", f.reference, f.reference_mean);
+  return fmt::format("{} {:.3f} ± {:.3f}{}", f.reference, f.reference_mean, f.reference_spread,
+                     f.reference_spread_scope == "covered" ? " (seed sd over the covered scenes)" : "");
+}
 
 std::string FindingClaim(const TableSpec& spec) {
   return spec.finding.empty() ? spec.reference + " beats each other row" : spec.finding;
@@ -195,9 +226,7 @@ std::string FindingsMarkdown(const std::vector<Finding>& findings) {
                                    c.test.over_scenes ? " (over scenes)" : ""));
       }
     }
-    const std::string ref = f.reference_has_value
-                                ? fmt::format("{} {:.3f} ± {:.3f}", f.reference, f.reference_mean, f.reference_spread)
-                                : f.reference + " (no runs)";
+    const std::string ref = ReferenceText(f);
     md += fmt::format("| {} | {} | {} | **{}** | {} | {} | {} | {} |\n", f.claim, f.pipeline, f.metric,
                       f.verdict, ref, fmt::join(rows, "; "), f.why, CoverageLine(f));
   }

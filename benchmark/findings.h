@@ -49,6 +49,10 @@ struct Finding {
   std::string reference;
   double reference_mean = 0, reference_spread = 0;
   bool reference_has_value = false;
+  // Where reference_spread comes from: "all" (the table cell: every scene of the table),
+  // "covered" (the covered scenes alone, the table's cell having none yet) or "none" (fewer
+  // than two seeds: no spread).
+  std::string reference_spread_scope = "none";
   std::vector<FindingComparison> against;
   std::string verdict;  // "holds", "does not hold", "undecided"
   std::string why;      // the deciding comparisons in words
@@ -60,6 +64,8 @@ struct Finding {
 
 // The claim a table states: its "finding" key, else "<reference> beats each other row".
 std::string FindingClaim(const TableSpec& spec);
+// The reference row as the findings show it: its mean, with its seed spread where there is one.
+std::string ReferenceText(const Finding& f);
 
 // Every ablation table of the suite (or options.table) x options.metrics. Throws hdr4d::Error
 // for a table id that is not in the suite or is no ablation table, or for no metrics.

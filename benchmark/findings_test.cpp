@@ -124,9 +124,19 @@ TEST(Findings, CoverageAndOneSeed) {
   EXPECT_EQ(part.verdict, "holds");
   EXPECT_EQ(part.scenes_covered, (std::vector<std::string>{"s2"}));
   EXPECT_NE(FindingsMarkdown({part}).find("1/2 scenes (s2), seeds 0,1,2"), std::string::npos);
+  // The table cell has no seed spread (a scene has no runs): the finding's is over s2 alone.
+  const double sd = SampleStdDev({24 + kSeedNoise[0], 24 + kSeedNoise[1], 24 + kSeedNoise[2]});
+  EXPECT_EQ(part.reference_spread_scope, "covered");
+  EXPECT_NEAR(part.reference_spread, sd, 1e-12);
+  EXPECT_NE(FindingsMarkdown({part}).find(fmt::format("R 24.000 ± {:.3f} (seed sd over the covered scenes)", sd)),
+            std::string::npos) << FindingsMarkdown({part});
+  const Finding full = Only(BuildFindings(s, Runs(-1.0, -2.0), {}), "psnr");
+  EXPECT_EQ(full.reference_spread_scope, "all");
   // One seed on one scene: nothing to test against.
   const Finding one = Only(BuildFindings(s, Runs(-1.0, -2.0, 1, {"s1"}), {}), "psnr");
   EXPECT_EQ(one.verdict, "undecided");
+  EXPECT_EQ(one.reference_spread_scope, "none");
+  EXPECT_NE(FindingsMarkdown({one}).find("| R 20.040 |"), std::string::npos) << FindingsMarkdown({one});
   EXPECT_EQ(one.against[0].outcome, "not testable");
   EXPECT_NE(one.why.find("no pairs with two seeds"), std::string::npos) << one.why;
   // A metric no run has.

@@ -24,10 +24,7 @@ std::string FindingRowHtml(const Finding& f) {
       against += " (not testable)";
     against += "<br>";
   }
-  const std::string ref = f.reference_has_value
-                              ? fmt::format("{} {:.3f} ± {:.3f}", HtmlEscape(f.reference),
-                                            f.reference_mean, f.reference_spread)
-                              : HtmlEscape(f.reference) + " (no runs)";
+  const std::string ref = HtmlEscape(ReferenceText(f));
   return fmt::format(
       "<tr><td>{}</td><td>{}</td><td>{}</td><td><b>{}</b></td><td>{}</td><td>{}</td><td>{}</td>"
       "<td>{}/{} scenes ({}), seeds {}</td></tr>\n",
