@@ -150,21 +150,28 @@ TEST(RadianceBank, SaveLoadRoundTrip) {
   EXPECT_FALSE(loaded.written(3));
 }
 
-TEST(RadianceBank, LoadsVersionOneWithRowsWrittenWhereNotZero) {
+// A bank file written by hand, with a valid checksum: `version`, rows x 3 floats, then the
+// written flags (version 2).
+std::string HandWritten(std::uint32_t version, const std::vector<float>& rows,
+                        const std::vector<std::uint8_t>& flags = {}) {
   std::stringstream s;
   HashingWriter w(s);
   w.Bytes("HDR4DBNK", 8);
-  w.Value(std::uint32_t{1});
+  w.Value(version);
   w.ResetHash();
-  w.Value(std::uint32_t{3});
-  const float rows[9] = {1, 2, 3, 0, 0, 0, 0, -0.5f, 0};
-  w.Bytes(rows, sizeof(rows));
+  w.Value(static_cast<std::uint32_t>(rows.size() / 3));
+  w.Bytes(rows.data(), rows.size() * sizeof(float));
+  w.Bytes(flags.data(), flags.size());
   w.Value(w.hash());
+  return s.str();
+}
+
+TEST(RadianceBank, LoadsVersionOneWithRowsWrittenWhereNotZero) {
   RadianceBank bank(3);
+  std::stringstream s(HandWritten(1, {1, 2, 3, 0, 0, 0, 0, -0.5f, 0}));
   bank.Load(s, "old.bin");
   EXPECT_EQ(bank.written_rows(), (std::vector<std::uint8_t>{1, 0, 1}));
 }
-
 std::string Saved(const RadianceBank& bank) {
   std::stringstream s;
   bank.Save(s);
@@ -203,30 +210,13 @@ TEST(RadianceBank, LoadRejectsBadDataAndKeepsTheBank) {
   RadianceBank other(4);
   EXPECT_NE(LoadError(other, good).find("3 rows"), std::string::npos);
 
-  // A non-finite row with a valid checksum (written by hand).
-  std::stringstream s;
-  HashingWriter w(s);
-  w.Bytes("HDR4DBNK", 8);
-  w.Value(std::uint32_t{1});
-  w.ResetHash();
-  w.Value(std::uint32_t{3});
-  const float rows[9] = {0, 0, 0, 0, std::numeric_limits<float>::infinity(), 0, 0, 0, 0};
-  w.Bytes(rows, sizeof(rows));
-  w.Value(w.hash());
-  EXPECT_NE(LoadError(bank, s.str()).find("row 1 has a non-finite"), std::string::npos);
-
-  std::stringstream f;  // version 2 with a flag that is neither 0 nor 1
-  HashingWriter fw(f);
-  fw.Bytes("HDR4DBNK", 8);
-  fw.Value(std::uint32_t{2});
-  fw.ResetHash();
-  fw.Value(std::uint32_t{3});
-  const float zeros[9] = {};
-  fw.Bytes(zeros, sizeof(zeros));
-  const std::uint8_t flags[3] = {1, 7, 0};
-  fw.Bytes(flags, sizeof(flags));
-  fw.Value(fw.hash());
-  EXPECT_NE(LoadError(bank, f.str()).find("row 1 has a bad written flag"), std::string::npos);
+  // A non-finite row, and a flag that is neither 0 nor 1, with valid checksums.
+  const float inf = std::numeric_limits<float>::infinity();
+  EXPECT_NE(LoadError(bank, HandWritten(1, {0, 0, 0, 0, inf, 0, 0, 0, 0})).find("row 1 has a non-finite"),
+            std::string::npos);
+  EXPECT_NE(LoadError(bank, HandWritten(2, std::vector<float>(9, 0.0f), {1, 7, 0}))
+                .find("row 1 has a bad written flag"),
+            std::string::npos);
 
   EXPECT_EQ(bank.rows(), before);
   EXPECT_EQ(LoadError(bank, good), "");
