@@ -5,7 +5,10 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
+#include <optional>
+#include <vector>
 #include <set>
 
 #include "benchmark/child_process.h"
@@ -42,6 +45,30 @@ void Run(const std::vector<std::string>& argv, const fs::path& log, const std::s
   const ChildResult r = RunChild({.argv = argv, .log = log});
   if (!r.ok())
     Fail("scene '{}': generating it failed ({}); see {}", scene, r.Describe(), log.string());
+}
+
+// Another dataset of the same scene, preset and seed in the cache (another camera pipeline's),
+// whose renders may serve this one: `datagen --reuse-renders` takes them when the render plan
+// is the same and renders otherwise. The bare <preset>-s<seed> folder first, then by name.
+std::optional<fs::path> RenderSource(const SceneSpec& spec, const fs::path& dir) {
+  const std::string prefix = fmt::format("{}-s{}", spec.source["preset"].get<std::string>(),
+                                         spec.source["seed"].get<std::int64_t>());
+  const std::string scene = spec.source["scene"].get<std::string>();
+  std::error_code ec;
+  std::vector<fs::path> found;
+  for (const auto& e : fs::directory_iterator(dir.parent_path().parent_path(), ec)) {
+    const std::string name = e.path().filename().string();
+    if (e.path() == dir.parent_path() || (name != prefix && name.rfind(prefix + "-", 0) != 0))
+      continue;
+    if (IsDataset(e.path() / scene) && fs::exists(e.path() / scene / "manifest.json"))
+      found.push_back(e.path());
+  }
+  if (found.empty()) return std::nullopt;
+  std::sort(found.begin(), found.end(), [&](const fs::path& a, const fs::path& b) {
+    const bool bare_a = a.filename() == prefix, bare_b = b.filename() == prefix;
+    return bare_a != bare_b ? bare_a : a < b;
+  });
+  return found.front();
 }
 
 }  // namespace
@@ -111,6 +138,8 @@ PreparedScene PrepareScene(const SceneSpec& spec, const SceneCacheOptions& optio
         if (spec.source.contains("flags"))
           for (const std::string& a : SettingsToArgs(spec.source["flags"], 0, spec.name))
             datagen.push_back(a);
+        if (const auto source = RenderSource(spec, p.dir))
+          datagen.insert(datagen.end(), {"--reuse-renders", source->string()});
         Run(datagen, log, spec.name);
       } else {
         const fs::path partial = p.dir.string() + ".partial";

@@ -2,11 +2,14 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <map>
+#include <sstream>
 #include <set>
 
 #include "benchmark/names.h"
 #include "benchmark/scene_cache.h"
+#include "core/files/json_util.h"
 #include "tests/testing.h"
 
 namespace hdr4d::bench {
@@ -185,6 +188,49 @@ TEST(Suite, DatagenFlagsMakeTheirOwnScene) {
   EXPECT_EQ(b.filename(), "lego");
   j["scenes"][1]["datagen"]["flags"] = {{"seed", 3}};  // the harness's own flag
   EXPECT_NE(ErrorFor(j).find("seed"), std::string::npos);
+}
+
+// A datagen scene of another pipeline takes the renders of a cached one of the same scene,
+// preset and seed (datagen --reuse-renders); the first one of a scene renders. A stand-in for
+// hdr4d records its arguments and writes a dataset.
+TEST(Suite, AnotherPipelineOfACachedSceneReusesItsRenders) {
+  nlohmann::json j = Minimal();
+  j["scenes"] = nlohmann::json::parse(R"([
+    {"name": "fixed", "datagen": {"scene": "lego"}},
+    {"name": "phone", "datagen": {"scene": "lego", "flags": {"pipeline": "phone"}}},
+    {"name": "deer", "datagen": {"scene": "deer", "flags": {"pipeline": "phone"}}}])");
+  const Suite s = ParseSuite(j, "/x/suite.json");
+  testing::TempDir dir;
+  // What the stand-in writes as each scene: one frame (its image's bytes are all the checksum
+  // reads) and a manifest.
+  const std::filesystem::path tiny = dir / "tiny";
+  WriteJsonFile(tiny / "transforms_train.json",
+                nlohmann::json::parse(R"({"camera_angle_x": 0.7, "w": 4, "h": 4, "frames": [{"file_path": "a.png",
+                  "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,4],[0,0,0,1]], "time": 0,
+                  "exposures": 1.0, "camera_id": 0}]})"));
+  testing::WriteTextFile(tiny / "a.png", "x");
+  testing::WriteTextFile(tiny / "manifest.json", "{}");
+  const std::filesystem::path fake = dir / "hdr4d";
+  testing::WriteTextFile(fake,
+                         "#!/bin/sh\necho \"$@\" >> '" + (dir / "args.txt").string() + "'\n"
+                         "while [ $# -gt 0 ]; do case $1 in --out) out=$2;; --scene) scene=$2;; "
+                         "esac; shift; done\nmkdir -p \"$out/$scene\"\n"
+                         "cp '" + tiny.string() + "'/* \"$out/$scene/\"\n");
+  std::filesystem::permissions(fake, std::filesystem::perms::owner_all);
+  const SceneCacheOptions o{.cache_dir = dir / "cache", .hdr4d = fake, .verbose = false};
+  for (const SceneSpec& spec : s.scenes) PrepareScene(spec, o);
+  const std::string args = testing::ReadTextFile(dir / "args.txt");
+  const std::vector<std::string> lines = [&] {
+    std::vector<std::string> out;
+    std::stringstream in(args);
+    for (std::string l; std::getline(in, l);) out.push_back(l);
+    return out;
+  }();
+  ASSERT_EQ(lines.size(), 3u) << args;
+  EXPECT_EQ(lines[0].find("--reuse-renders"), std::string::npos) << lines[0];
+  EXPECT_NE(lines[1].find("--reuse-renders " + (dir / "cache" / "datagen" / "mini-s0").string()),
+            std::string::npos) << lines[1];
+  EXPECT_EQ(lines[2].find("--reuse-renders"), std::string::npos) << lines[2];  // no deer yet
 }
 
 // The pipelines suite: Tables 4, 6 and 7 per pipeline on the eight scenes.

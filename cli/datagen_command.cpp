@@ -41,6 +41,12 @@ void PrintSceneResult(const datagen::SceneResult& r) {
         r.scene, r.cameras, r.frames, r.brackets, r.cameras,
         r.extra_views > 0 ? fmt::format(" + {} hand-held views", r.extra_views) : "",
         r.root.string(), r.root.string(), r.renders, r.blender_seconds, r.range.ratio);
+  } else if (!r.renders_reused_from.empty()) {
+    fmt::print(
+        "datagen: {}: {} renders reused from {}, {} LDR images in {} ({:.1f} s; HDR range "
+        "p99.9/p0.1 = {:.3g})\n",
+        r.scene, r.renders, r.renders_reused_from.string(), r.ldr_images, r.root.string(),
+        r.total_seconds, r.range.ratio);
   } else {
     fmt::print(
         "datagen: {}: {} renders, {} LDR images in {} (Blender {:.1f} s, {:.2f} s per render; "
@@ -190,6 +196,12 @@ void AddDatagenCommand(CLI::App& app) {
                   "preset's: 2000 ci, 20000 mini, 100000 paper)")
       ->check(Integer(0, 10'000'000))
       ->capture_default_str();
+  cmd->add_option("--reuse-renders", options->reuse_renders,
+                  "Take each scene's renders from DIR/<scene> (an earlier datagen --out DIR) "
+                  "when it was rendered from the same plan (scene, preset, seed, width, samples, "
+                  "points): only the LDR synthesis runs, e.g. for another --pipeline; otherwise "
+                  "render, saying why")
+      ->check(Text("a folder"));
   cmd->add_option("--width", options->width,
                   "Image width in pixels (0 = the preset's; the height follows the scene)")
       ->check(Integer(0, 100000))

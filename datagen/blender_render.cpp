@@ -164,4 +164,66 @@ BlenderRender RenderWithBlender(const ScenePreset& preset,
   return out;
 }
 
+namespace {
+
+// The first top-level key where two plans differ, "" when they agree; the Cycles thread count
+// changes no pixel (datagen's own determinism test), so it is left out.
+std::string FirstDifference(json a, json b) {
+  a.erase("threads");
+  b.erase("threads");
+  if (a == b) return "";
+  for (const auto& [key, value] : a.items())
+    if (!b.contains(key) || b[key] != value) return key;
+  for (const auto& [key, value] : b.items())
+    if (!a.contains(key)) return key;
+  return "?";
+}
+
+}  // namespace
+
+std::optional<BlenderRender> ReuseRenders(const ScenePreset& preset,
+                                          const std::vector<PlannedRender>& renders,
+                                          const BlenderSettings& settings,
+                                          const fs::path& source,
+                                          const fs::path& staging,
+                                          std::string* why) {
+  const fs::path plan_file = source / kPlanFile;
+  if (!fs::exists(plan_file) || !fs::exists(source / kInfoFile) ||
+      !fs::exists(source / "point3d.ply")) {
+    *why = fmt::format("{} holds no finished dataset of datagen", source.string());
+    return std::nullopt;
+  }
+  const json plan = RenderPlanJson(preset, renders, settings);
+  json theirs;
+  try {
+    theirs = ReadJsonFile(plan_file);
+  } catch (const Error& e) {
+    *why = e.what();
+    return std::nullopt;
+  }
+  if (const std::string key = FirstDifference(plan, theirs); !key.empty()) {
+    *why = fmt::format("{} was rendered from another plan ('{}' differs)", plan_file.string(), key);
+    return std::nullopt;
+  }
+  for (const PlannedRender& r : renders) {
+    if (!fs::exists(source / r.hdr_file)) {
+      *why = fmt::format("{} is missing", (source / r.hdr_file).string());
+      return std::nullopt;
+    }
+  }
+  for (const PlannedRender& r : renders) {
+    fs::create_directories((staging / r.hdr_file).parent_path());
+    fs::copy_file(source / r.hdr_file, staging / r.hdr_file, fs::copy_options::overwrite_existing);
+  }
+  fs::copy_file(source / kInfoFile, staging / kInfoFile, fs::copy_options::overwrite_existing);
+  WriteJsonFile(staging / kPlanFile, plan);
+  std::ofstream log(staging / kLogFile);
+  log << fmt::format("hdr4d datagen: the renders of {} reused (--reuse-renders); its log:\n",
+                     source.string());
+  if (std::ifstream old(source / kLogFile); old) log << old.rdbuf();
+  BlenderRender out;
+  out.info = ReadRenderInfo(preset, renders, staging);
+  return out;
+}
+
 }  // namespace hdr4d::datagen

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -50,5 +51,20 @@ BlenderRender RenderWithBlender(const ScenePreset& preset,
                                 const std::vector<PlannedRender>& renders,
                                 const BlenderSettings& settings,
                                 const std::filesystem::path& staging);
+
+// --reuse-renders: the renders of `source`, a scene folder datagen wrote from the same render
+// plan (scene, preset, seed, size, samples, points; Cycles' thread count aside), copied into
+// `staging` as Blender leaves them: each planned EXR, render_info.json (checked against the plan
+// as after a render) and blender.log; this call's plan is written as render_plan.json. The LDR
+// synthesis (the camera pipeline) is not part of the plan, so one render serves every pipeline
+// of a scene. Returns nullopt with the reason in *why when `source` holds no dataset of this
+// plan (none there, another plan, a planned file missing); nothing is then left in `staging`
+// that a render would not replace.
+std::optional<BlenderRender> ReuseRenders(const ScenePreset& preset,
+                                          const std::vector<PlannedRender>& renders,
+                                          const BlenderSettings& settings,
+                                          const std::filesystem::path& source,
+                                          const std::filesystem::path& staging,
+                                          std::string* why);
 
 }  // namespace hdr4d::datagen

@@ -13,6 +13,7 @@
 #include "core/util/error.h"
 #include "core/radiometry/exposure_stack.h"
 #include "core/files/json_util.h"
+#include "core/geometry/ply.h"
 #include "datagen/blender_process.h"
 #include "datagen/blender_render.h"
 #include "datagen/capture_generator.h"
@@ -90,6 +91,8 @@ void DatagenOptions::Validate() const {
     }
   }
   if (capture) ValidateCaptureVariant(*this);
+  if (capture && !reuse_renders.empty())
+    Fail("datagen: --reuse-renders takes the renders of a dataset; a capture renders its own");
   if (capture && !pipeline.IsIdentity())
     Fail("datagen: --pipeline and --vignetting make datasets, not captures: a capture's cameras "
          "differ through --unlike-cameras");
@@ -206,6 +209,41 @@ json SceneManifest(const DatagenOptions& options,
   };
 }
 
+// The scene's renders: Blender's, or with --reuse-renders an earlier dataset's of the same plan.
+BlenderRender Renders(const DatagenOptions& options,
+                      const ScenePreset& preset,
+                      const std::vector<PlannedRender>& renders,
+                      const fs::path& staging,
+                      SceneResult* result) {
+  if (!options.reuse_renders.empty()) {
+    const fs::path source = options.reuse_renders / preset.scene;
+    std::string why;
+    const BlenderSettings settings{.seed = options.seed, .threads = options.threads};
+    if (auto reused = ReuseRenders(preset, renders, settings, source, staging, &why)) {
+      result->renders_reused_from = source;
+      return *reused;
+    }
+    fmt::print(stderr, "datagen: {}: not reusing renders: {}; rendering with Blender\n",
+               preset.scene, why);
+  }
+  return RenderWithBlender(preset, renders, options.FoundBlender(), staging);
+}
+
+// point3d.ply: from Blender's surface points, or the reused dataset's own file.
+std::int64_t PointCloudFile(const ScenePreset& preset, const json& info,
+                            const SceneResult& result, const fs::path& staging) {
+  if (result.renders_reused_from.empty()) return WritePointCloud(preset, info, staging);
+  const fs::path ply = staging / "point3d.ply";
+  fs::copy_file(result.renders_reused_from / "point3d.ply", ply,
+                fs::copy_options::overwrite_existing);
+  const std::int64_t count = static_cast<std::int64_t>(ReadPly(ply).size());
+  const std::int64_t expected = info.contains("points") ? info["points"].value("count", -1) : -1;
+  if (count != expected)
+    Fail("datagen: scene '{}': {} holds {} points, its render_info.json says {}", preset.scene,
+         (result.renders_reused_from / "point3d.ply").string(), count, expected);
+  return count;
+}
+
 }  // namespace
 
 SceneResult GenerateScene(const DatagenOptions& options, const std::string& scene) {
@@ -217,29 +255,31 @@ SceneResult GenerateScene(const DatagenOptions& options, const std::string& scen
   if (options.points > 0) preset.points = options.points;
   const std::vector<PlannedRender> renders = PlanRenders(preset);
   const fs::path final_dir = options.out / preset.scene;
-  const BlenderSettings blender = options.FoundBlender();
+  if (options.reuse_renders.empty()) options.FoundBlender();  // a missing Blender, before anything
   const fs::path staging = PrepareStaging(final_dir, preset.scene);
-  const BlenderRender run = RenderWithBlender(preset, renders, blender, staging);
+  SceneResult result;
+  const BlenderRender run = Renders(options, preset, renders, staging, &result);
   const json& info = run.info;
   const LuminanceHistogram histogram = NormaliseExrs(preset, renders, staging);
   const Dataset dataset = BuildDataset(preset, renders, info, staging);
   WriteDataset(dataset, staging);
-  const std::int64_t points = WritePointCloud(preset, info, staging);
+  const std::int64_t points = PointCloudFile(preset, info, result, staging);
 
   const DatasetSynthesisOptions ldr = options.LdrFor(preset.scene);
   const int ldr_images = SynthesizeDatasetLdr(staging, ldr);
   CheckWrittenDataset(staging, preset.scene);
 
-  SceneResult result;
   result.scene = preset.scene;
   result.root = final_dir;
   result.renders = static_cast<int>(renders.size());
   result.ldr_images = ldr_images;
   result.blender_seconds = run.seconds;
   result.range = histogram.Summary();
-  result.total_seconds =
-      FinishOutput(SceneManifest(options, preset, renders, info, dataset, ldr, result, points),
-                   result.blender_seconds, result.renders, start, staging, final_dir);
+  json manifest = SceneManifest(options, preset, renders, info, dataset, ldr, result, points);
+  if (!result.renders_reused_from.empty())
+    manifest["renders_reused_from"] = result.renders_reused_from.string();
+  result.total_seconds = FinishOutput(std::move(manifest), result.blender_seconds, result.renders,
+                                      start, staging, final_dir);
   return result;
 }
 

@@ -41,6 +41,10 @@ struct DatagenOptions {
   int samples = 0;          // Cycles samples per pixel; 0 = the preset's
   int width = 0;            // image width; 0 = the preset's (the height follows the aspect)
   int points = 0;           // point3d.ply size; 0 = the preset's (not with --capture)
+  // --reuse-renders DIR: take each scene's renders from DIR/<scene> when datagen made it from
+  // the same render plan (ReuseRenders), so another camera pipeline of a scene costs no Blender
+  // time; otherwise render, saying why. Not with --capture.
+  std::filesystem::path reuse_renders;
   // LDR synthesis, as the demo and HDR-4D-Syn-style data: a camera response, shot and read
   // noise, 8 bits. The noise seed is the scene seed. Unset: the scene's defaults (a filmic
   // response with full well 20000 and read noise 0.002; `studio` has its own, see SceneInfo).
@@ -101,6 +105,7 @@ struct SceneResult {
   bool capture = false;  // a capture (static/, sequence/, truth/) rather than a dataset
   int cameras = 0, frames = 0, brackets = 0, extra_views = 0;  // of a capture
   double blender_seconds = 0;  // Blender's wall time: start-up, scene building, every render
+  std::filesystem::path renders_reused_from;  // --reuse-renders: the scene folder, when reused
   double total_seconds = 0;
   DynamicRange range;
 };

@@ -160,6 +160,59 @@ TEST(Generator, WritesACompleteCheckedDatasetAroundTheRenders) {
   EXPECT_TRUE(Contains(testing::ReadTextFile(root / "blender.log"), "HDR4D_RENDERED 1 6"));
 }
 
+// --reuse-renders: another camera pipeline of a scene from the renders of an earlier dataset,
+// without Blender; the same LDR options give the same files; another plan renders.
+TEST(Generator, ReuseRendersTakesAnEarlierDatasetsRendersAndMakesItsOwnLdr) {
+  Fixture f;
+  WriteFixture(f.dir / "fixture", f.preset);
+  f.options.blender = WriteFakeBlender(f.dir.path(), f.dir / "fixture", "").string();
+  GenerateScene(f.options, "airplane");
+  const fs::path first = f.options.out / "airplane";
+  const json first_files = ReadJsonFile(first / "manifest.json")["files"];
+
+  DatagenOptions phone = f.options;
+  phone.out = f.dir / "phone";
+  phone.reuse_renders = f.options.out;
+  phone.pipeline.name = "phone";
+  phone.blender = WriteFakeBlender(f.dir / "phone", "", "echo 'Blender ran' >&2\nexit 1\n").string();
+  const SceneResult reused = GenerateScene(phone, "airplane");
+  EXPECT_EQ(reused.renders_reused_from, first);
+  const fs::path root = phone.out / "airplane";
+  LoadDataset(root, {.image_check = ImageCheck::kFull});
+  const json manifest = ReadJsonFile(root / "manifest.json");
+  EXPECT_EQ(manifest["renders_reused_from"], first.string());
+  int ldr_differs = 0;
+  for (const auto& [name, sha] : manifest["files"].items()) {
+    if (name.rfind("hdr/", 0) == 0 || name == "point3d.ply" || name == "render_info.json")
+      EXPECT_EQ(sha, first_files[name]) << name;  // the renders, as they were
+    if (name.rfind("images/", 0) == 0) ldr_differs += sha != first_files[name];
+  }
+  EXPECT_EQ(ldr_differs, 6);  // every LDR image through the phone pipeline
+  EXPECT_TRUE(Contains(testing::ReadTextFile(root / "blender.log"), "reused"));
+
+  // The first dataset's own options from its renders: the same files, byte for byte.
+  DatagenOptions again = f.options;
+  again.out = f.dir / "again";
+  again.reuse_renders = f.options.out;
+  again.blender = phone.blender;
+  GenerateScene(again, "airplane");
+  EXPECT_EQ(ReadJsonFile(again.out / "airplane" / "manifest.json")["files"], first_files);
+
+  // Another plan (another width), or no dataset there: Blender renders (and fails here).
+  for (const fs::path& source : {f.options.out, f.dir / "nothing"}) {
+    DatagenOptions other = phone;
+    other.out = f.dir / "other";
+    other.reuse_renders = source;
+    if (source == f.options.out) other.width = 40;
+    EXPECT_TRUE(Contains(ErrorOf([&] { GenerateScene(other, "airplane"); }), "Blender ran"))
+        << source;
+  }
+  DatagenOptions capture = phone;
+  capture.capture = true;
+  capture.pipeline = {};
+  EXPECT_TRUE(Contains(ErrorOf([&] { capture.Validate(); }), "--reuse-renders"));
+}
+
 TEST(Generator, RerunReplacesItsOwnPreviousOutput) {
   Fixture f;
   WriteFixture(f.dir / "fixture", f.preset);
