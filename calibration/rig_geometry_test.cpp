@@ -1,6 +1,7 @@
 // RigFromColmap's model selection of lens distortion and shared intrinsics, on a synthetic
 // COLMAP model whose truth is known.
 #include "calibration/rig_geometry.h"
+#include "calibration/synthetic_rig_test_util.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -30,14 +31,8 @@ ColmapModel MakeModel(const std::vector<Lens>& lenses) {
   ColmapModel model;
   std::vector<Eigen::Isometry3d> cam_from_world;
   for (std::size_t c = 0; c < lenses.size(); ++c) {
-    const double a = (static_cast<double>(c) - 1) * 0.35;
-    const Eigen::Vector3d centre(4 * std::sin(a), 0.3 * c, -4 * std::cos(a));
-    const Eigen::Vector3d z = -centre.normalized(), x = Eigen::Vector3d::UnitY().cross(z).normalized();
-    Eigen::Matrix3d r;
-    r << x.transpose(), z.cross(x).transpose(), z.transpose();
-    Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-    t.linear() = r;
-    t.translation() = -r * centre;
+    const Eigen::Isometry3d t = CameraOnArc((static_cast<double>(c) - 1) * 0.35, 4, 0.3 * c);
+    const Eigen::Matrix3d r = t.linear();
     cam_from_world.push_back(t);
     const int id = static_cast<int>(c) + 1;
     model.cameras[id] = {id, "RADIAL", kW, kH, {kF, kW / 2.0, kH / 2.0, lenses[c].colmap_k1, 0.0}};
