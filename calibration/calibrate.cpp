@@ -119,6 +119,7 @@ std::optional<Rig> RunGeometry(const Capture& capture, const CalibrateOptions& o
   rig_options.refine = options.refine_rig;
   rig_options.select_shared_focal = options.select_shared_focal;
   rig_options.show_progress = options.show_progress;
+  if (options.focal_multistart) rig_options.focal_starts = DefaultFocalStarts();
   if (options.rig_time_points) {
     rig_options.rig_times = ExtractRigTimes(capture, names, options.show_progress);
     if (rig_options.rig_times.empty())

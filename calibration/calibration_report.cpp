@@ -37,6 +37,24 @@ void AppendRigTimePoints(const RigTimeReport& r, std::string& md, nlohmann::json
                             {"rms_after", r.rms_after}};
 }
 
+void AppendFocalStarts(const FocalStartReport& r, std::string& md, nlohmann::json& doc) {
+  md += "Focal restarts (the refinement of the model kept, again from COLMAP's poses and these scalings of its "
+        "focal lengths; the least robust cost kept):\n\n| start | focal after (px) | robust cost | RMS (px) | kept "
+        "|\n|---|---|---|---|---|\n";
+  md += fmt::format("| model selection's own | {:.2f} | {:.3f} | | {} |\n", r.selection_focal, r.selection_cost,
+                    r.kept < 0 ? "yes" : "");
+  doc["focal_starts_selection"] = {{"focal", r.selection_focal}, {"cost", r.selection_cost}, {"kept", r.kept < 0}};
+  for (std::size_t i = 0; i < r.starts.size(); ++i) {
+    const FocalStart& s = r.starts[i];
+    const bool kept = static_cast<int>(i) == r.kept;
+    md += fmt::format("| x{:.2f} | {:.2f} | {:.3f} | {:.4f} | {} |\n", s.scale, s.focal, s.cost, s.rms,
+                      kept ? "yes" : "");
+    doc["focal_starts"].push_back({{"scale", s.scale}, {"focal", s.focal}, {"cost", s.cost}, {"rms", s.rms},
+                                   {"kept", kept}});
+  }
+  md += "\n";
+}
+
 void AppendGeometry(const CalibrationRecord& record, std::string& md, nlohmann::json& doc) {
   const Rig& rig = *record.rig;
   md += fmt::format("## Geometry{}\n\nSparse model: {}. Intrinsics: {}. {} extra image(s) helped "
@@ -68,6 +86,7 @@ void AppendGeometry(const CalibrationRecord& record, std::string& md, nlohmann::
                               {"undistorted", c.undistort}});
   }
   md += fmt::format("\n{} points in point3d.ply.\n\n", rig.points.size());
+  if (rig.focal_starts) AppendFocalStarts(*rig.focal_starts, md, doc);
   if (rig.rig_time) AppendRigTimePoints(*rig.rig_time, md, doc);
 }
 

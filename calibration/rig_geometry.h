@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "calibration/bundle_refinement.h"
+#include "calibration/focal_multistart.h"
 #include "calibration/rig_time_points.h"
 #include "core/geometry/colmap_model.h"
 #include "core/geometry/ply.h"
@@ -55,6 +56,8 @@ struct Rig {
   // The points of the rig's own sequence times added to the refinement (absent: not asked for).
   // They constrain the geometry only: point3d.ply and the normalisation stay COLMAP's points.
   std::optional<RigTimeReport> rig_time;
+  // The focal restarts of the first refinement and the one kept (absent: one start, COLMAP's).
+  std::optional<FocalStartReport> focal_starts;
 
   const RigCamera* Find(const std::string& name) const;
 };
@@ -82,6 +85,10 @@ struct RigOptions {
   // the refinement and the model selections. Empty: COLMAP's points only.
   std::vector<RigTimeFeatures> rig_times;
   RigTimeOptions rig_time;
+  // The first refinement restarts from these scalings of the free rig cameras' focal lengths and
+  // keeps the least robust cost (focal_multistart.h); include 1 (COLMAP's own start). Empty:
+  // one start, COLMAP's.
+  std::vector<double> focal_starts;
 };
 
 // Builds the rig for `camera_names` from `model`, whose image names are <camera>/<file> (any

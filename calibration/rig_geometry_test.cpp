@@ -163,5 +163,24 @@ TEST(RigGeometry, NoRefinementKeepsColmapsModel) {
   EXPECT_EQ(rig.cameras[0].rms_after, rig.cameras[0].rms_before);
 }
 
+// The focal restarts (issue 54) run on the model the selections chose and report every start
+// and the selection's own solution; the rig keeps the least cost of them.
+TEST(RigGeometry, FocalRestartsAreReportedAndTheLeastCostIsKept) {
+  const ColmapModel model = MakeModel({{0, 0}, {0, 0}, {0, 0}});
+  RigOptions restarts;
+  restarts.focal_starts = {0.97, 1.0, 1.03};
+  const Rig rig = RigFromColmap(model, {"cam0", "cam1", "cam2"}, restarts);
+  ASSERT_TRUE(rig.focal_starts.has_value());
+  const FocalStartReport& r = *rig.focal_starts;
+  ASSERT_EQ(r.starts.size(), 3u);
+  double least = r.selection_cost;
+  for (const FocalStart& s : r.starts) least = std::min(least, s.cost);
+  const double kept_cost = r.kept < 0 ? r.selection_cost : r.starts[r.kept].cost;
+  const double kept_focal = r.kept < 0 ? r.selection_focal : r.starts[r.kept].focal;
+  EXPECT_EQ(kept_cost, least);
+  EXPECT_NEAR(rig.cameras[0].intrinsics.f, kept_focal, 1e-9);
+  EXPECT_FALSE(RigFromColmap(model, {"cam0", "cam1", "cam2"}).focal_starts.has_value());
+}
+
 }  // namespace
 }  // namespace hdr4d

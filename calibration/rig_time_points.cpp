@@ -19,24 +19,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-Eigen::Matrix3d RotationOf(const BundlePose& pose) {
-  const double angle = pose.rotation.norm();
-  return angle > 0 ? Eigen::AngleAxisd(angle, pose.rotation / angle).toRotationMatrix()
-                   : Eigen::Matrix3d::Identity();
-}
-
-// The pinhole (normalised) coordinates of a pixel: the radial model inverted by fixed-point
-// iteration (converges for the few-percent distortion of real lenses).
-Eigen::Vector2d Normalised(const BundleIntrinsics& k, const Eigen::Vector2d& pixel) {
-  const Eigen::Vector2d distorted = (pixel - Eigen::Vector2d(k.cx, k.cy)) / k.f;
-  Eigen::Vector2d x = distorted;
-  for (int i = 0; i < 20; ++i) {
-    const double r2 = x.squaredNorm();
-    x = distorted / (1 + k.k1 * r2 + k.k2 * r2 * r2);
-  }
-  return x;
-}
-
 // A rig camera as the matching sees it: pose, intrinsics and its undistorted pixels.
 struct View {
   BundlePose pose;
@@ -282,7 +264,7 @@ std::vector<View> ViewsOf(const RigTimeFeatures& time, const std::vector<int>& r
     v.k = problem.intrinsics[rig_intrinsics[c]];
     static const ViewFeatures kNone;
     v.features = c < time.views.size() ? &time.views[c] : &kNone;
-    for (const Eigen::Vector2d& p : v.features->pixels) v.normalised.push_back(Normalised(v.k, p));
+    for (const Eigen::Vector2d& p : v.features->pixels) v.normalised.push_back(NormalisedRadial(v.k, p));
   }
   return views;
 }
