@@ -27,9 +27,9 @@ void AddGeometryFlags(CLI::App* cmd, CalibrateOptions* options) {
                   "Downscale images to this size for COLMAP's SIFT (0: COLMAP's default, 3200)")
       ->check(Integer(0, 100000));
   cmd->add_flag("--focal-multistart,!--no-focal-multistart", options->focal_multistart,
-                "Restart the first rig refinement from focal lengths x0.96 to x1.04 of COLMAP's (steps of "
-                "0.01) and keep the least robust cost: a rig camera seen in one pose has shallow local "
-                "minima about 1% of focal apart");
+                "Once the models are chosen, restart the rig refinement from COLMAP's poses and focal "
+                "lengths x0.96 to x1.04 (steps of 0.01) and keep the least robust cost: a rig camera seen "
+                "in one pose has shallow minima about 1% of focal apart (on by default)");
   cmd->add_flag("--rig-time-points", options->rig_time_points,
                 "Also match the rig cameras with one another at every time of the sequence (SIFT on "
                 "one mid bracket each) and add the triangulated points to the rig refinement: more "
