@@ -1,6 +1,7 @@
 #include "calibration/bundle_refinement.h"
 
 #include <ceres/ceres.h>
+#include <Eigen/Geometry>
 #include <ceres/manifold.h>
 #include <ceres/rotation.h>
 
@@ -88,6 +89,22 @@ Eigen::Vector2d ProjectRadial(const BundlePose& pose, const BundleIntrinsics& k,
   const double x = p[0] / p[2], y = p[1] / p[2], r2 = x * x + y * y;
   const double d = 1 + k.k1 * r2 + k.k2 * r2 * r2;
   return {k.f * d * x + k.cx, k.f * d * y + k.cy};
+}
+
+Eigen::Matrix3d RotationOf(const BundlePose& pose) {
+  const double angle = pose.rotation.norm();
+  return angle > 0 ? Eigen::AngleAxisd(angle, pose.rotation / angle).toRotationMatrix()
+                   : Eigen::Matrix3d::Identity();
+}
+
+Eigen::Vector2d NormalisedRadial(const BundleIntrinsics& k, const Eigen::Vector2d& pixel) {
+  const Eigen::Vector2d distorted = (pixel - Eigen::Vector2d(k.cx, k.cy)) / k.f;
+  Eigen::Vector2d x = distorted;
+  for (int i = 0; i < 20; ++i) {
+    const double r2 = x.squaredNorm();
+    x = distorted / (1 + k.k1 * r2 + k.k2 * r2 * r2);
+  }
+  return x;
 }
 
 BundleReport RefineBundle(BundleProblem* problem, const BundleOptions& options) {

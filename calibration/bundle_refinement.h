@@ -60,6 +60,13 @@ struct BundleReport {
 // The pixel where `point` (world) lands in a camera, with radial distortion.
 Eigen::Vector2d ProjectRadial(const BundlePose& pose, const BundleIntrinsics& k, const Eigen::Vector3d& point);
 
+// The rotation (cam_from_world) of a pose.
+Eigen::Matrix3d RotationOf(const BundlePose& pose);
+
+// The pinhole (normalised) coordinates of a pixel: the radial model inverted by fixed-point
+// iteration (converges for the few-percent distortion of real lenses).
+Eigen::Vector2d NormalisedRadial(const BundleIntrinsics& k, const Eigen::Vector2d& pixel);
+
 // Refines `problem` in place. Throws hdr4d::Error for an index out of range or no observations.
 BundleReport RefineBundle(BundleProblem* problem, const BundleOptions& options = {});
 

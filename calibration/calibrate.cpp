@@ -14,6 +14,7 @@
 #include "calibration/radiometry_stage.h"
 #include "calibration/registration_ladder.h"
 #include "calibration/rig_geometry.h"
+#include "calibration/rig_time_points.h"
 #include "core/geometry/colmap_model.h"
 #include "core/dataset/dataset.h"
 #include "core/util/error.h"
@@ -118,6 +119,12 @@ std::optional<Rig> RunGeometry(const Capture& capture, const CalibrateOptions& o
   rig_options.refine = options.refine_rig;
   rig_options.select_shared_focal = options.select_shared_focal;
   rig_options.show_progress = options.show_progress;
+  if (options.focal_multistart) rig_options.focal_starts = DefaultFocalStarts();
+  if (options.rig_time_points) {
+    rig_options.rig_times = ExtractRigTimes(capture, names, options.show_progress);
+    if (rig_options.rig_times.empty())
+      notes->push_back("--rig-time-points: the capture has no sequence frames to match; COLMAP's points only");
+  }
   std::vector<BoardCalibration> boards;
   std::vector<std::string> board_notes;
   if (!options.board.empty()) {

@@ -37,6 +37,11 @@ struct CalibrateOptions {
   bool select_distortion = true;   // keep k1, k2 only where the data shows them (BIC)
   bool select_shared_focal = true;  // one focal length for alike cameras where BIC says so
   bool refine_rig = true;          // false: COLMAP's model as it is (a diagnosis)
+  // Points from the rig cameras' own sequence times join the refinement (rig_time_points.h).
+  bool rig_time_points = false;
+  // The rig refinement restarts from several focal lengths once the models are chosen
+  // (focal_multistart.h, rig_geometry.cpp).
+  bool focal_multistart = true;
   bool per_camera_response = false;  // each camera its own curve even when they look alike
   bool correct_gains = true;  // divide each camera's HDR by its gains (calibration/camera_gains.h)
   bool show_progress = true;

@@ -10,6 +10,51 @@ namespace hdr4d {
 
 namespace {
 
+void AppendRigTimePoints(const RigTimeReport& r, std::string& md, nlohmann::json& doc) {
+  md += fmt::format(
+      "Rig-time points (the rig cameras' own sequence, one mid bracket per camera and time): {} of {} times "
+      "matched; {} cross-checked matches, {} within the Sampson bound, {} tracks; {} new points and {} existing "
+      "points seen by more cameras, {} observations added to the refinement ({} repeats of existing observations "
+      "left out; rejected: {} behind a camera, {} over the reprojection bound, {} under the triangulation angle). "
+      "Their reprojection RMS: {:.3f} px at triangulation, {:.3f} px after the refinement. The cameras' RMS "
+      "above is over COLMAP's observations; their observation counts include these.\n\n",
+      r.times_used, r.times, r.matches, r.matches_kept, r.tracks, r.points_added, r.points_extended,
+      r.observations_added, r.repeats, r.rejected_cheirality, r.rejected_reprojection, r.rejected_angle,
+      r.rms_before, r.rms_after);
+  doc["rig_time_points"] = {{"times", r.times},
+                            {"times_used", r.times_used},
+                            {"matches", r.matches},
+                            {"matches_kept", r.matches_kept},
+                            {"tracks", r.tracks},
+                            {"points_added", r.points_added},
+                            {"points_extended", r.points_extended},
+                            {"observations_added", r.observations_added},
+                            {"repeats", r.repeats},
+                            {"rejected_cheirality", r.rejected_cheirality},
+                            {"rejected_reprojection", r.rejected_reprojection},
+                            {"rejected_angle", r.rejected_angle},
+                            {"rms_before", r.rms_before},
+                            {"rms_after", r.rms_after}};
+}
+
+void AppendFocalStarts(const FocalStartReport& r, std::string& md, nlohmann::json& doc) {
+  md += "Focal restarts (the refinement of the model kept, again from COLMAP's poses and these scalings of its "
+        "focal lengths; the least robust cost kept):\n\n| start | focal after (px) | robust cost | RMS (px) | kept "
+        "|\n|---|---|---|---|---|\n";
+  md += fmt::format("| model selection's own | {:.2f} | {:.3f} | | {} |\n", r.selection_focal, r.selection_cost,
+                    r.kept < 0 ? "yes" : "");
+  doc["focal_starts_selection"] = {{"focal", r.selection_focal}, {"cost", r.selection_cost}, {"kept", r.kept < 0}};
+  for (std::size_t i = 0; i < r.starts.size(); ++i) {
+    const FocalStart& s = r.starts[i];
+    const bool kept = static_cast<int>(i) == r.kept;
+    md += fmt::format("| x{:.2f} | {:.2f} | {:.3f} | {:.4f} | {} |\n", s.scale, s.focal, s.cost, s.rms,
+                      kept ? "yes" : "");
+    doc["focal_starts"].push_back({{"scale", s.scale}, {"focal", s.focal}, {"cost", s.cost}, {"rms", s.rms},
+                                   {"kept", kept}});
+  }
+  md += "\n";
+}
+
 void AppendGeometry(const CalibrationRecord& record, std::string& md, nlohmann::json& doc) {
   const Rig& rig = *record.rig;
   md += fmt::format("## Geometry{}\n\nSparse model: {}. Intrinsics: {}. {} extra image(s) helped "
@@ -41,6 +86,8 @@ void AppendGeometry(const CalibrationRecord& record, std::string& md, nlohmann::
                               {"undistorted", c.undistort}});
   }
   md += fmt::format("\n{} points in point3d.ply.\n\n", rig.points.size());
+  if (rig.focal_starts) AppendFocalStarts(*rig.focal_starts, md, doc);
+  if (rig.rig_time) AppendRigTimePoints(*rig.rig_time, md, doc);
 }
 
 void AppendCameraAgreement(const CalibrationRecord& record, std::string& md, nlohmann::json& doc) {

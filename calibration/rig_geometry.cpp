@@ -291,6 +291,105 @@ void NoteWorseCameras(const Rig& rig, std::vector<std::string>* notes) {
   }
 }
 
+// The rig cameras' intrinsics blocks that the refinement may change, each once.
+std::vector<int> FreeRigBlocks(const RigProblem& rp) {
+  std::vector<int> blocks;
+  for (int b : rp.rig_intrinsics)
+    if (!rp.problem.intrinsics[b].fixed && std::find(blocks.begin(), blocks.end(), b) == blocks.end())
+      blocks.push_back(b);
+  return blocks;
+}
+
+// The focal restarts, run once the models are chosen (shared focal lengths, radial terms) so that
+// every start has the same parameters and the costs compare: COLMAP's poses and focal lengths
+// scaled, its distortion where the model keeps it (0 where not), points re-triangulated. Before
+// the selections each start's focal length traded against COLMAP's k1, k2 (all free), and the
+// least cost there did not carry over to the model kept (issue 54, 1280x720 rig). The
+// selection's own solution stays unless a restart ends at a strictly lower cost.
+void RestartFromFocalLengths(const RigOptions& options, const BundleProblem& colmap_start, RigProblem* rp, Rig* rig,
+                             BundleReport* report) {
+  BundleProblem start = colmap_start;
+  for (std::size_t i = 0; i < start.intrinsics.size(); ++i) {
+    const BundleIntrinsics& chosen = rp->problem.intrinsics[i];
+    BundleIntrinsics& k = start.intrinsics[i];
+    k.focal_group = chosen.focal_group, k.hold_distortion = chosen.hold_distortion, k.hold_k2 = chosen.hold_k2;
+    if (k.hold_distortion) k.k1 = chosen.k1, k.k2 = chosen.k2;
+    if (k.hold_k2) k.k2 = chosen.k2;
+  }
+  BundleReport restarted;
+  FocalStartReport starts = RefineFromFocalStarts(&start, FreeRigBlocks(*rp), options.focal_starts, {}, &restarted);
+  starts.selection_cost = RobustCost(rp->problem, BundleOptions{}.huber_pixels);
+  starts.selection_focal = rp->problem.intrinsics[FreeRigBlocks(*rp).front()].f;
+  rig->refinement_iterations += restarted.iterations;
+  if (starts.starts[starts.kept].cost < starts.selection_cost) {
+    rp->problem = std::move(start);
+    const std::vector<double> rms_in = report->rms_before;
+    *report = restarted;
+    report->rms_before = rms_in;
+  } else {
+    starts.kept = -1;
+  }
+  rig->focal_starts = std::move(starts);
+}
+
+// COLMAP's model refined, then the model selections (shared focal length, distortion terms),
+// each followed by a refinement. The report's rms_before is of the problem as it came in.
+BundleReport RefineAndSelect(const RigOptions& options, RigProblem* rp, Rig* rig) {
+  BundleOptions bundle;
+  if (!options.refine) bundle.max_iterations = 0;  // the residuals of COLMAP's model, unchanged
+  const BundleProblem colmap_start = rp->problem;
+  BundleReport report = RefineBundle(&rp->problem, bundle);
+  rig->refinement_iterations += report.iterations;
+  if (!options.refine) rig->notes.push_back("the rig is COLMAP's model as it is (--no-refinement)");
+  // One focal length for alike cameras is decided first, with every camera's k1, k2 free: a
+  // camera's own focal length absorbs much of its radial distortion (one pose each), a shared
+  // one cannot, so the distortion selection that follows sees it.
+  const std::vector<double> rms_in = report.rms_before;
+  auto refine_again = [&] {
+    report = RefineBundle(&rp->problem);
+    report.rms_before = rms_in;
+    rig->refinement_iterations += report.iterations;
+  };
+  if (options.refine && options.select_shared_focal && SelectSharedFocal(rp, &rig->cameras, &rig->notes))
+    refine_again();
+  if (options.refine && options.select_distortion && SelectDistortion(rp, &rig->cameras)) refine_again();
+  if (options.refine && !options.focal_starts.empty() && !FreeRigBlocks(*rp).empty())
+    RestartFromFocalLengths(options, colmap_start, rp, rig, &report);
+  return report;
+}
+
+// Rig-time points are matched and triangulated under the geometry that COLMAP's points alone
+// refine to (a first pass, its notes and choices dropped): COLMAP's own intrinsics can carry a
+// distortion fitted to noise that moves the image borders by pixels, and a Sampson bound under
+// them would keep the matches that agree with it and drop the border matches that show it
+// wrong. The points join the first pass's geometry, with every intrinsics choice reopened, and
+// the refinement and model selections run again on everything.
+BundleReport RefineWithRigTimePoints(const RigOptions& options, RigProblem* rp, Rig* rig) {
+  BundleProblem colmap_only = rp->problem;
+  const std::vector<double> colmap_rms = RefineBundle(&colmap_only, {.max_iterations = 0}).rms_before;
+  {
+    Rig first_rig = *rig;
+    RigProblem first = *rp;
+    RefineAndSelect(options, &first, &first_rig);
+    rig->focal_starts = first_rig.focal_starts;
+    rp->problem.poses = first.problem.poses;
+    rp->problem.points = first.problem.points;
+    for (std::size_t i = 0; i < rp->problem.intrinsics.size(); ++i) {
+      const BundleIntrinsics& refined = first.problem.intrinsics[i];
+      BundleIntrinsics& k = rp->problem.intrinsics[i];
+      if (!k.fixed) k.f = refined.f, k.k1 = refined.k1, k.k2 = refined.k2;
+    }
+  }
+  rig->rig_time = AddRigTimePoints(options.rig_times, rp->rig_intrinsics, &rp->problem, options.rig_time);
+  rig->notes.insert(rig->notes.end(), rig->rig_time->notes.begin(), rig->rig_time->notes.end());
+  // The focal restarts ran in the first pass; the points start from its geometry.
+  RigOptions again = options;
+  again.focal_starts.clear();
+  BundleReport report = RefineAndSelect(again, rp, rig);
+  report.rms_before = colmap_rms;
+  return report;
+}
+
 }  // namespace
 
 Rig RigFromColmap(const ColmapModel& model, const std::vector<std::string>& camera_names,
@@ -309,24 +408,20 @@ Rig RigFromColmap(const ColmapModel& model, const std::vector<std::string>& came
   }
   AddPoints(model, camera_names.size(), &rp, &rig);
   if (rp.problem.observations.empty()) Fail("COLMAP's model has no 3D points to refine the rig with");
-
-  BundleOptions bundle;
-  if (!options.refine) bundle.max_iterations = 0;  // the residuals of COLMAP's model, unchanged
-  BundleReport report = RefineBundle(&rp.problem, bundle);
-  rig.refinement_iterations = report.iterations;
-  if (!options.refine) rig.notes.push_back("the rig is COLMAP's model as it is (--no-refinement)");
-  // One focal length for alike cameras is decided first, with every camera's k1, k2 free: a
-  // camera's own focal length absorbs much of its radial distortion (one pose each), a shared
-  // one cannot, so the distortion selection that follows sees it.
-  const std::vector<double> colmap_rms = report.rms_before;
-  auto refine_again = [&] {
-    report = RefineBundle(&rp.problem);
-    report.rms_before = colmap_rms;
-    rig.refinement_iterations += report.iterations;
-  };
-  if (options.refine && options.select_shared_focal && SelectSharedFocal(&rp, &rig.cameras, &rig.notes))
-    refine_again();
-  if (options.refine && options.select_distortion && SelectDistortion(&rp, &rig.cameras)) refine_again();
+  const std::size_t colmap_points = rp.problem.points.size(), colmap_observations = rp.problem.observations.size();
+  BundleReport report;
+  if (options.rig_times.empty() || !options.refine) {
+    if (!options.rig_times.empty()) rig.notes.push_back("rig-time points are not used without the refinement");
+    report = RefineAndSelect(options, &rp, &rig);
+  } else {
+    report = RefineWithRigTimePoints(options, &rp, &rig);
+    rig.rig_time->rms_after = ObservationRms(rp.problem, colmap_observations);
+    // The cameras' RMS after, like before, over COLMAP's observations: comparable figures.
+    BundleProblem colmap_only = rp.problem;
+    colmap_only.observations.resize(colmap_observations);
+    report.rms_after = RefineBundle(&colmap_only, {.max_iterations = 0}).rms_before;
+  }
+  rp.problem.points.resize(colmap_points);  // the added points constrained the geometry; the scene is COLMAP's
   Normalise(rp.problem.points, &rig);
   for (std::size_t c = 0; c < rig.cameras.size(); ++c) {
     RigCamera& camera = rig.cameras[c];

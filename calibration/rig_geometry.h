@@ -7,10 +7,13 @@
 #include <Eigen/Core>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "calibration/bundle_refinement.h"
+#include "calibration/focal_multistart.h"
+#include "calibration/rig_time_points.h"
 #include "core/geometry/colmap_model.h"
 #include "core/geometry/ply.h"
 
@@ -50,6 +53,11 @@ struct Rig {
   std::string intrinsics_source = "COLMAP, refined with Ceres";
   double metres_per_unit = 0;  // of the normalised world; 0 = unknown (no board seen by 2 cameras)
   std::vector<std::string> notes;  // what the report must say (not in rig.json)
+  // The points of the rig's own sequence times added to the refinement (absent: not asked for).
+  // They constrain the geometry only: point3d.ply and the normalisation stay COLMAP's points.
+  std::optional<RigTimeReport> rig_time;
+  // The focal restarts of the first refinement and the one kept (absent: one start, COLMAP's).
+  std::optional<FocalStartReport> focal_starts;
 
   const RigCamera* Find(const std::string& name) const;
 };
@@ -73,6 +81,14 @@ struct RigOptions {
   // Off: COLMAP's poses, intrinsics and points as they are, no Ceres refinement and no model
   // selection (a diagnosis: what the refinement changes).
   bool refine = true;
+  // Features of the rig's sequence times (rig_time_points.h): their points join COLMAP's before
+  // the refinement and the model selections. Empty: COLMAP's points only.
+  std::vector<RigTimeFeatures> rig_times;
+  RigTimeOptions rig_time;
+  // The first refinement restarts from these scalings of the free rig cameras' focal lengths and
+  // keeps the least robust cost (focal_multistart.h); include 1 (COLMAP's own start). Empty:
+  // one start, COLMAP's.
+  std::vector<double> focal_starts;
 };
 
 // Builds the rig for `camera_names` from `model`, whose image names are <camera>/<file> (any

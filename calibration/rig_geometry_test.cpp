@@ -1,6 +1,7 @@
 // RigFromColmap's model selection of lens distortion and shared intrinsics, on a synthetic
 // COLMAP model whose truth is known.
 #include "calibration/rig_geometry.h"
+#include "calibration/synthetic_rig_test_util.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -30,14 +31,8 @@ ColmapModel MakeModel(const std::vector<Lens>& lenses) {
   ColmapModel model;
   std::vector<Eigen::Isometry3d> cam_from_world;
   for (std::size_t c = 0; c < lenses.size(); ++c) {
-    const double a = (static_cast<double>(c) - 1) * 0.35;
-    const Eigen::Vector3d centre(4 * std::sin(a), 0.3 * c, -4 * std::cos(a));
-    const Eigen::Vector3d z = -centre.normalized(), x = Eigen::Vector3d::UnitY().cross(z).normalized();
-    Eigen::Matrix3d r;
-    r << x.transpose(), z.cross(x).transpose(), z.transpose();
-    Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-    t.linear() = r;
-    t.translation() = -r * centre;
+    const Eigen::Isometry3d t = CameraOnArc((static_cast<double>(c) - 1) * 0.35, 4, 0.3 * c);
+    const Eigen::Matrix3d r = t.linear();
     cam_from_world.push_back(t);
     const int id = static_cast<int>(c) + 1;
     model.cameras[id] = {id, "RADIAL", kW, kH, {kF, kW / 2.0, kH / 2.0, lenses[c].colmap_k1, 0.0}};
@@ -166,6 +161,25 @@ TEST(RigGeometry, NoRefinementKeepsColmapsModel) {
   EXPECT_EQ(rig.cameras[1].intrinsics.f, 520);
   EXPECT_EQ(rig.cameras[0].intrinsics.k1, 0.01);
   EXPECT_EQ(rig.cameras[0].rms_after, rig.cameras[0].rms_before);
+}
+
+// The focal restarts (issue 54) run on the model the selections chose and report every start
+// and the selection's own solution; the rig keeps the least cost of them.
+TEST(RigGeometry, FocalRestartsAreReportedAndTheLeastCostIsKept) {
+  const ColmapModel model = MakeModel({{0, 0}, {0, 0}, {0, 0}});
+  RigOptions restarts;
+  restarts.focal_starts = {0.97, 1.0, 1.03};
+  const Rig rig = RigFromColmap(model, {"cam0", "cam1", "cam2"}, restarts);
+  ASSERT_TRUE(rig.focal_starts.has_value());
+  const FocalStartReport& r = *rig.focal_starts;
+  ASSERT_EQ(r.starts.size(), 3u);
+  double least = r.selection_cost;
+  for (const FocalStart& s : r.starts) least = std::min(least, s.cost);
+  const double kept_cost = r.kept < 0 ? r.selection_cost : r.starts[r.kept].cost;
+  const double kept_focal = r.kept < 0 ? r.selection_focal : r.starts[r.kept].focal;
+  EXPECT_EQ(kept_cost, least);
+  EXPECT_NEAR(rig.cameras[0].intrinsics.f, kept_focal, 1e-9);
+  EXPECT_FALSE(RigFromColmap(model, {"cam0", "cam1", "cam2"}).focal_starts.has_value());
 }
 
 }  // namespace

@@ -26,6 +26,14 @@ void AddGeometryFlags(CLI::App* cmd, CalibrateOptions* options) {
   cmd->add_option("--colmap-max-image-size", options->colmap_max_image_size,
                   "Downscale images to this size for COLMAP's SIFT (0: COLMAP's default, 3200)")
       ->check(Integer(0, 100000));
+  cmd->add_flag("--focal-multistart,!--no-focal-multistart", options->focal_multistart,
+                "Once the models are chosen, restart the rig refinement from COLMAP's poses and focal "
+                "lengths x0.96 to x1.04 (steps of 0.01) and keep the least robust cost: a rig camera seen "
+                "in one pose has shallow minima about 1% of focal apart (on by default)");
+  cmd->add_flag("--rig-time-points", options->rig_time_points,
+                "Also match the rig cameras with one another at every time of the sequence (SIFT on "
+                "one mid bracket each) and add the triangulated points to the rig refinement: more "
+                "observations for the focal lengths and distortion where there are no hand-held views");
 }
 
 // The response recovery and how the cameras' curves are fused.
