@@ -101,21 +101,31 @@ void Coverage(const std::vector<SeedValues>& rows, const std::vector<std::string
   if (shared) f->seeds.assign(shared->begin(), shared->end());
 }
 
-// The reference's seed spread over the covered scenes, where its table cell has none (not
-// every scene of the table has runs yet): the sample sd over the shared seeds of the mean over
-// those scenes.
-void SpreadOverCoveredScenes(const SeedValues& reference, Finding* f) {
-  if (f->seeds.size() < 2 || f->scenes_covered.empty()) return;
+// One row over the covered scenes and the shared seeds: the mean over seeds of its mean over
+// those scenes, and from two seeds their sample sd. Used where the table is not complete (its
+// cells then average whatever runs there are), so that every mean a finding shows is over what
+// its paired tests compare.
+struct CoveredMean {
+  bool has = false, has_sd = false;
+  double mean = 0, sd = 0;
+};
+
+CoveredMean OverCoverage(const SeedValues& row, const Finding& f) {
+  CoveredMean out;
+  if (f.seeds.empty() || f.scenes_covered.empty()) return out;
   std::vector<double> seed_means;
-  for (std::int64_t seed : f->seeds) {
+  for (std::int64_t seed : f.seeds) {
     std::vector<double> per_scene;
-    for (const std::string& scene : f->scenes_covered)
-      if (auto it = reference.find({scene, seed}); it != reference.end()) per_scene.push_back(it->second);
-    if (per_scene.size() != f->scenes_covered.size()) return;
+    for (const std::string& scene : f.scenes_covered)
+      if (auto it = row.find({scene, seed}); it != row.end()) per_scene.push_back(it->second);
+    if (per_scene.size() != f.scenes_covered.size()) return out;
     seed_means.push_back(Mean(per_scene));
   }
-  f->reference_spread = SampleStdDev(seed_means);
-  f->reference_spread_scope = "covered";
+  out.has = true;
+  out.mean = Mean(seed_means);
+  out.has_sd = seed_means.size() >= 2;
+  out.sd = out.has_sd ? SampleStdDev(seed_means) : 0;
+  return out;
 }
 
 Finding OneFinding(const TableSpec& spec, const Suite& suite, const std::vector<RunSummary>& runs,
@@ -134,6 +144,7 @@ Finding OneFinding(const TableSpec& spec, const Suite& suite, const std::vector<
   f.direction = col < t.columns.size() && t.columns[col].direction < 0 ? -1 : 1;
   std::vector<SeedValues> values;
   std::optional<std::size_t> reference_values;
+  std::vector<std::size_t> against_values;  // values' row of each comparison
   bool reference_has_spread = false;
   for (const RowResult& r : t.rows) {
     if (r.added) continue;
@@ -152,11 +163,25 @@ Finding OneFinding(const TableSpec& spec, const Suite& suite, const std::vector<
     if (col < t.columns.size()) c.test = r.tests[col];
     c.outcome = OutcomeOf(c.test, f.direction);
     f.against.push_back(std::move(c));
+    against_values.push_back(values.size() - 1);
   }
   Coverage(values, t.scenes, &f);
   f.reference_spread_scope = reference_has_spread ? "all" : "none";
-  if (!reference_has_spread && reference_values)
-    SpreadOverCoveredScenes(values[*reference_values], &f);
+  const bool partial = f.scenes_covered.size() < f.table_scenes || !reference_has_spread;
+  if (partial && reference_values) {
+    // Not every scene of the table has runs of every row yet: show the means over the covered
+    // scenes, where the pairs are.
+    f.reference_spread_scope = "none";
+    const CoveredMean ref = OverCoverage(values[*reference_values], f);
+    if (ref.has) f.reference_mean = ref.mean;
+    if (ref.has_sd) {
+      f.reference_spread = ref.sd;
+      f.reference_spread_scope = "covered";
+    }
+    for (std::size_t k = 0; k < f.against.size(); ++k)
+      if (const CoveredMean m = OverCoverage(values[against_values[k]], f); m.has)
+        f.against[k].mean = m.mean;
+  }
   Decide(&f);
   if (col == t.columns.size())  // a key no run of the table has (mistyped, or not computed)
     f.why = fmt::format("no run of the table has the metric '{}'", metric);
@@ -180,7 +205,7 @@ std::string ReferenceText(const Finding& f) {
   if (!f.reference_has_value) return f.reference + " (no runs)";
   if (f.reference_spread_scope == "none") return fmt::format("{} {:.3f}", f.reference, f.reference_mean);
   return fmt::format("{} {:.3f} ± {:.3f}{}", f.reference, f.reference_mean, f.reference_spread,
-                     f.reference_spread_scope == "covered" ? " (seed sd over the covered scenes)" : "");
+                     f.reference_spread_scope == "covered" ? " (mean and seed sd over the covered scenes)" : "");
 }
 
 std::string FindingClaim(const TableSpec& spec) {

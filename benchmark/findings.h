@@ -51,7 +51,8 @@ struct Finding {
   bool reference_has_value = false;
   // Where reference_spread comes from: "all" (the table cell: every scene of the table),
   // "covered" (the covered scenes alone, the table's cell having none yet) or "none" (fewer
-  // than two seeds: no spread).
+  // than two seeds: no spread). While the table is not complete, reference_mean and each
+  // comparison's mean are over the covered scenes and seeds too, as the paired tests are.
   std::string reference_spread_scope = "none";
   std::vector<FindingComparison> against;
   std::string verdict;  // "holds", "does not hold", "undecided"

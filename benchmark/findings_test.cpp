@@ -128,10 +128,19 @@ TEST(Findings, CoverageAndOneSeed) {
   const double sd = SampleStdDev({24 + kSeedNoise[0], 24 + kSeedNoise[1], 24 + kSeedNoise[2]});
   EXPECT_EQ(part.reference_spread_scope, "covered");
   EXPECT_NEAR(part.reference_spread, sd, 1e-12);
-  EXPECT_NE(FindingsMarkdown({part}).find(fmt::format("R 24.000 ± {:.3f} (seed sd over the covered scenes)", sd)),
+  EXPECT_NE(FindingsMarkdown({part}).find(fmt::format("R 24.000 ± {:.3f} (mean and seed sd over the covered scenes)", sd)),
             std::string::npos) << FindingsMarkdown({part});
   const Finding full = Only(BuildFindings(s, Runs(-1.0, -2.0), {}), "psnr");
   EXPECT_EQ(full.reference_spread_scope, "all");
+  // X has runs on s1 only (a table's rows filled one scene at a time): every mean shown is over
+  // s1, where the pairs are, not R's over both scenes.
+  std::vector<RunSummary> partial = Runs(-1.0, -2.0);
+  std::erase_if(partial, [](const RunSummary& r) { return r.label.method == "x" && r.label.scene == "s2"; });
+  const Finding s1 = Only(BuildFindings(s, partial, {}), "psnr");
+  EXPECT_EQ(s1.scenes_covered, (std::vector<std::string>{"s1"}));
+  EXPECT_NEAR(s1.reference_mean, 20.0, 1e-9);
+  EXPECT_NEAR(s1.against[0].mean, 19.0, 1e-9);
+  EXPECT_NEAR(s1.against[1].mean, 18.0, 1e-9);  // Y has both scenes; shown over s1 too
   // One seed on one scene: nothing to test against.
   const Finding one = Only(BuildFindings(s, Runs(-1.0, -2.0, 1, {"s1"}), {}), "psnr");
   EXPECT_EQ(one.verdict, "undecided");
