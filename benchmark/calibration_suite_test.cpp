@@ -33,6 +33,10 @@ TEST(CalibrationSuite, ShippedGridParses) {
   const CalibrationGrid proof = LoadCalibrationGrid(SuitesDir() / "calibration-untuned.json");
   EXPECT_EQ(proof.seeds, std::vector<int>{7});
   EXPECT_GE(proof.variants.size(), 7u);
+  // The final proof run: the same variants at seed 11.
+  const CalibrationGrid final_run = LoadCalibrationGrid(SuitesDir() / "calibration-final.json");
+  EXPECT_EQ(final_run.seeds, std::vector<int>{11});
+  EXPECT_EQ(final_run.variants.size(), proof.variants.size());
 }
 
 TEST(CalibrationSuite, BadGridsNameTheFileAndKey) {

@@ -102,8 +102,10 @@ std::optional<Rig> RunGeometry(const Capture& capture, const CalibrateOptions& o
                          fmt::join(ladder.attempts, "; "));
     if (ladder.weakest_observations < kWeakCameraObservations)
       notes->push_back(fmt::format("a rig camera has only {} triangulated observations (under {}): too few to pin its "
-                                   "focal length and distortion by self-calibration; hand-held views of the scene "
-                                   "(static/extra/) give COLMAP more", ladder.weakest_observations,
+                                   "focal length and distortion by self-calibration, and so few that the whole model can be "
+                                   "wrong (a 320x240 rig with 3 hand-held views came out mirrored, 34 deg off); "
+                                   "hand-held views of the scene (static/extra/) give COLMAP more",
+                                   ladder.weakest_observations,
                                    kWeakCameraObservations));
     if (!ladder.unregistered.empty())
       notes->push_back(fmt::format("COLMAP left {} unregistered after every rung of the registration ladder",
@@ -221,6 +223,10 @@ CalibrateSummary RunStages(const Capture& capture, const CalibrateOptions& optio
   }
   WriteCalibrationReport(staging, record);
   Publish(staging, out);
+  // The capture's own warnings were printed when it was scanned; the stages' are printed here,
+  // so that a weak model is not said in report.md alone.
+  for (std::size_t k = capture.warnings.size(); k < record.warnings.size(); ++k)
+    spdlog::warn("calibrate: {}", record.warnings[k]);
   return summary;
 }
 

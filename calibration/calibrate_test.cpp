@@ -544,6 +544,7 @@ TEST(Calibrate, RegistrationLadderSequenceRungMatchesAcrossCamerasAtOneTime) {
   EXPECT_NE(report.find("rung 1 of the registration ladder (defaults; tried: 1. defaults: all registered, "
                         "weakest camera"), std::string::npos) << report;
   EXPECT_NE(report.find("triangulated observations (under 300)"), std::string::npos) << report;
+  EXPECT_NE(result.err.find("triangulated observations (under 300)"), std::string::npos) << result.err;
   EXPECT_FALSE(fs::exists(dir / "pairs.txt"));
 }
 

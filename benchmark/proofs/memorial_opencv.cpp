@@ -1,13 +1,15 @@
 // The OpenCV reference numbers of calibration/hdr_fusion_test.cpp's Memorial test (issue 54),
 // measured outside hdr4d (OpenCV is not a dependency of the merge):
 //   g++ -O2 -o /tmp/memorial_opencv benchmark/proofs/memorial_opencv.cpp $(pkg-config --cflags --libs opencv4)
-//   /tmp/memorial_opencv ../shared/data/memorial_exposures
+//   /tmp/memorial_opencv ../shared/data/memorial_exposures [OURS.exr ...]
+// (reading EXR needs OPENCV_IO_ENABLE_OPENEXR=1 in the environment)
 // Prints the rose window / dark wall ratio of OpenCV's MergeDebevec and MergeRobertson (each
 // with its own Calibrate* response), and of OpenCV's Debevec response merged the way
 // MergeDebevec does (triangle weights, log domain) but with codes within three noise widths of
 // the black level weighted out: what MergeDebevec gives once its shadows are not lifted by the
 // short brackets' black codes. And the ratio from one bracket per region (the one that
-// exposes it best), which no weighting or black code enters.
+// exposes it best), which no weighting or black code enters, under our boxes and under the
+// issue's candidate definitions.
 #include <opencv2/opencv.hpp>
 #include <opencv2/photo.hpp>
 
@@ -105,6 +107,30 @@ double BestBracketMean(const std::vector<cv::Mat>& images, const std::vector<flo
   return sum;
 }
 
+// The same single-bracket read under one of the issue's candidate definitions (mean or median,
+// RGB mean or green): if a merge agrees with it there, the region definition is not why it differs
+// from MergeDebevec.
+double BestBracketValue(const std::vector<cv::Mat>& images, const std::vector<float>& times,
+                        const cv::Mat& response, const cv::Rect& box, const RegionDefinition& d) {
+  int chosen = 0;
+  BestBracketMean(images, times, response, box, &chosen);
+  cv::Mat radiance(images[chosen].rows, images[chosen].cols, CV_32FC3, cv::Scalar::all(0));
+  for (int y = box.y; y < box.y + box.height; ++y)
+    for (int x = box.x; x < box.x + box.width; ++x)
+      for (int c = 0; c < 3; ++c)
+        radiance.at<cv::Vec3f>(y, x)[c] = response.at<cv::Vec3f>(images[chosen].at<cv::Vec3b>(y, x)[c])[c] / times[chosen];
+  return RegionValue(radiance, box, d);
+}
+
+void PrintBestBracketCandidates(const std::vector<cv::Mat>& images, const std::vector<float>& times,
+                                const cv::Mat& response, const char* name) {
+  for (const RegionDefinition& d : kIssueCandidates)
+    std::cout << "best single bracket per region, " << name << " response, issue candidate " << d.name << ": "
+              << BestBracketValue(images, times, response, d.window, d) /
+                     BestBracketValue(images, times, response, d.wall, d)
+              << "\n";
+}
+
 void PrintBestBracketRatio(const std::vector<cv::Mat>& images, const std::vector<float>& times,
                            const cv::Mat& response, const char* name) {
   int window_bracket = 0, wall_bracket = 0;
@@ -139,6 +165,17 @@ int main(int argc, char** argv) {
   PrintIssueCandidates(hdr, "MergeRobertson");
   PrintBestBracketRatio(images, times, debevec, "OpenCV's Debevec");
   PrintBestBracketRatio(images, times, robertson, "OpenCV's Robertson");
+  PrintBestBracketCandidates(images, times, debevec, "OpenCV's Debevec");
+  PrintBestBracketCandidates(images, times, robertson, "OpenCV's Robertson");
+  for (int k = 2; k < argc; ++k) {  // other merges, e.g. calibrate's hdr/cam0/00000.exr
+    const cv::Mat bgr = cv::imread(argv[k], cv::IMREAD_UNCHANGED);
+    if (bgr.empty() || bgr.type() != CV_32FC3) {
+      std::cerr << argv[k] << ": not a 3-channel float image (set OPENCV_IO_ENABLE_OPENEXR=1)\n";
+      return 1;
+    }
+    std::cout << argv[k] << " " << Ratio(bgr) << "\n";
+    PrintIssueCandidates(bgr, argv[k]);
+  }
   for (double black : {16.0, 19.0})
     std::cout << "MergeDebevec's formula, codes near black " << black << " (sigma 1.5) weighted out "
               << Ratio(MergeAboveBlack(images, times, debevec, black, 1.5)) << "\n";
