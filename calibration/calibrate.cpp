@@ -105,8 +105,7 @@ std::optional<Rig> RunGeometry(const Capture& capture, const CalibrateOptions& o
                                    "focal length and distortion by self-calibration, and so few that the whole model can be "
                                    "wrong (a 320x240 rig with 3 hand-held views came out mirrored, 34 deg off); "
                                    "hand-held views of the scene (static/extra/) give COLMAP more",
-                                   ladder.weakest_observations,
-                                   kWeakCameraObservations));
+                                   ladder.weakest_observations, kWeakCameraObservations));
     if (!ladder.unregistered.empty())
       notes->push_back(fmt::format("COLMAP left {} unregistered after every rung of the registration ladder",
                                    fmt::join(ladder.unregistered, ", ")));
