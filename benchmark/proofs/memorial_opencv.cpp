@@ -23,10 +23,12 @@ namespace {
 
 const cv::Rect kWindow(160, 120, 45, 45), kWall(400, 150, 80, 100);
 
-double Ratio(const cv::Mat& hdr) {
-  const cv::Scalar a = cv::mean(hdr(kWindow)), b = cv::mean(hdr(kWall));
+// Window over wall, each the mean of its box in RGB (read from two images where they differ).
+double Ratio(const cv::Mat& window_image, const cv::Mat& wall_image) {
+  const cv::Scalar a = cv::mean(window_image(kWindow)), b = cv::mean(wall_image(kWall));
   return (a[0] + a[1] + a[2]) / (b[0] + b[1] + b[2]);
 }
+double Ratio(const cv::Mat& hdr) { return Ratio(hdr, hdr); }
 
 // The 1328 (MergeDebevec) and 1594 (MergeRobertson) came from region boxes it did not
 // record. These four definitions each give both within 3% (of 71 found by scanning box positions
@@ -84,11 +86,8 @@ cv::Mat MergeAboveBlack(const std::vector<cv::Mat>& images, const std::vector<fl
   return out;
 }
 
-// Each region from the single bracket that exposes it best (the most pixels with every channel
-// in codes 40..220), read through `response` and divided by that bracket's time: no weights and
-// no black codes at all, so a check of any merge's ratio that only the response enters.
-double BestBracketMean(const std::vector<cv::Mat>& images, const std::vector<float>& times,
-                       const cv::Mat& response, const cv::Rect& region, int* chosen) {
+// The bracket that exposes `region` best: the most pixels with every channel in codes 40..220.
+int BestExposedBracket(const std::vector<cv::Mat>& images, const cv::Rect& region) {
   int best = 0, best_count = -1;
   for (std::size_t j = 0; j < images.size(); ++j) {
     int count = 0;
@@ -99,27 +98,28 @@ double BestBracketMean(const std::vector<cv::Mat>& images, const std::vector<flo
       }
     if (count > best_count) best_count = count, best = static_cast<int>(j);
   }
-  *chosen = best;
-  double sum = 0;
-  for (int y = region.y; y < region.y + region.height; ++y)
-    for (int x = region.x; x < region.x + region.width; ++x)
-      for (int c = 0; c < 3; ++c) sum += response.at<cv::Vec3f>(images[best].at<cv::Vec3b>(y, x)[c])[c] / times[best];
-  return sum;
+  return best;
 }
 
-// The same single-bracket read under one of the candidate definitions (mean or median,
-// RGB mean or green): if a merge agrees with it there, the region definition is not why it differs
-// from MergeDebevec.
+// `region` of bracket j read through `response` and divided by its time (the region's pixels
+// only; the rest of the image stays 0): no weights and no black codes at all, so a check of any
+// merge's ratio that only the response enters.
+cv::Mat BracketRadiance(const std::vector<cv::Mat>& images, const std::vector<float>& times,
+                        const cv::Mat& response, const cv::Rect& region, int j) {
+  cv::Mat radiance(images[j].rows, images[j].cols, CV_32FC3, cv::Scalar::all(0));
+  for (int y = region.y; y < region.y + region.height; ++y)
+    for (int x = region.x; x < region.x + region.width; ++x)
+      for (int c = 0; c < 3; ++c)
+        radiance.at<cv::Vec3f>(y, x)[c] = response.at<cv::Vec3f>(images[j].at<cv::Vec3b>(y, x)[c])[c] / times[j];
+  return radiance;
+}
+
+// Each region from the single bracket that exposes it best, under one of the candidate
+// definitions (mean or median, RGB mean or green): if a merge agrees with it there, the region
+// definition is not why it differs from MergeDebevec.
 double BestBracketValue(const std::vector<cv::Mat>& images, const std::vector<float>& times,
                         const cv::Mat& response, const cv::Rect& box, const RegionDefinition& d) {
-  int chosen = 0;
-  BestBracketMean(images, times, response, box, &chosen);
-  cv::Mat radiance(images[chosen].rows, images[chosen].cols, CV_32FC3, cv::Scalar::all(0));
-  for (int y = box.y; y < box.y + box.height; ++y)
-    for (int x = box.x; x < box.x + box.width; ++x)
-      for (int c = 0; c < 3; ++c)
-        radiance.at<cv::Vec3f>(y, x)[c] = response.at<cv::Vec3f>(images[chosen].at<cv::Vec3b>(y, x)[c])[c] / times[chosen];
-  return RegionValue(radiance, box, d);
+  return RegionValue(BracketRadiance(images, times, response, box, BestExposedBracket(images, box)), box, d);
 }
 
 void PrintBestBracketCandidates(const std::vector<cv::Mat>& images, const std::vector<float>& times,
@@ -133,11 +133,11 @@ void PrintBestBracketCandidates(const std::vector<cv::Mat>& images, const std::v
 
 void PrintBestBracketRatio(const std::vector<cv::Mat>& images, const std::vector<float>& times,
                            const cv::Mat& response, const char* name) {
-  int window_bracket = 0, wall_bracket = 0;
-  const double window = BestBracketMean(images, times, response, kWindow, &window_bracket) / kWindow.area();
-  const double wall = BestBracketMean(images, times, response, kWall, &wall_bracket) / kWall.area();
+  const int window_bracket = BestExposedBracket(images, kWindow), wall_bracket = BestExposedBracket(images, kWall);
+  const cv::Mat window = BracketRadiance(images, times, response, kWindow, window_bracket);
+  const cv::Mat wall = BracketRadiance(images, times, response, kWall, wall_bracket);
   std::cout << "best single bracket per region, " << name << " response: window from " << times[window_bracket]
-            << " s, wall from " << times[wall_bracket] << " s: " << window / wall << "\n";
+            << " s, wall from " << times[wall_bracket] << " s: " << Ratio(window, wall) << "\n";
 }
 
 }  // namespace
