@@ -28,6 +28,38 @@ bool HasLdrOutput(const HexPlaneModel& m);
 void RenderView(const HexPlaneModel& m, const Camera& camera, float time01, double exposure,
                 int image_index, std::vector<float>* ldr, std::vector<float>* hdr);
 
+// The view at several exposures: one march and appearance, then the tone mapper and composite
+// per exposure (RayBatch::Reexpose). ldr: one image per exposure (null: none; left empty without
+// an LDR output); hdr as RenderView's. Each image equals RenderView's at that exposure.
+void RenderBrackets(const HexPlaneModel& m, const Camera& camera, float time01,
+                    const std::vector<double>& exposures, int image_index,
+                    std::vector<std::vector<float>>* ldr, std::vector<float>* hdr);
+
+// A split's views rendered one by one in any order, each shot (camera and time) once for all its
+// exposures: a multi-view test split films every shot at each exposure (hook's mini test split:
+// 60 views, 20 shots), so its brackets cost one march and one appearance. Keeps one shot.
+class BracketRenderer {
+ public:
+  struct ViewAt {
+    Camera camera;
+    float time01 = 0;
+    double exposure = 1;
+  };
+  BracketRenderer(const HexPlaneModel& m, std::vector<ViewAt> views);
+  // View `view` of the list, as RenderView would render it (image index -1).
+  void Render(std::size_t view, std::vector<float>* ldr, std::vector<float>* hdr);
+  int shots_rendered() const { return shots_rendered_; }
+
+ private:
+  static bool SameShot(const ViewAt& a, const ViewAt& b);
+  const HexPlaneModel& m_;
+  std::vector<ViewAt> views_;
+  std::vector<std::size_t> shot_views_;  // the views of the shot held
+  std::vector<std::vector<float>> shot_ldr_;
+  std::vector<float> shot_hdr_;
+  int shots_rendered_ = 0;
+};
+
 // The test metrics of a Gaussian run's results.json (method/train/test_evaluation.h): LDR
 // metrics with FLIP, and where a view has HDR ground truth and the model HDR colours, Table 1's
 // HDR metrics, the scale-aligned ones and the HDR's log-log slope.

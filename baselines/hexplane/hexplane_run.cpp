@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <set>
 
 #include "baselines/hexplane/hexplane_render.h"
 #include "baselines/hexplane/hexplane_run.h"
@@ -55,26 +56,32 @@ LoadedHexPlaneRun LoadHexPlaneRun(const fs::path& run, int resolution_override) 
 
 namespace {
 
-// Renders one view and stages its images: the LDR PNG (for models with an LDR output) and the
-// HDR EXR (when `exr` is not empty and the model has HDR colours). Returns the files written.
-int WriteView(const LoadedHexPlaneRun& run, const Camera& camera, float time01, double exposure,
-              const fs::path& png, const fs::path& exr, int png_compression, FileBatch* batch) {
-  std::vector<float> ldr, hdr;
-  const int w = camera.intrinsics.width, h = camera.intrinsics.height;
-  RenderView(run.model, camera, time01, exposure, -1, &ldr, exr.empty() ? nullptr : &hdr);
+// Stages a view's images: the LDR PNG (where the model has an LDR output) and the HDR EXR
+// (when `exr` is not empty and the model has HDR colours). Returns the files written.
+int WriteImages(const std::vector<float>& ldr, const std::vector<float>& hdr, int w, int h,
+                const fs::path& png, const fs::path& exr, int png_compression, FileBatch* batch) {
   int written = 0;
   if (!ldr.empty()) {
     WriteImage(png, DisplayImageFromBuffer(ldr.data(), w, h, 3),
                {.png_compression = png_compression, .batch = batch});
     ++written;
   }
-  if (!hdr.empty()) {
+  if (!hdr.empty() && !exr.empty()) {
     Image image(w, h, 3, Encoding::kLinear);
     std::copy(hdr.begin(), hdr.end(), image.data());
     WriteImage(exr, image, {.format = PixelFormat::kFloat, .batch = batch});
     ++written;
   }
   return written;
+}
+
+// Renders one view and stages its images (WriteImages).
+int WriteView(const LoadedHexPlaneRun& run, const Camera& camera, float time01, double exposure,
+              const fs::path& png, const fs::path& exr, int png_compression, FileBatch* batch) {
+  std::vector<float> ldr, hdr;
+  RenderView(run.model, camera, time01, exposure, -1, &ldr, exr.empty() ? nullptr : &hdr);
+  return WriteImages(ldr, hdr, camera.intrinsics.width, camera.intrinsics.height, png, exr,
+                     png_compression, batch);
 }
 
 Camera AtResolution(const Camera& camera, int resolution) {
@@ -139,16 +146,27 @@ int RenderSplit(const HexPlaneRenderOptions& o, const LoadedHexPlaneRun& run,
   FileBatch batch;  // the renders replace an earlier run's all together (atomic_file.h)
   Progress progress("render", static_cast<std::int64_t>(frames.size()));
   std::vector<double> seconds;
+  std::vector<BracketRenderer::ViewAt> at;
+  for (const Frame& f : frames)
+    at.push_back({AtResolution(f.camera, run.resolution), float(f.time),
+                  o.exposure.value_or(f.exposure)});
+  BracketRenderer renderer(run.model, at);  // a shot's brackets rendered together
+  std::set<fs::path> hdr_written;           // one EXR per HDR truth, not one per bracket
+  std::vector<float> ldr, hdr;
   int written = 0;
-  for (const Frame& f : frames) {
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const Frame& f = frames[i];
     fs::path name = f.image_path.filename();
     if (name.extension() != ".png") name += ".png";
     fs::path hdr_name = f.hdr_path ? f.hdr_path->filename() : f.image_path.stem();
     if (hdr_name.extension() != ".exr") hdr_name += ".exr";
+    const bool with_hdr = o.write_hdr && hdr_written.insert(hdr_name).second;
     const auto start = std::chrono::steady_clock::now();
-    written += WriteView(run, AtResolution(f.camera, run.resolution), float(f.time),
-                         o.exposure.value_or(f.exposure), out / name,
-                         o.write_hdr ? out / hdr_name : fs::path(), o.png_compression, &batch);
+    renderer.Render(i, &ldr, with_hdr ? &hdr : nullptr);
+    if (!with_hdr) hdr.clear();
+    written += WriteImages(ldr, hdr, at[i].camera.intrinsics.width, at[i].camera.intrinsics.height,
+                           out / name, with_hdr ? out / hdr_name : fs::path(), o.png_compression,
+                           &batch);
     seconds.push_back(
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     progress.Advance();
@@ -165,7 +183,9 @@ int RenderSplit(const HexPlaneRenderOptions& o, const LoadedHexPlaneRun& run,
                              {"threads", MaxThreads()},
                              {"fps", FiniteOrNull(fps)},
                              {"view_seconds", seconds},
-                             {"note", "render time includes the PNG/EXR encoding"}});
+                             {"note",
+                              "render time includes the PNG/EXR encoding; a shot's brackets are "
+                              "rendered together, in its first view's time"}});
   }
   return written;
 }

@@ -5,6 +5,7 @@
 
 #include <fstream>
 #include <iterator>
+#include <set>
 
 #include "baselines/hexplane/hexplane_render.h"
 #include "baselines/hexplane/hexplane_run.h"
@@ -222,6 +223,34 @@ TEST(HexPlaneRun, HdrMethodsReportTableOneMetricsAndTheSlope) {
   for (const auto& e : fs::directory_iterator(dir / "star_renders"))
     EXPECT_EQ(e.path().extension(), ".exr") << e.path();
   EXPECT_GT(written, 0);
+}
+
+// The test split's brackets of one shot rendered together (BracketRenderer) are the images of
+// one view at a time, in any order; each shot is rendered once.
+TEST(HexPlaneRun, BracketsOfAShotRenderAsSingleViews) {
+  TempDir dir;
+  MakeHdrScene(dir / "scene");
+  HexPlaneTrainOptions o = SmallRun(dir / "scene", dir / "run", 10);
+  o.method = "hdr-hexplane";
+  o.supervision = "ldr+hdr";
+  TrainHexPlane(o);
+  const LoadedHexPlaneRun run = LoadHexPlaneRun(dir / "run");
+  std::vector<BracketRenderer::ViewAt> views;
+  for (const Frame& f : run.dataset.test) views.push_back({f.camera, float(f.time), f.exposure});
+  BracketRenderer renderer(run.model, views);
+  std::vector<float> ldr, hdr, single_ldr, single_hdr;
+  for (std::size_t k = views.size(); k-- > 0;) {  // backwards: any order works
+    renderer.Render(k, &ldr, &hdr);
+    RenderView(run.model, views[k].camera, views[k].time01, views[k].exposure, -1, &single_ldr,
+               &single_hdr);
+    ASSERT_FALSE(ldr.empty());
+    EXPECT_EQ(ldr, single_ldr) << "view " << k;
+    EXPECT_EQ(hdr, single_hdr) << "view " << k;
+  }
+  std::set<std::pair<float, double>> shots;  // the demo's test views: (time, camera centre x)
+  for (const auto& v : views) shots.insert({v.time01, v.camera.Center().x()});
+  EXPECT_EQ(renderer.shots_rendered(), int(shots.size()));
+  EXPECT_LT(renderer.shots_rendered(), int(views.size()));  // brackets shared a march
 }
 
 }  // namespace

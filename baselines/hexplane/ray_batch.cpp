@@ -8,6 +8,7 @@
 #include "baselines/hexplane/background_env.h"
 #include "baselines/hexplane/volume_render.h"
 #include "baselines/sigmoid_tone_mapper.h"
+#include "core/util/error.h"
 #include "core/util/parallel.h"
 
 namespace hdr4d::baselines::hexplane {
@@ -116,12 +117,33 @@ void RayBatch::Forward(const HexPlaneModel& m, const std::vector<Ray>& rays, con
     for (int r = lane.begin; r < lane.end; ++r) lane.March(m, rays[r], jitter);
     lane.Appearance(m, rays, jitter ? kExploreSamples : 0, jitter ? jitter[0] : 0.0f);
     lane.Background(m, rays);
-    for (int r = lane.begin; r < lane.end; ++r) {
-      const int i = r - lane.begin, b = lane.first[i];
-      Composite(lane.weight.data() + b, lane.colour.data() + std::size_t(b) * K,
-                lane.first[i + 1] - b, K, lane.transmittance[i],
-                lane.background.data() + std::size_t(i) * K, out->data() + std::size_t(r) * K);
-    }
+    lane.CompositeRays(m, out->data());
+  });
+}
+
+void RayBatch::Lane::CompositeRays(const HexPlaneModel& m, float* out) const {
+  const int K = RayChannels(m);
+  for (int r = begin; r < end; ++r) {
+    const int i = r - begin, b = first[i];
+    Composite(weight.data() + b, colour.data() + std::size_t(b) * K, first[i + 1] - b, K,
+              transmittance[i], background.data() + std::size_t(i) * K,
+              out + std::size_t(r) * K);
+  }
+}
+
+void RayBatch::Reexpose(const HexPlaneModel& m, const std::vector<Ray>& rays,
+                        std::vector<float>* out) {
+  const std::size_t rendered = lanes_.empty() || !lanes_.back() ? 0 : lanes_.back()->end;
+  if (rendered == 0 || rays.size() != rendered)
+    Fail("hexplane: Reexpose needs the last Forward's rays ({} given, {} rendered)", rays.size(),
+         rendered);
+  rays_ = &rays;
+  out->assign(rays.size() * std::size_t(RayChannels(m)), 0.0f);
+  ParallelFor(std::int64_t(lanes_.size()), 1, [&](std::int64_t l) {
+    Lane& lane = *lanes_[l];
+    lane.ToneMap(m, rays);
+    lane.Background(m, rays);
+    lane.CompositeRays(m, out->data());
   });
 }
 

@@ -39,6 +39,11 @@ class RayBatch {
   // until Backward.
   void Forward(const HexPlaneModel& m, const std::vector<Ray>& rays, const float* jitter,
                std::vector<float>* out);
+  // The last Forward's rays again at other exposures (`rays` as they were but for log_exposure
+  // and image): only the tone mapper, the background and the composite are redone, so the
+  // brackets of one view cost one march and one appearance. Exactly Forward's output on `rays`
+  // (without jitter); for an LDR model (no exposure input) the same output as before.
+  void Reexpose(const HexPlaneModel& m, const std::vector<Ray>& rays, std::vector<float>* out);
   // dL_dout: RayChannels per ray. Overwrites *grads with the batch's gradient.
   void Backward(const HexPlaneModel& m, const std::vector<float>& dL_dout, HexPlaneGrads* grads);
   // Samples whose density and whose appearance were evaluated in the last Forward.

@@ -13,7 +13,7 @@ namespace hdr4d::baselines::hexplane {
 void RayBatch::Lane::Appearance(const HexPlaneModel& m, const std::vector<Ray>& rays, int explore,
                                 float offset) {
   const HexPlaneConfig& c = m.config;
-  const int K = RayChannels(m), P = 3 * c.app_comps, D = c.app_dim;
+  const int P = 3 * c.app_comps, D = c.app_dim;
   const int num_rays = end - begin;
   app_sample.clear();
   app_first.assign(1, 0);
@@ -45,6 +45,11 @@ void RayBatch::Lane::Appearance(const HexPlaneModel& m, const std::vector<Ray>& 
     for (int r = app_first[i]; r < app_first[i + 1]; ++r)
       EncodeInput(shape, feat.row(r).data(), RayOf(rays, i).dir, input.row(r).data());
   AppMlpForward(shape.Layers(), m.mlp.data(), input, &acts);
+  ToneMap(m, rays);
+}
+
+void RayBatch::Lane::ToneMap(const HexPlaneModel& m, const std::vector<Ray>& rays) {
+  const int K = RayChannels(m), num_rays = end - begin;
   colour.assign(feature.size() * K, 0.0f);
   const RowMatrix<float>& y = acts.back();
   std::vector<float> ldr;

@@ -41,6 +41,11 @@ struct RayBatch::Lane {
   // colour, spread evenly along the ray from `offset` (a fraction of the stride, in [0, 1)).
   void Appearance(const HexPlaneModel& m, const std::vector<Ray>& rays, int explore = 0,
                   float offset = 0.0f);
+  // The colour of each appearance sample from the MLP's output (acts.back()): its LDR through the
+  // tone mapper at the ray's exposure, and for log-HDR colours the radiance.
+  void ToneMap(const HexPlaneModel& m, const std::vector<Ray>& rays);
+  // The lane's rays composited over their background into out (K per ray of the whole batch).
+  void CompositeRays(const HexPlaneModel& m, float* out) const;
   void Backward(const HexPlaneModel& m, const std::vector<Ray>& rays, const float* dL_dout);
   void AppearanceBackward(const HexPlaneModel& m, const std::vector<Ray>& rays,
                           const std::vector<float>& dL_dcolour);

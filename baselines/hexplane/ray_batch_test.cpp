@@ -1,5 +1,7 @@
 #include "baselines/hexplane/ray_batch.h"
 
+#include "core/util/error.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -129,6 +131,35 @@ TEST(RayBatch, EmptyModelShowsTheBackground) {
   batch.Forward(m, SomeRays(), nullptr, &out);
   for (float v : out) EXPECT_NEAR(v, 0.3f, 1e-6f);
   EXPECT_EQ(batch.app_samples(), 0);
+}
+
+// A view's other brackets through Reexpose are Forward's images at those exposures, bit for bit,
+// for both colour models and with a learned (exposure-dependent) background.
+TEST(RayBatch, ReexposeEqualsAForwardAtTheOtherExposure) {
+  for (ColorModel color : {ColorModel::kLdr, ColorModel::kLogHdr})
+    for (bool learned_background : {false, true}) {
+      HexPlaneModel m = SmallModel(color, 0.5f);
+      if (learned_background) {
+        m.background.resize(9 * 3);
+        for (std::size_t i = 0; i < m.background.size(); ++i)
+          m.background[i] = 0.1f * float(i % 7) - 0.3f;
+      }
+      std::vector<Ray> rays = SomeRays();
+      RayBatch batch;
+      std::vector<float> first, again, direct;
+      batch.Forward(m, rays, nullptr, &first);
+      for (Ray& r : rays) r.log_exposure = -2.5f;
+      batch.Reexpose(m, rays, &again);
+      RayBatch fresh;
+      fresh.Forward(m, rays, nullptr, &direct);
+      ASSERT_EQ(again.size(), direct.size());
+      for (std::size_t i = 0; i < direct.size(); ++i)
+        ASSERT_EQ(again[i], direct[i]) << "value " << i << " learned " << learned_background;
+      // The LDR model has no exposure input; the log-HDR one's LDR channels change with it.
+      EXPECT_EQ(first == again, color == ColorModel::kLdr);
+      rays.pop_back();
+      EXPECT_THROW(batch.Reexpose(m, rays, &again), Error);
+    }
 }
 
 }  // namespace
