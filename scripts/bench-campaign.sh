@@ -84,7 +84,9 @@ if (( ! foreground )); then
   nohup nice -n 19 bash "${BASH_SOURCE[0]}" "${args[@]}" >>"$log" 2>&1 &
   echo $! >"$runs_dir/campaign.pid"
   echo "bench-campaign: suite $name in the background (pid $!, nice 19); log $log; store $store"
-  echo "bench-campaign: stop it with: kill -INT $! (the run in progress is redone next time)"
+  # TERM, not INT: bash starts a background command with SIGINT ignored, and a signal ignored on
+  # entry cannot be trapped, so `kill -INT` would not reach the script (it did not, stop 64).
+  echo "bench-campaign: stop it with: kill -TERM $! (the run in progress resumes next time)"
   exit 0
 fi
 
@@ -116,7 +118,12 @@ if [[ $records != none && -d $records/results ]]; then
 fi
 
 child=0
-stop() { (( child )) && kill -INT "$child" 2>/dev/null; wait "$child" 2>/dev/null || true; exit 130; }
+stop() {
+  (( child )) && kill -INT "$child" 2>/dev/null
+  wait "$child" 2>/dev/null || true
+  echo "bench-campaign: $(date -Is) stopped by a signal; the interrupted run resumes next time"
+  exit 130
+}
 trap stop INT TERM HUP
 extra=()
 [[ -n $cache ]] && extra+=(--cache "$cache")

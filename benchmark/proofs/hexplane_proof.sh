@@ -87,6 +87,7 @@ if [[ " $parts " == *" mini "* ]]; then
     timed "$work/bench_$s.time" "$hdr4d" bench run paper --store "$work/paper.sqlite" \
       --cache "$work/cache" --methods HexPlane HDR-HexPlane 4dgs --scenes "$s" --seeds 0 \
       --iterations "$iterations" --threads "$threads" --series-points 50 --keep-checkpoints \
+      --any-code-version \
       > "$work/bench_$s.log" 2>&1 || echo "  $s: bench run failed, see $work/bench_$s.log"
     echo "  $s: $(tail -n 1 "$work/bench_$s.log")"
   done
