@@ -4,10 +4,11 @@
 #   1. dnerf: the real D-NeRF lego (SHARED/data/dnerf_lego_tiny, 100 px): HexPlane and our 4DGS
 #      (`train` without --method: 4dgs on a one-exposure LDR scene), DNERF_ITERATIONS each; test
 #      PSNR/SSIM from each run's results.json, CPU time from /usr/bin/time.
-#   2. mini: the `paper` suite's HexPlane (LDR; HDR = HexPlane*), HDR-HexPlane (LDR, LDR+HDR) and
-#      4DGS rows on the datagen `mini` scenes, seed 0, ITERATIONS each (the suite's 1024 rays and
-#      reduced grid for the grid methods), into WORKDIR/paper.sqlite (`bench run` skips what the
-#      store has: resume by running this again), then Table 1 of that store.
+#   2. mini: every Table 1 row of the `paper` suite (HexPlane: LDR, and HDR = HexPlane*;
+#      HDR-HexPlane: LDR, LDR+HDR; 4DGS, 4DGS-HDR, HDR-4DGS: LDR, LDR+HDR and the HDR head;
+#      HDR-GS: LDR, LDR+HDR) on the datagen `mini` scenes, seed 0, ITERATIONS each (the suite's
+#      1024 rays and reduced grid for the grid methods), into WORKDIR/paper.sqlite (`bench run`
+#      skips what the store has: resume by running this again), then Table 1 of that store.
 #   3. sides: a side-by-side PNG per scene: truth | HexPlane | HDR-HexPlane LDR | HDR-HexPlane
 #      LDR+HDR | 4DGS, first held-out view (ffmpeg's hstack; python3 reads the JSON).
 # Usage: bash benchmark/proofs/hexplane_proof.sh BINARY WORKDIR
@@ -76,7 +77,7 @@ EOF
 fi
 
 if [[ " $parts " == *" mini "* ]]; then
-  echo "== 2. datagen mini ($scenes): the paper suite's grid rows and 4DGS, $iterations iterations"
+  echo "== 2. datagen mini ($scenes): Table 1's rows of the paper suite, $iterations iterations"
   mkdir -p "$work/cache/datagen/mini-s0"
   for s in $scenes; do
     [ -f "$mini/$s/transforms_train.json" ] || { echo "$0: $mini/$s: no scene" >&2; exit 2; }
@@ -85,7 +86,7 @@ if [[ " $parts " == *" mini "* ]]; then
   # One scene at a time, so an interrupted pass leaves whole scenes behind it.
   for s in $scenes; do
     timed "$work/bench_$s.time" "$hdr4d" bench run paper --store "$work/paper.sqlite" \
-      --cache "$work/cache" --methods HexPlane HDR-HexPlane 4dgs --scenes "$s" --seeds 0 \
+      --cache "$work/cache" --methods HexPlane HDR-HexPlane 4dgs 4dgs-hdr hdr4dgs hdr4dgs-head hdr-gs --scenes "$s" --seeds 0 \
       --iterations "$iterations" --threads "$threads" --series-points 50 --keep-checkpoints \
       --any-code-version \
       > "$work/bench_$s.log" 2>&1 || echo "  $s: bench run failed, see $work/bench_$s.log"
