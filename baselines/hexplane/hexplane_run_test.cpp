@@ -79,6 +79,14 @@ HexPlaneTrainOptions SmallRun(const fs::path& scene, const fs::path& run, int it
   return o;
 }
 
+// HDR-HexPlane with LDR+HDR supervision, as SmallRun.
+HexPlaneTrainOptions SmallHdrHexPlaneRun(const fs::path& scene, const fs::path& run, int iterations) {
+  HexPlaneTrainOptions o = SmallRun(scene, run, iterations);
+  o.method = "hdr-hexplane";
+  o.supervision = "ldr+hdr";
+  return o;
+}
+
 // Interrupted between the schedules' events (upsampling after iterations 4, 7, 11, occupancy
 // after 5, 10, 12 of 30; counted from 0) and resumed: the same checkpoint as a run never stopped.
 TEST(HexPlaneRun, ResumeContinuesExactly) {
@@ -202,9 +210,7 @@ TEST(HexPlaneRun, RendersAtAnyTimeAndAlongTheOrbit) {
 TEST(HexPlaneRun, HdrMethodsReportTableOneMetricsAndTheSlope) {
   TempDir dir;
   MakeHdrScene(dir / "scene");
-  HexPlaneTrainOptions o = SmallRun(dir / "scene", dir / "hdr", 30);
-  o.method = "hdr-hexplane";
-  o.supervision = "ldr+hdr";
+  HexPlaneTrainOptions o = SmallHdrHexPlaneRun(dir / "scene", dir / "hdr", 30);
   const HexPlaneTrainSummary s = TrainHexPlane(o);
   for (const char* key : {"psnr", "ssim", "flip", "mu_psnr", "mu_ssim", "pu21_psnr", "hdr_flip",
                           "hdr_log_slope", "hdr_log_corr"})
@@ -230,10 +236,7 @@ TEST(HexPlaneRun, HdrMethodsReportTableOneMetricsAndTheSlope) {
 TEST(HexPlaneRun, BracketsOfAShotRenderAsSingleViews) {
   TempDir dir;
   MakeHdrScene(dir / "scene");
-  HexPlaneTrainOptions o = SmallRun(dir / "scene", dir / "run", 10);
-  o.method = "hdr-hexplane";
-  o.supervision = "ldr+hdr";
-  TrainHexPlane(o);
+  TrainHexPlane(SmallHdrHexPlaneRun(dir / "scene", dir / "run", 10));
   const LoadedHexPlaneRun run = LoadHexPlaneRun(dir / "run");
   std::vector<BracketRenderer::ViewAt> views;
   for (const Frame& f : run.dataset.test) views.push_back({f.camera, float(f.time), f.exposure});
