@@ -15,7 +15,8 @@
 # Settings from the environment: PARTS ["dnerf mini sides"], ITERATIONS [300], DNERF_ITERATIONS
 # [500], RAYS and GRID (D-NeRF HexPlane: rays, voxels at start and end) [1024, "32768 262144",
 # as the suite's grid rows; the reference's: 4096, "262144 8000000"], THREADS [2], SCENES [the
-# eight], MINI (the generated scenes) [/work/data/mini], SHARED [/work/shared].
+# eight], METHODS (the paper suite's methods of part 2) [every Table 1 row's], MINI (the generated
+# scenes) [/work/data/mini], SHARED [/work/shared].
 # A Gaussian run's config.json names its method under "hdr" (a grid run's at the top).
 # WORKDIR/cache/datagen/mini-s0/<scene> link to MINI's scenes, so `bench run` finds them
 # generated (nothing is written into MINI).
@@ -31,6 +32,7 @@ parts="${PARTS:-dnerf mini sides}"
 iterations="${ITERATIONS:-300}" dnerf_iterations="${DNERF_ITERATIONS:-500}"
 rays="${RAYS:-1024}" grid="${GRID:-32768 262144}" threads="${THREADS:-2}"
 scenes="${SCENES:-airplane deer hook jump lego mutant standup tank}"
+methods="${METHODS:-HexPlane HDR-HexPlane 4dgs 4dgs-hdr hdr4dgs hdr4dgs-head hdr-gs}"
 mini="${MINI:-/work/data/mini}" shared="${SHARED:-/work/shared}"
 mkdir -p "$work"
 work="$(realpath "$work")"
@@ -86,7 +88,7 @@ if [[ " $parts " == *" mini "* ]]; then
   # One scene at a time, so an interrupted pass leaves whole scenes behind it.
   for s in $scenes; do
     timed "$work/bench_$s.time" "$hdr4d" bench run paper --store "$work/paper.sqlite" \
-      --cache "$work/cache" --methods HexPlane HDR-HexPlane 4dgs 4dgs-hdr hdr4dgs hdr4dgs-head hdr-gs --scenes "$s" --seeds 0 \
+      --cache "$work/cache" --methods $methods --scenes "$s" --seeds 0 \
       --iterations "$iterations" --threads "$threads" --series-points 50 --keep-checkpoints \
       --any-code-version \
       > "$work/bench_$s.log" 2>&1 || echo "  $s: bench run failed, see $work/bench_$s.log"
