@@ -100,42 +100,49 @@ if [[ " $parts " == *" mini "* ]]; then
   echo "  tables: $work/tables"
 fi
 
-stack() {  # OUT IN...: the images side by side (ffmpeg), or a note when one is missing
+stack() {  # OUT IN...: the images that exist side by side (ffmpeg); says which were missing
   local out="$1"
   shift
-  for f in "$@"; do [ -f "$f" ] || { echo "  $out: $f missing, not written"; return; }; done
-  local args=()
-  for f in "$@"; do args+=(-i "$f"); done
-  ffmpeg -loglevel error -y "${args[@]}" -filter_complex "hstack=inputs=$#" "$out"
+  local args=() n=0
+  for f in "$@"; do
+    if [ -f "$f" ]; then
+      args+=(-i "$f")
+      n=$((n + 1))
+    else
+      echo "  $out: no $f (its panel left out)"
+    fi
+  done
+  (( n >= 2 )) || { echo "  $out: fewer than two images, not written"; return; }
+  ffmpeg -loglevel error -y "${args[@]}" -filter_complex "hstack=inputs=$n" "$out"
   echo "  $out"
 }
 
 if [[ " $parts " == *" sides "* ]]; then
-  echo "== 3. side-by-side PNGs (truth | HexPlane | HDR-HexPlane LDR | LDR+HDR | 4DGS): $work/sides"
+  echo "== 3. side-by-side PNGs at ${iterations}it (truth | HexPlane | HDR-HexPlane LDR | LDR+HDR |" \
+    "HDR-4DGS LDR | 4DGS): $work/sides"
   mkdir -p "$work/sides"
   d="$work/dnerf"
   first="$(ls "$d/hexplane/renders/test" 2> /dev/null | grep '\.png$' | head -n 1 || true)"
   [ -n "$first" ] && stack "$work/sides/dnerf_lego.png" \
     "$shared/data/dnerf_lego_tiny/images/$first" "$d/hexplane/renders/test/$first" \
     "$d/4dgs/renders/test/$first"
-  # The bench runs: RUNS/<id>/train/config.json names the method, supervision and scene.
+  # The bench runs: RUNS/<id>/spec.json labels each run (method, supervision, scene, budget).
   for s in $scenes; do
     declare -A dir=()
-    for c in "$work"/paper.sqlite.runs/*/train/config.json; do
-      [ -f "$c" ] || continue
-      key="$(python3 -c 'import json,sys; c=json.load(open(sys.argv[1]))
-h=c.get("hexplane",{}); m=c.get("method") or c.get("hdr",{}).get("method","")
-sup="ldr+hdr" if h.get("ldr_loss") and h.get("hdr_loss") else "hdr" if h.get("hdr_loss") else "ldr"
-print(c["data"].rstrip("/").rsplit("/",1)[-1], m, sup)' "$c")"
-      read -r scene method sup <<< "$key"
-      [ "$scene" = "$s" ] && dir["$method/$sup"]="$(dirname "$(dirname "$c")")/renders"
+    for spec in "$work"/paper.sqlite.runs/*/spec.json; do
+      [ -d "$(dirname "$spec")/renders" ] || continue
+      key="$(python3 -c 'import json,sys; l=json.load(open(sys.argv[1]))["labels"][0]
+print(l["scene"], l["budget"], l["method"] + "/" + l["supervision"])' "$spec")"
+      read -r scene budget row <<< "$key"
+      [[ $scene == "$s" && $budget == "${iterations}it" ]] && dir["$row"]="$(dirname "$spec")/renders"
     done
     first="$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["frames"][0]["file_path"])' \
       "$mini/$s/transforms_test.json")"
-    stack "$work/sides/$s.png" "$mini/$s/$first" "${dir[hexplane/ldr]:-none}/$(basename "$first")" \
-      "${dir[hdr-hexplane/ldr]:-none}/$(basename "$first")" \
-      "${dir[hdr-hexplane/ldr+hdr]:-none}/$(basename "$first")" \
-      "${dir[4dgs/ldr]:-none}/$(basename "$first")"
+    name="$(basename "$first")"
+    stack "$work/sides/${s}_${iterations}it.png" "$mini/$s/$first" \
+      "${dir[HexPlane/ldr]:-none}/$name" "${dir[HDR-HexPlane/ldr]:-none}/$name" \
+      "${dir[HDR-HexPlane/ldr+hdr]:-none}/$name" "${dir[hdr4dgs/ldr]:-none}/$name" \
+      "${dir[4dgs/ldr]:-none}/$name"
     unset dir
   done
 fi
