@@ -101,7 +101,7 @@ bool BracketRenderer::SameShot(const ViewAt& a, const ViewAt& b) {
 
 void BracketRenderer::Render(std::size_t view, std::vector<float>* ldr, std::vector<float>* hdr) {
   if (view >= views_.size()) Fail("hexplane: view {} of a split of {}", view, views_.size());
-  const auto held = std::find(shot_views_.begin(), shot_views_.end(), view);
+  auto held = std::find(shot_views_.begin(), shot_views_.end(), view);
   if (held == shot_views_.end()) {
     shot_views_.clear();
     std::vector<double> exposures;
@@ -113,9 +113,9 @@ void BracketRenderer::Render(std::size_t view, std::vector<float>* ldr, std::vec
     RenderBrackets(m_, views_[view].camera, views_[view].time01, exposures, -1, &shot_ldr_,
                    &shot_hdr_);
     ++shots_rendered_;
+    held = std::find(shot_views_.begin(), shot_views_.end(), view);
   }
-  const std::size_t k =
-      std::size_t(std::find(shot_views_.begin(), shot_views_.end(), view) - shot_views_.begin());
+  const std::size_t k = std::size_t(held - shot_views_.begin());
   if (ldr) {
     if (shot_ldr_.empty()) {
       ldr->clear();

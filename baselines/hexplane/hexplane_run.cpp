@@ -162,8 +162,7 @@ int RenderSplit(const HexPlaneRenderOptions& o, const LoadedHexPlaneRun& run,
     if (hdr_name.extension() != ".exr") hdr_name += ".exr";
     const bool with_hdr = o.write_hdr && hdr_written.insert(hdr_name).second;
     const auto start = std::chrono::steady_clock::now();
-    renderer.Render(i, &ldr, with_hdr ? &hdr : nullptr);
-    if (!with_hdr) hdr.clear();
+    renderer.Render(i, &ldr, with_hdr ? &hdr : nullptr);  // WriteImages skips an empty exr path
     written += WriteImages(ldr, hdr, at[i].camera.intrinsics.width, at[i].camera.intrinsics.height,
                            out / name, with_hdr ? out / hdr_name : fs::path(), o.png_compression,
                            &batch);
