@@ -148,9 +148,16 @@ Finding OneFinding(const TableSpec& spec, const Suite& suite, const std::vector<
   bool reference_has_spread = false;
   for (const RowResult& r : t.rows) {
     if (r.added) continue;
+    const bool has = col < t.columns.size() && r.cells[col].has_value;
+    if (!r.is_reference && !spec.finding_rows.empty() &&
+        std::find(spec.finding_rows.begin(), spec.finding_rows.end(), r.label) == spec.finding_rows.end())
+      continue;
+    if (!r.is_reference && !has && spec.layout == "main") {
+      f.left_out.push_back(r.label);
+      continue;
+    }
     const TableRow row{r.label, r.method, r.supervision};
     values.push_back(FindingRowValues(runs, row, t.scenes, metric, BudgetOf(suite, o), VariantOf(suite, o)));
-    const bool has = col < t.columns.size() && r.cells[col].has_value;
     if (r.is_reference) {
       f.reference_has_value = has;
       f.reference_mean = has ? r.cells[col].mean : 0;
@@ -183,6 +190,8 @@ Finding OneFinding(const TableSpec& spec, const Suite& suite, const std::vector<
         f.against[k].mean = m.mean;
   }
   Decide(&f);
+  if (!f.left_out.empty())
+    f.why += fmt::format("; left out, no runs with this metric: {}", fmt::join(f.left_out, ", "));
   if (col == t.columns.size())  // a key no run of the table has (mistyped, or not computed)
     f.why = fmt::format("no run of the table has the metric '{}'", metric);
   return f;
@@ -220,10 +229,10 @@ std::vector<Finding> BuildFindings(const Suite& suite, const std::vector<RunSumm
   for (const TableSpec& spec : suite.tables) {
     if (!options.table.empty() && spec.id != options.table) continue;
     found = true;
-    if (spec.layout != "ablation") {
+    if (spec.layout != "ablation" && spec.finding.empty()) {
       if (!options.table.empty())
-        Fail("bench findings: table '{}' of suite '{}' is no ablation table (a finding is an "
-             "ablation's reference row against the others)", spec.id, suite.name);
+        Fail("bench findings: table '{}' of suite '{}' is a main table that words no finding (its "
+             "\"finding\" key; ablation tables state theirs by their reference row)", spec.id, suite.name);
       continue;
     }
     for (const std::string& metric : options.metrics)

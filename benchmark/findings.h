@@ -57,6 +57,7 @@ struct Finding {
   std::vector<FindingComparison> against;
   std::string verdict;  // "holds", "does not hold", "undecided"
   std::string why;      // the deciding comparisons in words
+  std::vector<std::string> left_out;  // main tables: rows without a run of the metric
   // Coverage: scenes of the table with runs of every row, the seeds the rows share.
   std::vector<std::string> scenes_covered;
   std::size_t table_scenes = 0;
@@ -68,8 +69,11 @@ std::string FindingClaim(const TableSpec& spec);
 // The reference row as the findings show it: its mean, with its seed spread where there is one.
 std::string ReferenceText(const Finding& f);
 
-// Every ablation table of the suite (or options.table) x options.metrics. Throws hdr4d::Error
-// for a table id that is not in the suite or is no ablation table, or for no metrics.
+// Every ablation table of the suite, and every main table that words a finding (or
+// options.table), x options.metrics. A main table compares its reference with its
+// finding_rows (every other row when it names none) and leaves out, by name, the rows without
+// a run of the metric (the paper's GPU baselines, HDR-only rows on an LDR metric). Throws
+// hdr4d::Error for a table id that is not in the suite or has no finding, or for no metrics.
 std::vector<Finding> BuildFindings(const Suite& suite, const std::vector<RunSummary>& runs,
                                    const FindingsOptions& options);
 

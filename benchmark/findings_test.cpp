@@ -212,11 +212,52 @@ TEST(Findings, ThroughAStoreAndBadTables) {
     BuildFindings(s, {}, o);
     ADD_FAILURE() << "a main table gave findings";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("no ablation table"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("words no finding"), std::string::npos) << e.what();
   }
   o.table = "";
   o.metrics = {};
   EXPECT_THROW(BuildFindings(s, {}, o), Error);
+}
+
+// Table 1's kind of finding: a main table that words one compares its reference with the rows it
+// names (the paper's baselines, not its own variants) and leaves out, by name, the rows that have
+// no run of the metric (GPU-only baselines no suite runs).
+TEST(Findings, AMainTableWithAFindingComparesItsBaselinesAndLeavesOutRowsWithoutRuns) {
+  const Suite s = ParseSuite(nlohmann::json::parse(R"({
+    "name": "f",
+    "scenes": [{"name": "s1", "group": "fixed", "path": "a"}, {"name": "s2", "group": "fixed", "path": "b"}],
+    "methods": [{"name": "ref"}, {"name": "x"}, {"name": "y"}],
+    "seeds": [0, 1, 2],
+    "budgets": [{"iterations": 10}],
+    "tables": [{"id": "table1", "scenes": "fixed", "reference": "Ours", "finding": "Ours beats every baseline",
+       "finding_rows": ["X", "GPU-only"], "rows": [
+        {"label": "X", "method": "x", "supervision": "ldr"},
+        {"label": "GPU-only", "method": "HDR-NeRF", "supervision": "ldr"},
+        {"label": "Ours", "method": "ref", "supervision": "ldr"},
+        {"label": "Ours, variant", "method": "y", "supervision": "ldr"}]}]})"), "/x/f.json");
+  FindingsOptions o;
+  o.metrics = {"psnr"};
+  // Y (our own variant) is better than the reference but not a baseline: not compared.
+  const std::vector<Finding> f = BuildFindings(s, Runs(-1.0, +2.0), o);
+  ASSERT_EQ(f.size(), 1u);
+  EXPECT_EQ(f[0].claim, "Ours beats every baseline");
+  EXPECT_EQ(f[0].verdict, "holds") << f[0].why;
+  ASSERT_EQ(f[0].against.size(), 1u);
+  EXPECT_EQ(f[0].against[0].label, "X");
+  EXPECT_EQ(f[0].left_out, (std::vector<std::string>{"GPU-only"}));
+  EXPECT_NE(f[0].why.find("left out, no runs with this metric: GPU-only"), std::string::npos) << f[0].why;
+  EXPECT_EQ(f[0].scenes_covered, (std::vector<std::string>{"s1", "s2"}));
+  EXPECT_EQ(BuildFindings(s, Runs(+1.0, -2.0), o).at(0).verdict, "does not hold");
+
+  nlohmann::json bad = nlohmann::json::parse(R"({"name": "f", "scenes": [{"name": "s1", "path": "a"}],
+    "methods": [{"name": "ref"}], "budgets": [{"iterations": 10}], "tables": [{"id": "t", "finding_rows": ["R"],
+    "rows": [{"label": "R", "method": "ref", "supervision": "ldr"}]}]})");
+  try {
+    ParseSuite(bad, "/x/bad.json");
+    ADD_FAILURE() << "the reference accepted as a finding row";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("finding_rows"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Findings, DefaultClaimAndTheReportSection) {

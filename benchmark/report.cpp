@@ -219,7 +219,7 @@ ReportSummary WriteReport(const Suite& suite, const ResultsStore& store, const R
   const std::string findings =
       FindingsHtml(suite, runs, options.tables, &summary.images, &summary.tables);
   body += "<h2 id=\"findings\">Findings</h2>\n" +
-          (findings.empty() ? std::string("<p>The suite has no ablation table: no finding to state.</p>\n") : findings);
+          (findings.empty() ? std::string("<p>No table of the suite states a finding (no ablation table, no main table with a finding).</p>\n") : findings);
 
   body += "<h2 id=\"pareto\">Run time against error</h2>\n";
   // The charts and the renders show the rows --methods selects, as the tables do.

@@ -44,8 +44,8 @@ std::string FindingsHtml(const Suite& suite, const std::vector<RunSummary>& runs
   const std::vector<Finding> findings = BuildFindings(suite, runs, o);
   if (findings.empty()) return "";
   std::string h =
-      "<p>Per ablation table (one per camera pipeline), whether its reference row beats each "
-      "other row beyond the seed noise (paired test, pairs by scene and seed): <b>holds</b>, "
+      "<p>Per ablation table (one per camera pipeline), and per main table that words a finding, whether "
+      "its reference row beats each other row beyond the seed noise (paired test, pairs by scene and seed): <b>holds</b>, "
       "<b>does not hold</b> (some row is better) or <b>undecided</b>; <code>hdr4d bench "
       "findings</code> prints the same lines.</p>\n<table><tr><th>finding</th><th>pipeline</th>"
       "<th>metric</th><th>verdict</th><th>reference</th><th>each other row (row - reference)</th>"

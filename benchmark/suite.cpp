@@ -272,7 +272,7 @@ std::vector<TableRow> ParseRows(const Obj& t) {
 
 TableSpec ParseTable(const nlohmann::json& j, const std::string& where) {
   const Obj t(j, where);
-  t.OnlyKeys({"id", "title", "layout", "scenes", "rows", "reference", "note", "finding"});
+  t.OnlyKeys({"id", "title", "layout", "scenes", "rows", "reference", "note", "finding", "finding_rows"});
   TableSpec spec;
   spec.id = t.Name("id", "", true);
   spec.title = t.String("title", spec.id);
@@ -287,6 +287,19 @@ TableSpec ParseTable(const nlohmann::json& j, const std::string& where) {
   if (std::none_of(spec.rows.begin(), spec.rows.end(),
                    [&](const TableRow& r) { return r.label == spec.reference; }))
     Fail("{}: reference '{}' is not a row label", t.At("reference"), spec.reference);
+  if (t.Has("finding_rows")) {
+    const nlohmann::json& list = t.Raw("finding_rows");
+    if (!list.is_array() || list.empty())
+      Fail("{}: must be a non-empty list of row labels, got {}", t.At("finding_rows"), Obj::Short(list));
+    for (const nlohmann::json& item : list) {
+      if (!item.is_string()) Fail("{}: must hold row labels (strings), got {}", t.At("finding_rows"), Obj::Short(item));
+      spec.finding_rows.push_back(item.get<std::string>());
+    }
+  }
+  for (const std::string& label : spec.finding_rows)
+    if (label == spec.reference ||
+        std::none_of(spec.rows.begin(), spec.rows.end(), [&](const TableRow& r) { return r.label == label; }))
+      Fail("{}: '{}' is not a row label other than the reference", t.At("finding_rows"), label);
   return spec;
 }
 

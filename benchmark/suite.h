@@ -71,8 +71,11 @@ struct TableSpec {
   std::string reference;  // row label the paired tests compare with (default: the last row)
   std::string note;
   // The paper's finding the table tests, in words (`bench findings`; "" = "<reference> beats
-  // each other row").
+  // each other row"). A main table takes part in `bench findings` only when it words one.
   std::string finding;
+  // The rows the finding compares the reference with (empty: every other row); a main table
+  // leaves out the paper's own variants this way (Table 1's HDR-4DGS† is no baseline).
+  std::vector<std::string> finding_rows;
 };
 
 struct Suite {
