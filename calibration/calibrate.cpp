@@ -100,12 +100,14 @@ std::optional<Rig> RunGeometry(const Capture& capture, const CalibrateOptions& o
     source = fmt::format("COLMAP 3.8 (SIFT on CPU, exhaustive matching, incremental mapping), rung {} of the "
                          "registration ladder ({}; tried: {})", ladder.rung, ladder.rung_name,
                          fmt::join(ladder.attempts, "; "));
+    if (!ladder.cross_check.empty()) source += "; " + ladder.cross_check;
     if (ladder.weakest_observations < kWeakCameraObservations)
       notes->push_back(fmt::format("a rig camera has only {} triangulated observations (under {}): too few to pin its "
                                    "focal length and distortion by self-calibration, and so few that the whole model can be "
-                                   "wrong (a 320x240 rig with 3 hand-held views came out mirrored, 34 deg off); "
-                                   "hand-held views of the scene (static/extra/) give COLMAP more",
-                                   ladder.weakest_observations, kWeakCameraObservations));
+                                   "wrong (a 320x240 rig with 3 hand-held views came out mirrored); {}; hand-held views of "
+                                   "the scene (static/extra/) give COLMAP more",
+                                   ladder.weakest_observations, kWeakCameraObservations,
+                                   ladder.cross_check.empty() ? "not cross-checked" : ladder.cross_check));
     if (!ladder.unregistered.empty())
       notes->push_back(fmt::format("COLMAP left {} unregistered after every rung of the registration ladder",
                                    fmt::join(ladder.unregistered, ", ")));

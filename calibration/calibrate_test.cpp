@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 #include <fstream>
+#include <numbers>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
@@ -13,6 +14,8 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include "calibration/capture.h"
+#include "calibration/registration_ladder.h"
 #include "core/geometry/colmap_model.h"
 #include "core/radiometry/crf.h"
 #include "core/dataset/dataset.h"
@@ -546,6 +549,100 @@ TEST(Calibrate, RegistrationLadderSequenceRungMatchesAcrossCamerasAtOneTime) {
   EXPECT_NE(report.find("triangulated observations (under 300)"), std::string::npos) << report;
   EXPECT_NE(result.err.find("triangulated observations (under 300)"), std::string::npos) << result.err;
   EXPECT_FALSE(fs::exists(dir / "pairs.txt"));
+}
+
+// `model` with camera `turned`'s image rotated by `degrees` about its viewing axis' normal: a
+// model whose rig cameras are turned to each other otherwise (as a mirrored model's are).
+fs::path TurnedModel(const fs::path& model, const fs::path& out, int turned, double degrees) {
+  ColmapModel m = ReadColmapModel(model);
+  ColmapImage& image = m.images.at(turned);
+  image.cam_from_world_rotation =
+      Eigen::AngleAxisd(degrees * std::numbers::pi / 180, Eigen::Vector3d::UnitY()) * image.cam_from_world_rotation;
+  WriteColmapModel(out, m, ColmapFormat::kText);
+  return out;
+}
+
+// A COLMAP whose mapper returns models[r] on rung r + 1 (the last one for later rungs).
+fs::path RungColmap(const fs::path& dir, const std::vector<fs::path>& models) {
+  std::string cases;
+  for (std::size_t r = 0; r < models.size(); ++r)
+    cases += fmt::format("  */rung{}/*) cp -r '{}' \"$out/0\";;\n", r + 1, models[r].string());
+  return FakeColmap(dir, "step=$1; shift; out=\n"
+                         "while [ $# -gt 0 ]; do case \"$1\" in --output_path) out=$2;; esac; shift; done\n"
+                         "[ \"$step\" = mapper ] || exit 0\n"
+                         "echo \"$out\" >> '" + (dir / "mapped.txt").string() + "'\n"
+                         "case \"$out\" in\n" + cases +
+                         "  *) cp -r '" + models.back().string() + "' \"$out/0\";; esac");
+}
+
+// Issue 54: a weak model (few observations per rig camera) is checked against the next rung's.
+// A mirrored first model is passed over for the two that agree, and so is a flattened one (its
+// focal lengths 40% short); when no two rungs agree, calibrate stops with an error naming the
+// rungs instead of writing a model it cannot trust.
+TEST(Calibrate, RegistrationLadderCrossChecksAWeakModel) {
+  testing::TempDir dir;
+  WriteCapture(dir / "capture", dir / "model");
+  const fs::path turned = TurnedModel(dir / "model", dir / "turned", 2, 40);
+  auto result = testing::RunHdr4d(GeometryArgs(dir / "capture", dir / "out",
+                                               RungColmap(dir.path(), {turned, dir / "model", dir / "model"})));
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  std::string report = testing::ReadTextFile(dir / "out" / "report.md");
+  EXPECT_NE(report.find("rung 2 of the registration ladder"), std::string::npos) << report;
+  EXPECT_NE(report.find("checked against rung 3's"), std::string::npos) << report;
+  EXPECT_NE(report.find("rungs 1 and 2: 40.00 deg, focal 0.0%"), std::string::npos) << report;
+
+  ColmapModel flat = ReadColmapModel(dir / "model");
+  for (auto& [id, camera] : flat.cameras) camera.params[0] *= 0.6;
+  WriteColmapModel(dir / "flat", flat, ColmapFormat::kText);
+  result = testing::RunHdr4d(GeometryArgs(dir / "capture", dir / "out1",
+                                          RungColmap(dir.path(), {dir / "flat", dir / "model", dir / "model"})));
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  report = testing::ReadTextFile(dir / "out1" / "report.md");
+  EXPECT_NE(report.find("rung 2 of the registration ladder"), std::string::npos) << report;
+  EXPECT_NE(report.find("rungs 1 and 2: 0.00 deg, focal 40.0%"), std::string::npos) << report;
+
+  // Every rung a model of its own: five mapper runs, then the error, and no output.
+  std::vector<fs::path> models;
+  for (int r = 0; r < 5; ++r)
+    models.push_back(TurnedModel(dir / "model", dir / fmt::format("turned{}", r), 1 + r % 3, 10.0 * (r + 1)));
+  fs::remove(dir / "mapped.txt");
+  result = testing::RunHdr4d(GeometryArgs(dir / "capture", dir / "out2", RungColmap(dir.path(), models)));
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_NE(result.err.find("their models disagree"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("rungs 1, 2, 3, 4, 5"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("--colmap-model"), std::string::npos) << result.err;
+  EXPECT_FALSE(fs::exists(dir / "out2"));
+  std::istringstream mapped(testing::ReadTextFile(dir / "mapped.txt"));
+  int mappers = 0;
+  for (std::string line; std::getline(mapped, line);) ++mappers;
+  EXPECT_EQ(mappers, 5);
+}
+
+// The comparison itself: blind to a similarity between the models, the largest pair's angle and
+// the largest focal ratio.
+TEST(RegistrationLadder, RigModelDisagreementIgnoresTheSimilarity) {
+  testing::TempDir dir;
+  WriteCapture(dir / "capture", dir / "model");
+  const Capture capture = ScanCapture(dir / "capture");
+  const ColmapModel model = ReadColmapModel(dir / "model");
+  ColmapModel moved = model;
+  const Eigen::Quaterniond g(Eigen::AngleAxisd(1.1, Eigen::Vector3d(1, 2, 3).normalized()));
+  for (auto& [id, image] : moved.images) image.cam_from_world_rotation = image.cam_from_world_rotation * g;
+  for (auto& [id, image] : moved.images) image.cam_from_world_translation *= 3;
+  EXPECT_NEAR(RigModelDisagreement(capture, model, moved).rotation_deg, 0, 1e-9);
+  EXPECT_TRUE(RigModelDisagreement(capture, model, moved).Agrees());
+  const ColmapModel turned = ReadColmapModel(TurnedModel(dir / "model", dir / "turned", 3, 25));
+  EXPECT_NEAR(RigModelDisagreement(capture, model, turned).rotation_deg, 25, 1e-9);
+  EXPECT_FALSE(RigModelDisagreement(capture, model, turned).Agrees());
+  ColmapModel longer = model;
+  longer.cameras.at(2).params[0] *= 1.2;
+  EXPECT_NEAR(RigModelDisagreement(capture, longer, model).focal, 0.2, 1e-9);
+  EXPECT_TRUE(RigModelDisagreement(capture, longer, model).Agrees());
+  longer.cameras.at(2).params[0] *= 1.1;
+  EXPECT_FALSE(RigModelDisagreement(capture, longer, model).Agrees());
+  ColmapModel missing = model;
+  missing.images.erase(2);
+  EXPECT_THROW(RigModelDisagreement(capture, model, missing), Error);
 }
 
 // Running, not a zombie nobody has reaped yet.

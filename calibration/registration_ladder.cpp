@@ -5,8 +5,10 @@
 #include <spdlog/spdlog.h>
 
 #include <optional>
+#include <ranges>
 #include <set>
 
+#include "calibration/truth_comparison.h"
 #include "core/geometry/colmap_model.h"
 #include "core/util/error.h"
 
@@ -152,10 +154,51 @@ fs::path RunLadderRung(const Capture& capture, const fs::path& workspace,
 
 }  // namespace
 
+namespace {
+
+// A rig camera's image in a model: its static image, else its first.
+const ColmapImage& RigCameraImage(const CaptureCamera& camera, const ColmapModel& model) {
+  const ColmapImage* found = nullptr;
+  for (const auto& [id, image] : model.images) {
+    if (image.name.rfind(camera.name + "/", 0) != 0) continue;
+    const bool sequence = image.name.find("/seq_") != std::string::npos;
+    if (!found || (!sequence && found->name.find("/seq_") != std::string::npos)) found = &image;
+  }
+  if (!found) Fail("camera {}: no registered image in one of the models compared", camera.name);
+  return *found;
+}
+
+// A model that registered everything, kept for the second opinion.
+struct CompleteModel {
+  LadderResult result;
+  ColmapModel model;
+};
+
+}  // namespace
+
+ModelDisagreement RigModelDisagreement(const Capture& capture, const ColmapModel& a, const ColmapModel& b) {
+  ModelDisagreement d;
+  std::vector<Eigen::Matrix3d> ra, rb;
+  for (const CaptureCamera& camera : capture.cameras) {
+    const ColmapImage& ia = RigCameraImage(camera, a);
+    const ColmapImage& ib = RigCameraImage(camera, b);
+    ra.push_back(ia.cam_from_world_rotation.normalized().toRotationMatrix());
+    rb.push_back(ib.cam_from_world_rotation.normalized().toRotationMatrix());
+    const double fa = a.cameras.at(ia.camera_id).Pinhole().fx, fb = b.cameras.at(ib.camera_id).Pinhole().fx;
+    d.focal = std::max(d.focal, std::abs(fa / std::max(fb, 1e-9) - 1));
+  }
+  for (std::size_t i = 0; i < ra.size(); ++i)
+    for (std::size_t j = i + 1; j < ra.size(); ++j)
+      d.rotation_deg = std::max(d.rotation_deg, RotationAngleDegrees(ra[i] * ra[j].transpose(), rb[i] * rb[j].transpose()));
+  return d;
+}
+
 LadderResult RegisterWithLadder(const Capture& capture, const fs::path& workspace, const ColmapRunOptions& options) {
   LadderResult best;
   std::optional<std::size_t> best_missing;
   std::optional<ColmapNoModel> last_error;
+  std::vector<CompleteModel> complete;  // models that registered everything, awaiting a second opinion
+  std::vector<std::string> comparisons;
   const auto& ladder = RegistrationLadder();
   const bool have_frames = !capture.cameras.front().frames.empty();
   for (std::size_t r = 0; r < ladder.size(); ++r) {
@@ -163,28 +206,64 @@ LadderResult RegisterWithLadder(const Capture& capture, const fs::path& workspac
     if (rung.sequence_frames && !have_frames) break;
     try {
       const fs::path folder = RunLadderRung(capture, workspace, options, r);
-      const ColmapModel model = ReadColmapModel(folder);
+      ColmapModel model = ReadColmapModel(folder);
       const std::vector<std::string> missing = Unregistered(capture, model);
       const int weakest = WeakestCameraObservations(capture, model);
       best.attempts.push_back(fmt::format("{}. {}: {}, weakest camera {} observations", r + 1, rung.name,
                                           missing.empty() ? "all registered" : fmt::format("missing {}", fmt::join(missing, ", ")),
                                           weakest));
+      LadderResult here = best;
+      here.model_folder = folder;
+      here.rung = static_cast<int>(r + 1);
+      here.rung_name = rung.name;
+      here.unregistered = missing;
+      here.weakest_observations = weakest;
+      if (missing.empty()) {
+        // The defaults' model with strong cameras is taken as it is; any other needs another rung
+        // to agree.
+        if (complete.empty() && r == 0 && weakest >= kWeakCameraObservations) return here;
+        for (CompleteModel& earlier : complete) {
+          const ModelDisagreement apart = RigModelDisagreement(capture, earlier.model, model);
+          comparisons.push_back(fmt::format("rungs {} and {}: {:.2f} deg, focal {:.1f}%", earlier.result.rung, r + 1,
+                                            apart.rotation_deg, 100 * apart.focal));
+          if (apart.Agrees()) {
+            earlier.result.attempts = best.attempts;
+            earlier.result.cross_check = fmt::format(
+                "the model of rung {} was checked against rung {}'s: they agree (compared: {})", earlier.result.rung,
+                r + 1, fmt::join(comparisons, "; "));
+            return earlier.result;
+          }
+        }
+        complete.push_back({here, std::move(model)});
+      }
       // Fewer missing wins; at equal, the model whose weakest camera has more observations.
       if (!best_missing || missing.size() < *best_missing ||
           (missing.size() == *best_missing && weakest > best.weakest_observations)) {
         best_missing = missing.size();
-        best.model_folder = folder;
-        best.rung = static_cast<int>(r + 1);
-        best.rung_name = rung.name;
-        best.unregistered = missing;
-        best.weakest_observations = weakest;
+        const std::vector<std::string> attempts = best.attempts;
+        best = here;
+        best.attempts = attempts;
       }
-      if (missing.empty()) return best;
     } catch (const ColmapNoModel& e) {
       best.attempts.push_back(fmt::format("{}. {}: no model", r + 1, rung.name));
       last_error = e;
     }
     spdlog::info("calibrate: COLMAP rung {} ({}) left {}; trying the next", r + 1, rung.name, best.attempts.back());
+  }
+  if (complete.size() > 1)
+    Fail("{}: COLMAP registered every image on rungs {} of the registration ladder, but their models disagree on the "
+         "rig ({}; right models agree within {} deg and {}% focal): at least one is mirrored or flattened and nothing "
+         "tells which. Add hand-held views (static/extra/) that overlap neighbouring rig cameras, or give a model you "
+         "trust with --colmap-model (tried: {})",
+         capture.root.string(),
+         fmt::join(complete | std::views::transform([](const CompleteModel& c) { return c.result.rung; }), ", "),
+         fmt::join(comparisons, "; "), kModelAgreementDegrees, 100 * kModelAgreementFocal, fmt::join(best.attempts, "; "));
+  if (complete.size() == 1) {
+    LadderResult only = complete.front().result;
+    only.attempts = best.attempts;
+    only.cross_check = fmt::format("the model of rung {} could not be checked: no other rung registered every image",
+                                   only.rung);
+    return only;
   }
   if (!best_missing) throw *last_error;
   return best;
