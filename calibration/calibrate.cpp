@@ -101,6 +101,9 @@ std::optional<Rig> RunGeometry(const Capture& capture, const CalibrateOptions& o
                          "registration ladder ({}; tried: {})", ladder.rung, ladder.rung_name,
                          fmt::join(ladder.attempts, "; "));
     if (!ladder.cross_check.empty()) source += "; " + ladder.cross_check;
+    if (ladder.cross_check_weak && ladder.weakest_observations >= kWeakCameraObservations)
+      notes->push_back(fmt::format("COLMAP's model could not be confirmed by an independent rung of the registration "
+                                   "ladder ({}): check the poses", ladder.cross_check));
     if (ladder.weakest_observations < kWeakCameraObservations)
       notes->push_back(fmt::format("a rig camera has only {} triangulated observations (under {}): too few to pin its "
                                    "focal length and distortion by self-calibration, and so few that the whole model can be "

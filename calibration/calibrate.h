@@ -13,6 +13,7 @@
 #include <optional>
 #include <string>
 
+#include "calibration/camera_gains.h"
 #include "calibration/hdr_fusion.h"
 #include "calibration/response_recovery.h"
 
@@ -44,6 +45,9 @@ struct CalibrateOptions {
   bool focal_multistart = true;
   bool per_camera_response = false;  // each camera its own curve even when they look alike
   bool correct_gains = true;  // divide each camera's HDR by its gains (calibration/camera_gains.h)
+  // The surface patch the gains compare, in pixels of the camera that sees it smallest (0: a
+  // 3x3 window in every camera, as before).
+  double gain_footprint_pixels = kGainFootprintPixels;
   bool show_progress = true;
 };
 

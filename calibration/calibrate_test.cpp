@@ -141,7 +141,9 @@ SyntheticRig WriteCapture(const fs::path& root, const fs::path& model_folder, bo
     model.points[p.id] = p;
   }
   // Each camera's radiance: noise, with the points painted as 3x3 patches of their own radiance
-  // where they project (the surfaces the cameras share).
+  // where they project (the surfaces the cameras share). Only those 3x3 patches are one surface
+  // seen by every camera, so the gains' tests sample 3x3 windows (kThreeByThreeGains); the wider
+  // same-surface patch of the default is tested on a rendered plane (camera_gains_test.cpp).
   std::vector<std::array<double, 3>> point_radiance;
   for (std::size_t i = 0; i < model.points.size(); ++i)
     point_radiance.push_back({std::exp(log_r(rng)), std::exp(log_r(rng)), std::exp(log_r(rng))});
@@ -192,6 +194,9 @@ SyntheticRig WriteCapture(const fs::path& root, const fs::path& model_folder, bo
   return rig;
 }
 
+// This rig's shared surfaces are 3x3 patches on each camera's own noise (WriteCapture).
+constexpr const char* kThreeByThreeGains = " --gain-footprint 0";
+
 double AngleDegrees(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
   return Eigen::AngleAxisd(a.transpose() * b).angle() * 180 / M_PI;
 }
@@ -228,7 +233,8 @@ TEST(Calibrate, GainsAreMeasuredOnTheEmptySceneNotUnderTheActors) {
   testing::TempDir dir;
   WriteCapture(dir / "capture", dir / "model", false, {2.2, 2.2, 2.2}, /*actor=*/true);
   const auto result = testing::RunHdr4d("calibrate --capture '" + (dir / "capture").string() + "' --out '" +
-                                        (dir / "out").string() + "' --colmap-model '" + (dir / "model").string() + "'");
+                                        (dir / "out").string() + "' --colmap-model '" + (dir / "model").string() + "'" +
+                                        kThreeByThreeGains);
   ASSERT_EQ(result.exit_code, 0) << result.err;
   const nlohmann::json report = nlohmann::json::parse(testing::ReadTextFile(dir / "out" / "calibration.json"));
   const nlohmann::json& agreement = report["camera_agreement"];
@@ -252,7 +258,7 @@ TEST(Calibrate, SyntheticRigBecomesADataset) {
   testing::WriteTextFile(dir / "capture" / "timestamps.json", R"({"0": 2.0, "1": 4.0})");
   const auto result = testing::RunHdr4d("calibrate --capture '" + (dir / "capture").string() +
                                         "' --out '" + (dir / "out").string() + "' --colmap-model '" +
-                                        (dir / "model").string() + "' --fps 10");
+                                        (dir / "model").string() + "' --fps 10" + kThreeByThreeGains);
   ASSERT_EQ(result.exit_code, 0) << result.err;
   const Dataset dataset = LoadDataset(dir / "out", {.image_check = ImageCheck::kFull});
   EXPECT_EQ(dataset.train.size(), 2u * kFrames * 3);  // cam0, cam1: 2 frames x 3 brackets
@@ -307,7 +313,8 @@ TEST(Calibrate, CamerasWithDifferentResponsesGetTheirOwnCurves) {
   testing::TempDir dir;
   const SyntheticRig truth = WriteCapture(dir / "capture", dir / "model", false, {2.2, 1.6, 2.8});
   const auto result = testing::RunHdr4d("calibrate --capture '" + (dir / "capture").string() + "' --out '" +
-                                        (dir / "out").string() + "' --colmap-model '" + (dir / "model").string() + "'");
+                                        (dir / "out").string() + "' --colmap-model '" + (dir / "model").string() + "'" +
+                                        kThreeByThreeGains);
   ASSERT_EQ(result.exit_code, 0) << result.err;
   ExpectHdrMatchesRadiance(LoadDataset(dir / "out", {.image_check = ImageCheck::kHeaders}), truth);
   const nlohmann::json report = nlohmann::json::parse(testing::ReadTextFile(dir / "out" / "calibration.json"));
@@ -509,8 +516,10 @@ TEST(Calibrate, RegistrationLadderClimbsUntilEveryCameraRegisters) {
 }
 
 // Issue 54: a camera that only the sequence frames' rung registers; that rung matches only
-// images of two different cameras, and sequence frames only with frames of the same time. A rig
-// whose cameras all register but hold few points stays on the first rung, named in the report.
+// images of two different cameras, and sequence frames only with frames of the same time. Its
+// model is weak (this rig has 40 points) and no other rung can check it, so calibrate refuses
+// it, naming the rung. A rig whose cameras all register but hold few points stays on the first
+// rung (the second agreeing), named in the report.
 TEST(Calibrate, RegistrationLadderSequenceRungMatchesAcrossCamerasAtOneTime) {
   testing::TempDir dir;
   WriteCapture(dir / "capture", dir / "model");
@@ -527,9 +536,10 @@ TEST(Calibrate, RegistrationLadderSequenceRungMatchesAcrossCamerasAtOneTime) {
                                   "  *) cp -r '" + other_rungs.string() + "' \"$out/0\";; esac");
   };
   auto result = testing::RunHdr4d(GeometryArgs(dir / "capture", dir / "out", fake(dir / "partial")));
-  ASSERT_EQ(result.exit_code, 0) << result.err;
-  std::string report = testing::ReadTextFile(dir / "out" / "report.md");
-  EXPECT_NE(report.find("rung 5 of the registration ladder (sequence frames"), std::string::npos) << report;
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_NE(result.err.find("only rung 5 of the registration ladder registered every rig camera"), std::string::npos)
+      << result.err;
+  EXPECT_FALSE(fs::exists(dir / "out"));
   std::istringstream pairs(testing::ReadTextFile(dir / "pairs.txt"));
   int listed = 0;
   for (std::string a, b; pairs >> a >> b; ++listed) {
@@ -543,7 +553,7 @@ TEST(Calibrate, RegistrationLadderSequenceRungMatchesAcrossCamerasAtOneTime) {
   fs::remove(dir / "pairs.txt");
   result = testing::RunHdr4d(GeometryArgs(dir / "capture", dir / "out2", fake(dir / "model")));
   ASSERT_EQ(result.exit_code, 0) << result.err;
-  report = testing::ReadTextFile(dir / "out2" / "report.md");
+  const std::string report = testing::ReadTextFile(dir / "out2" / "report.md");
   EXPECT_NE(report.find("rung 1 of the registration ladder (defaults; tried: 1. defaults: all registered, "
                         "weakest camera"), std::string::npos) << report;
   EXPECT_NE(report.find("triangulated observations (under 300)"), std::string::npos) << report;
@@ -562,11 +572,13 @@ fs::path TurnedModel(const fs::path& model, const fs::path& out, int turned, dou
   return out;
 }
 
-// A COLMAP whose mapper returns models[r] on rung r + 1 (the last one for later rungs).
+// A COLMAP whose mapper returns models[r] on rung r + 1 (the last one for later rungs; an empty
+// path: no model).
 fs::path RungColmap(const fs::path& dir, const std::vector<fs::path>& models) {
   std::string cases;
   for (std::size_t r = 0; r < models.size(); ++r)
-    cases += fmt::format("  */rung{}/*) cp -r '{}' \"$out/0\";;\n", r + 1, models[r].string());
+    cases += models[r].empty() ? fmt::format("  */rung{}/*) ;;\n", r + 1)
+                               : fmt::format("  */rung{}/*) cp -r '{}' \"$out/0\";;\n", r + 1, models[r].string());
   return FakeColmap(dir, "step=$1; shift; out=\n"
                          "while [ $# -gt 0 ]; do case \"$1\" in --output_path) out=$2;; esac; shift; done\n"
                          "[ \"$step\" = mapper ] || exit 0\n"
@@ -616,6 +628,27 @@ TEST(Calibrate, RegistrationLadderCrossChecksAWeakModel) {
   int mappers = 0;
   for (std::string line; std::getline(mapped, line);) ++mappers;
   EXPECT_EQ(mappers, 5);
+}
+
+// Rungs 3 and 4 share their features: their agreement waits for rung 5 (other images), which
+// confirms it, or contradicts it and the capture is refused.
+TEST(Calibrate, RegistrationLadderAsksAnIndependentRung) {
+  testing::TempDir dir;
+  WriteCapture(dir / "capture", dir / "model");
+  auto result = testing::RunHdr4d(GeometryArgs(
+      dir / "capture", dir / "out", RungColmap(dir.path(), {"", "", dir / "model", dir / "model", dir / "model"})));
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const std::string report = testing::ReadTextFile(dir / "out" / "report.md");
+  EXPECT_NE(report.find("the model of rung 3 was checked against rung 5's: they agree (compared: rungs 3 and 4: "
+                        "0.00 deg, focal 0.0% (same features)"), std::string::npos) << report;
+
+  const fs::path turned = TurnedModel(dir / "model", dir / "turned", 1, 30);
+  fs::remove(dir / "mapped.txt");
+  result = testing::RunHdr4d(GeometryArgs(dir / "capture", dir / "out2",
+                                          RungColmap(dir.path(), {"", "", dir / "model", dir / "model", turned})));
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_NE(result.err.find("their models disagree"), std::string::npos) << result.err;
+  EXPECT_FALSE(fs::exists(dir / "out2"));
 }
 
 // The comparison itself: blind to a similarity between the models, the largest pair's angle and

@@ -92,7 +92,7 @@ void AppendGeometry(const CalibrationRecord& record, std::string& md, nlohmann::
 
 void AppendCameraAgreement(const CalibrationRecord& record, std::string& md, nlohmann::json& doc) {
   const CameraGains& g = *record.gains;
-  md += fmt::format("### Camera agreement\n\nOn {} sparse points seen by two or more cameras ({}), "
+  md += fmt::format("### Camera agreement\n\nOn {} sparse points seen by two or more cameras ({}; {}), "
                     "the cameras' HDR differed from the points' mean by {:.1f}% (median) "
                     "before the per-camera gains and {:.1f}% after{}. Those figures include the texture's "
                     "scatter between where each camera samples a point (3-5% on textured walls for a perfect "
@@ -100,6 +100,10 @@ void AppendCameraAgreement(const CalibrationRecord& record, std::string& md, nlo
                     "median bias on the rest is at most {:.1f}%.\n\n| camera | gain R | G | B |\n"
                     "|---|---|---|---|\n",
                     g.points_used,
+                    g.footprint_pixels > 0
+                        ? fmt::format("each camera averaging the same patch of surface, {:g} px in the camera "
+                                      "that sees it smallest", g.footprint_pixels)
+                        : std::string("a 3x3 window in every camera"),
                     g.from_static_images ? "their static images, in the first frame's HDR units"
                                          : "the first frame's fused HDR",
                     100 * g.disagreement_before, 100 * g.disagreement_after,
@@ -115,6 +119,7 @@ void AppendCameraAgreement(const CalibrationRecord& record, std::string& md, nlo
                              {"disagreement_before", g.disagreement_before},
                              {"disagreement_after", g.disagreement_after},
                              {"held_out_bias", g.held_out_bias},
+                             {"footprint_pixels", g.footprint_pixels},
                              {"gains", g.gain}};
 }
 

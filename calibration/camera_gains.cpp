@@ -17,25 +17,48 @@ double Median(std::vector<double> v) {
   return v[mid];
 }
 
-// Mean log radiance of a 3x3 window around where the point lands, per channel.
-std::optional<std::array<double, 3>> Sample(const RigCamera& camera, const Image& hdr,
-                                            const Eigen::Vector3d& point) {
+// Where a rig camera sees a point: its pixel position and depth (nothing behind the camera or
+// off the lens model).
+struct PointView {
+  Eigen::Vector2d uv;
+  double pixels_per_unit = 0;  // focal length / depth: how large the surface appears
+};
+
+std::optional<PointView> View(const RigCamera& camera, const Eigen::Vector3d& point) {
   BundlePose pose;
   const Eigen::Matrix4d cam_from_world = RigidInverse(WorldFromCamCvFromGl(camera.world_from_cam_gl));
   const Eigen::AngleAxisd aa(Eigen::Matrix3d(cam_from_world.topLeftCorner<3, 3>()));
   pose.rotation = aa.angle() * aa.axis();
   pose.translation = cam_from_world.topRightCorner<3, 1>();
+  const double depth = (cam_from_world.topLeftCorner<3, 3>() * point + pose.translation).z();
   const Eigen::Vector2d uv = ProjectRadial(pose, camera.intrinsics, point);
-  if (!uv.allFinite()) return std::nullopt;
-  const int x0 = static_cast<int>(std::floor(uv.x())), y0 = static_cast<int>(std::floor(uv.y()));
-  if (x0 < 1 || y0 < 1 || x0 >= hdr.width() - 1 || y0 >= hdr.height() - 1) return std::nullopt;
+  if (!(depth > 0) || !uv.allFinite()) return std::nullopt;
+  return PointView{uv, camera.intrinsics.f / depth};
+}
+
+// Mean log radiance around `uv` (pixel i spans [i, i + 1)), per channel: over the pixels whose
+// centres lie within `radius` of it, or the 3x3 window of the pixel it falls in for a radius
+// under 1.5 (what every camera used before the footprint).
+std::optional<std::array<double, 3>> Sample(const Image& hdr, const Eigen::Vector2d& uv, double radius) {
+  const bool window = radius < 1.5;
+  const int x_lo = static_cast<int>(std::floor(window ? uv.x() - 1 : uv.x() - radius));
+  const int x_hi = static_cast<int>(std::floor(window ? uv.x() + 1 : uv.x() + radius));
+  const int y_lo = static_cast<int>(std::floor(window ? uv.y() - 1 : uv.y() - radius));
+  const int y_hi = static_cast<int>(std::floor(window ? uv.y() + 1 : uv.y() + radius));
+  if (x_lo < 0 || y_lo < 0 || x_hi >= hdr.width() || y_hi >= hdr.height()) return std::nullopt;
   std::array<double, 3> out{};
   for (int c = 0; c < 3; ++c) {
     double sum = 0;
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) sum += hdr.at(x0 + dx, y0 + dy, c);
-    if (!(sum > 0)) return std::nullopt;
-    out[c] = std::log(sum / 9);
+    int n = 0;
+    for (int y = y_lo; y <= y_hi; ++y)
+      for (int x = x_lo; x <= x_hi; ++x) {
+        const double dx = x + 0.5 - uv.x(), dy = y + 0.5 - uv.y();
+        if (!window && dx * dx + dy * dy > radius * radius) continue;
+        sum += hdr.at(x, y, c);
+        ++n;
+      }
+    if (!(sum > 0) || n == 0) return std::nullopt;
+    out[c] = std::log(sum / n);
   }
   return out;
 }
@@ -109,18 +132,29 @@ double CameraGains::Mean(int camera) const {
   return (g[0] + g[1] + g[2]) / 3;
 }
 
-CameraGains EstimateCameraGains(const Rig& rig, const std::vector<Image>& hdr) {
+CameraGains EstimateCameraGains(const Rig& rig, const std::vector<Image>& hdr, double footprint_pixels) {
   const std::size_t nc = rig.cameras.size();
   HDR4D_CHECK(hdr.size() == nc);
   CameraGains result;
   result.gain.assign(nc, {1.0, 1.0, 1.0});
+  result.footprint_pixels = footprint_pixels;
   // samples[p] = (camera, log rgb) for every camera that saw point p and where it projects.
   GainSamples samples;
   for (std::size_t p = 0; p < rig.points.size(); ++p) {
     if (p >= rig.visibility.size()) break;
-    std::vector<std::pair<int, std::array<double, 3>>> seen;
+    const Eigen::Vector3d point = rig.points.positions[p].cast<double>();
+    std::vector<std::pair<int, PointView>> views;
+    double smallest = 0;  // pixels per unit of the camera that sees the surface smallest
     for (int c : rig.visibility[p])
-      if (auto s = Sample(rig.cameras[c], hdr[c], rig.points.positions[p].cast<double>())) seen.emplace_back(c, *s);
+      if (auto v = View(rig.cameras[c], point)) {
+        views.emplace_back(c, *v);
+        if (smallest == 0 || v->pixels_per_unit < smallest) smallest = v->pixels_per_unit;
+      }
+    std::vector<std::pair<int, std::array<double, 3>>> seen;
+    for (const auto& [c, v] : views) {
+      const double radius = footprint_pixels > 0 ? footprint_pixels * v.pixels_per_unit / smallest : 1;
+      if (auto s = Sample(hdr[c], v.uv, radius)) seen.emplace_back(c, *s);
+    }
     if (seen.size() >= 2) samples.push_back(std::move(seen));
   }
   result.points_used = static_cast<int>(samples.size());

@@ -2,6 +2,12 @@
 // by a gain per colour channel (sensor sensitivity, white balance). The gains come from the
 // sparse points that several cameras saw: each camera's log radiance there against the
 // points' mean, a median over points (moving objects and occlusions are outliers).
+// Each camera averages the same patch of surface around a point: a disc of footprint_pixels
+// radius in the camera that sees the surface smallest, wider in proportion in the cameras that
+// see it larger (focal length over depth). A fixed 3x3 window (footprint 0) averaged a larger
+// patch in the farther camera; at the features' blobs and edges that biased the gains by the
+// cameras' distances (unlike 320x240 and 640x480 rigs: the cameras' HDR scales 3.5% and 4.2%
+// apart with it, 1.4% and 2.5% with a footprint of 3 px; docs/history/calibration.md, ninth pass).
 #pragma once
 
 #include <array>
@@ -26,11 +32,15 @@ struct CameraGains {
   int points_used = 0;
   // Sampled in the static images (the empty scene) rather than the first frame's fused HDR.
   bool from_static_images = false;
+  double footprint_pixels = 0;  // the patch each camera averaged (see above; 0: 3x3 windows)
   double Mean(int camera) const;  // mean of the three channel gains
 };
 
+constexpr double kGainFootprintPixels = 3;
+
 // `hdr` holds one fused RGB image per rig camera of the same time (distorted, as fused).
 // `rig.visibility` says which cameras saw each point. Fewer than 10 shared points: gains 1.
-CameraGains EstimateCameraGains(const Rig& rig, const std::vector<Image>& hdr);
+CameraGains EstimateCameraGains(const Rig& rig, const std::vector<Image>& hdr,
+                                double footprint_pixels = kGainFootprintPixels);
 
 }  // namespace hdr4d

@@ -119,7 +119,7 @@ std::optional<CameraGains> EstimateGains(const Capture& capture, const std::opti
       }
   if (fused.size() != rig->cameras.size()) return std::nullopt;
   const bool use_static = std::none_of(statics.begin(), statics.end(), [](const Image& i) { return i.empty(); });
-  CameraGains gains = EstimateCameraGains(*rig, use_static ? statics : fused);
+  CameraGains gains = EstimateCameraGains(*rig, use_static ? statics : fused, options.gain_footprint_pixels);
   gains.from_static_images = use_static;
   return gains;
 }

@@ -4,6 +4,7 @@
 #include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <optional>
 #include <ranges>
 #include <set>
@@ -168,10 +169,96 @@ const ColmapImage& RigCameraImage(const CaptureCamera& camera, const ColmapModel
   return *found;
 }
 
-// A model that registered everything, kept for the second opinion.
-struct CompleteModel {
-  LadderResult result;
-  ColmapModel model;
+// The second opinion on models that registered everything (the ladder's header). Rungs with the
+// same features and images (3 and 4 differ only in the mapper) fail together: their agreement
+// is weak evidence, kept only when nothing independent contradicts it.
+class SecondOpinion {
+ public:
+  explicit SecondOpinion(const Capture& capture) : capture_(capture) {}
+  bool Empty() const { return models_.empty(); }
+
+  // Compares rung `r`'s model with the earlier ones: the earlier model that an independent rung
+  // agrees with, or nothing (the model is kept for later rungs).
+  std::optional<LadderResult> Offer(std::size_t r, const LadderResult& here, ColmapModel model,
+                                    const std::vector<std::string>& attempts) {
+    for (Entry& earlier : models_) {
+      const ModelDisagreement apart = RigModelDisagreement(capture_, earlier.model, model);
+      const bool independent = Independent(earlier.rung_index, r);
+      comparisons_.push_back(fmt::format("rungs {} and {}: {:.2f} deg, focal {:.1f}%{}", earlier.result.rung,
+                                         r + 1, apart.rotation_deg, 100 * apart.focal,
+                                         independent ? "" : " (same features)"));
+      if (apart.Agrees() && independent) {
+        // Of the two, the model that registered more (extra views), the earlier at equal.
+        const bool later = here.unregistered.size() < earlier.result.unregistered.size();
+        return Conclude(later ? here : earlier.result, later ? earlier.result.rung : r + 1, attempts, false);
+      }
+      if (apart.Agrees() && !weak_agreement_) weak_agreement_ = {&earlier - models_.data(), r + 1};
+      if (!apart.Agrees() && independent) independent_disagreement_ = true;
+    }
+    models_.push_back({r, here, std::move(model)});
+    return std::nullopt;
+  }
+
+  // After the last rung: a model only rungs of the same features agreed on (said to be weak
+  // evidence), the one model nothing could check if its cameras are strong, or the error when
+  // the models disagree or the only one is weak.
+  std::optional<LadderResult> Finish(const std::vector<std::string>& attempts) {
+    if (weak_agreement_ && !independent_disagreement_)
+      return Conclude(models_[weak_agreement_->first].result, weak_agreement_->second, attempts, true);
+    if (models_.size() > 1)
+      Fail("{}: COLMAP registered every rig camera on rungs {} of the registration ladder, but their models disagree on "
+           "the rig ({}; right models agree within {} deg and {}% focal): at least one is mirrored or flattened and "
+           "nothing tells which. Add hand-held views (static/extra/) that overlap neighbouring rig cameras, or give a "
+           "model you trust with --colmap-model (tried: {})",
+           capture_.root.string(),
+           fmt::join(models_ | std::views::transform([](const Entry& e) { return e.result.rung; }), ", "),
+           fmt::join(comparisons_, "; "), kModelAgreementDegrees, 100 * kModelAgreementFocal, fmt::join(attempts, "; "));
+    if (models_.empty()) return std::nullopt;
+    LadderResult only = models_.front().result;
+    if (only.weakest_observations < kWeakCameraObservations)
+      Fail("{}: only rung {} of the registration ladder registered every rig camera, and its weakest camera has {} "
+           "triangulated observations (under {}): a model that weak and checked by no other rung is too often wrong "
+           "(a 320x240 rig with 3 hand-held views came out 52 deg off). Add hand-held views (static/extra/) that "
+           "overlap neighbouring rig cameras, or give a model you trust with --colmap-model (tried: {})",
+           capture_.root.string(), only.rung, only.weakest_observations, kWeakCameraObservations,
+           fmt::join(attempts, "; "));
+    only.attempts = attempts;
+    only.cross_check_weak = true;
+    only.cross_check = fmt::format("the model of rung {} could not be checked: no other rung registered every rig "
+                                   "camera", only.rung);
+    return only;
+  }
+
+ private:
+  struct Entry {
+    std::size_t rung_index;
+    LadderResult result;
+    ColmapModel model;
+  };
+
+  static bool Independent(std::size_t a, std::size_t b) {
+    const LadderRung& x = RegistrationLadder()[a];
+    const LadderRung& y = RegistrationLadder()[b];
+    return x.extract_args != y.extract_args || x.sequence_frames != y.sequence_frames;
+  }
+
+  LadderResult Conclude(LadderResult result, std::size_t other_rung, const std::vector<std::string>& attempts,
+                        bool weak) const {
+    result.attempts = attempts;
+    result.cross_check_weak = weak;
+    result.cross_check = fmt::format(
+        "the model of rung {} was checked against rung {}'s: they agree{} (compared: {})", result.rung, other_rung,
+        weak ? ", but rung " + std::to_string(other_rung) + " uses the same features, so the two can be wrong together"
+             : "",
+        fmt::join(comparisons_, "; "));
+    return result;
+  }
+
+  const Capture& capture_;
+  std::vector<Entry> models_;
+  std::vector<std::string> comparisons_;
+  std::optional<std::pair<std::ptrdiff_t, std::size_t>> weak_agreement_;  // (model index, agreeing rung)
+  bool independent_disagreement_ = false;
 };
 
 }  // namespace
@@ -197,8 +284,7 @@ LadderResult RegisterWithLadder(const Capture& capture, const fs::path& workspac
   LadderResult best;
   std::optional<std::size_t> best_missing;
   std::optional<ColmapNoModel> last_error;
-  std::vector<CompleteModel> complete;  // models that registered everything, awaiting a second opinion
-  std::vector<std::string> comparisons;
+  SecondOpinion opinion(capture);
   const auto& ladder = RegistrationLadder();
   const bool have_frames = !capture.cameras.front().frames.empty();
   for (std::size_t r = 0; r < ladder.size(); ++r) {
@@ -218,24 +304,15 @@ LadderResult RegisterWithLadder(const Capture& capture, const fs::path& workspac
       here.rung_name = rung.name;
       here.unregistered = missing;
       here.weakest_observations = weakest;
-      if (missing.empty()) {
-        // The defaults' model with strong cameras is taken as it is; any other needs another rung
-        // to agree.
-        if (complete.empty() && r == 0 && weakest >= kWeakCameraObservations) return here;
-        for (CompleteModel& earlier : complete) {
-          const ModelDisagreement apart = RigModelDisagreement(capture, earlier.model, model);
-          comparisons.push_back(fmt::format("rungs {} and {}: {:.2f} deg, focal {:.1f}%", earlier.result.rung, r + 1,
-                                            apart.rotation_deg, 100 * apart.focal));
-          if (apart.Agrees()) {
-            earlier.result.attempts = best.attempts;
-            earlier.result.cross_check = fmt::format(
-                "the model of rung {} was checked against rung {}'s: they agree (compared: {})", earlier.result.rung,
-                r + 1, fmt::join(comparisons, "; "));
-            return earlier.result;
-          }
-        }
-        complete.push_back({here, std::move(model)});
-      }
+      // The defaults' model with strong cameras is taken as it is; any other that registered
+      // everything needs another rung to agree.
+      if (missing.empty() && opinion.Empty() && r == 0 && weakest >= kWeakCameraObservations) return here;
+      // A model of every rig camera can give or get a second opinion (extra views only help).
+      const bool rig_registered = std::none_of(missing.begin(), missing.end(), [](const std::string& m) {
+        return m.rfind("camera ", 0) == 0;
+      });
+      if (rig_registered)
+        if (auto agreed = opinion.Offer(r, here, std::move(model), best.attempts)) return *agreed;
       // Fewer missing wins; at equal, the model whose weakest camera has more observations.
       if (!best_missing || missing.size() < *best_missing ||
           (missing.size() == *best_missing && weakest > best.weakest_observations)) {
@@ -250,21 +327,7 @@ LadderResult RegisterWithLadder(const Capture& capture, const fs::path& workspac
     }
     spdlog::info("calibrate: COLMAP rung {} ({}) left {}; trying the next", r + 1, rung.name, best.attempts.back());
   }
-  if (complete.size() > 1)
-    Fail("{}: COLMAP registered every image on rungs {} of the registration ladder, but their models disagree on the "
-         "rig ({}; right models agree within {} deg and {}% focal): at least one is mirrored or flattened and nothing "
-         "tells which. Add hand-held views (static/extra/) that overlap neighbouring rig cameras, or give a model you "
-         "trust with --colmap-model (tried: {})",
-         capture.root.string(),
-         fmt::join(complete | std::views::transform([](const CompleteModel& c) { return c.result.rung; }), ", "),
-         fmt::join(comparisons, "; "), kModelAgreementDegrees, 100 * kModelAgreementFocal, fmt::join(best.attempts, "; "));
-  if (complete.size() == 1) {
-    LadderResult only = complete.front().result;
-    only.attempts = best.attempts;
-    only.cross_check = fmt::format("the model of rung {} could not be checked: no other rung registered every image",
-                                   only.rung);
-    return only;
-  }
+  if (auto concluded = opinion.Finish(best.attempts)) return *concluded;
   if (!best_missing) throw *last_error;
   return best;
 }

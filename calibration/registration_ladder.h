@@ -21,9 +21,12 @@
 // the same capture flattened, focal lengths 13-19% short). So the ladder climbs on for a second
 // opinion and keeps the earliest model that another rung's model agrees with (the rig cameras'
 // relative rotations within kModelAgreementDegrees and their focal lengths within
-// kModelAgreementFocal). When every rung that registered everything disagrees with every
-// other, calibrate stops with an error naming the rungs and their disagreement instead of
-// writing a model it cannot trust. A camera
+// kModelAgreementFocal). Rungs 3 and 4 share their features and fail together (seed 21: both
+// flattened alike), so their agreement alone is weak evidence: kept with a warning unless an
+// independent rung contradicts it. Models that registered every rig camera but not every extra
+// view take part too. When the models disagree and none is agreed on, or the only model has a
+// weak camera, calibrate stops with an error naming the rungs instead of writing a model it
+// cannot trust. A camera
 // that no rung registers fails with the error of RigFromColmap (it truly shares no view). The
 // report names the rung and each rung's weakest camera. A rig camera with fewer than
 // kWeakCameraObservations triangulated observations (no hand-held views around it) is named in
@@ -72,6 +75,9 @@ struct LadderResult {
   // For a model that needed a second opinion: which rung's model it was checked against, or
   // why it could not be checked; empty for a model that needed no second opinion.
   std::string cross_check;
+  // The check was weak: only a rung of the same features agreed, or none could check (calibrate
+  // warns).
+  bool cross_check_weak = false;
 };
 
 struct ModelDisagreement {

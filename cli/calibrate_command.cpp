@@ -47,6 +47,12 @@ void AddRadiometryFlags(CLI::App* cmd, CalibrateOptions* options) {
       "--per-camera-response", options->per_camera_response,
       "Fuse each camera with its own response curve (default: only when the cameras' curves "
       "differ by more than 0.05 RMS in log exposure)");
+  cmd->add_option("--gain-footprint", options->gain_footprint_pixels,
+                  "Unlike cameras' gains compare the same patch of surface around each sparse point: "
+                  "a disc of this radius in pixels in the camera that sees it smallest, larger in the "
+                  "others (0: a 3x3 window in every camera)")
+      ->capture_default_str()
+      ->check(Real(0, 100));
   cmd->add_option("--smoothness", options->response.smoothness, "Debevec-Malik smoothness weight")
       ->capture_default_str()
       ->check(Real(0, 1e9));
