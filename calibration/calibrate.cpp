@@ -79,6 +79,39 @@ void Publish(const fs::path& staging, const fs::path& out) {
   fs::remove_all(staging);
 }
 
+// COLMAP through the registration ladder: the model folder, what the report says of it in
+// `source`, and the warnings of a weak or unchecked model in `notes`.
+fs::path RegisterWithColmap(const Capture& capture, const CalibrateOptions& options, const fs::path& staging,
+                            std::string* source, std::vector<std::string>* notes) {
+  for (const CaptureCamera& camera : capture.cameras)
+    if (camera.static_images.empty())
+      Fail("{}: camera {} has no static images; COLMAP needs at least one per camera",
+           (capture.root / "static" / camera.name).string(), camera.name);
+  ColmapRunOptions colmap;
+  colmap.binary = options.colmap_binary;
+  colmap.show_progress = options.show_progress;
+  colmap.max_image_size = options.colmap_max_image_size;
+  const LadderResult ladder = RegisterWithLadder(capture, staging / "colmap", colmap);
+  *source = fmt::format("COLMAP 3.8 (SIFT on CPU, exhaustive matching, incremental mapping), rung {} of the "
+                        "registration ladder ({}; tried: {})", ladder.rung, ladder.rung_name,
+                        fmt::join(ladder.attempts, "; "));
+  if (!ladder.cross_check.empty()) *source += "; " + ladder.cross_check;
+  if (ladder.cross_check_weak && ladder.weakest_observations >= kWeakCameraObservations)
+    notes->push_back(fmt::format("COLMAP's model could not be confirmed by an independent rung of the registration "
+                                 "ladder ({}): check the poses", ladder.cross_check));
+  if (ladder.weakest_observations < kWeakCameraObservations)
+    notes->push_back(fmt::format("a rig camera has only {} triangulated observations (under {}): too few to pin its "
+                                 "focal length and distortion by self-calibration, and so few that the whole model can be "
+                                 "wrong (a 320x240 rig with 3 hand-held views came out mirrored); {}; hand-held views of "
+                                 "the scene (static/extra/) give COLMAP more",
+                                 ladder.weakest_observations, kWeakCameraObservations,
+                                 ladder.cross_check.empty() ? "not cross-checked" : ladder.cross_check));
+  if (!ladder.unregistered.empty())
+    notes->push_back(fmt::format("COLMAP left {} unregistered after every rung of the registration ladder",
+                                 fmt::join(ladder.unregistered, ", ")));
+  return ladder.model_folder;
+}
+
 std::optional<Rig> RunGeometry(const Capture& capture, const CalibrateOptions& options,
                                const fs::path& staging, std::vector<std::string>* notes) {
   fs::path model_folder;
@@ -87,33 +120,7 @@ std::optional<Rig> RunGeometry(const Capture& capture, const CalibrateOptions& o
     model_folder = FindColmapModelFolder(*options.colmap_model);
     source = fmt::format("given ({})", model_folder.string());
   } else {
-    for (const CaptureCamera& camera : capture.cameras)
-      if (camera.static_images.empty())
-        Fail("{}: camera {} has no static images; COLMAP needs at least one per camera",
-             (capture.root / "static" / camera.name).string(), camera.name);
-    ColmapRunOptions colmap;
-    colmap.binary = options.colmap_binary;
-    colmap.show_progress = options.show_progress;
-    colmap.max_image_size = options.colmap_max_image_size;
-    const LadderResult ladder = RegisterWithLadder(capture, staging / "colmap", colmap);
-    model_folder = ladder.model_folder;
-    source = fmt::format("COLMAP 3.8 (SIFT on CPU, exhaustive matching, incremental mapping), rung {} of the "
-                         "registration ladder ({}; tried: {})", ladder.rung, ladder.rung_name,
-                         fmt::join(ladder.attempts, "; "));
-    if (!ladder.cross_check.empty()) source += "; " + ladder.cross_check;
-    if (ladder.cross_check_weak && ladder.weakest_observations >= kWeakCameraObservations)
-      notes->push_back(fmt::format("COLMAP's model could not be confirmed by an independent rung of the registration "
-                                   "ladder ({}): check the poses", ladder.cross_check));
-    if (ladder.weakest_observations < kWeakCameraObservations)
-      notes->push_back(fmt::format("a rig camera has only {} triangulated observations (under {}): too few to pin its "
-                                   "focal length and distortion by self-calibration, and so few that the whole model can be "
-                                   "wrong (a 320x240 rig with 3 hand-held views came out mirrored); {}; hand-held views of "
-                                   "the scene (static/extra/) give COLMAP more",
-                                   ladder.weakest_observations, kWeakCameraObservations,
-                                   ladder.cross_check.empty() ? "not cross-checked" : ladder.cross_check));
-    if (!ladder.unregistered.empty())
-      notes->push_back(fmt::format("COLMAP left {} unregistered after every rung of the registration ladder",
-                                   fmt::join(ladder.unregistered, ", ")));
+    model_folder = RegisterWithColmap(capture, options, staging, &source, notes);
   }
   const ColmapModel model = ReadColmapModel(model_folder);
   std::vector<std::string> names;
