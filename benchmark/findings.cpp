@@ -290,6 +290,31 @@ std::string FindingsCsv(const std::vector<Finding>& findings) {
   return csv;
 }
 
+namespace {
+
+// A row label in ASCII for the PNG's bitmap font: the paper's daggers become + and ++ (HDR-GS+ is
+// HDR-GS†), any other non-ASCII character '?'.
+std::string AsciiLabel(const std::string& label) {
+  std::string out;
+  for (std::size_t i = 0; i < label.size();) {
+    if (label.compare(i, 3, "\u2020") == 0) {
+      out += "+";
+      i += 3;
+    } else if (label.compare(i, 3, "\u2021") == 0) {
+      out += "++";
+      i += 3;
+    } else if (static_cast<unsigned char>(label[i]) < 0x80) {
+      out += label[i++];
+    } else {
+      out += '?';
+      for (++i; i < label.size() && (static_cast<unsigned char>(label[i]) & 0xC0) == 0x80;) ++i;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 PlotPanel FindingChart(const Suite& suite, const std::vector<RunSummary>& runs,
                        const Finding& finding, const FindingsOptions& options) {
   const TableSpec* spec = nullptr;
@@ -319,7 +344,7 @@ PlotPanel FindingChart(const Suite& suite, const std::vector<RunSummary>& runs,
   for (std::size_t i = 0; i < spec->rows.size(); ++i) {
     const TableRow& row = spec->rows[i];
     const double x = static_cast<double>(i + 1);
-    names.push_back(fmt::format("{} {}", i + 1, row.label));
+    names.push_back(fmt::format("{} {}", i + 1, AsciiLabel(row.label)));
     const SeedValues v = FindingRowValues(runs, row, finding.scenes_covered, finding.metric, budget, variant);
     std::vector<double> seed_means;
     for (std::int64_t seed : finding.seeds) {
@@ -337,7 +362,7 @@ PlotPanel FindingChart(const Suite& suite, const std::vector<RunSummary>& runs,
     PlotSeries& target = row.label == spec->reference ? ref : means;
     target.x.push_back(x);
     target.y.push_back(m);
-    target.point_labels.push_back(row.label);
+    target.point_labels.push_back(AsciiLabel(row.label));
     bars.x.insert(bars.x.end(), {x, x, NAN});
     bars.y.insert(bars.y.end(), {m - sd, m + sd, NAN});
   }

@@ -182,6 +182,14 @@ TEST(Findings, ChartHasSeedDotsMeansAndSpreadBars) {
   const double sd = SampleStdDev({22.04, 21.97, 21.99});
   EXPECT_NEAR(bars.y[7] - bars.y[6], 2 * sd, 1e-9);
   EXPECT_NO_THROW(RenderPlotSvg(chart.first, chart.second));
+
+  // The paper's daggers in ASCII for the PNG's font.
+  Suite daggers = s;
+  daggers.tables[1].rows[0].label = "X\u2020";
+  daggers.tables[1].rows[1].label = "Y\u2021 (\u00e9)";
+  const PlotPanel ascii = FindingChart(daggers, runs, BuildFindings(daggers, runs, o).at(0), o);
+  EXPECT_EQ(ascii.first[2].point_labels, (std::vector<std::string>{"X+", "Y++ (?)"}));
+  EXPECT_NE(ascii.second.x_label.find("1 X+, 2 Y++ (?)"), std::string::npos) << ascii.second.x_label;
 }
 
 TEST(Findings, ThroughAStoreAndBadTables) {
