@@ -37,6 +37,10 @@ TEST(CalibrationSuite, ShippedGridParses) {
   const CalibrationGrid final_run = LoadCalibrationGrid(SuitesDir() / "calibration-final.json");
   EXPECT_EQ(final_run.seeds, std::vector<int>{11});
   EXPECT_EQ(final_run.variants.size(), proof.variants.size());
+  // Stop 65's proof run: the same variants at seed 31.
+  const CalibrationGrid s31 = LoadCalibrationGrid(SuitesDir() / "calibration-s31.json");
+  EXPECT_EQ(s31.seeds, std::vector<int>{31});
+  EXPECT_EQ(s31.variants.size(), proof.variants.size());
 }
 
 TEST(CalibrationSuite, BadGridsNameTheFileAndKey) {
