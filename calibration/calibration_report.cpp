@@ -97,8 +97,9 @@ void AppendCameraAgreement(const CalibrationRecord& record, std::string& md, nlo
                     "before the per-camera gains and {:.1f}% after{}. Those figures include the texture's "
                     "scatter between where each camera samples a point (3-5% on textured walls for a perfect "
                     "calibration); what measures the gains: estimated on every other point, each camera's "
-                    "median bias on the rest is at most {:.1f}%.\n\n| camera | gain R | G | B |\n"
-                    "|---|---|---|---|\n",
+                    "median bias on the rest is at most {:.1f}%. The vignetting column is measured on the "
+                    "same points (radiance x 1 - v (r / r_corner)^2) and not applied.\n\n"
+                    "| camera | gain R | G | B | vignetting v |\n|---|---|---|---|---|\n",
                     g.points_used,
                     g.footprint_pixels > 0
                         ? fmt::format("each camera averaging the same patch of surface, {:g} px in the camera "
@@ -111,8 +112,8 @@ void AppendCameraAgreement(const CalibrationRecord& record, std::string& md, nlo
                                          : " (not applied: --no-gain-correction)",
                     100 * g.held_out_bias);
   for (std::size_t c = 0; c < g.gain.size() && c < record.rig->cameras.size(); ++c)
-    md += fmt::format("| {} | {:.4f} | {:.4f} | {:.4f} |\n", record.rig->cameras[c].name,
-                      g.gain[c][0], g.gain[c][1], g.gain[c][2]);
+    md += fmt::format("| {} | {:.4f} | {:.4f} | {:.4f} | {} |\n", record.rig->cameras[c].name, g.gain[c][0],
+                      g.gain[c][1], g.gain[c][2], c < g.vignetting.size() ? fmt::format("{:.3f}", g.vignetting[c]) : "-");
   md += "\n";
   doc["camera_agreement"] = {{"points", g.points_used},
                              {"sampled_in", g.from_static_images ? "static images" : "first frame"},
@@ -120,6 +121,7 @@ void AppendCameraAgreement(const CalibrationRecord& record, std::string& md, nlo
                              {"disagreement_after", g.disagreement_after},
                              {"held_out_bias", g.held_out_bias},
                              {"footprint_pixels", g.footprint_pixels},
+                             {"vignetting_estimate", g.vignetting},
                              {"gains", g.gain}};
 }
 

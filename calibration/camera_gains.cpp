@@ -4,6 +4,7 @@
 #include <cmath>
 #include <optional>
 
+#include "calibration/vignetting_estimate.h"
 #include "core/geometry/camera.h"
 #include "core/util/error.h"
 
@@ -61,6 +62,14 @@ std::optional<std::array<double, 3>> Sample(const Image& hdr, const Eigen::Vecto
     out[c] = std::log(sum / n);
   }
   return out;
+}
+
+// (r / r_corner)^2 of a pixel position: r from the principal point, r_corner to the farthest
+// corner (datagen's vignetting radius).
+double CornerRadius2(const RigCamera& camera, const Eigen::Vector2d& uv) {
+  const double cx = camera.intrinsics.cx, cy = camera.intrinsics.cy;
+  const double corner2 = std::max({cx * cx + cy * cy, std::pow(camera.width - cx, 2) + std::pow(camera.height - cy, 2), 1.0});
+  return std::min(1.0, ((uv.x() - cx) * (uv.x() - cx) + (uv.y() - cy) * (uv.y() - cy)) / corner2);
 }
 
 using GainSamples = std::vector<std::vector<std::pair<int, std::array<double, 3>>>>;
@@ -140,6 +149,7 @@ CameraGains EstimateCameraGains(const Rig& rig, const std::vector<Image>& hdr, d
   result.footprint_pixels = footprint_pixels;
   // samples[p] = (camera, log rgb) for every camera that saw point p and where it projects.
   GainSamples samples;
+  std::vector<std::vector<VignettingSample>> falloff;  // the same samples with their radii
   for (std::size_t p = 0; p < rig.points.size(); ++p) {
     if (p >= rig.visibility.size()) break;
     const Eigen::Vector3d point = rig.points.positions[p].cast<double>();
@@ -151,11 +161,18 @@ CameraGains EstimateCameraGains(const Rig& rig, const std::vector<Image>& hdr, d
         if (smallest == 0 || v->pixels_per_unit < smallest) smallest = v->pixels_per_unit;
       }
     std::vector<std::pair<int, std::array<double, 3>>> seen;
+    std::vector<VignettingSample> radii;
     for (const auto& [c, v] : views) {
       const double radius = footprint_pixels > 0 ? footprint_pixels * v.pixels_per_unit / smallest : 1;
-      if (auto s = Sample(hdr[c], v.uv, radius)) seen.emplace_back(c, *s);
+      if (auto s = Sample(hdr[c], v.uv, radius)) {
+        seen.emplace_back(c, *s);
+        radii.push_back({c, ((*s)[0] + (*s)[1] + (*s)[2]) / 3, CornerRadius2(rig.cameras[c], v.uv)});
+      }
     }
-    if (seen.size() >= 2) samples.push_back(std::move(seen));
+    if (seen.size() >= 2) {
+      samples.push_back(std::move(seen));
+      falloff.push_back(std::move(radii));
+    }
   }
   result.points_used = static_cast<int>(samples.size());
   if (samples.size() < 10 || nc < 2) return result;
@@ -166,6 +183,7 @@ CameraGains EstimateCameraGains(const Rig& rig, const std::vector<Image>& hdr, d
   const LogGains log_gain = SolveLogGains(samples, nc, 2);
   result.disagreement_after = GainDisagreement(samples, log_gain);
   if (samples.size() >= 20) result.held_out_bias = HeldOutBias(samples, nc);
+  result.vignetting = EstimateVignetting(falloff, static_cast<int>(nc));
   for (std::size_t c = 0; c < nc; ++c)
     for (int ch = 0; ch < 3; ++ch) result.gain[c][ch] = std::exp(log_gain[c][ch]);
   return result;

@@ -33,6 +33,9 @@ struct CameraGains {
   // Sampled in the static images (the empty scene) rather than the first frame's fused HDR.
   bool from_static_images = false;
   double footprint_pixels = 0;  // the patch each camera averaged (see above; 0: 3x3 windows)
+  // Each camera's vignetting v (radiance x 1 - v (r / r_corner)^2) from the same points
+  // (calibration/vignetting_estimate.h): reported, not applied.
+  std::vector<double> vignetting;
   double Mean(int camera) const;  // mean of the three channel gains
 };
 
