@@ -25,14 +25,25 @@ struct PointView {
   double pixels_per_unit = 0;  // focal length / depth: how large the surface appears
 };
 
-std::optional<PointView> View(const RigCamera& camera, const Eigen::Vector3d& point) {
+// A rig camera's pose in the bundle's form, computed once per camera (not per point).
+struct CameraPose {
   BundlePose pose;
+  Eigen::Matrix3d rotation;  // cam_from_world
+};
+
+CameraPose PoseOf(const RigCamera& camera) {
+  CameraPose out;
   const Eigen::Matrix4d cam_from_world = RigidInverse(WorldFromCamCvFromGl(camera.world_from_cam_gl));
-  const Eigen::AngleAxisd aa(Eigen::Matrix3d(cam_from_world.topLeftCorner<3, 3>()));
-  pose.rotation = aa.angle() * aa.axis();
-  pose.translation = cam_from_world.topRightCorner<3, 1>();
-  const double depth = (cam_from_world.topLeftCorner<3, 3>() * point + pose.translation).z();
-  const Eigen::Vector2d uv = ProjectRadial(pose, camera.intrinsics, point);
+  out.rotation = cam_from_world.topLeftCorner<3, 3>();
+  const Eigen::AngleAxisd aa(out.rotation);
+  out.pose.rotation = aa.angle() * aa.axis();
+  out.pose.translation = cam_from_world.topRightCorner<3, 1>();
+  return out;
+}
+
+std::optional<PointView> View(const RigCamera& camera, const CameraPose& pose, const Eigen::Vector3d& point) {
+  const double depth = (pose.rotation * point + pose.pose.translation).z();
+  const Eigen::Vector2d uv = ProjectRadial(pose.pose, camera.intrinsics, point);
   if (!(depth > 0) || !uv.allFinite()) return std::nullopt;
   return PointView{uv, camera.intrinsics.f / depth};
 }
@@ -148,6 +159,8 @@ CameraGains EstimateCameraGains(const Rig& rig, const std::vector<Image>& hdr, d
   result.gain.assign(nc, {1.0, 1.0, 1.0});
   result.footprint_pixels = footprint_pixels;
   // samples[p] = (camera, log rgb) for every camera that saw point p and where it projects.
+  std::vector<CameraPose> poses;
+  for (const RigCamera& camera : rig.cameras) poses.push_back(PoseOf(camera));
   GainSamples samples;
   std::vector<std::vector<VignettingSample>> falloff;  // the same samples with their radii
   for (std::size_t p = 0; p < rig.points.size(); ++p) {
@@ -156,7 +169,7 @@ CameraGains EstimateCameraGains(const Rig& rig, const std::vector<Image>& hdr, d
     std::vector<std::pair<int, PointView>> views;
     double smallest = 0;  // pixels per unit of the camera that sees the surface smallest
     for (int c : rig.visibility[p])
-      if (auto v = View(rig.cameras[c], point)) {
+      if (auto v = View(rig.cameras[c], poses[c], point)) {
         views.emplace_back(c, *v);
         if (smallest == 0 || v->pixels_per_unit < smallest) smallest = v->pixels_per_unit;
       }
