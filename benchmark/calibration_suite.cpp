@@ -115,6 +115,21 @@ std::string DistortionOf(const nlohmann::json& calibration) {
   return fmt::format("{}", fmt::join(kept, " "));
 }
 
+// The falloff calibrate divided out of each camera (calibration.json, rig order) against the
+// capture's (truth_comparison.json, the same order); absent in older results: nothing counted.
+void ReadVignetting(const nlohmann::json& cal, const nlohmann::json& truth, CalibrationRow* r) {
+  std::vector<double> applied;
+  if (cal.contains("camera_agreement") && cal["camera_agreement"].contains("vignetting_applied"))
+    for (const auto& v : cal["camera_agreement"]["vignetting_applied"]) applied.push_back(v.is_number() ? v.get<double>() : 0);
+  const auto cameras = truth.value("cameras", nlohmann::json::array());
+  for (std::size_t c = 0; c < cameras.size(); ++c) {
+    const double v_true = cameras[c].value("vignetting_truth", 0.0), v = c < applied.size() ? applied[c] : 0.0;
+    r->vignetting_true += v_true > 0;
+    r->vignetting_corrected += v > 0;
+    r->vignetting_error = std::max(r->vignetting_error, std::abs(v - v_true));
+  }
+}
+
 std::vector<std::string> MissedTargets(const CalibrationRow& r, const CalibrationTargets& t) {
   std::vector<std::string> missed;
   if (!(r.rotation_pairs_deg <= t.rotation_deg)) missed.push_back("rotation");
@@ -184,6 +199,7 @@ CalibrationRow ReadCalibrationRow(const fs::path& calibrated, const CalibrationT
     r.sparse_disagreement_after = CalibrationNumber(cal["camera_agreement"], "disagreement_after", cal_file);
     r.held_out_bias = cal["camera_agreement"].value("held_out_bias", 0.0);
   }
+  ReadVignetting(cal, truth, &r);
   if (cal.contains("seconds"))
     r.calibrate_seconds = cal["seconds"].value("geometry", 0.0) + cal["seconds"].value("radiometry", 0.0);
   r.missed = MissedTargets(r, targets);
@@ -194,21 +210,23 @@ std::string CalibrationTableMarkdown(const std::vector<CalibrationRow>& rows) {
   std::string md =
       "| variant | seed | registered | rotation max (deg): pairs / orientations / centres' similarity | "
       "centre max (% rig) | focal max | distortion kept | HDR slope (against the render; a perfect calibration there) | HDR median (darkest fifth) | "
-      "cameras' HDR scales vs truth | sparse points after gains: scatter / held-out bias | calibrate (s) | targets |\n"
-      "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+      "cameras' HDR scales vs truth | sparse points after gains: scatter / held-out bias | vignetting divided out: cameras (with it), "
+      "max error of v | calibrate (s) | targets |\n"
+      "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const CalibrationRow& r : rows) {
     if (!r.failed.empty()) {
-      md += fmt::format("| {} | {} | failed: {} |||||||||| missed all |\n", r.variant, r.seed, r.failed);
+      md += fmt::format("| {} | {} | failed: {} ||||||||||| missed all |\n", r.variant, r.seed, r.failed);
       continue;
     }
     md += fmt::format(
         "| {} | {} | {} | {:.3f} / {:.3f} / {:.3f} | {:.2f} | {:.2f}% | {} | {:.3f}{} | {:.1f}% ({:.1f}%) | {:.1f}% | "
-        "{:.1f}% / {:.1f}% | {:.0f} | {} |\n",
+        "{:.1f}% / {:.1f}% | {} ({}), {:.3f} | {:.0f} | {} |\n",
         r.variant, r.seed, r.registration, r.rotation_pairs_deg, r.rotation_oriented_deg, r.rotation_centres_deg,
         100 * r.centre_relative, 100 * r.focal_relative, r.distortion, r.slope,
         r.slope_render < 0 ? std::string() : fmt::format(" ({:.3f}; {:.3f})", r.slope_render, r.slope_render_floor),
         100 * r.hdr_median, 100 * r.hdr_dark,
-        100 * r.camera_disagreement, 100 * r.sparse_disagreement_after, 100 * r.held_out_bias, r.calibrate_seconds,
+        100 * r.camera_disagreement, 100 * r.sparse_disagreement_after, 100 * r.held_out_bias, r.vignetting_corrected,
+        r.vignetting_true, r.vignetting_error, r.calibrate_seconds,
         r.missed.empty() ? std::string("all met") : fmt::format("missed: {}", fmt::join(r.missed, ", ")));
   }
   return md;
@@ -218,12 +236,13 @@ std::string CalibrationTableCsv(const std::vector<CalibrationRow>& rows) {
   std::string csv =
       "variant,seed,failed,rotation_pairs_deg,rotation_oriented_deg,rotation_centres_deg,centre_relative,"
       "focal_relative,distortion,slope,slope_render,slope_render_floor,hdr_median,hdr_dark,camera_disagreement,sparse_after,held_out_bias,"
-      "calibrate_seconds,missed\n";
+      "vignetting_corrected,vignetting_true,vignetting_error,calibrate_seconds,missed\n";
   for (const CalibrationRow& r : rows)
-    csv += fmt::format("{},{},\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", r.variant, r.seed, r.failed,
+    csv += fmt::format("{},{},\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", r.variant, r.seed, r.failed,
                        r.rotation_pairs_deg, r.rotation_oriented_deg, r.rotation_centres_deg, r.centre_relative,
                        r.focal_relative, r.distortion, r.slope, r.slope_render, r.slope_render_floor, r.hdr_median, r.hdr_dark, r.camera_disagreement,
-                       r.sparse_disagreement_after, r.held_out_bias, r.calibrate_seconds, fmt::join(r.missed, " "));
+                       r.sparse_disagreement_after, r.held_out_bias, r.vignetting_corrected, r.vignetting_true,
+                       r.vignetting_error, r.calibrate_seconds, fmt::join(r.missed, " "));
   return csv;
 }
 

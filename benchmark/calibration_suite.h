@@ -54,6 +54,10 @@ struct CalibrationRow {
   double slope_render = -1, slope_render_floor = -1;
   double sparse_disagreement_after = 0;  // calibrate's, on its sparse points (texture included)
   double held_out_bias = 0;  // calibrate's gains checked on held-out points (no truth needed)
+  // Vignetting: how many cameras had a falloff divided out, of how many had one in the truth,
+  // and the largest |v divided out - v true| over the cameras (0 where nothing either side).
+  int vignetting_corrected = 0, vignetting_true = 0;
+  double vignetting_error = 0;
   double calibrate_seconds = 0;
   std::vector<std::string> missed;  // targets not met (empty: all met)
 };

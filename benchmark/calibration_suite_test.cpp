@@ -41,6 +41,10 @@ TEST(CalibrationSuite, ShippedGridParses) {
   const CalibrationGrid s31 = LoadCalibrationGrid(SuitesDir() / "calibration-s31.json");
   EXPECT_EQ(s31.seeds, std::vector<int>{31});
   EXPECT_EQ(s31.variants.size(), proof.variants.size());
+  // Stop 66's: the same at seed 41, with a low-resolution vignetted rig added.
+  const CalibrationGrid s41 = LoadCalibrationGrid(SuitesDir() / "calibration-s41.json");
+  EXPECT_EQ(s41.seeds, std::vector<int>{41});
+  EXPECT_EQ(s41.variants.size(), proof.variants.size() + 1);
 }
 
 TEST(CalibrationSuite, BadGridsNameTheFileAndKey) {
@@ -104,6 +108,19 @@ TEST(CalibrationSuite, ARowFromAFinishedVariant) {
   r = ReadCalibrationRow(dir.path(), {});
   EXPECT_TRUE(Has(CalibrationTableMarkdown({r}), "| 1.010 (0.900; 0.905) |")) << CalibrationTableMarkdown({r});
   EXPECT_TRUE(r.missed.empty());
+
+  // Vignetting: the falloff divided out against the capture's, camera by camera.
+  EXPECT_TRUE(Has(CalibrationTableMarkdown({r}), "| 0 (0), 0.000 |")) << CalibrationTableMarkdown({r});
+  truth["cameras"] = {{{"name", "a"}, {"vignetting_truth", 0.2}}, {{"name", "b"}, {"vignetting_truth", 0.0}}};
+  WriteJsonFile(dir.path() / "truth_comparison.json", truth);
+  nlohmann::json cal = ReadJsonFile(dir.path() / "calibration.json");
+  cal["camera_agreement"]["vignetting_applied"] = {0.23, 0.0};
+  WriteJsonFile(dir.path() / "calibration.json", cal);
+  r = ReadCalibrationRow(dir.path(), {});
+  EXPECT_EQ(r.vignetting_corrected, 1);
+  EXPECT_EQ(r.vignetting_true, 1);
+  EXPECT_NEAR(r.vignetting_error, 0.03, 1e-12);
+  EXPECT_TRUE(Has(CalibrationTableMarkdown({r}), "| 1 (1), 0.030 |")) << CalibrationTableMarkdown({r});
 
   WriteFinishedVariant(dir.path(), 0.4, 0.9);
   r = ReadCalibrationRow(dir.path(), {});

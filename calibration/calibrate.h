@@ -48,6 +48,8 @@ struct CalibrateOptions {
   // The surface patch the gains compare, in pixels of the camera that sees it smallest (0: a
   // 3x3 window in every camera, as before).
   double gain_footprint_pixels = kGainFootprintPixels;
+  // Which cameras' vignetting is divided out of their HDR and brackets (vignetting_correction.h).
+  VignettingCorrection vignetting = VignettingCorrection::kAuto;
   bool show_progress = true;
 };
 

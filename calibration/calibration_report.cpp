@@ -97,9 +97,11 @@ void AppendCameraAgreement(const CalibrationRecord& record, std::string& md, nlo
                     "before the per-camera gains and {:.1f}% after{}. Those figures include the texture's "
                     "scatter between where each camera samples a point (3-5% on textured walls for a perfect "
                     "calibration); what measures the gains: estimated on every other point, each camera's "
-                    "median bias on the rest is at most {:.1f}%. The vignetting column is measured on the "
-                    "same points (radiance x 1 - v (r / r_corner)^2) and not applied.\n\n"
-                    "| camera | gain R | G | B | vignetting v |\n|---|---|---|---|---|\n",
+                    "median bias on the rest is at most {:.1f}%. Vignetting (radiance x 1 - v (r / r_corner)^2) is "
+                    "estimated on the same points; where it is divided out (--vignetting auto: v >= {:g} and >= {:g} "
+                    "standard errors) the "
+                    "gains are solved after it, and the camera's HDR and brackets are corrected.\n\n"
+                    "| camera | gain R | G | B | vignetting v | standard error | divided out |\n|---|---|---|---|---|---|---|\n",
                     g.points_used,
                     g.footprint_pixels > 0
                         ? fmt::format("each camera averaging the same patch of surface, {:g} px in the camera "
@@ -110,10 +112,14 @@ void AppendCameraAgreement(const CalibrationRecord& record, std::string& md, nlo
                     100 * g.disagreement_before, 100 * g.disagreement_after,
                     record.gains_applied ? " (applied to hdr/, the mean gain folded into `exposures`)"
                                          : " (not applied: --no-gain-correction)",
-                    100 * g.held_out_bias);
+                    100 * g.held_out_bias, kVignettingApplyFrom, kVignettingSignificance);
+  const auto vignetting = [](const std::vector<double>& v, std::size_t c) {
+    return c < v.size() ? fmt::format("{:.3f}", v[c]) : std::string("-");
+  };
   for (std::size_t c = 0; c < g.gain.size() && c < record.rig->cameras.size(); ++c)
-    md += fmt::format("| {} | {:.4f} | {:.4f} | {:.4f} | {} |\n", record.rig->cameras[c].name, g.gain[c][0],
-                      g.gain[c][1], g.gain[c][2], c < g.vignetting.size() ? fmt::format("{:.3f}", g.vignetting[c]) : "-");
+    md += fmt::format("| {} | {:.4f} | {:.4f} | {:.4f} | {} | {} | {} |\n", record.rig->cameras[c].name, g.gain[c][0],
+                      g.gain[c][1], g.gain[c][2], vignetting(g.vignetting, c), vignetting(g.vignetting_error, c),
+                      vignetting(g.vignetting_applied, c));
   md += "\n";
   doc["camera_agreement"] = {{"points", g.points_used},
                              {"sampled_in", g.from_static_images ? "static images" : "first frame"},
@@ -122,6 +128,8 @@ void AppendCameraAgreement(const CalibrationRecord& record, std::string& md, nlo
                              {"held_out_bias", g.held_out_bias},
                              {"footprint_pixels", g.footprint_pixels},
                              {"vignetting_estimate", g.vignetting},
+                             {"vignetting_standard_error", g.vignetting_error},
+                             {"vignetting_applied", g.vignetting_applied},
                              {"gains", g.gain}};
 }
 

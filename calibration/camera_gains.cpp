@@ -4,6 +4,7 @@
 #include <cmath>
 #include <optional>
 
+#include "calibration/vignetting_correction.h"
 #include "calibration/vignetting_estimate.h"
 #include "core/geometry/camera.h"
 #include "core/util/error.h"
@@ -75,14 +76,6 @@ std::optional<std::array<double, 3>> Sample(const Image& hdr, const Eigen::Vecto
   return out;
 }
 
-// (r / r_corner)^2 of a pixel position: r from the principal point, r_corner to the farthest
-// corner (datagen's vignetting radius).
-double CornerRadius2(const RigCamera& camera, const Eigen::Vector2d& uv) {
-  const double cx = camera.intrinsics.cx, cy = camera.intrinsics.cy;
-  const double corner2 = std::max({cx * cx + cy * cy, std::pow(camera.width - cx, 2) + std::pow(camera.height - cy, 2), 1.0});
-  return std::min(1.0, ((uv.x() - cx) * (uv.x() - cx) + (uv.y() - cy) * (uv.y() - cy)) / corner2);
-}
-
 using GainSamples = std::vector<std::vector<std::pair<int, std::array<double, 3>>>>;
 using LogGains = std::vector<std::array<double, 3>>;
 
@@ -152,7 +145,8 @@ double CameraGains::Mean(int camera) const {
   return (g[0] + g[1] + g[2]) / 3;
 }
 
-CameraGains EstimateCameraGains(const Rig& rig, const std::vector<Image>& hdr, double footprint_pixels) {
+CameraGains EstimateCameraGains(const Rig& rig, const std::vector<Image>& hdr, double footprint_pixels,
+                                VignettingCorrection vignetting) {
   const std::size_t nc = rig.cameras.size();
   HDR4D_CHECK(hdr.size() == nc);
   CameraGains result;
@@ -179,7 +173,7 @@ CameraGains EstimateCameraGains(const Rig& rig, const std::vector<Image>& hdr, d
       const double radius = footprint_pixels > 0 ? footprint_pixels * v.pixels_per_unit / smallest : 1;
       if (auto s = Sample(hdr[c], v.uv, radius)) {
         seen.emplace_back(c, *s);
-        radii.push_back({c, ((*s)[0] + (*s)[1] + (*s)[2]) / 3, CornerRadius2(rig.cameras[c], v.uv)});
+        radii.push_back({c, ((*s)[0] + (*s)[1] + (*s)[2]) / 3, CornerRadius2(rig.cameras[c], v.uv.x(), v.uv.y())});
       }
     }
     if (seen.size() >= 2) {
@@ -191,12 +185,21 @@ CameraGains EstimateCameraGains(const Rig& rig, const std::vector<Image>& hdr, d
   if (samples.size() < 10 || nc < 2) return result;
 
   result.disagreement_before = GainDisagreement(samples, LogGains(nc, {0, 0, 0}));
+  // The falloff first: the gains are then solved on the samples with it divided out, so that a
+  // camera's gain is not its mean falloff over where the points happened to land.
+  result.vignetting = EstimateVignetting(falloff, static_cast<int>(nc), &result.vignetting_error);
+  result.vignetting_applied = VignettingToApply(result.vignetting, result.vignetting_error, vignetting);
+  for (std::size_t p = 0; p < samples.size(); ++p)
+    for (std::size_t k = 0; k < samples[p].size(); ++k) {
+      const double v = result.vignetting_applied[samples[p][k].first];
+      const double log_fall = std::log(std::max(0.1, 1 - v * falloff[p][k].r2));
+      for (double& x : samples[p][k].second) x -= log_fall;
+    }
   // Iterated: each camera's median residual against the points' mean, the mean then
   // recomputed without the gains found so far.
   const LogGains log_gain = SolveLogGains(samples, nc, 2);
   result.disagreement_after = GainDisagreement(samples, log_gain);
   if (samples.size() >= 20) result.held_out_bias = HeldOutBias(samples, nc);
-  result.vignetting = EstimateVignetting(falloff, static_cast<int>(nc));
   for (std::size_t c = 0; c < nc; ++c)
     for (int ch = 0; ch < 3; ++ch) result.gain[c][ch] = std::exp(log_gain[c][ch]);
   return result;

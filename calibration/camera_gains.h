@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "calibration/rig_geometry.h"
+#include "calibration/vignetting_correction.h"
 #include "core/image/image.h"
 
 namespace hdr4d {
@@ -34,16 +35,20 @@ struct CameraGains {
   bool from_static_images = false;
   double footprint_pixels = 0;  // the patch each camera averaged (see above; 0: 3x3 windows)
   // Each camera's vignetting v (radiance x 1 - v (r / r_corner)^2) from the same points
-  // (calibration/vignetting_estimate.h): reported, not applied.
-  std::vector<double> vignetting;
+  // (calibration/vignetting_estimate.h), and the v divided out of the samples before the gains
+  // were solved (0 where not; vignetting_correction.h says which): calibrate divides the same
+  // out of the camera's HDR and brackets.
+  std::vector<double> vignetting, vignetting_error, vignetting_applied;  // error: its standard error
   double Mean(int camera) const;  // mean of the three channel gains
 };
 
 constexpr double kGainFootprintPixels = 3;
 
 // `hdr` holds one fused RGB image per rig camera of the same time (distorted, as fused).
-// `rig.visibility` says which cameras saw each point. Fewer than 10 shared points: gains 1.
+// `rig.visibility` says which cameras saw each point. Fewer than 10 shared points: gains 1, no
+// vignetting. `vignetting` says which cameras' falloff is divided out before the gains.
 CameraGains EstimateCameraGains(const Rig& rig, const std::vector<Image>& hdr,
-                                double footprint_pixels = kGainFootprintPixels);
+                                double footprint_pixels = kGainFootprintPixels,
+                                VignettingCorrection vignetting = VignettingCorrection::kAuto);
 
 }  // namespace hdr4d

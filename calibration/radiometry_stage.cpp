@@ -8,6 +8,7 @@
 #include "calibration/camera_gains.h"
 #include "calibration/hdr_fusion.h"
 #include "calibration/undistort.h"
+#include "calibration/vignetting_correction.h"
 #include "core/image/image_io.h"
 #include "core/util/error.h"
 #include "core/util/progress.h"
@@ -119,7 +120,8 @@ std::optional<CameraGains> EstimateGains(const Capture& capture, const std::opti
       }
   if (fused.size() != rig->cameras.size()) return std::nullopt;
   const bool use_static = std::none_of(statics.begin(), statics.end(), [](const Image& i) { return i.empty(); });
-  CameraGains gains = EstimateCameraGains(*rig, use_static ? statics : fused, options.gain_footprint_pixels);
+  CameraGains gains =
+      EstimateCameraGains(*rig, use_static ? statics : fused, options.gain_footprint_pixels, options.vignetting);
   gains.from_static_images = use_static;
   return gains;
 }
@@ -131,6 +133,15 @@ std::array<double, 3> GainOf(const CalibrationRecord& record, const std::optiona
   return {1.0, 1.0, 1.0};
 }
 
+// The falloff divided out of a camera's HDR and brackets (0: none; camera_gains.h).
+double VignettingOf(const CalibrationRecord& record, const std::optional<Rig>& rig, const std::string& name) {
+  if (!record.gains) return 0;
+  const std::vector<double>& applied = record.gains->vignetting_applied;
+  for (std::size_t c = 0; c < rig->cameras.size() && c < applied.size(); ++c)
+    if (rig->cameras[c].name == name) return applied[c];
+  return 0;
+}
+
 // What one camera's frames share while they are written.
 struct CameraOutput {
   const CaptureCamera& camera;
@@ -138,23 +149,27 @@ struct CameraOutput {
   const RigCamera* rig_camera;  // null without a rig
   const CameraResponse& response;
   std::array<double, 3> gain;
+  double vignetting = 0;  // the falloff divided out of its HDR and brackets (rig cameras only)
 };
 
-// Copies (or, undistorted or not 8-bit-friendly, re-encodes) bracket k into images/.
+// Copies (or, devignetted, undistorted or not 8-bit-friendly, re-encodes) bracket k into images/.
 std::string WriteBracketImage(const CameraOutput& cam, const CaptureFrame& capture_frame, const Bracket& bracket,
                               std::size_t k, const fs::path& staging) {
   const fs::path& source = capture_frame.brackets[k];
   const bool undistort = cam.rig_camera && cam.rig_camera->undistort;
   std::string ext = source.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return std::tolower(ch); });
-  const bool copy = !undistort && (ext == ".png" || ext == ".jpg" || ext == ".jpeg");
+  const bool devignette = cam.rig_camera && cam.vignetting != 0;
+  const bool copy = !undistort && !devignette && (ext == ".png" || ext == ".jpg" || ext == ".jpeg");
   const std::string name =
       fmt::format("images/{}/{}{}", cam.camera.name, source.stem().string(), copy ? ext : ".png");
   fs::create_directories((staging / name).parent_path());
   if (copy) {
     fs::copy_file(source, staging / name, fs::copy_options::overwrite_existing);
   } else {
-    const Image ldr = undistort ? Undistort(bracket.image, cam.rig_camera->intrinsics) : bracket.image;
+    Image ldr = devignette ? DevignetteDisplay(bracket.image, *cam.rig_camera, cam.vignetting, cam.response)
+                           : bracket.image;
+    if (undistort) ldr = Undistort(ldr, cam.rig_camera->intrinsics);
     WriteImage(staging / name, ldr, {.format = PixelFormat::kUint16});
   }
   return name;
@@ -189,6 +204,8 @@ void WriteFrame(const CameraOutput& cam, const CaptureFrame& capture_frame, cons
          cam.rig_camera->height);
   FusionResult fused = FuseBrackets(brackets, cam.response, options.fusion);
   for (std::size_t i = 0; i < fused.hdr.size(); ++i) fused.hdr.data()[i] /= static_cast<float>(cam.gain[i % 3]);
+  // The falloff is in the image as captured: divided out before any undistortion.
+  if (cam.rig_camera && cam.vignetting != 0) fused.hdr = DevignetteLinear(fused.hdr, *cam.rig_camera, cam.vignetting);
   if (cam.rig_camera && cam.rig_camera->undistort) fused.hdr = Undistort(fused.hdr, cam.rig_camera->intrinsics);
   const std::string hdr_name = fmt::format("hdr/{}/{:05d}.exr", cam.camera.name, capture_frame.index);
   WriteImage(staging / hdr_name, fused.hdr);
@@ -238,7 +255,8 @@ std::vector<Frame> RunRadiometry(const Capture& capture, const CalibrateOptions&
     if (rig && !rig_camera)
       Fail("{}: camera {} is not in the rig of rig.json", (capture.root / "sequence" / camera.name).string(),
            camera.name);
-    const CameraOutput cam{camera, static_cast<int>(c), rig_camera, responses[c], GainOf(*record, rig, camera.name)};
+    const CameraOutput cam{camera,       static_cast<int>(c),          rig_camera,
+                           responses[c], GainOf(*record, rig, camera.name), VignettingOf(*record, rig, camera.name)};
     for (const CaptureFrame& capture_frame : camera.frames) {
       WriteFrame(cam, capture_frame, options, staging, record, images_written, &frames);
       progress.Advance(1, fmt::format("{} frame {}", camera.name, capture_frame.index));

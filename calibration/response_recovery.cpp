@@ -186,6 +186,18 @@ double CameraResponse::Linearize(int channel, double value01) const {
   return x[lo] + f * (x[lo + 1] - x[lo]);
 }
 
+double CameraResponse::Encode(int channel, double exposure) const {
+  const auto& x = inverse[std::clamp<std::size_t>(channel, 0, inverse.size() - 1)];
+  if (!(exposure > x[0])) return 0.0;
+  if (exposure > x[kResponseCodes - 1]) return 1.0;
+  // x is non-decreasing: the first code at or above the exposure, interpolated from the one below.
+  const int hi = static_cast<int>(std::lower_bound(x.begin(), x.end(), exposure) - x.begin());
+  const int lo = hi - 1;
+  const double span = x[hi] - x[lo];
+  const double f = span > 0 ? (exposure - x[lo]) / span : 0.0;
+  return (lo + f) / (kResponseCodes - 1);
+}
+
 CameraResponse RecoverResponse(const std::vector<std::vector<Bracket>>& stacks,
                                const ResponseOptions& options) {
   CheckStacks(stacks);

@@ -35,6 +35,9 @@ struct CameraResponse {
   std::string method;
   // The exposure of `code` in channel c, linear interpolation on a continuous code value.
   double Linearize(int channel, double value01) const;
+  // Linearize's inverse: the display value in [0,1] whose exposure is `exposure` (the first
+  // code of a flat run; 0 below the curve, 1 above it).
+  double Encode(int channel, double exposure) const;
 };
 
 // The code (0..255) of a display value in [0,1].

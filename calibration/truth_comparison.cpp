@@ -73,6 +73,7 @@ struct TruthCamera {
   std::string name;
   double fx = 0, fy = 0, cx = 0, cy = 0;
   double k1 = 0, k2 = 0;  // the capture's lens (RADIAL, normalised coordinates); 0: a pinhole
+  double vignetting = 0;  // the capture's falloff v (radiance x 1 - v (r / r_corner)^2)
   int width = 0, height = 0;
   Eigen::Matrix4d world_from_cam_gl;
   std::array<double, 3> low{}, high{};
@@ -96,6 +97,7 @@ std::vector<TruthCamera> ReadTruthCameras(const fs::path& truth) {
       c.fy = j.value("fy", c.fx);
       c.k1 = j.value("k1", 0.0);
       c.k2 = j.value("k2", 0.0);
+      c.vignetting = j.value("vignetting", 0.0);
       c.cx = j.at("cx").get<double>();
       c.cy = j.at("cy").get<double>();
       c.width = j.at("width").get<int>();
@@ -222,7 +224,8 @@ struct HdrPair {
 // radiance the calibrated camera should deliver in its own geometry. Against it the HDR figures
 // measure the radiometry alone (the geometry figures measure the rest); against the render
 // itself, each bilinear resampling's blur of the texture and any residual distortion lower a
-// pixel-by-pixel log-log slope too. Vignetting is not applied: calibrate does not correct it.
+// pixel-by-pixel log-log slope too. Vignetting is not applied: calibrate divides out the falloff
+// it measures (--vignetting), so the radiance it should deliver is the render's.
 bool HasLens(const TruthCamera& t) { return t.k1 != 0 || t.k2 != 0; }
 
 Image TruthAsCalibrated(const Image& render, const TruthCamera& t, const RigCamera* c) {
@@ -505,6 +508,7 @@ TruthComparison CompareWithTruth(const fs::path& calibrated, const fs::path& tru
   std::vector<HdrPair> pairs;
   for (std::size_t c = 0; c < out.cameras.size(); ++c) {
     const TruthCamera& t = FindTruth(truth_cameras, out.cameras[c].name, truth / "cameras.json");
+    out.cameras[c].vignetting_truth = t.vignetting;
     const fs::path folder = calibrated / "hdr" / t.name;
     if (!fs::is_directory(folder)) continue;
     for (const auto& entry : fs::directory_iterator(folder)) {
@@ -545,6 +549,7 @@ json TruthComparisonJson(const TruthComparison& c) {
       j["focal_error_relative"] = e.focal_relative;
       j["principal_point_error_px"] = e.principal_point_px;
     }
+    j["vignetting_truth"] = e.vignetting_truth;
     if (e.hdr) {
       j["hdr_median_relative_error"] = e.hdr_median_relative;
       j["hdr_scale_against_truth"] = e.hdr_scale;

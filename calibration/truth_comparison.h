@@ -55,6 +55,7 @@ struct CameraTruthError {
   double hdr_median_relative = 0;  // median over its values of |s c - truth| / truth
   long hdr_values = 0;
   std::array<double, 3> hdr_scale{1, 1, 1};  // median of s c / truth per channel (1 = agrees)
+  double vignetting_truth = 0;  // the capture's falloff v (calibration.json has the estimate)
 };
 
 struct TruthComparison {

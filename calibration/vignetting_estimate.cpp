@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace hdr4d {
 namespace {
@@ -11,9 +12,38 @@ constexpr double kMinV = -0.5, kMaxV = 0.9;
 
 double Falloff(double v, double r2) { return std::log(std::max(1e-6, 1 - v * r2)); }
 
+// The standard error of each camera's v at the solution: the inliers' residual variance times
+// the (v, v) element of the inverse of J^T J for (a_c, v_c), the points' means held (so it
+// is a lower bound; a camera whose falloff is not resolved by its radii gets a large one).
+std::vector<double> StandardErrors(const std::vector<std::vector<VignettingSample>>& points,
+                                   const std::vector<double>& mean, const std::vector<double>& a,
+                                   const std::vector<double>& v, const std::vector<int>& count) {
+  const std::size_t nc = v.size();
+  std::vector<double> se(nc, std::numeric_limits<double>::infinity());
+  for (std::size_t c = 0; c < nc; ++c) {
+    if (count[c] < 20) continue;
+    double jtj00 = 0, jtj01 = 0, jtj11 = 0, rr = 0;
+    for (std::size_t p = 0; p < points.size(); ++p)
+      for (const VignettingSample& s : points[p]) {
+        if (static_cast<std::size_t>(s.camera) != c) continue;
+        const double r = s.log_radiance - mean[p] - a[c] - Falloff(v[c], s.r2);
+        if (std::abs(r) > kOutlier) continue;
+        const double dv = -s.r2 / std::max(1e-6, 1 - v[c] * s.r2);
+        jtj00 += 1;
+        jtj01 += dv;
+        jtj11 += dv * dv;
+        rr += r * r;
+      }
+    const double det = jtj00 * jtj11 - jtj01 * jtj01;
+    if (jtj00 > 2 && det > 1e-12) se[c] = std::sqrt(rr / (jtj00 - 2) * jtj00 / det);
+  }
+  return se;
+}
+
 }  // namespace
 
-std::vector<double> EstimateVignetting(const std::vector<std::vector<VignettingSample>>& points, int cameras) {
+std::vector<double> EstimateVignetting(const std::vector<std::vector<VignettingSample>>& points, int cameras,
+                                       std::vector<double>* standard_error) {
   const std::size_t nc = static_cast<std::size_t>(std::max(cameras, 0));
   std::vector<double> a(nc, 0), v(nc, 0);
   std::vector<int> count(nc, 0);
@@ -55,6 +85,7 @@ std::vector<double> EstimateVignetting(const std::vector<std::vector<VignettingS
   }
   for (std::size_t c = 0; c < nc; ++c)
     if (count[c] < 20) v[c] = 0;
+  if (standard_error) *standard_error = StandardErrors(points, mean, a, v, count);
   return v;
 }
 

@@ -19,7 +19,9 @@ struct VignettingSample {
 };
 
 // points[p] = the cameras that saw point p. Returns v per camera (0 where a camera has fewer
-// than 20 samples), clamped to [-0.5, 0.9].
-std::vector<double> EstimateVignetting(const std::vector<std::vector<VignettingSample>>& points, int cameras);
+// than 20 samples), clamped to [-0.5, 0.9]; with `standard_error`, each v's standard error there
+// (infinite where no estimate was made).
+std::vector<double> EstimateVignetting(const std::vector<std::vector<VignettingSample>>& points, int cameras,
+                                       std::vector<double>* standard_error = nullptr);
 
 }  // namespace hdr4d

@@ -53,6 +53,14 @@ void AddRadiometryFlags(CLI::App* cmd, CalibrateOptions* options) {
                   "others (0: a 3x3 window in every camera)")
       ->capture_default_str()
       ->check(Real(0, 100));
+  cmd->add_option_function<std::string>(
+         "--vignetting", [options](const std::string& text) { options->vignetting = ParseVignettingCorrection(text); },
+         "Each rig camera's vignetting (radiance x 1 - v (r / r_corner)^2) is estimated from the points the "
+         "cameras share; auto: divided out of its HDR and brackets where v >= 0.05 and at least 4 standard "
+         "errors (the brackets are then "
+         "re-encoded through the response as 16-bit PNG); on: every camera's estimate; off: reported only")
+      ->default_str("auto")
+      ->check(CLI::IsMember({"auto", "on", "off"}));
   cmd->add_option("--smoothness", options->response.smoothness, "Debevec-Malik smoothness weight")
       ->capture_default_str()
       ->check(Real(0, 1e9));
