@@ -20,7 +20,7 @@ using CompareKey = std::tuple<std::string, std::string, std::string, std::string
 using SeedRuns = std::map<std::int64_t, const RunSummary*>;
 
 // The columns of the paper's tables, in their order: what is compared unless asked otherwise.
-const std::vector<std::string> kPaperMetrics = {"mu_psnr", "mu_ssim", "hdr_flip",
+const std::vector<std::string> kPaperMetrics = {"mu_psnr", "mu_ssim", "hdr_flip_aligned",
                                                 "psnr",    "ssim",    "flip"};
 
 int DirectionOf(const std::string& key) {

@@ -19,7 +19,9 @@ using Key = std::tuple<std::string, std::string, std::string, std::int64_t>;  //
 const char* kLpipsNote =
     "LPIPS: not computed. It needs the LPIPS network weights, which cannot be obtained on these "
     "machines. FLIP (NVIDIA's weight-free perceptual metric, lower is better) is reported beside "
-    "SSIM instead.";
+    "SSIM instead. HDR FLIP is HDR-FLIP of the prediction times its scale against the truth "
+    "(hdr_flip_aligned, as the aligned mu-PSNR): HDR-FLIP is not scale-free, and a model supervised on "
+    "each image divided by its own maximum renders in those units. Runs scored before it have none (-).";
 
 std::vector<Column> HdrColumns(const TableOptions& o, bool with_lpips) {
   std::string psnr = "mu_psnr", ssim = "mu_ssim";
@@ -27,7 +29,7 @@ std::vector<Column> HdrColumns(const TableOptions& o, bool with_lpips) {
   if (o.protocol == HdrProtocol::kPu21) psnr = "pu21_psnr", ssim = "pu21_ssim";
   if (!o.hdr_psnr_key.empty()) psnr = o.hdr_psnr_key, ssim = o.hdr_ssim_key;
   std::vector<Column> c = {
-      {psnr, "HDR", "PSNR", 1, 2}, {ssim, "HDR", "SSIM", 1, 3}, {"hdr_flip", "HDR", "FLIP", -1, 3}};
+      {psnr, "HDR", "PSNR", 1, 2}, {ssim, "HDR", "SSIM", 1, 3}, {"hdr_flip_aligned", "HDR", "FLIP", -1, 3}};
   if (with_lpips) c.push_back({"lpips_hdr", "HDR", "LPIPS", -1, 3, false});
   return c;
 }
@@ -482,7 +484,7 @@ Table BuildAllMetricsTable(const TableSpec& spec, const Suite& suite,
   // LDR keys first, then the HDR protocols, then anything newer, alphabetically.
   const std::vector<std::string> order = {"psnr", "psnr_channel_mean", "ssim", "flip", "mu_psnr",
                                           "mu_ssim", "mu_psnr_gt_max", "mu_ssim_gt_max",
-                                          "pu21_psnr", "pu21_ssim", "hdr_flip"};
+                                          "pu21_psnr", "pu21_ssim", "hdr_flip", "hdr_flip_aligned"};
   std::vector<Column> columns;
   auto digits = [](const std::string& k) {
     return k.find("ssim") != std::string::npos || k.find("flip") != std::string::npos ? 3 : 2;

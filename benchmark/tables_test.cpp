@@ -74,7 +74,7 @@ TEST(Tables, MainLayoutMeansSpreadsBestAndTests) {
   EXPECT_EQ(t.scenes, (std::vector<std::string>{"s1", "s2"}));
   std::vector<std::string> keys;
   for (const auto& c : t.columns) keys.push_back(c.key);
-  EXPECT_EQ(keys, (std::vector<std::string>{"mu_psnr", "mu_ssim", "hdr_flip", "lpips_hdr", "psnr",
+  EXPECT_EQ(keys, (std::vector<std::string>{"mu_psnr", "mu_ssim", "hdr_flip_aligned", "lpips_hdr", "psnr",
                                             "ssim", "flip", "lpips", "train_minutes", "fps"}));
   EXPECT_EQ(t.columns[Column(t, "flip")].direction, -1);  // FLIP: lower is better
   const std::size_t psnr = Column(t, "psnr"), mu = Column(t, "mu_psnr"), time = Column(t, "train_minutes");

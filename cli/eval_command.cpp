@@ -50,6 +50,7 @@ HDR pairs (EXR/HDR; both float) are scored with:
   pu21_ssim          SSIM on PU21 luminance, C1 = (0.01*256)^2, C2 = (0.03*256)^2
   hdr_flip           HDR-FLIP (Andersson et al. 2021): the worst LDR-FLIP per pixel over
                      ACES-tone-mapped exposures whose range comes from the ground truth
+                     (NVIDIA's tool's figure; not scale-free)
 PU21 scaling: both images are multiplied by 4000 / (max luminance of the ground truth),
 luminance = 0.212656 R + 0.715158 G + 0.072186 B, then clamped to [0.005, 10000] cd/m^2.
 Scale-aligned HDR metrics (LDR fixes an HDR only up to one factor, and cannot tell how bright
@@ -79,6 +80,8 @@ a light is that clips at every exposure; the own-max protocol divides by exactly
                      with a narrow range of reproduced truth would swing a mean of slopes
   mu_*_aligned       prediction times hdr_align_scale, then the HDR-NeRF (GT max) protocol
   pu21_*_aligned     prediction times hdr_align_scale, then PU21 as above
+  hdr_flip_aligned   prediction times hdr_align_scale, then HDR-FLIP as above (the
+                     tables' HDR FLIP)
 Metrics use the first three channels (alpha is ignored). "mean" is the mean of the
 per-image values that are finite. Identical images have PSNR inf, written as null in JSON and
 left out of the means; "identical_pairs" counts them.)";

@@ -212,7 +212,7 @@ TEST(HexPlaneRun, HdrMethodsReportTableOneMetricsAndTheSlope) {
   MakeHdrScene(dir / "scene");
   HexPlaneTrainOptions o = SmallHdrHexPlaneRun(dir / "scene", dir / "hdr", 30);
   const HexPlaneTrainSummary s = TrainHexPlane(o);
-  for (const char* key : {"psnr", "ssim", "flip", "mu_psnr", "mu_ssim", "pu21_psnr", "hdr_flip",
+  for (const char* key : {"psnr", "ssim", "flip", "mu_psnr", "mu_ssim", "pu21_psnr", "hdr_flip", "hdr_flip_aligned",
                           "hdr_log_slope", "hdr_log_corr"})
     EXPECT_TRUE(s.test_metrics.contains(key)) << key << " in " << s.test_metrics.dump();
   const nlohmann::json config = ReadJsonFile(dir / "hdr" / "config.json");

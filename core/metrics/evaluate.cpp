@@ -135,7 +135,7 @@ PairResult EvaluateFiles(const fs::path& pred_path,
     if (hdr) {
       result.metrics = HdrMetrics(pred_rgb, gt_rgb);
       result.metrics.emplace_back("hdr_flip", HdrFlip(pred_rgb, gt_rgb));
-      MetricList aligned = AlignedHdrMetrics(pred_rgb, gt_rgb, mask);
+      MetricList aligned = AlignedHdrMetrics(pred_rgb, gt_rgb, mask, /*with_flip=*/true);
       if (masks && masks->reproduced) {
         result.fit_sums.emplace();
         const MetricList fit =
@@ -283,7 +283,7 @@ const std::vector<std::string>& KnownKeys() {
   static const std::vector<std::string> keys = {
       "psnr",           "psnr_channel_mean", "ssim",      "flip",      "mu_psnr",
       "mu_ssim",        "mu_psnr_gt_max",    "mu_ssim_gt_max", "pu21_psnr", "pu21_ssim",
-      "hdr_flip",       "mu_psnr_aligned",   "mu_ssim_aligned", "pu21_psnr_aligned",
+      "hdr_flip",       "hdr_flip_aligned",  "mu_psnr_aligned",   "mu_ssim_aligned", "pu21_psnr_aligned",
       "pu21_ssim_aligned", "hdr_log_slope",  "hdr_log_corr", "hdr_log_contrast",
       "hdr_align_scale", "hdr_measured_fraction", "hdr_log_slope_ldr_fit",
       "hdr_log_corr_ldr_fit", "hdr_ldr_fit_fraction"};

@@ -35,7 +35,7 @@ using testing::TempDir;
 const std::set<std::string> kLdrKeys = {"name", "psnr", "psnr_channel_mean", "ssim", "flip"};
 const std::set<std::string> kHdrKeys = {
     "name",           "mu_psnr",           "mu_ssim",         "mu_psnr_gt_max",
-    "mu_ssim_gt_max", "pu21_psnr",         "pu21_ssim",       "hdr_flip",        "hdr_align_scale",
+    "mu_ssim_gt_max", "pu21_psnr",         "pu21_ssim",       "hdr_flip",        "hdr_flip_aligned", "hdr_align_scale",
     "hdr_log_slope",  "hdr_log_corr",      "hdr_log_contrast", "hdr_measured_fraction", "mu_psnr_aligned",
     "mu_ssim_aligned", "pu21_psnr_aligned", "pu21_ssim_aligned"};
 

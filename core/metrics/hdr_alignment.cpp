@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/metrics/flip.h"
 #include "core/util/error.h"
 
 namespace hdr4d {
@@ -207,7 +208,8 @@ HdrAlignment AlignHdr(const Image& pred, const Image& gt, const std::vector<std:
 
 MetricList AlignedHdrMetrics(const Image& pred,
                              const Image& gt,
-                             const std::vector<std::uint8_t>* mask) {
+                             const std::vector<std::uint8_t>* mask,
+                             bool with_flip) {
   const HdrAlignment a = AlignHdr(pred, gt, mask);
   Image aligned = pred.Rgb();
   float* d = aligned.data();
@@ -216,7 +218,7 @@ MetricList AlignedHdrMetrics(const Image& pred,
     d[i] = float(std::min(double(d[i]) * a.scale, double(std::numeric_limits<float>::max())));
   }
   const Image gt_rgb = gt.Rgb();
-  return {
+  MetricList out = {
       {"hdr_align_scale", a.scale},
       {"hdr_log_slope", a.slope},
       {"hdr_log_corr", a.corr},
@@ -227,6 +229,8 @@ MetricList AlignedHdrMetrics(const Image& pred,
       {"pu21_psnr_aligned", Pu21Psnr(aligned, gt_rgb)},
       {"pu21_ssim_aligned", Pu21Ssim(aligned, gt_rgb)},
   };
+  if (with_flip) out.emplace_back("hdr_flip_aligned", HdrFlip(aligned, gt_rgb));
+  return out;
 }
 
 PooledShape PoolLogShape(const std::vector<LogShapeSums>& images) {

@@ -102,11 +102,15 @@ HdrAlignment AlignHdr(const Image& pred, const Image& gt, const std::vector<std:
 // In this order: "hdr_align_scale", "hdr_log_slope", "hdr_log_corr", "hdr_log_contrast",
 // "hdr_measured_fraction" (pixels used / all pixels), "mu_psnr_aligned", "mu_ssim_aligned"
 // (prediction times the scale, both divided by the truth's maximum, clamped, mu-law),
-// "pu21_psnr_aligned", "pu21_ssim_aligned".
+// "pu21_psnr_aligned", "pu21_ssim_aligned"; with `with_flip`, then "hdr_flip_aligned"
+// (HDR-FLIP of the prediction times the scale: raw HDR-FLIP is not scale-free, and a model
+// supervised as the paper does, on each image divided by its own maximum, renders in those
+// units; on lego mini its raw HDR-FLIP read 0.81 for every such model, the scale alone).
 // Throws as AlignHdr, and hdr4d::Error for an all-black truth.
 MetricList AlignedHdrMetrics(const Image& pred,
                              const Image& gt,
-                             const std::vector<std::uint8_t>* mask);
+                             const std::vector<std::uint8_t>* mask,
+                             bool with_flip = false);
 
 // The HDR's shape where the LDR is right (5 above): "hdr_log_slope_ldr_fit" and
 // "hdr_log_corr_ldr_fit" (AlignHdr over the pixels `reproduced` keeps), and

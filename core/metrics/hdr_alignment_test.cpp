@@ -8,6 +8,7 @@
 #include <map>
 #include <random>
 
+#include "core/metrics/flip.h"
 #include "tests/testing.h"
 
 namespace hdr4d {
@@ -74,6 +75,20 @@ TEST(HdrAlignment, AlignedMetricsIgnoreTheGlobalScaleButNotTheShape) {
   EXPECT_NEAR(compressed.at("hdr_log_slope"), 0.25, 0.02);
   EXPECT_GT(compressed.at("hdr_log_corr"), 0.98);
   EXPECT_NEAR(compressed.at("hdr_log_contrast"), 0.25, 0.02);
+}
+
+// HDR-FLIP is not scale-free: a prediction right but for one factor (a model supervised on each
+// image over its own maximum) reads as badly wrong in raw HDR-FLIP. The aligned one sees the
+// right image, and still sees a wrong shape.
+TEST(HdrAlignment, AlignedHdrFlipIgnoresTheGlobalScaleButNotTheShape) {
+  const Image gt = WideRangeHdr(48, 48, 2);
+  const Image scaled = Power(gt, 1.0 / 37, 1.0);
+  EXPECT_EQ(AsMap(AlignedHdrMetrics(scaled, gt, nullptr)).count("hdr_flip_aligned"), 0u);  // only when asked
+  const auto proportional = AsMap(AlignedHdrMetrics(scaled, gt, nullptr, /*with_flip=*/true));
+  EXPECT_GT(HdrFlip(scaled, gt), 0.3);
+  EXPECT_LT(proportional.at("hdr_flip_aligned"), 1e-3);
+  const auto compressed = AsMap(AlignedHdrMetrics(Power(gt, 1.0, 0.5), gt, nullptr, true));
+  EXPECT_GT(compressed.at("hdr_flip_aligned"), 0.1);
 }
 
 // A held-out render misplaces pixels (geometry error, blur): the slope drops with the

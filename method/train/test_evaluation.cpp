@@ -63,7 +63,7 @@ MetricList GroupHdrMetrics(const std::vector<TrainView>& views,
     truth = DownsampleBox(truth, factor);
   MetricList metrics = HdrMetrics(prediction, truth);
   if (with_flip) metrics.emplace_back("hdr_flip", HdrFlip(prediction, truth));
-  const MetricList aligned = AlignedHdrMetrics(prediction, truth, &measured);
+  const MetricList aligned = AlignedHdrMetrics(prediction, truth, &measured, with_flip);
   metrics.insert(metrics.end(), aligned.begin(), aligned.end());
   if (rendered.size() == brackets.size()) {
     fit_sums->emplace_back();

@@ -62,7 +62,7 @@ TEST(TrainerHdr, LdrSupervisionTrainsAndReportsHdrMetrics) {
   for (int i = 0; i < 30; ++i)
     first += s.loss_curve[i], last += s.loss_curve[s.loss_curve.size() - 1 - i];
   EXPECT_LT(last, 0.9 * first);
-  for (const char* key : {"psnr", "ssim", "flip", "mu_psnr", "mu_ssim", "pu21_psnr", "hdr_flip",
+  for (const char* key : {"psnr", "ssim", "flip", "mu_psnr", "mu_ssim", "pu21_psnr", "hdr_flip", "hdr_flip_aligned",
                           "mu_psnr_aligned", "pu21_psnr_aligned", "hdr_log_slope", "hdr_log_corr",
                           "hdr_log_slope_ldr_fit", "hdr_ldr_fit_fraction"}) {
     ASSERT_TRUE(s.test_metrics.contains(key)) << key << " in " << s.test_metrics.dump();
