@@ -1,5 +1,6 @@
-// Each rig camera's vignetting from the sparse points that several cameras saw, measured and
-// reported, not applied (issue 54). The model is datagen's: radiance times 1 - v (r / r_corner)^2,
+// Each rig camera's vignetting from the sparse points that several cameras saw (issue 54;
+// vignetting_correction.h decides where it is divided out). The model is datagen's: radiance
+// times 1 - v (r / r_corner)^2,
 // r the distance from the principal point. It is identifiable without a flat field because one
 // point lands at different radii in different cameras: the log radiance of point p in camera c is
 // l_p + a_c + ln(1 - v_c r_pc^2), and with radius pairs that vary over the points the gain a_c
