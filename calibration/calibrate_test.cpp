@@ -93,11 +93,18 @@ void DrawBoard(Image* image, const Eigen::Matrix4d& cam_from_world, const Eigen:
     }
 }
 
+// (r / r_corner)^2 of pixel (x, y) of the rig's images, r from the image centre.
+double CentreRadius2(int x, int y) {
+  return (std::pow(x + 0.5 - kW / 2.0, 2) + std::pow(y + 0.5 - kH / 2.0, 2)) / (kW * kW / 4.0 + kH * kH / 4.0);
+}
+
 // With `actor`, each camera sees each point's patch with its own scatter (as texture and a
 // sub-pixel misregistration give), and in frame 0 an actor covers 40% of camera 0's points with
-// something three times as bright (the static images show the empty scene).
+// something three times as bright (the static images show the empty scene). `vignetting` darkens
+// each camera's images by 1 - v (r / r_corner)^2 (r from the image centre, its principal point).
 SyntheticRig WriteCapture(const fs::path& root, const fs::path& model_folder, bool board = false,
-                          std::array<double, kCameras> gammas = {2.2, 2.2, 2.2}, bool actor = false) {
+                          std::array<double, kCameras> gammas = {2.2, 2.2, 2.2}, bool actor = false,
+                          std::array<double, kCameras> vignetting = {0, 0, 0}, std::size_t points = 40) {
   SyntheticRig rig;
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1, 1), log_r(std::log(0.02), std::log(3.0));
@@ -116,9 +123,9 @@ SyntheticRig WriteCapture(const fs::path& root, const fs::path& model_folder, bo
     image.cam_from_world_translation = rig.cam_from_world[c].topRightCorner<3, 1>();
     model.images[c + 1] = image;
   }
-  // Points seen by every camera, 40 of them, kept apart by 4 pixels in every image so that their
-  // patches (below) do not overwrite each other.
-  for (int id = 1; model.points.size() < 40;) {
+  // Points seen by every camera (`points` of them, 40 unless asked), kept apart by 4 pixels in
+  // every image so that their patches (below) do not overwrite each other.
+  for (int id = 1; model.points.size() < points;) {
     const Eigen::Vector3d xyz(0.8 * u(rng), 0.8 * u(rng), 0.8 * u(rng));
     std::vector<Eigen::Vector2d> uv;
     bool apart = true;
@@ -167,8 +174,14 @@ SyntheticRig WriteCapture(const fs::path& root, const fs::path& model_folder, bo
             }
     }
     rig.radiance.push_back(radiance);
+    Image lens(kW, kH, 3);  // the gain and the falloff, per pixel and channel
+    for (int y = 0; y < kH; ++y)
+      for (int x = 0; x < kW; ++x) {
+        const double fall = 1 - vignetting[c] * CentreRadius2(x, y);
+        for (int ch = 0; ch < 3; ++ch) lens.at(x, y, ch) = static_cast<float>(kGains[c][ch] * fall);
+      }
     Image seen = radiance;
-    for (std::size_t i = 0; i < seen.size(); ++i) seen.data()[i] *= static_cast<float>(kGains[c][i % 3]);
+    for (std::size_t i = 0; i < seen.size(); ++i) seen.data()[i] *= lens.data()[i];
     const GammaCrf crf(gammas[c]);
     // The static image through the camera's own response, at the middle bracket's exposure.
     Image still(kW, kH, 3, Encoding::kSrgb);
@@ -185,7 +198,7 @@ SyntheticRig WriteCapture(const fs::path& root, const fs::path& model_folder, bo
         Image ldr(kW, kH, 3, Encoding::kSrgb);
         const Image& scene = frame == 0 ? with_actor : radiance;
         for (std::size_t i = 0; i < ldr.size(); ++i)
-          ldr.data()[i] = static_cast<float>(crf.Apply(scene.data()[i] * kGains[c][i % 3] * kExposures[k]));
+          ldr.data()[i] = static_cast<float>(crf.Apply(scene.data()[i] * lens.data()[i] * kExposures[k]));
         WriteImage(root / "sequence" / name / fmt::format("{}_{}.png", frame, k), ldr);
       }
   }
@@ -250,6 +263,41 @@ TEST(Calibrate, GainsAreMeasuredOnTheEmptySceneNotUnderTheActors) {
     for (int c = 0; c < kCameras; ++c)
       EXPECT_NEAR(r[c] / std::exp(log_mean), 1.0, 0.03) << "camera " << c << " channel " << ch;
   }
+}
+
+// Vignetting through the whole command: the falloff is measured on the shared points, divided
+// out of the HDR (flat from the centre to the corners against the radiance) and of the brackets,
+// which are re-encoded as 16-bit PNG; a camera without vignetting keeps its brackets as they are.
+TEST(Calibrate, VignettingIsDividedOutOfTheHdrAndTheBrackets) {
+  testing::TempDir dir;
+  const SyntheticRig truth =
+      WriteCapture(dir / "capture", dir / "model", false, {2.2, 2.2, 2.2}, false, {0.35, 0.0, 0.25}, 160);
+  const auto result = testing::RunHdr4d("calibrate --capture '" + (dir / "capture").string() + "' --out '" +
+                                        (dir / "out").string() + "' --colmap-model '" + (dir / "model").string() +
+                                        "'" + kThreeByThreeGains);
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const nlohmann::json report = nlohmann::json::parse(testing::ReadTextFile(dir / "out" / "calibration.json"));
+  const nlohmann::json& applied = report["camera_agreement"]["vignetting_applied"];
+  ASSERT_EQ(applied.size(), 3u) << report["camera_agreement"].dump();
+  EXPECT_NEAR(applied[0].get<double>(), 0.35, 0.05) << report["camera_agreement"].dump();
+  EXPECT_EQ(applied[1].get<double>(), 0.0) << report["camera_agreement"].dump();
+  EXPECT_NEAR(applied[2].get<double>(), 0.25, 0.05) << report["camera_agreement"].dump();
+  EXPECT_TRUE(fs::exists(dir / "out" / "images" / "cam0" / "0_0.png"));  // re-encoded
+  EXPECT_TRUE(fs::exists(dir / "out" / "images" / "cam1" / "0_0.png"));  // copied (it was a PNG)
+  // Camera 0's HDR against its radiance: the corners as bright as the centre (0.35 x 0.75 = 26% in
+  // log before the correction, measured at the corners).
+  const Image hdr = ReadImage(dir / "out" / "hdr" / "cam0" / "00000.exr");
+  std::vector<double> centre, corners;
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const double r2 = CentreRadius2(x, y);
+      if (r2 > 0.1 && r2 < 0.7) continue;
+      const double ratio = std::log(hdr.at(x, y, 1) / truth.radiance[0].at(x, y, 1));
+      if (std::isfinite(ratio)) (r2 <= 0.1 ? centre : corners).push_back(ratio);
+    }
+  std::nth_element(centre.begin(), centre.begin() + centre.size() / 2, centre.end());
+  std::nth_element(corners.begin(), corners.begin() + corners.size() / 2, corners.end());
+  EXPECT_NEAR(corners[corners.size() / 2], centre[centre.size() / 2], 0.05);
 }
 
 TEST(Calibrate, SyntheticRigBecomesADataset) {
