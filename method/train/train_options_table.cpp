@@ -442,7 +442,9 @@ std::vector<TrainOption> CadenceRows() {
   const auto count = [](std::int64_t min) { return ValueRange::Integer(min); };
   return {
       Row("test_every", Top(&TrainOptions::test_every))
-          .Flag("--test-every", "Evaluate the test split every N iterations (0: at the end)")
+          .Flag("--test-every",
+                "Evaluate the test split every N iterations (0: at the end); RUN/results.json's "
+                "test_curve holds each evaluation's metrics, iteration and training seconds")
           .Range(count(0))
           .ShowDefault()
           .MayChangeOnResume(),

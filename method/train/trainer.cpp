@@ -916,6 +916,7 @@ void TrainingRun::EvaluateAndCheckpoint(int it) {
     nlohmann::json m = EvaluateTestViews(/*with_flip=*/false);  // the curve stays cheap
     spdlog::info("train: iteration {}: test {}", it, m.dump());
     m["iteration"] = it;
+    m["train_seconds"] = TrainingSeconds();  // time to quality: the curve against training time
     loop_.test_curve.push_back(std::move(m));
     eval_seconds_ +=
         std::chrono::duration<double>(std::chrono::steady_clock::now() - eval_start).count();
@@ -1072,6 +1073,7 @@ TrainSummary TrainingRun::Finish() {
   if (options_.test_every > 0) {
     nlohmann::json last = summary.test_metrics;
     last["iteration"] = loop_.iteration;
+    last["train_seconds"] = loop_.train_seconds;
     results["test_curve"].push_back(std::move(last));
   }
   WriteJsonFile(options_.out / "results.json", results);

@@ -130,6 +130,29 @@ TEST(TrainerSpeedOptions, IterationsAutoStopsDeterministicallyAndResumes) {
   EXPECT_TRUE(again.stopped_flat);
 }
 
+// --test-every: each held-out evaluation records the training seconds spent so far (evaluation
+// time excluded), so time to quality can be read from one run's curve.
+TEST(TrainerSpeedOptions, TestCurveRecordsTheTrainingSecondsOfEachEvaluation) {
+  TempDir dir;
+  MakeTinyScene(dir / "scene");
+  TrainOptions o = TinyRun(dir / "scene", dir / "run", 60);
+  o.test_every = 20;
+  Train(o);
+  const nlohmann::json r = ReadJsonFile(dir / "run" / "results.json");
+  const nlohmann::json& curve = r["test_curve"];
+  ASSERT_EQ(curve.size(), 3u);  // 20, 40 and the end
+  double before = 0;
+  for (std::size_t i = 0; i < curve.size(); ++i) {
+    EXPECT_EQ(curve[i]["iteration"], 20 * static_cast<int>(i + 1));
+    const double s = curve[i].at("train_seconds").get<double>();
+    EXPECT_GT(s, before) << "evaluation " << i;
+    before = s;
+    EXPECT_TRUE(curve[i].contains("psnr"));
+  }
+  EXPECT_DOUBLE_EQ(curve.back().at("train_seconds").get<double>(),
+                   r.at("train_seconds").get<double>());
+}
+
 // --coarse-to-fine: the first iterations train on reduced images (the tiny scene's 24 px: 6 px
 // up to 20, 12 px up to 40), which changes the run; a run interrupted inside the coarse part
 // resumes bit for bit.
