@@ -167,6 +167,12 @@ struct OptimizationOptions {
   // after densification ended (the model no longer grows). 0 = run all iterations.
   int stop_window = 0;
   double stop_tolerance = kDefaultStopTolerance;
+  // --stop-on-val: the same stop decided on the scene's val split instead of the training loss:
+  // its views are scored every stop_window iterations (also while densifying, except on an
+  // opacity reset's iteration) and the run stops once kHeldOutPatience evaluations in a row have
+  // not improved on the best (method/train/loss_plateau.h). Catches a model that overfits its
+  // training views, which the training loss cannot see.
+  bool stop_on_val = false;
   // Coarse-to-fine images: the first coarse_to_fine iterations render and supervise at 1/4 of
   // the images' size (first half) and 1/2 (second half) where the size divides
   // (method/train/coarse_images.h). 0 = full size throughout.
@@ -292,6 +298,9 @@ struct OptimizationOptions {
     if (!(stop_tolerance >= 0.0 && stop_tolerance <= 1.0)) {
       return fmt::format("stop_tolerance must be in [0, 1], got {}", stop_tolerance);
     }
+    if (stop_on_val && stop_window == 0)
+      return "stop_on_val: --stop-on-val decides when --iterations auto stops; add --iterations "
+             "auto (or --stop-window N)";
     return "";
   }
 };

@@ -24,10 +24,15 @@ std::uint32_t LoopState::NextView(std::size_t num_views) {
 nlohmann::json LoopState::ToJson() const {
   std::ostringstream rng_state;
   rng_state << rng;
-  return {{"iteration", iteration},   {"rng", rng_state.str()},
-          {"order", order},           {"next", next},
-          {"loss_curve", loss_curve}, {"psnr_curve", psnr_curve},
-          {"test_curve", test_curve}, {"train_seconds", train_seconds}};
+  return {{"iteration", iteration},
+          {"rng", rng_state.str()},
+          {"order", order},
+          {"next", next},
+          {"loss_curve", loss_curve},
+          {"psnr_curve", psnr_curve},
+          {"test_curve", test_curve},
+          {"val_curve", val_curve},
+          {"train_seconds", train_seconds}};
 }
 
 void LoopState::FromJson(const nlohmann::json& j, const fs::path& path, std::size_t num_views) {
@@ -42,6 +47,9 @@ void LoopState::FromJson(const nlohmann::json& j, const fs::path& path, std::siz
     // Checkpoints from before the curves were kept resume with empty ones.
     psnr_curve = j.value("psnr_curve", std::vector<double>{});
     test_curve = j.value("test_curve", nlohmann::json::array());
+    val_curve = j.value("val_curve", nlohmann::json::array());
+    if (!val_curve.is_array())
+      Fail("{}: corrupt checkpoint: val_curve is not a list", path.string());
     train_seconds = j.at("train_seconds").get<double>();
   } catch (const nlohmann::json::exception& e) {
     Fail("{}: corrupt checkpoint trainer state: {}", path.string(), e.what());

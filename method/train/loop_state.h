@@ -19,6 +19,8 @@ struct LoopState {
   std::vector<double> loss_curve;
   std::vector<double> psnr_curve;  // training-view PSNR of the final LDR image, per iteration
   nlohmann::json test_curve = nlohmann::json::array();  // {"iteration": i, <metric>: ...}
+  // --stop-on-val: {"iteration": i, "psnr": mean val PSNR or null, "train_seconds": s}
+  nlohmann::json val_curve = nlohmann::json::array();
   double train_seconds = 0;
 
   // The next training view: a new shuffled order of all views at the start of each epoch.

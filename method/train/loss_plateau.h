@@ -9,10 +9,10 @@
 namespace hdr4d::method {
 
 struct LossPlateau {
-  int iteration = 0;      // the iteration after which the run stops
-  double previous = 0;    // mean loss of iterations (iteration - 2 window, iteration - window]
-  double last = 0;        // mean loss of iterations (iteration - window, iteration]
-  double improvement = 0; // (previous - last) / previous
+  int iteration = 0;       // the iteration after which the run stops
+  double previous = 0;     // mean loss of iterations (iteration - 2 window, iteration - window]
+  double last = 0;         // mean loss of iterations (iteration - window, iteration]
+  double improvement = 0;  // (previous - last) / previous
 };
 
 // With loss_curve[i] the loss of iteration i + 1: a plateau when the curve's length is a
@@ -23,5 +23,31 @@ std::optional<LossPlateau> FindLossPlateau(const std::vector<double>& loss_curve
                                            int densify_until,
                                            int window,
                                            double tolerance);
+
+// --stop-on-val: the held-out signal. One point per evaluation of the scene's val split.
+struct HeldOutPoint {
+  int iteration = 0;
+  double psnr = 0;  // mean LDR PSNR over the val views (dB)
+};
+
+struct HeldOutPlateau {
+  int iteration = 0;       // the iteration after which the run stops (the last evaluation)
+  int best_iteration = 0;  // the evaluation that last improved the best
+  double best_psnr = 0;
+  double last_psnr = 0;
+};
+
+// Evaluations of the val split a run waits for an improvement before it stops.
+inline constexpr int kHeldOutPatience = 3;
+
+// A plateau when none of the last `patience` evaluations lowered the val split's mean squared
+// error (10^(-PSNR/10)) below (1 - tolerance) x the best before it: the relative gain of the
+// training-loss rule, on held-out views. Unlike the training loss, the held-out error can rise
+// while the training loss still falls (a model that overfits its views); the rule stops there,
+// `patience` evaluations after the best, and keeps the last model, not the best one.
+// nullopt with fewer than patience + 1 points.
+std::optional<HeldOutPlateau> FindHeldOutPlateau(const std::vector<HeldOutPoint>& curve,
+                                                 double tolerance,
+                                                 int patience = kHeldOutPatience);
 
 }  // namespace hdr4d::method

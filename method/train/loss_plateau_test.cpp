@@ -68,5 +68,60 @@ TEST(LossPlateau, ImprovingLossDoesNotStop) {
   EXPECT_FALSE(FindLossPlateau(falling, 0, 200, 0.002).has_value());
 }
 
+// Held-out points from (iteration, PSNR) pairs, one evaluation per 100 iterations.
+std::vector<HeldOutPoint> HeldOut(const std::vector<double>& psnr) {
+  std::vector<HeldOutPoint> curve;
+  for (std::size_t i = 0; i < psnr.size(); ++i)
+    curve.push_back({static_cast<int>(100 * (i + 1)), psnr[i]});
+  return curve;
+}
+
+TEST(HeldOutPlateau, StopsPatienceEvaluationsAfterTheBest) {
+  // Rises to 25 dB at iteration 300, then falls (a model overfitting its training views).
+  const std::vector<double> psnr = {20, 23, 25, 24.9, 24.7, 24.6, 24.5};
+  for (std::size_t n = 1; n <= psnr.size(); ++n) {
+    const std::vector<double> part(psnr.begin(), psnr.begin() + n);
+    const auto p = FindHeldOutPlateau(HeldOut(part), 0.002, 3);
+    EXPECT_EQ(p.has_value(), n == 6 || n == 7) << n;  // 3 evaluations after the best (n = 3)
+    if (p) {
+      EXPECT_EQ(p->best_iteration, 300);
+      EXPECT_DOUBLE_EQ(p->best_psnr, 25);
+      EXPECT_EQ(p->iteration, static_cast<int>(100 * n));
+      EXPECT_DOUBLE_EQ(p->last_psnr, psnr[n - 1]);
+    }
+  }
+}
+
+TEST(HeldOutPlateau, SlowGainsAddUpAgainstTheBestSoFar) {
+  // +0.005 dB per evaluation (0.115% lower error): measured against the best so far, two steps
+  // pass a 0.2% tolerance, so the run goes on; five are needed to pass 0.5%, so the best moves
+  // to the sixth evaluation (600) and four later ones do not beat it.
+  std::vector<double> psnr;
+  for (int i = 0; i < 10; ++i) psnr.push_back(24.0 + 0.005 * i);
+  EXPECT_FALSE(FindHeldOutPlateau(HeldOut(psnr), 0.002, 3).has_value());
+  const auto p = FindHeldOutPlateau(HeldOut(psnr), 0.005, 3);
+  ASSERT_TRUE(p.has_value());
+  EXPECT_EQ(p->best_iteration, 600);
+  EXPECT_EQ(p->iteration, 1000);
+}
+
+TEST(HeldOutPlateau, ADipFromAnOpacityResetRecoveredWithinPatienceDoesNotStop) {
+  const std::vector<double> psnr = {22, 24, 14, 23.5, 24.5};  // reset at the third evaluation
+  EXPECT_FALSE(FindHeldOutPlateau(HeldOut(psnr), 0.002, 3).has_value());
+}
+
+TEST(HeldOutPlateau, NonFinitePsnrNeverImprovesAndTooFewPointsNeverStop) {
+  const double nan = std::nan("");
+  EXPECT_FALSE(FindHeldOutPlateau(HeldOut({20, 21, 22}), 0.002, 3).has_value());
+  const auto p = FindHeldOutPlateau(HeldOut({20, nan, nan, nan}), 0.002, 3);
+  ASSERT_TRUE(p.has_value());
+  EXPECT_EQ(p->best_iteration, 100);
+  // A first point that could not be scored is beaten by any finite one.
+  const auto q = FindHeldOutPlateau(HeldOut({nan, 18, 17, 16, 15}), 0.002, 3);
+  ASSERT_TRUE(q.has_value());
+  EXPECT_EQ(q->best_iteration, 200);
+  EXPECT_FALSE(FindHeldOutPlateau(HeldOut({20, 20, 20, 20}), 0.002, 0).has_value());
+}
+
 }  // namespace
 }  // namespace hdr4d::method

@@ -545,6 +545,15 @@ std::vector<TrainOption> SpeedRows() {
           .ShowDefault()
           .IfMissing(O::kDefaultStopTolerance)
           .MayChangeOnResume(),
+      Row("optimization.stop_on_val", Opt(&O::stop_on_val))
+          .Switch("--stop-on-val", true,
+                  "With --iterations auto: decide the stop on the scene's val split "
+                  "(transforms_val.json or val_filenames), scored every --stop-window "
+                  "iterations, instead of the training loss: stop once 3 evaluations in a row "
+                  "lowered the val views' error by less than --stop-tolerance on the best so "
+                  "far (the last model is kept). Needs a val split")
+          .IfMissing(false)
+          .MayChangeOnResume(),
       Row("optimization.coarse_to_fine", Opt(&O::coarse_to_fine))
           .Flag("--coarse-to-fine",
                 "Iterations at the start that train on reduced images: 1/4 of the size over "

@@ -78,9 +78,9 @@ std::string TrainOptions::Validate() const {
       hdr.tone_mapper->unseen_rows != "zero")
     return "reference: --reference reads the radiance bank's unwritten rows as zeros; drop "
            "--unseen-bank-rows (or --reference)";
-  if (reference && optimization.stop_window > 0)
-    return "reference: --reference trains every iteration asked for; drop --iterations auto "
-           "and --stop-window (or --reference)";
+  if (reference && (optimization.stop_window > 0 || optimization.stop_on_val))
+    return "reference: --reference trains every iteration asked for; drop --iterations auto, "
+           "--stop-window and --stop-on-val (or --reference)";
   return "";
 }
 
@@ -177,12 +177,18 @@ class TrainingRun {
   void RestoreDensifyStats(Checkpoint* c);
   void PrepareRendering();
   void ReserveForBudget();
-  // Iterations left, and (--iterations auto) the loss still improving.
-  bool StepsLeft() const { return loop_.iteration < opt_.iterations && !Plateau(); }
+  // Iterations left, and (--iterations auto) the loss still improving: the training loss, or
+  // with --stop-on-val the val split's.
+  bool StepsLeft() const { return loop_.iteration < opt_.iterations && !Stopped(); }
+  bool Stopped() const {
+    return opt_.stop_on_val ? HeldOutStop().has_value() : Plateau().has_value();
+  }
   std::optional<LossPlateau> Plateau() const {
     return FindLossPlateau(loop_.loss_curve, opt_.densify_until, opt_.stop_window,
                            opt_.stop_tolerance);
   }
+  std::optional<HeldOutPlateau> HeldOutStop() const;
+  void EvaluateValViews(int it);
   nlohmann::json StopRecord() const;
   bool OutOfTime() const;
   void Step();
@@ -221,6 +227,7 @@ class TrainingRun {
   void EvaluateAndCheckpoint(int it);
   std::string FlatToneCurveCheck(int it);
   nlohmann::json EvaluateTestViews(bool with_flip);
+  nlohmann::json EvaluateOn(const std::vector<TrainView>& views, bool with_flip);
   std::vector<const std::vector<float>*> ExtraFloats() const;
   void Save();
   void StartLearnedBackground(const nlohmann::json* trainer);
@@ -231,6 +238,7 @@ class TrainingRun {
   std::optional<Dataset> dataset_;
   SceneProfile profile_;
   std::vector<TrainView> train_views_, test_views_;
+  std::vector<TrainView> val_views_;  // --stop-on-val only
   int num_times_ = 1;
   double extent_ = 0;
   OptimizationOptions opt_;  // the schedules resolved for this run
@@ -374,7 +382,16 @@ void TrainingRun::LoadTrainingViews() {
                            hdr.hdr_target);
   // Checked now, read again at each evaluation (train_views.h: not held while training).
   test_views_ = CheckViews(*dataset_, Split::kTest, background, options_.resolution);
-  for (auto* views : {&train_views_, &test_views_}) {
+  if (options_.optimization.stop_on_val) {
+    val_views_ = CheckViews(*dataset_, Split::kVal, background, options_.resolution);
+    if (val_views_.empty()) {
+      Fail(
+          "train: --stop-on-val: the scene {} has no val split (transforms_val.json, or "
+          "val_filenames in transforms.json); drop --stop-on-val to stop on the training loss",
+          options_.data.string());
+    }
+  }
+  for (auto* views : {&train_views_, &test_views_, &val_views_}) {
     for (TrainView& v : *views) v.time_index = RadianceBank::TimeIndex(v.time, num_times_);
   }
   ReturnFreedMemory();  // the checked test images and the decoding buffers (core/util/free_memory.h)
@@ -605,8 +622,10 @@ TrainSummary TrainingRun::FinishedSummary() const {
   summary.gaussians = model_.size();
   summary.loss_curve = loop_.loss_curve;
   summary.stopped_by_time = results.value("stopped_by_time", false);
-  summary.stopped_flat = results.contains("stopped") && results["stopped"].is_object() &&
-                         results["stopped"].value("reason", "") == "loss_plateau";
+  const std::string reason = results.contains("stopped") && results["stopped"].is_object()
+                                 ? results["stopped"].value("reason", "")
+                                 : "";
+  summary.stopped_flat = reason == "loss_plateau" || reason == "val_plateau";
   return summary;
 }
 
@@ -911,6 +930,7 @@ void TrainingRun::ShowProgress(double loss_value, const float* ldr_out, std::siz
 }
 
 void TrainingRun::EvaluateAndCheckpoint(int it) {
+  EvaluateValViews(it);
   if (options_.test_every > 0 && it % options_.test_every == 0 && it < opt_.iterations) {
     const auto eval_start = std::chrono::steady_clock::now();
     nlohmann::json m = EvaluateTestViews(/*with_flip=*/false);  // the curve stays cheap
@@ -943,12 +963,39 @@ std::string TrainingRun::FlatToneCurveCheck(int it) {
 }
 
 nlohmann::json TrainingRun::EvaluateTestViews(bool with_flip) {
+  return EvaluateOn(test_views_, with_flip);
+}
+
+nlohmann::json TrainingRun::EvaluateOn(const std::vector<TrainView>& views, bool with_flip) {
   RenderOptions base = render_;
   base.color_stage = nullptr;
   ViewRenderer renderer(model_, tone_mapper_.get(), resolved_, base, options_.background,
                         background_ ? &background_->params() : nullptr,
                         head_current_ ? &head_ : nullptr);
-  return EvaluateViews(&renderer, test_views_, with_flip);
+  return EvaluateViews(&renderer, views, with_flip);
+}
+
+// --stop-on-val: the val views scored every stop_window iterations. Not on an opacity reset's
+// iteration (every opacity at 0.01: the views read about 14 dB, which says nothing of the model).
+// The time is the method's, so it stays in the training seconds.
+void TrainingRun::EvaluateValViews(int it) {
+  if (!opt_.stop_on_val || opt_.stop_window <= 0 || it % opt_.stop_window != 0 ||
+      ResetsOpacityAt(it))
+    return;
+  const nlohmann::json m = EvaluateOn(val_views_, /*with_flip=*/false);
+  const double psnr = m.value("psnr", std::nan(""));
+  spdlog::info("train: iteration {}: val PSNR {:.3f} dB", it, psnr);
+  loop_.val_curve.push_back(
+      {{"iteration", it}, {"psnr", FiniteOrNull(psnr)}, {"train_seconds", TrainingSeconds()}});
+}
+
+std::optional<HeldOutPlateau> TrainingRun::HeldOutStop() const {
+  std::vector<HeldOutPoint> curve;
+  for (const nlohmann::json& e : loop_.val_curve) {
+    const nlohmann::json& p = e.at("psnr");
+    curve.push_back({e.at("iteration").get<int>(), p.is_number() ? p.get<double>() : std::nan("")});
+  }
+  return FindHeldOutPlateau(curve, opt_.stop_tolerance);
 }
 
 std::vector<const std::vector<float>*> TrainingRun::ExtraFloats() const {
@@ -1036,11 +1083,18 @@ TrainSummary TrainingRun::Finish() {
   Save();
   ReleaseTrainingState();
   TrainSummary summary;
-  summary.stopped_flat = Plateau().has_value();
-  if (summary.stopped_flat)
+  summary.stopped_flat = Stopped();
+  if (const std::optional<HeldOutPlateau> v = opt_.stop_on_val ? HeldOutStop() : std::nullopt) {
+    spdlog::info("train: --iterations auto --stop-on-val: the val views' PSNR stopped improving "
+                 "(best {:.3f} dB at iteration {}, {} evaluations since); stopped at iteration "
+                 "{} of {}",
+                 v->best_psnr, v->best_iteration, kHeldOutPatience, loop_.iteration,
+                 opt_.iterations);
+  } else if (summary.stopped_flat) {
     spdlog::info("train: --iterations auto: the training loss stopped improving (less than {} "
                  "over {} iterations); stopped at iteration {} of {}",
                  opt_.stop_tolerance, opt_.stop_window, loop_.iteration, opt_.iterations);
+  }
   summary.stopped_by_time = loop_.iteration < opt_.iterations && !summary.stopped_flat;
   summary.test_metrics = EvaluateTestViews(/*with_flip=*/true);
   summary.train_seconds = loop_.train_seconds;
@@ -1070,6 +1124,7 @@ TrainSummary TrainingRun::Finish() {
   // The learned gains, camera by camera (natural log, R G B): what the correction found.
   if (correction_) results["camera_log_gains"] = correction_->log_gains();
   if (opt_.stop_window > 0) results["stopped"] = StopRecord();
+  if (opt_.stop_on_val) results["val_curve"] = loop_.val_curve;
   if (options_.test_every > 0) {
     nlohmann::json last = summary.test_metrics;
     last["iteration"] = loop_.iteration;
@@ -1082,16 +1137,28 @@ TrainSummary TrainingRun::Finish() {
 
 // --iterations auto: why the loop ended, at which iteration, and the rule it was under.
 nlohmann::json TrainingRun::StopRecord() const {
-  nlohmann::json r = {{"rule", fmt::format("mean training loss over windows of {} iterations "
-                                           "after densification (until {}) improving by less "
-                                           "than {} (relative)",
-                                           opt_.stop_window, opt_.densify_until,
-                                           opt_.stop_tolerance)},
+  const std::string rule =
+      opt_.stop_on_val
+          ? fmt::format("mean LDR PSNR of the {} val views, scored every {} iterations (not on "
+                        "an opacity reset's), not lowering their error by {} (relative) on the "
+                        "best for {} evaluations in a row",
+                        val_views_.size(), opt_.stop_window, opt_.stop_tolerance,
+                        kHeldOutPatience)
+          : fmt::format("mean training loss over windows of {} iterations after densification "
+                        "(until {}) improving by less than {} (relative)",
+                        opt_.stop_window, opt_.densify_until, opt_.stop_tolerance);
+  nlohmann::json r = {{"rule", rule},
                       {"window", opt_.stop_window},
                       {"tolerance", opt_.stop_tolerance},
                       {"iteration", loop_.iteration},
                       {"max_iterations", opt_.iterations}};
-  if (const std::optional<LossPlateau> p = Plateau()) {
+  const std::optional<LossPlateau> p = opt_.stop_on_val ? std::nullopt : Plateau();
+  if (const std::optional<HeldOutPlateau> v = opt_.stop_on_val ? HeldOutStop() : std::nullopt) {
+    r["reason"] = "val_plateau";
+    r["best_val_iteration"] = v->best_iteration;
+    r["best_val_psnr"] = v->best_psnr;
+    r["last_val_psnr"] = v->last_psnr;
+  } else if (p) {
     r["reason"] = "loss_plateau";
     r["previous_window_loss"] = p->previous;
     r["last_window_loss"] = p->last;

@@ -5,8 +5,11 @@
 
 #include <cmath>
 #include <functional>
+#include <string>
+#include <vector>
 
 #include "core/files/json_util.h"
+#include "core/util/error.h"
 #include "method/run/gaussian_scene.h"
 #include "method/train/checkpoint.h"
 #include "method/train/tiny_run_test_util.h"
@@ -128,6 +131,56 @@ TEST(TrainerSpeedOptions, IterationsAutoStopsDeterministicallyAndResumes) {
   const TrainSummary again = Train(rest);
   EXPECT_EQ(again.iterations, 70);
   EXPECT_TRUE(again.stopped_flat);
+}
+
+// --stop-on-val: the stop is decided on the val split (here a copy of the test split), scored
+// every --stop-window iterations except on an opacity reset's (30); with a tolerance nothing
+// reaches, the first evaluation stays the best and the run stops three evaluations later. An
+// interrupted run stops at the same iteration; a scene without a val split is refused.
+TEST(TrainerSpeedOptions, StopOnValStopsOnTheValSplitAndResumes) {
+  TempDir dir;
+  MakeTinyScene(dir / "scene");
+  fs::copy_file(dir / "scene" / "transforms_test.json", dir / "scene" / "transforms_val.json");
+  auto run = [&](const char* name, int iterations) {
+    TrainOptions o = TinyRun(dir / "scene", dir / name, iterations);
+    o.optimization.stop_window = 10;
+    o.optimization.stop_tolerance = 0.9;
+    o.optimization.stop_on_val = true;
+    return o;
+  };
+  const TrainSummary a = Train(run("a", 400));
+  EXPECT_EQ(a.iterations, 50);
+  EXPECT_TRUE(a.stopped_flat);
+  const nlohmann::json r = ReadJsonFile(dir / "a" / "results.json");
+  EXPECT_EQ(r["stopped"]["reason"], "val_plateau");
+  EXPECT_EQ(r["stopped"]["best_val_iteration"], 10);
+  std::vector<int> evaluated;
+  for (const nlohmann::json& e : r.at("val_curve")) {
+    evaluated.push_back(e.at("iteration").get<int>());
+    EXPECT_TRUE(e.at("psnr").is_number());
+  }
+  EXPECT_EQ(evaluated, (std::vector<int>{10, 20, 40, 50}));
+  // Interrupted at 25 and resumed: the same stop, the same state.
+  Train(run("b", 25));
+  TrainOptions rest = run("b", 400);
+  rest.resume = true;
+  const TrainSummary b = Train(rest);
+  EXPECT_EQ(b.iterations, 50);
+  EXPECT_EQ(b.loss_curve, a.loss_curve);
+  ExpectSameState(dir / "b", dir / "a");
+  // Without a val split: refused, naming the scene.
+  fs::remove(dir / "scene" / "transforms_val.json");
+  try {
+    Train(run("c", 400));
+    ADD_FAILURE() << "a scene without a val split was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("no val split"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find((dir / "scene").string()), std::string::npos);
+  }
+  // Without --iterations auto (no window) it is refused before anything is read.
+  TrainOptions no_window = run("d", 400);
+  no_window.optimization.stop_window = 0;
+  EXPECT_NE(no_window.Validate().find("--stop-on-val"), std::string::npos);
 }
 
 // --test-every: each held-out evaluation records the training seconds spent so far (evaluation
