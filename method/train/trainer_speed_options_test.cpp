@@ -48,6 +48,18 @@ void ExpectSameState(const fs::path& a, const fs::path& b) {
   EXPECT_EQ(ca.extra_floats, cb.extra_floats);
 }
 
+// Trains `run(name, split_at)`, then resumes it with a cap of `cap` iterations: what a run
+// interrupted at `split_at` ends with.
+TrainSummary InterruptAndResume(const std::function<TrainOptions(const char*, int)>& run,
+                                const char* name,
+                                int split_at,
+                                int cap) {
+  Train(run(name, split_at));
+  TrainOptions rest = run(name, cap);
+  rest.resume = true;
+  return Train(rest);
+}
+
 // A run of `run(name, iterations)` stopped at `split_at` and resumed to the end gives the same
 // losses as `straight` (the uninterrupted run in dir / "straight") and the same final state.
 void ExpectResumesExactly(const std::function<TrainOptions(const char*, int)>& run,
@@ -120,14 +132,13 @@ TEST(TrainerSpeedOptions, IterationsAutoStopsDeterministicallyAndResumes) {
   const TrainSummary b = Train(run("b", 400));
   EXPECT_EQ(b.loss_curve, a.loss_curve);
   // Interrupted at 65 and resumed: the same stop, the same state.
-  Train(run("c", 65));
-  TrainOptions rest = run("c", 400);
-  rest.resume = true;
-  const TrainSummary c = Train(rest);
+  const TrainSummary c = InterruptAndResume(run, "c", 65, 400);
   EXPECT_EQ(c.iterations, 70);
   EXPECT_EQ(c.loss_curve, a.loss_curve);
   ExpectSameState(dir / "c", dir / "a");
   // A run that stopped is finished: resumed again, nothing is trained.
+  TrainOptions rest = run("c", 400);
+  rest.resume = true;
   const TrainSummary again = Train(rest);
   EXPECT_EQ(again.iterations, 70);
   EXPECT_TRUE(again.stopped_flat);
@@ -161,10 +172,7 @@ TEST(TrainerSpeedOptions, StopOnValStopsOnTheValSplitAndResumes) {
   }
   EXPECT_EQ(evaluated, (std::vector<int>{10, 20, 40, 50}));
   // Interrupted at 25 and resumed: the same stop, the same state.
-  Train(run("b", 25));
-  TrainOptions rest = run("b", 400);
-  rest.resume = true;
-  const TrainSummary b = Train(rest);
+  const TrainSummary b = InterruptAndResume(run, "b", 25, 400);
   EXPECT_EQ(b.iterations, 50);
   EXPECT_EQ(b.loss_curve, a.loss_curve);
   ExpectSameState(dir / "b", dir / "a");
