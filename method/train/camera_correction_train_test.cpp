@@ -126,6 +126,31 @@ TEST(CameraCorrectionTraining, ResumesExactlyRecordsAndRendersPerCamera) {
   EXPECT_NE(cameras.find("camera_correction_cameras"), std::string::npos) << cameras;
 }
 
+// --stop-on-val scores the val views with their cameras' gains, as the test views: with both
+// splits a copy of the training frames, the two curves are the same numbers.
+TEST(CameraCorrectionTraining, ValViewsAreScoredWithTheirCamerasGains) {
+  TempDir dir;
+  MakeScene(dir / "scene");
+  for (const char* split : {"transforms_test.json", "transforms_val.json"}) {
+    fs::copy_file(dir / "scene" / "transforms_train.json", dir / "scene" / split,
+                  fs::copy_options::overwrite_existing);
+  }
+  TrainOptions o = CorrectedRun(dir / "scene", dir / "run", 40);
+  o.test_every = 10;
+  o.optimization.stop_window = 10;
+  o.optimization.stop_tolerance = 0.9;
+  o.optimization.stop_on_val = true;
+  Train(o);
+  const nlohmann::json results = ReadJsonFile(dir / "run" / "results.json");
+  const nlohmann::json& val = results.at("val_curve");
+  const nlohmann::json& test = results.at("test_curve");
+  ASSERT_GE(val.size(), 3u);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(val[i]["iteration"], test[i]["iteration"]);
+    EXPECT_DOUBLE_EQ(val[i]["psnr"].get<double>(), test[i]["psnr"].get<double>()) << i;
+  }
+}
+
 TEST(CameraCorrectionTraining, NeedsAToneMapper) {
   TempDir dir;
   MakeScene(dir / "scene");

@@ -428,7 +428,8 @@ void TrainingRun::StartCameraCorrection() {
   }
   const CorrectionCameras cameras = FindCorrectionCameras(*dataset_);
   for (auto [views, rows] : {std::pair{&train_views_, &cameras.train},
-                             std::pair{&test_views_, &cameras.test}}) {
+                             std::pair{&test_views_, &cameras.test},
+                             std::pair{&val_views_, &cameras.val}}) {
     for (TrainView& v : *views) v.camera_index = (*rows)[v.image_index];
   }
   auto wrapper = std::make_unique<CameraCorrectedToneMapper>(
