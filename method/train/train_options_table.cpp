@@ -331,7 +331,8 @@ std::vector<TrainOption> RunRows() {
                 "the reference's values are those of 20000 iterations; a flag given below "
                 "wins over the scaling. auto: the schedules of the default length, and stop "
                 "once the training loss has stopped improving (--stop-window, "
-                "--stop-tolerance); results.json says when and why")
+                "--stop-tolerance); results.json says when and why. Not given, on a scene "
+                "with a val split: as auto with --stop-on-val")
           .Range(count(1))
           .AcceptsAuto()
           .ShowDefault()
@@ -551,7 +552,9 @@ std::vector<TrainOption> SpeedRows() {
                   "(transforms_val.json or val_filenames), scored every --stop-window "
                   "iterations, instead of the training loss: stop once 3 evaluations in a row "
                   "lowered the val views' error by less than --stop-tolerance on the best so "
-                  "far (the last model is kept). Needs a val split")
+                  "far (the last model is kept). Needs a val split. The default on a scene with "
+                  "one when no run length (--iterations, --stop-window, a configuration's "
+                  "iterations) is given")
           .IfMissing(false)
           .MayChangeOnResume(),
       Row("optimization.coarse_to_fine", Opt(&O::coarse_to_fine))

@@ -61,12 +61,18 @@ TrainOptions ResolveTrainRequest(const TrainRequest& request, const MethodPreset
   if (!request.Given("--data") && !saved)
     Fail("train: --data is required (a resumed run takes its own from RUN/config.json)");
   TrainOptions options = saved ? *saved : TrainOptions{};
+  bool length_asked = request.Given("--iterations") || request.Given("--stop-window") ||
+                      request.Given("--stop-on-val");
   if (!request.config.empty()) {
-    ApplyTrainConfig(ReadTrainConfig(request.config), "--config " + request.config,
+    const nlohmann::json config = ReadTrainConfig(request.config);
+    length_asked |= config.contains("iterations");
+    ApplyTrainConfig(config, "--config " + request.config,
                      [&request](const std::string& flag) { return request.Given(flag); },
                      &options);
   }
   ApplyGiven(request, OptionTarget::kRun, &options);
+  // No run length asked for: a scene with a val split stops on it (TrainingRun::PickStopForScene).
+  options.stop_on_val_where_split = !saved && !options.reference && !length_asked;
   options.out = request.out;
   options.resume = request.resume;
   options.overwrite = request.overwrite;

@@ -59,6 +59,23 @@ TEST(TrainRequest, GivenOptionsLieOverTheConfigurationOverTheDefaults) {
   EXPECT_FALSE(o.learn_background);  // unset: the run decides
 }
 
+// No run length asked for (no --iterations, --stop-window or --stop-on-val, and none in the
+// configuration): the run stops on the scene's val split where it has one. Asked for, or the
+// paper's configuration: the iterations asked for.
+TEST(TrainRequest, NoRunLengthAskedStopsOnAValSplitWhereTheSceneHasOne) {
+  EXPECT_TRUE(ResolveTrainRequest(Request({{"--data", "/scene"}}), Preset).stop_on_val_where_split);
+  for (const auto& [flag, value] : std::vector<std::pair<std::string, json>>{
+           {"--iterations", 20000}, {"--iterations", "auto"}, {"--stop-window", 500},
+           {"--reference", true}}) {
+    EXPECT_FALSE(ResolveTrainRequest(Request({{"--data", "/scene"}, {flag, value}}), Preset)
+                     .stop_on_val_where_split)
+        << flag;
+  }
+  TrainRequest r = Request({{"--data", "/scene"}});
+  r.config = "real/bed";  // iterations 20000
+  EXPECT_FALSE(ResolveTrainRequest(r, Preset).stop_on_val_where_split);
+}
+
 // The radiance bank's unwritten rows: interpolated by default, zeros under --reference (as
 // before), and the two together refused.
 TEST(TrainRequest, ReferenceReadsUnwrittenBankRowsAsZeros) {

@@ -63,6 +63,10 @@ struct TrainOptions {
   // saying so. `hdr4d train` sets plain 4DGS here unless the method, tone mapper or
   // supervision was asked for.
   std::optional<HdrTrainingOptions> when_nothing_hdr;
+  // Set by `hdr4d train` when no run length was asked for: a scene with a val split then trains
+  // as --iterations auto --stop-on-val, and records it so (issue 55; a resumed run keeps what
+  // it recorded). Not an option of its own: --iterations N trains N.
+  bool stop_on_val_where_split = false;
   // "" or the first problem: a member outside its option's range (train_options_table.h, in
   // the words of the flag's help), then the optimisation's and the colour model's own checks.
   std::string Validate() const;

@@ -191,6 +191,30 @@ TEST(TrainerSpeedOptions, StopOnValStopsOnTheValSplitAndResumes) {
   EXPECT_NE(no_window.Validate().find("--stop-on-val"), std::string::npos);
 }
 
+// stop_on_val_where_split (`hdr4d train` without a run length): a scene with a val split trains
+// as --iterations auto --stop-on-val and records it so; one without trains as asked.
+TEST(TrainerSpeedOptions, NoRunLengthAskedStopsOnTheValSplitWhereThereIsOne) {
+  TempDir dir;
+  MakeTinyScene(dir / "scene");
+  auto run = [&](const char* name) {
+    TrainOptions o = TinyRun(dir / "scene", dir / name, 30);
+    o.stop_on_val_where_split = true;
+    EXPECT_EQ(Train(o).iterations, 30);
+    return std::pair{ReadJsonFile(dir / name / "config.json")["optimization"],
+                     ReadJsonFile(dir / name / "results.json")};
+  };
+  const auto [plain_config, plain_results] = run("plain");
+  EXPECT_EQ(plain_config["stop_on_val"], false);
+  EXPECT_EQ(plain_config["stop_window"], 0);
+  EXPECT_FALSE(plain_results.contains("stopped"));
+  fs::copy_file(dir / "scene" / "transforms_test.json", dir / "scene" / "transforms_val.json");
+  const auto [val_config, val_results] = run("val");
+  EXPECT_EQ(val_config["stop_on_val"], true);
+  EXPECT_EQ(val_config["stop_window"], OptimizationOptions::kDefaultStopWindow);
+  EXPECT_EQ(val_results.at("stopped").at("window"), OptimizationOptions::kDefaultStopWindow);
+  EXPECT_TRUE(val_results.at("val_curve").empty());  // 30 iterations: no evaluation yet
+}
+
 // --test-every: each held-out evaluation records the training seconds spent so far (evaluation
 // time excluded), so time to quality can be read from one run's curve.
 TEST(TrainerSpeedOptions, TestCurveRecordsTheTrainingSecondsOfEachEvaluation) {
