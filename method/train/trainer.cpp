@@ -173,6 +173,7 @@ class TrainingRun {
     for (const std::string& note : scene_notes_) spdlog::warn("{}", note);
   }
   std::vector<std::string> scene_notes_;
+  bool stop_picked_for_scene_ = false;  // PickStopForScene turned --stop-on-val on
   void OpenRunFolder();
   void ResumeOrInitialise();
   void RestoreDensifyStats(Checkpoint* c);
@@ -385,7 +386,15 @@ void TrainingRun::LoadTrainingViews() {
   // Checked now, read again at each evaluation (train_views.h: not held while training).
   test_views_ = CheckViews(*dataset_, Split::kTest, background, options_.resolution);
   if (options_.optimization.stop_on_val) {
-    val_views_ = CheckViews(*dataset_, Split::kVal, background, options_.resolution);
+    try {
+      val_views_ = CheckViews(*dataset_, Split::kVal, background, options_.resolution);
+    } catch (const Error& e) {
+      if (!stop_picked_for_scene_) throw;
+      // A scene whose val split was never used before is read now: say why, and the way out.
+      Fail("{} (the val split is read to decide when to stop, as no run length was given; "
+           "--iterations N trains N without it)",
+           e.what());
+    }
     if (val_views_.empty()) {
       Fail(
           "train: --stop-on-val: the scene {} has no val split (transforms_val.json, or "
@@ -502,6 +511,7 @@ void TrainingRun::PickStopForScene() {
   OptimizationOptions& o = options_.optimization;
   if (o.stop_window == 0) o.stop_window = OptimizationOptions::kDefaultStopWindow;
   o.stop_on_val = true;
+  stop_picked_for_scene_ = true;
   scene_notes_.push_back(fmt::format(
       "train: note: the scene has a val split ({} views): the run stops once they stop "
       "improving (scored every {} iterations; at most {}), as --iterations auto --stop-on-val "

@@ -213,6 +213,19 @@ TEST(TrainerSpeedOptions, NoRunLengthAskedStopsOnTheValSplitWhereThereIsOne) {
   EXPECT_EQ(val_config["stop_window"], OptimizationOptions::kDefaultStopWindow);
   EXPECT_EQ(val_results.at("stopped").at("window"), OptimizationOptions::kDefaultStopWindow);
   EXPECT_TRUE(val_results.at("val_curve").empty());  // 30 iterations: no evaluation yet
+  // A val image whose header reads but whose pixels do not (a truncated copy): the error names
+  // it and says why it was read. (A missing one is refused when the scene is read, as before.)
+  nlohmann::json val = ReadJsonFile(dir / "scene" / "transforms_val.json");
+  const fs::path image = dir / "scene" / val["frames"][0]["file_path"].get<std::string>();
+  fs::copy_file(image, dir / "scene" / "broken_view.png");
+  fs::resize_file(dir / "scene" / "broken_view.png", fs::file_size(image) / 2);
+  val["frames"][0]["file_path"] = "broken_view.png";
+  WriteJsonFile(dir / "scene" / "transforms_val.json", val);
+  TrainOptions o = TinyRun(dir / "scene", dir / "broken", 30);
+  o.stop_on_val_where_split = true;
+  const std::string message = testing::ErrorOf([&] { Train(o); });
+  EXPECT_NE(message.find("broken_view.png"), std::string::npos) << message;
+  EXPECT_NE(message.find("--iterations N trains N"), std::string::npos) << message;
 }
 
 // --test-every: each held-out evaluation records the training seconds spent so far (evaluation
