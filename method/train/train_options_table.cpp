@@ -554,7 +554,9 @@ std::vector<TrainOption> SpeedRows() {
                   "lowered the val views' error by less than --stop-tolerance on the best so "
                   "far (the last model is kept). Needs a val split. The default on a scene with "
                   "one when no run length (--iterations, --stop-window, a configuration's "
-                  "iterations) is given")
+                  "iterations) is given. --no-stop-on-val: the training loss decides (with "
+                  "--stop-window 0: every iteration asked for; also on resume)")
+          .Negatable("--no-stop-on-val")
           .IfMissing(false)
           .MayChangeOnResume(),
       Row("optimization.coarse_to_fine", Opt(&O::coarse_to_fine))

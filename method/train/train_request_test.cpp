@@ -66,7 +66,7 @@ TEST(TrainRequest, NoRunLengthAskedStopsOnAValSplitWhereTheSceneHasOne) {
   EXPECT_TRUE(ResolveTrainRequest(Request({{"--data", "/scene"}}), Preset).stop_on_val_where_split);
   for (const auto& [flag, value] : std::vector<std::pair<std::string, json>>{
            {"--iterations", 20000}, {"--iterations", "auto"}, {"--stop-window", 500},
-           {"--reference", true}}) {
+           {"--stop-on-val", false}, {"--reference", true}}) {
     EXPECT_FALSE(ResolveTrainRequest(Request({{"--data", "/scene"}, {flag, value}}), Preset)
                      .stop_on_val_where_split)
         << flag;
