@@ -173,7 +173,6 @@ class TrainingRun {
     for (const std::string& note : scene_notes_) spdlog::warn("{}", note);
   }
   std::vector<std::string> scene_notes_;
-  bool stop_picked_for_scene_ = false;  // PickStopForScene turned --stop-on-val on
   void OpenRunFolder();
   void ResumeOrInitialise();
   void RestoreDensifyStats(Checkpoint* c);
@@ -389,8 +388,8 @@ void TrainingRun::LoadTrainingViews() {
     try {
       val_views_ = CheckViews(*dataset_, Split::kVal, background, options_.resolution);
     } catch (const Error& e) {
-      if (!stop_picked_for_scene_) throw;
-      // A scene whose val split was never used before is read now: say why, and the way out.
+      // A val split read only because PickStopForScene chose the stop: say why, and the way out.
+      if (!options_.stop_on_val_where_split || options_.resume) throw;
       Fail("{} (the val split is read to decide when to stop, as no run length was given; "
            "--iterations N trains N without it)",
            e.what());
@@ -511,7 +510,6 @@ void TrainingRun::PickStopForScene() {
   OptimizationOptions& o = options_.optimization;
   if (o.stop_window == 0) o.stop_window = OptimizationOptions::kDefaultStopWindow;
   o.stop_on_val = true;
-  stop_picked_for_scene_ = true;
   scene_notes_.push_back(fmt::format(
       "train: note: the scene has a val split ({} views): the run stops once they stop "
       "improving (scored every {} iterations; at most {}), as --iterations auto --stop-on-val "

@@ -214,9 +214,9 @@ TEST(TrainerSpeedOptions, NoRunLengthAskedStopsOnTheValSplitWhereThereIsOne) {
   EXPECT_EQ(val_results.at("stopped").at("window"), OptimizationOptions::kDefaultStopWindow);
   EXPECT_TRUE(val_results.at("val_curve").empty());  // 30 iterations: no evaluation yet
   // Resumed with --no-stop-on-val --stop-window 0: it trains on to the iterations asked for.
-  TrainOptions on = TinyRun(dir / "scene", dir / "val", 45);
-  on.resume = true;
-  EXPECT_EQ(Train(on).iterations, 45);
+  TrainOptions resumed = TinyRun(dir / "scene", dir / "val", 45);
+  resumed.resume = true;
+  EXPECT_EQ(Train(resumed).iterations, 45);
   EXPECT_EQ(ReadJsonFile(dir / "val" / "config.json")["optimization"]["stop_on_val"], false);
   // A val image whose header reads but whose pixels do not (a truncated copy): the error names
   // it and says why it was read. (A missing one is refused when the scene is read, as before.)
