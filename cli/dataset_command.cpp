@@ -1,5 +1,6 @@
 // `hdr4d dataset check DIR`: every problem of a scene, then what the scene is
-// (core/dataset/dataset_check_report.h); `hdr4d dataset preview DIR`: a contact sheet.
+// (core/dataset/dataset_check_report.h); `hdr4d dataset preview DIR`: a contact sheet;
+// `hdr4d dataset split-val DIR --out NEW`: the scene with a val split (core/dataset/val_split.h).
 #include <fmt/format.h>
 
 #include <cstdio>
@@ -10,6 +11,7 @@
 #include "cli/flags.h"
 #include "core/dataset/dataset.h"
 #include "core/dataset/dataset_check_report.h"
+#include "core/dataset/val_split.h"
 #include "core/image/image_io.h"
 #include "core/util/error.h"
 #include "core/viz/preview.h"
@@ -112,6 +114,47 @@ void AddPreview(CLI::App* dataset) {
   preview->callback([preview_args] { RunPreview(*preview_args); });
 }
 
+struct SplitValArgs {
+  std::string dir;
+  std::string out;
+  ValSplitOptions options;
+};
+
+void AddSplitVal(CLI::App* dataset) {
+  auto args = std::make_shared<SplitValArgs>();
+  CLI::App* split = dataset->add_subcommand(
+      "split-val",
+      "Write a copy of a scene with some training frames moved to a val split, so that `hdr4d "
+      "train` stops when those held-out views stop improving (the default where a scene has a "
+      "val split)");
+  split->footer(
+      "The new scene holds its own transforms files and links to the original's images, HDR and "
+      "point cloud; the original is not changed. Monocular captures: --every-time 8 holds back "
+      "one frame in eight; fixed rigs: --camera ID holds back one camera (or --every-time K, "
+      "one time in K on every camera).");
+  split->add_option("DIR", args->dir, "Scene folder (transforms_{train,test}.json at its root)")
+      ->required()
+      ->check(Text("a scene folder"));
+  split->add_option("--out,-o", args->out, "The new scene folder (new, or empty)")
+      ->required()
+      ->check(Text("an output folder"));
+  CLI::Option* every = split->add_option(
+      "--every-time", args->options.every_time,
+      "Move every frame of one training time in K (the middle time of each run of K) to val");
+  every->check(Integer(2, 1000000));
+  split
+      ->add_option("--camera", args->options.camera_id,
+                   "Move every training frame of this camera_id to val")
+      ->check(Integer(0))
+      ->excludes(every);
+  split->callback([args] {
+    const ValSplitSummary s = SplitOffVal(args->dir, args->out, args->options);
+    fmt::print("dataset split-val: wrote {} from {}: {} training frames moved to val ({}), {} "
+               "left to train on\n",
+               args->out, args->dir, s.moved, s.what, s.kept);
+  });
+}
+
 }  // namespace
 
 void AddDatasetCommand(CLI::App& app) {
@@ -121,10 +164,12 @@ void AddDatasetCommand(CLI::App& app) {
   dataset->require_subcommand(0, 1);
   dataset->callback([dataset] {
     if (!dataset->get_subcommands().empty()) return;
-    Fail("dataset: a subcommand is required: check or preview (see `hdr4d dataset --help`)");
+    Fail("dataset: a subcommand is required: check, preview or split-val (see `hdr4d dataset "
+         "--help`)");
   });
   AddCheck(dataset);
   AddPreview(dataset);
+  AddSplitVal(dataset);
 }
 
 }  // namespace hdr4d::cli

@@ -505,7 +505,7 @@ TEST_F(Hostile, Case14CommandLineMistakesExitOneWithOneLine) {
            {"tone-curves --run " + R() + " --times a,b", "--times"},
            {"train --data " + S(), "--out"},
            {"trian --data " + S(), "trian"},
-           {"dataset", "check or preview"},
+           {"dataset", "check, preview or split-val"},
            {"", "subcommand"}}) {
     ExpectOneLineError(RunHdr4d(args), args, {text});
   }

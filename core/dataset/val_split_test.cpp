@@ -1,0 +1,131 @@
+// `hdr4d dataset split-val`: which frames move, that nothing else changes, and the refusals.
+#include "core/dataset/val_split.h"
+
+#include <gtest/gtest.h>
+
+#include <set>
+#include <string>
+
+#include "core/dataset/dataset.h"
+#include "core/dataset/demo_scene.h"
+#include "core/files/json_util.h"
+#include "tests/testing.h"
+
+namespace hdr4d {
+namespace {
+namespace fs = std::filesystem;
+using testing::ErrorOf;
+using testing::TempDir;
+
+// The demo scene at 16 px: six times, three cameras (the third held out for test), three
+// exposures: 2 x 6 x 3 = 36 training frames.
+void MakeScene(const fs::path& root, int cameras = 3) {
+  DemoSceneOptions s;
+  s.width = s.height = 16;
+  s.num_timestamps = 6;
+  s.num_cameras = cameras;
+  s.samples_per_axis = 1;
+  MakeDemoScene(s, root);
+}
+
+TEST(ValSplit, EveryKthTimeMovesEveryFrameOfTheMiddleTimeOfEachRunOfK) {
+  TempDir dir;
+  MakeScene(dir / "scene");
+  const std::string train_before = testing::ReadTextFile(dir / "scene" / "transforms_train.json");
+  const ValSplitSummary s = SplitOffVal(dir / "scene", dir / "split", {.every_time = 3});
+  EXPECT_EQ(s.moved, 12u);  // times 1 and 4 (of 0..5), two cameras, three exposures
+  EXPECT_EQ(s.kept, 24u);
+  // The original is untouched; the new scene reads, with the val split.
+  EXPECT_EQ(testing::ReadTextFile(dir / "scene" / "transforms_train.json"), train_before);
+  EXPECT_FALSE(fs::exists(dir / "scene" / "transforms_val.json"));
+  const Dataset before = LoadDataset(dir / "scene", {.image_check = ImageCheck::kNone});
+  const Dataset after = LoadDataset(dir / "split", {.image_check = ImageCheck::kNone});
+  ASSERT_EQ(after.val.size(), 12u);
+  EXPECT_EQ(after.train.size(), 24u);
+  EXPECT_EQ(after.test.size(), before.test.size());
+  std::set<double> times, val_times;
+  for (const Frame& f : before.train) times.insert(f.time_raw);
+  for (const Frame& f : after.val) val_times.insert(f.time_raw);
+  const std::vector<double> sorted(times.begin(), times.end());
+  EXPECT_EQ(val_times, (std::set<double>{sorted[1], sorted[4]}));
+  for (const Frame& f : after.train) EXPECT_EQ(val_times.count(f.time_raw), 0u) << f.file_path;
+  // Each frame keeps every key, and the files their top level; the test file is a copy.
+  const nlohmann::json original = ReadJsonFile(dir / "scene" / "transforms_train.json");
+  const nlohmann::json val = ReadJsonFile(dir / "split" / "transforms_val.json");
+  EXPECT_EQ(val["frames"][0], original["frames"][3]);  // camera 0, time 1, exposure 0
+  nlohmann::json top = original, val_top = val;
+  top.erase("frames");
+  val_top.erase("frames");
+  EXPECT_EQ(val_top, top);
+  EXPECT_EQ(testing::ReadTextFile(dir / "split" / "transforms_test.json"),
+            testing::ReadTextFile(dir / "scene" / "transforms_test.json"));
+  // The images are the original's, through links.
+  EXPECT_TRUE(fs::is_symlink(dir / "split" / "hdr"));
+  EXPECT_TRUE(fs::exists(after.val[0].hdr_path.value()));
+}
+
+TEST(ValSplit, ACameraOfARigMovesAllItsFrames) {
+  TempDir dir;
+  MakeScene(dir / "scene", 4);
+  const ValSplitSummary s = SplitOffVal(dir / "scene", dir / "split", {.camera_id = 1});
+  EXPECT_EQ(s.moved, 18u);  // six times x three exposures
+  EXPECT_EQ(s.kept, 36u);
+  const Dataset after = LoadDataset(dir / "split", {.image_check = ImageCheck::kNone});
+  for (const Frame& f : after.val) EXPECT_EQ(f.camera_id, 1);
+  for (const Frame& f : after.train) EXPECT_NE(f.camera_id, 1);
+  EXPECT_NE(s.what.find("camera 1"), std::string::npos);
+}
+
+TEST(ValSplit, RefusalsNameTheFileAndWriteNothing) {
+  TempDir dir;
+  MakeScene(dir / "scene");
+  const fs::path scene = dir / "scene";
+  auto refused = [&](const ValSplitOptions& o, const std::string& part, const fs::path& from) {
+    const std::string message = ErrorOf([&] { SplitOffVal(from, dir / "out", o); });
+    EXPECT_NE(message.find(part), std::string::npos) << message;
+    EXPECT_FALSE(fs::exists(dir / "out")) << message;
+  };
+  refused({}, "one of --every-time K and --camera ID", scene);
+  refused({.every_time = 2, .camera_id = 0}, "one of --every-time K and --camera ID", scene);
+  refused({.every_time = 1}, "K >= 2", scene);
+  refused({.every_time = 20}, "chooses none of the 6 training times", scene);
+  refused({.camera_id = 7}, "no training frame has camera_id 7 (the training cameras: 0, 1)",
+          scene);
+  refused({.every_time = 2}, "transforms_train.json and transforms_test.json", dir / "nowhere");
+  // A rig with one training camera: holding it back leaves nothing.
+  MakeScene(dir / "two", 2);
+  refused({.camera_id = 0}, "nothing would be left to train on", dir / "two");
+  // A scene with a val split already.
+  fs::copy_file(scene / "transforms_test.json", scene / "transforms_val.json");
+  refused({.every_time = 2}, "already has a val split", scene);
+  fs::remove(scene / "transforms_val.json");
+  // An output folder that is there and not empty is not merged into.
+  fs::create_directories(dir / "busy");
+  testing::WriteTextFile(dir / "busy" / "keep.txt", "mine");
+  const std::string message =
+      ErrorOf([&] { SplitOffVal(scene, dir / "busy", {.every_time = 2}); });
+  EXPECT_NE(message.find((dir / "busy").string()), std::string::npos) << message;
+  EXPECT_EQ(testing::ReadTextFile(dir / "busy" / "keep.txt"), "mine");
+}
+
+TEST(ValSplitCli, WritesTheSceneAndSaysWhatMoved) {
+  TempDir dir;
+  MakeScene(dir / "scene");
+  const std::string scene = "'" + (dir / "scene").string() + "'";
+  const auto ok = testing::RunHdr4d("dataset split-val " + scene + " --out '" +
+                                    (dir / "split").string() + "' --every-time 3");
+  EXPECT_EQ(ok.exit_code, 0) << ok.err;
+  EXPECT_NE(ok.out.find("12 training frames moved to val"), std::string::npos) << ok.out;
+  EXPECT_NE(ok.out.find("24 left to train on"), std::string::npos) << ok.out;
+  const auto both = testing::RunHdr4d("dataset split-val " + scene + " --out '" +
+                                      (dir / "both").string() + "' --every-time 3 --camera 0");
+  EXPECT_NE(both.exit_code, 0);
+  EXPECT_NE(both.err.find("excludes"), std::string::npos) << both.err;
+  EXPECT_FALSE(fs::exists(dir / "both"));
+  const auto help = testing::RunHdr4d("dataset split-val --help");
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_NE(help.out.find("--every-time"), std::string::npos) << help.out;
+}
+
+}  // namespace
+}  // namespace hdr4d
