@@ -173,6 +173,11 @@ struct OptimizationOptions {
   // not improved on the best (method/train/loss_plateau.h). Catches a model that overfits its
   // training views, which the training loss cannot see.
   bool stop_on_val = false;
+  // --grow-on-val: with --stop-on-val, the same val evaluations also decide how far the model
+  // grows: from the first one, while densifying, that did not improve on the best, the count
+  // stays at or under the count then (method/train/loss_plateau.h, FindGrowthStop). Off: the
+  // budget alone (max_gaussians) caps it.
+  bool grow_on_val = false;
   // Coarse-to-fine images: the first coarse_to_fine iterations render and supervise at 1/4 of
   // the images' size (first half) and 1/2 (second half) where the size divides
   // (method/train/coarse_images.h). 0 = full size throughout.

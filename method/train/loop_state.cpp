@@ -48,13 +48,16 @@ void LoopState::FromJson(const nlohmann::json& j, const fs::path& path, std::siz
     psnr_curve = j.value("psnr_curve", std::vector<double>{});
     test_curve = j.value("test_curve", nlohmann::json::array());
     val_curve = j.value("val_curve", nlohmann::json::array());
-    // --stop-on-val decides on these points: each an iteration and a PSNR (null: unscored).
+    // --stop-on-val decides on these points: each an iteration and a PSNR (null: unscored),
+    // and --grow-on-val on the count (absent from checkpoints before it was kept).
     const auto point_ok = [](const nlohmann::json& e) {
       return e.is_object() && e.contains("iteration") && e["iteration"].is_number_integer() &&
-             e.contains("psnr") && (e["psnr"].is_number() || e["psnr"].is_null());
+             e.contains("psnr") && (e["psnr"].is_number() || e["psnr"].is_null()) &&
+             (!e.contains("gaussians") || e["gaussians"].is_number_unsigned());
     };
     if (!val_curve.is_array() || !std::all_of(val_curve.begin(), val_curve.end(), point_ok))
-      Fail("{}: corrupt checkpoint: val_curve is not a list of {{iteration, psnr}} points",
+      Fail("{}: corrupt checkpoint: val_curve is not a list of {{iteration, psnr, gaussians}} "
+           "points",
            path.string());
     train_seconds = j.at("train_seconds").get<double>();
   } catch (const nlohmann::json::exception& e) {

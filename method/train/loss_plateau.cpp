@@ -27,22 +27,42 @@ std::optional<LossPlateau> FindLossPlateau(const std::vector<double>& loss_curve
   return LossPlateau{static_cast<int>(n), previous, last, improvement};
 }
 
+namespace {
+
+// PSNR to mean squared error; a non-finite PSNR (a view that could not be scored) never counts
+// as an improvement.
+double HeldOutError(double psnr) {
+  return std::isfinite(psnr) ? std::pow(10.0, -psnr / 10.0) : HUGE_VAL;
+}
+
+}  // namespace
+
 std::optional<HeldOutPlateau> FindHeldOutPlateau(const std::vector<HeldOutPoint>& curve,
                                                  double tolerance,
                                                  int patience) {
   if (patience < 1 || curve.size() < static_cast<std::size_t>(patience) + 1) return std::nullopt;
-  // PSNR to mean squared error; a non-finite PSNR (a view that could not be scored) never
-  // counts as an improvement.
-  const auto mse = [](double psnr) {
-    return std::isfinite(psnr) ? std::pow(10.0, -psnr / 10.0) : HUGE_VAL;
-  };
   std::size_t best = 0;
   for (std::size_t i = 1; i < curve.size(); ++i) {
-    if (mse(curve[i].psnr) < (1.0 - tolerance) * mse(curve[best].psnr)) best = i;
+    if (HeldOutError(curve[i].psnr) < (1.0 - tolerance) * HeldOutError(curve[best].psnr))
+      best = i;
   }
   if (curve.size() - 1 - best < static_cast<std::size_t>(patience)) return std::nullopt;
   return HeldOutPlateau{curve.back().iteration, curve[best].iteration, curve[best].psnr,
                         curve.back().psnr};
+}
+
+std::optional<GrowthStop> FindGrowthStop(const std::vector<HeldOutPoint>& curve,
+                                         int densify_until,
+                                         double tolerance) {
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < curve.size() && curve[i].iteration < densify_until; ++i) {
+    if (HeldOutError(curve[i].psnr) < (1.0 - tolerance) * HeldOutError(curve[best].psnr)) {
+      best = i;
+    } else if (curve[i].gaussians > 0) {
+      return GrowthStop{curve[i].iteration, curve[i].gaussians};
+    }
+  }
+  return std::nullopt;
 }
 
 }  // namespace hdr4d::method

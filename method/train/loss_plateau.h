@@ -3,6 +3,7 @@
 // stops at the same iteration whether or not it was interrupted and resumed.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <vector>
 
@@ -28,6 +29,7 @@ std::optional<LossPlateau> FindLossPlateau(const std::vector<double>& loss_curve
 struct HeldOutPoint {
   int iteration = 0;
   double psnr = 0;  // mean LDR PSNR over the val views (dB)
+  std::int64_t gaussians = 0;  // the model's count when scored (0: not recorded)
 };
 
 struct HeldOutPlateau {
@@ -49,5 +51,19 @@ inline constexpr int kHeldOutPatience = 3;
 std::optional<HeldOutPlateau> FindHeldOutPlateau(const std::vector<HeldOutPoint>& curve,
                                                  double tolerance,
                                                  int patience = kHeldOutPatience);
+
+// --grow-on-val: the first evaluation before `densify_until` (the model still grows) that did not
+// lower the val error below (1 - tolerance) x the best before it, by the rule above; nullopt
+// while every one did, or where no count was recorded. From then on densification keeps the
+// count at or under that evaluation's: what the model added since its best did not pay on the
+// held-out views, and more of it costs every later iteration (a budget set by the scene, where
+// a fixed factor of the image size is too many on one scene and too few on another).
+struct GrowthStop {
+  int iteration = 0;
+  std::int64_t gaussians = 0;
+};
+std::optional<GrowthStop> FindGrowthStop(const std::vector<HeldOutPoint>& curve,
+                                         int densify_until,
+                                         double tolerance);
 
 }  // namespace hdr4d::method

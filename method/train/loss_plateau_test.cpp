@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 namespace hdr4d::method {
@@ -76,6 +77,14 @@ std::vector<HeldOutPoint> HeldOut(const std::vector<double>& psnr) {
   return curve;
 }
 
+// As HeldOut, each point with a count (1000, 2000, ...).
+std::vector<HeldOutPoint> HeldOutWithCounts(const std::vector<double>& psnr) {
+  std::vector<HeldOutPoint> curve = HeldOut(psnr);
+  for (std::size_t i = 0; i < curve.size(); ++i)
+    curve[i].gaussians = static_cast<std::int64_t>(1000 * (i + 1));
+  return curve;
+}
+
 TEST(HeldOutPlateau, StopsPatienceEvaluationsAfterTheBest) {
   // Rises to 25 dB at iteration 300, then falls (a model overfitting its training views).
   const std::vector<double> psnr = {20, 23, 25, 24.9, 24.7, 24.6, 24.5};
@@ -121,6 +130,37 @@ TEST(HeldOutPlateau, NonFinitePsnrNeverImprovesAndTooFewPointsNeverStop) {
   ASSERT_TRUE(q.has_value());
   EXPECT_EQ(q->best_iteration, 200);
   EXPECT_FALSE(FindHeldOutPlateau(HeldOut({20, 20, 20, 20}), 0.002, 0).has_value());
+}
+
+// --grow-on-val: the first evaluation before densify_until that does not improve on the best
+// before it freezes the count at that evaluation's; later ones (better or not) do not move it.
+TEST(GrowthStop, FirstEvaluationWithoutGainWhileDensifyingFreezesItsCount) {
+  const std::vector<HeldOutPoint> curve = HeldOutWithCounts({20, 22, 21.9, 23, 22.5});
+  const auto g = FindGrowthStop(curve, 1000, 0.002);
+  ASSERT_TRUE(g.has_value());
+  EXPECT_EQ(g->iteration, 300);
+  EXPECT_EQ(g->gaussians, 3000);
+  // Every evaluation improving: no stop. The first point has no best before it.
+  EXPECT_FALSE(FindGrowthStop(std::vector<HeldOutPoint>(curve.begin(), curve.begin() + 2), 1000,
+                              0.002)
+                   .has_value());
+  EXPECT_FALSE(FindGrowthStop({{100, 10.0, 500}}, 1000, 0.002).has_value());
+  // A gain smaller than the tolerance is no gain: +0.005 dB against 0.2%.
+  EXPECT_EQ(FindGrowthStop(HeldOutWithCounts({20, 20.005}), 1000, 0.002)->iteration, 200);
+  EXPECT_FALSE(FindGrowthStop(HeldOutWithCounts({20, 20.005}), 1000, 0.0).has_value());
+}
+
+TEST(GrowthStop, OnlyWhileDensifyingAndOnlyWhereACountWasRecorded) {
+  std::vector<HeldOutPoint> curve = HeldOutWithCounts({20, 22, 21.9, 23, 22.5});
+  // Densification ends at 300: the points at 300 and after cannot stop a growth that is over.
+  EXPECT_FALSE(FindGrowthStop(curve, 300, 0.002).has_value());
+  EXPECT_EQ(FindGrowthStop(curve, 301, 0.002)->iteration, 300);
+  // A checkpoint from before counts were kept: its points never freeze the count.
+  curve[2].gaussians = 0;
+  EXPECT_EQ(FindGrowthStop(curve, 1000, 0.002)->iteration, 500);
+  // An unscored (non-finite) evaluation is no gain.
+  const double nan = std::nan("");
+  EXPECT_EQ(FindGrowthStop(HeldOutWithCounts({20, nan, 25}), 1000, 0.002)->iteration, 200);
 }
 
 }  // namespace

@@ -559,6 +559,15 @@ std::vector<TrainOption> SpeedRows() {
           .Negatable("--no-stop-on-val")
           .IfMissing(false)
           .MayChangeOnResume(),
+      Row("optimization.grow_on_val", Opt(&O::grow_on_val))
+          .Switch("--grow-on-val", true,
+                  "With --stop-on-val: the val evaluations also decide how far the model grows. "
+                  "From the first one, while densifying, that did not improve on the best so "
+                  "far, the Gaussian count stays at or under its count then (results.json: "
+                  "growth_stopped). --no-grow-on-val: only --max-gaussians caps it")
+          .Negatable("--no-grow-on-val")
+          .IfMissing(false)
+          .Config("grow_on_val"),
       Row("optimization.coarse_to_fine", Opt(&O::coarse_to_fine))
           .Flag("--coarse-to-fine",
                 "Iterations at the start that train on reduced images: 1/4 of the size over "

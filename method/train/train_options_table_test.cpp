@@ -63,7 +63,7 @@ TEST(TrainOptionsTable, RecordsTheKeysRunsHaveAlwaysRecorded) {
       // issue 55
       "reference", "optimization.visible_adam", "optimization.stop_window",
       "optimization.stop_tolerance", "optimization.coarse_to_fine",
-      "optimization.prune_contribution", "optimization.stop_on_val"};
+      "optimization.prune_contribution", "optimization.stop_on_val", "optimization.grow_on_val"};
   EXPECT_EQ(keys, expected);
   // Each value keeps its member's JSON type: a float's exact value, an unsigned seed, nulls.
   const json j = Recordable().ToJson();
@@ -173,7 +173,7 @@ TEST(TrainOptionsTable, EveryFlagIsOneRowWithHelpAndItsValues) {
     // A default the help shows is one the option accepts.
     if (row.show_default) EXPECT_EQ(row.Check(row.get(defaults)), "") << row.flag;
   }
-  EXPECT_EQ(flags.size(), 48u);  // 36 + issue 55's seven + issue 52's four + issue 56's --exposure-unit
+  EXPECT_EQ(flags.size(), 49u);  // 36 + issue 55's eight + issue 52's four + issue 56's --exposure-unit
   EXPECT_EQ(FindTrainOption("--no-learn-background"), FindTrainOption("learn_background"));
 }
 

@@ -81,6 +81,9 @@ std::string TrainOptions::Validate() const {
   if (reference && (optimization.stop_window > 0 || optimization.stop_on_val))
     return "reference: --reference trains every iteration asked for; drop --iterations auto, "
            "--stop-window and --stop-on-val (or --reference)";
+  if (reference && optimization.grow_on_val)
+    return "reference: --reference grows the model up to --max-gaussians; drop --grow-on-val "
+           "(or --reference)";
   return "";
 }
 
@@ -188,7 +191,13 @@ class TrainingRun {
     return FindLossPlateau(loop_.loss_curve, opt_.densify_until, opt_.stop_window,
                            opt_.stop_tolerance);
   }
+  std::vector<HeldOutPoint> ValPoints() const;
   std::optional<HeldOutPlateau> HeldOutStop() const;
+  // --grow-on-val: the evaluation after which the model grows no further, if there is one yet.
+  std::optional<GrowthStop> GrowthStopped() const {
+    if (!opt_.grow_on_val) return std::nullopt;
+    return FindGrowthStop(ValPoints(), opt_.densify_until, opt_.stop_tolerance);
+  }
   void EvaluateValViews(int it);
   nlohmann::json StopRecord() const;
   bool OutOfTime() const;
@@ -309,6 +318,10 @@ void TrainingRun::SetUp() {
   profile_ = ProfileScene(*dataset_);
   PickMethodForScene();
   PickStopForScene();
+  // A resumed run that turned --no-stop-on-val keeps the growth stop its val curve found.
+  if (options_.optimization.grow_on_val && !options_.optimization.stop_on_val && !options_.resume)
+    Fail("train: --grow-on-val is decided by the val evaluations of --stop-on-val; add "
+         "--iterations auto --stop-on-val (or drop --grow-on-val)");
   num_times_ = DistinctTimes(*dataset_);
   if (options_.hdr.tone_mapper) {
     ToneMapperConfig tc = *options_.hdr.tone_mapper;
@@ -930,8 +943,13 @@ void TrainingRun::FinishUpdate(int it, double loss_value) {
   }
   loop_.loss_curve.push_back(loss_value);
   if (DensifiesAt(it)) {
-    DensifyAndPrune(&model_, &grads_, &optimizer_->adam(), &stats_,
-                    DensifyParamsAt(opt_, extent_, it), &loop_.rng);
+    DensifyParams params = DensifyParamsAt(opt_, extent_, it);
+    if (const std::optional<GrowthStop> g = GrowthStopped()) {
+      const auto frozen = static_cast<std::size_t>(g->gaussians);
+      params.max_gaussians = params.max_gaussians > 0 ? std::min(params.max_gaussians, frozen)
+                                                      : frozen;
+    }
+    DensifyAndPrune(&model_, &grads_, &optimizer_->adam(), &stats_, params, &loop_.rng);
     OrderByTime();
     ReturnFreedMemory();  // its temporaries (core/util/free_memory.h)
   }
@@ -1013,17 +1031,29 @@ void TrainingRun::EvaluateValViews(int it) {
   const nlohmann::json m = EvaluateOn(val_views_, /*with_flip=*/false);
   const double psnr = m.value("psnr", std::nan(""));
   spdlog::info("train: iteration {}: val PSNR {:.3f} dB", it, psnr);
-  loop_.val_curve.push_back(
-      {{"iteration", it}, {"psnr", FiniteOrNull(psnr)}, {"train_seconds", TrainingSeconds()}});
+  loop_.val_curve.push_back({{"iteration", it},
+                             {"psnr", FiniteOrNull(psnr)},
+                             {"train_seconds", TrainingSeconds()},
+                             {"gaussians", model_.size()}});
+  if (const std::optional<GrowthStop> g = GrowthStopped(); g && g->iteration == it) {
+    spdlog::info("train: iteration {}: the val views did not improve on their best; the model "
+                 "grows no further than its {} Gaussians (--grow-on-val)",
+                 it, g->gaussians);
+  }
 }
 
-std::optional<HeldOutPlateau> TrainingRun::HeldOutStop() const {
+std::vector<HeldOutPoint> TrainingRun::ValPoints() const {
   std::vector<HeldOutPoint> curve;
   for (const nlohmann::json& e : loop_.val_curve) {
     const nlohmann::json& p = e.at("psnr");
-    curve.push_back({e.at("iteration").get<int>(), p.is_number() ? p.get<double>() : std::nan("")});
+    curve.push_back({e.at("iteration").get<int>(), p.is_number() ? p.get<double>() : std::nan(""),
+                     e.value("gaussians", std::int64_t{0})});
   }
-  return FindHeldOutPlateau(curve, opt_.stop_tolerance);
+  return curve;
+}
+
+std::optional<HeldOutPlateau> TrainingRun::HeldOutStop() const {
+  return FindHeldOutPlateau(ValPoints(), opt_.stop_tolerance);
 }
 
 std::vector<const std::vector<float>*> TrainingRun::ExtraFloats() const {
@@ -1153,6 +1183,12 @@ TrainSummary TrainingRun::Finish() {
   if (correction_) results["camera_log_gains"] = correction_->log_gains();
   if (opt_.stop_window > 0) results["stopped"] = StopRecord();
   if (opt_.stop_on_val) results["val_curve"] = loop_.val_curve;
+  if (opt_.grow_on_val) {
+    const std::optional<GrowthStop> g = GrowthStopped();
+    results["growth_stopped"] =
+        g ? nlohmann::json{{"iteration", g->iteration}, {"gaussians", g->gaussians}}
+          : nlohmann::json(nullptr);
+  }
   if (options_.test_every > 0) {
     nlohmann::json last = summary.test_metrics;
     last["iteration"] = loop_.iteration;

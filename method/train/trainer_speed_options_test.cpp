@@ -191,6 +191,57 @@ TEST(TrainerSpeedOptions, StopOnValStopsOnTheValSplitAndResumes) {
   EXPECT_NE(no_window.Validate().find("--stop-on-val"), std::string::npos);
 }
 
+// --grow-on-val: with a tolerance nothing reaches, the second evaluation (20) is the first without
+// a gain, so densification at 30 and 40 keeps the count at or under the count at 20, where
+// the same run without it grows on. An interrupted run freezes at the same count (the val curve
+// keeps it); without --stop-on-val or with --reference it is refused.
+TEST(TrainerSpeedOptions, GrowOnValFreezesTheCountAtTheFirstValEvaluationWithoutGain) {
+  TempDir dir;
+  MakeTinyScene(dir / "scene");
+  fs::copy_file(dir / "scene" / "transforms_test.json", dir / "scene" / "transforms_val.json");
+  auto run = [&](const char* name, int iterations) {
+    TrainOptions o = TinyRun(dir / "scene", dir / name, iterations);
+    o.optimization.stop_window = 10;
+    o.optimization.stop_tolerance = 0.9;
+    o.optimization.stop_on_val = true;
+    o.optimization.grow_on_val = true;
+    return o;
+  };
+  const TrainSummary a = Train(run("a", 400));
+  EXPECT_EQ(a.iterations, 50);
+  const nlohmann::json r = ReadJsonFile(dir / "a" / "results.json");
+  const nlohmann::json& curve = r.at("val_curve");
+  ASSERT_EQ(curve.size(), 4u);
+  const auto frozen = curve[1].at("gaussians").get<std::size_t>();
+  EXPECT_EQ(r.at("growth_stopped").at("iteration"), 20);
+  EXPECT_EQ(r.at("growth_stopped").at("gaussians"), frozen);
+  for (std::size_t i = 2; i < curve.size(); ++i)
+    EXPECT_LE(curve[i].at("gaussians").get<std::size_t>(), frozen) << i;
+  EXPECT_LE(a.gaussians, frozen);
+  // Without it the model grows past that count (the same run up to iteration 20).
+  TrainOptions free_growth = run("free", 400);
+  free_growth.optimization.grow_on_val = false;
+  const TrainSummary f = Train(free_growth);
+  const nlohmann::json free_curve = ReadJsonFile(dir / "free" / "results.json").at("val_curve");
+  EXPECT_EQ(free_curve[1].at("gaussians").get<std::size_t>(), frozen);
+  EXPECT_GT(f.gaussians, frozen);
+  EXPECT_FALSE(ReadJsonFile(dir / "free" / "results.json").contains("growth_stopped"));
+  // Interrupted after the freeze and resumed: the same state.
+  const TrainSummary b = InterruptAndResume(run, "b", 25, 400);
+  EXPECT_EQ(b.loss_curve, a.loss_curve);
+  ExpectSameState(dir / "b", dir / "a");
+  // Refused without the val evaluations, and with --reference.
+  TrainOptions no_val = run("c", 400);
+  no_val.optimization.stop_on_val = false;
+  const std::string message = testing::ErrorOf([&] { Train(no_val); });
+  EXPECT_NE(message.find("--grow-on-val"), std::string::npos) << message;
+  TrainOptions reference = run("d", 400);
+  reference.reference = true;
+  reference.optimization.stop_window = 0;
+  reference.optimization.stop_on_val = false;
+  EXPECT_NE(reference.Validate().find("--grow-on-val"), std::string::npos);
+}
+
 // stop_on_val_where_split (`hdr4d train` without a run length): a scene with a val split trains
 // as --iterations auto --stop-on-val and records it so; one without trains as asked.
 TEST(TrainerSpeedOptions, NoRunLengthAskedStopsOnTheValSplitWhereThereIsOne) {
