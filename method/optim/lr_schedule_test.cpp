@@ -199,5 +199,19 @@ TEST(GaussianBudget, TwiceOneViewsPixelsWithAFloor) {
   EXPECT_EQ(DefaultGaussianBudget(-5.0), 32768);
 }
 
+// Beyond one 200 x 200 view the default of a dynamic scene follows the side: the same below.
+TEST(GaussianBudget, BeyondTwoHundredPixelsTheSideNotTheArea) {
+  EXPECT_EQ(SideScaledGaussianBudget(400.0 * 400.0), 160000);  // the paper's Syn resolution
+  EXPECT_EQ(SideScaledGaussianBudget(800.0 * 800.0), 320000);
+  EXPECT_EQ(SideScaledGaussianBudget(240.0 * 240.0), 96000);
+  for (double side : {0.0, 64.0, 128.0, 150.0, 200.0})
+    EXPECT_EQ(SideScaledGaussianBudget(side * side), DefaultGaussianBudget(side * side)) << side;
+  EXPECT_EQ(SideScaledGaussianBudget(-5.0), 32768);
+  // Continuous at 200 px and below the area's beyond it.
+  EXPECT_NEAR(SideScaledGaussianBudget(200.0 * 200.0 + 1), 80000, 1);
+  for (double side = 201; side < 2000; side *= 1.7)
+    EXPECT_LT(SideScaledGaussianBudget(side * side), DefaultGaussianBudget(side * side)) << side;
+}
+
 }  // namespace
 }  // namespace hdr4d::method

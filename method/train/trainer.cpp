@@ -430,10 +430,14 @@ void TrainingRun::ResolveSchedules() {
   const double image_size = ImageSize(train_views_);
   opt_ = requested.Resolved(image_size, hdr.color_mode == ColorMode::kLogHdr);
   if (opt_.max_gaussians < 0) {
-    // Dynamic: one view's pixels (a rig's cameras film one performance from around it). Static:
-    // every view's (a capture's views are its one time, usually spread over the scene).
-    opt_.max_gaussians = DefaultGaussianBudget(
-        profile_.dynamic ? image_size * image_size : PixelsPerTime(train_views_));
+    // Dynamic: one view's pixels (a rig's cameras film one performance from around it), by its
+    // side beyond 200 px (not under --reference). Static: every view's (a capture's views are
+    // its one time, usually spread over the scene).
+    const double view_pixels = image_size * image_size;
+    opt_.max_gaussians =
+        !profile_.dynamic    ? DefaultGaussianBudget(PixelsPerTime(train_views_))
+        : options_.reference ? DefaultGaussianBudget(view_pixels)
+                             : SideScaledGaussianBudget(view_pixels);
   }
   temporal_ = profile_.dynamic && !hdr.force_static;
   spdlog::info("train: {} train / {} test views, extent {:.3f}, {}, method {}", train_views_.size(),

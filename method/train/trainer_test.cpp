@@ -165,6 +165,26 @@ TEST(Trainer, DefaultGaussianBudgetFollowsOneView) {
             2 * 160 * 160 * 3);
 }
 
+// Beyond 200 px a dynamic scene's default follows the view's side (2 x 240 x 200 at 240 px, not
+// 2 x 240 x 240); --reference keeps the area's.
+TEST(Trainer, DefaultGaussianBudgetFollowsTheSideBeyondTwoHundredPixels) {
+  TempDir dir;
+  GaussianSceneOptions scene;
+  scene.size = 240;
+  scene.num_gaussians = 12;
+  scene.num_cameras = 4;
+  scene.num_timestamps = 2;
+  MakeGaussianScene(scene, dir / "scene");
+  Train(SmallRun(dir / "scene", dir / "run", 2));
+  EXPECT_EQ(ReadJsonFile(dir / "run" / "config.json")["optimization"]["max_gaussians"],
+            2 * 240 * 200);
+  TrainOptions reference = SmallRun(dir / "scene", dir / "reference", 2);
+  reference.reference = true;
+  Train(reference);
+  EXPECT_EQ(ReadJsonFile(dir / "reference" / "config.json")["optimization"]["max_gaussians"],
+            2 * 240 * 240);
+}
+
 // The buffers get capacity for the budget when it fits the machine's memory, and a budget far
 // beyond it (the largest --max-gaussians accepts) trains as any other: nothing is reserved.
 TEST(Trainer, ABudgetBeyondMemoryIsNotReserved) {
