@@ -144,20 +144,30 @@ TEST(TrainerSpeedOptions, IterationsAutoStopsDeterministicallyAndResumes) {
   EXPECT_TRUE(again.stopped_flat);
 }
 
+// The tiny scene with a val split: a copy of its test split.
+void MakeTinySceneWithVal(const fs::path& root) {
+  MakeTinyScene(root);
+  fs::copy_file(root / "transforms_test.json", root / "transforms_val.json");
+}
+
+// --iterations auto --stop-on-val every 10 iterations, with a tolerance no evaluation reaches.
+TrainOptions StopOnValRun(const fs::path& scene, const fs::path& run, int iterations) {
+  TrainOptions o = TinyRun(scene, run, iterations);
+  o.optimization.stop_window = 10;
+  o.optimization.stop_tolerance = 0.9;
+  o.optimization.stop_on_val = true;
+  return o;
+}
+
 // --stop-on-val: the stop is decided on the val split (here a copy of the test split), scored
 // every --stop-window iterations except on an opacity reset's (30); with a tolerance nothing
 // reaches, the first evaluation stays the best and the run stops three evaluations later. An
 // interrupted run stops at the same iteration; a scene without a val split is refused.
 TEST(TrainerSpeedOptions, StopOnValStopsOnTheValSplitAndResumes) {
   TempDir dir;
-  MakeTinyScene(dir / "scene");
-  fs::copy_file(dir / "scene" / "transforms_test.json", dir / "scene" / "transforms_val.json");
+  MakeTinySceneWithVal(dir / "scene");
   auto run = [&](const char* name, int iterations) {
-    TrainOptions o = TinyRun(dir / "scene", dir / name, iterations);
-    o.optimization.stop_window = 10;
-    o.optimization.stop_tolerance = 0.9;
-    o.optimization.stop_on_val = true;
-    return o;
+    return StopOnValRun(dir / "scene", dir / name, iterations);
   };
   const TrainSummary a = Train(run("a", 400));
   EXPECT_EQ(a.iterations, 50);
@@ -197,13 +207,9 @@ TEST(TrainerSpeedOptions, StopOnValStopsOnTheValSplitAndResumes) {
 // keeps it); without --stop-on-val or with --reference it is refused.
 TEST(TrainerSpeedOptions, GrowOnValFreezesTheCountAtTheFirstValEvaluationWithoutGain) {
   TempDir dir;
-  MakeTinyScene(dir / "scene");
-  fs::copy_file(dir / "scene" / "transforms_test.json", dir / "scene" / "transforms_val.json");
+  MakeTinySceneWithVal(dir / "scene");
   auto run = [&](const char* name, int iterations) {
-    TrainOptions o = TinyRun(dir / "scene", dir / name, iterations);
-    o.optimization.stop_window = 10;
-    o.optimization.stop_tolerance = 0.9;
-    o.optimization.stop_on_val = true;
+    TrainOptions o = StopOnValRun(dir / "scene", dir / name, iterations);
     o.optimization.grow_on_val = true;
     return o;
   };

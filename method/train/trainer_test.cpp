@@ -143,16 +143,21 @@ TEST(Trainer, GaussianBudgetIsNeverPassed) {
   EXPECT_GT(Train(o).gaussians, 430u);
 }
 
+// Four cameras at two times, SIZE px: the budget tests' scene.
+void MakeBudgetScene(const fs::path& root, int size) {
+  GaussianSceneOptions scene;
+  scene.size = size;
+  scene.num_gaussians = 12;
+  scene.num_cameras = 4;
+  scene.num_timestamps = 2;
+  MakeGaussianScene(scene, root);
+}
+
 // The default budget of a dynamic scene follows one view's pixels, not the rig's: four 160 px
 // cameras record 2 x 160 x 160, not four times that. A static scene counts every view.
 TEST(Trainer, DefaultGaussianBudgetFollowsOneView) {
   TempDir dir;
-  GaussianSceneOptions scene;
-  scene.size = 160;
-  scene.num_gaussians = 12;
-  scene.num_cameras = 4;
-  scene.num_timestamps = 2;
-  MakeGaussianScene(scene, dir / "scene");
+  MakeBudgetScene(dir / "scene", 160);
   TrainOptions o = SmallRun(dir / "scene", dir / "run", 2);
   ASSERT_LT(o.optimization.max_gaussians, 0) << "the default must be the derived budget";
   Train(o);
@@ -169,12 +174,7 @@ TEST(Trainer, DefaultGaussianBudgetFollowsOneView) {
 // 2 x 240 x 240); --reference keeps the area's.
 TEST(Trainer, DefaultGaussianBudgetFollowsTheSideBeyondTwoHundredPixels) {
   TempDir dir;
-  GaussianSceneOptions scene;
-  scene.size = 240;
-  scene.num_gaussians = 12;
-  scene.num_cameras = 4;
-  scene.num_timestamps = 2;
-  MakeGaussianScene(scene, dir / "scene");
+  MakeBudgetScene(dir / "scene", 240);
   Train(SmallRun(dir / "scene", dir / "run", 2));
   EXPECT_EQ(ReadJsonFile(dir / "run" / "config.json")["optimization"]["max_gaussians"],
             2 * 240 * 200);
