@@ -35,6 +35,12 @@ double HeldOutError(double psnr) {
   return std::isfinite(psnr) ? std::pow(10.0, -psnr / 10.0) : HUGE_VAL;
 }
 
+// Whether `point` lowered the val error below (1 - tolerance) x `best`'s: the one gain rule of
+// the stop and the growth stop.
+bool Improves(const HeldOutPoint& point, const HeldOutPoint& best, double tolerance) {
+  return HeldOutError(point.psnr) < (1.0 - tolerance) * HeldOutError(best.psnr);
+}
+
 }  // namespace
 
 std::optional<HeldOutPlateau> FindHeldOutPlateau(const std::vector<HeldOutPoint>& curve,
@@ -43,8 +49,7 @@ std::optional<HeldOutPlateau> FindHeldOutPlateau(const std::vector<HeldOutPoint>
   if (patience < 1 || curve.size() < static_cast<std::size_t>(patience) + 1) return std::nullopt;
   std::size_t best = 0;
   for (std::size_t i = 1; i < curve.size(); ++i) {
-    if (HeldOutError(curve[i].psnr) < (1.0 - tolerance) * HeldOutError(curve[best].psnr))
-      best = i;
+    if (Improves(curve[i], curve[best], tolerance)) best = i;
   }
   if (curve.size() - 1 - best < static_cast<std::size_t>(patience)) return std::nullopt;
   return HeldOutPlateau{curve.back().iteration, curve[best].iteration, curve[best].psnr,
@@ -56,7 +61,7 @@ std::optional<GrowthStop> FindGrowthStop(const std::vector<HeldOutPoint>& curve,
                                          double tolerance) {
   std::size_t best = 0;
   for (std::size_t i = 1; i < curve.size() && curve[i].iteration < densify_until; ++i) {
-    if (HeldOutError(curve[i].psnr) < (1.0 - tolerance) * HeldOutError(curve[best].psnr)) {
+    if (Improves(curve[i], curve[best], tolerance)) {
       best = i;
     } else if (curve[i].gaussians > 0) {
       return GrowthStop{curve[i].iteration, curve[i].gaussians};
