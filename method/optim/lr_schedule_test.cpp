@@ -213,5 +213,16 @@ TEST(GaussianBudget, BeyondTwoHundredPixelsTheSideNotTheArea) {
     EXPECT_LT(SideScaledGaussianBudget(side * side), DefaultGaussianBudget(side * side)) << side;
 }
 
+// One moving camera: one view's pixels (by the side beyond 200 px), the same floor, never more
+// than a rig's default.
+TEST(GaussianBudget, MonocularIsOneViewsPixels) {
+  EXPECT_EQ(MonocularGaussianBudget(200.0 * 200.0), 40000);
+  EXPECT_EQ(MonocularGaussianBudget(400.0 * 400.0), 80000);
+  EXPECT_EQ(MonocularGaussianBudget(100.0 * 100.0), 32768);  // D-NeRF at 100 px: as before
+  EXPECT_EQ(MonocularGaussianBudget(-5.0), 32768);
+  for (double side = 64; side < 2000; side *= 1.3)
+    EXPECT_LE(MonocularGaussianBudget(side * side), SideScaledGaussianBudget(side * side)) << side;
+}
+
 }  // namespace
 }  // namespace hdr4d::method

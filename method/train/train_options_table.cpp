@@ -369,8 +369,9 @@ std::vector<TrainOption> RunRows() {
                 "Gaussian budget (the reference's densify_until_num_points): densification "
                 "never takes the count past N, keeping the clone/split candidates with the "
                 "largest gradients; 0 = no budget (default: 2 x the pixels of one training "
-                "view up to 200 x 200 and 2 x side x 200 beyond (--reference: 2 x the pixels), "
-                "of every view for a static scene, at least 32768; BENCHMARKS.md). An N "
+                "view up to 200 x 200 and 2 x side x 200 beyond, half that for one moving "
+                "camera (--reference: 2 x the pixels), of every view for a static scene, at "
+                "least 32768; BENCHMARKS.md). An N "
                 "given here also caps the initial point cloud: a larger point3d.ply is "
                 "subsampled to N points, evenly over the file's order (the default budget "
                 "leaves it whole)")

@@ -431,13 +431,21 @@ void TrainingRun::ResolveSchedules() {
   opt_ = requested.Resolved(image_size, hdr.color_mode == ColorMode::kLogHdr);
   if (opt_.max_gaussians < 0) {
     // Dynamic: one view's pixels (a rig's cameras film one performance from around it), by its
-    // side beyond 200 px (not under --reference). Static: every view's (a capture's views are
-    // its one time, usually spread over the scene).
+    // side beyond 200 px, and half as many for one moving camera (neither under --reference).
+    // Static: every view's (a capture's views are its one time, usually spread over the scene).
     const double view_pixels = image_size * image_size;
     opt_.max_gaussians =
-        !profile_.dynamic    ? DefaultGaussianBudget(PixelsPerTime(train_views_))
-        : options_.reference ? DefaultGaussianBudget(view_pixels)
-                             : SideScaledGaussianBudget(view_pixels);
+        !profile_.dynamic     ? DefaultGaussianBudget(PixelsPerTime(train_views_))
+        : options_.reference  ? DefaultGaussianBudget(view_pixels)
+        : profile_.multi_view ? SideScaledGaussianBudget(view_pixels)
+                              : MonocularGaussianBudget(view_pixels);
+    spdlog::info("train: Gaussian budget {} ({}, at least {})", opt_.max_gaussians,
+                 !profile_.dynamic     ? "static: 2 x every view's pixels"
+                 : options_.reference  ? "--reference: 2 x one view's pixels"
+                 : profile_.multi_view ? "2 x one view's pixels, by its side beyond 200 px"
+                                       : "one moving camera: 1 x one view's pixels, by its side "
+                                         "beyond 200 px",
+                 kMinGaussianBudget);
   }
   temporal_ = profile_.dynamic && !hdr.force_static;
   spdlog::info("train: {} train / {} test views, extent {:.3f}, {}, method {}", train_views_.size(),

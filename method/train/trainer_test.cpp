@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 #include "core/util/error.h"
 #include "core/files/json_util.h"
 #include "method/run/gaussian_scene.h"
@@ -183,6 +185,41 @@ TEST(Trainer, DefaultGaussianBudgetFollowsTheSideBeyondTwoHundredPixels) {
   Train(reference);
   EXPECT_EQ(ReadJsonFile(dir / "reference" / "config.json")["optimization"]["max_gaussians"],
             2 * 240 * 240);
+}
+
+// One moving camera: of the three training cameras only camera k % 3 at time k, and no camera
+// ids (a rig's would make the scene multi-view).
+void MakeMonocular(const fs::path& root) {
+  for (const char* split : {"transforms_train.json", "transforms_test.json"}) {
+    nlohmann::json j = ReadJsonFile(root / split);
+    nlohmann::json kept = nlohmann::json::array();
+    for (nlohmann::json& frame : j["frames"]) {
+      int camera = -1, time = -1;
+      ASSERT_EQ(std::sscanf(frame["file_path"].get<std::string>().c_str(), "images/cam%d_t%d.png",
+                            &camera, &time),
+                2);
+      frame.erase("camera_id");
+      if (camera % 4 == 3 || camera == time % 3) kept.push_back(frame);
+    }
+    j["frames"] = kept;
+    WriteJsonFile(root / split, j);
+  }
+}
+
+// A monocular dynamic scene's default is one view's pixels, not two (--reference keeps two).
+TEST(Trainer, DefaultGaussianBudgetOfOneMovingCameraIsOneView) {
+  TempDir dir;
+  MakeBudgetScene(dir / "scene", 190);
+  MakeMonocular(dir / "scene");
+  Train(SmallRun(dir / "scene", dir / "run", 2));
+  const nlohmann::json config = ReadJsonFile(dir / "run" / "config.json");
+  EXPECT_EQ(config["profile"]["multi_view"], false);
+  EXPECT_EQ(config["optimization"]["max_gaussians"], 190 * 190);
+  TrainOptions reference = SmallRun(dir / "scene", dir / "reference", 2);
+  reference.reference = true;
+  Train(reference);
+  EXPECT_EQ(ReadJsonFile(dir / "reference" / "config.json")["optimization"]["max_gaussians"],
+            2 * 190 * 190);
 }
 
 // The buffers get capacity for the budget when it fits the machine's memory, and a budget far
