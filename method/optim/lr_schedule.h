@@ -88,9 +88,9 @@ inline int StepsForRunLength(int reference_steps, int iterations) {
 // under 2 GB (docs/history/gaussian-budget.md).
 inline constexpr double kGaussiansPerPixel = 2.0;
 inline constexpr std::int64_t kMinGaussianBudget = 32768;
-inline std::int64_t DefaultGaussianBudget(double pixels) {
+inline std::int64_t DefaultGaussianBudget(double pixels, double per_pixel = kGaussiansPerPixel) {
   return std::max<std::int64_t>(kMinGaussianBudget,
-                                std::llround(kGaussiansPerPixel * std::max(0.0, pixels)));
+                                std::llround(per_pixel * std::max(0.0, pixels)));
 }
 
 // The default of a dynamic scene (issue 55; --reference keeps the one above): up to one
@@ -118,8 +118,7 @@ inline std::int64_t SideScaledGaussianBudget(double pixels) {
 // At 200 px this is 40k; D-NeRF-sized scenes (100 px) keep the floor as before.
 inline constexpr double kMonocularGaussiansPerPixel = 1.0;
 inline std::int64_t MonocularGaussianBudget(double pixels) {
-  return std::max<std::int64_t>(
-      kMinGaussianBudget, std::llround(kMonocularGaussiansPerPixel * SideScaledPixels(pixels)));
+  return DefaultGaussianBudget(SideScaledPixels(pixels), kMonocularGaussiansPerPixel);
 }
 
 // Optimisation settings with the HDR-4DGS HDR-4D-Syn defaults (which are the 4DGS ones except for

@@ -434,17 +434,21 @@ void TrainingRun::ResolveSchedules() {
     // side beyond 200 px, and half as many for one moving camera (neither under --reference).
     // Static: every view's (a capture's views are its one time, usually spread over the scene).
     const double view_pixels = image_size * image_size;
-    opt_.max_gaussians =
-        !profile_.dynamic     ? DefaultGaussianBudget(PixelsPerTime(train_views_))
-        : options_.reference  ? DefaultGaussianBudget(view_pixels)
-        : profile_.multi_view ? SideScaledGaussianBudget(view_pixels)
-                              : MonocularGaussianBudget(view_pixels);
-    spdlog::info("train: Gaussian budget {} ({}, at least {})", opt_.max_gaussians,
-                 !profile_.dynamic     ? "static: 2 x every view's pixels"
-                 : options_.reference  ? "--reference: 2 x one view's pixels"
-                 : profile_.multi_view ? "2 x one view's pixels, by its side beyond 200 px"
-                                       : "one moving camera: 1 x one view's pixels, by its side "
-                                         "beyond 200 px",
+    const char* rule = nullptr;
+    if (!profile_.dynamic) {
+      opt_.max_gaussians = DefaultGaussianBudget(PixelsPerTime(train_views_));
+      rule = "static: 2 x every view's pixels";
+    } else if (options_.reference) {
+      opt_.max_gaussians = DefaultGaussianBudget(view_pixels);
+      rule = "--reference: 2 x one view's pixels";
+    } else if (profile_.multi_view) {
+      opt_.max_gaussians = SideScaledGaussianBudget(view_pixels);
+      rule = "2 x one view's pixels, by its side beyond 200 px";
+    } else {
+      opt_.max_gaussians = MonocularGaussianBudget(view_pixels);
+      rule = "one moving camera: 1 x one view's pixels, by its side beyond 200 px";
+    }
+    spdlog::info("train: Gaussian budget {} ({}, at least {})", opt_.max_gaussians, rule,
                  kMinGaussianBudget);
   }
   temporal_ = profile_.dynamic && !hdr.force_static;
