@@ -31,6 +31,11 @@ void AddGaussianSceneCommand(CLI::App& app) {
   cmd->add_option("--timestamps", options->num_timestamps, "Timestamps in [0,1]")
       ->check(Integer(2, 100000))
       ->capture_default_str();
+  cmd->add_option("--sh-degree", options->sh_degree,
+                  "Colours that change with the viewing direction up to this SH degree (0: "
+                  "every view agrees on a Gaussian's colour)")
+      ->check(Integer(0, 3))
+      ->capture_default_str();
   cmd->add_option("--seed", options->seed, "Random seed of the scene")
       ->check(Seed())
       ->capture_default_str();

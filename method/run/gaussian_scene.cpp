@@ -20,6 +20,7 @@ void GaussianSceneOptions::Validate() const {
   if (num_gaussians < 1) Fail("gaussian scene: need at least one Gaussian");
   if (num_cameras < 4) Fail("gaussian scene: need at least 4 cameras (every 4th is held out)");
   if (num_timestamps < 2) Fail("gaussian scene: need at least 2 timestamps");
+  if (sh_degree < 0 || sh_degree > 3) Fail("gaussian scene: SH degree {} must be within 0..3", sh_degree);
 }
 
 GaussianModel MakeGaussianSceneModel(const GaussianSceneOptions& options) {
@@ -28,7 +29,7 @@ GaussianModel MakeGaussianSceneModel(const GaussianSceneOptions& options) {
   auto u = [&](float lo, float hi) { return std::uniform_real_distribution<float>(lo, hi)(rng); };
   GaussianModel m;
   m.temporal = true;
-  m.basis.max_sh_degree = 0;
+  m.basis.max_sh_degree = options.sh_degree;
   m.basis.max_time_degree = 0;
   m.Resize(options.num_gaussians);
   for (int i = 0; i < options.num_gaussians; ++i) {
@@ -43,6 +44,8 @@ GaussianModel MakeGaussianSceneModel(const GaussianSceneOptions& options) {
     for (int a = 1; a < 4; ++a) m.rot_right[i * 4 + a] = u(-0.15f, 0.15f);
     m.opacity_logit[i] = u(0.5f, 3.0f);
     for (int c = 0; c < 3; ++c) m.color_dc[i * 3 + c] = (u(0.1f, 0.95f) - kColorOffset) / kShC0;
+    // |Y_lm| is about 0.5 at degree 1: coefficients of +-0.6 swing a colour by about +-0.3.
+    for (std::size_t f = 0; f < m.rest_stride(); ++f) m.color_rest[i * m.rest_stride() + f] = u(-0.6f, 0.6f);
   }
   return m;
 }
@@ -60,7 +63,7 @@ Dataset MakeGaussianScene(const GaussianSceneOptions& options, const fs::path& f
   dataset.layout = "dnerf";
   dataset.camera_angle_x = kFovX;
   RenderOptions render;
-  render.sh_degree = 0;
+  render.sh_degree = options.sh_degree;
   render.time_degree = 0;
   render.background = {0, 0, 0};
   render.backend = RasterBackend::kScalar;  // the reference path makes the ground truth

@@ -18,10 +18,13 @@ struct GaussianSceneOptions {
   int num_cameras = 12;  // on a ring; every 4th is a test camera
   int num_timestamps = 8;
   std::uint64_t seed = 1;
+  // Colours that change with the viewing direction up to this SH degree (0..3): random
+  // coefficients of up to ~0.3 in colour per degree, a glossy scene whose views disagree.
+  int sh_degree = 0;
   void Validate() const;
 };
 
-// The scene's model (LDR colours, degree-0 colour so every view agrees on a Gaussian's colour).
+// The scene's model (LDR colours; with sh_degree 0 every view agrees on a Gaussian's colour).
 GaussianModel MakeGaussianSceneModel(const GaussianSceneOptions& options);
 
 // Renders every camera at every timestamp to <root>/images/*.png and writes the dataset JSON,
