@@ -9,8 +9,10 @@
 // gradients to the coefficients only; none flows to the mean, the camera or mu_t.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <utility>
 
 #include "core/util/error.h"
 #include "method/gaussian/constants.h"
@@ -33,6 +35,27 @@ constexpr double kShC2[5] = {1.0925484305920792, -1.0925484305920792, 0.31539156
 constexpr double kShC3[7] = {-0.5900435899266435, 2.890611442640554,   -0.4570457994644658,
                              0.3731763325901154,  -0.4570457994644658, 1.445305721320277,
                              -0.5900435899266435};
+
+// The lowest spatial and time degrees that give a model's colours exactly: those of its highest
+// non-zero coefficients. Colour bands never switched on (--color-bands-by-need) stay zero, and a
+// render at these degrees skips their terms: the same image up to float rounding, less work.
+template <typename T>
+std::pair<int, int> UsedColorDegrees(const GaussianModelT<T>& model) {
+  const int functions = model.basis.sh_functions();
+  const std::size_t channels = static_cast<std::size_t>(model.channels);
+  const std::size_t stride = model.rest_stride();
+  int sh = 0, time = 0;
+  for (std::size_t f = 0; f < model.color_rest.size(); ++f) {
+    if (model.color_rest[f] == T(0)) continue;
+    const int k = static_cast<int>((f % stride) / channels) + 1;  // coefficient k = n F + lm
+    const int lm = k % functions;
+    int degree = 0;
+    while ((degree + 1) * (degree + 1) <= lm) ++degree;
+    sh = std::max(sh, degree);
+    time = std::max(time, k / functions);
+  }
+  return {sh, time};
+}
 
 // Y_lm(d) for l <= degree (0..3) at the unit direction d, in 3DGS order: (degree+1)^2 values.
 template <typename T>

@@ -8,6 +8,7 @@
 #include <random>
 
 #include "method/gaussian/constants.h"
+#include "method/gaussian/sh4d.h"
 
 namespace hdr4d::method {
 namespace {
@@ -174,6 +175,41 @@ TEST(Render, FastPathMatchesTheReference) {
   expect_close(g_fast.opacity_logit, g_ref.opacity_logit, "opacity_logit");
   expect_close(g_fast.color_dc, g_ref.color_dc, "color_dc");
   expect_close(g_fast.color_rest, g_ref.color_rest, "color_rest");
+}
+
+// Colour bands left frozen (zero) by --color-bands-by-need: a render at the degrees the model
+// uses (UsedColorDegrees) is the render at the full degrees, in 4D and 3D, up to float rounding
+// (the SIMD colour kernel groups its sums by the degrees it evaluates).
+TEST(Render, SkippingZeroColourBandsGivesTheSameImage) {
+  const Camera camera = TestCamera(53, 41);
+  for (bool temporal : {true, false}) {
+    GaussianModel model = RandomScene<float>(200, temporal, 11);
+    const std::size_t stride = model.rest_stride();
+    // SH degree 1 on, everything above it zero.
+    for (std::size_t i = 0; i < model.size(); ++i)
+      std::fill(model.color_rest.begin() + i * stride + 9, model.color_rest.begin() + (i + 1) * stride,
+                0.0f);
+    ASSERT_EQ(UsedColorDegrees(model), (std::pair{1, 0}));
+    RenderOptions full = Options(temporal), used = full;
+    used.sh_degree = 1;
+    used.time_degree = 0;
+    FrameState a, b;
+    std::vector<float> image_full(53 * 41 * 3), image_used(53 * 41 * 3);
+    RenderForward(model, camera, 0.5f, full, &a, image_full.data());
+    RenderForward(model, camera, 0.5f, used, &b, image_used.data());
+    float worst = 0;
+    for (std::size_t i = 0; i < image_full.size(); ++i)
+      worst = std::max(worst, std::abs(image_full[i] - image_used[i]));
+    EXPECT_LE(worst, 2e-6f) << (temporal ? "4D" : "3D");
+  }
+  GaussianModel model = RandomScene<float>(20, true, 3);
+  EXPECT_EQ(UsedColorDegrees(model), (std::pair{3, 2}));
+  std::fill(model.color_rest.begin(), model.color_rest.end(), 0.0f);
+  EXPECT_EQ(UsedColorDegrees(model), (std::pair{0, 0}));
+  model.color_rest[model.rest_stride() * 4 + 15 * 3] = 0.5f;  // k = 16: time block 1, l = 0
+  EXPECT_EQ(UsedColorDegrees(model), (std::pair{0, 1}));
+  model.color_rest[model.rest_stride() * 2 + 16 * 3 + 2] = 0.5f;  // k = 17: time block 1, l = 1
+  EXPECT_EQ(UsedColorDegrees(model), (std::pair{1, 1}));
 }
 
 // rows_done hands over every Gaussian once, after its gradient rows are final (what the fused

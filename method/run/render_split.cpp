@@ -13,6 +13,7 @@
 #include <numbers>
 #include <optional>
 #include <sstream>
+#include <tuple>
 
 #include "core/files/atomic_file.h"
 #include "core/dataset/dataset.h"
@@ -21,6 +22,7 @@
 #include "core/files/json_util.h"
 #include "core/files/output_guard.h"
 #include "core/util/parallel.h"
+#include "method/gaussian/sh4d.h"
 #include "core/util/progress.h"
 #include "method/optim/permute_rows.h"
 #include "method/optim/time_order.h"
@@ -248,8 +250,9 @@ std::vector<Camera> OrbitCameras(const std::vector<Camera>& train, int frames) {
 
 std::unique_ptr<ViewRenderer> MakeRunRenderer(const LoadedRun& run) {
   RenderOptions render;
-  render.sh_degree = run.model.basis.max_sh_degree;
-  render.time_degree = run.model.temporal ? run.model.basis.max_time_degree : 0;
+  // Bands that stayed frozen in training (zero) are skipped: the same image, less work.
+  std::tie(render.sh_degree, render.time_degree) = UsedColorDegrees(run.model);
+  if (!run.model.temporal) render.time_degree = 0;
   return std::make_unique<ViewRenderer>(
       run.model, run.tone_mapper.get(), run.resolved, render, run.background,
       run.learned_background ? &*run.learned_background : nullptr, &run.hdr_head);
