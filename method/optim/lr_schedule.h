@@ -214,6 +214,14 @@ struct OptimizationOptions {
   // largest blending weight alpha T at any pixel of those views stayed below this is pruned
   // (DensifyParams::min_contribution). 0 = off.
   double prune_contribution = 0.0;
+  // Colour bands by need (method/train/color_bands.h): where the reference adds a colour band,
+  // a probe of its gradient switches it on only when the gradients of the views agree (their
+  // summed square over the sum of squares reaches color_band_signal, about 1 for noise); false:
+  // every band on the reference's schedule. Off by default: on five datagen scenes it kept held-out
+  // LDR but lost aligned HDR (docs/history/time-to-quality.md).
+  bool color_bands_by_need = false;
+  double color_band_signal = kDefaultColorBandSignal;
+  static constexpr double kDefaultColorBandSignal = 2.0;
   static constexpr int kDefaultStopWindow = 1000;
   static constexpr double kDefaultStopTolerance = 0.002;
 
@@ -327,6 +335,8 @@ struct OptimizationOptions {
       return fmt::format("prune_opacity must be in [0, 1), got {}", prune_opacity);
     }
     if (!(e = positive_int("sh_increase_interval", sh_increase_interval)).empty()) return e;
+    if (!(color_band_signal >= 0.0 && std::isfinite(color_band_signal)))
+      return fmt::format("color_band_signal must be >= 0 and finite, got {}", color_band_signal);
     if (stop_window < 0) return fmt::format("stop_window must be >= 0, got {}", stop_window);
     if (!(stop_tolerance >= 0.0 && stop_tolerance <= 1.0)) {
       return fmt::format("stop_tolerance must be in [0, 1], got {}", stop_tolerance);

@@ -518,6 +518,7 @@ std::vector<TrainOption> SpeedRows() {
           .WhenGiven([](TrainOptions* o, const Json&) {
             o->reference = true;
             o->optimization.visible_adam = false;
+            o->optimization.color_bands_by_need = false;
             o->optimization.coarse_to_fine = 0;
             o->optimization.prune_contribution = 0.0;
             // A tone mapper given later gets it in ResolveTrainRequest.
@@ -595,6 +596,27 @@ std::vector<TrainOption> LessWorkRows() {
           .Range(ValueRange::Real(0, 0.999))
           .IfMissing(0.0)
           .Config("prune_contribution"),
+      Row("optimization.color_bands_by_need", Opt(&O::color_bands_by_need))
+          .Switch("--color-bands-by-need", true,
+                  "Start the higher colour bands (SH degrees 1-3, time degrees 1-2) frozen: "
+                  "where the reference adds one (every --sh-increase-interval), probe its "
+                  "gradient over the next 100 iterations without stepping it and switch it on "
+                  "only when the views' gradients agree beyond noise (--color-band-signal); a "
+                  "frozen band costs no Adam step. --all-color-bands (the default): every band "
+                  "on the reference's schedule, as the paper")
+          .Negatable("--all-color-bands")
+          .IfMissing(false)
+          .Config("color_bands_by_need"),
+      Row("optimization.color_band_signal", Opt(&O::color_band_signal))
+          .Flag("--color-band-signal",
+                "The probe's threshold: over all Gaussians and a band's coefficients, the "
+                "squared sum of the band's gradients over the probe's views (after the DC "
+                "term's share) against what noise would give (about 1 where the colour does "
+                "not follow the band)")
+          .Range(ValueRange::Real(0, 1e9))
+          .ShowDefault()
+          .IfMissing(O::kDefaultColorBandSignal)
+          .Config("color_band_signal"),
   };
 }
 

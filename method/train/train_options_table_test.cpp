@@ -61,7 +61,8 @@ TEST(TrainOptionsTable, RecordsTheKeysRunsHaveAlwaysRecorded) {
       // issue 52: the per-camera correction
       "camera_correction", "camera_correction_weight", "camera_correction_lr",
       // issue 55
-      "reference", "optimization.visible_adam", "optimization.stop_window",
+      "reference", "optimization.visible_adam", "optimization.color_bands_by_need",
+      "optimization.color_band_signal", "optimization.stop_window",
       "optimization.stop_tolerance", "optimization.coarse_to_fine",
       "optimization.prune_contribution", "optimization.stop_on_val", "optimization.grow_on_val"};
   EXPECT_EQ(keys, expected);
@@ -104,7 +105,7 @@ TEST(TrainOptionsTable, RecordsOfOlderRunsReadAsTheyTrained) {
   old.erase("learn_background");
   old.erase("reference");
   for (const char* key : {"visible_adam", "stop_window", "stop_tolerance", "coarse_to_fine",
-                          "prune_contribution"})
+                          "prune_contribution", "color_bands_by_need", "color_band_signal"})
     old["optimization"].erase(key);
   for (const char* key : {"hdr_target", "hdr_geometry", "hdr_head", "hdr_head_iterations",
                           "pixel_log_epsilon"})
@@ -116,6 +117,7 @@ TEST(TrainOptionsTable, RecordsOfOlderRunsReadAsTheyTrained) {
   EXPECT_EQ(o.optimization.stop_window, 0);
   EXPECT_EQ(o.optimization.coarse_to_fine, 0);
   EXPECT_EQ(o.optimization.prune_contribution, 0.0);
+  EXPECT_FALSE(o.optimization.color_bands_by_need);  // every band on the reference's schedule
   EXPECT_EQ(o.hdr.hdr_target, HdrTarget::kImageMax);
   EXPECT_TRUE(o.hdr.hdr_geometry);
   EXPECT_FALSE(o.hdr.hdr_head);
@@ -173,7 +175,7 @@ TEST(TrainOptionsTable, EveryFlagIsOneRowWithHelpAndItsValues) {
     // A default the help shows is one the option accepts.
     if (row.show_default) EXPECT_EQ(row.Check(row.get(defaults)), "") << row.flag;
   }
-  EXPECT_EQ(flags.size(), 49u);  // 36 + issue 55's eight + issue 52's four + issue 56's --exposure-unit
+  EXPECT_EQ(flags.size(), 51u);  // 36 + issue 55's ten + issue 52's four + issue 56's --exposure-unit
   EXPECT_EQ(FindTrainOption("--no-learn-background"), FindTrainOption("learn_background"));
 }
 
@@ -224,6 +226,7 @@ TEST(TrainOptionsTable, ReferenceIsRecordedAndRefusesTheOptionsThatDoLess) {
   EXPECT_FALSE(o.optimization.visible_adam);
   EXPECT_EQ(o.optimization.coarse_to_fine, 0);
   EXPECT_EQ(o.optimization.prune_contribution, 0.0);
+  EXPECT_FALSE(o.optimization.color_bands_by_need);
   EXPECT_EQ(o.hdr.tone_mapper->unseen_rows, "zero");
   EXPECT_EQ(o.Validate(), "");
   EXPECT_EQ(o.ToJson()["reference"], true);
@@ -241,6 +244,11 @@ TEST(TrainOptionsTable, ReferenceIsRecordedAndRefusesTheOptionsThatDoLess) {
   o.optimization.prune_contribution = 0.02;
   EXPECT_NE(o.Validate().find("drop --prune-contribution"), std::string::npos) << o.Validate();
   EXPECT_FALSE(MayChangeOnResume("optimization.prune_contribution"));
+  o.optimization.prune_contribution = 0;
+  o.optimization.color_bands_by_need = true;
+  EXPECT_NE(o.Validate().find("drop --color-bands-by-need"), std::string::npos) << o.Validate();
+  EXPECT_FALSE(MayChangeOnResume("optimization.color_bands_by_need"));
+  EXPECT_FALSE(MayChangeOnResume("optimization.color_band_signal"));
   // A resumed run cannot change what it learns: --visible-adam is not one a resume may change.
   EXPECT_FALSE(MayChangeOnResume("reference"));
   EXPECT_FALSE(MayChangeOnResume("optimization.visible_adam"));

@@ -53,6 +53,7 @@
 #include "method/train/tone_curve_watch.h"
 #include "method/train/train_options_table.h"
 #include "method/train/train_views.h"
+#include "method/train/color_bands.h"
 #include "method/render/view_renderer.h"
 
 namespace hdr4d::method {
@@ -68,6 +69,9 @@ std::string TrainOptions::Validate() const {
   if (reference && optimization.visible_adam)
     return "reference: --reference trains the paper's configuration, which steps Adam densely; "
            "drop --visible-adam (or --reference)";
+  if (reference && optimization.color_bands_by_need)
+    return "reference: --reference adds every colour band on the paper's schedule; drop "
+           "--color-bands-by-need (or --reference)";
   if (reference && optimization.coarse_to_fine > 0)
     return "reference: --reference trains at full size from the start; drop --coarse-to-fine "
            "(or --reference)";
@@ -109,6 +113,9 @@ namespace {
 // --prune-contribution's blending-weight statistics in a checkpoint: the extra float section after
 // the HDR head's (an empty head section when the run has none).
 constexpr std::size_t kMaxWeightSection = kHdrHeadSection + 1;
+// --color-bands-by-need: the sums of a colour-band probe under way (empty when none runs).
+constexpr std::size_t kColorBandSection = kMaxWeightSection + 1;
+constexpr const char* kColorBandsKey = "color_bands";
 
 constexpr const char* kCheckpointName = "checkpoint.bin";
 
@@ -148,18 +155,6 @@ double PixelsPerTime(const std::vector<TrainView>& views) {
   return times.empty() ? 0.0 : pixels / double(times.size());
 }
 
-// Active colour degrees at an iteration: spatial 0 -> 3 every interval, then temporal 0 -> 2.
-// Both only grow, so a colour_rest float beyond those of the active coefficients has never had
-// a gradient (ActiveRestColumns).
-std::pair<int, int> ColorDegrees(int iteration, const GaussianModel& model, int interval) {
-  const int steps = iteration / interval;
-  const int sh = std::min(model.basis.max_sh_degree, steps);
-  const int time =
-      model.temporal ? std::clamp(steps - model.basis.max_sh_degree, 0, model.basis.max_time_degree)
-                     : 0;
-  return {sh, time};
-}
-
 // One training run from set-up to results.json: Train() below reads top to bottom as set-up,
 // resume or initialise, the steps, and the final save (docs/ARCHITECTURE.md, "One training
 // step"). Members are declared in the order they are made.
@@ -179,6 +174,7 @@ class TrainingRun {
   void OpenRunFolder();
   void ResumeOrInitialise();
   void RestoreDensifyStats(Checkpoint* c);
+  void StartColorBands(Checkpoint* c);
   void PrepareRendering();
   void ReserveForBudget();
   // Iterations left, and (--iterations auto) the loss still improving: the training loss, or
@@ -230,6 +226,9 @@ class TrainingRun {
   void OrderByTime();
   bool ResetsOpacityAt(int it) const;
   std::size_t ActiveRestColumns() const;
+  void SetColorDegrees(int it);
+  GradientRowsDone WithBandProbe(GradientRowsDone step_rows);
+  void EndBandProbe(int it, bool rows_stored);
   void BackwardAndUpdate(const TrainView& view, int it, double loss_value);
   double BatchBackwardAndUpdate(int it, const float** ldr_out, std::size_t* pixels);
   void FinishUpdate(int it, double loss_value);
@@ -269,6 +268,8 @@ class TrainingRun {
   GaussianGradients view_grads_;  // --batch-size > 1: one view's gradient before it is summed
   BatchStats batch_stats_;
   std::optional<ModelOptimizer> optimizer_;
+  // --color-bands-by-need: which colour bands are on, and the probe of the next one.
+  std::optional<ColorBandGate> bands_;
   DensifyStats stats_;
   LoopState loop_;
   RenderOptions render_;
@@ -583,6 +584,24 @@ void TrainingRun::RestoreDensifyStats(Checkpoint* c) {
   }
 }
 
+// --color-bands-by-need: the bands on and a probe under way, from the checkpoint when resuming.
+void TrainingRun::StartColorBands(Checkpoint* c) {
+  if (!opt_.color_bands_by_need) return;
+  // A probe is 100 iterations, or the interval where that is shorter (a short test run).
+  const ColorBandGate::Options o{.interval = opt_.sh_increase_interval,
+                                 .probe_iterations = std::min(100, opt_.sh_increase_interval),
+                                 .min_signal = opt_.color_band_signal};
+  bands_.emplace(model_.basis, model_.temporal, model_.channels, o);
+  if (!c) return;
+  if (!c->trainer.contains(kColorBandsKey))
+    Fail("{}: corrupt checkpoint: no colour band state for --color-bands-by-need",
+         checkpoint_path_.string());
+  std::vector<float> sums;
+  if (c->extra_floats.size() > kColorBandSection) sums = std::move(c->extra_floats[kColorBandSection]);
+  bands_->FromJson(c->trainer[kColorBandsKey], std::move(sums), model_.size(),
+                   checkpoint_path_.string());
+}
+
 // The model, optimiser and loop state from the checkpoint, or a new model from the point cloud
 // (or random points); then RUN/config.json.
 void TrainingRun::ResumeOrInitialise() {
@@ -595,6 +614,7 @@ void TrainingRun::ResumeOrInitialise() {
     optimizer_->Load(adam_state, checkpoint_path_.string());
     loop_.FromJson(c.trainer, checkpoint_path_, train_views_.size());
     RestoreDensifyStats(&c);
+    StartColorBands(&c);
     if (model_.color_mode != options_.hdr.color_mode) {
       Fail("{}: the checkpoint's colour model does not match method '{}'",
            checkpoint_path_.string(), options_.hdr.method);
@@ -634,6 +654,7 @@ void TrainingRun::ResumeOrInitialise() {
     if (opt_.prune_contribution > 0) stats_.max_weight.assign(model_.size(), 0.0f);
     stats_.Reset(model_.size());
     OrderByTime();  // before the optimiser's groups exist: the model alone
+    StartColorBands(nullptr);
     StartLearnedBackground(nullptr);
   }
   // At batch size 1 the fused step takes the colour gradient rows straight from the backward,
@@ -772,8 +793,8 @@ void TrainingRun::Step() {
   const int it = ++loop_.iteration;
   head_current_ = false;
   optimizer_->SetIteration(it);
-  std::tie(render_.sh_degree, render_.time_degree) =
-      ColorDegrees(it, model_, opt_.sh_increase_interval);
+  if (bands_) bands_->Begin(it, model_.size());
+  SetColorDegrees(it);
   render_.track_max_weight = opt_.prune_contribution > 0 && it < opt_.densify_until;
   if (tone_mapper_) tone_mapper_->ZeroGrad();  // a batch adds every view's gradient to it
   if (background_) background_->ZeroGrad();
@@ -876,20 +897,56 @@ bool TrainingRun::ResetsOpacityAt(int it) const {
 
 // The leading floats of a colour_rest row that the active colour degrees use: the coefficients
 // k = n F + lm with n <= time degree and lm < (sh degree + 1)^2 (row index (k - 1) channels).
+// A probe's band is rendered but not stepped (color_bands.h).
 std::size_t TrainingRun::ActiveRestColumns() const {
-  const int functions = model_.basis.sh_functions();
-  const int active = (render_.sh_degree + 1) * (render_.sh_degree + 1);
-  const auto coefficients = static_cast<std::size_t>(render_.time_degree * functions + active - 1);
-  return std::min(model_.rest_stride(), coefficients * static_cast<std::size_t>(model_.channels));
+  if (bands_) return bands_->step_columns();
+  return RestColumns({render_.sh_degree, render_.time_degree}, model_.basis, model_.channels);
+}
+
+// The colour degrees iteration `it` renders with: the reference's schedule, or the bands on and
+// the one probed (--color-bands-by-need).
+void TrainingRun::SetColorDegrees(int it) {
+  BandDegrees d = bands_ ? bands_->render_degrees()
+                         : ScheduledDegrees(it, model_.basis, model_.temporal,
+                                            opt_.sh_increase_interval);
+  render_.sh_degree = d.sh;
+  render_.time_degree = d.time;
+}
+
+// During a probe the backward's colour rows also go to it, before the optimiser steps them.
+// Without a row callback (a batch's or a densifying step's stored gradients) EndBandProbe takes
+// them from grads_.
+GradientRowsDone TrainingRun::WithBandProbe(GradientRowsDone step_rows) {
+  if (!bands_ || !bands_->probing() || !step_rows) return step_rows;
+  return [this, step = std::move(step_rows)](std::int64_t b, std::int64_t e,
+                                             const GradientRows& rows) {
+    bands_->Add(b, e, rows);
+    step(b, e, rows);
+  };
+}
+
+// After the backward and before a densification moves the rows: the probe's stored rows, and
+// its decision when it ends.
+void TrainingRun::EndBandProbe(int it, bool rows_stored) {
+  if (!bands_ || !bands_->probing()) return;
+  if (rows_stored)
+    bands_->Add(0, static_cast<std::int64_t>(model_.size()),
+                GradientRows{grads_.color_dc.data(), grads_.color_rest.data()});
+  if (const std::optional<BandDecision> d = bands_->End(it, DensifiesAt(it))) {
+    spdlog::info("train: iteration {}: colour band SH {} time {}: signal {:.3g} (DC {:.3g}) -> {}",
+                 it, d->band.sh, d->band.time, d->signal, d->dc_signal,
+                 d->switched_on ? "on" : "stays frozen");
+  }
 }
 
 // The backward with the model's optimiser step fused into it, the finite check, densification
 // and the opacity reset on their schedule, and the steps the backward did not take.
 void TrainingRun::BackwardAndUpdate(const TrainView& view, int it, double loss_value) {
-  const GradientRowsDone step_rows =
-      optimizer_->Begin(DensifiesAt(it), ResetsOpacityAt(it), model_.size(), ActiveRestColumns());
+  const GradientRowsDone step_rows = WithBandProbe(
+      optimizer_->Begin(DensifiesAt(it), ResetsOpacityAt(it), model_.size(), ActiveRestColumns()));
   RenderBackward(model_, camera_, view.time, render_, &state_, dL_dimage_.data(), &grads_,
                  step_rows, GeometryGradient());
+  EndBandProbe(it, /*rows_stored=*/!step_rows);
   if (tone_mapper_) tone_mapper_->EndFrameBackward();
   if (it < opt_.densify_until)
     AccumulateStats(state_.splat_grads.mean2d, state_.screen_radius, camera_.intrinsics.width,
@@ -928,8 +985,8 @@ double TrainingRun::BatchBackwardAndUpdate(int it, const float** ldr_out, std::s
   if (background_)
     for (float& g : background_->grads()) g *= inverse;
   if (correction_) correction_->ScaleGrad(inverse);
-  const GradientRowsDone step_rows =
-      optimizer_->Begin(DensifiesAt(it), ResetsOpacityAt(it), model_.size(), ActiveRestColumns());
+  const GradientRowsDone step_rows = WithBandProbe(
+      optimizer_->Begin(DensifiesAt(it), ResetsOpacityAt(it), model_.size(), ActiveRestColumns()));
   if (step_rows) {
     const std::size_t channels = static_cast<std::size_t>(model_.channels);
     const std::size_t stride = model_.rest_stride();
@@ -940,6 +997,7 @@ double TrainingRun::BatchBackwardAndUpdate(int it, const float** ldr_out, std::s
                                                grads_.color_rest.data() + b * stride});
                       });
   }
+  EndBandProbe(it, /*rows_stored=*/!step_rows);
   if (it < opt_.densify_until) batch_stats_.AddTo(&stats_);
   const double loss_value = loss_sum / batch;
   FinishUpdate(it, loss_value);
@@ -1075,21 +1133,20 @@ std::optional<HeldOutPlateau> TrainingRun::HeldOutStop() const {
 std::vector<const std::vector<float>*> TrainingRun::ExtraFloats() const {
   std::vector<const std::vector<float>*> extra = {&stats_.grad_accum, &stats_.denom,
                                                   &stats_.max_radii};
-  static const std::vector<float> kNoHead;
-  if (head_current_) {
-    extra.push_back(&head_.offset);  // at kHdrHeadSection
-  } else if (opt_.prune_contribution > 0) {
-    extra.push_back(&kNoHead);  // an empty section: no head
-  }
-  if (opt_.prune_contribution > 0) extra.push_back(&stats_.max_weight);  // at kMaxWeightSection
+  // Sections at fixed places: an empty one stands for a part the run does not have.
+  static const std::vector<float> kNone;
+  const bool probe = bands_ && bands_->probing();
+  const bool prune = opt_.prune_contribution > 0;
+  if (head_current_ || prune || probe) extra.push_back(head_current_ ? &head_.offset : &kNone);
+  if (prune || probe) extra.push_back(prune ? &stats_.max_weight : &kNone);  // kMaxWeightSection
+  if (probe) extra.push_back(&bands_->sums());                             // kColorBandSection
   return extra;
 }
 
 void TrainingRun::FitHdrHeadIfAsked() {
   if (!resolved_.hdr_head || head_current_) return;
   // The colour degrees of the last iteration, as the test evaluation renders with.
-  std::tie(render_.sh_degree, render_.time_degree) =
-      ColorDegrees(loop_.iteration, model_, opt_.sh_increase_interval);
+  SetColorDegrees(loop_.iteration);
   // The trained model is saved first: a head that fails leaves a run that resumes to fit it.
   loop_.train_seconds = TrainingSeconds();
   Save();
@@ -1121,6 +1178,7 @@ void TrainingRun::Save() {
   if (background_) trainer[kLearnedBackgroundKey] = background_->params();
   if (correction_) trainer[kCameraCorrectionKey] = correction_->ToJson();
   if (head_current_) trainer[kHdrHeadScaleKey] = head_.log_scale;
+  if (bands_) trainer[kColorBandsKey] = bands_->ToJson();
   if (head_current_ && !head_.background.empty())
     trainer[kHdrHeadBackgroundKey] = head_.background;
   std::string tone_mapper_state;
@@ -1197,6 +1255,7 @@ TrainSummary TrainingRun::Finish() {
       {"warnings", std::move(warnings)}};
   // The learned gains, camera by camera (natural log, R G B): what the correction found.
   if (correction_) results["camera_log_gains"] = correction_->log_gains();
+  if (bands_) results[kColorBandsKey] = bands_->ToJson();
   if (opt_.stop_window > 0) results["stopped"] = StopRecord();
   if (opt_.stop_on_val) results["val_curve"] = loop_.val_curve;
   if (opt_.grow_on_val) {

@@ -313,6 +313,74 @@ TEST(TrainerSpeedOptions, TestCurveRecordsTheTrainingSecondsOfEachEvaluation) {
                    r.at("train_seconds").get<double>());
 }
 
+// --color-bands-by-need: a probe renders the next band at zero and never steps it, so a run whose
+// probes all fail trains exactly as one that never adds a band; a threshold of 0 takes every
+// band, one probe after the reference would; a run interrupted mid-probe resumes bit for bit.
+TEST(TrainerSpeedOptions, ColorBandProbesDoNotChangeTrainingAndResumeExactly) {
+  TempDir dir;
+  MakeTinyScene(dir / "scene");
+  auto run = [&](const char* name, int iterations, double signal) {
+    TrainOptions o = TinyRun(dir / "scene", dir / name, iterations);
+    o.optimization.color_bands_by_need = true;
+    o.optimization.color_band_signal = signal;
+    return o;
+  };
+  TrainOptions dc = TinyRun(dir / "scene", dir / "dc", 60);
+  dc.optimization.sh_increase_interval = 1000000;  // the DC term alone, no probe
+  const TrainSummary only_dc = Train(dc);
+  const TrainSummary frozen = Train(run("frozen", 60, 1e9));
+  EXPECT_EQ(frozen.loss_curve, only_dc.loss_curve);
+  ExpectSameState(dir / "frozen", dir / "dc");
+  const nlohmann::json bands = ReadJsonFile(dir / "frozen" / "results.json")["color_bands"];
+  EXPECT_EQ(bands["sh_degree"], 0);
+  ASSERT_EQ(bands["decisions"].size(), 5u);  // probes from 11, 21, ..., 51, each of SH degree 1
+  for (const nlohmann::json& d : bands["decisions"]) {
+    EXPECT_EQ(d["sh_degree"], 1);
+    EXPECT_FALSE(d["switched_on"].get<bool>());
+    EXPECT_GT(d["signal"].get<double>(), 0.0);
+  }
+
+  const TrainSummary straight = Train(run("straight", 60, 0.0));
+  EXPECT_NE(straight.loss_curve, only_dc.loss_curve);
+  const nlohmann::json on = ReadJsonFile(dir / "straight" / "results.json")["color_bands"];
+  EXPECT_EQ(on["sh_degree"], 3);
+  EXPECT_EQ(on["time_degree"], 2);
+  // Split in the probe of SH degree 3 (iterations 31-40), its sums in the checkpoint.
+  ExpectResumesExactly([&](const char* name, int it) { return run(name, it, 0.0); }, 37,
+                       straight, dir.path());
+}
+
+// The probe sees a scene whose colours change with the view: made from Gaussians with SH degree
+// 3 colours, SH degree 1 is switched on, with a larger signal at the second probe than the same
+// Gaussians with one colour each give (the first, from iteration 101, comes while the DC terms
+// are still far from their values).
+TEST(TrainerSpeedOptions, ColorBandsSwitchOnWhereColoursFollowTheView) {
+  TempDir dir;
+  double second_signal[2] = {0, 0};
+  for (int degree : {0, 3}) {
+    const fs::path scene = dir / ("scene" + std::to_string(degree));
+    GaussianSceneOptions s;
+    s.size = 32;
+    s.num_gaussians = 60;
+    s.num_cameras = 12;
+    s.num_timestamps = 3;
+    s.sh_degree = degree;
+    MakeGaussianScene(s, scene);
+    TrainOptions o = TinyRun(scene, dir / ("run" + std::to_string(degree)), 300);
+    o.optimization.color_bands_by_need = true;
+    o.optimization.sh_increase_interval = 100;  // probes of 100 iterations from 101 and 201
+    o.optimization.densify_until = 40;
+    Train(o);
+    const nlohmann::json bands =
+        ReadJsonFile(dir / ("run" + std::to_string(degree)) / "results.json")["color_bands"];
+    ASSERT_EQ(bands["decisions"].size(), 2u);
+    EXPECT_EQ(bands["decisions"][0]["sh_degree"], 1);
+    second_signal[degree == 3] = bands["decisions"][1]["signal"].get<double>();
+    if (degree == 3) EXPECT_GE(bands["sh_degree"].get<int>(), 1);
+  }
+  EXPECT_GT(second_signal[1], second_signal[0]);
+}
+
 // --coarse-to-fine: the first iterations train on reduced images (the tiny scene's 24 px: 6 px
 // up to 20, 12 px up to 40), which changes the run; a run interrupted inside the coarse part
 // resumes bit for bit.
