@@ -929,7 +929,7 @@ GradientRowsDone TrainingRun::WithBandProbe(GradientRowsDone step_rows) {
 // its decision when it ends.
 void TrainingRun::EndBandProbe(int it, bool rows_stored) {
   if (!bands_ || !bands_->probing()) return;
-  if (rows_stored)
+  if (rows_stored && grads_.color_dc.size() == model_.color_dc.size())
     bands_->Add(0, static_cast<std::int64_t>(model_.size()),
                 GradientRows{grads_.color_dc.data(), grads_.color_rest.data()});
   if (const std::optional<BandDecision> d = bands_->End(it, DensifiesAt(it))) {
