@@ -8,6 +8,9 @@
 #   bash benchmark/proofs/time_to_quality.sh HDR4D SCENE WORKDIR ITERATIONS "SEEDS" "CANDIDATE FLAGS" [NAME]
 # Prints one TSV row per run: scene, name, seed, cpu_s, iterations, gaussians, psnr,
 # mu_psnr_aligned, hdr_log_slope, stopped; appends them to WORKDIR/time_to_quality.tsv.
+# Resumes: a run whose (scene, name, seed) row is already in that TSV is not run again, so an
+# interrupted suite is continued by running the same command (delete the row to redo one).
+# benchmark/proofs/default_vs_reference.py turns the TSV into the comparison table.
 set -euo pipefail
 BIN=$(realpath "$1"); SCENE=$(realpath "$2"); WORK=$3; ITERS=$4; SEEDS=$5; FLAGS=$6
 NAME=${7:-candidate}
@@ -18,6 +21,11 @@ TSV="$WORK/time_to_quality.tsv"
 one() {  # name seed flags...
   local name=$1 seed=$2; shift 2
   local run="$WORK/$(basename "$SCENE")-$name-s$seed"
+  if awk -F'\t' -v s="$(basename "$SCENE")" -v n="$name" -v d="$seed" \
+       '$1 == s && $2 == n && $3 == d { found = 1 } END { exit !found }' "$TSV"; then
+    echo "time_to_quality: $(basename "$SCENE") $name seed $seed already in $TSV, not run again"
+    return
+  fi
   rm -rf "$run"
   /usr/bin/time -f '%U %S' -o "$run.time" nice -n 10 "$BIN" train --data "$SCENE" --out "$run" \
     --seed "$seed" --threads 2 --iterations "$ITERS" "$@" > "$run.log" 2>&1
