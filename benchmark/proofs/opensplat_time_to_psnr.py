@@ -20,7 +20,7 @@ copy of transforms.json, OpenSplat through `--val --val-image NAME`) and both ar
 
   python3 opensplat_time_to_psnr.py --hdr4d BIN --opensplat BIN --scene SCENE --work DIR
       [--view frame_00005.png] [--opensplat-iters 7000] [--densify-until 3500]
-      [--hdr4d-iters 20000] [--test-every 100] [--threads 2]
+      [--hdr4d-iters 20000] [--test-every 100] [--threads 2] [--hdr4d-args "--max-gaussians N"]
 
 Prints a Markdown summary and writes DIR/summary.json. Meaningful only on an otherwise idle
 machine: run nothing beside it.
@@ -28,6 +28,7 @@ machine: run nothing beside it.
 import argparse
 import json
 import os
+import shlex
 import shutil
 import subprocess
 import sys
@@ -88,6 +89,8 @@ def main():
     ap.add_argument("--hdr4d-iters", type=int, default=20000)
     ap.add_argument("--test-every", type=int, default=100)
     ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--hdr4d-args", default="",
+                    help="more `hdr4d train` flags, one string (e.g. \"--max-gaussians 20000\")")
     a = ap.parse_args()
     hdr4d, osplat = os.path.abspath(a.hdr4d), os.path.abspath(a.opensplat)
     os.makedirs(a.work, exist_ok=True)
@@ -126,7 +129,8 @@ def main():
     print(f"hdr4d: {a.hdr4d_iters} iterations, held-out view every {a.test_every}", flush=True)
     hdr4d_wall = run([hdr4d, "train", "--data", scene, "--out", out, "--overwrite", "--threads",
                       str(a.threads), "--iterations", str(a.hdr4d_iters), "--test-every",
-                      str(a.test_every)], os.path.join(a.work, "hdr4d-train.log"))
+                      str(a.test_every)] + shlex.split(a.hdr4d_args),
+                     os.path.join(a.work, "hdr4d-train.log"))
     with open(os.path.join(out, "results.json")) as f:
         results = json.load(f)
     h_curve = [(e["iteration"], e["psnr"], e["train_seconds"]) for e in results["test_curve"]]
@@ -146,7 +150,8 @@ def main():
                       "curve": os_curve, "best_psnr": best, "plateau_db": a.plateau,
                       "step_within_plateau": os_step, "seconds_to_step": os_seconds,
                       "startup_seconds": start_wall, "curve_run_wall": curve_wall},
-        "hdr4d": {"iters": a.hdr4d_iters, "curve": h_curve, "run_wall": hdr4d_wall,
+        "hdr4d": {"iters": a.hdr4d_iters, "args": a.hdr4d_args, "curve": h_curve,
+                  "run_wall": hdr4d_wall,
                   "reached": None if hit is None else {"iteration": hit[0], "psnr": hit[1],
                                                        "train_seconds": hit[2]},
                   "final_psnr_results_json": h_curve[-1][1], "final_psnr_eval": final_eval},
