@@ -84,7 +84,7 @@ def main():
         runs[(row["scene"], row["seed"])][row["name"]] = {
             "cpu": num(row, "cpu_s"), "psnr": num(row, "psnr"),
             "mu": num(row, "mu_psnr_aligned"), "slope": num(row, "hdr_log_slope"),
-            "gaussians": num(row, "gaussians") or 0, "iterations": row.get("iterations", "")}
+            "gaussians": num(row, "gaussians") or 0}
 
     print(f"| scene | seed | `--{a.reference}` (CPU, LDR, aligned mu, slope, Gaussians) | "
           f"{a.candidate} | CPU ratio | LDR | aligned mu | kept |")
