@@ -55,7 +55,9 @@ double AddHdrTerm(const std::vector<float>& hdr,
   const float k = static_cast<float>(scale);
   s->target.resize(values);
   s->grad.resize(values);
-  for (std::size_t i = 0; i < values; ++i) s->target[i] = MuLawEncode(k * hdr[i], terms.hdr_mu);
+  const MuLawCoder<float> coder(terms.hdr_mu);
+  ParallelFor(static_cast<std::int64_t>(values), kGrain,
+              [&](std::int64_t i) { s->target[i] = coder.Encode(k * hdr[i]); });
   const double loss = PhotometricLoss(s->target.data(), hdr_mu_gt, width, height, 3,
                                       terms.lambda_dssim, s->grad.data())
                           .value;
@@ -64,7 +66,7 @@ double AddHdrTerm(const std::vector<float>& hdr,
   ParallelFor(static_cast<std::int64_t>(pixels), kGrain, [&](std::int64_t p) {
     for (int c = 0; c < 3; ++c) {
       dL_draster[p * channels + c] +=
-          w * MuLawEncodeBackward(k * hdr[p * 3 + c], s->grad[p * 3 + c], terms.hdr_mu);
+          w * coder.EncodeBackward(k * hdr[p * 3 + c], s->grad[p * 3 + c]);
     }
   });
   return loss;
