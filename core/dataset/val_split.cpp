@@ -8,6 +8,7 @@
 
 #include "core/dataset/dataset.h"
 #include "core/files/json_util.h"
+#include "core/files/output_guard.h"
 #include "core/files/staged_folder.h"
 #include "core/util/error.h"
 
@@ -40,17 +41,17 @@ std::set<int> ChooseValFrames(const Dataset& scene,
   std::set<double> times;
   for (const Frame& f : scene.train) times.insert(f.time_raw);
   if (times.size() < 2) {
-    Fail("{}: every training frame has the same time; --every-time needs several (hold back a "
-         "camera with --camera instead)",
-         train_json.string());
+    Fail("{}: every training frame has the same time; {} needs several (hold back a "
+         "camera instead)",
+         train_json.string(), options.every_time_flag);
   }
   const std::vector<double> sorted(times.begin(), times.end());
   const auto k = static_cast<std::size_t>(options.every_time);
   std::set<double> val_times;
   for (std::size_t i = k / 2; i < sorted.size(); i += k) val_times.insert(sorted[i]);
   if (val_times.empty()) {
-    Fail("{}: --every-time {} chooses none of the {} training times (give at most {})",
-         train_json.string(), options.every_time, sorted.size(), 2 * sorted.size() - 1);
+    Fail("{}: {} {} chooses none of the {} training times (give at most {})", train_json.string(),
+         options.every_time_flag, options.every_time, sorted.size(), 2 * sorted.size() - 1);
   }
   for (const Frame& f : scene.train)
     if (val_times.count(f.time_raw)) chosen.insert(f.index);
@@ -59,44 +60,57 @@ std::set<int> ChooseValFrames(const Dataset& scene,
   return chosen;
 }
 
-}  // namespace
+// The chosen training frames of `dir`, as the new train and val JSON documents: each keeps the
+// original's top-level keys and every key of each frame.
+struct PartitionedTrain {
+  nlohmann::json train, val;
+  ValSplitSummary summary;
+};
 
-ValSplitSummary SplitOffVal(const fs::path& dir, const fs::path& out, const ValSplitOptions& options) {
+PartitionedTrain PartitionTrain(const fs::path& dir, const ValSplitOptions& options,
+                                const char* who) {
   if ((options.every_time > 0) == (options.camera_id >= 0))
-    Fail("dataset split-val: give one of --every-time K and --camera ID");
+    Fail("{}: give one of --every-time K and --camera ID", who);
   if (options.every_time == 1)
-    Fail("dataset split-val: --every-time 1 would move every training frame; give K >= 2");
+    Fail("{}: {} 1 would move every training frame; give K >= 2", who, options.every_time_flag);
   const fs::path train_json = dir / "transforms_train.json";
   const fs::path test_json = dir / "transforms_test.json";
   if (!fs::exists(train_json) || !fs::exists(test_json)) {
-    Fail("{}: split-val reads a scene with transforms_train.json and transforms_test.json at its "
+    Fail("{}: {} reads a scene with transforms_train.json and transforms_test.json at its "
          "root (the dataset format); convert other layouts first",
-         dir.string());
+         dir.string(), who);
   }
   const Dataset scene = LoadDataset(dir, {.image_check = ImageCheck::kNone});
   if (!scene.val.empty()) {
     Fail("{}: the scene already has a val split ({} frames); nothing is written",
          (dir / "transforms_val.json").string(), scene.val.size());
   }
-  ValSplitSummary summary;
-  const std::set<int> chosen = ChooseValFrames(scene, options, train_json, &summary.what);
-  nlohmann::json train = ReadJsonFile(train_json);
-  const nlohmann::json all = train.at("frames");  // read by LoadDataset: a list
-  train["frames"] = nlohmann::json::array();
-  nlohmann::json val = train;
+  PartitionedTrain p;
+  const std::set<int> chosen = ChooseValFrames(scene, options, train_json, &p.summary.what);
+  p.train = ReadJsonFile(train_json);
+  const nlohmann::json all = p.train.at("frames");  // read by LoadDataset: a list
+  p.train["frames"] = nlohmann::json::array();
+  p.val = p.train;
   for (std::size_t i = 0; i < all.size(); ++i)
-    (chosen.count(static_cast<int>(i)) ? val : train)["frames"].push_back(all[i]);
-  summary.moved = val["frames"].size();
-  summary.kept = train["frames"].size();
-  if (summary.kept == 0) {
+    (chosen.count(static_cast<int>(i)) ? p.val : p.train)["frames"].push_back(all[i]);
+  p.summary.moved = p.val["frames"].size();
+  p.summary.kept = p.train["frames"].size();
+  if (p.summary.kept == 0) {
     Fail("{}: {} is every training frame; nothing would be left to train on",
-         train_json.string(), summary.what);
+         train_json.string(), p.summary.what);
   }
+  return p;
+}
+
+}  // namespace
+
+ValSplitSummary SplitOffVal(const fs::path& dir, const fs::path& out, const ValSplitOptions& options) {
+  const PartitionedTrain p = PartitionTrain(dir, options, "dataset split-val");
   StagedFolder staged(out);
-  WriteJsonFile(staged.path() / "transforms_train.json", train);
-  WriteJsonFile(staged.path() / "transforms_val.json", val);
+  WriteJsonFile(staged.path() / "transforms_train.json", p.train);
+  WriteJsonFile(staged.path() / "transforms_val.json", p.val);
   try {
-    fs::copy_file(test_json, staged.path() / "transforms_test.json");
+    fs::copy_file(dir / "transforms_test.json", staged.path() / "transforms_test.json");
     // Everything else (images, HDR, point cloud) is the original's, linked rather than copied.
     const std::set<std::string> written = {"transforms_train.json", "transforms_val.json",
                                            "transforms_test.json"};
@@ -109,7 +123,19 @@ ValSplitSummary SplitOffVal(const fs::path& dir, const fs::path& out, const ValS
     Fail("{}: cannot write the new scene: {}", out.string(), e.what());
   }
   staged.Commit();
-  return summary;
+  return p.summary;
+}
+
+ValSplitSummary SplitValInPlace(const fs::path& dir, const ValSplitOptions& options,
+                                const char* who) {
+  const PartitionedTrain p = PartitionTrain(dir, options, who);
+  // Rewriting the scene's transforms files is this call's job (LoadDataset protected them).
+  const OutputPermit permit({dir / "transforms_val.json", dir / "transforms_train.json"});
+  // The val file first: a failure between the two writes leaves every frame in train and a
+  // val file that repeats some of them, which a folder still being built is thrown away for.
+  WriteJsonFile(dir / "transforms_val.json", p.val);
+  WriteJsonFile(dir / "transforms_train.json", p.train);
+  return p.summary;
 }
 
 }  // namespace hdr4d

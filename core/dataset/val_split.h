@@ -17,6 +17,8 @@ struct ValSplitOptions {
   int every_time = 0;
   // >= 0: every training frame of this camera_id (a fixed rig: one camera held back).
   int camera_id = -1;
+  // The option that set every_time, as the error messages name it.
+  std::string every_time_flag = "--every-time";
 };
 
 struct ValSplitSummary {
@@ -36,5 +38,12 @@ struct ValSplitSummary {
 ValSplitSummary SplitOffVal(const std::filesystem::path& dir,
                             const std::filesystem::path& out,
                             const ValSplitOptions& options);
+
+// The same split made in place, for a scene folder still being built (hdr4d datagen
+// --val-every, in its staging folder): transforms_val.json is written beside the others and the
+// chosen frames leave transforms_train.json. The same refusals; `who` names the command in them.
+ValSplitSummary SplitValInPlace(const std::filesystem::path& dir,
+                                const ValSplitOptions& options,
+                                const char* who);
 
 }  // namespace hdr4d

@@ -9,6 +9,7 @@
 #include "core/dataset/dataset.h"
 #include "core/dataset/demo_scene.h"
 #include "core/files/json_util.h"
+#include "core/files/output_guard.h"
 #include "tests/testing.h"
 
 namespace hdr4d {
@@ -106,6 +107,31 @@ TEST(ValSplit, RefusalsNameTheFileAndWriteNothing) {
       ErrorOf([&] { SplitOffVal(scene, dir / "busy", {.every_time = 2}); });
   EXPECT_NE(message.find((dir / "busy").string()), std::string::npos) << message;
   EXPECT_EQ(testing::ReadTextFile(dir / "busy" / "keep.txt"), "mine");
+}
+
+// In place (datagen --val-every, in its staging folder): the same frames move, no links, and
+// the refusals name the caller's flag.
+TEST(ValSplit, InPlaceMovesTheSameFramesAndNamesTheFlag) {
+  const InputProtectionScope scope;  // as in a command: the scene's files are its inputs
+  TempDir dir;
+  MakeScene(dir / "scene");
+  MakeScene(dir / "copy");
+  const ValSplitSummary linked = SplitOffVal(dir / "copy", dir / "split", {.every_time = 3});
+  const ValSplitSummary s = SplitValInPlace(dir / "scene", {.every_time = 3}, "datagen");
+  EXPECT_EQ(s.moved, linked.moved);
+  EXPECT_EQ(s.kept, linked.kept);
+  EXPECT_EQ(testing::ReadTextFile(dir / "scene" / "transforms_val.json"),
+            testing::ReadTextFile(dir / "split" / "transforms_val.json"));
+  EXPECT_EQ(testing::ReadTextFile(dir / "scene" / "transforms_train.json"),
+            testing::ReadTextFile(dir / "split" / "transforms_train.json"));
+  EXPECT_FALSE(fs::is_symlink(dir / "scene" / "hdr"));
+  const std::string again = ErrorOf([&] { SplitValInPlace(dir / "scene", {.every_time = 3}, "datagen"); });
+  EXPECT_NE(again.find("already has a val split"), std::string::npos) << again;
+  const std::string none = ErrorOf([&] {
+    SplitValInPlace(dir / "copy", {.every_time = 40, .every_time_flag = "--val-every"}, "datagen");
+  });
+  EXPECT_NE(none.find("--val-every 40 chooses none"), std::string::npos) << none;
+  EXPECT_FALSE(fs::exists(dir / "copy" / "transforms_val.json"));
 }
 
 TEST(ValSplitCli, WritesTheSceneAndSaysWhatMoved) {
