@@ -138,6 +138,10 @@ PreparedScene PrepareScene(const SceneSpec& spec, const SceneCacheOptions& optio
         if (spec.source.contains("flags"))
           for (const std::string& a : SettingsToArgs(spec.source["flags"], 0, spec.name))
             datagen.push_back(a);
+        // A suite's scenes keep the paper's train / test splits (and the cached scenes of earlier
+        // harnesses stay valid) unless its flags ask datagen for a val split.
+        if (!spec.source.contains("flags") || !spec.source["flags"].contains("val-every"))
+          datagen.insert(datagen.end(), {"--val-every", "0"});
         if (const auto source = RenderSource(spec, p.dir))
           datagen.insert(datagen.end(), {"--reuse-renders", source->string()});
         Run(datagen, log, spec.name);

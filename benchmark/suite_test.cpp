@@ -198,7 +198,8 @@ TEST(Suite, AnotherPipelineOfACachedSceneReusesItsRenders) {
   j["scenes"] = nlohmann::json::parse(R"([
     {"name": "fixed", "datagen": {"scene": "lego"}},
     {"name": "phone", "datagen": {"scene": "lego", "flags": {"pipeline": "phone"}}},
-    {"name": "deer", "datagen": {"scene": "deer", "flags": {"pipeline": "phone"}}}])");
+    {"name": "deer", "datagen": {"scene": "deer", "flags": {"pipeline": "phone"}}},
+    {"name": "tank-val", "datagen": {"scene": "tank", "flags": {"val-every": 8}}}])");
   const Suite s = ParseSuite(j, "/x/suite.json");
   testing::TempDir dir;
   // What the stand-in writes as each scene: one frame (its image's bytes are all the checksum
@@ -226,11 +227,15 @@ TEST(Suite, AnotherPipelineOfACachedSceneReusesItsRenders) {
     for (std::string l; std::getline(in, l);) out.push_back(l);
     return out;
   }();
-  ASSERT_EQ(lines.size(), 3u) << args;
+  ASSERT_EQ(lines.size(), 4u) << args;
   EXPECT_EQ(lines[0].find("--reuse-renders"), std::string::npos) << lines[0];
   EXPECT_NE(lines[1].find("--reuse-renders " + (dir / "cache" / "datagen" / "mini-s0").string()),
             std::string::npos) << lines[1];
   EXPECT_EQ(lines[2].find("--reuse-renders"), std::string::npos) << lines[2];  // no deer yet
+  // The suite's scenes keep the paper's splits: no val split unless its flags ask for one.
+  for (int i = 0; i < 3; ++i) EXPECT_NE(lines[i].find("--val-every 0"), std::string::npos) << lines[i];
+  EXPECT_EQ(lines[3].find("--val-every 0"), std::string::npos) << lines[3];
+  EXPECT_NE(lines[3].find("--val-every 8"), std::string::npos) << lines[3];
 }
 
 // The pipelines suite: Tables 4, 6 and 7 per pipeline on the eight scenes.

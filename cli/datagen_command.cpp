@@ -54,6 +54,9 @@ void PrintSceneResult(const datagen::SceneResult& r) {
         r.scene, r.renders, r.ldr_images, r.root.string(), r.blender_seconds,
         r.blender_seconds / r.renders, r.range.ratio);
   }
+  if (!r.val_split.empty())
+    fmt::print("datagen: {}: val split: {} (--val-every 0 keeps the paper's splits)\n", r.scene,
+               r.val_split);
   std::fflush(stdout);
 }
 
@@ -159,7 +162,7 @@ void AddDatagenCommand(CLI::App& app) {
       "datagen",
       "Render HDR-4D-Syn-style dynamic HDR scenes with Blender (Cycles on the CPU, linear float "
       "EXR) and write each as a dataset: LDR at 0.125/2/32 s through a camera response with "
-      "noise, transforms_{train,test}.json, point3d.ply sampled over the scene's time, manifest.json with "
+      "noise, transforms_{train,test}.json (and _val for one moving camera), point3d.ply sampled over the scene's time, manifest.json with "
       "checksums.\n"
       "  hdr4d datagen --scene all --preset mini --out DATA     (DATA/<scene>/ per scene)\n"
       "  hdr4d datagen --capture --scene room --width 240 --out CAP   (a rig capture for "
@@ -202,6 +205,13 @@ void AddDatagenCommand(CLI::App& app) {
                   "points): only the LDR synthesis runs, e.g. for another --pipeline; otherwise "
                   "render, saying why")
       ->check(Text("a folder"));
+  cmd->add_option_function<int>(
+         "--val-every", [options](int k) { options->val_every = k; },
+         "Move every frame of one training time in K to transforms_val.json, so that `hdr4d "
+         "train` stops once those views stop improving (0: the paper's train and test splits "
+         "only). Default: 8 for a scene of one moving camera with 16 or more training times "
+         "(the mini and paper presets of airplane, deer, lego, tank), else 0")
+      ->check(Integer(0, 1'000'000));
   cmd->add_option("--width", options->width,
                   "Image width in pixels (0 = the preset's; the height follows the scene)")
       ->check(Integer(0, 100000))

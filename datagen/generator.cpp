@@ -10,6 +10,7 @@
 
 #include "core/radiometry/crf.h"
 #include "core/dataset/dataset.h"
+#include "core/dataset/val_split.h"
 #include "core/util/error.h"
 #include "core/radiometry/exposure_stack.h"
 #include "core/files/json_util.h"
@@ -41,6 +42,13 @@ json SplitCounts(const std::vector<PlannedRender>& renders, Split split) {
 
 }  // namespace
 
+int DatagenOptions::ValEveryFor(const ScenePreset& preset) const {
+  if (val_every) return *val_every;
+  return preset.rig == Rig::kMonocular && preset.train_timestamps >= kMinTimesForDefaultVal
+             ? kDefaultValEvery
+             : 0;
+}
+
 void DatagenOptions::Validate() const {
   if (scene != "all") FindScene(scene);
   if (std::find(PresetNames().begin(), PresetNames().end(), preset) == PresetNames().end())
@@ -53,6 +61,12 @@ void DatagenOptions::Validate() const {
     Fail("datagen: --points must be in [0, 10^7] (0 = the preset's), got {}", points);
   if (points != 0 && capture)
     Fail("datagen: --points sets a dataset's point3d.ply; a capture keeps the preset's");
+  if (val_every && (*val_every < 0 || *val_every == 1))
+    Fail("datagen: --val-every {}: give K >= 2 (one training time in K to val) or 0 (none)",
+         *val_every);
+  if (val_every.value_or(0) != 0 && capture)
+    Fail("datagen: --val-every splits a dataset's training frames; a capture has none (split the "
+         "calibrated dataset with `hdr4d dataset split-val`)");
   if (std::find(UnlikeCamerasModes().begin(), UnlikeCamerasModes().end(), unlike_cameras) ==
       UnlikeCamerasModes().end())
     Fail("datagen: --unlike-cameras {}: use none, gains, responses or both", unlike_cameras);
@@ -267,6 +281,13 @@ SceneResult GenerateScene(const DatagenOptions& options, const std::string& scen
 
   const DatasetSynthesisOptions ldr = options.LdrFor(preset.scene);
   const int ldr_images = SynthesizeDatasetLdr(staging, ldr);
+  if (const int k = options.ValEveryFor(preset); k > 0) {
+    ValSplitOptions val{.every_time = k, .every_time_flag = "--val-every"};
+    const ValSplitSummary moved = SplitValInPlace(staging, val, "datagen");
+    result.val_frames = static_cast<int>(moved.moved);
+    result.val_split = fmt::format("{} of {} training frames to val ({})", moved.moved,
+                                   moved.moved + moved.kept, moved.what);
+  }
   CheckWrittenDataset(staging, preset.scene);
 
   result.scene = preset.scene;
@@ -278,6 +299,11 @@ SceneResult GenerateScene(const DatagenOptions& options, const std::string& scen
   json manifest = SceneManifest(options, preset, renders, info, dataset, ldr, result, points);
   if (!result.renders_reused_from.empty())
     manifest["renders_reused_from"] = result.renders_reused_from.string();
+  if (result.val_frames > 0) {
+    manifest["val_split"] = {{"val_every", options.ValEveryFor(preset)},
+                             {"frames", result.val_frames},
+                             {"what", result.val_split}};
+  }
   result.total_seconds = FinishOutput(std::move(manifest), result.blender_seconds, result.renders,
                                       start, staging, final_dir);
   return result;

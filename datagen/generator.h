@@ -5,7 +5,7 @@
 // with its time inside (0, 1)), and manifest.json (versions, preset, seed, render settings,
 // dynamic range, SHA-256 of every file).
 //
-// Output of one scene, OUT/<scene>/:
+// Output of one scene, OUT/<scene>/ (with --val-every, transforms_val.json too):
 //   hdr/camCC_tTTTT.exr            one linear render per camera and timestamp
 //   images/camCC_tTTTT_eK.png      LDR at exposure index K (0.125, 2, 32 s)
 //   transforms_train.json, transforms_test.json, point3d.ply, synthesis.json
@@ -27,6 +27,7 @@
 #include "core/radiometry/ldr_synthesis.h"
 #include "datagen/blender_render.h"
 #include "datagen/dynamic_range.h"
+#include "datagen/scene_presets.h"
 
 namespace hdr4d::datagen {
 
@@ -45,6 +46,15 @@ struct DatagenOptions {
   // the same render plan (ReuseRenders), so another camera pipeline of a scene costs no Blender
   // time; otherwise render, saying why. Not with --capture.
   std::filesystem::path reuse_renders;
+  // --val-every K: every frame of one training time in K (the middle of each run of K) goes to
+  // transforms_val.json, so that `hdr4d train`'s default stops once those views stop improving
+  // (core/dataset/val_split.h). 0: the paper's train / test splits only. Unset: ValEveryFor's
+  // choice. Set to anything but 0, not with --capture.
+  std::optional<int> val_every;
+  // The K a scene gets: val_every where set; else kDefaultValEvery for one moving camera with
+  // at least kMinTimesForDefaultVal training times (mini and paper presets), 0 otherwise (rigs,
+  // whose held-back time or camera costs more than the stop saves, and the ci preset).
+  int ValEveryFor(const ScenePreset& preset) const;
   // LDR synthesis, as the demo and HDR-4D-Syn-style data: a camera response, shot and read
   // noise, 8 bits. The noise seed is the scene seed. Unset: the scene's defaults (a filmic
   // response with full well 20000 and read noise 0.002; `studio` has its own, see SceneInfo).
@@ -92,6 +102,12 @@ struct DatagenOptions {
   BlenderSettings FoundBlender() const;
 };
 
+// One moving camera overfits its views long before 20000 iterations: with one training time in
+// 8 held back, the default's stop took 0.2-0.8 of the CPU of the full run on four datagen minis
+// and scored better held out on seven of eight runs (docs/history/time-to-quality.md).
+inline constexpr int kDefaultValEvery = 8;
+inline constexpr int kMinTimesForDefaultVal = 16;  // two val times at least
+
 inline constexpr int kCaptureCameras = 6;
 inline constexpr int kCaptureMaxCameras = 12;  // 30 degrees apart: 12 fill the circle
 const std::vector<std::string>& UnlikeCamerasModes();  // none, gains, responses, both
@@ -106,6 +122,8 @@ struct SceneResult {
   int cameras = 0, frames = 0, brackets = 0, extra_views = 0;  // of a capture
   double blender_seconds = 0;  // Blender's wall time: start-up, scene building, every render
   std::filesystem::path renders_reused_from;  // --reuse-renders: the scene folder, when reused
+  int val_frames = 0;     // --val-every: training frames moved to transforms_val.json
+  std::string val_split;  // and which, in words (empty: no val split)
   double total_seconds = 0;
   DynamicRange range;
 };

@@ -15,6 +15,7 @@
 #include "core/dataset/dataset.h"
 #include "core/image/image_io.h"
 #include "core/files/json_util.h"
+#include "core/files/output_guard.h"
 #include "core/radiometry/ldr_synthesis.h"
 #include "core/geometry/ply.h"
 #include "datagen/capture_generator.h"
@@ -211,6 +212,81 @@ TEST(Generator, ReuseRendersTakesAnEarlierDatasetsRendersAndMakesItsOwnLdr) {
   capture.capture = true;
   capture.pipeline = {};
   EXPECT_TRUE(Contains(ErrorOf([&] { capture.Validate(); }), "--reuse-renders"));
+}
+
+// --val-every K: one training time in K moves to transforms_val.json after the LDR synthesis, so
+// the images are the same as without it; the manifest says what moved; a K that chooses nothing
+// fails before the scene is moved into place.
+TEST(Generator, ValEveryMovesOneTrainingTimeInKToAValSplit) {
+  Fixture f;
+  // One command's input protection around each run, as the CLI does: the datasets read are
+  // inputs, and the split rewrites two of their files.
+  auto generate = [](const DatagenOptions& o) {
+    const InputProtectionScope scope;
+    return GenerateScene(o, "airplane");
+  };
+  WriteFixture(f.dir / "fixture", f.preset);
+  f.options.blender = WriteFakeBlender(f.dir.path(), f.dir / "fixture", "").string();
+  generate(f.options);
+  const json plain = ReadJsonFile(f.options.out / "airplane" / "manifest.json")["files"];
+
+  DatagenOptions split = f.options;
+  split.out = f.dir / "split";
+  split.val_every = 2;
+  const SceneResult result = generate(split);
+  const fs::path root = split.out / "airplane";
+  const Dataset dataset = LoadDataset(root, {.image_check = ImageCheck::kFull});
+  // The ci airplane trains on timestamps 0, 1, 2, 4, 5 (3 is the test's): the 2nd and 4th go.
+  ASSERT_EQ(dataset.val.size(), 2u);
+  EXPECT_EQ(dataset.train.size(), 3u);
+  EXPECT_EQ(dataset.test.size(), 1u);
+  EXPECT_EQ(dataset.val[0].file_path, "images/cam00_t0001_e1.png");
+  EXPECT_EQ(dataset.val[1].file_path, "images/cam00_t0004_e1.png");
+  EXPECT_EQ(result.val_frames, 2);
+  const json manifest = ReadJsonFile(root / "manifest.json");
+  EXPECT_EQ(manifest["val_split"]["val_every"], 2);
+  EXPECT_EQ(manifest["val_split"]["frames"], 2);
+  EXPECT_TRUE(manifest["files"].contains("transforms_val.json"));
+  for (const auto& [name, sha] : plain.items()) {  // the images and renders are the same bytes
+    if (name.rfind("images/", 0) == 0 || name.rfind("hdr/", 0) == 0) {
+      EXPECT_EQ(manifest["files"][name], sha) << name;
+    }
+  }
+
+  // Too few training times for K: an error naming the flag; the earlier scene stays.
+  split.val_every = 20;
+  const std::string message = ErrorOf([&] { generate(split); });
+  EXPECT_TRUE(Contains(message, "--val-every 20 chooses none of the 5 training times")) << message;
+  EXPECT_EQ(LoadDataset(root, {.image_check = ImageCheck::kNone}).val.size(), 2u);
+
+  DatagenOptions bad = f.options;
+  bad.val_every = 1;
+  EXPECT_TRUE(Contains(ErrorOf([&] { bad.Validate(); }), "--val-every 1: give K >= 2"));
+  bad.val_every = -3;
+  EXPECT_TRUE(Contains(ErrorOf([&] { bad.Validate(); }), "--val-every -3"));
+  bad.val_every = 8;
+  bad.capture = true;
+  bad.scene = "room";
+  EXPECT_TRUE(Contains(ErrorOf([&] { bad.Validate(); }), "a capture has none"));
+  bad.val_every.reset();  // unset: a capture gets none, and no refusal
+  EXPECT_EQ(ErrorOf([&] { bad.Validate(); }), "");
+}
+
+// Unset, one moving camera with 16 or more training times gets one in 8 (the mini and paper
+// presets of the four monocular scenes); rigs and the ci preset get none; a given K wins.
+TEST(Generator, ValEveryDefaultsToEightForOneMovingCameraOnly) {
+  DatagenOptions o;
+  for (const char* scene : {"airplane", "deer", "lego", "tank"}) {
+    EXPECT_EQ(o.ValEveryFor(ResolvePreset(scene, "mini")), kDefaultValEvery) << scene;
+    EXPECT_EQ(o.ValEveryFor(ResolvePreset(scene, "paper")), kDefaultValEvery) << scene;
+    EXPECT_EQ(o.ValEveryFor(ResolvePreset(scene, "ci")), 0) << scene;
+  }
+  for (const char* scene : {"hook", "jump", "mutant", "standup", "studio", "marker"})
+    EXPECT_EQ(o.ValEveryFor(ResolvePreset(scene, "mini")), 0) << scene;
+  o.val_every = 0;
+  EXPECT_EQ(o.ValEveryFor(ResolvePreset("lego", "mini")), 0);
+  o.val_every = 4;
+  EXPECT_EQ(o.ValEveryFor(ResolvePreset("hook", "mini")), 4);
 }
 
 TEST(Generator, RerunReplacesItsOwnPreviousOutput) {
