@@ -152,6 +152,22 @@ void AddCaptureFlags(CLI::App* cmd, datagen::DatagenOptions* options) {
   AddCaptureVariantFlags(cmd, options);
 }
 
+// The LDR images' camera response and sensor noise (the scene's own where not given).
+void AddLdrSynthesisFlags(CLI::App* cmd, datagen::DatagenOptions* options) {
+  cmd->add_option("--crf", options->crf,
+                  "Camera response of the LDR images: linear, gamma:G, srgb, filmic[:k,mid], "
+                  "naka-rushton:k,gamma, table:F.csv (default: the scene's, filmic for the eight)")
+      ->check(Text("a camera response"));
+  cmd->add_option("--full-well", options->full_well,
+                  "Shot noise: photo-electrons at saturation, 0 = none (default: the scene's, "
+                  "20000 for the eight, none for studio)")
+      ->check(Real(0, 1e12));
+  cmd->add_option("--read-noise", options->read_sigma,
+                  "Read noise std in units of full scale (default: the scene's, 0.002 for the "
+                  "eight, none for studio)")
+      ->check(Real(0, 1));
+}
+
 }  // namespace
 
 void AddDatagenCommand(CLI::App& app) {
@@ -216,18 +232,7 @@ void AddDatagenCommand(CLI::App& app) {
                   "Image width in pixels (0 = the preset's; the height follows the scene)")
       ->check(Integer(0, 100000))
       ->capture_default_str();
-  cmd->add_option("--crf", options->crf,
-                  "Camera response of the LDR images: linear, gamma:G, srgb, filmic[:k,mid], "
-                  "naka-rushton:k,gamma, table:F.csv (default: the scene's, filmic for the eight)")
-      ->check(Text("a camera response"));
-  cmd->add_option("--full-well", options->full_well,
-                  "Shot noise: photo-electrons at saturation, 0 = none (default: the scene's, "
-                  "20000 for the eight, none for studio)")
-      ->check(Real(0, 1e12));
-  cmd->add_option("--read-noise", options->read_sigma,
-                  "Read noise std in units of full scale (default: the scene's, 0.002 for the "
-                  "eight, none for studio)")
-      ->check(Real(0, 1));
+  AddLdrSynthesisFlags(cmd, options.get());
   AddCaptureFlags(cmd, options.get());
   cmd->add_flag("--list", *list, "List the scenes and presets, render nothing");
   auto pipeline = std::make_shared<PipelineFlags>(cmd, options->pipeline);
