@@ -178,8 +178,8 @@ void AddDatagenCommand(CLI::App& app) {
       "datagen",
       "Render HDR-4D-Syn-style dynamic HDR scenes with Blender (Cycles on the CPU, linear float "
       "EXR) and write each as a dataset: LDR at 0.125/2/32 s through a camera response with "
-      "noise, transforms_{train,test}.json (and _val for one moving camera), point3d.ply sampled over the scene's time, manifest.json with "
-      "checksums.\n"
+      "noise, transforms_{train,test}.json (and _val for one moving camera), point3d.ply "
+      "sampled over the scene's time, manifest.json with checksums.\n"
       "  hdr4d datagen --scene all --preset mini --out DATA     (DATA/<scene>/ per scene)\n"
       "  hdr4d datagen --capture --scene room --width 240 --out CAP   (a rig capture for "
       "hdr4d calibrate)\n"

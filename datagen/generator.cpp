@@ -44,8 +44,8 @@ json SplitCounts(const std::vector<PlannedRender>& renders, Split split) {
 
 int DatagenOptions::ValEveryFor(const ScenePreset& preset) const {
   if (val_every) return *val_every;
-  return preset.rig == Rig::kMonocular && preset.train_timestamps >= kMinTimesForDefaultVal
-             ? kDefaultValEvery
+  return preset.rig == Rig::kMonocular && preset.train_timestamps >= kMinTimesForMonocularVal
+             ? kMonocularValEvery
              : 0;
 }
 

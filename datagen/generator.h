@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "core/radiometry/exposure_stack.h"
+#include "core/dataset/val_split.h"
 #include "core/radiometry/ldr_synthesis.h"
 #include "datagen/blender_render.h"
 #include "datagen/dynamic_range.h"
@@ -51,8 +52,8 @@ struct DatagenOptions {
   // (core/dataset/val_split.h). 0: the paper's train / test splits only. Unset: ValEveryFor's
   // choice. Set to anything but 0, not with --capture.
   std::optional<int> val_every;
-  // The K a scene gets: val_every where set; else kDefaultValEvery for one moving camera with
-  // at least kMinTimesForDefaultVal training times (mini and paper presets), 0 otherwise (rigs,
+  // The K a scene gets: val_every where set; else kMonocularValEvery for one moving camera with
+  // at least kMinTimesForMonocularVal training times (mini and paper presets), 0 otherwise (rigs,
   // whose held-back time or camera costs more than the stop saves, and the ci preset).
   int ValEveryFor(const ScenePreset& preset) const;
   // LDR synthesis, as the demo and HDR-4D-Syn-style data: a camera response, shot and read
@@ -101,12 +102,6 @@ struct DatagenOptions {
   // fails here, before anything under --out is touched.
   BlenderSettings FoundBlender() const;
 };
-
-// One moving camera overfits its views long before 20000 iterations: with one training time in
-// 8 held back, the default's stop took 0.2-0.8 of the CPU of the full run on four datagen minis
-// and scored better held out on seven of eight runs (docs/history/time-to-quality.md).
-inline constexpr int kDefaultValEvery = 8;
-inline constexpr int kMinTimesForDefaultVal = 16;  // two val times at least
 
 inline constexpr int kCaptureCameras = 6;
 inline constexpr int kCaptureMaxCameras = 12;  // 30 degrees apart: 12 fill the circle

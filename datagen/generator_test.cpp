@@ -277,8 +277,8 @@ TEST(Generator, ValEveryMovesOneTrainingTimeInKToAValSplit) {
 TEST(Generator, ValEveryDefaultsToEightForOneMovingCameraOnly) {
   DatagenOptions o;
   for (const char* scene : {"airplane", "deer", "lego", "tank"}) {
-    EXPECT_EQ(o.ValEveryFor(ResolvePreset(scene, "mini")), kDefaultValEvery) << scene;
-    EXPECT_EQ(o.ValEveryFor(ResolvePreset(scene, "paper")), kDefaultValEvery) << scene;
+    EXPECT_EQ(o.ValEveryFor(ResolvePreset(scene, "mini")), kMonocularValEvery) << scene;
+    EXPECT_EQ(o.ValEveryFor(ResolvePreset(scene, "paper")), kMonocularValEvery) << scene;
     EXPECT_EQ(o.ValEveryFor(ResolvePreset(scene, "ci")), 0) << scene;
   }
   for (const char* scene : {"hook", "jump", "mutant", "standup", "studio", "marker"})

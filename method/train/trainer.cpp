@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "core/dataset/dataset.h"
+#include "core/dataset/val_split.h"
 #include "core/util/error.h"
 #include "core/files/folder_lock.h"
 #include "core/util/free_memory.h"
@@ -541,13 +542,15 @@ void TrainingRun::PickStopForScene() {
     // One moving camera overfits its few views long before the full run ends; a val split is
     // what lets the default see that (docs/history/time-to-quality.md, "A val split for one
     // moving camera"). hdr4d datagen writes one for such scenes; other sources may not.
-    if (profile_.dynamic && !profile_.multi_view && dataset_->train.size() >= 16) {
-      scene_notes_.push_back(
+    if (profile_.dynamic && !profile_.multi_view &&
+        dataset_->train.size() >= static_cast<std::size_t>(kMinTimesForMonocularVal)) {
+      scene_notes_.push_back(fmt::format(
           "train: note: one moving camera and no val split: all the iterations run. A val split "
-          "(`hdr4d dataset split-val DIR --out NEW --every-time 8`, or `hdr4d datagen "
-          "--val-every 8`) lets the default stop once held-out views stop improving: on four "
+          "(`hdr4d dataset split-val DIR --out NEW --every-time {0}`, or `hdr4d datagen "
+          "--val-every {0}`) lets the default stop once held-out views stop improving: on four "
           "datagen scenes of one moving camera it took 0.2-0.8 of the CPU of the full run and "
-          "scored better held out on seven of eight runs");
+          "scored better held out on seven of eight runs",
+          kMonocularValEvery));
     }
     return;
   }
