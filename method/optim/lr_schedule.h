@@ -121,6 +121,25 @@ inline std::int64_t MonocularGaussianBudget(double pixels) {
   return DefaultGaussianBudget(SideScaledPixels(pixels), kMonocularGaussiansPerPixel);
 }
 
+// The default of a static scene (issue 55; --reference keeps 2 x every view's pixels, the first
+// rule above): one view's pixels (by its side beyond 200 px) for each view's worth of distinct
+// content the cameras hold (`content_views`, train/content_views.h: about 1 for a ring round an
+// object, more for a walk-around capture whose views see different parts), at least
+// kMinGaussianBudget and at most 2 x every view's pixels. A static Gaussian is seen at every
+// instant, and a dynamic rig at its 80k budget shows 38-55k Gaussians at one instant, 1-1.4 x
+// one view's pixels (the six datagen rig minis at 20000 iterations), so one view's pixels per
+// view of content is what one instant of a rig holds. Growing freely, a 20-view ring (200 px)
+// reaches 69k and overfits its held-out view (docs/history/time-to-quality.md, "A static
+// scene's budget"). Non-finite or < 1 content counts as 1.
+inline constexpr double kStaticGaussiansPerViewPixel = 1.0;
+inline std::int64_t StaticGaussianBudget(double view_pixels, double content_views,
+                                         double every_view_pixels) {
+  const double views = std::isfinite(content_views) ? std::max(1.0, content_views) : 1.0;
+  const std::int64_t ceiling = DefaultGaussianBudget(every_view_pixels);
+  return std::min(ceiling, DefaultGaussianBudget(SideScaledPixels(view_pixels) * views,
+                                                 kStaticGaussiansPerViewPixel));
+}
+
 // Optimisation settings with the HDR-4DGS HDR-4D-Syn defaults (which are the 4DGS ones except for
 // iterations, the densification interval and the tone mapper). Learning rates of the 4D mean
 // (xyz and t) are in scene-extent units: the caller multiplies them by the extent (PositionLr,

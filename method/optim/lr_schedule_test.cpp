@@ -224,5 +224,22 @@ TEST(GaussianBudget, MonocularIsOneViewsPixels) {
     EXPECT_LE(MonocularGaussianBudget(side * side), SideScaledGaussianBudget(side * side)) << side;
 }
 
+// A static scene: one view's pixels per view of content, between the floor and 2 x every view's
+// pixels (the old static rule, still --reference's).
+TEST(GaussianBudget, StaticIsOneViewsPixelsPerViewOfContent) {
+  const double view = 200.0 * 200.0, every = 20 * view;  // syn200_20k: a ring of 20 views
+  EXPECT_EQ(StaticGaussianBudget(view, 1.0, every), 40000);
+  EXPECT_EQ(StaticGaussianBudget(view, 1.04, every), 41600);
+  EXPECT_EQ(StaticGaussianBudget(view, 5.0, every), 200000);  // a walk-around capture
+  EXPECT_EQ(StaticGaussianBudget(view, 50.0, every), DefaultGaussianBudget(every));  // ceiling
+  EXPECT_EQ(StaticGaussianBudget(128.0 * 128.0, 1.0, 8 * 128.0 * 128.0), 32768);     // floor
+  EXPECT_EQ(StaticGaussianBudget(400.0 * 400.0, 1.0, 20 * 400.0 * 400.0), 80000);   // by side
+  // Guarded: less than one view of content, NaN or infinity count as one view.
+  for (double bad : {0.0, -3.0, 0.5, std::nan(""), HUGE_VAL})
+    EXPECT_EQ(StaticGaussianBudget(view, bad, every), 40000) << bad;
+  // Never above the old rule, even for a single small view.
+  EXPECT_EQ(StaticGaussianBudget(view, 3.0, view), DefaultGaussianBudget(view));
+}
+
 }  // namespace
 }  // namespace hdr4d::method

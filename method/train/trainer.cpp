@@ -55,6 +55,7 @@
 #include "method/train/train_options_table.h"
 #include "method/train/train_views.h"
 #include "method/train/color_bands.h"
+#include "method/train/content_views.h"
 #include "method/render/view_renderer.h"
 
 namespace hdr4d::method {
@@ -214,6 +215,7 @@ class TrainingRun {
   void CheckDataUnchanged();
   void LoadTrainingViews();
   void ResolveSchedules();
+  std::optional<double> StaticContentViews();  // a static scene's views of content, for its budget
   void ResolveLearnedBackground();
   void StartCameraCorrection();
   void RecordConfig();
@@ -246,6 +248,7 @@ class TrainingRun {
 
   TrainOptions options_;  // with the method SetUp picks (when_nothing_hdr)
   std::optional<Dataset> dataset_;
+  std::optional<PointCloud> initial_cloud_;  // read early by StaticContentViews, else at initialisation
   SceneProfile profile_;
   std::vector<TrainView> train_views_, test_views_;
   std::vector<TrainView> val_views_;  // --stop-on-val only
@@ -436,10 +439,21 @@ void TrainingRun::ResolveSchedules() {
     // side beyond 200 px, and half as many for one moving camera (neither under --reference).
     // Static: every view's (a capture's views are its one time, usually spread over the scene).
     const double view_pixels = image_size * image_size;
-    const char* rule = nullptr;
+    std::string rule;
     if (!profile_.dynamic) {
-      opt_.max_gaussians = DefaultGaussianBudget(PixelsPerTime(train_views_));
-      rule = "static: 2 x every view's pixels";
+      // Static: one view's pixels per view of distinct content (the cloud's points seen by any
+      // camera over those one camera sees), at most 2 x every view's pixels (--reference's).
+      const double every_view = PixelsPerTime(train_views_);
+      const std::optional<double> content = options_.reference ? std::nullopt : StaticContentViews();
+      if (content) {
+        opt_.max_gaussians = StaticGaussianBudget(view_pixels, *content, every_view);
+        rule = fmt::format("static: 1 x one view's pixels, by its side beyond 200 px, x {:.2f} "
+                           "views of content, at most 2 x every view's pixels", *content);
+      } else {
+        opt_.max_gaussians = DefaultGaussianBudget(every_view);
+        rule = options_.reference ? "static, --reference: 2 x every view's pixels"
+                                  : "static, no point cloud in view: 2 x every view's pixels";
+      }
     } else if (options_.reference) {
       opt_.max_gaussians = DefaultGaussianBudget(view_pixels);
       rule = "--reference: 2 x one view's pixels";
@@ -457,6 +471,18 @@ void TrainingRun::ResolveSchedules() {
   spdlog::info("train: {} train / {} test views, extent {:.3f}, {}, method {}", train_views_.size(),
                test_views_.size(), extent_, temporal_ ? "dynamic" : "static (no time axis)",
                hdr.method);
+}
+
+// How many views' worth of content the training cameras hold (train/content_views.h), from the
+// scene's point cloud, which is kept for the model's initialisation; none without a cloud (the
+// random points of a cloudless scene are not the scene).
+std::optional<double> TrainingRun::StaticContentViews() {
+  if (!dataset_->point_cloud_path) return std::nullopt;
+  initial_cloud_ = ReadPly(*dataset_->point_cloud_path);
+  std::vector<Camera> cameras;
+  cameras.reserve(train_views_.size());
+  for (const TrainView& v : train_views_) cameras.push_back(v.camera);
+  return method::ContentViews(initial_cloud_->positions, cameras);
 }
 
 // --camera-correction: each view's camera row, and the tone mapper wrapped in the correction.
@@ -650,8 +676,8 @@ void TrainingRun::ResumeOrInitialise() {
     init.seed = options_.seed;
     init.temporal = temporal_;  // a static scene trains without the time axis
     init.color_mode = options_.hdr.color_mode;
-    std::optional<PointCloud> cloud;
-    if (dataset_->point_cloud_path) cloud = ReadPly(*dataset_->point_cloud_path);
+    std::optional<PointCloud> cloud = std::move(initial_cloud_);  // read for the budget, or now
+    if (!cloud && dataset_->point_cloud_path) cloud = ReadPly(*dataset_->point_cloud_path);
     // A budget asked for caps the initial cloud too (the default one leaves it whole).
     if (cloud && options_.optimization.max_gaussians > 0 &&
         cloud->size() > static_cast<std::size_t>(options_.optimization.max_gaussians)) {

@@ -6,6 +6,7 @@
 
 #include "core/util/error.h"
 #include "core/files/json_util.h"
+#include "core/geometry/ply.h"
 #include "method/run/gaussian_scene.h"
 #include "method/train/checkpoint.h"
 #include "method/train/tiny_run_test_util.h"
@@ -170,6 +171,32 @@ TEST(Trainer, DefaultGaussianBudgetFollowsOneView) {
   // Cameras 0-2 train (every 4th is held out); the two shots of each are one view when static.
   EXPECT_EQ(ReadJsonFile(dir / "static_run" / "config.json")["optimization"]["max_gaussians"],
             2 * 160 * 160 * 3);
+}
+
+// A static scene with a point cloud: one view's pixels per view of content (a ring round the
+// scene's centre sees all of a small cloud there: one view, 240 x 200 by the side); a cloud no
+// camera sees, and --reference, keep 2 x every view's pixels.
+TEST(Trainer, DefaultBudgetOfAStaticSceneIsOneViewPerViewOfContent) {
+  TempDir dir;
+  MakeBudgetScene(dir / "scene", 240);
+  MakeStatic(dir / "scene");
+  PointCloud cloud;
+  for (int i = 0; i < 200; ++i)
+    cloud.positions.emplace_back(0.01f * (i % 7), 0.01f * (i % 5), 0.01f * (i % 3));
+  WritePly(dir / "scene" / "point3d.ply", cloud);
+  Train(SmallRun(dir / "scene", dir / "run", 2));
+  EXPECT_EQ(ReadJsonFile(dir / "run" / "config.json")["optimization"]["max_gaussians"], 240 * 200);
+  TrainOptions reference = SmallRun(dir / "scene", dir / "reference", 2);
+  reference.reference = true;
+  Train(reference);
+  const int every_view = 2 * 240 * 240 * 3;  // cameras 0-2 train
+  EXPECT_EQ(ReadJsonFile(dir / "reference" / "config.json")["optimization"]["max_gaussians"],
+            every_view);
+  for (Eigen::Vector3f& p : cloud.positions) p += Eigen::Vector3f(0, 0, 1000);  // far above
+  WritePly(dir / "scene" / "point3d.ply", cloud);
+  Train(SmallRun(dir / "scene", dir / "unseen", 2));
+  EXPECT_EQ(ReadJsonFile(dir / "unseen" / "config.json")["optimization"]["max_gaussians"],
+            every_view);
 }
 
 // Beyond 200 px a dynamic scene's default follows the view's side (2 x 240 x 200 at 240 px, not
