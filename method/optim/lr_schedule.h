@@ -126,11 +126,12 @@ inline std::int64_t MonocularGaussianBudget(double pixels) {
 // content the cameras hold (`content_views`, train/content_views.h: about 1 for a ring round an
 // object, more for a walk-around capture whose views see different parts), at least
 // kMinGaussianBudget and at most 2 x every view's pixels. A static Gaussian is seen at every
-// instant, and a dynamic rig at its 80k budget shows 38-55k Gaussians at one instant, 1-1.4 x
-// one view's pixels (the six datagen rig minis at 20000 iterations), so one view's pixels per
-// view of content is what one instant of a rig holds. Growing freely, a 20-view ring (200 px)
-// reaches 69k and overfits its held-out view (docs/history/time-to-quality.md, "A static
-// scene's budget"). Non-finite or < 1 content counts as 1.
+// instant, and a dynamic rig at its budget shows 0.9-1.4 x one view's pixels at one instant
+// (38-55k of 80k on five datagen rig minis at 200 px, 20000 iterations; ring5 at 128 px 0.9), so
+// one view's pixels per view of content is the low end of what one instant of a rig holds.
+// Growing freely, a 20-view ring (200 px) reaches 69k and overfits its held-out view
+// (docs/history/time-to-quality.md, "A static scene's budget"). Non-finite or < 1 content
+// counts as 1.
 inline constexpr double kStaticGaussiansPerViewPixel = 1.0;
 inline std::int64_t StaticGaussianBudget(double view_pixels, double content_views,
                                          double every_view_pixels) {

@@ -11,7 +11,8 @@ std::optional<double> ContentViews(const std::vector<Eigen::Vector3f>& points,
   const std::size_t stride =
       std::max<std::size_t>(1, (points.size() + max_points - 1) / std::size_t(max_points));
   std::vector<Eigen::Vector3d> sample;
-  for (std::size_t i = 0; i < points.size(); i += stride) sample.push_back(points[i].cast<double>());
+  for (std::size_t i = 0; i < points.size(); i += stride)
+    sample.push_back(points[i].cast<double>());
   std::vector<std::uint8_t> seen_by_any(sample.size(), 0);
   std::int64_t seen_total = 0;  // (point, camera) pairs
   for (const Camera& camera : cameras) {

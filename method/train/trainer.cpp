@@ -248,7 +248,7 @@ class TrainingRun {
 
   TrainOptions options_;  // with the method SetUp picks (when_nothing_hdr)
   std::optional<Dataset> dataset_;
-  std::optional<PointCloud> initial_cloud_;  // read early by StaticContentViews, else at initialisation
+  std::optional<PointCloud> initial_cloud_;  // read by StaticContentViews, else at initialisation
   SceneProfile profile_;
   std::vector<TrainView> train_views_, test_views_;
   std::vector<TrainView> val_views_;  // --stop-on-val only
@@ -437,14 +437,14 @@ void TrainingRun::ResolveSchedules() {
   if (opt_.max_gaussians < 0) {
     // Dynamic: one view's pixels (a rig's cameras film one performance from around it), by its
     // side beyond 200 px, and half as many for one moving camera (neither under --reference).
-    // Static: every view's (a capture's views are its one time, usually spread over the scene).
     const double view_pixels = image_size * image_size;
     std::string rule;
     if (!profile_.dynamic) {
       // Static: one view's pixels per view of distinct content (the cloud's points seen by any
       // camera over those one camera sees), at most 2 x every view's pixels (--reference's).
       const double every_view = PixelsPerTime(train_views_);
-      const std::optional<double> content = options_.reference ? std::nullopt : StaticContentViews();
+      const std::optional<double> content =
+          options_.reference ? std::nullopt : StaticContentViews();
       if (content) {
         opt_.max_gaussians = StaticGaussianBudget(view_pixels, *content, every_view);
         rule = fmt::format("static: 1 x one view's pixels, by its side beyond 200 px, x {:.2f} "
