@@ -17,14 +17,11 @@ std::optional<double> ContentViews(const std::vector<Eigen::Vector3f>& points,
   std::int64_t seen_total = 0;  // (point, camera) pairs
   for (const Camera& camera : cameras) {
     const PinholeIntrinsics& k = camera.intrinsics;
-    const Eigen::Matrix4d cam_from_world = camera.CamFromWorldCv();  // once, not per point
-    const Eigen::Matrix3d r = cam_from_world.topLeftCorner<3, 3>();
-    const Eigen::Vector3d t = cam_from_world.topRightCorner<3, 1>();
     for (std::size_t i = 0; i < sample.size(); ++i) {
-      const Eigen::Vector3d p = r * sample[i] + t;  // as Camera::Project
-      if (!(p.z() > 0.0)) continue;
-      const double u = k.fx * p.x() / p.z() + k.cx, v = k.fy * p.y() / p.z() + k.cy;
-      if (!(u >= 0 && u <= k.width && v >= 0 && v <= k.height)) continue;
+      const auto uvd = camera.Project(sample[i]);  // nullopt behind the camera
+      if (!uvd || !((*uvd)[0] >= 0 && (*uvd)[0] <= k.width && (*uvd)[1] >= 0 &&
+                    (*uvd)[1] <= k.height))
+        continue;
       ++seen_total;
       seen_by_any[i] = 1;
     }

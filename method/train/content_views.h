@@ -14,7 +14,7 @@
 namespace hdr4d::method {
 
 // At most this many points are projected (an even stride over the cloud): the ratio is a mean
-// over views, and 4096 points give it to about 1% at a millisecond per hundred views.
+// over views, and 4096 points give it to about 1% (once per run, at set-up).
 inline constexpr int kContentViewsMaxPoints = 4096;
 
 // Seen: in front of the camera and inside its image (the pinhole projection, no occlusion: a
