@@ -131,8 +131,13 @@ void AddSplitVal(CLI::App* dataset) {
       "The new scene holds its own transforms files and links to the original's images, HDR and "
       "point cloud; the original is not changed. Monocular captures: --every-time 8 holds back "
       "one frame in eight; fixed rigs: --camera ID holds back one camera (or --every-time K, "
-      "one time in K on every camera).");
-  split->add_option("DIR", args->dir, "Scene folder (transforms_{train,test}.json at its root)")
+      "one time in K on every camera); a static capture of separate views (one exposure each): "
+      "--every-frame K holds back one view in K. A nerfstudio scene (one transforms.json) gets "
+      "a copy of that file with val_filenames.");
+  split
+      ->add_option("DIR", args->dir,
+                   "Scene folder (transforms_{train,test}.json, or nerfstudio's transforms.json, "
+                   "at its root)")
       ->required()
       ->check(Text("a scene folder"));
   split->add_option("--out,-o", args->out, "The new scene folder (new, or empty)")
@@ -142,11 +147,18 @@ void AddSplitVal(CLI::App* dataset) {
       "--every-time", args->options.every_time,
       "Move every frame of one training time in K (the middle time of each run of K) to val");
   every->check(Integer(2, 1000000));
+  CLI::Option* camera = split
+                            ->add_option("--camera", args->options.camera_id,
+                                         "Move every training frame of this camera_id to val")
+                            ->check(Integer(0))
+                            ->excludes(every);
   split
-      ->add_option("--camera", args->options.camera_id,
-                   "Move every training frame of this camera_id to val")
-      ->check(Integer(0))
-      ->excludes(every);
+      ->add_option("--every-frame", args->options.every_frame,
+                   "Move every K-th training frame in file order (the middle one of each run of "
+                   "K) to val: for a static capture whose frames are separate views")
+      ->check(Integer(2, 1000000))
+      ->excludes(every)
+      ->excludes(camera);
   split->callback([args] {
     const ValSplitSummary s = SplitOffVal(args->dir, args->out, args->options);
     fmt::print("dataset split-val: wrote {} from {}: {} training frames moved to val ({}), {} "

@@ -24,6 +24,9 @@ struct ValSplitOptions {
   int every_time = 0;
   // >= 0: every training frame of this camera_id (a fixed rig: one camera held back).
   int camera_id = -1;
+  // > 0: every K-th training frame in file order, the middle one of each run of K (frames K/2,
+  // K/2 + K, ...): a static capture whose frames are separate views loses one view in K.
+  int every_frame = 0;
   // The option that set every_time, as the error messages name it.
   std::string every_time_flag = "--every-time";
 };
@@ -38,8 +41,11 @@ struct ValSplitSummary {
 // split) and writes the scene `out`: transforms_train.json without the chosen frames,
 // transforms_val.json with them (each file keeps the original's top-level keys and every key of
 // each frame), transforms_test.json as it was, and a link to every other entry of `dir`
-// (images, HDR, point3d.ply). `out` is built beside its place and moved there when complete;
-// an existing non-empty `out` is refused. Throws hdr4d::Error naming the file and the problem
+// (images, HDR, point3d.ply). A nerfstudio scene (one transforms.json) gets a copy of that file
+// with the chosen frames' file_path in val_filenames (and its test split written out as
+// test_filenames where it was the implicit every 8th frame, which a list would otherwise end).
+// `out` is built beside its place and moved there when complete; an existing non-empty `out` is
+// refused. Throws hdr4d::Error naming the file and the problem
 // for a scene that cannot be read, already has a val split, has no time or camera_id to choose
 // by, or would keep no training frame.
 ValSplitSummary SplitOffVal(const std::filesystem::path& dir,
@@ -48,7 +54,8 @@ ValSplitSummary SplitOffVal(const std::filesystem::path& dir,
 
 // The same split made in place, for a scene folder still being built (hdr4d datagen
 // --val-every, in its staging folder): transforms_val.json is written beside the others and the
-// chosen frames leave transforms_train.json. The same refusals; `who` names the command in them.
+// chosen frames leave transforms_train.json. The same refusals, and the reference layout only;
+// `who` names the command in them.
 ValSplitSummary SplitValInPlace(const std::filesystem::path& dir,
                                 const ValSplitOptions& options,
                                 const char* who);
