@@ -216,9 +216,10 @@ struct OptimizationOptions {
   int stop_window = 0;
   double stop_tolerance = kDefaultStopTolerance;
   // --stop-on-val: the same stop decided on the scene's val split instead of the training loss:
-  // its views are scored every stop_window iterations (also while densifying, except on an
-  // opacity reset's iteration) and the run stops once kHeldOutPatience evaluations in a row have
-  // not improved on the best (method/train/loss_plateau.h). Catches a model that overfits its
+  // its views are scored every stop_window iterations (also while densifying: before that
+  // iteration's densification and opacity reset) and the run stops, on the model it scored, once
+  // kHeldOutPatience evaluations in a row have not improved on the best
+  // (method/train/loss_plateau.h). Catches a model that overfits its
   // training views, which the training loss cannot see.
   bool stop_on_val = false;
   // --grow-on-val: with --stop-on-val, the same val evaluations also decide how far the model

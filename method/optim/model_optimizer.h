@@ -4,7 +4,7 @@
 // returns (method/gaussian/gradient_rows.h) with each block of Gaussians whose gradient rows are
 // final, and the block is stepped there, while its gradients are still in cache
 // (fused_adam_step.h). Per iteration the trainer calls
-//   SetIteration -> Begin -> (backward) -> FirstNonFinite -> [densify] -> Finish
+//   SetIteration -> Begin -> (backward) -> FirstNonFinite -> Finish -> [evaluate, densify]
 // (docs/ARCHITECTURE.md, "One training step").
 #pragma once
 
@@ -63,7 +63,9 @@ class ModelOptimizer {
   // "". Such a state is partly stepped and must be dropped.
   std::string FirstNonFinite() const;
   // Steps what the backward did not: the tone mapper always; the model groups outside the fused
-  // step unless this iteration densifies or resets them. Call after any densification.
+  // step unless this iteration densifies or resets them. On a densifying iteration it steps only
+  // the tone mapper and the background, so it may come before the densification (the trainer
+  // scores its held-out views in between).
   void Finish();
 
   // The Adam state, for densification (which resizes its groups), the opacity reset and

@@ -448,7 +448,8 @@ std::vector<TrainOption> CadenceRows() {
   return {
       Row("test_every", Top(&TrainOptions::test_every))
           .Flag("--test-every",
-                "Evaluate the test split every N iterations (0: at the end); RUN/results.json's "
+                "Evaluate the test split every N iterations (0: at the end), before that "
+                "iteration's densification as the reference does; RUN/results.json's "
                 "test_curve holds each evaluation's metrics, iteration and training seconds")
           .Range(count(0))
           .ShowDefault()

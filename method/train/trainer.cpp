@@ -236,7 +236,8 @@ class TrainingRun {
   double BatchBackwardAndUpdate(int it, const float** ldr_out, std::size_t* pixels);
   void FinishUpdate(int it, double loss_value);
   void ShowProgress(double loss_value, const float* ldr_out, std::size_t pixels);
-  void EvaluateAndCheckpoint(int it);
+  void EvaluateHeldOut(int it);  // the test curve and the val views, when due
+  void CheckpointIfDue(int it);
   std::string FlatToneCurveCheck(int it);
   nlohmann::json EvaluateTestViews(bool with_flip);
   nlohmann::json EvaluateOn(const std::vector<TrainView>& views, bool with_flip);
@@ -830,8 +831,8 @@ bool TrainingRun::OutOfTime() const {
 }
 
 // One iteration: pick a view (a batch of them with --batch-size), render it, the loss, the
-// backward with the fused optimiser step, densification, progress, and the periodic evaluation
-// and checkpoint.
+// backward with the fused optimiser step, the periodic held-out evaluation, densification,
+// progress and the checkpoint.
 void TrainingRun::Step() {
   const int it = ++loop_.iteration;
   head_current_ = false;
@@ -853,7 +854,7 @@ void TrainingRun::Step() {
     const double loss_value = BatchBackwardAndUpdate(it, &ldr_out, &pixels);
     ShowProgress(loss_value, ldr_out, pixels);
   }
-  EvaluateAndCheckpoint(it);
+  CheckpointIfDue(it);
   if (it % kToneCurveCheckEvery == 0) FlatToneCurveCheck(it);
 }
 
@@ -982,8 +983,7 @@ void TrainingRun::EndBandProbe(int it, bool rows_stored) {
   }
 }
 
-// The backward with the model's optimiser step fused into it, the finite check, densification
-// and the opacity reset on their schedule, and the steps the backward did not take.
+// The backward with the model's optimiser step fused into it, then FinishUpdate.
 void TrainingRun::BackwardAndUpdate(const TrainView& view, int it, double loss_value) {
   const GradientRowsDone step_rows = WithBandProbe(
       optimizer_->Begin(DensifiesAt(it), ResetsOpacityAt(it), model_.size(), ActiveRestColumns()));
@@ -1047,8 +1047,8 @@ double TrainingRun::BatchBackwardAndUpdate(int it, const float** ldr_out, std::s
   return loss_value;
 }
 
-// After the backward: the finite check, densification and the opacity reset on their schedule,
-// and the steps the backward did not take.
+// After the backward: the finite check, the steps the backward did not take, the held-out
+// evaluations due, then densification and the opacity reset on their schedule.
 void TrainingRun::FinishUpdate(int it, double loss_value) {
   // A non-finite gradient stops training: the state in memory is partly stepped and dropped,
   // the last checkpoint kept.
@@ -1059,6 +1059,18 @@ void TrainingRun::FinishUpdate(int it, double loss_value) {
         it, bad, checkpoint_path_.string());
   }
   loop_.loss_curve.push_back(loss_value);
+  // On a densifying iteration this steps only the tone mapper and the background, which
+  // densification leaves alone, so it may come first (ModelOptimizer::Finish).
+  optimizer_->Finish();
+  if (correction_) correction_->Step();
+  // The held-out views are scored before this iteration's densification and opacity reset, as
+  // the reference's training_report is: right after them the new Gaussians have not settled
+  // and every opacity is 0.01, so a reading there (every one on a multiple of the interval)
+  // read several dB low on a sparse capture. A run that ends here (its last iteration, or the
+  // val split stops it) ends on the model it scored. (A run's last iteration still densifies
+  // when its schedule says so: a run extended with --resume then continues exactly.)
+  EvaluateHeldOut(it);
+  if (Stopped()) return;
   if (DensifiesAt(it)) {
     DensifyParams params = DensifyParamsAt(opt_, extent_, it);
     if (const std::optional<GrowthStop> g = GrowthStopped()) {
@@ -1070,8 +1082,6 @@ void TrainingRun::FinishUpdate(int it, double loss_value) {
     OrderByTime();
     ReturnFreedMemory();  // its temporaries (core/util/free_memory.h)
   }
-  optimizer_->Finish();
-  if (correction_) correction_->Step();
   if (ResetsOpacityAt(it)) ResetOpacity(&model_, &optimizer_->adam());
 }
 
@@ -1092,18 +1102,24 @@ void TrainingRun::ShowProgress(double loss_value, const float* ldr_out, std::siz
   progress_->Advance(1, fmt::format("{} N {}", shown, model_.size()));
 }
 
-void TrainingRun::EvaluateAndCheckpoint(int it) {
+void TrainingRun::EvaluateHeldOut(int it) {
   EvaluateValViews(it);
-  if (options_.test_every > 0 && it % options_.test_every == 0 && it < opt_.iterations) {
+  // A run that stops here is scored once more at its end (Finish), on the same model.
+  if (options_.test_every > 0 && it % options_.test_every == 0 && it < opt_.iterations &&
+      !Stopped()) {
     const auto eval_start = std::chrono::steady_clock::now();
     nlohmann::json m = EvaluateTestViews(/*with_flip=*/false);  // the curve stays cheap
     spdlog::info("train: iteration {}: test {}", it, m.dump());
     m["iteration"] = it;
     m["train_seconds"] = TrainingSeconds();  // time to quality: the curve against training time
+    m["gaussians"] = model_.size();
     loop_.test_curve.push_back(std::move(m));
     eval_seconds_ +=
         std::chrono::duration<double>(std::chrono::steady_clock::now() - eval_start).count();
   }
+}
+
+void TrainingRun::CheckpointIfDue(int it) {
   if (options_.checkpoint_every > 0 && it % options_.checkpoint_every == 0) {
     loop_.train_seconds = TrainingSeconds();
     Save();
@@ -1138,13 +1154,11 @@ nlohmann::json TrainingRun::EvaluateOn(const std::vector<TrainView>& views, bool
   return EvaluateViews(&renderer, views, with_flip);
 }
 
-// --stop-on-val: the val views scored every stop_window iterations. Not on an opacity reset's
-// iteration (every opacity at 0.01: the views read about 14 dB, which says nothing of the model).
-// The time is the method's, so it stays in the training seconds.
+// --stop-on-val: the val views scored every stop_window iterations, before that iteration's
+// densification and opacity reset (FinishUpdate). The time is the method's, so it stays in the
+// training seconds.
 void TrainingRun::EvaluateValViews(int it) {
-  if (!opt_.stop_on_val || opt_.stop_window <= 0 || it % opt_.stop_window != 0 ||
-      ResetsOpacityAt(it))
-    return;
+  if (!opt_.stop_on_val || opt_.stop_window <= 0 || it % opt_.stop_window != 0) return;
   const nlohmann::json m = EvaluateOn(val_views_, /*with_flip=*/false);
   const double psnr = m.value("psnr", std::nan(""));
   spdlog::info("train: iteration {}: val PSNR {:.3f} dB", it, psnr);
@@ -1321,8 +1335,8 @@ TrainSummary TrainingRun::Finish() {
 nlohmann::json TrainingRun::StopRecord() const {
   const std::string rule =
       opt_.stop_on_val
-          ? fmt::format("mean LDR PSNR of the {} val views, scored every {} iterations (not on "
-                        "an opacity reset's), not lowering their error by {} (relative) on the "
+          ? fmt::format("mean LDR PSNR of the {} val views, scored every {} iterations (before "
+                        "that iteration's densification), not lowering their error by {} (relative) on the "
                         "best for {} evaluations in a row",
                         val_views_.size(), opt_.stop_window, opt_.stop_tolerance,
                         kHeldOutPatience)

@@ -160,9 +160,11 @@ TrainOptions StopOnValRun(const fs::path& scene, const fs::path& run, int iterat
 }
 
 // --stop-on-val: the stop is decided on the val split (here a copy of the test split), scored
-// every --stop-window iterations except on an opacity reset's (30); with a tolerance nothing
-// reaches, the first evaluation stays the best and the run stops three evaluations later. An
-// interrupted run stops at the same iteration; a scene without a val split is refused.
+// every --stop-window iterations, before that iteration's densification and opacity reset (the
+// tiny run densifies every 10 and resets at 30); with a tolerance nothing reaches, the first
+// evaluation stays the best and the run stops three evaluations later, on the model the last
+// one scored. An interrupted run stops at the same iteration; a scene without a val split is
+// refused.
 TEST(TrainerSpeedOptions, StopOnValStopsOnTheValSplitAndResumes) {
   TempDir dir;
   MakeTinySceneWithVal(dir / "scene");
@@ -170,20 +172,23 @@ TEST(TrainerSpeedOptions, StopOnValStopsOnTheValSplitAndResumes) {
     return StopOnValRun(dir / "scene", dir / name, iterations);
   };
   const TrainSummary a = Train(run("a", 400));
-  EXPECT_EQ(a.iterations, 50);
+  EXPECT_EQ(a.iterations, 40);
   EXPECT_TRUE(a.stopped_flat);
   const nlohmann::json r = ReadJsonFile(dir / "a" / "results.json");
   EXPECT_EQ(r["stopped"]["reason"], "val_plateau");
+  // The val views are the test views: the final scores are the last val reading's, to the bit,
+  // so nothing (no densification at 40) changed the model after it was scored.
+  EXPECT_EQ(r["test"]["psnr"].get<double>(), r["val_curve"].back()["psnr"].get<double>());
   EXPECT_EQ(r["stopped"]["best_val_iteration"], 10);
   std::vector<int> evaluated;
   for (const nlohmann::json& e : r.at("val_curve")) {
     evaluated.push_back(e.at("iteration").get<int>());
     EXPECT_TRUE(e.at("psnr").is_number());
   }
-  EXPECT_EQ(evaluated, (std::vector<int>{10, 20, 40, 50}));
+  EXPECT_EQ(evaluated, (std::vector<int>{10, 20, 30, 40}));
   // Interrupted at 25 and resumed: the same stop, the same state.
   const TrainSummary b = InterruptAndResume(run, "b", 25, 400);
-  EXPECT_EQ(b.iterations, 50);
+  EXPECT_EQ(b.iterations, 40);
   EXPECT_EQ(b.loss_curve, a.loss_curve);
   ExpectSameState(dir / "b", dir / "a");
   // Without a val split: refused, naming the scene.
@@ -202,8 +207,8 @@ TEST(TrainerSpeedOptions, StopOnValStopsOnTheValSplitAndResumes) {
 }
 
 // --grow-on-val: with a tolerance nothing reaches, the second evaluation (20) is the first without
-// a gain, so densification at 30 and 40 keeps the count at or under the count at 20, where
-// the same run without it grows on. An interrupted run freezes at the same count (the val curve
+// a gain, so densification from 20 on (it comes after that iteration's evaluation) keeps the
+// count at or under the count at 20, where the same run without it grows on. An interrupted run freezes at the same count (the val curve
 // keeps it); without --stop-on-val or with --reference it is refused.
 TEST(TrainerSpeedOptions, GrowOnValFreezesTheCountAtTheFirstValEvaluationWithoutGain) {
   TempDir dir;
@@ -214,7 +219,7 @@ TEST(TrainerSpeedOptions, GrowOnValFreezesTheCountAtTheFirstValEvaluationWithout
     return o;
   };
   const TrainSummary a = Train(run("a", 400));
-  EXPECT_EQ(a.iterations, 50);
+  EXPECT_EQ(a.iterations, 40);
   const nlohmann::json r = ReadJsonFile(dir / "a" / "results.json");
   const nlohmann::json& curve = r.at("val_curve");
   ASSERT_EQ(curve.size(), 4u);
@@ -311,6 +316,29 @@ TEST(TrainerSpeedOptions, TestCurveRecordsTheTrainingSecondsOfEachEvaluation) {
   }
   EXPECT_DOUBLE_EQ(curve.back().at("train_seconds").get<double>(),
                    r.at("train_seconds").get<double>());
+}
+
+// The held-out views are scored before that iteration's densification, as the reference's
+// training_report: the tiny run first densifies at 20, and its test curve reads there the model
+// before it (as many Gaussians as a run that never densifies). A val stop is checked in
+// StopOnValStopsOnTheValSplitAndResumes.
+TEST(TrainerSpeedOptions, HeldOutReadingsComeBeforeTheIterationsDensification) {
+  TempDir dir;
+  MakeTinyScene(dir / "scene");
+  auto run = [&](const char* name, int densify_until) {
+    TrainOptions o = TinyRun(dir / "scene", dir / name, 60);
+    o.test_every = 20;
+    o.optimization.densify_until = densify_until;
+    const TrainSummary s = Train(o);
+    return std::pair{s, ReadJsonFile(dir / name / "results.json")};
+  };
+  const auto [a, ra] = run("a", 50);
+  const auto [never, rn] = run("never", 20);  // densifies never: 20 is not < 20
+  EXPECT_NE(a.gaussians, never.gaussians);
+  const nlohmann::json& at_20 = ra["test_curve"][0];
+  ASSERT_EQ(at_20["iteration"], 20);
+  EXPECT_EQ(at_20["gaussians"].get<std::size_t>(), never.gaussians);
+  EXPECT_NE(ra["test_curve"][1]["gaussians"].get<std::size_t>(), never.gaussians);
 }
 
 // --color-bands-by-need: a probe renders the next band at zero and never steps it, so a run whose
