@@ -1066,9 +1066,9 @@ void TrainingRun::FinishUpdate(int it, double loss_value) {
   // The held-out views are scored before this iteration's densification and opacity reset, as
   // the reference's training_report is: right after them the new Gaussians have not settled
   // and every opacity is 0.01, so a reading there (every one on a multiple of the interval)
-  // read several dB low on a sparse capture. A run that ends here (its last iteration, or the
-  // val split stops it) ends on the model it scored. (A run's last iteration still densifies
-  // when its schedule says so: a run extended with --resume then continues exactly.)
+  // read several dB low on a sparse capture. A run the val split stops here ends on the model
+  // it scored. (A run's last iteration still densifies where its schedule says so, which no
+  // default schedule does, so that a run extended with --resume continues exactly.)
   EvaluateHeldOut(it);
   if (Stopped()) return;
   if (DensifiesAt(it)) {
@@ -1336,8 +1336,8 @@ nlohmann::json TrainingRun::StopRecord() const {
   const std::string rule =
       opt_.stop_on_val
           ? fmt::format("mean LDR PSNR of the {} val views, scored every {} iterations (before "
-                        "that iteration's densification), not lowering their error by {} (relative) on the "
-                        "best for {} evaluations in a row",
+                        "that iteration's densification), not lowering their error by {} "
+                        "(relative) on the best for {} evaluations in a row",
                         val_views_.size(), opt_.stop_window, opt_.stop_tolerance,
                         kHeldOutPatience)
           : fmt::format("mean training loss over windows of {} iterations after densification "

@@ -208,8 +208,9 @@ TEST(TrainerSpeedOptions, StopOnValStopsOnTheValSplitAndResumes) {
 
 // --grow-on-val: with a tolerance nothing reaches, the second evaluation (20) is the first without
 // a gain, so densification from 20 on (it comes after that iteration's evaluation) keeps the
-// count at or under the count at 20, where the same run without it grows on. An interrupted run freezes at the same count (the val curve
-// keeps it); without --stop-on-val or with --reference it is refused.
+// count at or under the count at 20, where the same run without it grows on. An interrupted
+// run freezes at the same count (the val curve keeps it); without --stop-on-val or with
+// --reference it is refused.
 TEST(TrainerSpeedOptions, GrowOnValFreezesTheCountAtTheFirstValEvaluationWithoutGain) {
   TempDir dir;
   MakeTinySceneWithVal(dir / "scene");
