@@ -217,8 +217,13 @@ void RunTrain(TrainArgs& a) {
   }
   const method::TrainSummary s =
       method::Train(method::ResolveTrainRequest(request, baselines::MethodPreset));
-  fmt::print("train: {} iterations in {:.1f} s, {} Gaussians; test {}\n", s.iterations,
-             s.train_seconds, s.gaussians, s.test_metrics.dump());
+  const std::string kept =
+      s.model_iteration > 0 && s.model_iteration != s.iterations
+          ? fmt::format(" (kept: the model of iteration {}, the best val evaluation)",
+                        s.model_iteration)
+          : "";
+  fmt::print("train: {} iterations in {:.1f} s{}, {} Gaussians; test {}\n", s.iterations,
+             s.train_seconds, kept, s.gaussians, s.test_metrics.dump());
 }
 
 }  // namespace

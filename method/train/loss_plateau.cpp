@@ -43,14 +43,21 @@ bool Improves(const HeldOutPoint& point, const HeldOutPoint& best, double tolera
 
 }  // namespace
 
-std::optional<HeldOutPlateau> FindHeldOutPlateau(const std::vector<HeldOutPoint>& curve,
-                                                 double tolerance,
-                                                 int patience) {
-  if (patience < 1 || curve.size() < static_cast<std::size_t>(patience) + 1) return std::nullopt;
+std::optional<std::size_t> BestHeldOutIndex(const std::vector<HeldOutPoint>& curve,
+                                            double tolerance) {
+  if (curve.empty()) return std::nullopt;
   std::size_t best = 0;
   for (std::size_t i = 1; i < curve.size(); ++i) {
     if (Improves(curve[i], curve[best], tolerance)) best = i;
   }
+  return best;
+}
+
+std::optional<HeldOutPlateau> FindHeldOutPlateau(const std::vector<HeldOutPoint>& curve,
+                                                 double tolerance,
+                                                 int patience) {
+  if (patience < 1 || curve.size() < static_cast<std::size_t>(patience) + 1) return std::nullopt;
+  const std::size_t best = *BestHeldOutIndex(curve, tolerance);
   if (curve.size() - 1 - best < static_cast<std::size_t>(patience)) return std::nullopt;
   return HeldOutPlateau{curve.back().iteration, curve[best].iteration, curve[best].psnr,
                         curve.back().psnr};

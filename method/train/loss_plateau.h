@@ -3,6 +3,7 @@
 // stops at the same iteration whether or not it was interrupted and resumed.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -42,12 +43,18 @@ struct HeldOutPlateau {
 // Evaluations of the val split a run waits for an improvement before it stops.
 inline constexpr int kHeldOutPatience = 3;
 
-// A plateau when none of the last `patience` evaluations lowered the val split's mean squared
-// error (10^(-PSNR/10)) below (1 - tolerance) x the best before it: the relative gain of the
-// training-loss rule, on held-out views. Unlike the training loss, the held-out error can rise
-// while the training loss still falls (a model that overfits its views); the rule stops there,
-// `patience` evaluations after the best, and keeps the last model, not the best one.
-// nullopt with fewer than patience + 1 points.
+// The best evaluation so far: the last one that lowered the val split's mean squared error
+// (10^(-PSNR/10)) below (1 - tolerance) x the best before it (the first point starts the best).
+// Its index in `curve`; nullopt for an empty curve.
+std::optional<std::size_t> BestHeldOutIndex(const std::vector<HeldOutPoint>& curve,
+                                            double tolerance);
+
+// A plateau when none of the last `patience` evaluations improved on the best (the rule above):
+// the relative gain of the training-loss rule, on held-out views. Unlike the training loss, the
+// held-out error can rise while the training loss still falls (a model that overfits its
+// views); the rule stops there, `patience` evaluations after the best, and the trainer then
+// takes back the best evaluation's model (trainer.h). nullopt with fewer than patience + 1
+// points.
 std::optional<HeldOutPlateau> FindHeldOutPlateau(const std::vector<HeldOutPoint>& curve,
                                                  double tolerance,
                                                  int patience = kHeldOutPatience);

@@ -101,6 +101,18 @@ TEST(HeldOutPlateau, StopsPatienceEvaluationsAfterTheBest) {
   }
 }
 
+// The best so far, which the trainer keeps to take back at the end: the last evaluation that
+// improved by the tolerance, not the highest reading.
+TEST(HeldOutPlateau, BestIsTheLastEvaluationThatImprovedByTheTolerance) {
+  EXPECT_FALSE(BestHeldOutIndex({}, 0.002).has_value());
+  EXPECT_EQ(BestHeldOutIndex(HeldOut({20}), 0.002), 0u);
+  EXPECT_EQ(BestHeldOutIndex(HeldOut({20, 23, 25, 24.9, 24.7}), 0.002), 2u);
+  // 25.001 dB is 0.02% lower error than 25: below a 0.2% tolerance, so 25 stays the best.
+  EXPECT_EQ(BestHeldOutIndex(HeldOut({20, 25, 25.001}), 0.002), 1u);
+  EXPECT_EQ(BestHeldOutIndex(HeldOut({20, 25, 25.001}), 0.0), 2u);
+  EXPECT_EQ(BestHeldOutIndex(HeldOut({std::nan(""), 18}), 0.002), 1u);
+}
+
 TEST(HeldOutPlateau, SlowGainsAddUpAgainstTheBestSoFar) {
   // +0.005 dB per evaluation (0.115% lower error): measured against the best so far, two steps
   // pass a 0.2% tolerance, so the run goes on; five are needed to pass 0.5%, so the best moves

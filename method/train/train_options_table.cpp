@@ -574,6 +574,15 @@ std::vector<TrainOption> SpeedRows() {
           .Negatable("--no-grow-on-val")
           .IfMissing(false)
           .Config("grow_on_val"),
+      Row("optimization.keep_best_val", Opt(&O::keep_best_val))
+          .Switch("--keep-best-val", true,
+                  "With --stop-on-val: when the val views stop the run, end on the model of "
+                  "their best evaluation (kept in RUN/best_val.bin until then) instead of the "
+                  "last one; a run that reaches its length keeps its last model. results.json: "
+                  "stopped.model_iteration. --no-keep-best-val: the last model")
+          .Negatable("--no-keep-best-val")
+          .IfMissing(false)
+          .Config("keep_best_val"),
   };
 }
 

@@ -87,6 +87,8 @@ std::string TrainOptions::Validate() const {
   if (reference && (optimization.stop_window > 0 || optimization.stop_on_val))
     return "reference: --reference trains every iteration asked for; drop --iterations auto, "
            "--stop-window and --stop-on-val (or --reference)";
+  if (reference && optimization.keep_best_val)
+    return "reference: --reference ends on its last model; drop --keep-best-val (or --reference)";
   if (reference && optimization.grow_on_val)
     return "reference: --reference grows the model up to --max-gaussians; drop --grow-on-val "
            "(or --reference)";
@@ -120,6 +122,11 @@ constexpr std::size_t kColorBandSection = kMaxWeightSection + 1;
 constexpr const char* kColorBandsKey = "color_bands";
 
 constexpr const char* kCheckpointName = "checkpoint.bin";
+// --stop-on-val: the model of the best val evaluation so far, written when one improves on the
+// best and taken back when the run ends (RestoreBestValModel); removed once results.json is.
+constexpr const char* kBestValName = "best_val.bin";
+// In the trainer state: the live model is the best val evaluation's, taken back at the end.
+constexpr const char* kBestValRestoredKey = "best_val_restored";
 
 // NeRF++ normalisation: 1.1 x the largest distance of a training camera from their centroid.
 double SceneExtent(const std::vector<TrainView>& views) {
@@ -175,8 +182,12 @@ class TrainingRun {
   std::vector<std::string> scene_notes_;
   void OpenRunFolder();
   void ResumeOrInitialise();
-  void RestoreDensifyStats(Checkpoint* c);
-  void StartColorBands(Checkpoint* c);
+  // A checkpoint's model, optimiser, statistics, colour bands, tone mapper, camera correction
+  // and background into the run (not its loop state); `file` names it in errors.
+  void LoadTrainingState(Checkpoint* c, const fs::path& file);
+  void RestoreDensifyStats(Checkpoint* c, const fs::path& file);
+  void StartColorBands(Checkpoint* c, const fs::path& file);
+  void BindOptimizer(bool resumed);
   void PrepareRendering();
   void ReserveForBudget();
   // Iterations left, and (--iterations auto) the loss still improving: the training loss, or
@@ -197,6 +208,17 @@ class TrainingRun {
     return FindGrowthStop(ValPoints(), opt_.densify_until, opt_.stop_tolerance);
   }
   void EvaluateValViews(int it);
+  // The iteration of the best val evaluation (loss_plateau.h BestHeldOutIndex); nullopt before
+  // the first.
+  std::optional<int> BestValIteration() const;
+  // --stop-on-val, once no step is left: the model of the best val evaluation, when a later
+  // one is live (the stop waits kHeldOutPatience evaluations past it). The loop state (the
+  // iteration, the curves) stays the last one, so the stop is not run again on a resume.
+  void RestoreBestValModel();
+  // The iteration of the live model: the loop's, or the best val evaluation's once taken back.
+  int ModelIteration() const {
+    return best_val_restored_ ? BestValIteration().value_or(loop_.iteration) : loop_.iteration;
+  }
   nlohmann::json StopRecord() const;
   bool OutOfTime() const;
   void Step();
@@ -242,8 +264,8 @@ class TrainingRun {
   nlohmann::json EvaluateTestViews(bool with_flip);
   nlohmann::json EvaluateOn(const std::vector<TrainView>& views, bool with_flip);
   std::vector<const std::vector<float>*> ExtraFloats() const;
-  void Save();
-  void StartLearnedBackground(const nlohmann::json* trainer);
+  void Save(const fs::path& file);
+  void StartLearnedBackground(const nlohmann::json* trainer, const fs::path& file);
   void ReleaseTrainingState();
   double TrainingSeconds() const;
 
@@ -297,6 +319,9 @@ class TrainingRun {
   // or read).
   HdrHead head_;
   bool head_current_ = false;
+  // The live model is the best val evaluation's, taken back at the end (RestoreBestValModel);
+  // false again after any step.
+  bool best_val_restored_ = false;
   std::optional<Progress> progress_;
   // Shown once, when a tone curve is first found flat (tone_curve_watch.h); results.json lists
   // the end of the run's.
@@ -328,6 +353,9 @@ void TrainingRun::SetUp() {
   if (options_.optimization.grow_on_val && !options_.optimization.stop_on_val && !options_.resume)
     Fail("train: --grow-on-val is decided by the val evaluations of --stop-on-val; add "
          "--iterations auto --stop-on-val (or drop --grow-on-val)");
+  if (options_.optimization.keep_best_val && !options_.optimization.stop_on_val)
+    Fail("train: --keep-best-val keeps the best of the val evaluations of --stop-on-val; add "
+         "--iterations auto --stop-on-val (or drop --keep-best-val)");
   num_times_ = DistinctTimes(*dataset_);
   if (options_.hdr.tone_mapper) {
     ToneMapperConfig tc = *options_.hdr.tone_mapper;
@@ -611,10 +639,10 @@ void TrainingRun::OpenRunFolder() {
 
 // The checkpoint's extra float sections: densification statistics, the HDR head, and
 // --prune-contribution's blending weights.
-void TrainingRun::RestoreDensifyStats(Checkpoint* c) {
+void TrainingRun::RestoreDensifyStats(Checkpoint* c, const fs::path& file) {
   if (c->extra_floats.size() < 3)
-    Fail("{}: checkpoint has no densification statistics", checkpoint_path_.string());
-  head_ = ReadHdrHead(*c, model_.size(), checkpoint_path_.string());
+    Fail("{}: checkpoint has no densification statistics", file.string());
+  head_ = ReadHdrHead(*c, model_.size(), file.string());
   head_current_ = !head_.empty();
   stats_.grad_accum = std::move(c->extra_floats[0]);
   stats_.denom = std::move(c->extra_floats[1]);
@@ -623,13 +651,13 @@ void TrainingRun::RestoreDensifyStats(Checkpoint* c) {
     if (c->extra_floats.size() <= kMaxWeightSection ||
         c->extra_floats[kMaxWeightSection].size() != model_.size())
       Fail("{}: checkpoint has no blending-weight statistics for --prune-contribution",
-           checkpoint_path_.string());
+           file.string());
     stats_.max_weight = std::move(c->extra_floats[kMaxWeightSection]);
   }
 }
 
 // --color-bands-by-need: the bands on and a probe under way, from the checkpoint when resuming.
-void TrainingRun::StartColorBands(Checkpoint* c) {
+void TrainingRun::StartColorBands(Checkpoint* c, const fs::path& file) {
   if (!opt_.color_bands_by_need) return;
   // A probe is 100 iterations, or the interval where that is shorter (a short test run).
   const ColorBandGate::Options o{.interval = opt_.sh_increase_interval,
@@ -639,11 +667,10 @@ void TrainingRun::StartColorBands(Checkpoint* c) {
   if (!c) return;
   if (!c->trainer.contains(kColorBandsKey))
     Fail("{}: corrupt checkpoint: no colour band state for --color-bands-by-need",
-         checkpoint_path_.string());
+         file.string());
   std::vector<float> sums;
   if (c->extra_floats.size() > kColorBandSection) sums = std::move(c->extra_floats[kColorBandSection]);
-  bands_->FromJson(c->trainer[kColorBandsKey], std::move(sums), model_.size(),
-                   checkpoint_path_.string());
+  bands_->FromJson(c->trainer[kColorBandsKey], std::move(sums), model_.size(), file.string());
 }
 
 // The model, optimiser and loop state from the checkpoint, or a new model from the point cloud
@@ -653,24 +680,8 @@ void TrainingRun::ResumeOrInitialise() {
   loop_.rng.seed(options_.seed);
   if (options_.resume) {
     Checkpoint c = LoadCheckpoint(checkpoint_path_);
-    model_ = std::move(c.model);
-    std::istringstream adam_state(c.adam_state);
-    optimizer_->Load(adam_state, checkpoint_path_.string());
     loop_.FromJson(c.trainer, checkpoint_path_, train_views_.size());
-    RestoreDensifyStats(&c);
-    StartColorBands(&c);
-    if (model_.color_mode != options_.hdr.color_mode) {
-      Fail("{}: the checkpoint's colour model does not match method '{}'",
-           checkpoint_path_.string(), options_.hdr.method);
-    }
-    if (tone_mapper_) {
-      if (c.tone_mapper_state.empty())
-        Fail("{}: checkpoint has no tone mapper state", checkpoint_path_.string());
-      std::istringstream tm_state(c.tone_mapper_state);
-      tone_mapper_->Load(tm_state, checkpoint_path_.string());
-    }
-    if (correction_) correction_->FromJson(c.trainer, checkpoint_path_.string());
-    StartLearnedBackground(&c.trainer);
+    LoadTrainingState(&c, checkpoint_path_);
     spdlog::info("train: resuming {} at iteration {}", checkpoint_path_.string(), loop_.iteration);
   } else {
     InitOptions init = options_.init;
@@ -698,15 +709,46 @@ void TrainingRun::ResumeOrInitialise() {
     if (opt_.prune_contribution > 0) stats_.max_weight.assign(model_.size(), 0.0f);
     stats_.Reset(model_.size());
     OrderByTime();  // before the optimiser's groups exist: the model alone
-    StartColorBands(nullptr);
-    StartLearnedBackground(nullptr);
+    StartColorBands(nullptr, checkpoint_path_);
+    StartLearnedBackground(nullptr, checkpoint_path_);
   }
+  BindOptimizer(options_.resume);
+  if (AlreadyFinished()) return;
+  WriteJsonFile(options_.out / "config.json", config_);
+  WriteJsonFile(options_.out / kDataRecordName, data_record_.ToJson());
+}
+
+void TrainingRun::LoadTrainingState(Checkpoint* c, const fs::path& file) {
+  model_ = std::move(c->model);
+  optimizer_.emplace(opt_, extent_);
+  std::istringstream adam_state(c->adam_state);
+  optimizer_->Load(adam_state, file.string());
+  RestoreDensifyStats(c, file);
+  StartColorBands(c, file);
+  if (model_.color_mode != options_.hdr.color_mode) {
+    Fail("{}: the checkpoint's colour model does not match method '{}'", file.string(),
+         options_.hdr.method);
+  }
+  if (tone_mapper_) {
+    if (c->tone_mapper_state.empty())
+      Fail("{}: checkpoint has no tone mapper state", file.string());
+    std::istringstream tm_state(c->tone_mapper_state);
+    tone_mapper_->Load(tm_state, file.string());
+  }
+  if (correction_) correction_->FromJson(c->trainer, file.string());
+  StartLearnedBackground(&c->trainer, file);
+  best_val_restored_ = c->trainer.value(kBestValRestoredKey, false);
+}
+
+// The optimiser's groups over the model's (and the background's) buffers: new ones for a new
+// model, the loaded state's bound to them for a checkpoint's.
+void TrainingRun::BindOptimizer(bool resumed) {
   // At batch size 1 the fused step takes the colour gradient rows straight from the backward,
   // so no colour gradient buffer is kept (~0.6 KB per Gaussian; densify.h, ColourRowsOnly).
   // A batch sums every view's gradient first and needs them all.
   grads_.ZerosLike(model_,
                    /*colour=*/!(opt_.batch_size == 1 && FastPreprocessApplies(model_, render_)));
-  if (options_.resume) {
+  if (resumed) {
     optimizer_->BindGroups(model_, grads_, tone_mapper_.get());
     if (background_)
       optimizer_->BindBackgroundGroup(background_->params(), background_->grads(),
@@ -718,9 +760,6 @@ void TrainingRun::ResumeOrInitialise() {
       optimizer_->AddBackgroundGroup(background_->params(), background_->grads(),
                                      static_cast<float>(opt_.f_dc_lr) * kShC0);
   }
-  if (AlreadyFinished()) return;
-  WriteJsonFile(options_.out / "config.json", config_);
-  WriteJsonFile(options_.out / kDataRecordName, data_record_.ToJson());
 }
 
 bool TrainingRun::AlreadyFinished() const {
@@ -741,6 +780,7 @@ TrainSummary TrainingRun::FinishedSummary() const {
   summary.test_metrics = results.value("test", nlohmann::json::object());
   summary.train_seconds = loop_.train_seconds;
   summary.iterations = loop_.iteration;
+  summary.model_iteration = ModelIteration();
   summary.gaussians = model_.size();
   summary.loss_curve = loop_.loss_curve;
   summary.stopped_by_time = results.value("stopped_by_time", false);
@@ -755,13 +795,13 @@ TrainSummary TrainingRun::FinishedSummary() const {
 // the start. Log-HDR colours start at the median of the Gaussians' initial log colours (the
 // level the colours start at, so the backdrop is neither black nor a glare at the start); LDR
 // colours at the grey of --background.
-void TrainingRun::StartLearnedBackground(const nlohmann::json* trainer) {
+void TrainingRun::StartLearnedBackground(const nlohmann::json* trainer, const fs::path& file) {
   if (!options_.learn_background.value_or(false)) return;
   const bool log_hdr = model_.color_mode == ColorMode::kLogHdr;
   const int channels = LearnedBackgroundChannels(model_);
   std::vector<float> values(channels, options_.background);
   if (trainer) {
-    values = ReadLearnedBackground(*trainer, channels, checkpoint_path_.string());
+    values = ReadLearnedBackground(*trainer, channels, file.string());
   } else if (log_hdr && model_.size() > 0) {
     for (int c = 0; c < channels; ++c) {
       std::vector<float> logs(model_.size());
@@ -836,6 +876,7 @@ bool TrainingRun::OutOfTime() const {
 void TrainingRun::Step() {
   const int it = ++loop_.iteration;
   head_current_ = false;
+  best_val_restored_ = false;
   optimizer_->SetIteration(it);
   if (bands_) bands_->Begin(it, model_.size());
   SetColorDegrees(it);
@@ -1122,7 +1163,7 @@ void TrainingRun::EvaluateHeldOut(int it) {
 void TrainingRun::CheckpointIfDue(int it) {
   if (options_.checkpoint_every > 0 && it % options_.checkpoint_every == 0) {
     loop_.train_seconds = TrainingSeconds();
-    Save();
+    Save(checkpoint_path_);
   }
 }
 
@@ -1171,6 +1212,43 @@ void TrainingRun::EvaluateValViews(int it) {
                  "grows no further than its {} Gaussians (--grow-on-val)",
                  it, g->gaussians);
   }
+  // The model as scored (this iteration's densification has not run yet), kept to be taken
+  // back if no later evaluation improves on it.
+  if (opt_.keep_best_val && BestValIteration() == it) Save(options_.out / kBestValName);
+}
+
+std::optional<int> TrainingRun::BestValIteration() const {
+  const std::vector<HeldOutPoint> points = ValPoints();
+  const std::optional<std::size_t> best = BestHeldOutIndex(points, opt_.stop_tolerance);
+  return best ? std::optional<int>(points[*best].iteration) : std::nullopt;
+}
+
+void TrainingRun::RestoreBestValModel() {
+  // Only a run the val split stopped: one out of time or at its length is left as it stands, so
+  // that --resume continues it exactly (a longer run's stop may still take back a best).
+  if (!opt_.keep_best_val || !opt_.stop_on_val || !Stopped() || best_val_restored_) return;
+  const std::optional<int> best = BestValIteration();
+  if (!best || *best == loop_.iteration) return;
+  const fs::path file = options_.out / kBestValName;
+  Checkpoint c;
+  try {
+    c = LoadCheckpoint(file);
+    if (c.trainer.value("iteration", -1) != *best)
+      Fail("{}: holds iteration {}, not that of the best val evaluation ({})", file.string(),
+           c.trainer.value("iteration", -1), *best);
+  } catch (const Error& e) {
+    // The end of a long run is not thrown away for a lost copy: the last model stays.
+    spdlog::warn("train: the best val evaluation's model (iteration {}) cannot be taken back: "
+                 "{}; the run keeps its last model (iteration {})",
+                 *best, e.what(), loop_.iteration);
+    return;
+  }
+  LoadTrainingState(&c, file);
+  BindOptimizer(/*resumed=*/true);
+  best_val_restored_ = true;
+  spdlog::info("train: the model of the best val evaluation (iteration {}) taken back from {}; "
+               "the run ends with it at iteration {}",
+               *best, file.string(), loop_.iteration);
 }
 
 std::vector<HeldOutPoint> TrainingRun::ValPoints() const {
@@ -1206,7 +1284,7 @@ void TrainingRun::FitHdrHeadIfAsked() {
   SetColorDegrees(loop_.iteration);
   // The trained model is saved first: a head that fails leaves a run that resumes to fit it.
   loop_.train_seconds = TrainingSeconds();
-  Save();
+  Save(checkpoint_path_);
   HdrHeadFit fit;
   fit.model = &model_;
   fit.views = &train_views_;
@@ -1229,7 +1307,7 @@ void TrainingRun::FitHdrHeadIfAsked() {
                std::exp(head_.log_scale));
 }
 
-void TrainingRun::Save() {
+void TrainingRun::Save(const fs::path& file) {
   // The live model and optimiser are streamed into the file, not copied (checkpoint.h).
   nlohmann::json trainer = loop_.ToJson();
   if (background_) trainer[kLearnedBackgroundKey] = background_->params();
@@ -1238,13 +1316,14 @@ void TrainingRun::Save() {
   if (bands_) trainer[kColorBandsKey] = bands_->ToJson();
   if (head_current_ && !head_.background.empty())
     trainer[kHdrHeadBackgroundKey] = head_.background;
+  if (best_val_restored_) trainer[kBestValRestoredKey] = true;
   std::string tone_mapper_state;
   if (tone_mapper_) {
     std::ostringstream tm_state;
     tone_mapper_->Save(tm_state);
     tone_mapper_state = tm_state.str();
   }
-  SaveCheckpoint(checkpoint_path_,
+  SaveCheckpoint(file,
                  CheckpointParts{.model = &model_,
                                  .trainer = &trainer,
                                  .extra_floats = ExtraFloats(),
@@ -1269,7 +1348,7 @@ void TrainingRun::ReleaseTrainingState() {
 TrainSummary TrainingRun::Finish() {
   if (progress_) progress_->Finish();
   loop_.train_seconds = TrainingSeconds();
-  Save();
+  Save(checkpoint_path_);
   ReleaseTrainingState();
   TrainSummary summary;
   summary.stopped_flat = Stopped();
@@ -1288,6 +1367,7 @@ TrainSummary TrainingRun::Finish() {
   summary.test_metrics = EvaluateTestViews(/*with_flip=*/true);
   summary.train_seconds = loop_.train_seconds;
   summary.iterations = loop_.iteration;
+  summary.model_iteration = ModelIteration();
   summary.gaussians = model_.size();
   summary.loss_curve = loop_.loss_curve;
   nlohmann::json warnings = nlohmann::json::array();
@@ -1325,9 +1405,17 @@ TrainSummary TrainingRun::Finish() {
     nlohmann::json last = summary.test_metrics;
     last["iteration"] = loop_.iteration;
     last["train_seconds"] = loop_.train_seconds;
+    // The model scored: the best val evaluation's when the stop took it back.
+    if (best_val_restored_) last["model_iteration"] = ModelIteration();
     results["test_curve"].push_back(std::move(last));
   }
   WriteJsonFile(options_.out / "results.json", results);
+  // The kept model is in the checkpoint now: the copy goes (a run at its length keeps it, as a
+  // longer resumed run may still stop and take it back).
+  if (best_val_restored_) {
+    std::error_code ec;
+    fs::remove(options_.out / kBestValName, ec);
+  }
   return summary;
 }
 
@@ -1362,6 +1450,8 @@ nlohmann::json TrainingRun::StopRecord() const {
   } else {
     r["reason"] = loop_.iteration < opt_.iterations ? "max_seconds" : "max_iterations";
   }
+  // The model kept and scored in "test": the best val evaluation's (RestoreBestValModel).
+  if (opt_.stop_on_val) r["model_iteration"] = ModelIteration();
   return r;
 }
 
@@ -1378,6 +1468,7 @@ TrainSummary Train(const TrainOptions& options) {
   run.ShowSceneNotes();
   run.PrepareRendering();
   while (run.StepsLeft() && !run.OutOfTime()) run.Step();
+  run.RestoreBestValModel();
   run.FitHdrHeadIfAsked();
   return run.Finish();
 }

@@ -87,6 +87,9 @@ struct TrainSummary {
   std::vector<double> loss_curve;  // per iteration
   bool stopped_by_time = false;    // max_seconds ended the loop before optimization.iterations
   bool stopped_flat = false;       // --iterations auto ended it (the loss stopped improving)
+  // The iteration of the model kept and scored: `iterations`, or the best val evaluation's
+  // when --stop-on-val took that model back at the stop.
+  int model_iteration = 0;
 };
 
 // Runs (or resumes) training; writes RUN/config.json, RUN/checkpoint.bin, RUN/results.json.

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <functional>
 #include <string>
 #include <vector>
@@ -204,6 +205,74 @@ TEST(TrainerSpeedOptions, StopOnValStopsOnTheValSplitAndResumes) {
   TrainOptions no_window = run("d", 400);
   no_window.optimization.stop_window = 0;
   EXPECT_NE(no_window.Validate().find("--stop-on-val"), std::string::npos);
+}
+
+// --keep-best-val: the same stop (the first evaluation the best, the stop at 40) ends on the model
+// the best one scored, taken back from RUN/best_val.bin. A run that reaches its length first
+// keeps its last model and the file, so that a longer resumed run can still take it back; a
+// damaged file costs a warning and the last model, never the run.
+TEST(TrainerSpeedOptions, KeepBestValEndsOnTheBestValModel) {
+  TempDir dir;
+  MakeTinySceneWithVal(dir / "scene");
+  auto run = [&](const char* name, int iterations) {
+    TrainOptions o = StopOnValRun(dir / "scene", dir / name, iterations);
+    o.optimization.keep_best_val = true;
+    return o;
+  };
+  const TrainSummary a = Train(run("a", 400));
+  EXPECT_EQ(a.iterations, 40);
+  const nlohmann::json r = ReadJsonFile(dir / "a" / "results.json");
+  EXPECT_EQ(r["stopped"]["reason"], "val_plateau");
+  EXPECT_EQ(r["stopped"]["best_val_iteration"], 10);
+  // The val views are the test views: the final scores are the best reading's (the model as
+  // scored, before the densification at 10), and the count is its. Within float rounding: the
+  // final scores render every colour band switched on by 40; those the model of 10 had not used
+  // are zero.
+  EXPECT_EQ(r["stopped"]["model_iteration"], 10);
+  EXPECT_EQ(a.model_iteration, 10);
+  EXPECT_NEAR(r["test"]["psnr"].get<double>(), r["val_curve"][0]["psnr"].get<double>(), 1e-6);
+  EXPECT_NE(r["test"]["psnr"].get<double>(), r["val_curve"].back()["psnr"].get<double>());
+  EXPECT_EQ(a.gaussians, r["val_curve"][0]["gaussians"].get<std::size_t>());
+  EXPECT_EQ(r["test_curve"].size(), 0u);  // no --test-every
+  EXPECT_FALSE(fs::exists(dir / "a" / "best_val.bin"));  // its model is in the checkpoint now
+  EXPECT_EQ(LoadCheckpoint(dir / "a" / "checkpoint.bin").model.size(), a.gaussians);
+  // Resumed when finished: nothing to do, the kept model stays (the stop is not run again).
+  TrainOptions again = run("a", 400);
+  again.resume = true;
+  const TrainSummary finished = Train(again);
+  EXPECT_EQ(finished.gaussians, a.gaussians);
+  EXPECT_EQ(finished.model_iteration, 10);
+  // Interrupted at 25 and resumed: the same stop and the same kept model.
+  const TrainSummary b = InterruptAndResume(run, "b", 25, 400);
+  EXPECT_EQ(b.model_iteration, 10);
+  ExpectSameState(dir / "b", dir / "a");
+  // At its length (30) before the stop: the last model, and the file stays.
+  const TrainSummary e = Train(run("e", 30));
+  EXPECT_EQ(e.iterations, 30);
+  EXPECT_EQ(e.model_iteration, 30);
+  EXPECT_EQ(ReadJsonFile(dir / "e" / "results.json")["stopped"]["model_iteration"], 30);
+  EXPECT_TRUE(fs::exists(dir / "e" / "best_val.bin"));
+  // Resumed on to the stop with that file damaged: a warning, and the last model is kept.
+  {
+    std::fstream f(dir / "e" / "best_val.bin", std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(100);
+    f.put('\x5a');
+  }
+  TrainOptions longer = run("e", 400);
+  longer.resume = true;
+  const TrainSummary g = Train(longer);
+  EXPECT_EQ(g.iterations, 40);
+  EXPECT_EQ(g.model_iteration, 40);
+  EXPECT_EQ(ReadJsonFile(dir / "e" / "results.json")["stopped"]["reason"], "val_plateau");
+  // Without --stop-on-val it is refused, naming both options.
+  TrainOptions alone = TinyRun(dir / "scene", dir / "f", 40);
+  alone.optimization.keep_best_val = true;
+  try {
+    Train(alone);
+    ADD_FAILURE() << "--keep-best-val without --stop-on-val was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("--stop-on-val"), std::string::npos) << e.what();
+  }
 }
 
 // --grow-on-val: with a tolerance nothing reaches, the second evaluation (20) is the first without
