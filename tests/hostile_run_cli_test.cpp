@@ -80,10 +80,12 @@ TEST_F(RunSweep, Case03ANewRunNeverReplacesAnEarlierOneUnlessAskedTo) {
   const auto help = RunHdr4d("train --help");
   EXPECT_NE(help.out.find("deletes its checkpoint.bin, config.json, results.json"), std::string::npos);
   testing::WriteTextFile(fs::path(R()) / "notes.txt", "mine");
+  testing::WriteTextFile(fs::path(R()) / "best_val.bin", "an earlier run's best val model");
   r = RunHdr4d(args + " --overwrite");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(ReadJson(fs::path(R()) / "results.json")["iterations"], 5);
   EXPECT_EQ(ReadTextFile(fs::path(R()) / "notes.txt"), "mine");
+  EXPECT_FALSE(fs::exists(fs::path(R()) / "best_val.bin"));  // a run file: never another run's
 }
 
 // Rewrites a demo scene into the layout calibrate writes: images/camNN/tTTT_eE.png and

@@ -37,8 +37,8 @@ bool LockHeldByAnother(const fs::path& run) {
 
 std::string OverwriteHelp() {
   return "Start a new run in a folder that holds an earlier one: deletes its checkpoint.bin, "
-         "config.json, results.json and data_checksums.json first (other files, e.g. renders, "
-         "stay). Without it such a folder is refused";
+         "config.json, results.json, data_checksums.json and best_val.bin first (other files, "
+         "e.g. renders, stay). Without it such a folder is refused";
 }
 
 void RequireFreshRunFolder(const fs::path& run, bool overwrite) {
@@ -53,8 +53,8 @@ void RequireFreshRunFolder(const fs::path& run, bool overwrite) {
       : Present(run / "checkpoint.bin") ? "a run's checkpoint"
                                         : fmt::format("a run's {}", found.front());
   Fail("{}: holds {} ({}): refusing to replace it; continue it with --resume, or pass --overwrite "
-       "to delete its checkpoint.bin, config.json, results.json and data_checksums.json and "
-       "start a new run",
+       "to delete its checkpoint.bin, config.json, results.json, data_checksums.json and "
+       "best_val.bin and start a new run",
        run.string(), what, fmt::join(found, ", "));
 }
 

@@ -11,8 +11,9 @@ namespace hdr4d::method {
 // The record of the run's data (core/dataset/dataset_checksum.h), compared on --resume.
 inline constexpr const char* kDataRecordName = "data_checksums.json";
 // The files a training run writes into its folder; --overwrite deletes exactly these.
+// (best_val.bin: --keep-best-val's best model, kept while a run may still take it back.)
 inline constexpr const char* kTrainRunFiles[] = {"checkpoint.bin", "config.json", "results.json",
-                                                 "data_checksums.json"};
+                                                 "data_checksums.json", "best_val.bin"};
 
 // For a new run (no --resume): throws hdr4d::Error when RUN holds a run's files (a finished run,
 // a checkpoint, a configuration) and `overwrite` is false, naming what is there, --resume and
