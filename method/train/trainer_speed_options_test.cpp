@@ -160,6 +160,24 @@ TrainOptions StopOnValRun(const fs::path& scene, const fs::path& run, int iterat
   return o;
 }
 
+// StopOnValRun with one more switch of OptimizationOptions on, as run(name, iterations).
+std::function<TrainOptions(const char*, int)> StopOnValRunsWith(const fs::path& dir,
+                                                                bool OptimizationOptions::*flag) {
+  return [dir, flag](const char* name, int iterations) {
+    TrainOptions o = StopOnValRun(dir / "scene", dir / name, iterations);
+    o.optimization.*flag = true;
+    return o;
+  };
+}
+
+// run("a", 400) trained to its val stop, which the tolerance puts at 40; its summary and results.
+std::pair<TrainSummary, nlohmann::json> TrainToTheValStop(
+    const TempDir& dir, const std::function<TrainOptions(const char*, int)>& run) {
+  const TrainSummary a = Train(run("a", 400));
+  EXPECT_EQ(a.iterations, 40);
+  return {a, ReadJsonFile(dir / "a" / "results.json")};
+}
+
 // --stop-on-val: the stop is decided on the val split (here a copy of the test split), scored
 // every --stop-window iterations, before that iteration's densification and opacity reset (the
 // tiny run densifies every 10 and resets at 30); with a tolerance nothing reaches, the first
@@ -172,10 +190,8 @@ TEST(TrainerSpeedOptions, StopOnValStopsOnTheValSplitAndResumes) {
   auto run = [&](const char* name, int iterations) {
     return StopOnValRun(dir / "scene", dir / name, iterations);
   };
-  const TrainSummary a = Train(run("a", 400));
-  EXPECT_EQ(a.iterations, 40);
+  const auto [a, r] = TrainToTheValStop(dir, run);
   EXPECT_TRUE(a.stopped_flat);
-  const nlohmann::json r = ReadJsonFile(dir / "a" / "results.json");
   EXPECT_EQ(r["stopped"]["reason"], "val_plateau");
   // The val views are the test views: the final scores are the last val reading's, to the bit,
   // so nothing (no densification at 40) changed the model after it was scored.
@@ -214,14 +230,8 @@ TEST(TrainerSpeedOptions, StopOnValStopsOnTheValSplitAndResumes) {
 TEST(TrainerSpeedOptions, KeepBestValEndsOnTheBestValModel) {
   TempDir dir;
   MakeTinySceneWithVal(dir / "scene");
-  auto run = [&](const char* name, int iterations) {
-    TrainOptions o = StopOnValRun(dir / "scene", dir / name, iterations);
-    o.optimization.keep_best_val = true;
-    return o;
-  };
-  const TrainSummary a = Train(run("a", 400));
-  EXPECT_EQ(a.iterations, 40);
-  const nlohmann::json r = ReadJsonFile(dir / "a" / "results.json");
+  const auto run = StopOnValRunsWith(dir.path(), &OptimizationOptions::keep_best_val);
+  const auto [a, r] = TrainToTheValStop(dir, run);
   EXPECT_EQ(r["stopped"]["reason"], "val_plateau");
   EXPECT_EQ(r["stopped"]["best_val_iteration"], 10);
   // The val views are the test views: the final scores are the best reading's (the model as
@@ -283,14 +293,8 @@ TEST(TrainerSpeedOptions, KeepBestValEndsOnTheBestValModel) {
 TEST(TrainerSpeedOptions, GrowOnValFreezesTheCountAtTheFirstValEvaluationWithoutGain) {
   TempDir dir;
   MakeTinySceneWithVal(dir / "scene");
-  auto run = [&](const char* name, int iterations) {
-    TrainOptions o = StopOnValRun(dir / "scene", dir / name, iterations);
-    o.optimization.grow_on_val = true;
-    return o;
-  };
-  const TrainSummary a = Train(run("a", 400));
-  EXPECT_EQ(a.iterations, 40);
-  const nlohmann::json r = ReadJsonFile(dir / "a" / "results.json");
+  const auto run = StopOnValRunsWith(dir.path(), &OptimizationOptions::grow_on_val);
+  const auto [a, r] = TrainToTheValStop(dir, run);
   const nlohmann::json& curve = r.at("val_curve");
   ASSERT_EQ(curve.size(), 4u);
   const auto frozen = curve[1].at("gaussians").get<std::size_t>();
