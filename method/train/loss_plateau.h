@@ -52,9 +52,9 @@ std::optional<std::size_t> BestHeldOutIndex(const std::vector<HeldOutPoint>& cur
 // A plateau when none of the last `patience` evaluations improved on the best (the rule above):
 // the relative gain of the training-loss rule, on held-out views. Unlike the training loss, the
 // held-out error can rise while the training loss still falls (a model that overfits its
-// views); the rule stops there, `patience` evaluations after the best, and the trainer then
-// takes back the best evaluation's model (trainer.h). nullopt with fewer than patience + 1
-// points.
+// views); the rule stops there, `patience` evaluations after the best, on the last model (with
+// --keep-best-val the trainer takes back the best evaluation's). nullopt with fewer than
+// patience + 1 points.
 std::optional<HeldOutPlateau> FindHeldOutPlateau(const std::vector<HeldOutPoint>& curve,
                                                  double tolerance,
                                                  int patience = kHeldOutPatience);

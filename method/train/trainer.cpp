@@ -122,8 +122,8 @@ constexpr std::size_t kColorBandSection = kMaxWeightSection + 1;
 constexpr const char* kColorBandsKey = "color_bands";
 
 constexpr const char* kCheckpointName = "checkpoint.bin";
-// --stop-on-val: the model of the best val evaluation so far, written when one improves on the
-// best and taken back when the run ends (RestoreBestValModel); removed once results.json is.
+// --keep-best-val: the model of the best val evaluation so far, written when one improves on the
+// best and taken back at the stop (RestoreBestValModel); removed once results.json is written.
 constexpr const char* kBestValName = "best_val.bin";
 // In the trainer state: the live model is the best val evaluation's, taken back at the end.
 constexpr const char* kBestValRestoredKey = "best_val_restored";
@@ -211,9 +211,9 @@ class TrainingRun {
   // The iteration of the best val evaluation (loss_plateau.h BestHeldOutIndex); nullopt before
   // the first.
   std::optional<int> BestValIteration() const;
-  // --stop-on-val, once no step is left: the model of the best val evaluation, when a later
-  // one is live (the stop waits kHeldOutPatience evaluations past it). The loop state (the
-  // iteration, the curves) stays the last one, so the stop is not run again on a resume.
+  // --keep-best-val, once the val views stopped the run: the model of their best evaluation,
+  // when a later one is live (the stop waits kHeldOutPatience evaluations past it). The loop
+  // state (the iteration, the curves) stays the last one, so a resume finds the run finished.
   void RestoreBestValModel();
   // The iteration of the live model: the loop's, or the best val evaluation's once taken back.
   int ModelIteration() const {
