@@ -1145,9 +1145,10 @@ void TrainingRun::ShowProgress(double loss_value, const float* ldr_out, std::siz
 
 void TrainingRun::EvaluateHeldOut(int it) {
   EvaluateValViews(it);
-  // A run that stops here is scored once more at its end (Finish), on the same model.
+  // A run that stops here is scored once more at its end (Finish), on the same model; with
+  // --keep-best-val the end scores the best val evaluation's, so the last model is scored here.
   if (options_.test_every > 0 && it % options_.test_every == 0 && it < opt_.iterations &&
-      !Stopped()) {
+      (!Stopped() || opt_.keep_best_val)) {
     const auto eval_start = std::chrono::steady_clock::now();
     nlohmann::json m = EvaluateTestViews(/*with_flip=*/false);  // the curve stays cheap
     spdlog::info("train: iteration {}: test {}", it, m.dump());

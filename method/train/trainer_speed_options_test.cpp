@@ -243,7 +243,7 @@ TEST(TrainerSpeedOptions, KeepBestValEndsOnTheBestValModel) {
   EXPECT_NEAR(r["test"]["psnr"].get<double>(), r["val_curve"][0]["psnr"].get<double>(), 1e-6);
   EXPECT_NE(r["test"]["psnr"].get<double>(), r["val_curve"].back()["psnr"].get<double>());
   EXPECT_EQ(a.gaussians, r["val_curve"][0]["gaussians"].get<std::size_t>());
-  EXPECT_EQ(r["test_curve"].size(), 0u);  // no --test-every
+
   EXPECT_FALSE(fs::exists(dir / "a" / "best_val.bin"));  // its model is in the checkpoint now
   EXPECT_EQ(LoadCheckpoint(dir / "a" / "checkpoint.bin").model.size(), a.gaussians);
   // Resumed when finished: nothing to do, the kept model stays (the stop is not run again).
@@ -252,6 +252,19 @@ TEST(TrainerSpeedOptions, KeepBestValEndsOnTheBestValModel) {
   const TrainSummary finished = Train(again);
   EXPECT_EQ(finished.gaussians, a.gaussians);
   EXPECT_EQ(finished.model_iteration, 10);
+  // With a test curve, the last model is scored at the stop as well (what the option gave up),
+  // then the kept one, marked with its iteration.
+  TrainOptions curve = run("t", 400);
+  curve.test_every = 10;
+  Train(curve);
+  const nlohmann::json tc = ReadJsonFile(dir / "t" / "results.json").at("test_curve");
+  ASSERT_EQ(tc.size(), 5u);
+  EXPECT_EQ(tc[3]["iteration"], 40);
+  EXPECT_EQ(tc[3]["psnr"].get<double>(), r["val_curve"][3]["psnr"].get<double>());
+  EXPECT_FALSE(tc[3].contains("model_iteration"));
+  EXPECT_EQ(tc[4]["iteration"], 40);
+  EXPECT_EQ(tc[4]["model_iteration"], 10);
+  EXPECT_NEAR(tc[4]["psnr"].get<double>(), tc[0]["psnr"].get<double>(), 1e-6);
   // Interrupted at 25 and resumed: the same stop and the same kept model.
   const TrainSummary b = InterruptAndResume(run, "b", 25, 400);
   EXPECT_EQ(b.model_iteration, 10);
