@@ -229,9 +229,8 @@ struct OptimizationOptions {
   bool grow_on_val = false;
   // --keep-best-val: with --stop-on-val, the run ends on the model of its best val evaluation
   // (written to RUN/best_val.bin when one improves on the best, taken back at the stop) instead
-  // of the last. Off: on six scenes with val splits, two seeds, it was better held out on
-  // three, mixed on one and worse on two (docs/history/time-to-quality.md, "Keeping the best
-  // val model").
+  // of the last. Off: better held out on some scenes with val splits and worse on others, two
+  // seeds each (docs/history/time-to-quality.md, "Keeping the best val model").
   bool keep_best_val = false;
   // Coarse-to-fine images: the first coarse_to_fine iterations render and supervise at 1/4 of
   // the images' size (first half) and 1/2 (second half) where the size divides
