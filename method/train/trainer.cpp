@@ -353,7 +353,9 @@ void TrainingRun::SetUp() {
   if (options_.optimization.grow_on_val && !options_.optimization.stop_on_val && !options_.resume)
     Fail("train: --grow-on-val is decided by the val evaluations of --stop-on-val; add "
          "--iterations auto --stop-on-val (or drop --grow-on-val)");
-  if (options_.optimization.keep_best_val && !options_.optimization.stop_on_val)
+  // A resumed run may turn --no-stop-on-val to train on; the best is then never taken back.
+  if (options_.optimization.keep_best_val && !options_.optimization.stop_on_val &&
+      !options_.resume)
     Fail("train: --keep-best-val keeps the best of the val evaluations of --stop-on-val; add "
          "--iterations auto --stop-on-val (or drop --keep-best-val)");
   num_times_ = DistinctTimes(*dataset_);

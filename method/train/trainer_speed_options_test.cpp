@@ -269,6 +269,12 @@ TEST(TrainerSpeedOptions, KeepBestValEndsOnTheBestValModel) {
   const TrainSummary b = InterruptAndResume(run, "b", 25, 400);
   EXPECT_EQ(b.model_iteration, 10);
   ExpectSameState(dir / "b", dir / "a");
+  // Resumed to train on without the val stop (as the README says): from the kept model.
+  TrainOptions on = run("b", 50);
+  on.resume = true;
+  on.optimization.stop_on_val = false;
+  on.optimization.stop_window = 0;
+  EXPECT_EQ(Train(on).iterations, 50);
   // At its length (30) before the stop: the last model, and the file stays.
   const TrainSummary e = Train(run("e", 30));
   EXPECT_EQ(e.iterations, 30);
