@@ -1151,11 +1151,14 @@ void TrainingRun::EvaluateHeldOut(int it) {
   // --keep-best-val the end scores the best val evaluation's, so the last model is scored here.
   if (options_.test_every > 0 && it % options_.test_every == 0 && it < opt_.iterations &&
       (!Stopped() || opt_.keep_best_val)) {
+    // Time to quality: the curve against training time, read before this evaluation (its
+    // seconds are not training; read after it, each point carried its own evaluation's).
+    const double train_seconds = TrainingSeconds();
     const auto eval_start = std::chrono::steady_clock::now();
     nlohmann::json m = EvaluateTestViews(/*with_flip=*/false);  // the curve stays cheap
     spdlog::info("train: iteration {}: test {}", it, m.dump());
     m["iteration"] = it;
-    m["train_seconds"] = TrainingSeconds();  // time to quality: the curve against training time
+    m["train_seconds"] = train_seconds;
     m["gaussians"] = model_.size();
     loop_.test_curve.push_back(std::move(m));
     eval_seconds_ +=

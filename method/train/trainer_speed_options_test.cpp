@@ -411,6 +411,31 @@ TEST(TrainerSpeedOptions, TestCurveRecordsTheTrainingSecondsOfEachEvaluation) {
                    r.at("train_seconds").get<double>());
 }
 
+// Each point's seconds leave out its own evaluation too: 24 held-out views cost several training
+// steps of one view each, so a point read after its evaluation would come out later than the
+// end of the run's next step (the last point, the run's own training seconds).
+TEST(TrainerSpeedOptions, TestCurveSecondsLeaveOutTheirOwnEvaluation) {
+  TempDir dir;
+  GaussianSceneOptions s;
+  s.size = 48;
+  s.num_gaussians = 12;
+  s.num_cameras = 4;  // every 4th held out: one test camera
+  s.num_timestamps = 24;
+  MakeGaussianScene(s, dir / "scene");
+  TrainOptions o = TinyRun(dir / "scene", dir / "run", 12);
+  o.test_every = 1;
+  Train(o);
+  const nlohmann::json r = ReadJsonFile(dir / "run" / "results.json");
+  ASSERT_EQ(r.at("test_views").get<int>(), 24);
+  const nlohmann::json& curve = r["test_curve"];
+  ASSERT_EQ(curve.size(), 12u);
+  for (std::size_t i = 1; i < curve.size(); ++i) {
+    EXPECT_LT(curve[i - 1].at("train_seconds").get<double>(),
+              curve[i].at("train_seconds").get<double>())
+        << "iteration " << curve[i]["iteration"];
+  }
+}
+
 // The held-out views are scored before that iteration's densification, as the reference's
 // training_report: the tiny run first densifies at 20, and its test curve reads there the model
 // before it (as many Gaussians as a run that never densifies). A val stop is checked in
