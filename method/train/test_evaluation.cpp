@@ -74,18 +74,46 @@ MetricList GroupHdrMetrics(const std::vector<TrainView>& views,
   return metrics;
 }
 
+// A trained model's renderer as a RenderViewFn: each view at its own time and exposure.
+RenderViewFn RenderEachView(ViewRenderer* renderer) {
+  return [renderer](const TrainView& v, std::vector<float>* ldr, std::vector<float>* hdr) {
+    const ToneFrame frame{v.time_index, -1, static_cast<float>(std::log(v.exposure)),
+                           v.camera_index};
+    renderer->Render(v.camera, v.time, frame, ldr, hdr);
+  };
+}
+
 }  // namespace
 
 nlohmann::json EvaluateViews(ViewRenderer* renderer,
                              const std::vector<TrainView>& views,
                              bool with_flip) {
-  return EvaluateViews(
-      [renderer](const TrainView& v, std::vector<float>* ldr, std::vector<float>* hdr) {
-        const ToneFrame frame{v.time_index, -1, static_cast<float>(std::log(v.exposure)),
-                               v.camera_index};
-        renderer->Render(v.camera, v.time, frame, ldr, hdr);
-      },
-      views, with_flip);
+  return EvaluateViews(RenderEachView(renderer), views, with_flip);
+}
+
+double MeanLdrPsnr(ViewRenderer* renderer, const std::vector<TrainView>& views) {
+  return MeanLdrPsnr(RenderEachView(renderer), views);
+}
+
+double MeanLdrPsnr(const RenderViewFn& render, const std::vector<TrainView>& views) {
+  double sum = 0;
+  int count = 0;
+  std::vector<float> ldr, gt;
+  // EvaluateViews's order (the views grouped by HDR truth): the same sum, bit for bit.
+  for (const std::vector<std::size_t>& group : GroupByHdrTruth(views)) {
+    for (std::size_t i : group) {
+      const TrainView& v = views[i];
+      render(v, &ldr, /*hdr=*/nullptr);
+      if (ldr.empty()) continue;
+      v.ToFloat(&gt);
+      const double psnr = Psnr(DisplayImageFromBuffer(ldr.data(), v.width(), v.height(), 3),
+                               DisplayImageFromBuffer(gt.data(), v.width(), v.height(), 3));
+      if (!std::isfinite(psnr)) continue;
+      sum += psnr;
+      ++count;
+    }
+  }
+  return count > 0 ? sum / count : std::nan("");
 }
 
 nlohmann::json EvaluateViews(const RenderViewFn& render,

@@ -31,4 +31,11 @@ nlohmann::json EvaluateViews(const RenderViewFn& render,
                              const std::vector<TrainView>& views,
                              bool with_flip = true);
 
+// The mean LDR PSNR over the views, exactly EvaluateViews's "psnr" (the same LDR renders, the
+// same per-view values added in the same order, a view with no finite value left out; NaN when
+// none has one), without its other metrics or any HDR render: what the val stop reads, without
+// what it does not (each HDR truth read from disk again, the HDR metrics and the SSIMs).
+double MeanLdrPsnr(ViewRenderer* renderer, const std::vector<TrainView>& views);
+double MeanLdrPsnr(const RenderViewFn& render, const std::vector<TrainView>& views);
+
 }  // namespace hdr4d::method

@@ -263,6 +263,7 @@ class TrainingRun {
   std::string FlatToneCurveCheck(int it);
   nlohmann::json EvaluateTestViews(bool with_flip);
   nlohmann::json EvaluateOn(const std::vector<TrainView>& views, bool with_flip);
+  ViewRenderer EvalRenderer();
   std::vector<const std::vector<float>*> ExtraFloats() const;
   void Save(const fs::path& file);
   void StartLearnedBackground(const nlohmann::json* trainer, const fs::path& file);
@@ -1193,21 +1194,26 @@ nlohmann::json TrainingRun::EvaluateTestViews(bool with_flip) {
 }
 
 nlohmann::json TrainingRun::EvaluateOn(const std::vector<TrainView>& views, bool with_flip) {
+  ViewRenderer renderer = EvalRenderer();
+  return EvaluateViews(&renderer, views, with_flip);
+}
+
+// The model's renderer as the evaluations use it: without the training's colour stage.
+ViewRenderer TrainingRun::EvalRenderer() {
   RenderOptions base = render_;
   base.color_stage = nullptr;
-  ViewRenderer renderer(model_, tone_mapper_.get(), resolved_, base, options_.background,
-                        background_ ? &background_->params() : nullptr,
-                        head_current_ ? &head_ : nullptr);
-  return EvaluateViews(&renderer, views, with_flip);
+  return ViewRenderer(model_, tone_mapper_.get(), resolved_, base, options_.background,
+                      background_ ? &background_->params() : nullptr,
+                      head_current_ ? &head_ : nullptr);
 }
 
 // --stop-on-val: the val views scored every stop_window iterations, before that iteration's
 // densification and opacity reset (FinishUpdate). The time is the method's, so it stays in the
-// training seconds.
+// training seconds; the stop reads the mean LDR PSNR alone, so nothing else is computed.
 void TrainingRun::EvaluateValViews(int it) {
   if (!opt_.stop_on_val || opt_.stop_window <= 0 || it % opt_.stop_window != 0) return;
-  const nlohmann::json m = EvaluateOn(val_views_, /*with_flip=*/false);
-  const double psnr = m.value("psnr", std::nan(""));
+  ViewRenderer renderer = EvalRenderer();
+  const double psnr = MeanLdrPsnr(&renderer, val_views_);
   spdlog::info("train: iteration {}: val PSNR {:.3f} dB", it, psnr);
   loop_.val_curve.push_back({{"iteration", it},
                              {"psnr", FiniteOrNull(psnr)},
