@@ -350,6 +350,7 @@ DensifyParams DensifyParamsAt(const OptimizationOptions& unresolved,
   const bool after_reset = iteration > options.opacity_reset_interval &&
                            since_reset <= options.densify_from;
   p.min_contribution = after_reset ? 0.0f : static_cast<float>(options.prune_contribution);
+  p.clone_opacity_correction = options.clone_opacity_correction;
   return p;
 }
 
@@ -575,6 +576,38 @@ std::size_t RebuildModel(const KeptRows& kept,
   return new_n;
 }
 
+// log(1 + e^x) without overflow.
+double Softplus(double x) { return x > 0.0 ? x + std::log1p(std::exp(-x)) : std::log1p(std::exp(x)); }
+
+}  // namespace
+
+float HalvedCloneOpacityLogit(float logit) {
+  // alpha' = 1 - s with s = sqrt(1 - alpha), so 1 - (1 - alpha')^2 = alpha. Its logit is
+  // log(alpha' / s), with alpha' = alpha / (1 + s) (no cancellation for small alpha):
+  // log sigmoid(l) - log1p(s) - log s, where log sigmoid(l) = -softplus(-l) and
+  // log s = -softplus(l) / 2. Finite for every finite logit.
+  const double l = logit;
+  const double log_s = -0.5 * Softplus(l);
+  return static_cast<float>(-Softplus(-l) - std::log1p(std::exp(log_s)) - log_s);
+}
+
+namespace {
+
+// --clone-opacity-correction: each kept clone (rows after the originals) and its source, where the
+// source survived, get the halved-blend opacity (a clone whose source was pruned keeps its own). Clone sources are never split parents.
+void CorrectCloneOpacities(const KeptRows& kept, std::size_t old_n, GaussianModel* model) {
+  std::vector<std::int64_t> new_row(old_n, -1);
+  for (std::size_t r = 0; r < kept.originals.size(); ++r) new_row[kept.originals[r]] = r;
+  for (std::size_t k = 0; k < kept.clones.size(); ++k) {
+    const std::int64_t source = new_row[kept.clones[k]];
+    if (source < 0) continue;  // the source was pruned: the clone stands alone
+    const std::size_t clone_row = kept.originals.size() + k;
+    const float logit = HalvedCloneOpacityLogit(model->opacity_logit[clone_row]);
+    model->opacity_logit[clone_row] = logit;
+    model->opacity_logit[static_cast<std::size_t>(source)] = logit;
+  }
+}
+
 }  // namespace
 
 DensifyResult DensifyAndPrune(GaussianModel* model,
@@ -600,7 +633,9 @@ DensifyResult DensifyAndPrune(GaussianModel* model,
   result.split = candidates.parents.size();
   const KeptRows kept =
       SelectSurvivors(*model, *stats, params, candidates, children, &result.pruned);
+  const std::size_t old_n = model->size();
   const std::size_t new_n = RebuildModel(kept, candidates.parents, children, model, grads, adam);
+  if (params.clone_opacity_correction) CorrectCloneOpacities(kept, old_n, model);
   grads->ZerosLike(*model, /*colour=*/!colour_rows_only);
   BindModelGroups(*model, *grads, adam);
   stats->Reset(new_n);

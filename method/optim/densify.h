@@ -178,6 +178,9 @@ struct DensifyParams {
   // weight there (stats.max_weight) stayed below this is pruned; clone sources and split parents
   // are not tested (their gradient asked for more of them). Needs stats.max_weight when > 0.
   float min_contribution = 0.0f;
+  // --clone-opacity-correction: a kept clone and its surviving source both get opacity
+  // 1 - sqrt(1 - alpha), so that together they blend as the source alone did (DensifyAndPrune).
+  bool clone_opacity_correction = false;
 
   // "" when usable, else the problem: threshold >= 0, percent_dense in (0, 1], extent > 0,
   // min_opacity in [0, 1), max_screen_size >= 0, all finite.
@@ -196,10 +199,17 @@ struct DensifyResult {
   // New size = old size + cloned + split - pruned.
 };
 
+// The opacity logit of each of two coincident copies that together blend as one Gaussian of
+// opacity sigmoid(logit): alpha' = 1 - sqrt(1 - alpha) (--clone-opacity-correction). Finite for
+// every finite logit, evaluated in double.
+float HalvedCloneOpacityLogit(float logit);
+
 // One densification step: mean gradient = accum / denom (0 where denom is 0).
 //  BUDGET with max_gaussians > 0, candidates (clone and split alike) beyond max_gaussians - size
 //    are dropped, lowest mean gradient first (ties: the later index); pruning still runs.
-//  CLONE grad >= threshold and max(exp(log_scales xyz)) <= percent_dense x extent: exact copy.
+//  CLONE grad >= threshold and max(exp(log_scales xyz)) <= percent_dense x extent: exact copy
+//    (with clone_opacity_correction, after pruning, the copy and its surviving source both take
+//    HalvedCloneOpacityLogit of its opacity).
 //  SPLIT grad >= threshold and max spatial scale > percent_dense x extent: 2 children, each at
 //    (xyz, t) + R4 (eps o s4) with eps ~ N(0, I4), s4 = exp(log_scales), R4 = Rotation4D(q_l, q_r)
 //    (3D mode: xyz + R3 (eps o s3) with R3 = Rotation3D(q_l); t and the time scale unchanged),

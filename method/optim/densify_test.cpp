@@ -301,6 +301,44 @@ TEST(Densify, CloneCopiesExactlyWithFreshMoments) {
   for (const char* name : kModelGroups) EXPECT_EQ(s->adam.StepCount(name), 2) << name;
 }
 
+TEST(Densify, HalvedCloneOpacityBlendsTwoCopiesAsOne) {
+  // 1 - (1 - alpha')^2 = alpha, checked in double on alpha' = sigmoid(logit'), from opacities
+  // near 0 to near 1 (where 1 - alpha in float would round to 0).
+  for (const double logit : {-30.0, -8.0, -1.0, 0.0, 0.7, 5.0, 15.0, 40.0}) {
+    const float halved = HalvedCloneOpacityLogit(static_cast<float>(logit));
+    ASSERT_TRUE(std::isfinite(halved)) << logit;
+    const double a = 1.0 / (1.0 + std::exp(-logit));
+    const double h = 1.0 / (1.0 + std::exp(-double{halved}));
+    const double one_minus_h = 1.0 / (1.0 + std::exp(double{halved}));
+    EXPECT_NEAR(1.0 - one_minus_h * one_minus_h, a, 1e-6 * a + 1e-12) << logit;
+    EXPECT_LT(h, a + 1e-12) << logit;  // each copy is fainter than the one
+  }
+  EXPECT_NEAR(HalvedCloneOpacityLogit(0.0f), std::log((1 - std::sqrt(0.5)) / std::sqrt(0.5)),
+              1e-6);
+}
+
+TEST(Densify, CloneOpacityCorrectionHalvesTheCloneAndItsSourceOnly) {
+  for (const bool correct : {false, true}) {
+    auto s = MakeSetup(4, true, 2);
+    s->model.opacity_logit = {0.5f, 2.0f, -1.0f, 0.5f};
+    SetGrad(s->stats, 1, 3e-4f);  // cloned
+    SetGrad(s->stats, 2, 3e-4f);  // split: children keep the parent's opacity
+    SetScale(s->model, 2, 0.05f);
+    DensifyParams params;
+    params.clone_opacity_correction = correct;
+    std::mt19937_64 rng(7);
+    const DensifyResult r =
+        DensifyAndPrune(&s->model, &s->grads, &s->adam, &s->stats, params, &rng);
+    ASSERT_EQ(r.cloned, 1u);
+    ASSERT_EQ(r.split, 1u);
+    // Originals 0, 1, 3, then the clone of 1, then 2's two children.
+    ASSERT_EQ(s->model.size(), 6u);
+    const float cloned = correct ? HalvedCloneOpacityLogit(2.0f) : 2.0f;
+    const std::vector<float> expected = {0.5f, cloned, 0.5f, cloned, -1.0f, -1.0f};
+    EXPECT_EQ(s->model.opacity_logit, expected) << correct;
+  }
+}
+
 // ---- Split ------------------------------------------------------------------------------------
 
 TEST(Densify, SplitReplacesParentsByTwoShrunkChildrenCopyMajor) {

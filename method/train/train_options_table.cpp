@@ -524,6 +524,7 @@ std::vector<TrainOption> SpeedRows() {
             o->optimization.color_bands_by_need = false;
             o->optimization.coarse_to_fine = 0;
             o->optimization.prune_contribution = 0.0;
+            o->optimization.clone_opacity_correction = false;
             // A tone mapper given later gets it in ResolveTrainRequest.
             if (o->hdr.tone_mapper) o->hdr.tone_mapper->unseen_rows = "zero";
           }),
@@ -608,6 +609,13 @@ std::vector<TrainOption> LessWorkRows() {
           .Range(ValueRange::Real(0, 0.999))
           .IfMissing(0.0)
           .Config("prune_contribution"),
+      Row("optimization.clone_opacity_correction", Opt(&O::clone_opacity_correction))
+          .Switch("--clone-opacity-correction", true,
+                  "At each densification give a clone and its source opacity 1 - sqrt(1 - "
+                  "alpha) each, so the two blend as the one did (Rota Bulo et al., ECCV 2024; "
+                  "not in the paper, whose clones both keep alpha)")
+          .IfMissing(false)
+          .Config("clone_opacity_correction"),
       Row("optimization.color_bands_by_need", Opt(&O::color_bands_by_need))
           .Switch("--color-bands-by-need", true,
                   "Start the higher colour bands (SH degrees 1-3, time degrees 1-2) frozen: "

@@ -65,7 +65,7 @@ TEST(TrainOptionsTable, RecordsTheKeysRunsHaveAlwaysRecorded) {
       "optimization.color_band_signal", "optimization.stop_window",
       "optimization.stop_tolerance", "optimization.coarse_to_fine",
       "optimization.prune_contribution", "optimization.stop_on_val", "optimization.grow_on_val",
-      "optimization.keep_best_val"};
+      "optimization.keep_best_val", "optimization.clone_opacity_correction"};
   EXPECT_EQ(keys, expected);
   // Each value keeps its member's JSON type: a float's exact value, an unsigned seed, nulls.
   const json j = Recordable().ToJson();
@@ -106,7 +106,8 @@ TEST(TrainOptionsTable, RecordsOfOlderRunsReadAsTheyTrained) {
   old.erase("learn_background");
   old.erase("reference");
   for (const char* key : {"visible_adam", "stop_window", "stop_tolerance", "coarse_to_fine",
-                          "prune_contribution", "color_bands_by_need", "color_band_signal"})
+                          "prune_contribution", "color_bands_by_need", "color_band_signal",
+                          "clone_opacity_correction"})
     old["optimization"].erase(key);
   for (const char* key : {"hdr_target", "hdr_geometry", "hdr_head", "hdr_head_iterations",
                           "pixel_log_epsilon"})
@@ -119,6 +120,7 @@ TEST(TrainOptionsTable, RecordsOfOlderRunsReadAsTheyTrained) {
   EXPECT_EQ(o.optimization.coarse_to_fine, 0);
   EXPECT_EQ(o.optimization.prune_contribution, 0.0);
   EXPECT_FALSE(o.optimization.color_bands_by_need);  // every band on the reference's schedule
+  EXPECT_FALSE(o.optimization.clone_opacity_correction);  // clones kept their source's opacity
   EXPECT_EQ(o.hdr.hdr_target, HdrTarget::kImageMax);
   EXPECT_TRUE(o.hdr.hdr_geometry);
   EXPECT_FALSE(o.hdr.hdr_head);
@@ -176,8 +178,8 @@ TEST(TrainOptionsTable, EveryFlagIsOneRowWithHelpAndItsValues) {
     // A default the help shows is one the option accepts.
     if (row.show_default) EXPECT_EQ(row.Check(row.get(defaults)), "") << row.flag;
   }
-  // 36 + issue 55's eleven + issue 52's four + issue 56's --exposure-unit
-  EXPECT_EQ(flags.size(), 52u);
+  // 36 + issue 55's twelve + issue 52's four + issue 56's --exposure-unit
+  EXPECT_EQ(flags.size(), 53u);
   EXPECT_EQ(FindTrainOption("--no-learn-background"), FindTrainOption("learn_background"));
 }
 
@@ -223,11 +225,13 @@ TEST(TrainOptionsTable, ReferenceIsRecordedAndRefusesTheOptionsThatDoLess) {
   o.optimization.visible_adam = true;
   o.optimization.coarse_to_fine = 500;
   o.optimization.prune_contribution = 0.02;
+  o.optimization.clone_opacity_correction = true;
   reference->set_given(&o, true);
   EXPECT_TRUE(o.reference);
   EXPECT_FALSE(o.optimization.visible_adam);
   EXPECT_EQ(o.optimization.coarse_to_fine, 0);
   EXPECT_EQ(o.optimization.prune_contribution, 0.0);
+  EXPECT_FALSE(o.optimization.clone_opacity_correction);
   EXPECT_FALSE(o.optimization.color_bands_by_need);
   EXPECT_EQ(o.hdr.tone_mapper->unseen_rows, "zero");
   EXPECT_EQ(o.Validate(), "");
@@ -236,6 +240,10 @@ TEST(TrainOptionsTable, ReferenceIsRecordedAndRefusesTheOptionsThatDoLess) {
   o.optimization.visible_adam = true;
   EXPECT_NE(o.Validate().find("drop --visible-adam"), std::string::npos) << o.Validate();
   o.optimization.visible_adam = false;
+  o.optimization.clone_opacity_correction = true;
+  EXPECT_NE(o.Validate().find("drop --clone-opacity-correction"), std::string::npos)
+      << o.Validate();
+  o.optimization.clone_opacity_correction = false;
   o.optimization.stop_window = 1000;
   EXPECT_NE(o.Validate().find("drop --iterations auto"), std::string::npos) << o.Validate();
   o.optimization.stop_window = 0;

@@ -80,6 +80,9 @@ std::string TrainOptions::Validate() const {
   if (reference && optimization.prune_contribution > 0)
     return "reference: --reference prunes by opacity only; drop --prune-contribution (or "
            "--reference)";
+  if (reference && optimization.clone_opacity_correction)
+    return "reference: --reference clones with the source's opacity; drop "
+           "--clone-opacity-correction (or --reference)";
   if (reference && hdr.tone_mapper && hdr.tone_mapper->kind == "dtm" &&
       hdr.tone_mapper->unseen_rows != "zero")
     return "reference: --reference reads the radiance bank's unwritten rows as zeros; drop "

@@ -576,5 +576,27 @@ TEST(TrainerSpeedOptions, PruneContributionPrunesMoreAndResumesExactly) {
   EXPECT_NE(both.Validate(), "");
 }
 
+
+// --clone-opacity-correction changes what a densification leaves (some Gaussian's opacity differs
+// from the plain run's once a clone was made), is recorded, and resumes bit for bit.
+TEST(TrainerSpeedOptions, CloneOpacityCorrectionChangesTheRunAndResumesExactly) {
+  TempDir dir;
+  MakeTinyScene(dir / "scene");
+  auto run = [&](const char* name, int iterations, bool correct) {
+    TrainOptions o = TinyRun(dir / "scene", dir / name, iterations);
+    o.optimization.clone_opacity_correction = correct;
+    o.optimization.percent_dense = 1.0;  // every candidate is cloned, none split
+    return o;
+  };
+  const TrainSummary plain = Train(run("plain", 60, false));
+  const TrainSummary straight = Train(run("straight", 60, true));
+  EXPECT_NE(plain.loss_curve.back(), straight.loss_curve.back());
+  for (double loss : straight.loss_curve) EXPECT_TRUE(std::isfinite(loss));
+  EXPECT_EQ(ReadJsonFile(dir / "straight" / "config.json")["optimization"]
+                        ["clone_opacity_correction"],
+            true);
+  ExpectResumesExactly([&](const char* name, int it) { return run(name, it, true); }, 27,
+                       straight, dir.path());
+}
 }  // namespace
 }  // namespace hdr4d::method
