@@ -156,6 +156,12 @@ void SetScale(GaussianModel& m, std::size_t i, float scale) {
   for (int k = 0; k < 4; ++k) m.log_scales[4 * i + k] = std::log(scale);
 }
 
+// One densification of the setup's model with `params` and a generator seeded with `seed`.
+DensifyResult DensifyWith(Setup& s, const DensifyParams& params, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  return DensifyAndPrune(&s.model, &s.grads, &s.adam, &s.stats, params, &rng);
+}
+
 // Mean gradient `g` from a single view.
 void SetGrad(DensifyStats& s, std::size_t i, float g) {
   s.grad_accum[i] = g;
@@ -326,9 +332,7 @@ TEST(Densify, CloneOpacityCorrectionHalvesTheCloneAndItsSourceOnly) {
     SetScale(s->model, 2, 0.05f);
     DensifyParams params;
     params.clone_opacity_correction = correct;
-    std::mt19937_64 rng(7);
-    const DensifyResult r =
-        DensifyAndPrune(&s->model, &s->grads, &s->adam, &s->stats, params, &rng);
+    const DensifyResult r = DensifyWith(*s, params, 7);
     ASSERT_EQ(r.cloned, 1u);
     ASSERT_EQ(r.split, 1u);
     // Originals 0, 1, 3, then the clone of 1, then 2's two children.
@@ -546,9 +550,7 @@ TEST(Densify, PruneByContributionRemovesOnlySeenFaintOriginals) {
     const GaussianModel before = s->model;
     DensifyParams params;
     params.min_contribution = threshold;
-    std::mt19937_64 rng(1);
-    const DensifyResult r =
-        DensifyAndPrune(&s->model, &s->grads, &s->adam, &s->stats, params, &rng);
+    const DensifyResult r = DensifyWith(*s, params, 1);
     EXPECT_EQ(r.cloned, 1u);
     EXPECT_EQ(r.split, 1u);
     EXPECT_EQ(r.pruned, threshold > 0 ? 1u : 0u);

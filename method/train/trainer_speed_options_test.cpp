@@ -95,14 +95,22 @@ TEST(TrainerSpeedOptions, ReferenceIsTheOldDefaultsBitForBit) {
   EXPECT_FALSE(ReadJsonFile(dir / "reference" / "results.json").contains("stopped"));
 }
 
+// run(name, iterations, on): a tiny run of MakeTinyScene's scene (in dir) into dir/name, with
+// `set(options, on)` applied: one option's runs with it and without it.
+template <typename Set>
+auto TinyRunsWith(const TempDir& dir, Set set) {
+  return [&dir, set](const char* name, int iterations, bool on) {
+    TrainOptions o = TinyRun(dir / "scene", dir / name, iterations);
+    set(o, on);
+    return o;
+  };
+}
+
 TEST(TrainerSpeedOptions, VisibleAdamDiffersFromDenseAndResumesExactly) {
   TempDir dir;
   MakeTinyScene(dir / "scene");
-  auto run = [&](const char* name, int iterations, bool visible) {
-    TrainOptions o = TinyRun(dir / "scene", dir / name, iterations);
-    o.optimization.visible_adam = visible;
-    return o;
-  };
+  const auto run = TinyRunsWith(
+      dir, [](TrainOptions& o, bool visible) { o.optimization.visible_adam = visible; });
   const TrainSummary dense = Train(run("dense", 60, false));
   const TrainSummary straight = Train(run("straight", 60, true));
   EXPECT_NE(dense.loss_curve, straight.loss_curve) << "no Gaussian was ever unseen";
@@ -522,7 +530,9 @@ TEST(TrainerSpeedOptions, ColorBandsSwitchOnWhereColoursFollowTheView) {
     ASSERT_EQ(bands["decisions"].size(), 2u);
     EXPECT_EQ(bands["decisions"][0]["sh_degree"], 1);
     second_signal[degree == 3] = bands["decisions"][1]["signal"].get<double>();
-    if (degree == 3) EXPECT_GE(bands["sh_degree"].get<int>(), 1);
+    if (degree == 3) {
+      EXPECT_GE(bands["sh_degree"].get<int>(), 1);
+    }
   }
   EXPECT_GT(second_signal[1], second_signal[0]);
 }
@@ -582,12 +592,10 @@ TEST(TrainerSpeedOptions, PruneContributionPrunesMoreAndResumesExactly) {
 TEST(TrainerSpeedOptions, CloneOpacityCorrectionChangesTheRunAndResumesExactly) {
   TempDir dir;
   MakeTinyScene(dir / "scene");
-  auto run = [&](const char* name, int iterations, bool correct) {
-    TrainOptions o = TinyRun(dir / "scene", dir / name, iterations);
+  const auto run = TinyRunsWith(dir, [](TrainOptions& o, bool correct) {
     o.optimization.clone_opacity_correction = correct;
     o.optimization.percent_dense = 1.0;  // every candidate is cloned, none split
-    return o;
-  };
+  });
   const TrainSummary plain = Train(run("plain", 60, false));
   const TrainSummary straight = Train(run("straight", 60, true));
   EXPECT_NE(plain.loss_curve.back(), straight.loss_curve.back());
