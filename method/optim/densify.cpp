@@ -577,7 +577,9 @@ std::size_t RebuildModel(const KeptRows& kept,
 }
 
 // log(1 + e^x) without overflow.
-double Softplus(double x) { return x > 0.0 ? x + std::log1p(std::exp(-x)) : std::log1p(std::exp(x)); }
+double Softplus(double x) {
+  return x > 0.0 ? x + std::log1p(std::exp(-x)) : std::log1p(std::exp(x));
+}
 
 }  // namespace
 
@@ -593,8 +595,9 @@ float HalvedCloneOpacityLogit(float logit) {
 
 namespace {
 
-// --clone-opacity-correction: each kept clone (rows after the originals) and its source, where the
-// source survived, get the halved-blend opacity (a clone whose source was pruned keeps its own). Clone sources are never split parents.
+// --clone-opacity-correction: each kept clone (rows after the originals) and its source, where
+// the source survived, get the halved-blend opacity (a clone whose source was pruned keeps its
+// own). Clone sources are never split parents.
 void CorrectCloneOpacities(const KeptRows& kept, std::size_t old_n, GaussianModel* model) {
   std::vector<std::int64_t> new_row(old_n, -1);
   for (std::size_t r = 0; r < kept.originals.size(); ++r) new_row[kept.originals[r]] = r;

@@ -246,12 +246,12 @@ struct OptimizationOptions {
   // every band on the reference's schedule. Off by default: on five datagen scenes it kept held-out
   // LDR but lost aligned HDR (docs/history/time-to-quality.md).
   bool color_bands_by_need = false;
+  double color_band_signal = kDefaultColorBandSignal;
   // --clone-opacity-correction: a clone and its source both get opacity 1 - sqrt(1 - alpha), so
   // the two copies (same place, same shape) blend as the one did before (Rota Bulo et al.,
   // "Revising Densification in Gaussian Splatting", ECCV 2024); false: both keep alpha, as the
   // paper's densification.
   bool clone_opacity_correction = false;
-  double color_band_signal = kDefaultColorBandSignal;
   static constexpr double kDefaultColorBandSignal = 2.0;
   static constexpr int kDefaultStopWindow = 1000;
   static constexpr double kDefaultStopTolerance = 0.002;
