@@ -169,14 +169,20 @@ TEST(TrainOptionsTable, EveryFlagIsOneRowWithHelpAndItsValues) {
   TrainOptions defaults;
   defaults.hdr.tone_mapper = ToneMapperConfig{};
   for (const TrainOption& row : TrainOptionTable()) {
-    if (!row.key.empty()) EXPECT_TRUE(keys.insert(row.key).second) << row.key;
+    if (!row.key.empty()) {
+      EXPECT_TRUE(keys.insert(row.key).second) << row.key;
+    }
     if (row.flag.empty()) continue;
     EXPECT_TRUE(flags.insert(row.flag).second) << row.flag;
     EXPECT_FALSE(row.help.empty()) << row.flag;
     EXPECT_EQ(row.flag.rfind("--", 0), 0u) << row.flag;
-    if (row.type == OptionType::kBool) EXPECT_TRUE(row.switch_value.is_boolean()) << row.flag;
+    if (row.type == OptionType::kBool) {
+      EXPECT_TRUE(row.switch_value.is_boolean()) << row.flag;
+    }
     // A default the help shows is one the option accepts.
-    if (row.show_default) EXPECT_EQ(row.Check(row.get(defaults)), "") << row.flag;
+    if (row.show_default) {
+      EXPECT_EQ(row.Check(row.get(defaults)), "") << row.flag;
+    }
   }
   // 36 + issue 55's twelve + issue 52's four + issue 56's --exposure-unit
   EXPECT_EQ(flags.size(), 53u);
