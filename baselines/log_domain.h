@@ -36,11 +36,8 @@ inline T ClampAbsSlope(T x, double bound) {
   return (x > T(-bound) && x < T(bound)) ? T(1) : T(0);
 }
 
-// log(1 + e^z) for any finite z.
-template <typename T>
-inline T Softplus(T z) {
-  return z > T(0) ? z + std::log1p(std::exp(-z)) : std::log1p(std::exp(z));
-}
+// log(1 + e^z) for any finite z (core/util/sigmoid.h).
+using hdr4d::Softplus;
 
 // Logistic function; never the exponential of a large positive number (core/util/sigmoid.h).
 template <typename T>

@@ -576,11 +576,6 @@ std::size_t RebuildModel(const KeptRows& kept,
   return new_n;
 }
 
-// log(1 + e^x) without overflow.
-double Softplus(double x) {
-  return x > 0.0 ? x + std::log1p(std::exp(-x)) : std::log1p(std::exp(x));
-}
-
 }  // namespace
 
 float HalvedCloneOpacityLogit(float logit) {
@@ -597,17 +592,17 @@ namespace {
 
 // --clone-opacity-correction: each kept clone (rows after the originals) and its source, where
 // the source survived, get the halved-blend opacity (a clone whose source was pruned keeps its
-// own). Clone sources are never split parents.
-void CorrectCloneOpacities(const KeptRows& kept, std::size_t old_n, GaussianModel* model) {
-  std::vector<std::int64_t> new_row(old_n, -1);
-  for (std::size_t r = 0; r < kept.originals.size(); ++r) new_row[kept.originals[r]] = r;
+// own). Clone sources are never split parents. kept.originals is in index order, so a source's
+// new row is its position there.
+void CorrectCloneOpacities(const KeptRows& kept, GaussianModel* model) {
+  const std::vector<std::uint32_t>& originals = kept.originals;
   for (std::size_t k = 0; k < kept.clones.size(); ++k) {
-    const std::int64_t source = new_row[kept.clones[k]];
-    if (source < 0) continue;  // the source was pruned: the clone stands alone
-    const std::size_t clone_row = kept.originals.size() + k;
+    const auto source = std::lower_bound(originals.begin(), originals.end(), kept.clones[k]);
+    if (source == originals.end() || *source != kept.clones[k]) continue;  // pruned: stands alone
+    const std::size_t clone_row = originals.size() + k;
     const float logit = HalvedCloneOpacityLogit(model->opacity_logit[clone_row]);
     model->opacity_logit[clone_row] = logit;
-    model->opacity_logit[static_cast<std::size_t>(source)] = logit;
+    model->opacity_logit[static_cast<std::size_t>(source - originals.begin())] = logit;
   }
 }
 
@@ -636,9 +631,8 @@ DensifyResult DensifyAndPrune(GaussianModel* model,
   result.split = candidates.parents.size();
   const KeptRows kept =
       SelectSurvivors(*model, *stats, params, candidates, children, &result.pruned);
-  const std::size_t old_n = model->size();
   const std::size_t new_n = RebuildModel(kept, candidates.parents, children, model, grads, adam);
-  if (params.clone_opacity_correction) CorrectCloneOpacities(kept, old_n, model);
+  if (params.clone_opacity_correction) CorrectCloneOpacities(kept, model);
   grads->ZerosLike(*model, /*colour=*/!colour_rows_only);
   BindModelGroups(*model, *grads, adam);
   stats->Reset(new_n);
