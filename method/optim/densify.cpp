@@ -350,7 +350,7 @@ DensifyParams DensifyParamsAt(const OptimizationOptions& unresolved,
   const bool after_reset = iteration > options.opacity_reset_interval &&
                            since_reset <= options.densify_from;
   p.min_contribution = after_reset ? 0.0f : static_cast<float>(options.prune_contribution);
-  p.clone_opacity_correction = options.clone_opacity_correction;
+  p.clone_opacity_correction = options.clone_opacity_correction.value_or(false);
   return p;
 }
 

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <numbers>
+#include <optional>
 #include <string>
 
 namespace hdr4d::method {
@@ -141,6 +142,23 @@ inline std::int64_t StaticGaussianBudget(double view_pixels, double content_view
                                                  kStaticGaussiansPerViewPixel));
 }
 
+// The many-view schedule (issue 55; not under --reference): where the training cameras look
+// along at least kManyViewDirections distinct directions (train/view_directions.h), a colour band
+// every kManyViewShIncreaseInterval iterations instead of the reference's 1000, and the clone
+// opacity correction (OptimizationOptions::clone_opacity_correction). Sixteen directions are as
+// many as a degree-3 band has coefficients per channel: from fewer, the top bands are fitted to
+// the few directions seen, and the faster schedule lost held-out LDR on an 8-camera rig (studio,
+// 0.8 dB on one seed of two); from 19 (syn200_20k) it took the time to OpenSplat's held-out
+// PSNR from 13-14x to 21-25x less than OpenSplat's (docs/history/time-to-quality.md, "The
+// many-view schedule"). Rigs (3-10 cameras here, the paper's Syn configuration 4) keep the
+// reference's schedule.
+inline constexpr int kManyViewDirections = 16;
+inline constexpr int kManyViewShIncreaseInterval = 500;
+inline constexpr int kReferenceShIncreaseInterval = 1000;
+inline bool ManyViewSchedule(int distinct_view_directions) {
+  return distinct_view_directions >= kManyViewDirections;
+}
+
 // Optimisation settings with the HDR-4DGS HDR-4D-Syn defaults (which are the 4DGS ones except for
 // iterations, the densification interval and the tone mapper). Learning rates of the 4D mean
 // (xyz and t) are in scene-extent units: the caller multiplies them by the extent (PositionLr,
@@ -198,7 +216,9 @@ struct OptimizationOptions {
   // iterations) leave the model no time to recover between them (docs/history/accuracy.md).
   int opacity_reset_interval = kFollowRunLength;
   double prune_opacity = 0.005;
-  int sh_increase_interval = 1000;
+  // Negative: by the scene's views (the many-view schedule above, set by the trainer before
+  // Resolved(), which gives what is still negative the reference's 1000).
+  int sh_increase_interval = kFollowRunLength;
   // Gaussian budget (the reference's densify_until_num_points): densification never takes the
   // count past it. 0 = none; kFollowRunLength (any negative value) = the default budget from
   // the training images, set by the trainer (DefaultGaussianBudget).
@@ -250,8 +270,9 @@ struct OptimizationOptions {
   // --clone-opacity-correction: a clone and its source both get opacity 1 - sqrt(1 - alpha), so
   // the two copies (same place, same shape) blend as the one did before (Rota Bulo et al.,
   // "Revising Densification in Gaussian Splatting", ECCV 2024); false: both keep alpha, as the
-  // paper's densification.
-  bool clone_opacity_correction = false;
+  // paper's densification. Unset: by the scene's views (the many-view schedule above, set by
+  // the trainer); Resolved() reads what is still unset as false.
+  std::optional<bool> clone_opacity_correction;
   static constexpr double kDefaultColorBandSignal = 2.0;
   static constexpr int kDefaultStopWindow = 1000;
   static constexpr double kDefaultStopTolerance = 0.002;
@@ -276,6 +297,8 @@ struct OptimizationOptions {
     steps(r.position_lr_max_steps, kRefPositionLrMaxSteps);
     steps(r.densify_until, kRefDensifyUntil);
     if (r.opacity_reset_interval < 0) r.opacity_reset_interval = kRefOpacityResetInterval;
+    if (r.sh_increase_interval < 0) r.sh_increase_interval = kReferenceShIncreaseInterval;
+    if (!r.clone_opacity_correction) r.clone_opacity_correction = false;
     if (r.densify_from < 0) {
       // Never past an explicit densify_until (a short run that densifies early).
       r.densify_from = std::min(StepsForRunLength(kRefDensifyFrom, iterations), r.densify_until);
@@ -365,7 +388,8 @@ struct OptimizationOptions {
     if (!(prune_opacity >= 0.0 && prune_opacity < 1.0)) {
       return fmt::format("prune_opacity must be in [0, 1), got {}", prune_opacity);
     }
-    if (!(e = positive_int("sh_increase_interval", sh_increase_interval)).empty()) return e;
+    if (sh_increase_interval == 0)
+      return "sh_increase_interval must be positive (or negative: by the scene's views), got 0";
     if (!(color_band_signal >= 0.0 && std::isfinite(color_band_signal)))
       return fmt::format("color_band_signal must be >= 0 and finite, got {}", color_band_signal);
     if (stop_window < 0) return fmt::format("stop_window must be >= 0, got {}", stop_window);

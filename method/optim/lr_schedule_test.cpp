@@ -89,6 +89,23 @@ TEST(OptimizationOptions, ReferenceDefaults) {
   EXPECT_EQ(o.opacity_reset_interval, 3000);
   EXPECT_EQ(o.prune_opacity, 0.005);
   EXPECT_EQ(o.sh_increase_interval, 1000);
+  EXPECT_EQ(o.clone_opacity_correction, false);
+}
+
+// The many-view schedule's two fields are unset by default (the trainer sets them from the
+// scene's views); what is still unset resolves to the reference's, and a set value stays.
+TEST(OptimizationOptions, ManyViewFieldsResolveToTheReferenceUnlessSet) {
+  OptimizationOptions o;
+  EXPECT_LT(o.sh_increase_interval, 0);
+  EXPECT_FALSE(o.clone_opacity_correction.has_value());
+  EXPECT_EQ(o.Validate(), "");
+  o.sh_increase_interval = 500;
+  o.clone_opacity_correction = true;
+  const OptimizationOptions r = o.Resolved(200.0);
+  EXPECT_EQ(r.sh_increase_interval, 500);
+  EXPECT_EQ(r.clone_opacity_correction, true);
+  EXPECT_FALSE(ManyViewSchedule(kManyViewDirections - 1));
+  EXPECT_TRUE(ManyViewSchedule(kManyViewDirections));
 }
 
 TEST(OptimizationOptions, SchedulesFollowTheRunLengthUnlessSet) {

@@ -89,6 +89,12 @@ void KeepSavedSchedules(const nlohmann::json& saved, OptimizationOptions* reques
     const auto v = it->find(row.key.substr(prefix.size()));
     if (v != it->end() && v->is_number() && v->get<double>() >= 0) row.set(&options, *v);
   }
+  // The many-view schedule's switch: what the run decided (a run from before it: off).
+  if (!options.optimization.clone_opacity_correction) {
+    const auto v = it->find("clone_opacity_correction");
+    options.optimization.clone_opacity_correction =
+        v != it->end() && v->is_boolean() && v->get<bool>();
+  }
   *requested = options.optimization;
 }
 

@@ -15,7 +15,8 @@ nlohmann::json ReadSavedRunConfig(const std::filesystem::path& run);
 
 // Schedules left to follow the run length (kFollowRunLength) take the values the run resolved
 // when it started, so a resumed run continues the schedule it was on, whatever --iterations
-// says now; a schedule given explicitly stays as given (and must then match, below).
+// says now; a schedule given explicitly stays as given (and must then match, below). So do the
+// many-view schedule's colour interval and clone correction (optim/lr_schedule.h).
 void KeepSavedSchedules(const nlohmann::json& saved, OptimizationOptions* requested);
 
 // A run trained with supervision ldr and resumed with --hdr-head (supervision ldr+hdr): the head's

@@ -222,13 +222,23 @@ Access DataAccess() {
           [](TrainOptions* o, const Json& v) { o->data = v.get<std::string>(); }};
 }
 
-// Unset (a caller's own look at the options): not recorded; runs from before the option: off.
-Access LearnBackgroundAccess() {
+// A switch the run decides when it is not given (std::optional<bool>): unset is not recorded
+// (a caller's own look at the options; a run records what it decided).
+template <typename Struct, typename Pick>
+Access OptionalBool(Pick pick, std::optional<bool> Struct::*m) {
   return {OptionType::kBool,
-          [](const TrainOptions& o) {
-            return o.learn_background ? Json(*o.learn_background) : Discarded();
+          [pick, m](const TrainOptions& o) {
+            const std::optional<bool>& v = pick(o).*m;
+            return v ? Json(*v) : Discarded();
           },
-          [](TrainOptions* o, const Json& v) { o->learn_background = v.get<bool>(); }};
+          [pick, m](TrainOptions* o, const Json& v) { pick(*o).*m = v.get<bool>(); }};
+}
+Access LearnBackgroundAccess() {
+  return OptionalBool([](auto& o) -> auto& { return o; }, &TrainOptions::learn_background);
+}
+Access CloneOpacityCorrectionAccess() {
+  return OptionalBool([](auto& o) -> auto& { return o.optimization; },
+                      &OptimizationOptions::clone_opacity_correction);
 }
 
 // --color-lr: the DC rate of LDR and of log-HDR colours alike.
@@ -434,10 +444,11 @@ std::vector<TrainOption> ScheduleRows() {
           .Config("opacity_reset_interval"),
       Row("optimization.sh_increase_interval", Opt(&O::sh_increase_interval))
           .Flag("--sh-increase-interval",
-                "Iterations per colour degree step, spatial 0->3 then temporal 0->2 (the "
-                "reference's, whatever the run length)")
+                "Iterations per colour degree step, spatial 0->3 then temporal 0->2, whatever "
+                "the run length (default: 500 where the training cameras look along 16 or more "
+                "distinct directions, the many-view schedule; else the reference's 1000)")
           .Range(count(1))
-          .ShowDefault()
+          .UnsetWhen(Unset::kNegative)
           .Config("sh_increase_interval"),
   };
 }
@@ -609,11 +620,14 @@ std::vector<TrainOption> LessWorkRows() {
           .Range(ValueRange::Real(0, 0.999))
           .IfMissing(0.0)
           .Config("prune_contribution"),
-      Row("optimization.clone_opacity_correction", Opt(&O::clone_opacity_correction))
+      Row("optimization.clone_opacity_correction", CloneOpacityCorrectionAccess())
           .Switch("--clone-opacity-correction", true,
                   "At each densification give a clone and its source opacity 1 - sqrt(1 - "
                   "alpha) each, so the two blend as the one did (Rota Bulo et al., ECCV 2024; "
-                  "not in the paper, whose clones both keep alpha)")
+                  "not in the paper, whose clones both keep alpha). Default: on where the "
+                  "training cameras look along 16 or more distinct directions (the many-view "
+                  "schedule), else off. --no-clone-opacity-correction: off, as the paper")
+          .Negatable("--no-clone-opacity-correction")
           .IfMissing(false)
           .Config("clone_opacity_correction"),
       Row("optimization.color_bands_by_need", Opt(&O::color_bands_by_need))

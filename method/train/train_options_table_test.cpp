@@ -31,6 +31,7 @@ TrainOptions Recordable() {
   o.data = "/scene";
   o.out = "/runs/a";
   o.learn_background = true;
+  o.optimization.clone_opacity_correction = false;  // what a run decided (unset: not recorded)
   o.hdr.color_mode = ColorMode::kLogHdr;  // hdr4dgs's colour model, with its tone mapper
   o.hdr.tone_mapper = ToneMapperConfig{};
   return o;
@@ -77,6 +78,8 @@ TEST(TrainOptionsTable, RecordsTheKeysRunsHaveAlwaysRecorded) {
   TrainOptions unset = Recordable();
   unset.learn_background.reset();  // a caller's own look: not recorded
   EXPECT_FALSE(unset.ToJson().contains("learn_background"));
+  unset.optimization.clone_opacity_correction.reset();
+  EXPECT_FALSE(unset.ToJson()["optimization"].contains("clone_opacity_correction"));
 }
 
 TEST(TrainOptionsTable, ARecordReadsBackToTheSameOptions) {
@@ -120,7 +123,7 @@ TEST(TrainOptionsTable, RecordsOfOlderRunsReadAsTheyTrained) {
   EXPECT_EQ(o.optimization.coarse_to_fine, 0);
   EXPECT_EQ(o.optimization.prune_contribution, 0.0);
   EXPECT_FALSE(o.optimization.color_bands_by_need);  // every band on the reference's schedule
-  EXPECT_FALSE(o.optimization.clone_opacity_correction);  // clones kept their source's opacity
+  EXPECT_EQ(o.optimization.clone_opacity_correction, false);  // clones kept their source's opacity
   EXPECT_EQ(o.hdr.hdr_target, HdrTarget::kImageMax);
   EXPECT_TRUE(o.hdr.hdr_geometry);
   EXPECT_FALSE(o.hdr.hdr_head);
@@ -237,7 +240,7 @@ TEST(TrainOptionsTable, ReferenceIsRecordedAndRefusesTheOptionsThatDoLess) {
   EXPECT_FALSE(o.optimization.visible_adam);
   EXPECT_EQ(o.optimization.coarse_to_fine, 0);
   EXPECT_EQ(o.optimization.prune_contribution, 0.0);
-  EXPECT_FALSE(o.optimization.clone_opacity_correction);
+  EXPECT_EQ(o.optimization.clone_opacity_correction, false);
   EXPECT_FALSE(o.optimization.color_bands_by_need);
   EXPECT_EQ(o.hdr.tone_mapper->unseen_rows, "zero");
   EXPECT_EQ(o.Validate(), "");

@@ -56,6 +56,7 @@
 #include "method/train/train_views.h"
 #include "method/train/color_bands.h"
 #include "method/train/content_views.h"
+#include "method/train/view_directions.h"
 #include "method/render/view_renderer.h"
 
 namespace hdr4d::method {
@@ -80,7 +81,7 @@ std::string TrainOptions::Validate() const {
   if (reference && optimization.prune_contribution > 0)
     return "reference: --reference prunes by opacity only; drop --prune-contribution (or "
            "--reference)";
-  if (reference && optimization.clone_opacity_correction)
+  if (reference && optimization.clone_opacity_correction.value_or(false))
     return "reference: --reference clones with the source's opacity; drop "
            "--clone-opacity-correction (or --reference)";
   if (reference && hdr.tone_mapper && hdr.tone_mapper->kind == "dtm" &&
@@ -240,6 +241,7 @@ class TrainingRun {
   void CheckDataUnchanged();
   void LoadTrainingViews();
   void ResolveSchedules();
+  void ApplyManyViewSchedule(OptimizationOptions* requested) const;
   std::optional<double> StaticContentViews();  // a static scene's views of content, for its budget
   void ResolveLearnedBackground();
   void StartCameraCorrection();
@@ -467,6 +469,7 @@ void TrainingRun::ResolveSchedules() {
   const HdrTrainingOptions& hdr = options_.hdr;
   OptimizationOptions requested = options_.optimization;
   if (saved_config_) KeepSavedSchedules(*saved_config_, &requested);
+  ApplyManyViewSchedule(&requested);
   const double image_size = ImageSize(train_views_);
   opt_ = requested.Resolved(image_size, hdr.color_mode == ColorMode::kLogHdr);
   if (opt_.max_gaussians < 0) {
@@ -506,6 +509,27 @@ void TrainingRun::ResolveSchedules() {
   spdlog::info("train: {} train / {} test views, extent {:.3f}, {}, method {}", train_views_.size(),
                test_views_.size(), extent_, temporal_ ? "dynamic" : "static (no time axis)",
                hdr.method);
+}
+
+// The many-view schedule (optim/lr_schedule.h) for what the options leave unset: from the
+// directions the training cameras look along; --reference keeps the paper's.
+void TrainingRun::ApplyManyViewSchedule(OptimizationOptions* requested) const {
+  if (requested->sh_increase_interval >= 0 && requested->clone_opacity_correction) return;
+  std::vector<Camera> cameras;
+  cameras.reserve(train_views_.size());
+  for (const TrainView& v : train_views_) cameras.push_back(v.camera);
+  const int directions = DistinctViewDirections(cameras);
+  const bool many = !options_.reference && ManyViewSchedule(directions);
+  if (requested->sh_increase_interval < 0)
+    requested->sh_increase_interval =
+        many ? kManyViewShIncreaseInterval : kReferenceShIncreaseInterval;
+  if (!requested->clone_opacity_correction) requested->clone_opacity_correction = many;
+  const bool correct = *requested->clone_opacity_correction;
+  spdlog::info("train: the training cameras look along {} distinct directions (the many-view "
+               "schedule from {}{}): a colour band every {} iterations, clone opacity correction "
+               "{}",
+               directions, kManyViewDirections, options_.reference ? ", not under --reference" : "",
+               requested->sh_increase_interval, correct ? "on" : "off");
 }
 
 // How many views' worth of content the training cameras hold (train/content_views.h), from the

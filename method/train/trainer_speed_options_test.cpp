@@ -7,6 +7,7 @@
 #include <fstream>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/files/json_util.h"
@@ -605,6 +606,53 @@ TEST(TrainerSpeedOptions, CloneOpacityCorrectionChangesTheRunAndResumesExactly) 
             true);
   ExpectResumesExactly([&](const char* name, int it) { return run(name, it, true); }, 27,
                        straight, dir.path());
+}
+
+// The many-view schedule: on a ring of 18 training cameras (15 degrees apart) the colour interval
+// and the clone correction, left unset, resolve to 500 and on, as recorded. --reference, values
+// given, a 3-camera rig, and a run resumed from before the rule keep what they had.
+TEST(TrainerSpeedOptions, ManyViewScheduleWhereTheCamerasLookAlongSixteenDirections) {
+  TempDir dir;
+  GaussianSceneOptions ring;
+  ring.size = 16;
+  ring.num_gaussians = 8;
+  ring.num_cameras = 24;  // every 4th held out
+  ring.num_timestamps = 2;
+  MakeGaussianScene(ring, dir / "ring");
+  MakeTinyScene(dir / "rig");
+  using Schedule = std::pair<int, bool>;
+  const auto recorded = [&](const char* name) {
+    const nlohmann::json o = ReadJsonFile(dir / name / "config.json")["optimization"];
+    return Schedule(o["sh_increase_interval"].get<int>(),
+                    o["clone_opacity_correction"].get<bool>());
+  };
+  const auto options = [&](const char* scene, const char* name, int iterations) {
+    TrainOptions o = TinyRun(dir / scene, dir / name, iterations);
+    o.optimization.sh_increase_interval = kFollowRunLength;  // unset: by the scene
+    return o;
+  };
+  Train(options("ring", "many", 5));
+  EXPECT_EQ(recorded("many"), Schedule(500, true));
+  Train(options("rig", "few", 5));
+  EXPECT_EQ(recorded("few"), Schedule(1000, false));
+  TrainOptions reference = options("ring", "reference", 5);
+  reference.reference = true;
+  Train(reference);
+  EXPECT_EQ(recorded("reference"), Schedule(1000, false));
+  TrainOptions given = options("ring", "given", 5);
+  given.optimization.sh_increase_interval = 700;
+  given.optimization.clone_opacity_correction = false;
+  Train(given);
+  EXPECT_EQ(recorded("given"), Schedule(700, false));
+  // A run from before the rule (and before the correction): resumed, it keeps the reference's.
+  nlohmann::json old = ReadJsonFile(dir / "many" / "config.json");
+  old["optimization"]["sh_increase_interval"] = 1000;
+  old["optimization"].erase("clone_opacity_correction");
+  WriteJsonFile(dir / "many" / "config.json", old);
+  TrainOptions resumed = options("ring", "many", 8);
+  resumed.resume = true;
+  Train(resumed);
+  EXPECT_EQ(recorded("many"), Schedule(1000, false));
 }
 }  // namespace
 }  // namespace hdr4d::method
