@@ -86,6 +86,7 @@ TEST(Trainer, OptionsReadBackFromTheirRecord) {
   o.resolution = 2;
   o.background = 0.25f;
   o.learn_background = true;
+  o.optimization.clone_opacity_correction = true;  // a run records what it decided
   o.optimization.max_gaussians = 1234;
   o.optimization.f_rest_lr = 3e-4;
   o.hdr.hdr_weight = 0.3f;
