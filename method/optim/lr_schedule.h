@@ -149,9 +149,9 @@ inline std::int64_t StaticGaussianBudget(double view_pixels, double content_view
 // many as a degree-3 band has coefficients per channel: from fewer, the top bands are fitted to
 // the few directions seen, and the faster schedule lost held-out LDR on an 8-camera rig (studio,
 // 0.8 dB on one seed of two); from 19 (syn200_20k) it took the time to OpenSplat's held-out
-// PSNR from 13-14x to 21-25x less than OpenSplat's (docs/history/time-to-quality.md, "The
-// many-view schedule"). Rigs (3-10 cameras here, the paper's Syn configuration 4) keep the
-// reference's schedule.
+// PSNR from 13-15x to 21-24x less than OpenSplat's on three seeds of four
+// (docs/history/time-to-quality.md, "The many-view schedule by default"). Rigs (3-10 cameras
+// here, the paper's Syn configuration 4) keep the reference's schedule.
 inline constexpr int kManyViewDirections = 16;
 inline constexpr int kManyViewShIncreaseInterval = 500;
 inline constexpr int kReferenceShIncreaseInterval = 1000;
