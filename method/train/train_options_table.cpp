@@ -445,8 +445,9 @@ std::vector<TrainOption> ScheduleRows() {
       Row("optimization.sh_increase_interval", Opt(&O::sh_increase_interval))
           .Flag("--sh-increase-interval",
                 "Iterations per colour degree step, spatial 0->3 then temporal 0->2, whatever "
-                "the run length (default: 500 where the training cameras look along 16 or more "
-                "distinct directions, the many-view schedule; else the reference's 1000)")
+                "the run length (default: 500 for a static scene whose training cameras look "
+                "along 16 or more distinct directions, the many-view schedule; else the "
+                "reference's 1000)")
           .Range(count(1))
           .UnsetWhen(Unset::kNegative)
           .Config("sh_increase_interval"),
@@ -624,9 +625,10 @@ std::vector<TrainOption> LessWorkRows() {
           .Switch("--clone-opacity-correction", true,
                   "At each densification give a clone and its source opacity 1 - sqrt(1 - "
                   "alpha) each, so the two blend as the one did (Rota Bulo et al., ECCV 2024; "
-                  "not in the paper, whose clones both keep alpha). Default: on where the "
-                  "training cameras look along 16 or more distinct directions (the many-view "
-                  "schedule), else off. --no-clone-opacity-correction: off, as the paper")
+                  "not in the paper, whose clones both keep alpha). Default: on for a static "
+                  "scene whose training cameras look along 16 or more distinct directions (the "
+                  "many-view schedule), else off. --no-clone-opacity-correction: off, as the "
+                  "paper")
           .Negatable("--no-clone-opacity-correction")
           .IfMissing(false)
           .Config("clone_opacity_correction"),

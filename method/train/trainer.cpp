@@ -511,23 +511,25 @@ void TrainingRun::ResolveSchedules() {
                hdr.method);
 }
 
-// The many-view schedule (optim/lr_schedule.h) for what the options leave unset: from the
-// directions the training cameras look along; --reference keeps the paper's.
+// The many-view schedule (optim/lr_schedule.h) for what the options leave unset: a static
+// model whose training cameras look along many directions; a model with a time axis and
+// --reference keep the paper's.
 void TrainingRun::ApplyManyViewSchedule(OptimizationOptions* requested) const {
   if (requested->sh_increase_interval >= 0 && requested->clone_opacity_correction) return;
   std::vector<Camera> cameras;
   cameras.reserve(train_views_.size());
   for (const TrainView& v : train_views_) cameras.push_back(v.camera);
   const int directions = DistinctViewDirections(cameras);
-  const bool many = !options_.reference && ManyViewSchedule(directions);
+  const bool static_model = !profile_.dynamic || options_.hdr.force_static;
+  const bool many = !options_.reference && static_model && ManyViewSchedule(directions);
   if (requested->sh_increase_interval < 0)
     requested->sh_increase_interval =
         many ? kManyViewShIncreaseInterval : kReferenceShIncreaseInterval;
   if (!requested->clone_opacity_correction) requested->clone_opacity_correction = many;
   const bool correct = *requested->clone_opacity_correction;
   spdlog::info("train: the training cameras look along {} distinct directions (the many-view "
-               "schedule from {}{}): a colour band every {} iterations, clone opacity correction "
-               "{}",
+               "schedule from {}, static models only{}): a colour band every {} iterations, "
+               "clone opacity correction {}",
                directions, kManyViewDirections, options_.reference ? ", not under --reference" : "",
                requested->sh_increase_interval, correct ? "on" : "off");
 }

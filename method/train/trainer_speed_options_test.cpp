@@ -608,9 +608,10 @@ TEST(TrainerSpeedOptions, CloneOpacityCorrectionChangesTheRunAndResumesExactly) 
                        straight, dir.path());
 }
 
-// The many-view schedule: on a ring of 18 training cameras (15 degrees apart) the colour interval
-// and the clone correction, left unset, resolve to 500 and on, as recorded. --reference, values
-// given, a 3-camera rig, and a run resumed from before the rule keep what they had.
+// The many-view schedule: on a static ring of 18 training cameras (15 degrees apart) the colour
+// interval and the clone correction, left unset, resolve to 500 and on, as recorded. The same
+// ring at two times (a time axis), --reference, values given, a 3-camera rig, and a run resumed
+// from before the rule keep what they had.
 TEST(TrainerSpeedOptions, ManyViewScheduleWhereTheCamerasLookAlongSixteenDirections) {
   TempDir dir;
   GaussianSceneOptions ring;
@@ -618,7 +619,14 @@ TEST(TrainerSpeedOptions, ManyViewScheduleWhereTheCamerasLookAlongSixteenDirecti
   ring.num_gaussians = 8;
   ring.num_cameras = 24;  // every 4th held out
   ring.num_timestamps = 2;
-  MakeGaussianScene(ring, dir / "ring");
+  MakeGaussianScene(ring, dir / "dynamic-ring");
+  // The static ring: the same frames, all at time 0.
+  fs::copy(dir / "dynamic-ring", dir / "ring", fs::copy_options::recursive);
+  for (const char* split : {"transforms_train.json", "transforms_test.json"}) {
+    nlohmann::json j = ReadJsonFile(dir / "ring" / split);
+    for (auto& frame : j["frames"]) frame["time"] = 0.0;
+    WriteJsonFile(dir / "ring" / split, j);
+  }
   MakeTinyScene(dir / "rig");
   using Schedule = std::pair<int, bool>;
   const auto recorded = [&](const char* name) {
@@ -635,6 +643,8 @@ TEST(TrainerSpeedOptions, ManyViewScheduleWhereTheCamerasLookAlongSixteenDirecti
   EXPECT_EQ(recorded("many"), Schedule(500, true));
   Train(options("rig", "few", 5));
   EXPECT_EQ(recorded("few"), Schedule(1000, false));
+  Train(options("dynamic-ring", "dynamic", 5));
+  EXPECT_EQ(recorded("dynamic"), Schedule(1000, false));
   TrainOptions reference = options("ring", "reference", 5);
   reference.reference = true;
   Train(reference);
