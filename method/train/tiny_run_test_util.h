@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "core/dataset/demo_scene.h"
+#include "core/files/json_util.h"
 #include "core/radiometry/exposure_stack.h"
 #include "method/train/trainer.h"
 
@@ -23,6 +24,15 @@ inline void MakeTinyHdrScene(const std::filesystem::path& root, int size) {
   DatasetSynthesisOptions ldr;
   ldr.noise.seed = 1;
   SynthesizeDatasetLdr(root, ldr);
+}
+
+// Makes a scene static: every frame of its train and test splits at time 0.
+inline void MakeStatic(const std::filesystem::path& root) {
+  for (const char* split : {"transforms_train.json", "transforms_test.json"}) {
+    nlohmann::json j = ReadJsonFile(root / split);
+    for (auto& frame : j["frames"]) frame["time"] = 0.0;
+    WriteJsonFile(root / split, j);
+  }
 }
 
 // 400 random points; densification, opacity reset and the SH schedule within 60 iterations

@@ -469,6 +469,7 @@ void TrainingRun::ResolveSchedules() {
   const HdrTrainingOptions& hdr = options_.hdr;
   OptimizationOptions requested = options_.optimization;
   if (saved_config_) KeepSavedSchedules(*saved_config_, &requested);
+  temporal_ = profile_.dynamic && !hdr.force_static;
   ApplyManyViewSchedule(&requested);
   const double image_size = ImageSize(train_views_);
   opt_ = requested.Resolved(image_size, hdr.color_mode == ColorMode::kLogHdr);
@@ -505,7 +506,6 @@ void TrainingRun::ResolveSchedules() {
     spdlog::info("train: Gaussian budget {} ({}, at least {})", opt_.max_gaussians, rule,
                  kMinGaussianBudget);
   }
-  temporal_ = profile_.dynamic && !hdr.force_static;
   spdlog::info("train: {} train / {} test views, extent {:.3f}, {}, method {}", train_views_.size(),
                test_views_.size(), extent_, temporal_ ? "dynamic" : "static (no time axis)",
                hdr.method);
@@ -520,8 +520,7 @@ void TrainingRun::ApplyManyViewSchedule(OptimizationOptions* requested) const {
   cameras.reserve(train_views_.size());
   for (const TrainView& v : train_views_) cameras.push_back(v.camera);
   const int directions = DistinctViewDirections(cameras);
-  const bool static_model = !profile_.dynamic || options_.hdr.force_static;
-  const bool many = !options_.reference && static_model && ManyViewSchedule(directions);
+  const bool many = !options_.reference && !temporal_ && ManyViewSchedule(directions);
   if (requested->sh_increase_interval < 0)
     requested->sh_increase_interval =
         many ? kManyViewShIncreaseInterval : kReferenceShIncreaseInterval;

@@ -622,11 +622,7 @@ TEST(TrainerSpeedOptions, ManyViewScheduleWhereTheCamerasLookAlongSixteenDirecti
   MakeGaussianScene(ring, dir / "dynamic-ring");
   // The static ring: the same frames, all at time 0.
   fs::copy(dir / "dynamic-ring", dir / "ring", fs::copy_options::recursive);
-  for (const char* split : {"transforms_train.json", "transforms_test.json"}) {
-    nlohmann::json j = ReadJsonFile(dir / "ring" / split);
-    for (auto& frame : j["frames"]) frame["time"] = 0.0;
-    WriteJsonFile(dir / "ring" / split, j);
-  }
+  train_testing::MakeStatic(dir / "ring");
   MakeTinyScene(dir / "rig");
   using Schedule = std::pair<int, bool>;
   const auto recorded = [&](const char* name) {

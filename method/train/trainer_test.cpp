@@ -34,13 +34,7 @@ void MakeScene(const fs::path& root) {
 }
 
 // Puts every frame of a scene at one instant: a static capture.
-void MakeStatic(const fs::path& root) {
-  for (const char* split : {"transforms_train.json", "transforms_test.json"}) {
-    nlohmann::json j = ReadJsonFile(root / split);
-    for (auto& frame : j["frames"]) frame["time"] = 0.0;
-    WriteJsonFile(root / split, j);
-  }
-}
+using train_testing::MakeStatic;
 
 TEST(Trainer, SameSeedSameRun) {
   TempDir dir;
