@@ -12,7 +12,7 @@ images in name order, resized by ffmpeg's area filter) and OUT/points.ply (the m
                  text in UNDISTORTED/txt (`colmap model_converter --output_type TXT`)
     HELD: comma-separated frame indices, e.g. 3,8
 
-Made for the real Sceaux Castle photos (benchmark/proofs/castle_scene.sh, issue 55).
+Made for real captures (benchmark/proofs/capture_scene.sh, issue 55).
 """
 import json
 import os
