@@ -142,25 +142,13 @@ inline std::int64_t StaticGaussianBudget(double view_pixels, double content_view
                                                  kStaticGaussiansPerViewPixel));
 }
 
-// The many-view schedule (issue 55; not under --reference): a static model (no time axis) whose
-// training cameras look along at least kManyViewDirections distinct directions
-// (train/view_directions.h) gets a colour band every kManyViewShIncreaseInterval iterations
-// instead of the reference's 1000, and the clone opacity correction
-// (OptimizationOptions::clone_opacity_correction). Sixteen directions are as many as a degree-3
-// band has coefficients per channel: from fewer, the top bands are fitted to the few directions
-// seen (studio, an 8-camera rig: -0.8 dB held-out LDR on one seed of two). On syn200_20k (a
-// static ring of 19) it took the time to OpenSplat's held-out PSNR from 13-15x to 21-24x less
-// than OpenSplat's on three seeds of four. A model with a time axis keeps the reference's: on a
-// dynamic 19-camera ring the faster schedule also brings the time bands in early, cost 9-13%
-// more CPU and lost 0.4 dB on one seed of two, and on one moving camera the pair was level with
-// the defaults before at best (docs/history/time-to-quality.md, "The many-view schedule by
-// default").
-inline constexpr int kManyViewDirections = 16;
-inline constexpr int kManyViewShIncreaseInterval = 500;
+// The reference's colour schedule: one more SH band (and, with a time axis, time band) every
+// 1000 iterations. A band every 500 with the clone opacity correction
+// (`--sh-increase-interval 500 --clone-opacity-correction`) reaches a static ring's held-out
+// PSNR much sooner, but ends 0.4-1.0 dB lower on three of four seeds of a real capture at 20000
+// iterations, so it is not a default anywhere (docs/history/time-to-quality.md, "The many-view
+// schedule on scenes it was not set on").
 inline constexpr int kReferenceShIncreaseInterval = 1000;
-inline bool ManyViewSchedule(int distinct_view_directions) {
-  return distinct_view_directions >= kManyViewDirections;
-}
 
 // Optimisation settings with the HDR-4DGS HDR-4D-Syn defaults (which are the 4DGS ones except for
 // iterations, the densification interval and the tone mapper). Learning rates of the 4D mean
@@ -219,8 +207,9 @@ struct OptimizationOptions {
   // iterations) leave the model no time to recover between them (docs/history/accuracy.md).
   int opacity_reset_interval = kFollowRunLength;
   double prune_opacity = 0.005;
-  // Negative: by the scene's views (the many-view schedule above, set by the trainer before
-  // Resolved(), which gives what is still negative the reference's 1000).
+  // Negative: the reference's 1000 (Resolved()); kept unset in a run's request so that a resumed
+  // run takes the value its config.json recorded (runs of 2026-12-06 recorded 500 on some
+  // static scenes).
   int sh_increase_interval = kFollowRunLength;
   // Gaussian budget (the reference's densify_until_num_points): densification never takes the
   // count past it. 0 = none; kFollowRunLength (any negative value) = the default budget from
@@ -273,8 +262,7 @@ struct OptimizationOptions {
   // --clone-opacity-correction: a clone and its source both get opacity 1 - sqrt(1 - alpha), so
   // the two copies (same place, same shape) blend as the one did before (Rota Bulo et al.,
   // "Revising Densification in Gaussian Splatting", ECCV 2024); false: both keep alpha, as the
-  // paper's densification. Unset: by the scene's views (the many-view schedule above, set by
-  // the trainer); Resolved() reads what is still unset as false.
+  // paper's densification. Unset: false (Resolved()), or on resume what the run recorded.
   std::optional<bool> clone_opacity_correction;
   static constexpr double kDefaultColorBandSignal = 2.0;
   static constexpr int kDefaultStopWindow = 1000;

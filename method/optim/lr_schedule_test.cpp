@@ -92,9 +92,9 @@ TEST(OptimizationOptions, ReferenceDefaults) {
   EXPECT_EQ(o.clone_opacity_correction, false);
 }
 
-// The many-view schedule's two fields are unset by default (the trainer sets them from the
-// scene's views); what is still unset resolves to the reference's, and a set value stays.
-TEST(OptimizationOptions, ManyViewFieldsResolveToTheReferenceUnlessSet) {
+// The colour schedule and the clone correction are unset by default (so that a resumed run takes
+// what it recorded); unset resolves to the reference's, and a set value stays.
+TEST(OptimizationOptions, ColourScheduleFieldsResolveToTheReferenceUnlessSet) {
   OptimizationOptions o;
   EXPECT_LT(o.sh_increase_interval, 0);
   EXPECT_FALSE(o.clone_opacity_correction.has_value());
@@ -104,8 +104,9 @@ TEST(OptimizationOptions, ManyViewFieldsResolveToTheReferenceUnlessSet) {
   const OptimizationOptions r = o.Resolved(200.0);
   EXPECT_EQ(r.sh_increase_interval, 500);
   EXPECT_EQ(r.clone_opacity_correction, true);
-  EXPECT_FALSE(ManyViewSchedule(kManyViewDirections - 1));
-  EXPECT_TRUE(ManyViewSchedule(kManyViewDirections));
+  const OptimizationOptions unset = OptimizationOptions{}.Resolved(200.0);
+  EXPECT_EQ(unset.sh_increase_interval, kReferenceShIncreaseInterval);
+  EXPECT_EQ(unset.clone_opacity_correction, false);
 }
 
 TEST(OptimizationOptions, SchedulesFollowTheRunLengthUnlessSet) {

@@ -56,7 +56,6 @@
 #include "method/train/train_views.h"
 #include "method/train/color_bands.h"
 #include "method/train/content_views.h"
-#include "method/train/view_directions.h"
 #include "method/render/view_renderer.h"
 
 namespace hdr4d::method {
@@ -241,7 +240,6 @@ class TrainingRun {
   void CheckDataUnchanged();
   void LoadTrainingViews();
   void ResolveSchedules();
-  void ApplyManyViewSchedule(OptimizationOptions* requested) const;
   std::optional<double> StaticContentViews();  // a static scene's views of content, for its budget
   void ResolveLearnedBackground();
   void StartCameraCorrection();
@@ -470,7 +468,6 @@ void TrainingRun::ResolveSchedules() {
   OptimizationOptions requested = options_.optimization;
   if (saved_config_) KeepSavedSchedules(*saved_config_, &requested);
   temporal_ = profile_.dynamic && !hdr.force_static;
-  ApplyManyViewSchedule(&requested);
   const double image_size = ImageSize(train_views_);
   opt_ = requested.Resolved(image_size, hdr.color_mode == ColorMode::kLogHdr);
   if (opt_.max_gaussians < 0) {
@@ -509,28 +506,6 @@ void TrainingRun::ResolveSchedules() {
   spdlog::info("train: {} train / {} test views, extent {:.3f}, {}, method {}", train_views_.size(),
                test_views_.size(), extent_, temporal_ ? "dynamic" : "static (no time axis)",
                hdr.method);
-}
-
-// The many-view schedule (optim/lr_schedule.h) for what the options leave unset: a static
-// model whose training cameras look along many directions; a model with a time axis and
-// --reference keep the paper's.
-void TrainingRun::ApplyManyViewSchedule(OptimizationOptions* requested) const {
-  if (requested->sh_increase_interval >= 0 && requested->clone_opacity_correction) return;
-  std::vector<Camera> cameras;
-  cameras.reserve(train_views_.size());
-  for (const TrainView& v : train_views_) cameras.push_back(v.camera);
-  const int directions = DistinctViewDirections(cameras);
-  const bool many = !options_.reference && !temporal_ && ManyViewSchedule(directions);
-  if (requested->sh_increase_interval < 0)
-    requested->sh_increase_interval =
-        many ? kManyViewShIncreaseInterval : kReferenceShIncreaseInterval;
-  if (!requested->clone_opacity_correction) requested->clone_opacity_correction = many;
-  const bool correct = *requested->clone_opacity_correction;
-  spdlog::info("train: the training cameras look along {} distinct directions (the many-view "
-               "schedule from {}, static models only{}): a colour band every {} iterations, "
-               "clone opacity correction {}",
-               directions, kManyViewDirections, options_.reference ? ", not under --reference" : "",
-               requested->sh_increase_interval, correct ? "on" : "off");
 }
 
 // How many views' worth of content the training cameras hold (train/content_views.h), from the

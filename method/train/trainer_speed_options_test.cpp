@@ -608,11 +608,11 @@ TEST(TrainerSpeedOptions, CloneOpacityCorrectionChangesTheRunAndResumesExactly) 
                        straight, dir.path());
 }
 
-// The many-view schedule: on a static ring of 18 training cameras (15 degrees apart) the colour
-// interval and the clone correction, left unset, resolve to 500 and on, as recorded. The same
-// ring at two times (a time axis), --reference, values given, a 3-camera rig, and a run resumed
-// from before the rule keep what they had.
-TEST(TrainerSpeedOptions, ManyViewScheduleWhereTheCamerasLookAlongSixteenDirections) {
+// The colour schedule and the clone correction, left unset, are the reference's on every scene,
+// a static ring of 18 training cameras (15 degrees apart) too: the many-view rule of 2026-12-06
+// gave it 500 and on, and is withdrawn. Given values are recorded as given. A run recorded with
+// 500 / on (by that rule) resumes on them; a record from before the correction resumes as off.
+TEST(TrainerSpeedOptions, ColourScheduleIsTheReferencesUnlessGivenAndResumesAsRecorded) {
   TempDir dir;
   GaussianSceneOptions ring;
   ring.size = 16;
@@ -620,10 +620,8 @@ TEST(TrainerSpeedOptions, ManyViewScheduleWhereTheCamerasLookAlongSixteenDirecti
   ring.num_cameras = 24;  // every 4th held out
   ring.num_timestamps = 2;
   MakeGaussianScene(ring, dir / "dynamic-ring");
-  // The static ring: the same frames, all at time 0.
   fs::copy(dir / "dynamic-ring", dir / "ring", fs::copy_options::recursive);
-  train_testing::MakeStatic(dir / "ring");
-  MakeTinyScene(dir / "rig");
+  train_testing::MakeStatic(dir / "ring");  // the same frames, all at time 0
   using Schedule = std::pair<int, bool>;
   const auto recorded = [&](const char* name) {
     const nlohmann::json o = ReadJsonFile(dir / name / "config.json")["optimization"];
@@ -632,33 +630,30 @@ TEST(TrainerSpeedOptions, ManyViewScheduleWhereTheCamerasLookAlongSixteenDirecti
   };
   const auto options = [&](const char* scene, const char* name, int iterations) {
     TrainOptions o = TinyRun(dir / scene, dir / name, iterations);
-    o.optimization.sh_increase_interval = kFollowRunLength;  // unset: by the scene
+    o.optimization.sh_increase_interval = kFollowRunLength;  // unset, as on the command line
     return o;
   };
-  Train(options("ring", "many", 5));
-  EXPECT_EQ(recorded("many"), Schedule(500, true));
-  Train(options("rig", "few", 5));
-  EXPECT_EQ(recorded("few"), Schedule(1000, false));
+  Train(options("ring", "static", 5));
+  EXPECT_EQ(recorded("static"), Schedule(1000, false));
   Train(options("dynamic-ring", "dynamic", 5));
   EXPECT_EQ(recorded("dynamic"), Schedule(1000, false));
-  TrainOptions reference = options("ring", "reference", 5);
-  reference.reference = true;
-  Train(reference);
-  EXPECT_EQ(recorded("reference"), Schedule(1000, false));
   TrainOptions given = options("ring", "given", 5);
-  given.optimization.sh_increase_interval = 700;
-  given.optimization.clone_opacity_correction = false;
+  given.optimization.sh_increase_interval = 500;
+  given.optimization.clone_opacity_correction = true;
   Train(given);
-  EXPECT_EQ(recorded("given"), Schedule(700, false));
-  // A run from before the rule (and before the correction): resumed, it keeps the reference's.
-  nlohmann::json old = ReadJsonFile(dir / "many" / "config.json");
-  old["optimization"]["sh_increase_interval"] = 1000;
+  EXPECT_EQ(recorded("given"), Schedule(500, true));
+  // Resumed with nothing given, each run keeps what it recorded.
+  TrainOptions again = options("ring", "given", 8);
+  again.resume = true;
+  Train(again);
+  EXPECT_EQ(recorded("given"), Schedule(500, true));
+  nlohmann::json old = ReadJsonFile(dir / "static" / "config.json");
   old["optimization"].erase("clone_opacity_correction");
-  WriteJsonFile(dir / "many" / "config.json", old);
-  TrainOptions resumed = options("ring", "many", 8);
+  WriteJsonFile(dir / "static" / "config.json", old);
+  TrainOptions resumed = options("ring", "static", 8);
   resumed.resume = true;
   Train(resumed);
-  EXPECT_EQ(recorded("many"), Schedule(1000, false));
+  EXPECT_EQ(recorded("static"), Schedule(1000, false));
 }
 }  // namespace
 }  // namespace hdr4d::method
