@@ -26,13 +26,22 @@ cp "${list[@]}" "$out/img/"
 db=$out/db.db
 rm -f "$db"
 echo "capture_scene.sh: COLMAP on ${#list[@]} photos (log: $out/colmap.log)"
-colmap feature_extractor --database_path "$db" --image_path "$out/img" --ImageReader.single_camera 1 \
+: > "$out/colmap.log"
+# One COLMAP step; a failed one stops here with its name and the log's last lines (under set -e
+# it would otherwise end the script without a word: the mapper exits 1 when no model forms).
+step() {
+  colmap "$@" >> "$out/colmap.log" 2>&1 && return
+  echo "capture_scene.sh: colmap $1 failed on $photos; the end of $out/colmap.log:" >&2
+  tail -3 "$out/colmap.log" >&2
+  exit 1
+}
+step feature_extractor --database_path "$db" --image_path "$out/img" --ImageReader.single_camera 1 \
   --ImageReader.camera_model SIMPLE_RADIAL --SiftExtraction.max_image_size 1000 \
-  --SiftExtraction.max_num_features 4000 --SiftExtraction.use_gpu 0 > "$out/colmap.log" 2>&1
-colmap exhaustive_matcher --database_path "$db" --SiftMatching.use_gpu 0 >> "$out/colmap.log" 2>&1
-colmap mapper --database_path "$db" --image_path "$out/img" --output_path "$out/sparse" >> "$out/colmap.log" 2>&1
+  --SiftExtraction.max_num_features 4000 --SiftExtraction.use_gpu 0
+step exhaustive_matcher --database_path "$db" --SiftMatching.use_gpu 0
+step mapper --database_path "$db" --image_path "$out/img" --output_path "$out/sparse"
 [ -f "$out/sparse/0/images.bin" ] || { echo "capture_scene.sh: COLMAP made no model; see $out/colmap.log" >&2; exit 1; }
-colmap image_undistorter --image_path "$out/img" --input_path "$out/sparse/0" --output_path "$out/und" \
-  --output_type COLMAP >> "$out/colmap.log" 2>&1
-colmap model_converter --input_path "$out/und/sparse" --output_path "$out/und/txt" --output_type TXT >> "$out/colmap.log" 2>&1
+step image_undistorter --image_path "$out/img" --input_path "$out/sparse/0" \
+  --output_path "$out/und" --output_type COLMAP
+step model_converter --input_path "$out/und/sparse" --output_path "$out/und/txt" --output_type TXT
 python3 "$here/colmap_to_nerfstudio.py" "$out/und" "$out/scene" "$width" "$height" "$held"
