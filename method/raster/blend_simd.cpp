@@ -409,24 +409,6 @@ HWY_INLINE void ReduceLanes(const V* acc, float* out) {
       if (base + 4 + i < kCount) out[base + 4 + i] = lanes[4 * i + 2];
     }
   }
-#elif HWY_TARGET == HWY_AVX2
-  // Groups of 8 accumulators of 8 lanes: three rounds of pairwise horizontal adds leave each
-  // accumulator's two 128-bit halves summed side by side, one cross-half add finishes them (9
-  // instructions per group of 8 instead of several per accumulator with SumOfLanes).
-  static_assert(hn::MaxLanes(D()) == 8);
-  for (int base = 0; base < kCount; base += 8) {
-    __m256 v[8];
-    for (int k = 0; k < 8; ++k) v[k] = base + k < kCount ? acc[base + k].raw : _mm256_setzero_ps();
-    const __m256 h01 = _mm256_hadd_ps(v[0], v[1]), h23 = _mm256_hadd_ps(v[2], v[3]);
-    const __m256 h45 = _mm256_hadd_ps(v[4], v[5]), h67 = _mm256_hadd_ps(v[6], v[7]);
-    // Per 128-bit half: the half's sums of accumulators 0-3 (q0) and 4-7 (q1).
-    const __m256 q0 = _mm256_hadd_ps(h01, h23), q1 = _mm256_hadd_ps(h45, h67);
-    const __m256 sums = _mm256_add_ps(_mm256_permute2f128_ps(q0, q1, 0x20),
-                                      _mm256_permute2f128_ps(q0, q1, 0x31));
-    HWY_ALIGN float lanes[8];
-    _mm256_store_ps(lanes, sums);
-    for (int k = 0; k < 8 && base + k < kCount; ++k) out[base + k] = lanes[k];
-  }
 #else
   for (int k = 0; k < kCount; ++k) out[k] = hn::GetLane(hn::SumOfLanes(d, acc[k]));
 #endif
