@@ -591,7 +591,7 @@ void ForwardTileImpl(const TileJob& job, int tile) {
   std::int32_t* rows = list_scratch.Get((list_count + 4) * padded + 2 * lanes);
   std::int32_t* row0 = rows;
   std::int32_t* row1 = rows + padded;
-  std::int32_t* col0 = rows + 2 * padded;  // read only with several segments
+  std::int32_t* col0 = rows + 2 * padded;  // filled and read only with several segments
   std::int32_t* col1 = rows + 3 * padded;
   std::int32_t* lists = rows + 4 * padded;  // kRowPairs x segments lists of `padded`
   // Structure-of-arrays copies of what the row test below needs.
@@ -608,8 +608,10 @@ void ForwardTileImpl(const TileJob& job, int tile) {
     const float* r = j < count ? record(j) : nullptr;
     row0[j] = j < count ? box(j, kBoxRow0) : kTileSize;
     row1[j] = j < count ? box(j, kBoxRow1) : -1;
-    col0[j] = j < count ? box(j, kBoxCol0) : kTileSize;
-    col1[j] = j < count ? box(j, kBoxCol1) : -1;
+    if (segments > 1) {
+      col0[j] = j < count ? box(j, kBoxCol0) : kTileSize;
+      col1[j] = j < count ? box(j, kBoxCol1) : -1;
+    }
     // Only when a > 0 (power concave in dx on a row) and the reach box is not the whole tile
     // because of an indefinite conic; otherwise all zeros, which the test never prunes.
     const bool exact = j < count && r[kRecHalfNegA] < 0.0f && std::isfinite(r[kRecHalfNegA]) &&
