@@ -4,8 +4,10 @@
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/partitioner.h>
+#include <tbb/task_group.h>
 
 #include <algorithm>
+#include <exception>
 
 namespace hdr4d {
 
@@ -46,6 +48,28 @@ void ParallelForChunks(std::int64_t n,
           fn(c * grain, std::min(n, (c + 1) * grain));
       },
       tbb::simple_partitioner());
+}
+
+void RunAlongside(const std::function<void()>& side, const std::function<void()>& main) {
+  std::exception_ptr failure;
+  const auto keep = [&failure](const std::function<void()>& job) {
+    try {
+      job();
+    } catch (...) {
+      if (!failure) failure = std::current_exception();
+    }
+  };
+  if (MaxThreads() == 1) {
+    keep(main);
+    keep(side);
+  } else {
+    tbb::task_group group;
+    group.run(side);
+    keep(main);
+    // side reads buffers the caller owns: it must be done before anything unwinds.
+    keep([&group] { group.wait(); });
+  }
+  if (failure) std::rethrow_exception(failure);
 }
 
 }  // namespace hdr4d

@@ -32,6 +32,13 @@ void ParallelForChunks(std::int64_t n,
                        std::int64_t grain,
                        const std::function<void(std::int64_t, std::int64_t)>& fn);
 
+// Runs `side` (one serial job) as a task beside `main`, which runs on the calling thread, and
+// returns when both are done: a serial job that would leave the other threads idle fills a gap
+// in main's parallel loops instead. Neither may write what the other reads. With one thread,
+// main runs first, then side. Both always run to their end; then an exception from either
+// reaches the caller (main's, when both threw).
+void RunAlongside(const std::function<void()>& side, const std::function<void()>& main);
+
 // Calls fn(i) for every i in [0, n).
 template <typename Fn>
 void ParallelFor(std::int64_t n, std::int64_t grain, Fn&& fn) {

@@ -49,6 +49,42 @@ TEST(Parallel, ThreadLimitHoldsWhileAlive) {
   EXPECT_EQ(MaxThreads(), all);
 }
 
+TEST(Parallel, RunAlongsideRunsBothAndWaitsForTheSideJob) {
+  for (const int threads : {1, 2}) {
+    ThreadLimit limit(threads);
+    std::atomic<bool> side_done{false};
+    long long main_sum = 0;
+    RunAlongside([&] { side_done = true; },
+                 [&] {
+                   std::vector<long long> parts(64, 0);
+                   ParallelFor(64, 1, [&](std::int64_t i) { parts[i] = i; });
+                   main_sum = std::accumulate(parts.begin(), parts.end(), 0LL);
+                 });
+    EXPECT_TRUE(side_done.load()) << threads;
+    EXPECT_EQ(main_sum, 63 * 64 / 2) << threads;
+  }
+}
+
+TEST(Parallel, RunAlongsideRethrowsOnlyAfterTheSideJobHasFinished) {
+  for (const int threads : {1, 2}) {
+    ThreadLimit limit(threads);
+    // main throws at once; the side job (which would read main's buffers) is over by the time
+    // the caller sees the exception.
+    std::atomic<int> side_steps{0};
+    const auto slow_side = [&] {
+      for (int i = 0; i < 1000; ++i) side_steps.fetch_add(1);
+    };
+    EXPECT_THROW(RunAlongside(slow_side, [] { throw std::runtime_error("main"); }),
+                 std::runtime_error);
+    EXPECT_EQ(side_steps.load(), 1000) << threads;
+    // An exception from the side job reaches the caller after main has run.
+    bool main_ran = false;
+    EXPECT_THROW(RunAlongside([] { throw std::logic_error("side"); }, [&] { main_ran = true; }),
+                 std::logic_error);
+    EXPECT_TRUE(main_ran) << threads;
+  }
+}
+
 TEST(Progress, LogLinesAtMostOnePerTenthAndOneFinal) {
   // stderr is not a terminal under ctest, so plain lines are written: capture them.
   ::testing::internal::CaptureStderr();

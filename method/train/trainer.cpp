@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <set>
@@ -257,10 +258,12 @@ class TrainingRun {
   void SetColorDegrees(int it);
   GradientRowsDone WithBandProbe(GradientRowsDone step_rows);
   void EndBandProbe(int it, bool rows_stored);
-  void BackwardAndUpdate(const TrainView& view, int it, double loss_value);
+  void BackwardAndUpdate(const TrainView& view, int it, double loss_value,
+                         const std::function<void()>& beside);
   double BatchBackwardAndUpdate(int it, const float** ldr_out, std::size_t* pixels);
   void FinishUpdate(int it, double loss_value);
-  void ShowProgress(double loss_value, const float* ldr_out, std::size_t pixels);
+  double TrainingPsnr(const float* ldr_out, std::size_t pixels) const;
+  void ShowProgress(double loss_value, std::optional<double> psnr);
   void EvaluateHeldOut(int it);  // the test curve and the val views, when due
   void CheckpointIfDue(int it);
   std::string FlatToneCurveCheck(int it);
@@ -895,11 +898,14 @@ void TrainingRun::Step() {
   if (opt_.batch_size == 1) {
     const TrainView& view = train_views_[loop_.NextView(train_views_.size())];
     const double loss_value = ViewLoss(view, it, &ldr_out, &pixels);
-    BackwardAndUpdate(view, it, loss_value);
-    ShowProgress(loss_value, ldr_out, pixels);
+    std::optional<double> psnr;
+    BackwardAndUpdate(view, it, loss_value, [&] {
+      if (ldr_out) psnr = TrainingPsnr(ldr_out, pixels);
+    });
+    ShowProgress(loss_value, psnr);
   } else {
     const double loss_value = BatchBackwardAndUpdate(it, &ldr_out, &pixels);
-    ShowProgress(loss_value, ldr_out, pixels);
+    ShowProgress(loss_value, ldr_out ? std::optional(TrainingPsnr(ldr_out, pixels)) : std::nullopt);
   }
   CheckpointIfDue(it);
   if (it % kToneCurveCheckEvery == 0) FlatToneCurveCheck(it);
@@ -1031,11 +1037,18 @@ void TrainingRun::EndBandProbe(int it, bool rows_stored) {
 }
 
 // The backward with the model's optimiser step fused into it, then FinishUpdate.
-void TrainingRun::BackwardAndUpdate(const TrainView& view, int it, double loss_value) {
+// `beside` runs alongside the backward (RunAlongside), which must not write what it reads: the
+// progress PSNR, a sequential sum over the image that would otherwise leave a thread idle.
+void TrainingRun::BackwardAndUpdate(const TrainView& view, int it, double loss_value,
+                                    const std::function<void()>& beside) {
   const GradientRowsDone step_rows = WithBandProbe(
       optimizer_->Begin(DensifiesAt(it), ResetsOpacityAt(it), model_.size(), ActiveRestColumns()));
-  RenderBackward(model_, camera_, view.time, render_, &state_, dL_dimage_.data(), &grads_,
-                 step_rows, GeometryGradient());
+  // The backward reads the loss's gradient image and the render state, not the final LDR image
+  // or the target.
+  RunAlongside(beside, [&] {
+    RenderBackward(model_, camera_, view.time, render_, &state_, dL_dimage_.data(), &grads_,
+                   step_rows, GeometryGradient());
+  });
   EndBandProbe(it, /*rows_stored=*/!step_rows);
   if (tone_mapper_) tone_mapper_->EndFrameBackward();
   if (it < opt_.densify_until)
@@ -1132,19 +1145,24 @@ void TrainingRun::FinishUpdate(int it, double loss_value) {
   if (ResetsOpacityAt(it)) ResetOpacity(&model_, &optimizer_->adam());
 }
 
-// The loss, the training-view PSNR of the final LDR image and the Gaussian count on the
-// progress line; the PSNR is also kept for results.json.
-void TrainingRun::ShowProgress(double loss_value, const float* ldr_out, std::size_t pixels) {
+// The training-view PSNR of the final LDR image against the target, in one sequential sum (the
+// curve of results.json is bit for bit the seed binary's).
+double TrainingRun::TrainingPsnr(const float* ldr_out, std::size_t pixels) const {
+  double squared = 0;
+  for (std::size_t i = 0; i < pixels * 3; ++i) {
+    const double d = std::clamp(ldr_out[i], 0.0f, 1.0f) - gt_[i];
+    squared += d * d;
+  }
+  return -10.0 * std::log10(std::max(squared / (pixels * 3), 1e-20));
+}
+
+// The loss, the training-view PSNR (none under HDR-only supervision) and the Gaussian count on
+// the progress line; the PSNR is also kept for results.json.
+void TrainingRun::ShowProgress(double loss_value, std::optional<double> psnr) {
   std::string shown = fmt::format("loss {:.4f}", loss_value);
-  if (ldr_out) {
-    double squared = 0;
-    for (std::size_t i = 0; i < pixels * 3; ++i) {
-      const double d = std::clamp(ldr_out[i], 0.0f, 1.0f) - gt_[i];
-      squared += d * d;
-    }
-    const double psnr = -10.0 * std::log10(std::max(squared / (pixels * 3), 1e-20));
-    loop_.psnr_curve.push_back(psnr);
-    shown += fmt::format(" psnr {:.2f}", psnr);
+  if (psnr) {
+    loop_.psnr_curve.push_back(*psnr);
+    shown += fmt::format(" psnr {:.2f}", *psnr);
   }
   progress_->Advance(1, fmt::format("{} N {}", shown, model_.size()));
 }
