@@ -8,6 +8,7 @@
 #include <numbers>
 
 #include "core/util/error.h"
+#include "core/util/parallel.h"
 #include "core/util/sigmoid.h"
 #include "method/gaussian/rotation4d.h"
 
@@ -244,6 +245,9 @@ std::vector<float> DensifyStats::MeanGradient() const {
   return mean;
 }
 
+// Gaussians per chunk of the per-view statistics (a chunk costs a wake-up).
+constexpr std::int64_t kStatsGrain = 8192;
+
 void AccumulateStats(const std::vector<float>& mean2d_grad,
                      const std::vector<int>& radius,
                      int width,
@@ -256,14 +260,17 @@ void AccumulateStats(const std::vector<float>& mean2d_grad,
               stats->denom.size() == n && stats->max_radii.size() == n);
   // d(pixel)/d(NDC) = size / 2, so the NDC gradient is the pixel one times size / 2.
   const double sx = 0.5 * width / reduction, sy = 0.5 * height / reduction;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (radius[i] <= 0) continue;
+  // Every Gaussian on its own, so in parallel (a serial pass here left the other threads idle
+  // on every step).
+  ParallelFor(static_cast<std::int64_t>(n), kStatsGrain, [&](std::int64_t j) {
+    const auto i = static_cast<std::size_t>(j);
+    if (radius[i] <= 0) return;
     const double gx = mean2d_grad[2 * i] * sx, gy = mean2d_grad[2 * i + 1] * sy;
     stats->grad_accum[i] += static_cast<float>(std::sqrt(gx * gx + gy * gy));
     stats->denom[i] += 1.0f;
     stats->max_radii[i] =
         std::max(stats->max_radii[i], static_cast<float>(radius[i] * reduction));
-  }
+  });
 }
 
 void AccumulateMaxWeight(const std::vector<float>& view_max_weight, DensifyStats* stats) {

@@ -53,6 +53,10 @@ std::vector<std::uint8_t> ReadViewPixels(const std::filesystem::path& path,
 
 }  // namespace
 
+// Values per chunk when a view's stored target becomes floats on every step (in parallel: a
+// serial pass left the other threads idle).
+constexpr std::int64_t kConvertGrain = 1 << 16;
+
 void TrainView::ToFloat(std::vector<float>* out) const {
   std::vector<std::uint8_t> read;
   if (rgb.empty()) {
@@ -62,14 +66,22 @@ void TrainView::ToFloat(std::vector<float>* out) const {
   const std::vector<std::uint8_t>& pixels = rgb.empty() ? read : rgb;
   out->resize(pixels.size());
   constexpr float kScale = 1.0f / 255.0f;
-  for (std::size_t i = 0; i < pixels.size(); ++i) (*out)[i] = pixels[i] * kScale;
+  float* to = out->data();
+  ParallelForChunks(static_cast<std::int64_t>(pixels.size()), kConvertGrain,
+                    [&](std::int64_t b, std::int64_t e) {
+                      for (std::int64_t i = b; i < e; ++i) to[i] = pixels[i] * kScale;
+                    });
 }
 
 void TrainView::HdrMuToFloat(std::vector<float>* out) const {
   HDR4D_CHECK(!hdr_mu.empty());
   out->resize(hdr_mu.size());
   constexpr float kScale = 1.0f / 65535.0f;
-  for (std::size_t i = 0; i < hdr_mu.size(); ++i) (*out)[i] = hdr_mu[i] * kScale;
+  float* to = out->data();
+  ParallelForChunks(static_cast<std::int64_t>(hdr_mu.size()), kConvertGrain,
+                    [&](std::int64_t b, std::int64_t e) {
+                      for (std::int64_t i = b; i < e; ++i) to[i] = hdr_mu[i] * kScale;
+                    });
 }
 
 namespace {
