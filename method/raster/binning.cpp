@@ -25,24 +25,85 @@ std::uint32_t DepthKey(float depth) {
 
 // Stable LSD radix sort of (key, id) pairs by key, three passes of 11/11/10 bits; a pass whose
 // digit is the same for every key is skipped (common for the high bits of depths in one range).
+// From kParallelSortMin pairs on, each pass counts and scatters fixed chunks in parallel: a
+// chunk's pairs of one digit go, in their order, after the earlier chunks' pairs of that digit,
+// which is the serial pass's permutation exactly.
+constexpr int kSortPasses = 3;
+constexpr std::array<int, kSortPasses> kSortShift = {0, 11, 22};
+constexpr int kSortBuckets = 2048;
+constexpr std::size_t kSortChunk = std::size_t{1} << 15;  // pairs per chunk of a parallel pass
+constexpr std::size_t kParallelSortMin = 2 * kSortChunk;
+
+std::uint32_t Digit(std::uint32_t key, int pass) {
+  return (key >> kSortShift[pass]) & (kSortBuckets - 1);
+}
+
+// One pass in parallel chunks; false (nothing moved) when every key has the same digit.
+bool ParallelRadixPass(int pass,
+                       std::vector<std::uint32_t>& keys,
+                       std::vector<std::int32_t>& ids,
+                       std::vector<std::uint32_t>& keys_tmp,
+                       std::vector<std::int32_t>& ids_tmp) {
+  const std::size_t n = keys.size();
+  const std::size_t chunks = (n + kSortChunk - 1) / kSortChunk;
+  std::vector<std::array<std::uint32_t, kSortBuckets>> next(chunks);
+  ParallelFor(static_cast<std::int64_t>(chunks), 1, [&](std::int64_t c) {
+    auto& h = next[c];
+    h.fill(0);
+    const std::size_t end = std::min(n, (c + 1) * kSortChunk);
+    for (std::size_t i = c * kSortChunk; i < end; ++i) ++h[Digit(keys[i], pass)];
+  });
+  const std::uint32_t first = Digit(keys[0], pass);
+  std::size_t same = 0;
+  for (const auto& h : next) same += h[first];
+  if (same == n) return false;
+  std::uint32_t sum = 0;
+  for (int b = 0; b < kSortBuckets; ++b) {
+    for (auto& h : next) {
+      const std::uint32_t count = h[b];
+      h[b] = sum;
+      sum += count;
+    }
+  }
+  ParallelFor(static_cast<std::int64_t>(chunks), 1, [&](std::int64_t c) {
+    auto& h = next[c];
+    const std::size_t end = std::min(n, (c + 1) * kSortChunk);
+    for (std::size_t i = c * kSortChunk; i < end; ++i) {
+      const std::uint32_t pos = h[Digit(keys[i], pass)]++;
+      keys_tmp[pos] = keys[i];
+      ids_tmp[pos] = ids[i];
+    }
+  });
+  return true;
+}
+
+}  // namespace
+
 void RadixSortByKey(std::vector<std::uint32_t>& keys,
                     std::vector<std::int32_t>& ids,
                     std::vector<std::uint32_t>& keys_tmp,
                     std::vector<std::int32_t>& ids_tmp) {
+  HDR4D_CHECK(ids.size() == keys.size());
   const std::size_t n = keys.size();
-  constexpr int kPasses = 3;
-  constexpr std::array<int, kPasses> kShift = {0, 11, 22};
-  constexpr int kBuckets = 2048;
-  std::array<std::array<std::uint32_t, kBuckets>, kPasses> hist{};
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::uint32_t k = keys[i];
-    for (int p = 0; p < kPasses; ++p) ++hist[p][(k >> kShift[p]) & (kBuckets - 1)];
-  }
   keys_tmp.resize(n);
   ids_tmp.resize(n);
-  for (int p = 0; p < kPasses; ++p) {
+  if (n == 0) return;
+  if (n >= kParallelSortMin && MaxThreads() > 1) {
+    for (int p = 0; p < kSortPasses; ++p) {
+      if (!ParallelRadixPass(p, keys, ids, keys_tmp, ids_tmp)) continue;
+      keys.swap(keys_tmp);
+      ids.swap(ids_tmp);
+    }
+    return;
+  }
+  std::array<std::array<std::uint32_t, kSortBuckets>, kSortPasses> hist{};
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint32_t k = keys[i];
+    for (int p = 0; p < kSortPasses; ++p) ++hist[p][Digit(k, p)];
+  }
+  for (int p = 0; p < kSortPasses; ++p) {
     auto& h = hist[p];
-    if (n == 0 || h[(keys[0] >> kShift[p]) & (kBuckets - 1)] == n) continue;
+    if (h[Digit(keys[0], p)] == n) continue;
     std::uint32_t sum = 0;
     for (auto& c : h) {
       const std::uint32_t count = c;
@@ -50,7 +111,7 @@ void RadixSortByKey(std::vector<std::uint32_t>& keys,
       sum += count;
     }
     for (std::size_t i = 0; i < n; ++i) {
-      const std::uint32_t pos = h[(keys[i] >> kShift[p]) & (kBuckets - 1)]++;
+      const std::uint32_t pos = h[Digit(keys[i], p)]++;
       keys_tmp[pos] = keys[i];
       ids_tmp[pos] = ids[i];
     }
@@ -58,6 +119,8 @@ void RadixSortByKey(std::vector<std::uint32_t>& keys,
     ids.swap(ids_tmp);
   }
 }
+
+namespace {
 
 // Ints in a 64-byte cache line: per-thread counters and spare slots are this far apart.
 constexpr int kLineInts = 16;

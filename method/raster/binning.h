@@ -25,6 +25,9 @@
 // one of N x tiles keys. The result does not depend on the thread count.
 #pragma once
 
+#include <cstdint>
+#include <vector>
+
 #include "method/raster/splats.h"
 
 namespace hdr4d::method {
@@ -44,6 +47,13 @@ TileRect GaussianTileRect(T mean_x, T mean_y, int radius, int tiles_x, int tiles
 
 // Number of tiles along an image side of `pixels` pixels.
 int TileCount(int pixels);
+
+// Sorts (keys[i], ids[i]) by key, stably (equal keys keep their order), with keys_tmp and ids_tmp
+// as scratch; the same permutation at any thread count. The binning's depth order.
+void RadixSortByKey(std::vector<std::uint32_t>& keys,
+                    std::vector<std::int32_t>& ids,
+                    std::vector<std::uint32_t>& keys_tmp,
+                    std::vector<std::int32_t>& ids_tmp);
 
 // Fills the binning part of `state` (sizes, tile_ranges, point_list, depth_order, entry_ranges,
 // point_entries) for `splats` on a settings.width x settings.height image. Inconsistent buffers or

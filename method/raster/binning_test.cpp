@@ -256,6 +256,34 @@ TEST(RasterBinning, SameResultAtAnyThreadCountAndWhenReused) {
   ExpectConsistent(s, two);
 }
 
+// The radix sort is std::stable_sort by key, serial and in parallel chunks (from 65536 pairs),
+// with ties, keys that differ only in the high digit (one pass skipped) and all keys equal.
+TEST(RasterBinning, RadixSortIsAStableSortAtAnyThreadCount) {
+  std::mt19937 rng(7);
+  for (const int n : {0, 1, 5000, 65535, 65536, 200001}) {
+    for (const int kind : {0, 1, 2}) {
+      std::vector<std::uint32_t> keys(n);
+      for (auto& k : keys) {
+        const std::uint32_t r = rng();
+        k = kind == 0 ? r % 1000 : kind == 1 ? (r & 0xffc00000u) | 0x155u : 42u;
+      }
+      std::vector<std::int32_t> ids(n);
+      for (int i = 0; i < n; ++i) ids[i] = i;
+      std::vector<std::int32_t> expected = ids;
+      std::stable_sort(expected.begin(), expected.end(),
+                       [&](std::int32_t a, std::int32_t b) { return keys[a] < keys[b]; });
+      for (const int threads : {1, 2}) {
+        ThreadLimit limit(threads);
+        std::vector<std::uint32_t> k = keys, kt;
+        std::vector<std::int32_t> id = ids, it;
+        RadixSortByKey(k, id, kt, it);
+        ASSERT_EQ(id, expected) << "n " << n << " kind " << kind << " threads " << threads;
+        for (int i = 0; i < n; ++i) ASSERT_EQ(k[i], keys[expected[i]]);
+      }
+    }
+  }
+}
+
 TEST(RasterBinning, DoublePrecisionAgreesWithFloat) {
   const SplatBuffers s = RandomSplats(500, 70, 50, 8);
   SplatBuffersT<double> d;
