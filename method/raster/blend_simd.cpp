@@ -778,7 +778,7 @@ void ForwardTileImpl(const TileJob& job, int tile) {
 
   for (int pair = 0; pair < kRowPairs; ++pair) {
     if (y0 + 2 * pair >= job.height) break;
-    for (int segment = 0; segment < vectors_per_row; ++segment) {
+    for (int segment = 0; segment < segments; ++segment) {
       const int which = pair * segments + segment;
       const std::int32_t* list = lists + which * padded;
       const int va = 2 * pair * vectors_per_row + segment;

@@ -51,11 +51,20 @@ std::vector<std::uint8_t> ReadViewPixels(const std::filesystem::path& path,
   return out;
 }
 
-}  // namespace
-
-// Values per chunk when a view's stored target becomes floats on every step (in parallel: a
+// out = in x scale as floats: a view's stored target on every step, in parallel chunks (a
 // serial pass left the other threads idle).
-constexpr std::int64_t kConvertGrain = 1 << 16;
+template <typename T>
+void ScaledToFloats(const std::vector<T>& in, float scale, std::vector<float>* out) {
+  constexpr std::int64_t kGrain = 1 << 16;
+  out->resize(in.size());
+  float* to = out->data();
+  ParallelForChunks(static_cast<std::int64_t>(in.size()), kGrain,
+                    [&](std::int64_t b, std::int64_t e) {
+                      for (std::int64_t i = b; i < e; ++i) to[i] = in[i] * scale;
+                    });
+}
+
+}  // namespace
 
 void TrainView::ToFloat(std::vector<float>* out) const {
   std::vector<std::uint8_t> read;
@@ -64,24 +73,12 @@ void TrainView::ToFloat(std::vector<float>* out) const {
                           resolution);
   }
   const std::vector<std::uint8_t>& pixels = rgb.empty() ? read : rgb;
-  out->resize(pixels.size());
-  constexpr float kScale = 1.0f / 255.0f;
-  float* to = out->data();
-  ParallelForChunks(static_cast<std::int64_t>(pixels.size()), kConvertGrain,
-                    [&](std::int64_t b, std::int64_t e) {
-                      for (std::int64_t i = b; i < e; ++i) to[i] = pixels[i] * kScale;
-                    });
+  ScaledToFloats(pixels, 1.0f / 255.0f, out);
 }
 
 void TrainView::HdrMuToFloat(std::vector<float>* out) const {
   HDR4D_CHECK(!hdr_mu.empty());
-  out->resize(hdr_mu.size());
-  constexpr float kScale = 1.0f / 65535.0f;
-  float* to = out->data();
-  ParallelForChunks(static_cast<std::int64_t>(hdr_mu.size()), kConvertGrain,
-                    [&](std::int64_t b, std::int64_t e) {
-                      for (std::int64_t i = b; i < e; ++i) to[i] = hdr_mu[i] * kScale;
-                    });
+  ScaledToFloats(hdr_mu, 1.0f / 65535.0f, out);
 }
 
 namespace {
