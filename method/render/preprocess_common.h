@@ -187,7 +187,15 @@ void Color(const T* w,
   ColorFromWeights(w, dc, rest, channels, functions, active, time_degree, color);
 }
 
-// The colour rows' gradient, written for every coefficient (w = 0 for the inactive ones).
+// The coefficients a colour at these degrees reads: k = n F + lm with n <= time degree and
+// lm < (sh degree + 1)^2 end at the last such k; every w after it is 0.
+inline int UsedCoefficients(const ColorBasis& basis, int sh_degree, int time_degree) {
+  const int active = (sh_degree + 1) * (sh_degree + 1);
+  return std::min(basis.coefficients(), time_degree * basis.sh_functions() + active);
+}
+
+// The colour rows' gradient for coefficients [0, coefficients) (w = 0 for the inactive ones
+// among them); the rest of the row is not written.
 template <typename T>
 void ColorGradRows(const T* w, const T* dcolor, int channels, int coefficients, T* gdc, T* grest) {
   if constexpr (std::is_same_v<T, float>) {
@@ -277,7 +285,8 @@ void WriteColour(const GaussianModelT<T>& model,
 }
 
 // Gaussian i's colour rows' gradient from its basis weights and the gradient of its colour
-// (through the colour stage when there is one; none where the colour was clamped). The view
+// (through the colour stage when there is one; none where the colour was clamped), for the
+// first `coefficients` (at least UsedCoefficients; the caller owns what follows). The view
 // direction and dt are detached, as in the reference code.
 template <typename T>
 void WriteColourGradient(const GaussianModelT<T>& model,
@@ -285,6 +294,7 @@ void WriteColourGradient(const GaussianModelT<T>& model,
                          const T* w,
                          const RenderOptions& options,
                          const FrameStateT<T>& state,
+                         int coefficients,
                          T* gdc,
                          T* grest) {
   const int channels = model.channels;
@@ -293,8 +303,8 @@ void WriteColourGradient(const GaussianModelT<T>& model,
                                            : &state.splat_grads.features[i * channels];
   for (int ch = 0; ch < channels; ++ch)
     dcolor[ch] = state.clamped[i * channels + ch] ? T(0) : dfeatures[ch];
-  // Written, not accumulated: every colour row in one pass (w is 0 for inactive degrees).
-  ColorGradRows(w, dcolor, channels, model.basis.coefficients(), gdc, grest);
+  // Written, not accumulated, in one pass (w is 0 for inactive degrees).
+  ColorGradRows(w, dcolor, channels, coefficients, gdc, grest);
 }
 
 // After a forward: the visible count and, with a colour stage, its forward over the visible rows.

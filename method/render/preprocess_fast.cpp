@@ -94,7 +94,10 @@ void PreprocessForwardFast(const GaussianModel& model,
   job.radius = s.radius.data();
   job.reach = s.reach.data();
   job.screen_radius = state->screen_radius.data();
-  const int coefficients = job.coefficients;
+  // Only the coefficients the colour degrees use are read, so only their part of each row is
+  // gathered and prefetched (none of the rest rows at SH and time degree 0).
+  const int used = UsedCoefficients(model.basis, options.sh_degree, time_degree);
+  const std::size_t used_rest = static_cast<std::size_t>(used - 1) * model.channels;
   const auto chunk = [&](std::int64_t b, std::int64_t e) {
     // The Gaussians culled by time alone are done here, without their geometry.
     HDR4D_CHECK(e - b <= kGaussianGrain);
@@ -107,8 +110,9 @@ void PreprocessForwardFast(const GaussianModel& model,
     // gaps in the stream, and colouring took twice as long (perf, a render of a dynamic model).
     std::int64_t next_prefetch = b;
     const auto prefetch_to = [&](std::int64_t last) {
-      for (last = std::min(last, e - 1); next_prefetch <= last && stride > 0; ++next_prefetch)
-        PrefetchRow(&model.color_rest[static_cast<std::size_t>(next_prefetch) * stride], stride);
+      for (last = std::min(last, e - 1); next_prefetch <= last && used_rest > 0; ++next_prefetch)
+        PrefetchRow(&model.color_rest[static_cast<std::size_t>(next_prefetch) * stride],
+                    used_rest);
     };
     alignas(64) float batch_w[kMaxColorCoefficients * kPreprocessBatch];
     float w[kMaxColorCoefficients];
@@ -120,7 +124,7 @@ void PreprocessForwardFast(const GaussianModel& model,
         prefetch_to(survivors[k + l] + kColorAhead);
         const std::size_t i = static_cast<std::size_t>(survivors[k + l]);
         if (state->screen_radius[i] == 0) continue;
-        LaneWeights(batch_w, l, coefficients, w);
+        LaneWeights(batch_w, l, used, w);
         WriteColour(model, i, w, options, time_degree, state);
         ++visible;
       }
@@ -142,6 +146,12 @@ struct ColourRowBlock {
   // every use of the block was 1.6% of a paper-configuration iteration. A block of another
   // size (another layout) starts all zeros.
   std::vector<char> row_is_zero;
+  // Every rest row is zero from coefficient `written` on: a row is written only up to the
+  // coefficients the colour degrees use (they only grow in a run), or up to `written` where that
+  // is further, so that no earlier, longer row's tail is left behind. While the degrees are low
+  // this skips most of a row (45 of 48 floats at SH degree 0), and the optimiser reads only the
+  // active columns (AdamRowStep::LimitColumns).
+  int written = 1;
   void Fit(int channels, std::size_t stride) {
     const std::size_t dc_size = static_cast<std::size_t>(kRowsDoneBlock) * channels;
     const std::size_t rest_size = static_cast<std::size_t>(kRowsDoneBlock) * stride;
@@ -149,6 +159,7 @@ struct ColourRowBlock {
     dc.assign(dc_size, 0.0f);
     rest.assign(rest_size, 0.0f);
     row_is_zero.assign(kRowsDoneBlock, 1);
+    written = 1;
   }
 };
 
@@ -168,7 +179,8 @@ class FastBackward {
         state_(state),
         grads_(grads),
         rows_done_(rows_done),
-        job_(MakePreprocessJob(model, view, time, options)) {
+        job_(MakePreprocessJob(model, view, time, options)),
+        used_coefficients_(UsedCoefficients(model.basis, job_.sh_degree, job_.time_degree)) {
     const SplatGradientsT<float>& sg = state.splat_grads;
     job_.radius_in = state.splats.radius.data();
     job_.g_mean2d = sg.mean2d.data();
@@ -195,8 +207,15 @@ class FastBackward {
   // the others' rows are zero, as the kernel would have written them.
   void Block(std::int64_t first, std::int64_t last, ColourRowBlock* block) const {
     const int channels = model_.channels;
-    const std::size_t stride = model_.rest_stride();
     const bool to_block = static_cast<bool>(rows_done_);
+    // The full buffers are written whole; the block up to its `written` coefficients.
+    int coefficients = model_.basis.coefficients();
+    if (to_block) {
+      block->written = std::max(block->written, used_coefficients_);
+      coefficients = block->written;
+    }
+    const std::size_t rest_floats = static_cast<std::size_t>(coefficients - 1) * channels;
+    const std::size_t stride = model_.rest_stride();
     GaussianGradients* grads = grads_;
     const auto colour_rows = [&](std::size_t i) {
       const std::size_t row = to_block ? i - static_cast<std::size_t>(first) : i;
@@ -219,11 +238,12 @@ class FastBackward {
       }
       const auto [gdc, grest] = colour_rows(i);
       std::fill_n(gdc, channels, 0.0f);
-      std::fill_n(grest, stride, 0.0f);
+      std::fill_n(grest, rest_floats, 0.0f);
     }
     alignas(64) float batch_w[kMaxColorCoefficients * kPreprocessBatch];
+    // The kernel gives the used coefficients' weights; the rest of the row is written as zeros.
     float w[kMaxColorCoefficients];
-    const int num_coefficients = model_.basis.coefficients();
+    std::fill(w + used_coefficients_, w + coefficients, 0.0f);
     for (int k = 0; k < num_kept; k += kPreprocessBatch) {
       const int count = std::min(kPreprocessBatch, num_kept - k);
       PreprocessBackwardSimd(job_, kept + k, count, batch_w);
@@ -231,8 +251,8 @@ class FastBackward {
         const std::size_t i = static_cast<std::size_t>(kept[k + l]);
         const auto [gdc, grest] = colour_rows(i);
         if (to_block) block->row_is_zero[i - static_cast<std::size_t>(first)] = 0;
-        LaneWeights(batch_w, l, num_coefficients, w);
-        WriteColourGradient(model_, i, w, options_, state_, gdc, grest);
+        LaneWeights(batch_w, l, used_coefficients_, w);
+        WriteColourGradient(model_, i, w, options_, state_, coefficients, gdc, grest);
       }
     }
     if (to_block) rows_done_(first, last, GradientRows{block->dc.data(), block->rest.data()});
@@ -244,6 +264,7 @@ class FastBackward {
   GaussianGradients* grads_;
   const GradientRowsDone& rows_done_;
   PreprocessSimdJob job_;
+  int used_coefficients_;
 };
 
 }  // namespace

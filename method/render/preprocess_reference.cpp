@@ -149,8 +149,8 @@ void PreprocessBackwardReference(const GaussianModelT<T>& model,
     T w[kMaxColorCoefficients];
     EvalColorBasisWeights(Vec3<T>(c.mean - center), model.t[i] - time, duration, model.basis,
                           options.sh_degree, time_degree, w);
-    WriteColourGradient(model, i, w, options, state, &grads->color_dc[i * channels],
-                        &grads->color_rest[i * stride]);
+    WriteColourGradient(model, i, w, options, state, model.basis.coefficients(),
+                        &grads->color_dc[i * channels], &grads->color_rest[i * stride]);
 
     // Opacity = sigmoid(logit) x marginal.
     const T sig = Sigmoid(model.opacity_logit[i]);

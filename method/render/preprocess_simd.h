@@ -77,8 +77,9 @@ int PreprocessTemporalSurvivors(const PreprocessSimdJob& job,
 
 // The Gaussians index[0..count), count <= kPreprocessBatch, one per lane (any indices: the
 // backward passes only the visible ones). Both also write the colour-basis weights of each
-// Gaussian (zeros beyond the active degrees) at weights[k * kPreprocessBatch + lane],
-// k < coefficients; in the forward only for lanes with screen_radius > 0. The backward writes
+// Gaussian (zeros for the inactive functions) at weights[k * kPreprocessBatch + lane] for the
+// coefficients the degrees use, k < UsedCoefficients (preprocess_common.h); nothing beyond;
+// in the forward only for lanes with screen_radius > 0. The backward writes
 // the gradients of the Gaussians it is given; the caller zeroes the others'.
 void PreprocessForwardSimd(const PreprocessSimdJob& job,
                            const std::int64_t* index,

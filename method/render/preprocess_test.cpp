@@ -12,6 +12,7 @@
 #include <mutex>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/geometry/camera.h"
@@ -684,36 +685,33 @@ TEST(Preprocess, TheBackwardZeroesTheCulledGaussiansRows) {
   });
 }
 
-// The colour rows handed to the callback stay right from frame to frame while the culled set
-// changes: the backward reuses its per-thread block and skips re-zeroing the rows it knows are
-// zero, so a row written for a visible Gaussian must be zeroed when a culled one takes its place.
-TEST(Preprocess, TheCallbackRowsFollowTheCulledSetFromFrameToFrame) {
-  const GaussianModel model = TimeSpread(700, 34);
+// Frame f's colour rows through the rows-done callback against the direct (full-buffer)
+// backward's, on every compiled target, the frames run in order on the same threads.
+void ExpectCallbackRowsMatchDirect(const GaussianModel& model,
+                                   const std::vector<float>& times,
+                                   const std::vector<RenderOptions>& options,
+                                   std::uint32_t seed) {
   const std::size_t stride = model.rest_stride();
-  const RenderOptions options = ColourOptions(2);
   const ViewParams<float> view = ViewParams<float>::FromCamera(TestCamera());
-  const float times[] = {kTime - 0.4f, kTime + 0.4f, kTime, kTime - 0.4f};
-  std::vector<FrameState> states(std::size(times));
-  std::mt19937 rng(10);
+  std::vector<FrameState> states(times.size());
+  std::mt19937 rng(seed);
   for (std::size_t f = 0; f < states.size(); ++f) {
-    PreprocessForwardFast(model, view, times[f], options, &states[f]);
+    PreprocessForwardFast(model, view, times[f], options[f], &states[f]);
     RandomSplatGradients(states[f].splats.radius, states[f].splats.radius, rng,
                          &states[f].splat_grads);
   }
-  // The frames differ in which Gaussians are culled.
-  ASSERT_NE(states[0].splats.radius, states[1].splats.radius);
   ForEachCompiledTarget([&] {
     for (std::size_t f = 0; f < states.size(); ++f) {
       GaussianGradients direct;
       direct.ZerosLike(model);
-      PreprocessBackwardFast(model, view, times[f], options, states[f], &direct);
+      PreprocessBackwardFast(model, view, times[f], options[f], states[f], &direct);
       std::vector<float> dc(direct.color_dc.size(), 9.0f), rest(direct.color_rest.size(), 9.0f);
       GaussianGradients geometry;
       geometry.ZerosLike(model);
       geometry.color_dc.clear();
       geometry.color_rest.clear();
       std::mutex mutex;
-      PreprocessBackwardFast(model, view, times[f], options, states[f], &geometry,
+      PreprocessBackwardFast(model, view, times[f], options[f], states[f], &geometry,
                              [&](std::int64_t begin, std::int64_t end, const GradientRows& rows) {
                                std::lock_guard<std::mutex> lock(mutex);
                                const std::size_t b = static_cast<std::size_t>(begin);
@@ -726,6 +724,40 @@ TEST(Preprocess, TheCallbackRowsFollowTheCulledSetFromFrameToFrame) {
       EXPECT_EQ(rest, direct.color_rest) << "frame " << f;
     }
   });
+}
+
+// The colour rows handed to the callback stay right from frame to frame while the culled set
+// changes: the backward reuses its per-thread block and skips re-zeroing the rows it knows are
+// zero, so a row written for a visible Gaussian must be zeroed when a culled one takes its place.
+TEST(Preprocess, TheCallbackRowsFollowTheCulledSetFromFrameToFrame) {
+  const GaussianModel model = TimeSpread(700, 34);
+  const std::vector<float> times = {kTime - 0.4f, kTime + 0.4f, kTime, kTime - 0.4f};
+  const RenderOptions options = ColourOptions(2);
+  // The frames differ in which Gaussians are culled.
+  const ViewParams<float> view = ViewParams<float>::FromCamera(TestCamera());
+  FrameState a, b;
+  PreprocessForwardFast(model, view, times[0], options, &a);
+  PreprocessForwardFast(model, view, times[1], options, &b);
+  ASSERT_NE(a.splats.radius, b.splats.radius);
+  ExpectCallbackRowsMatchDirect(model, times, std::vector<RenderOptions>(times.size(), options),
+                                10);
+}
+
+// The callback's rows are written only as far as the colour degrees reach (the block's tail
+// stays zero), so when the degrees drop (a probe ends, another model follows on the same
+// threads) the longer rows of an earlier frame must not show through.
+TEST(Preprocess, TheCallbackRowsFollowTheColourDegreesDownAsWellAsUp) {
+  const GaussianModel model = TimeSpread(700, 35);
+  const std::pair<int, int> degrees[] = {{0, 0}, {3, 2}, {0, 0}, {1, 1}, {0, 1}, {2, 0}, {0, 0}};
+  std::vector<float> times;
+  std::vector<RenderOptions> options;
+  for (const auto& [sh, time] : degrees) {
+    RenderOptions o = ColourOptions(sh);
+    o.time_degree = time;
+    options.push_back(o);
+    times.push_back(kTime + 0.05f * static_cast<float>(times.size() % 3));
+  }
+  ExpectCallbackRowsMatchDirect(model, times, options, 11);
 }
 
 }  // namespace
