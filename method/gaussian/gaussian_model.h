@@ -2,6 +2,7 @@
 // so preprocessing streams through memory and gradients have the same layout.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -23,6 +24,12 @@ struct ColorBasis {
   int max_time_degree = 2;  // 0 in 3D mode
   int sh_functions() const { return (max_sh_degree + 1) * (max_sh_degree + 1); }
   int coefficients() const { return sh_functions() * (max_time_degree + 1); }
+  // The coefficients a colour at these degrees reads: k = n F + lm with n <= time degree and
+  // lm < (sh degree + 1)^2 end at the last such k; every weight after it is 0.
+  int used_coefficients(int sh_degree, int time_degree) const {
+    const int active = (sh_degree + 1) * (sh_degree + 1);
+    return std::min(coefficients(), time_degree * sh_functions() + active);
+  }
 };
 
 // Parameters of N Gaussians. `temporal` false is the 3D mode (static scenes, static baselines):

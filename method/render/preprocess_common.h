@@ -187,13 +187,6 @@ void Color(const T* w,
   ColorFromWeights(w, dc, rest, channels, functions, active, time_degree, color);
 }
 
-// The coefficients a colour at these degrees reads: k = n F + lm with n <= time degree and
-// lm < (sh degree + 1)^2 end at the last such k; every w after it is 0.
-inline int UsedCoefficients(const ColorBasis& basis, int sh_degree, int time_degree) {
-  const int active = (sh_degree + 1) * (sh_degree + 1);
-  return std::min(basis.coefficients(), time_degree * basis.sh_functions() + active);
-}
-
 // The colour rows' gradient for coefficients [0, coefficients) (w = 0 for the inactive ones
 // among them); the rest of the row is not written.
 template <typename T>
@@ -286,8 +279,8 @@ void WriteColour(const GaussianModelT<T>& model,
 
 // Gaussian i's colour rows' gradient from its basis weights and the gradient of its colour
 // (through the colour stage when there is one; none where the colour was clamped), for the
-// first `coefficients` (at least UsedCoefficients; the caller owns what follows). The view
-// direction and dt are detached, as in the reference code.
+// first `coefficients` (at least ColorBasis::used_coefficients; the caller owns what follows).
+// The view direction and dt are detached, as in the reference code.
 template <typename T>
 void WriteColourGradient(const GaussianModelT<T>& model,
                          std::size_t i,

@@ -44,6 +44,7 @@ PreprocessSimdJob MakePreprocessJob(const GaussianModel& model,
   job.time_degree = TimeDegree(model, options);
   job.functions = model.basis.sh_functions();
   job.coefficients = model.basis.coefficients();
+  job.used_coefficients = model.basis.used_coefficients(job.sh_degree, job.time_degree);
   detail::CheckColorDegrees(model.basis, job.sh_degree, job.time_degree);
   HDR4D_CHECK(job.time_degree == 0 || job.duration > 0.0f);
   return job;
@@ -96,7 +97,7 @@ void PreprocessForwardFast(const GaussianModel& model,
   job.screen_radius = state->screen_radius.data();
   // Only the coefficients the colour degrees use are read, so only their part of each row is
   // gathered and prefetched (none of the rest rows at SH and time degree 0).
-  const int used = UsedCoefficients(model.basis, options.sh_degree, time_degree);
+  const int used = job.used_coefficients;
   const std::size_t used_rest = static_cast<std::size_t>(used - 1) * model.channels;
   const auto chunk = [&](std::int64_t b, std::int64_t e) {
     // The Gaussians culled by time alone are done here, without their geometry.
@@ -179,8 +180,7 @@ class FastBackward {
         state_(state),
         grads_(grads),
         rows_done_(rows_done),
-        job_(MakePreprocessJob(model, view, time, options)),
-        used_coefficients_(UsedCoefficients(model.basis, job_.sh_degree, job_.time_degree)) {
+        job_(MakePreprocessJob(model, view, time, options)) {
     const SplatGradientsT<float>& sg = state.splat_grads;
     job_.radius_in = state.splats.radius.data();
     job_.g_mean2d = sg.mean2d.data();
@@ -211,7 +211,7 @@ class FastBackward {
     // The full buffers are written whole; the block up to its `written` coefficients.
     int coefficients = model_.basis.coefficients();
     if (to_block) {
-      block->written = std::max(block->written, used_coefficients_);
+      block->written = std::max(block->written, job_.used_coefficients);
       coefficients = block->written;
     }
     const std::size_t rest_floats = static_cast<std::size_t>(coefficients - 1) * channels;
@@ -243,7 +243,7 @@ class FastBackward {
     alignas(64) float batch_w[kMaxColorCoefficients * kPreprocessBatch];
     // The kernel gives the used coefficients' weights; the rest of the row is written as zeros.
     float w[kMaxColorCoefficients];
-    std::fill(w + used_coefficients_, w + coefficients, 0.0f);
+    std::fill(w + job_.used_coefficients, w + coefficients, 0.0f);
     for (int k = 0; k < num_kept; k += kPreprocessBatch) {
       const int count = std::min(kPreprocessBatch, num_kept - k);
       PreprocessBackwardSimd(job_, kept + k, count, batch_w);
@@ -251,7 +251,7 @@ class FastBackward {
         const std::size_t i = static_cast<std::size_t>(kept[k + l]);
         const auto [gdc, grest] = colour_rows(i);
         if (to_block) block->row_is_zero[i - static_cast<std::size_t>(first)] = 0;
-        LaneWeights(batch_w, l, used_coefficients_, w);
+        LaneWeights(batch_w, l, job_.used_coefficients, w);
         WriteColourGradient(model_, i, w, options_, state_, coefficients, gdc, grest);
       }
     }
@@ -264,7 +264,6 @@ class FastBackward {
   GaussianGradients* grads_;
   const GradientRowsDone& rows_done_;
   PreprocessSimdJob job_;
-  int used_coefficients_;
 };
 
 }  // namespace

@@ -9,7 +9,6 @@
 #include <hwy/contrib/math/math-inl.h>
 #include <hwy/highway.h>
 
-#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <initializer_list>
@@ -411,8 +410,8 @@ HWY_INLINE void ColorWeights(
   const int active = (degree + 1) * (degree + 1);
   // Up to the last coefficient the degrees use (the zeros between the time blocks' active
   // functions); nothing reads beyond it.
-  const int used = std::min(job.coefficients, job.time_degree * functions + active);
-  for (int k = active; k < used; ++k) hn::Store(hn::Zero(d), d, weights + k * kB + off);
+  for (int k = active; k < job.used_coefficients; ++k)
+    hn::Store(hn::Zero(d), d, weights + k * kB + off);
   for (int lm = 0; lm < active; ++lm) hn::Store(w[lm], d, weights + lm * kB + off);
   if (job.time_degree == 0) return;
   // cos(n phase) by the Chebyshev recurrence, phase = 2 pi (mu_t - t) / T.

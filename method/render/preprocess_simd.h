@@ -37,6 +37,7 @@ struct PreprocessSimdJob {
   int sh_degree = 0, time_degree = 0;
   int functions = 16;     // SH functions per time block of the basis
   int coefficients = 48;  // K, all time blocks
+  int used_coefficients = 1;  // those the degrees use (ColorBasis::used_coefficients)
   // Forward outputs (rows of Gaussian i).
   float* mean2d = nullptr;  // N x 2
   float* conic = nullptr;   // N x 3
@@ -78,7 +79,7 @@ int PreprocessTemporalSurvivors(const PreprocessSimdJob& job,
 // The Gaussians index[0..count), count <= kPreprocessBatch, one per lane (any indices: the
 // backward passes only the visible ones). Both also write the colour-basis weights of each
 // Gaussian (zeros for the inactive functions) at weights[k * kPreprocessBatch + lane] for the
-// coefficients the degrees use, k < UsedCoefficients (preprocess_common.h); nothing beyond;
+// coefficients the degrees use, k < used_coefficients; nothing beyond;
 // in the forward only for lanes with screen_radius > 0. The backward writes
 // the gradients of the Gaussians it is given; the caller zeroes the others'.
 void PreprocessForwardSimd(const PreprocessSimdJob& job,

@@ -22,11 +22,8 @@ std::optional<BandDegrees> NextBand(BandDegrees d, const ColorBasis& basis, bool
 }
 
 std::size_t RestColumns(BandDegrees d, const ColorBasis& basis, int channels) {
-  const std::size_t active = static_cast<std::size_t>((d.sh + 1) * (d.sh + 1));
-  const std::size_t coefficients =
-      static_cast<std::size_t>(d.time) * static_cast<std::size_t>(basis.sh_functions()) + active;
-  const std::size_t rest = static_cast<std::size_t>(basis.coefficients() - 1);
-  return std::min(rest, coefficients - 1) * static_cast<std::size_t>(channels);
+  return static_cast<std::size_t>(basis.used_coefficients(d.sh, d.time) - 1) *
+         static_cast<std::size_t>(channels);
 }
 
 nlohmann::json BandDecision::ToJson() const {
