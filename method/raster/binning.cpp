@@ -172,9 +172,14 @@ constexpr int kChunk = 8192;
 
 // 1. Each Gaussian's tile rectangle, then the visible ones in index order with their depth keys,
 //    both in parallel over fixed chunks (so the order does not depend on threads). Returns how
-//    many are visible.
+//    many are visible and how many tile entries they make (the sum of their rectangles' areas,
+//    known before the depth order).
+struct VisibleCount {
+  int visible = 0;
+  std::int64_t entries = 0;
+};
 template <typename T>
-int VisibleRectsAndDepthKeys(const SplatBuffersT<T>& splats, RasterState& s) {
+VisibleCount VisibleRectsAndDepthKeys(const SplatBuffersT<T>& splats, RasterState& s) {
   const int n = s.num_gaussians;
   const int tiles_x = s.tiles_x;
   const int tiles_y = s.tiles_y;
@@ -184,9 +189,11 @@ int VisibleRectsAndDepthKeys(const SplatBuffersT<T>& splats, RasterState& s) {
   const int n_chunks = (n + kChunk - 1) / kChunk;
   s.rects.resize(4 * static_cast<std::size_t>(n));
   s.chunk_visible.assign(static_cast<std::size_t>(n_chunks) + 1, 0);
+  std::vector<std::int64_t> chunk_entries(static_cast<std::size_t>(n_chunks), 0);
   std::int32_t* rects = s.rects.data();
   ParallelForChunks(n, kChunk, [&](std::int64_t begin, std::int64_t end) {
     int count = 0;
+    std::int64_t entries = 0;
     for (std::int64_t g = begin; g < end; ++g) {
       const int rx = reach ? reach[2 * g] : radius[g];
       const int ry = reach ? reach[2 * g + 1] : radius[g];
@@ -199,11 +206,18 @@ int VisibleRectsAndDepthKeys(const SplatBuffersT<T>& splats, RasterState& s) {
       rects[4 * g + 2] = empty ? r.x0 : r.x1;  // an empty rectangle has area 0
       rects[4 * g + 3] = empty ? r.y0 : r.y1;
       count += !empty;
+      entries += r.area();
     }
     s.chunk_visible[begin / kChunk + 1] = count;
+    chunk_entries[begin / kChunk] = entries;
   });
-  for (int c = 0; c < n_chunks; ++c) s.chunk_visible[c + 1] += s.chunk_visible[c];
+  VisibleCount result;
+  for (int c = 0; c < n_chunks; ++c) {
+    s.chunk_visible[c + 1] += s.chunk_visible[c];
+    result.entries += chunk_entries[c];
+  }
   const int visible = s.chunk_visible[n_chunks];
+  result.visible = visible;
   s.sort_keys.resize(visible);
   s.depth_order.resize(visible);
   ParallelForChunks(n, kChunk, [&](std::int64_t begin, std::int64_t end) {
@@ -215,7 +229,7 @@ int VisibleRectsAndDepthKeys(const SplatBuffersT<T>& splats, RasterState& s) {
       ++v;
     }
   });
-  return visible;
+  return result;
 }
 
 // 3. The visible Gaussians' rectangles in depth order (one gather with independent loads, so the
@@ -387,7 +401,10 @@ class TileCountingSort {
 }  // namespace
 
 template <typename T>
-void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, RasterState* state) {
+void BinSplats(const SplatBuffersT<T>& splats,
+               const RasterSettings& settings,
+               RasterState* state,
+               const BesideSort& beside_sort) {
   HDR4D_CHECK(state != nullptr);
   HDR4D_CHECK(settings.width > 0 && settings.height > 0);
   HDR4D_CHECK(splats.Validate().empty());
@@ -399,10 +416,20 @@ void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, R
   s.tiles_y = TileCount(settings.height);
   s.num_gaussians = static_cast<int>(splats.size());
   s.packed_ready = false;
-  const int visible = VisibleRectsAndDepthKeys(splats, s);
-  // 2. Front-to-back order of the visible Gaussians (ties by id: the sort is stable).
-  RadixSortByKey(s.sort_keys, s.depth_order, s.sort_keys_tmp, s.sort_ids_tmp);
+  const auto [visible, entries] = VisibleRectsAndDepthKeys(splats, s);
+  HDR4D_CHECK(entries < INT_MAX);
+  // 2. Front-to-back order of the visible Gaussians (ties by id: the sort is stable), with the
+  // caller's work beside it.
+  const auto sort = [&s] {
+    RadixSortByKey(s.sort_keys, s.depth_order, s.sort_keys_tmp, s.sort_ids_tmp);
+  };
+  if (beside_sort) {
+    RunAlongside(sort, [&] { beside_sort(entries); });
+  } else {
+    sort();
+  }
   const std::int64_t total = SortedRectsAndEntryRanges(visible, s);
+  HDR4D_CHECK(total == entries);
   TileCountingSort tiles(visible, s);
   tiles.Count(total);
   // The backward's entry slots are not built for a render no backward follows.
@@ -411,7 +438,13 @@ void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, R
 
 template TileRect GaussianTileRect<float>(float, float, int, int, int, int);
 template TileRect GaussianTileRect<double>(double, double, int, int, int, int);
-template void BinSplats<float>(const SplatBuffersT<float>&, const RasterSettings&, RasterState*);
-template void BinSplats<double>(const SplatBuffersT<double>&, const RasterSettings&, RasterState*);
+template void BinSplats<float>(const SplatBuffersT<float>&,
+                               const RasterSettings&,
+                               RasterState*,
+                               const BesideSort&);
+template void BinSplats<double>(const SplatBuffersT<double>&,
+                                const RasterSettings&,
+                                RasterState*,
+                                const BesideSort&);
 
 }  // namespace hdr4d::method

@@ -26,6 +26,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "method/raster/splats.h"
@@ -55,10 +56,20 @@ void RadixSortByKey(std::vector<std::uint32_t>& keys,
                     std::vector<std::uint32_t>& keys_tmp,
                     std::vector<std::int32_t>& ids_tmp);
 
+// Work that needs the tile rectangles (RasterState::rects) and the number of list entries but not
+// the depth order: BinSplats runs it on the calling thread while the depth sort (serial below
+// 65,536 visible Gaussians) runs beside it (RunAlongside), so that a second thread is not idle
+// through the sort. It must not touch the binning's other buffers.
+using BesideSort = std::function<void(std::int64_t entries)>;
+
 // Fills the binning part of `state` (sizes, tile_ranges, point_list, depth_order, entry_ranges,
-// point_entries) for `splats` on a settings.width x settings.height image. Inconsistent buffers or
-// a non-positive image size are caller bugs (checked). Instantiated for float and double.
+// point_entries) for `splats` on a settings.width x settings.height image, calling `beside_sort`
+// (when given) as above. Inconsistent buffers or a non-positive image size are caller bugs
+// (checked). Instantiated for float and double.
 template <typename T>
-void BinSplats(const SplatBuffersT<T>& splats, const RasterSettings& settings, RasterState* state);
+void BinSplats(const SplatBuffersT<T>& splats,
+               const RasterSettings& settings,
+               RasterState* state,
+               const BesideSort& beside_sort = nullptr);
 
 }  // namespace hdr4d::method

@@ -256,6 +256,37 @@ TEST(RasterBinning, SameResultAtAnyThreadCountAndWhenReused) {
   ExpectConsistent(s, two);
 }
 
+// Work given to BinSplats runs beside the depth sort: it is called once, with the number of list
+// entries the binning then makes, sees the tile rectangles already written, and changes nothing
+// in the binning, at one and two threads.
+TEST(RasterBinning, WorkBesideTheSortSeesTheEntriesAndChangesNothing) {
+  const SplatBuffers s = RandomSplats(30000, 200, 200, 4, 40);
+  RasterState plain;
+  BinSplats(s, Size(200, 200), &plain);
+  for (const int threads : {1, 2}) {
+    ThreadLimit limit(threads);
+    RasterState beside;
+    int calls = 0;
+    std::int64_t entries = -1;
+    std::vector<std::int32_t> rects_seen;
+    BinSplats(s, Size(200, 200), &beside, [&](std::int64_t e) {
+      ++calls;
+      entries = e;
+      rects_seen = beside.rects;
+    });
+    EXPECT_EQ(calls, 1) << threads;
+    EXPECT_EQ(entries, static_cast<std::int64_t>(beside.num_entries())) << threads;
+    EXPECT_GT(entries, 30000) << threads;
+    EXPECT_EQ(rects_seen, plain.rects) << threads;
+    EXPECT_EQ(beside.point_list, plain.point_list) << threads;
+    EXPECT_EQ(beside.tile_ranges, plain.tile_ranges) << threads;
+    EXPECT_EQ(beside.point_entries, plain.point_entries) << threads;
+    EXPECT_EQ(beside.entry_ranges, plain.entry_ranges) << threads;
+    EXPECT_EQ(beside.depth_order, plain.depth_order) << threads;
+    ExpectConsistent(s, beside);
+  }
+}
+
 // The radix sort is std::stable_sort by key, serial and in parallel chunks (from 65536 pairs),
 // with ties, keys that differ only in the high digit (one pass skipped) and all keys equal.
 TEST(RasterBinning, RadixSortIsAStableSortAtAnyThreadCount) {

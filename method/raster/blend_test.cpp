@@ -1093,6 +1093,44 @@ TEST(RasterBlendSimd, DeterministicAcrossThreadCounts) {
   }
 }
 
+// RasterizeForward packs the SIMD records beside the depth sort; binning first and packing in
+// BlendForward gives the same records, image and gradients bit for bit, at one and two threads,
+// with and without the per-entry records, and with a state last used for a larger frame.
+TEST(RasterBlendSimd, PackedBesideTheSortEqualsPackedAfterIt) {
+  const SplatBuffers s = Convert<float>(RandomScene(DenseSixChannelScene(), 11));
+  const SplatBuffers other = Convert<float>(RandomScene(DenseSixChannelScene(), 12));
+  const std::vector<float> w = RandomFloats(static_cast<std::size_t>(160) * 120 * 6, 13);
+  for (const int threads : {1, 2}) {
+    for (const bool keep : {true, false}) {
+      SCOPED_TRACE("threads " + std::to_string(threads) + (keep ? " records" : " no records"));
+      ThreadLimit limit(threads);
+      RasterSettings settings = Settings(160, 120, std::vector<float>(6, 0.25f));
+      settings.keep_records = keep;
+      FloatRun beside, after;
+      for (FloatRun* r : {&beside, &after}) r->image.assign(w.size(), -7.0f);
+      std::vector<float> scratch(w.size());
+      for (FloatRun* r : {&beside, &after})  // a frame before, packed beside its sort
+        RasterizeForward(other, settings, &r->state, scratch.data());
+      RasterizeForward(s, settings, &beside.state, beside.image.data());
+      BinSplats(s, settings, &after.state);
+      EXPECT_FALSE(after.state.packed_ready);
+      BlendForward(s, settings, &after.state, after.image.data());
+      EXPECT_EQ(beside.state.packed_splats, after.state.packed_splats);
+      EXPECT_EQ(beside.state.final_transmittance, after.state.final_transmittance);
+      if (!keep) {
+        EXPECT_EQ(beside.image, after.image);
+        continue;
+      }
+      for (FloatRun* r : {&beside, &after}) {
+        r->dL_dbackground.assign(6, 0.0f);
+        BlendBackward(s, settings, &r->state, w.data(), nullptr, &r->grads,
+                      r->dL_dbackground.data());
+      }
+      ExpectSameImageAndGradients(beside, after);
+    }
+  }
+}
+
 // The per-axis reach the preprocess computes (preprocess_common.h BinningReach), from the conic:
 // Sigma_xx = c / det and Sigma_yy = a / det of the conic (a, b, c).
 void AddPreprocessReach(SplatBuffers* s) {
