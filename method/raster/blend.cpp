@@ -397,12 +397,11 @@ detail::TileJob MakeJob(const SplatBuffers& splats,
   return job;
 }
 
-// The SIMD kernels' per-Gaussian records, for the Gaussians listed in some tile (in parallel,
-// in id order).
 // packed_splats holds the per-Gaussian records, then the forward's per-entry records, then a
 // marker that is 1 once the forward has written the latter for the current packing.
 // With_records false (a forward no backward follows): no room for the per-entry records, and
-// job.tile_records null so the forward gathers into its scratch.
+// job.tile_records null so the forward gathers into its scratch. PackedSize is its length for
+// `entries` list entries.
 std::size_t PackedSize(int channels, int gaussians, std::size_t entries, bool with_records) {
   return static_cast<std::size_t>(gaussians) * detail::PackedStride(channels) +
          (with_records ? entries * detail::TileRecordStride(channels) : 0) + 1;
@@ -419,8 +418,9 @@ void UsePacked(detail::TileJob& job, RasterState* state, std::size_t entries, bo
                    : nullptr;
 }
 
-// Needs the splats and the tile rectangles only, so it can run beside the depth sort
-// (RasterizeForward); `entries` is the number of list entries the binning makes.
+// The SIMD kernels' per-Gaussian records, for the Gaussians listed in some tile (in parallel,
+// in id order). They need the splats and the tile rectangles only, so they can be packed beside
+// the depth sort (RasterizeForward); `entries` is the number of list entries the binning makes.
 void PackSplats(detail::TileJob& job, RasterState* state, std::size_t entries, bool with_records) {
   ResizeScratch(&state->packed_splats,
                 PackedSize(job.channels, state->num_gaussians, entries, with_records));
