@@ -234,7 +234,8 @@ VisibleCount VisibleRectsAndDepthKeys(const SplatBuffersT<T>& splats, RasterStat
 
 // 3. The visible Gaussians' rectangles in depth order (one gather with independent loads, so the
 //    passes below stream instead of waiting on a random access per Gaussian) and the offsets of
-//    their entries (entry_ranges, in depth order). Returns the number of entries.
+//    their entries (entry_ranges, in depth order). Returns the number of entries (BinSplats has
+//    checked that it fits an int32).
 std::int64_t SortedRectsAndEntryRanges(int visible, RasterState& s) {
   s.sorted_rects.resize(4 * static_cast<std::size_t>(visible));
   std::int32_t* sorted = s.sorted_rects.data();
@@ -250,7 +251,6 @@ std::int64_t SortedRectsAndEntryRanges(int visible, RasterState& s) {
     s.entry_ranges[i] = static_cast<std::int32_t>(total);
     total += static_cast<std::int64_t>(sorted[4 * i + 2] - sorted[4 * i]) *
              (sorted[4 * i + 3] - sorted[4 * i + 1]);
-    HDR4D_CHECK(total < INT_MAX);
   }
   s.entry_ranges[visible] = static_cast<std::int32_t>(total);
   return total;

@@ -432,6 +432,16 @@ void PackSplats(detail::TileJob& job, RasterState* state, std::size_t entries, b
   state->packed_ready = true;
 }
 
+// The records of this binning for `job`: packed already (beside the depth sort,
+// RasterizeForward) or packed now.
+void EnsurePacked(detail::TileJob& job, RasterState* state, bool with_records) {
+  if (state->packed_ready) {
+    UsePacked(job, state, state->num_entries(), with_records);
+  } else {
+    PackSplats(job, state, state->num_entries(), with_records);
+  }
+}
+
 void CheckCall(const SplatBuffers& splats, const RasterSettings& settings, const RasterState& s) {
   HDR4D_CHECK(splats.Validate().empty());
   HDR4D_CHECK(s.width == settings.width && s.height == settings.height);
@@ -513,11 +523,7 @@ void BlendForward(const SplatBuffers& splats,
   }
   detail::TileJob job = MakeJob(splats, settings, state);
   job.image = image;
-  if (state->packed_ready) {  // packed beside the depth sort (RasterizeForward)
-    UsePacked(job, state, state->num_entries(), settings.keep_records);
-  } else {
-    PackSplats(job, state, state->num_entries(), settings.keep_records);
-  }
+  EnsurePacked(job, state, settings.keep_records);
   ParallelFor(state->num_tiles(), 1,
               [&](std::int64_t tile) { detail::ForwardTileSimd(job, static_cast<int>(tile)); });
   // The per-entry records are there for the backward (else it gathers its own).
@@ -579,11 +585,7 @@ void BlendBackward(const SplatBuffers& splats,
     ResizeScratch(&state->entry_max_weight, state->num_entries());
     job.entry_max_weight = state->entry_max_weight.data();
   }
-  if (state->packed_ready) {
-    UsePacked(job, state, state->num_entries(), /*with_records=*/true);
-  } else {
-    PackSplats(job, state, state->num_entries(), /*with_records=*/true);
-  }
+  EnsurePacked(job, state, /*with_records=*/true);
   job.tile_records_ready = state->packed_splats.back() == 1.0f;
   ParallelFor(state->num_tiles(), 1,
               [&](std::int64_t tile) { detail::BackwardTileSimd(job, static_cast<int>(tile)); });
