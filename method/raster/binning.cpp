@@ -232,11 +232,9 @@ VisibleCount VisibleRectsAndDepthKeys(const SplatBuffersT<T>& splats, RasterStat
   return result;
 }
 
-// 3. The visible Gaussians' rectangles in depth order (one gather with independent loads, so the
-//    passes below stream instead of waiting on a random access per Gaussian) and the offsets of
-//    their entries (entry_ranges, in depth order). Returns the number of entries (BinSplats has
-//    checked that it fits an int32).
-std::int64_t SortedRectsAndEntryRanges(int visible, RasterState& s) {
+// 3. The visible Gaussians' rectangles in depth order: one gather with independent loads, so the
+//    passes below stream instead of waiting on a random access per Gaussian.
+void SortRects(int visible, RasterState& s) {
   s.sorted_rects.resize(4 * static_cast<std::size_t>(visible));
   std::int32_t* sorted = s.sorted_rects.data();
   const std::int32_t* rects = s.rects.data();
@@ -245,15 +243,6 @@ std::int64_t SortedRectsAndEntryRanges(int visible, RasterState& s) {
     const std::int32_t* r = rects + 4 * static_cast<std::size_t>(order[i]);
     for (int k = 0; k < 4; ++k) sorted[4 * i + k] = r[k];
   });
-  s.entry_ranges.resize(static_cast<std::size_t>(visible) + 1);
-  std::int64_t total = 0;
-  for (int i = 0; i < visible; ++i) {
-    s.entry_ranges[i] = static_cast<std::int32_t>(total);
-    total += static_cast<std::int64_t>(sorted[4 * i + 2] - sorted[4 * i]) *
-             (sorted[4 * i + 3] - sorted[4 * i + 1]);
-  }
-  s.entry_ranges[visible] = static_cast<std::int32_t>(total);
-  return total;
 }
 
 // 4. The counting sort by tile, keeping depth order. The depth-ordered list is cut into chunks
@@ -276,12 +265,17 @@ class TileCountingSort {
         chunk_size_(visible == 0 ? 1 : (visible + chunks_ - 1) / chunks_),
         // Per chunk: num_tiles counters + 3 spare counters (see Scatter), rounded up to whole
         // cache lines.
-        counters_((num_tiles_ + 3 + kLineInts - 1) / kLineInts * kLineInts) {}
+        counters_((num_tiles_ + 3 + kLineInts - 1) / kLineInts * kLineInts),
+        chunk_entries_(static_cast<std::size_t>(chunks_) + 1, 0) {}
 
-  // Each chunk's entries per tile, then each (chunk, tile)'s first slot and the tiles' ranges.
+  // Each chunk's entries per tile, then each (chunk, tile)'s first slot and the tiles' ranges,
+  // and each chunk's first entry in depth order (entry_ranges, written by Scatter: a serial
+  // prefix over the Gaussians here waited on rectangles the other core had gathered).
   void Count(std::int64_t total) {
     s_.chunk_offsets.assign(static_cast<std::size_t>(chunks_) * counters_, 0);
     ParallelFor(chunks_, 1, [&](std::int64_t c) { CountChunk(c); });
+    for (int c = 0; c < chunks_; ++c) chunk_entries_[c + 1] += chunk_entries_[c];
+    HDR4D_CHECK(chunk_entries_[chunks_] == total);
     const int num_tiles = num_tiles_, chunks = chunks_, counters = counters_;
     s_.tile_ranges.resize(static_cast<std::size_t>(num_tiles) + 1);
     std::int32_t* tile_ranges = s_.tile_ranges.data();
@@ -300,14 +294,17 @@ class TileCountingSort {
     HDR4D_CHECK(running == total);
   }
 
-  // Every entry to its slot (point_list) and, with `slots`, the backward's entry slots.
+  // Every entry to its slot (point_list), entry_ranges and, with `slots`, the backward's entry
+  // slots.
   void Scatter(std::int64_t total, bool slots) {
     // + one spare slot per chunk, the first of a cache line of its own.
     const std::int64_t with_spares = total + static_cast<std::int64_t>(chunks_) * kLineInts;
     ResizeScratch(&s_.point_list, with_spares);
     ResizeScratch(&s_.point_entries, slots ? with_spares : 1);
     ResizeScratch(&s_.entry_slots, slots ? with_spares : 1);
+    s_.entry_ranges.resize(static_cast<std::size_t>(visible_) + 1);
     ParallelFor(chunks_, 1, [&](std::int64_t c) { ScatterChunk(c, total, slots); });
+    s_.entry_ranges[visible_] = static_cast<std::int32_t>(total);
     s_.point_list.resize(total);
     s_.point_entries.resize(slots ? total : 0);
     s_.entry_slots.resize(slots ? total : 0);
@@ -324,11 +321,13 @@ class TileCountingSort {
     const std::int32_t* sorted = s_.sorted_rects.data();
     const int tiles_x = tiles_x_;
     const auto [begin, end] = ChunkBounds(c);
+    std::int64_t entries = 0;
     for (int i = begin; i < end; ++i) {
       const std::int32_t* rect = sorted + 4 * static_cast<std::size_t>(i);
       const int w = rect[2] - rect[0];
       const int h = rect[3] - rect[1];
       const int t = rect[1] * tiles_x + rect[0];
+      entries += w * h;
       if (w <= 2 && h <= 2) {
         const int dx = w > 1, dy = h > 1;
         counts[t] += 1;
@@ -340,6 +339,7 @@ class TileCountingSort {
       for (int ty = 0; ty < h; ++ty)
         for (int tx = 0; tx < w; ++tx) ++counts[t + ty * tiles_x + tx];
     }
+    chunk_entries_[c + 1] = entries;
   }
 
   void ScatterChunk(std::int64_t c, std::int64_t total, bool slots) {
@@ -347,21 +347,25 @@ class TileCountingSort {
     const std::int32_t spare = static_cast<std::int32_t>(total + c * kLineInts);
     const std::int32_t* sorted = s_.sorted_rects.data();
     const std::int32_t* order = s_.depth_order.data();
-    const std::int32_t* entry_ranges = s_.entry_ranges.data();
+    std::int32_t* entry_ranges = s_.entry_ranges.data();
     std::int32_t* points = s_.point_list.data();
     std::int32_t* entries = s_.point_entries.data();
     std::int32_t* slots_of = s_.entry_slots.data();
     const int tiles_x = tiles_x_;
     const int num_tiles = num_tiles_;
     const auto [begin, end] = ChunkBounds(c);
+    auto first = static_cast<std::int32_t>(chunk_entries_[c]);  // Gaussian i's first entry
     for (int i = begin; i < end; ++i) {
       const int g = order[i];
       const std::int32_t* rect = sorted + 4 * static_cast<std::size_t>(i);
       const int w = rect[2] - rect[0];
       const int h = rect[3] - rect[1];
       const int t = rect[1] * tiles_x + rect[0];
+      entry_ranges[i] = first;
       // This Gaussian's tiles, row-major (only written with slots; else the spare slot).
-      std::int32_t* own = entries + (slots ? entry_ranges[i] : 0);
+      std::int32_t* own = entries + (slots ? first : 0);
+      const std::int32_t own_first = first;
+      first += w * h;
       if (w <= 2 && h <= 2) {
         // A missing tile uses its own spare counter (num_tiles + 0..2), so it neither waits on
         // nor delays the counter of a real tile; its entry goes to the spare slot.
@@ -373,7 +377,7 @@ class TileCountingSort {
           points[pos] = g;
           if (!slots) return;
           (valid ? own[k] : entries[spare]) = pos;
-          slots_of[pos] = valid ? entry_ranges[i] + k : spare;
+          slots_of[pos] = valid ? own_first + k : spare;
         };
         put(t, 0, 1, 0);
         put(t + dx, 1, dx, 0);
@@ -387,7 +391,7 @@ class TileCountingSort {
           const std::int32_t pos = next[t + ty * tiles_x + tx]++;
           points[pos] = g;
           if (!slots) continue;
-          slots_of[pos] = entry_ranges[i] + k;
+          slots_of[pos] = own_first + k;
           own[k++] = pos;
         }
       }
@@ -396,6 +400,7 @@ class TileCountingSort {
 
   RasterState& s_;
   const int visible_, num_tiles_, tiles_x_, chunks_, chunk_size_, counters_;
+  std::vector<std::int64_t> chunk_entries_;  // per chunk, then its first entry (Count)
 };
 
 }  // namespace
@@ -428,12 +433,11 @@ void BinSplats(const SplatBuffersT<T>& splats,
   } else {
     sort();
   }
-  const std::int64_t total = SortedRectsAndEntryRanges(visible, s);
-  HDR4D_CHECK(total == entries);
+  SortRects(visible, s);
   TileCountingSort tiles(visible, s);
-  tiles.Count(total);
+  tiles.Count(entries);
   // The backward's entry slots are not built for a render no backward follows.
-  tiles.Scatter(total, /*slots=*/settings.keep_records);
+  tiles.Scatter(entries, /*slots=*/settings.keep_records);
 }
 
 template TileRect GaussianTileRect<float>(float, float, int, int, int, int);
