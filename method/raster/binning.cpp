@@ -269,8 +269,8 @@ class TileCountingSort {
         chunk_entries_(static_cast<std::size_t>(chunks_) + 1, 0) {}
 
   // Each chunk's entries per tile, then each (chunk, tile)'s first slot and the tiles' ranges,
-  // and each chunk's first entry in depth order (entry_ranges, written by Scatter: a serial
-  // prefix over the Gaussians here waited on rectangles the other core had gathered).
+  // and each chunk's first entry in depth order, from which Scatter writes entry_ranges. (A
+  // serial prefix over all the Gaussians waited on rectangles the other core had gathered.)
   void Count(std::int64_t total) {
     s_.chunk_offsets.assign(static_cast<std::size_t>(chunks_) * counters_, 0);
     ParallelFor(chunks_, 1, [&](std::int64_t c) { CountChunk(c); });
