@@ -10,21 +10,34 @@ int CoarseFactor(int iteration, int coarse_iterations, int width, int height) {
   if (coarse_iterations <= 0 || iteration > coarse_iterations) return 1;
   const int wanted = 2 * iteration <= coarse_iterations ? 4 : 2;
   for (int f = wanted; f > 1; f /= 2)
-    if (width % f == 0 && height % f == 0) return f;
+    if (width >= f && height >= f) return f;
   return 1;
+}
+
+PinholeIntrinsics CoarseIntrinsics(const PinholeIntrinsics& intrinsics, int factor) {
+  HDR4D_CHECK(factor >= 1 && intrinsics.width >= factor && intrinsics.height >= factor);
+  PinholeIntrinsics k = intrinsics;
+  k.fx /= factor;
+  k.fy /= factor;
+  k.cx /= factor;
+  k.cy /= factor;
+  k.width /= factor;  // floor: the last width mod f columns are left out
+  k.height /= factor;
+  return k;
 }
 
 void BoxReduceInPlace(std::vector<float>* image, int width, int height, int channels, int factor) {
   HDR4D_CHECK(image != nullptr && factor >= 1 && width > 0 && height > 0 && channels > 0);
-  HDR4D_CHECK(width % factor == 0 && height % factor == 0);
+  HDR4D_CHECK(width >= factor && height >= factor);
   HDR4D_CHECK(image->size() == static_cast<std::size_t>(width) * height * channels);
   if (factor == 1) return;
   const int w = width / factor, h = height / factor;
   const float inverse = 1.0f / static_cast<float>(factor * factor);
   float* data = image->data();
   // Output pixel (x, y) is written at or before any input pixel its block reads is needed again:
-  // its index y w + x never exceeds the first input index of its block (y f W + x f), and later
-  // blocks read only later inputs, so the reduction runs in place front to back.
+  // its index y w + x never exceeds the first input index of its block (y f W + x f, as w <= W),
+  // and later blocks read only later inputs, so the reduction runs in place front to back. The
+  // blocks cover the top-left w f x h f pixels (w = floor(W / f)); the rest is not read.
   std::vector<float> sum(channels);
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {

@@ -916,7 +916,7 @@ double TrainingRun::ViewLoss(const TrainView& view, int it, const float** ldr_ou
                              std::size_t* pixels) {
   coarse_ = CoarseFactor(it, opt_.coarse_to_fine, view.width(), view.height());
   camera_ = view.camera;
-  if (coarse_ > 1) camera_.intrinsics = DownscaledIntrinsics(view.camera.intrinsics, coarse_);
+  if (coarse_ > 1) camera_.intrinsics = CoarseIntrinsics(view.camera.intrinsics, coarse_);
   *pixels = static_cast<std::size_t>(camera_.intrinsics.width) * camera_.intrinsics.height;
   image_.resize(*pixels * raster_channels_);
   dL_dimage_.resize(*pixels * raster_channels_);

@@ -559,6 +559,31 @@ TEST(TrainerSpeedOptions, CoarseToFineDiffersFromFullSizeAndResumesExactly) {
                        straight, dir.path());
 }
 
+// --coarse-to-fine on a view whose size 2 and 4 do not divide (23 px): the coarse steps still
+// train on reduced images (5 px, then 11 px, the last rows and columns left out), so the run
+// differs from a full-size one, and it resumes bit for bit inside the coarse part.
+TEST(TrainerSpeedOptions, CoarseToFineReducesViewsOfAnySize) {
+  TempDir dir;
+  GaussianSceneOptions s;
+  s.size = 23;
+  s.num_gaussians = 12;
+  s.num_cameras = 4;
+  s.num_timestamps = 5;
+  MakeGaussianScene(s, dir / "scene");
+  auto run = [&](const char* name, int iterations, int coarse) {
+    TrainOptions o = TinyRun(dir / "scene", dir / name, iterations);
+    o.optimization.coarse_to_fine = coarse;
+    return o;
+  };
+  const TrainSummary full = Train(run("full", 60, 0));
+  const TrainSummary straight = Train(run("straight", 60, 40));
+  ASSERT_EQ(straight.loss_curve.size(), 60u);
+  EXPECT_NE(full.loss_curve[0], straight.loss_curve[0]);
+  for (double loss : straight.loss_curve) EXPECT_TRUE(std::isfinite(loss));
+  ExpectResumesExactly([&](const char* name, int it) { return run(name, it, 40); }, 27,
+                       straight, dir.path());
+}
+
 // --prune-contribution removes Gaussians the plain run keeps, and its statistics (the largest
 // blending weights since the last densification) travel in the checkpoint: a run interrupted
 // between two densifications resumes bit for bit.
