@@ -22,13 +22,8 @@ TEST(CoarseImages, FactorFollowsTheScheduleAndTheImageSize) {
 }
 
 TEST(CoarseImages, IntrinsicsOfTheReducedImageKeepEveryRay) {
-  PinholeIntrinsics k;
-  k.fx = 151.0;
-  k.fy = 149.0;
-  k.cx = 67.25;
-  k.cy = 120.5;
-  k.width = 135;
-  k.height = 241;
+  const PinholeIntrinsics k{
+      .fx = 151.0, .fy = 149.0, .cx = 67.25, .cy = 120.5, .width = 135, .height = 241};
   const PinholeIntrinsics c = CoarseIntrinsics(k, 4);
   EXPECT_EQ(c.width, 33);  // floor(135 / 4): 3 columns left out
   EXPECT_EQ(c.height, 60);

@@ -29,9 +29,9 @@ TrainOptions TinyRun(const fs::path& scene, const fs::path& run, int iterations)
 }
 
 // Eight cameras at five times: a view sees part of the model (4D Gaussians outside its time).
-void MakeTinyScene(const fs::path& root) {
+void MakeTinyScene(const fs::path& root, int size = 24) {
   GaussianSceneOptions s;
-  s.size = 24;
+  s.size = size;
   s.num_gaussians = 12;
   s.num_cameras = 4;
   s.num_timestamps = 5;
@@ -538,12 +538,11 @@ TEST(TrainerSpeedOptions, ColorBandsSwitchOnWhereColoursFollowTheView) {
   EXPECT_GT(second_signal[1], second_signal[0]);
 }
 
-// --coarse-to-fine: the first iterations train on reduced images (the tiny scene's 24 px: 6 px
-// up to 20, 12 px up to 40), which changes the run; a run interrupted inside the coarse part
-// resumes bit for bit.
-TEST(TrainerSpeedOptions, CoarseToFineDiffersFromFullSizeAndResumesExactly) {
+// --coarse-to-fine 40 on MakeTinyScene(size)'s views differs from a full-size run from the first
+// step, and a run interrupted inside the coarse part resumes bit for bit.
+void ExpectCoarseToFineChangesTheRunAndResumes(int size) {
   TempDir dir;
-  MakeTinyScene(dir / "scene");
+  MakeTinyScene(dir / "scene", size);
   auto run = [&](const char* name, int iterations, int coarse) {
     TrainOptions o = TinyRun(dir / "scene", dir / name, iterations);
     o.optimization.coarse_to_fine = coarse;
@@ -559,29 +558,14 @@ TEST(TrainerSpeedOptions, CoarseToFineDiffersFromFullSizeAndResumesExactly) {
                        straight, dir.path());
 }
 
-// --coarse-to-fine on a view whose size 2 and 4 do not divide (23 px): the coarse steps still
-// train on reduced images (5 px, then 11 px, the last rows and columns left out), so the run
-// differs from a full-size one, and it resumes bit for bit inside the coarse part.
+// The tiny scene's 24 px: 6 px up to iteration 20, 12 px up to 40.
+TEST(TrainerSpeedOptions, CoarseToFineDiffersFromFullSizeAndResumesExactly) {
+  ExpectCoarseToFineChangesTheRunAndResumes(24);
+}
+
+// A size 2 and 4 do not divide (23 px): 5 px, then 11 px, the last rows and columns left out.
 TEST(TrainerSpeedOptions, CoarseToFineReducesViewsOfAnySize) {
-  TempDir dir;
-  GaussianSceneOptions s;
-  s.size = 23;
-  s.num_gaussians = 12;
-  s.num_cameras = 4;
-  s.num_timestamps = 5;
-  MakeGaussianScene(s, dir / "scene");
-  auto run = [&](const char* name, int iterations, int coarse) {
-    TrainOptions o = TinyRun(dir / "scene", dir / name, iterations);
-    o.optimization.coarse_to_fine = coarse;
-    return o;
-  };
-  const TrainSummary full = Train(run("full", 60, 0));
-  const TrainSummary straight = Train(run("straight", 60, 40));
-  ASSERT_EQ(straight.loss_curve.size(), 60u);
-  EXPECT_NE(full.loss_curve[0], straight.loss_curve[0]);
-  for (double loss : straight.loss_curve) EXPECT_TRUE(std::isfinite(loss));
-  ExpectResumesExactly([&](const char* name, int it) { return run(name, it, 40); }, 27,
-                       straight, dir.path());
+  ExpectCoarseToFineChangesTheRunAndResumes(23);
 }
 
 // --prune-contribution removes Gaussians the plain run keeps, and its statistics (the largest
