@@ -122,7 +122,7 @@ struct DensifyStats {
 // rasteriser reports, on which its threshold 2e-4 is defined — and counts the view; max_radii
 // keeps the largest radius. Sizes must agree with stats (checked).
 // reduction f > 1 (--coarse-to-fine): the view was rendered at 1/f of the training images'
-// size. Its norm is divided by f and its radii multiplied by f, so both are in the units of the
+// size (floored where f does not divide it: train/coarse_images.h). Its norm is divided by f and its radii multiplied by f, so both are in the units of the
 // full-size images the threshold and the screen-size prune were resolved for (the threshold
 // goes as 1 / image size: OptimizationOptions::Resolved).
 void AccumulateStats(const std::vector<float>& mean2d_grad,

@@ -3,6 +3,7 @@
 #include <cstddef>
 
 #include "core/util/error.h"
+#include "method/train/train_views.h"  // DownscaledIntrinsics
 
 namespace hdr4d::method {
 
@@ -16,14 +17,12 @@ int CoarseFactor(int iteration, int coarse_iterations, int width, int height) {
 
 PinholeIntrinsics CoarseIntrinsics(const PinholeIntrinsics& intrinsics, int factor) {
   HDR4D_CHECK(factor >= 1 && intrinsics.width >= factor && intrinsics.height >= factor);
-  PinholeIntrinsics k = intrinsics;
-  k.fx /= factor;
-  k.fy /= factor;
-  k.cx /= factor;
-  k.cy /= factor;
-  k.width /= factor;  // floor: the last width mod f columns are left out
-  k.height /= factor;
-  return k;
+  // Cropping the last columns and rows keeps the focal lengths and principal point; the cropped
+  // size divides exactly.
+  PinholeIntrinsics cropped = intrinsics;
+  cropped.width -= intrinsics.width % factor;
+  cropped.height -= intrinsics.height % factor;
+  return DownscaledIntrinsics(cropped, factor);
 }
 
 void BoxReduceInPlace(std::vector<float>* image, int width, int height, int channels, int factor) {
