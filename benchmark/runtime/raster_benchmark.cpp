@@ -163,9 +163,14 @@ void BM_RasterForward(benchmark::State& state) {
   SetCounters(state, scene, c.threads);
 }
 
+// What the backward keeps per Gaussian beside its gradients (train --prune-contribution).
+enum class Tracked { kNothing, kWeights, kShares };
+
 // The blend's backward on one scene; with `split`, with a separate geometry image as
-// train --no-hdr-geometry passes (BlendBackward), to time the split against the plain backward.
-void BenchBlendGradients(benchmark::State& state, bool split) {
+// train --no-hdr-geometry passes (BlendBackward), to time the split against the plain backward;
+// with `tracked`, keeping the largest weights or radiance shares (--prune-radiance-share).
+void BenchBlendGradients(benchmark::State& state, bool split,
+                         Tracked tracked = Tracked::kNothing) {
   const Config c = ConfigOf(state);
   ThreadLimit limit(c.threads);
   const Scene& scene = GetScene(c.size, c.count, c.channels);
@@ -179,10 +184,12 @@ void BenchBlendGradients(benchmark::State& state, bool split) {
     geometry = scene.dL_dimage;
     for (float& v : geometry) v *= 0.5f;
   }
+  if (tracked == Tracked::kShares) settings.share_image = image.data();
   SplatGradients grads;
   std::vector<float> dbg(c.channels);
   for (auto _ : state) {
     grads.SetZero(scene.splats.size(), c.channels);
+    if (tracked != Tracked::kNothing) grads.max_weight.assign(scene.splats.size(), 0.0f);
     BlendBackward(scene.splats, settings, &raster, scene.dL_dimage.data(), nullptr, &grads,
                   dbg.data(), split ? geometry.data() : nullptr);
     benchmark::DoNotOptimize(grads.opacity.data());
@@ -195,6 +202,11 @@ void BM_RasterBackward(benchmark::State& state) { BenchBlendGradients(state, fal
 // Range argument 5: 0 without the geometry image, 1 with it (the same 6-channel scene).
 void BM_RasterBackwardGeometry(benchmark::State& state) {
   BenchBlendGradients(state, state.range(5) != 0);
+}
+
+// Range argument 5: 0 plain, 1 keeping the largest weights, 2 the largest radiance shares.
+void BM_RasterBackwardTracked(benchmark::State& state) {
+  BenchBlendGradients(state, false, static_cast<Tracked>(state.range(5)));
 }
 
 // What one training iteration asks of the rasteriser: bin, blend, back-propagate.
@@ -259,6 +271,11 @@ BENCHMARK(BM_RasterTrainStep)->Apply(TrainStepArgs);
 BENCHMARK(BM_RasterBackwardGeometry)->Apply([](benchmark::internal::Benchmark* b) {
   for (int size : {200, 400})
     for (int split : {0, 1}) b->Args({size, 20000, 2, 1, 6, split});
+  b->Unit(benchmark::kMillisecond)->UseRealTime();
+});
+
+BENCHMARK(BM_RasterBackwardTracked)->Apply([](benchmark::internal::Benchmark* b) {
+  for (int tracked : {0, 1, 2}) b->Args({200, 20000, 1, 1, 6, tracked});
   b->Unit(benchmark::kMillisecond)->UseRealTime();
 });
 

@@ -152,6 +152,7 @@ void BackwardTileReference(const SplatBuffersT<T>& splats,
                            const T* dL_dimage,
                            const T* dL_dgeometry,
                            const T* dL_dfinal_T,
+                           const T* share_image,
                            T* slots,
                            T* tile_bg,
                            T* weights,
@@ -198,8 +199,13 @@ void BackwardTileReference(const SplatBuffersT<T>& splats,
         if (alpha < T(kMinAlpha)) continue;
         transmittance = transmittance / (T(1) - alpha);
         const T dchannel_dcolor = alpha * transmittance;
-        if (weights != nullptr) weights[idx] = std::max(weights[idx], dchannel_dcolor);
         const T* f = features + static_cast<std::size_t>(g) * channels;
+        if (weights != nullptr) {
+          const T share = share_image != nullptr
+                              ? dchannel_dcolor * ShareScale(f, share_image + pix * channels)
+                              : dchannel_dcolor;
+          weights[idx] = std::max(weights[idx], share);
+        }
         T* slot = slots + static_cast<std::size_t>(idx) * stride;
         T dL_dalpha = T(0);
         for (int c = 0; c < channels; ++c) {
@@ -346,9 +352,11 @@ void BackwardReferenceWithScratch(const SplatBuffersT<T>& splats,
                                   const T* dL_dfinal_T,
                                   SplatGradientsT<T>* grads,
                                   T* dL_dbackground,
+                                  const T* share_image,
                                   std::vector<T>& slots,
                                   std::vector<T>& tile_bg) {
   const int channels = splats.channels;
+  HDR4D_CHECK(share_image == nullptr || channels >= kShareChannels);
   slots.resize(bins.num_entries() * SlotStride(channels));
   tile_bg.resize(static_cast<std::size_t>(bins.num_tiles()) * channels);
   T* bg_partials = dL_dbackground != nullptr ? tile_bg.data() : nullptr;
@@ -358,7 +366,8 @@ void BackwardReferenceWithScratch(const SplatBuffersT<T>& splats,
   ParallelFor(bins.num_tiles(), 1, [&](std::int64_t tile) {
     BackwardTileReference(splats, bins, background, final_T, n_contrib, dL_dimage,
                           dL_dgeometry != nullptr ? dL_dgeometry : dL_dimage, dL_dfinal_T,
-                          slots.data(), bg_partials ? bg_partials + tile * channels : nullptr,
+                          entry_weights != nullptr ? share_image : nullptr, slots.data(),
+                          bg_partials ? bg_partials + tile * channels : nullptr,
                           entry_weights, static_cast<int>(tile));
   });
   ReduceGradients(bins, channels, slots.data(), bg_partials, grads, dL_dbackground,
@@ -481,7 +490,8 @@ void BlendBackwardReference(const SplatBuffersT<T>& splats,
                             const T* dL_dfinal_T,
                             SplatGradientsT<T>* grads,
                             T* dL_dbackground,
-                            const T* dL_dimage_geometry) {
+                            const T* dL_dimage_geometry,
+                            const T* share_image) {
   HDR4D_CHECK(splats.Validate().empty());
   CheckBinnedForBackward(bins, splats.size());
   HDR4D_CHECK(final_T != nullptr && n_contrib != nullptr && dL_dimage != nullptr);
@@ -494,8 +504,8 @@ void BlendBackwardReference(const SplatBuffersT<T>& splats,
   std::vector<T> slots;
   std::vector<T> tile_bg;
   BackwardReferenceWithScratch(splats, bins, background, final_T, n_contrib, dL_dimage,
-                               dL_dimage_geometry, dL_dfinal_T, grads, dL_dbackground, slots,
-                               tile_bg);
+                               dL_dimage_geometry, dL_dfinal_T, grads, dL_dbackground,
+                               share_image, slots, tile_bg);
 }
 
 void BlendForward(const SplatBuffers& splats,
@@ -566,8 +576,8 @@ void BlendBackward(const SplatBuffers& splats,
     BackwardReferenceWithScratch<float>(splats, *state, background,
                                         state->final_transmittance.data(), state->n_contrib.data(),
                                         dL_dimage, dL_dimage_geometry, dL_dfinal_T, grads,
-                                        dL_dbackground, state->entry_gradients,
-                                        state->tile_background_grad);
+                                        dL_dbackground, settings.share_image,
+                                        state->entry_gradients, state->tile_background_grad);
     return;
   }
   const int channels = splats.channels;
@@ -584,6 +594,8 @@ void BlendBackward(const SplatBuffers& splats,
   if (!grads->max_weight.empty()) {
     ResizeScratch(&state->entry_max_weight, state->num_entries());
     job.entry_max_weight = state->entry_max_weight.data();
+    job.share_image = settings.share_image;
+    HDR4D_CHECK(job.share_image == nullptr || channels >= kShareChannels);
   }
   EnsurePacked(job, state, /*with_records=*/true);
   job.tile_records_ready = state->packed_splats.back() == 1.0f;
@@ -610,6 +622,7 @@ template void BlendBackwardReference<float>(const SplatBuffersT<float>&,
                                             const float*,
                                             SplatGradientsT<float>*,
                                             float*,
+                                            const float*,
                                             const float*);
 template void BlendBackwardReference<double>(const SplatBuffersT<double>&,
                                              const RasterState&,
@@ -620,6 +633,7 @@ template void BlendBackwardReference<double>(const SplatBuffersT<double>&,
                                              const double*,
                                              SplatGradientsT<double>*,
                                              double*,
+                                             const double*,
                                              const double*);
 
 }  // namespace hdr4d::method

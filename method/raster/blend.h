@@ -46,6 +46,7 @@
 //   (about 1 pixel in 10^4 on dense random scenes).
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 
@@ -85,6 +86,26 @@ void BlendBackward(const SplatBuffers& splats,
                    float* dL_dbackground,
                    const float* dL_dimage_geometry = nullptr);
 
+// A Gaussian's share of a pixel (RasterSettings::share_image) over its blending weight w = alpha
+// T: 1, or the largest f_c / C_c over the first kShareChannels channels (the HDR radiance of
+// HDR-4DGS's raster) where its colour f_c is a larger part of the pixel's value C_c than w says
+// (w f_c / C_c is then its part of C_c). A log-space HDR loss weighs that part, not w: a light
+// or a highlight behind a faint Gaussian, or a dark region (docs/history/time-to-quality.md).
+// C_c is floored at 0 and kShareFloor added, so the scale stays finite.
+inline constexpr int kShareChannels = 3;
+inline constexpr float kShareFloor = 1e-8f;
+template <typename T>
+inline T ShareInverse(T pixel_value) {
+  return T(1) / ((pixel_value > T(0) ? pixel_value : T(0)) + T(kShareFloor));
+}
+template <typename T>
+inline T ShareScale(const T* features, const T* pixel) {
+  T scale = T(1);
+  for (int c = 0; c < kShareChannels; ++c)
+    scale = std::max(scale, features[c] * ShareInverse(pixel[c]));
+  return scale;
+}
+
 // The scalar reference in any floating type (float and double are instantiated). `bins` needs
 // only its binning part. background: `channels` values or nullptr (zeros). Writes image
 // (H x W x C), final_T (H x W) and n_contrib (H x W).
@@ -107,7 +128,8 @@ void BlendBackwardReference(const SplatBuffersT<T>& splats,
                             const T* dL_dfinal_T,
                             SplatGradientsT<T>* grads,
                             T* dL_dbackground,
-                            const T* dL_dimage_geometry = nullptr);
+                            const T* dL_dimage_geometry = nullptr,
+                            const T* share_image = nullptr);
 
 // The 2^x of the blend kernels (alpha = opacity 2^power, the power in log2 units), exposed so
 // tests can bound its error: x clamped to [-125.5, 0], relative error <= 3e-7. x = n + r with
@@ -146,6 +168,7 @@ struct TileJob {
   const std::int32_t* entry_slots = nullptr;  // where each entry's slot goes (RasterState)
   float* tile_background_grad = nullptr;      // channels per tile; nullable
   float* entry_max_weight = nullptr;  // nullable: per entry (at its slot) the largest alpha T
+  const float* share_image = nullptr;  // nullable: RasterSettings::share_image
   // Per-Gaussian records of the SIMD kernels (PackedStride(channels) floats per Gaussian),
   // written by PackSplatsSimd for the Gaussians listed in some tile (a non-empty rectangle in
   // rects, RasterState::rects).

@@ -874,11 +874,14 @@ void BackwardTileImpl(const TileJob& job, int tile) {
   // dL/dalpha = F - B with F = sum_c f_c dgeo_c, and B += alpha (F - B). The same maths as the
   // scalar path's per-channel form (which the tests compare against), with other roundings.
   const bool split = job.dL_dimage_geometry != nullptr;
+  // With a share image (--prune-radiance-share), kShareChannels planes of ShareInverse(C_c).
+  const bool share = job.entry_max_weight != nullptr && job.share_image != nullptr;
   thread_local Scratch<float> plane_scratch;
   thread_local Scratch<float> rec_scratch;
-  float* planes =
-      plane_scratch.Get(static_cast<std::size_t>(kTilePixels) * (4 + (split ? 2 : 1) * channels) +
-                        static_cast<std::size_t>(channels) * lanes);
+  float* planes = plane_scratch.Get(
+      static_cast<std::size_t>(kTilePixels) *
+          (4 + (split ? 2 : 1) * channels + (share ? kShareChannels : 0)) +
+      static_cast<std::size_t>(channels) * lanes);
   float* T_plane = planes;
   float* behind = T_plane + kTilePixels;
   float* dpix = behind + kTilePixels;
@@ -886,6 +889,8 @@ void BackwardTileImpl(const TileJob& job, int tile) {
   auto* nc_plane = reinterpret_cast<std::int32_t*>(tfb + kTilePixels);
   float* gf_mem = tfb + 2 * kTilePixels;  // feature gradients, run-time channel count only
   float* dgeo = split ? gf_mem + static_cast<std::size_t>(channels) * lanes : dpix;
+  float* share_inv = gf_mem + static_cast<std::size_t>(channels) * lanes +
+                     (split ? static_cast<std::size_t>(kTilePixels) * channels : 0);
   HWY_ALIGN std::int32_t vector_max[kTilePixels];
   // The planes hold the tile in blocks of block_w x block_h pixels, one pixel vector each (4x4
   // with 16 lanes, 4x2 with 8): a Gaussian reaching a few pixels of a few rows fills more of a
@@ -921,6 +926,8 @@ void BackwardTileImpl(const TileJob& job, int tile) {
           dpix[c * kTilePixels + p] = 0.0f;
           if (split) dgeo[c * kTilePixels + p] = 0.0f;
         }
+        if (share)
+          for (int c = 0; c < kShareChannels; ++c) share_inv[c * kTilePixels + p] = 0.0f;
         continue;
       }
       const std::size_t pix = static_cast<std::size_t>(y) * job.width + x;
@@ -931,6 +938,11 @@ void BackwardTileImpl(const TileJob& job, int tile) {
         if (tile_bg != nullptr) tile_bg[c] += T_final * dL[c];
         dpix[c * kTilePixels + p] = dL[c];
         if (split) dgeo[c * kTilePixels + p] = dG[c];  // else dgeo is dpix
+      }
+      if (share) {
+        const float* C = job.share_image + pix * channels;
+        for (int c = 0; c < kShareChannels; ++c)
+          share_inv[c * kTilePixels + p] = ShareInverse(C[c]);
       }
       T_plane[p] = T_final;
       behind[p] = 0.0f;
@@ -1009,6 +1021,9 @@ void BackwardTileImpl(const TileJob& job, int tile) {
     V grad[kGradCount];
     for (int k = 0; k < kGradCount; ++k) grad[k] = hn::Zero(d);
     V w_max = hn::Zero(d);  // the largest blending weight, kept only with max_weight
+    V share_f[kShareChannels];  // the Gaussian's colour in the share's channels
+    if (share)
+      for (int c = 0; c < kShareChannels; ++c) share_f[c] = hn::Set(d, r[kRecFeatures + c]);
     if constexpr (kC == 0) {
       for (int c = 0; c < channels; ++c) hn::Store(hn::Zero(d), d, gf_mem + c * lanes);
     }
@@ -1042,7 +1057,17 @@ void BackwardTileImpl(const TileJob& job, int tile) {
         const V T = hn::Mul(T_old, inv);  // transmittance in front of this Gaussian
         hn::Store(hn::IfThenElse(m, T, T_old), d, T_plane + off);
         const V w = hn::IfThenElseZero(m, hn::Mul(alpha, T));
-        if (max_weight != nullptr) w_max = hn::Max(w_max, w);
+        if (share) {
+          // w ShareScale: f_c / C_c as f_c ShareInverse(C_c), as the scalar path (masked lanes:
+          // w = 0 and a finite scale).
+          V scale = one;
+          for (int c = 0; c < kShareChannels; ++c)
+            scale = hn::Max(
+                scale, hn::Mul(share_f[c], hn::Load(d, share_inv + c * kTilePixels + off)));
+          w_max = hn::Max(w_max, hn::Mul(w, scale));
+        } else if (max_weight != nullptr) {
+          w_max = hn::Max(w_max, w);
+        }
         V F = hn::Zero(d);
         for (int c = 0; c < channels; ++c) {
           const V dp = hn::Load(d, dpix + c * kTilePixels + off);

@@ -608,6 +608,39 @@ TEST_P(RasterBlendCases, MaxWeightIsTheLargestAlphaTimesTransmittance) {
   EXPECT_TRUE(untracked.max_weight.empty());
 }
 
+TEST_P(RasterBlendCases, ShareImageCountsAFaintGaussiansPartOfTheRadiance) {
+  // A faint red light (alpha 0.02, radiance 100) in front of an opaque white Gaussian of the same
+  // shape, both centred on pixel (5, 5), where G = 1. The light's weight is 0.02, but its part of
+  // that pixel's red radiance is 0.02 x 100 / (0.02 x 100 + 0.99 x 0.98 x 1) = 0.6734, and its
+  // share falls off the centre (the white one's alpha caps at 0.99 only there). The white one
+  // carries all of the green and blue: its share is 1 (within the floor). A lone Gaussian whose
+  // pixels hold only it has share 1 too, though its weight is 0.3.
+  SplatBuffers s = OneGaussian(5.5f, 5.5f, 0.02f, {100, 0, 0}, 1, 4, 0.01f, 0, 0.01f);
+  Append(&s, OneGaussian(5.5f, 5.5f, 0.99f, {1, 1, 1}, 2, 4, 0.01f, 0, 0.01f));
+  Append(&s, OneGaussian(24.5f, 24.5f, 0.3f, {0, 0, 1}));
+  const RasterSettings plain = Settings(32, 32, {}, GetParam());
+  std::vector<float> image(32 * 32 * 3);
+  RasterState state;
+  RasterizeForward(s, plain, &state, image.data());
+  const std::vector<float> dL(image.size(), 1.0f);
+  SplatGradients weights;
+  weights.max_weight.assign(3, 0.0f);
+  BlendBackward(s, plain, &state, dL.data(), nullptr, &weights, nullptr);
+  EXPECT_NEAR(weights.max_weight[0], 0.02f, 1e-6);
+  EXPECT_NEAR(weights.max_weight[2], 0.3f, 1e-6);
+  RasterSettings shared = plain;
+  shared.share_image = image.data();
+  SplatGradients shares;
+  shares.max_weight.assign(3, 0.0f);
+  BlendBackward(s, shared, &state, dL.data(), nullptr, &shares, nullptr);
+  EXPECT_NEAR(shares.max_weight[0], 2.0 / (2.0 + 0.99 * 0.98), 1e-5);
+  EXPECT_NEAR(shares.max_weight[1], 1.0f, 1e-5);
+  EXPECT_NEAR(shares.max_weight[2], 1.0f, 1e-5);
+  // The gradients do not depend on it.
+  EXPECT_EQ(shares.opacity, weights.opacity);
+  EXPECT_EQ(shares.features, weights.features);
+}
+
 TEST_P(RasterBlendCases, EmptySceneIsBackground) {
   SplatBuffers s;
   s.channels = 2;
@@ -747,24 +780,30 @@ TEST(RasterBlendSimd, MaxWeightMatchesScalar) {
     o.count = 60;
     o.channels = channels;
     const SplatBuffers s = Convert<float>(RandomScene(o, 90 + channels));
-    SplatGradients grads[2];
-    int k = 0;
-    for (RasterBackend backend : {RasterBackend::kScalar, RasterBackend::kSimd}) {
-      const RasterSettings settings = Settings(o.width, o.height, {}, backend);
-      std::vector<float> image(static_cast<std::size_t>(o.width) * o.height * channels);
-      RasterState state;
-      RasterizeForward(s, settings, &state, image.data());
-      const std::vector<float> dL(image.size(), 1.0f);
-      grads[k].max_weight.assign(s.size(), 0.0f);
-      BlendBackward(s, settings, &state, dL.data(), nullptr, &grads[k], nullptr);
-      ++k;
+    // Plain weights, then the shares of the forward's own image (--prune-radiance-share).
+    for (bool share : {false, true}) {
+      SplatGradients grads[2];
+      int k = 0;
+      for (RasterBackend backend : {RasterBackend::kScalar, RasterBackend::kSimd}) {
+        RasterSettings settings = Settings(o.width, o.height, {}, backend);
+        std::vector<float> image(static_cast<std::size_t>(o.width) * o.height * channels);
+        RasterState state;
+        RasterizeForward(s, settings, &state, image.data());
+        const std::vector<float> dL(image.size(), 1.0f);
+        if (share) settings.share_image = image.data();
+        grads[k].max_weight.assign(s.size(), 0.0f);
+        BlendBackward(s, settings, &state, dL.data(), nullptr, &grads[k], nullptr);
+        ++k;
+      }
+      int blended = 0;
+      for (std::size_t g = 0; g < s.size(); ++g) {
+        EXPECT_NEAR(grads[1].max_weight[g], grads[0].max_weight[g],
+                    1e-5 * std::max(1.0f, grads[0].max_weight[g]))
+            << "Gaussian " << g << (share ? ", shares" : ", weights");
+        blended += grads[0].max_weight[g] > 0.0f;
+      }
+      EXPECT_GT(blended, 20);  // the scene is not empty
     }
-    int blended = 0;
-    for (std::size_t g = 0; g < s.size(); ++g) {
-      EXPECT_NEAR(grads[1].max_weight[g], grads[0].max_weight[g], 1e-5) << "Gaussian " << g;
-      blended += grads[0].max_weight[g] > 0.0f;
-    }
-    EXPECT_GT(blended, 20);  // the scene is not empty
   }
 }
 

@@ -79,8 +79,8 @@ struct SplatGradientsT {
   std::vector<T> features;  // N x channels
   // Optional (--prune-contribution, issue 55): when sized N before a backward, the backward
   // raises each entry to the largest blending weight alpha T the Gaussian had at any pixel of the
-  // frame (a max, not a sum; 0 where it blended nowhere). Empty: not tracked, no cost. SetZero
-  // leaves it alone.
+  // frame (a max, not a sum; 0 where it blended nowhere), or with RasterSettings::share_image
+  // the largest share (blend.h ShareScale). Empty: not tracked, no cost. SetZero leaves it alone.
   std::vector<T> max_weight;
   // Sizes every buffer for n Gaussians and sets it to zero (no reallocation when the size holds).
   void SetZero(std::size_t n, int channels) {
@@ -111,6 +111,11 @@ struct RasterSettings {
   // n_contrib is left empty. The images and final_transmittance are the same bit for bit; a
   // backward of such a frame is a caller bug (checked).
   bool keep_records = true;
+  // Backward input, read only where SplatGradients::max_weight is tracked (--prune-radiance-
+  // share): the forward's image (H x W x channels, channels >= 3). The tracked value of a
+  // Gaussian at a pixel is then its share of the pixel, alpha T ShareScale (blend.h): a faint
+  // Gaussian that carries much of a pixel's radiance counts as much as it carries.
+  const float* share_image = nullptr;
 };
 
 // Everything the backward needs from the forward, kept between the calls. One object is meant

@@ -2,6 +2,7 @@
 
 #include <vector>
 
+#include "core/util/error.h"
 #include "method/raster/binning.h"
 #include "method/raster/blend.h"
 
@@ -16,6 +17,7 @@ RasterSettings SettingsFor(const Camera& camera, const RenderOptions& options, i
       options.background.empty() ? std::vector<float>(channels, 0.0f) : options.background;
   settings.backend = options.backend;
   settings.keep_records = options.backward_follows;
+  settings.share_image = options.track_max_weight ? options.share_image : nullptr;
   return settings;
 }
 
@@ -109,6 +111,7 @@ void RenderBackwardReference(const GaussianModelT<T>& model,
                              const T* dL_dimage,
                              GaussianGradientsT<T>* grads) {
   const RasterSettings settings = SettingsFor(camera, options, model.channels);
+  HDR4D_CHECK(settings.share_image == nullptr);  // the blend's own tests cover the share
   const std::vector<T> background(settings.background.begin(), settings.background.end());
   state->splat_grads.SetZero(model.size(), model.channels);
   TrackMaxWeight(options, model.size(), &state->splat_grads);

@@ -61,6 +61,9 @@ struct RenderOptions {
   // --prune-contribution (issue 55): the backward also keeps, per Gaussian, the largest blending
   // weight alpha T it had at any pixel of the frame, in splat_grads.max_weight (SplatGradientsT).
   bool track_max_weight = false;
+  // --prune-radiance-share: with track_max_weight, the frame's forward image (H x W x the raster's
+  // channels; its first three the HDR radiance), RasterSettings::share_image. Null: weights only.
+  const float* share_image = nullptr;
 };
 
 // The 3D Gaussian a 4D one (or a 3D one in static mode) presents at the frame's time, with the
