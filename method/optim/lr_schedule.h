@@ -245,13 +245,16 @@ struct OptimizationOptions {
   // seeds each (docs/history/time-to-quality.md, "Keeping the best val model").
   bool keep_best_val = false;
   // Coarse-to-fine images: the first coarse_to_fine iterations render and supervise at 1/4 of
-  // the images' size (first half) and 1/2 (second half) where the size divides
-  // (method/train/coarse_images.h). 0 = full size throughout.
+  // the images' size (first half) and 1/2 (second half), the columns and rows a factor leaves
+  // over sitting out (method/train/coarse_images.h). 0 = full size throughout.
   int coarse_to_fine = 0;
   // Pruning by contribution: at a densification step, a Gaussian seen since the last one whose
   // largest blending weight alpha T at any pixel of those views stayed below this is pruned
   // (DensifyParams::min_contribution). 0 = off.
   double prune_contribution = 0.0;
+  // With prune_contribution: the statistic is a Gaussian's largest share of a pixel, its weight
+  // raised to its part of the pixel's HDR radiance where that is larger (blend.h ShareScale).
+  bool prune_radiance_share = false;
   // Colour bands by need (method/train/color_bands.h): where the reference adds a colour band,
   // a probe of its gradient switches it on only when the gradients of the views agree (their
   // summed square over the sum of squares reaches color_band_signal, about 1 for noise); false:
@@ -374,6 +377,10 @@ struct OptimizationOptions {
     }
     if (!(percent_dense > 0.0 && percent_dense <= 1.0)) {
       return fmt::format("percent_dense must be in (0, 1], got {}", percent_dense);
+    }
+    if (prune_radiance_share && !(prune_contribution > 0.0)) {
+      return "prune_radiance_share: --prune-radiance-share changes what --prune-contribution "
+             "measures; give --prune-contribution T (T > 0) as well";
     }
     if (!(e = schedule("opacity_reset_interval", opacity_reset_interval)).empty()) return e;
     if (!(prune_opacity >= 0.0 && prune_opacity < 1.0)) {

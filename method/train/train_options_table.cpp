@@ -536,6 +536,7 @@ std::vector<TrainOption> SpeedRows() {
             o->optimization.color_bands_by_need = false;
             o->optimization.coarse_to_fine = 0;
             o->optimization.prune_contribution = 0.0;
+            o->optimization.prune_radiance_share = false;
             o->optimization.clone_opacity_correction = false;
             // A tone mapper given later gets it in ResolveTrainRequest.
             if (o->hdr.tone_mapper) o->hdr.tone_mapper->unseen_rows = "zero";
@@ -607,8 +608,8 @@ std::vector<TrainOption> LessWorkRows() {
       Row("optimization.coarse_to_fine", Opt(&O::coarse_to_fine))
           .Flag("--coarse-to-fine",
                 "Iterations at the start that train on reduced images: 1/4 of the size over "
-                "the first half of them, 1/2 over the rest, where the factor divides the "
-                "image's width and height (0: full size throughout, as the paper)")
+                "the first half of them, 1/2 over the rest (any size: the last columns and "
+                "rows the factor leaves over sit out; 0: full size throughout, as the paper)")
           .Range(ValueRange::Integer(0, kIntMax))
           .IfMissing(0)
           .Config("coarse_to_fine"),
@@ -621,6 +622,14 @@ std::vector<TrainOption> LessWorkRows() {
           .Range(ValueRange::Real(0, 0.999))
           .IfMissing(0.0)
           .Config("prune_contribution"),
+      Row("optimization.prune_radiance_share", Opt(&O::prune_radiance_share))
+          .Switch("--prune-radiance-share", true,
+                  "With --prune-contribution: a Gaussian's contribution at a pixel is the larger "
+                  "of its blending weight and its part of the pixel's HDR radiance (weight x "
+                  "its radiance / the pixel's, per channel), so a faint Gaussian that carries a "
+                  "light or a dark region's radiance is kept (methods with HDR colours)")
+          .IfMissing(false)
+          .Config("prune_radiance_share"),
       Row("optimization.clone_opacity_correction", CloneOpacityCorrectionAccess())
           .Switch("--clone-opacity-correction", true,
                   "At each densification give a clone and its source opacity 1 - sqrt(1 - "

@@ -65,7 +65,8 @@ TEST(TrainOptionsTable, RecordsTheKeysRunsHaveAlwaysRecorded) {
       "reference", "optimization.visible_adam", "optimization.color_bands_by_need",
       "optimization.color_band_signal", "optimization.stop_window",
       "optimization.stop_tolerance", "optimization.coarse_to_fine",
-      "optimization.prune_contribution", "optimization.stop_on_val", "optimization.grow_on_val",
+      "optimization.prune_contribution", "optimization.prune_radiance_share",
+      "optimization.stop_on_val", "optimization.grow_on_val",
       "optimization.keep_best_val", "optimization.clone_opacity_correction"};
   EXPECT_EQ(keys, expected);
   // Each value keeps its member's JSON type: a float's exact value, an unsigned seed, nulls.
@@ -109,8 +110,8 @@ TEST(TrainOptionsTable, RecordsOfOlderRunsReadAsTheyTrained) {
   old.erase("learn_background");
   old.erase("reference");
   for (const char* key : {"visible_adam", "stop_window", "stop_tolerance", "coarse_to_fine",
-                          "prune_contribution", "color_bands_by_need", "color_band_signal",
-                          "clone_opacity_correction"})
+                          "prune_contribution", "prune_radiance_share", "color_bands_by_need",
+                          "color_band_signal", "clone_opacity_correction"})
     old["optimization"].erase(key);
   for (const char* key : {"hdr_target", "hdr_geometry", "hdr_head", "hdr_head_iterations",
                           "pixel_log_epsilon"})
@@ -122,6 +123,7 @@ TEST(TrainOptionsTable, RecordsOfOlderRunsReadAsTheyTrained) {
   EXPECT_EQ(o.optimization.stop_window, 0);
   EXPECT_EQ(o.optimization.coarse_to_fine, 0);
   EXPECT_EQ(o.optimization.prune_contribution, 0.0);
+  EXPECT_FALSE(o.optimization.prune_radiance_share);
   EXPECT_FALSE(o.optimization.color_bands_by_need);  // every band on the reference's schedule
   EXPECT_EQ(o.optimization.clone_opacity_correction, false);  // clones kept their source's opacity
   EXPECT_EQ(o.hdr.hdr_target, HdrTarget::kImageMax);
@@ -187,8 +189,8 @@ TEST(TrainOptionsTable, EveryFlagIsOneRowWithHelpAndItsValues) {
       EXPECT_EQ(row.Check(row.get(defaults)), "") << row.flag;
     }
   }
-  // 36 + issue 55's twelve + issue 52's four + issue 56's --exposure-unit
-  EXPECT_EQ(flags.size(), 53u);
+  // 36 + issue 55's thirteen + issue 52's four + issue 56's --exposure-unit
+  EXPECT_EQ(flags.size(), 54u);
   EXPECT_EQ(FindTrainOption("--no-learn-background"), FindTrainOption("learn_background"));
 }
 
@@ -234,8 +236,10 @@ TEST(TrainOptionsTable, ReferenceIsRecordedAndRefusesTheOptionsThatDoLess) {
   o.optimization.visible_adam = true;
   o.optimization.coarse_to_fine = 500;
   o.optimization.prune_contribution = 0.02;
+  o.optimization.prune_radiance_share = true;
   o.optimization.clone_opacity_correction = true;
   reference->set_given(&o, true);
+  EXPECT_FALSE(o.optimization.prune_radiance_share);
   EXPECT_TRUE(o.reference);
   EXPECT_FALSE(o.optimization.visible_adam);
   EXPECT_EQ(o.optimization.coarse_to_fine, 0);

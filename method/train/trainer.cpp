@@ -435,6 +435,10 @@ void TrainingRun::LoadTrainingViews() {
   // paper-size scene's memory and loading time, issue 15).
   resolved_ = ResolveHdrTraining(hdr, profile_.hdr_gt_in_train,
                                  !tone_mapper_ || tone_mapper_->pointwise());
+  if (options_.optimization.prune_radiance_share && !resolved_.hdr_colors)
+    Fail("train: --prune-radiance-share: this run's Gaussians carry LDR colours, so there is "
+         "no radiance to share; drop it, or train a method with HDR colours (hdr4dgs, hdr-gs, "
+         "4dgs-hdr)");
   train_views_ = LoadViews(*dataset_, Split::kTrain, background,
                            /*load_hdr=*/resolved_.hdr || resolved_.hdr_head, options_.resolution,
                            hdr.hdr_target);
@@ -920,6 +924,8 @@ double TrainingRun::ViewLoss(const TrainView& view, int it, const float** ldr_ou
   *pixels = static_cast<std::size_t>(camera_.intrinsics.width) * camera_.intrinsics.height;
   image_.resize(*pixels * raster_channels_);
   dL_dimage_.resize(*pixels * raster_channels_);
+  // The backward reads this view's forward image for the radiance shares (RenderOptions).
+  render_.share_image = opt_.prune_radiance_share ? image_.data() : nullptr;
   view.ToFloat(&gt_);
   BoxReduceInPlace(&gt_, view.width(), view.height(), 3, coarse_);
   const double loss_value = ForwardAndLoss(view, ldr_out);

@@ -596,6 +596,44 @@ TEST(TrainerSpeedOptions, PruneContributionPrunesMoreAndResumesExactly) {
   EXPECT_NE(both.Validate(), "");
 }
 
+// --prune-radiance-share on an HDR-4DGS run: the statistic becomes the largest share of a pixel
+// (never below the weight), so it prunes another set than the weights alone; it is recorded,
+// resumes bit for bit, needs --prune-contribution, and a run with LDR colours refuses it.
+TEST(TrainerSpeedOptions, PruneRadianceShareChangesWhatIsPrunedAndResumesExactly) {
+  TempDir dir;
+  train_testing::MakeTinyHdrScene(dir / "scene", 16);
+  auto run = [&](const char* name, int iterations, bool share) {
+    TrainOptions o = TinyRun(dir / "scene", dir / name, iterations);
+    o.hdr.method = "hdr4dgs";
+    o.hdr.color_mode = ColorMode::kLogHdr;
+    o.hdr.tone_mapper = ToneMapperConfig{};
+    o.hdr.tone_mapper->context_window = 2;
+    o.optimization.prune_contribution = 0.05;
+    o.optimization.prune_radiance_share = share;
+    return o;
+  };
+  Train(run("weights", 60, false));
+  const TrainSummary straight = Train(run("straight", 60, true));
+  const Checkpoint weights = LoadCheckpoint(dir / "weights" / "checkpoint.bin");
+  const Checkpoint shares = LoadCheckpoint(dir / "straight" / "checkpoint.bin");
+  EXPECT_NE(weights.model.xyz, shares.model.xyz);
+  EXPECT_GT(shares.model.size(), 0u);
+  EXPECT_EQ(ReadJsonFile(dir / "straight" / "config.json")["optimization"]
+                        ["prune_radiance_share"],
+            true);
+  ExpectResumesExactly([&](const char* name, int it) { return run(name, it, true); }, 27,
+                       straight, dir.path());
+  TrainOptions alone = run("alone", 60, true);
+  alone.optimization.prune_contribution = 0;
+  EXPECT_NE(alone.Validate().find("give --prune-contribution"), std::string::npos)
+      << alone.Validate();
+  TrainOptions ldr = TinyRun(dir / "scene", dir / "ldr", 60);
+  ldr.optimization.prune_contribution = 0.05;
+  ldr.optimization.prune_radiance_share = true;
+  EXPECT_NE(hdr4d::testing::ErrorOf([&] { Train(ldr); }).find("carry LDR colours"),
+            std::string::npos);
+}
+
 
 // --clone-opacity-correction changes what a densification leaves (some Gaussian's opacity differs
 // from the plain run's once a clone was made), is recorded, and resumes bit for bit.
