@@ -583,6 +583,22 @@ TEST_P(RasterBlendCases, BackwardAccumulatesIntoGradients) {
 
 // The backward's largest blending weight per Gaussian (--prune-contribution): a max of alpha T
 // over the frame's pixels, raised into what the buffer holds, and nothing when it is empty.
+// The backward of `s` on a 32 x 32 image (3 channels, dL/dimage = 1), keeping the largest
+// weights from `start` on (none when empty), or with `share` the shares of its forward image.
+SplatGradients TrackedBackward(const SplatBuffers& s, RasterBackend backend, bool share,
+                               std::vector<float> start) {
+  RasterSettings settings = Settings(32, 32, {}, backend);
+  std::vector<float> image(32 * 32 * 3);
+  RasterState state;
+  RasterizeForward(s, settings, &state, image.data());
+  if (share) settings.share_image = image.data();
+  const std::vector<float> dL(image.size(), 1.0f);
+  SplatGradients grads;
+  grads.max_weight = std::move(start);
+  BlendBackward(s, settings, &state, dL.data(), nullptr, &grads, nullptr);
+  return grads;
+}
+
 TEST_P(RasterBlendCases, MaxWeightIsTheLargestAlphaTimesTransmittance) {
   // Two wide Gaussians on one pixel centre (front 0.5, back 0.5: the back one's weight is
   // 0.5 x 0.5 at that centre and less elsewhere), one alone in another tile (0.3), one culled.
@@ -590,49 +606,30 @@ TEST_P(RasterBlendCases, MaxWeightIsTheLargestAlphaTimesTransmittance) {
   Append(&s, OneGaussian(5.5f, 5.5f, 0.5f, {0, 1, 0}, 2, 4, 0.01f, 0, 0.01f));
   Append(&s, OneGaussian(24.5f, 24.5f, 0.3f, {0, 0, 1}));
   Append(&s, OneGaussian(24.5f, 8.5f, 0.7f, {0, 0, 1}, 1, /*radius=*/0));
-  const RasterSettings settings = Settings(32, 32, {}, GetParam());
-  std::vector<float> image(32 * 32 * 3);
-  RasterState state;
-  RasterizeForward(s, settings, &state, image.data());
-  const std::vector<float> dL(image.size(), 1.0f);
-  SplatGradients grads;
-  grads.max_weight = {0.0f, 0.0f, 0.0f, 0.9f};  // a value already there is only raised
-  BlendBackward(s, settings, &state, dL.data(), nullptr, &grads, nullptr);
+  // A value already there is only raised.
+  const SplatGradients grads = TrackedBackward(s, GetParam(), false, {0.0f, 0.0f, 0.0f, 0.9f});
   ASSERT_EQ(grads.max_weight.size(), 4u);
   EXPECT_NEAR(grads.max_weight[0], 0.5f, 1e-6);
   EXPECT_NEAR(grads.max_weight[1], 0.25f, 1e-6);
   EXPECT_NEAR(grads.max_weight[2], 0.3f, 1e-6);
   EXPECT_EQ(grads.max_weight[3], 0.9f);
-  SplatGradients untracked;
-  BlendBackward(s, settings, &state, dL.data(), nullptr, &untracked, nullptr);
-  EXPECT_TRUE(untracked.max_weight.empty());
+  EXPECT_TRUE(TrackedBackward(s, GetParam(), false, {}).max_weight.empty());
 }
 
 TEST_P(RasterBlendCases, ShareImageCountsAFaintGaussiansPartOfTheRadiance) {
-  // A faint red light (alpha 0.02, radiance 100) in front of an opaque white Gaussian of the same
-  // shape, both centred on pixel (5, 5), where G = 1. The light's weight is 0.02, but its part of
-  // that pixel's red radiance is 0.02 x 100 / (0.02 x 100 + 0.99 x 0.98 x 1) = 0.6734, and its
-  // share falls off the centre (the white one's alpha caps at 0.99 only there). The white one
-  // carries all of the green and blue: its share is 1 (within the floor). A lone Gaussian whose
-  // pixels hold only it has share 1 too, though its weight is 0.3.
+  // A faint red light (alpha 0.02 G, radiance 100) in front of an opaque white Gaussian of the
+  // same shape (alpha 0.99 G), both centred on pixel (5, 5). The light's weight is 0.02, but its
+  // part of the red radiance is 2 G / (2 G + 0.99 G (1 - 0.02 G)), largest at the centre (G = 1):
+  // 2 / (2 + 0.99 x 0.98) = 0.6734. The white one carries all of the green and blue: share 1
+  // (within the floor). A lone Gaussian whose pixels hold only it has share 1, though its weight
+  // is 0.3.
   SplatBuffers s = OneGaussian(5.5f, 5.5f, 0.02f, {100, 0, 0}, 1, 4, 0.01f, 0, 0.01f);
   Append(&s, OneGaussian(5.5f, 5.5f, 0.99f, {1, 1, 1}, 2, 4, 0.01f, 0, 0.01f));
   Append(&s, OneGaussian(24.5f, 24.5f, 0.3f, {0, 0, 1}));
-  const RasterSettings plain = Settings(32, 32, {}, GetParam());
-  std::vector<float> image(32 * 32 * 3);
-  RasterState state;
-  RasterizeForward(s, plain, &state, image.data());
-  const std::vector<float> dL(image.size(), 1.0f);
-  SplatGradients weights;
-  weights.max_weight.assign(3, 0.0f);
-  BlendBackward(s, plain, &state, dL.data(), nullptr, &weights, nullptr);
+  const SplatGradients weights = TrackedBackward(s, GetParam(), false, {0, 0, 0});
   EXPECT_NEAR(weights.max_weight[0], 0.02f, 1e-6);
   EXPECT_NEAR(weights.max_weight[2], 0.3f, 1e-6);
-  RasterSettings shared = plain;
-  shared.share_image = image.data();
-  SplatGradients shares;
-  shares.max_weight.assign(3, 0.0f);
-  BlendBackward(s, shared, &state, dL.data(), nullptr, &shares, nullptr);
+  const SplatGradients shares = TrackedBackward(s, GetParam(), true, {0, 0, 0});
   EXPECT_NEAR(shares.max_weight[0], 2.0 / (2.0 + 0.99 * 0.98), 1e-5);
   EXPECT_NEAR(shares.max_weight[1], 1.0f, 1e-5);
   EXPECT_NEAR(shares.max_weight[2], 1.0f, 1e-5);
