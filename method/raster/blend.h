@@ -89,8 +89,9 @@ void BlendBackward(const SplatBuffers& splats,
 // A Gaussian's share of a pixel (RasterSettings::share_image) over its blending weight w = alpha
 // T: 1, or the largest f_c / C_c over the first kShareChannels channels (the HDR radiance of
 // HDR-4DGS's raster) where its colour f_c is a larger part of the pixel's value C_c than w says
-// (w f_c / C_c is then its part of C_c). A log-space HDR loss weighs that part, not w: a light
-// or a highlight behind a faint Gaussian, or a dark region (docs/history/time-to-quality.md).
+// (w f_c / C_c is then its part of C_c). A log-space HDR loss weighs that part, not w: a faint
+// Gaussian that is a light or a highlight, or one in a dark region
+// (docs/history/time-to-quality.md, "Pruning by radiance share").
 // C_c is floored at 0 and kShareFloor added, so the scale stays finite.
 inline constexpr int kShareChannels = 3;
 inline constexpr float kShareFloor = 1e-8f;

@@ -111,8 +111,8 @@ struct RasterSettings {
   // n_contrib is left empty. The images and final_transmittance are the same bit for bit; a
   // backward of such a frame is a caller bug (checked).
   bool keep_records = true;
-  // Backward input, read only where SplatGradients::max_weight is tracked (--prune-radiance-
-  // share): the forward's image (H x W x channels, channels >= 3). The tracked value of a
+  // Backward input, read only where SplatGradients::max_weight is tracked
+  // (--prune-radiance-share): the forward's image (H x W x channels, channels >= 3). The value of a
   // Gaussian at a pixel is then its share of the pixel, alpha T ShareScale (blend.h): a faint
   // Gaussian that carries much of a pixel's radiance counts as much as it carries.
   const float* share_image = nullptr;
