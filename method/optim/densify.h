@@ -122,9 +122,10 @@ struct DensifyStats {
 // rasteriser reports, on which its threshold 2e-4 is defined — and counts the view; max_radii
 // keeps the largest radius. Sizes must agree with stats (checked).
 // reduction f > 1 (--coarse-to-fine): the view was rendered at 1/f of the training images'
-// size (floored where f does not divide it: train/coarse_images.h). Its norm is divided by f and its radii multiplied by f, so both are in the units of the
-// full-size images the threshold and the screen-size prune were resolved for (the threshold
-// goes as 1 / image size: OptimizationOptions::Resolved).
+// size (floored where f does not divide it: train/coarse_images.h). Its norm is divided by f
+// and its radii multiplied by f, so both are in the units of the full-size images the threshold
+// and the screen-size prune were resolved for (the threshold goes as 1 / image size:
+// OptimizationOptions::Resolved).
 void AccumulateStats(const std::vector<float>& mean2d_grad,
                      const std::vector<int>& radius,
                      int width,

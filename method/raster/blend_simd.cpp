@@ -849,6 +849,16 @@ HWY_INLINE void FinishSlot(const float* r, float neg_a, float neg_c, float* slot
   slot[kSlotOpacity] = slot[kSumU] / o;
 }
 
+// w ShareScale (blend.h) for a pixel vector: the Gaussian's colours f_c (kShareChannels
+// broadcasts) times the planes of ShareInverse(C_c) at `inverse` (kTilePixels apart), as the
+// scalar path computes f_c / C_c. Masked lanes have w = 0 and a finite scale.
+HWY_INLINE V WeightTimesShareScale(D d, V w, const V* f, const float* inverse) {
+  V scale = hn::Set(d, 1.0f);
+  for (int c = 0; c < kShareChannels; ++c)
+    scale = hn::Max(scale, hn::Mul(f[c], hn::Load(d, inverse + c * kTilePixels)));
+  return hn::Mul(w, scale);
+}
+
 // A kernel long on purpose: the blend's backward is the costliest loop of a step
 // (BM_RasterBackward); its per-Gaussian steps are the HWY_INLINE helpers above (FinishSlot ...).
 template <int kC>
@@ -1057,17 +1067,8 @@ void BackwardTileImpl(const TileJob& job, int tile) {
         const V T = hn::Mul(T_old, inv);  // transmittance in front of this Gaussian
         hn::Store(hn::IfThenElse(m, T, T_old), d, T_plane + off);
         const V w = hn::IfThenElseZero(m, hn::Mul(alpha, T));
-        if (share) {
-          // w ShareScale: f_c / C_c as f_c ShareInverse(C_c), as the scalar path (masked lanes:
-          // w = 0 and a finite scale).
-          V scale = one;
-          for (int c = 0; c < kShareChannels; ++c)
-            scale = hn::Max(
-                scale, hn::Mul(share_f[c], hn::Load(d, share_inv + c * kTilePixels + off)));
-          w_max = hn::Max(w_max, hn::Mul(w, scale));
-        } else if (max_weight != nullptr) {
-          w_max = hn::Max(w_max, w);
-        }
+        if (max_weight != nullptr)
+          w_max = hn::Max(w_max, share ? WeightTimesShareScale(d, w, share_f, share_inv + off) : w);
         V F = hn::Zero(d);
         for (int c = 0; c < channels; ++c) {
           const V dp = hn::Load(d, dpix + c * kTilePixels + off);
