@@ -70,6 +70,9 @@ inline constexpr int kReferenceIterations = 20000;
 inline constexpr double kReferenceImageSize = 400.0;
 // A schedule field set to this (any negative value) follows the run length; see Resolved().
 inline constexpr int kFollowRunLength = -1;
+// The fewest initial points a run starts from: a point cloud with fewer is replaced by random
+// points (each point's scale is its distance to three neighbours).
+inline constexpr int kMinInitialPoints = 4;
 
 // The reference's `reference_steps` of a 20000-iteration run scaled to `iterations`, at least 1.
 inline int StepsForRunLength(int reference_steps, int iterations) {
@@ -374,6 +377,13 @@ struct OptimizationOptions {
           "densify_grad_threshold must be positive and finite (or negative: scaled to the image "
           "size), got {}",
           densify_grad_threshold);
+    }
+    // A run starts from at least kMinInitialPoints (a smaller cloud falls back to random
+    // points), so a smaller budget could not be kept.
+    if (max_gaussians > 0 && max_gaussians < kMinInitialPoints) {
+      return fmt::format("max_gaussians: --max-gaussians must be 0 (no budget) or at least {} "
+                         "(the fewest points a run starts from), got {}",
+                         kMinInitialPoints, max_gaussians);
     }
     if (!(percent_dense > 0.0 && percent_dense <= 1.0)) {
       return fmt::format("percent_dense must be in (0, 1], got {}", percent_dense);

@@ -9,12 +9,14 @@
 #include "core/util/error.h"
 #include "core/util/parallel.h"
 #include "method/gaussian/constants.h"
+#include "method/optim/lr_schedule.h"
 
 namespace hdr4d::method {
 
 void InitOptions::Validate() const {
-  if (num_random_points < 4)
-    Fail("initialisation: need at least 4 random points, got {}", num_random_points);
+  if (num_random_points < kMinInitialPoints)
+    Fail("initialisation: need at least {} random points, got {}", kMinInitialPoints,
+         num_random_points);
   if (!(random_half_extent > 0))
     Fail("initialisation: random extent must be positive, got {}", random_half_extent);
   if (!(time_max >= time_min))
@@ -149,7 +151,7 @@ GaussianModel InitialiseGaussians(const std::optional<PointCloud>& cloud,
   std::vector<Eigen::Vector3f> positions;
   std::vector<Eigen::Vector3f> colors;
   std::vector<float> times;
-  if (cloud && cloud->size() >= 4) {
+  if (cloud && cloud->size() >= static_cast<std::size_t>(kMinInitialPoints)) {
     positions = cloud->positions;
     colors = cloud->colors;
     times = cloud->times;

@@ -385,8 +385,9 @@ std::vector<TrainOption> RunRows() {
                 "camera sees (--reference, or no cloud in view: 2 x every view's pixels); at "
                 "least 32768; BENCHMARKS.md). An N "
                 "given here also caps the initial point cloud: a larger point3d.ply is "
-                "subsampled to N points, evenly over the file's order (the default budget "
-                "leaves it whole)")
+                "subsampled to N points, evenly over the file's order, and a scene without "
+                "one starts from at most N random points (the default budget leaves both "
+                "whole); N is 0 or at least 4")
           .Range(ValueRange::Integer(0, std::int64_t{1} << 40))
           .UnsetWhen(Unset::kNegative)
           .Config("max_gaussians"),

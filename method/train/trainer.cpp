@@ -710,6 +710,14 @@ void TrainingRun::ResumeOrInitialise() {
                    dataset_->point_cloud_path->string(), options_.optimization.max_gaussians);
       SubsamplePointCloud(&*cloud, static_cast<std::size_t>(options_.optimization.max_gaussians));
     }
+    // ... and the random points that replace a missing or too small cloud.
+    const std::int64_t asked = options_.optimization.max_gaussians;
+    const bool random = !cloud || cloud->size() < static_cast<std::size_t>(kMinInitialPoints);
+    if (random && asked > 0 && init.num_random_points > asked) {
+      spdlog::info("train: {} random initial points, capped at --max-gaussians {}",
+                   init.num_random_points, asked);
+      init.num_random_points = static_cast<int>(asked);
+    }
     model_ = InitialiseGaussians(cloud, init);
     if (resolved_.hdr && model_.color_mode == ColorMode::kLogHdr) {
       if (const auto level =

@@ -141,6 +141,24 @@ TEST(Trainer, GaussianBudgetIsNeverPassed) {
   EXPECT_GT(Train(o).gaussians, 430u);
 }
 
+// A budget asked for also caps the random points that replace a missing cloud (a one-point
+// budget once started from 50000 random points), and one too small to start from is refused.
+TEST(Trainer, GaussianBudgetCapsTheRandomInitialPoints) {
+  TempDir dir;
+  MakeScene(dir / "scene");
+  TrainOptions o = SmallRun(dir / "scene", dir / "run", 1);
+  ASSERT_EQ(o.init.num_random_points, 400);
+  o.optimization.max_gaussians = 37;
+  Train(o);
+  EXPECT_EQ(LoadCheckpoint(dir / "run" / "checkpoint.bin").model.size(), 37u);
+  o = SmallRun(dir / "scene", dir / "tiny", 1);
+  o.optimization.max_gaussians = 3;
+  const std::string error = ErrorOf([&] { Train(o); });
+  EXPECT_NE(error.find("--max-gaussians must be 0 (no budget) or at least 4"), std::string::npos)
+      << error;
+  EXPECT_FALSE(fs::exists(dir / "tiny" / "config.json")) << "refused before anything is written";
+}
+
 // Four cameras at two times, SIZE px: the budget tests' scene.
 void MakeBudgetScene(const fs::path& root, int size) {
   GaussianSceneOptions scene;
