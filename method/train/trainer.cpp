@@ -186,6 +186,7 @@ class TrainingRun {
   std::vector<std::string> scene_notes_;
   void OpenRunFolder();
   void ResumeOrInitialise();
+  GaussianModel InitialModel();
   // A checkpoint's model, optimiser, statistics, colour bands, tone mapper, camera correction
   // and background into the run (not its loop state); `file` names it in errors.
   void LoadTrainingState(Checkpoint* c, const fs::path& file);
@@ -697,36 +698,7 @@ void TrainingRun::ResumeOrInitialise() {
     LoadTrainingState(&c, checkpoint_path_);
     spdlog::info("train: resuming {} at iteration {}", checkpoint_path_.string(), loop_.iteration);
   } else {
-    InitOptions init = options_.init;
-    init.seed = options_.seed;
-    init.temporal = temporal_;  // a static scene trains without the time axis
-    init.color_mode = options_.hdr.color_mode;
-    std::optional<PointCloud> cloud = std::move(initial_cloud_);  // read for the budget, or now
-    if (!cloud && dataset_->point_cloud_path) cloud = ReadPly(*dataset_->point_cloud_path);
-    // A budget asked for caps the initial cloud too (the default one leaves it whole).
-    if (cloud && options_.optimization.max_gaussians > 0 &&
-        cloud->size() > static_cast<std::size_t>(options_.optimization.max_gaussians)) {
-      spdlog::info("train: {} points in {}, subsampled to --max-gaussians {}", cloud->size(),
-                   dataset_->point_cloud_path->string(), options_.optimization.max_gaussians);
-      SubsamplePointCloud(&*cloud, static_cast<std::size_t>(options_.optimization.max_gaussians));
-    }
-    // ... and the random points that replace a missing or too small cloud.
-    const std::int64_t asked = options_.optimization.max_gaussians;
-    const bool random = !cloud || cloud->size() < static_cast<std::size_t>(kMinInitialPoints);
-    if (random && asked > 0 && init.num_random_points > asked) {
-      spdlog::info("train: {} random initial points, capped at --max-gaussians {}",
-                   init.num_random_points, asked);
-      init.num_random_points = static_cast<int>(asked);
-    }
-    model_ = InitialiseGaussians(cloud, init);
-    if (resolved_.hdr && model_.color_mode == ColorMode::kLogHdr) {
-      if (const auto level =
-              MedianLogHdrTarget(train_views_, HdrTargetMu(options_.hdr.hdr_target))) {
-        const float shift = ShiftLogColoursToLevel(&model_, *level);
-        spdlog::info("train: log-HDR colours start at the HDR targets' median {:.3g} (x{:.3g})",
-                     std::exp(*level), std::exp(shift));
-      }
-    }
+    model_ = InitialModel();
     if (opt_.prune_contribution > 0) stats_.max_weight.assign(model_.size(), 0.0f);
     stats_.Reset(model_.size());
     OrderByTime();  // before the optimiser's groups exist: the model alone
@@ -737,6 +709,41 @@ void TrainingRun::ResumeOrInitialise() {
   if (AlreadyFinished()) return;
   WriteJsonFile(options_.out / "config.json", config_);
   WriteJsonFile(options_.out / kDataRecordName, data_record_.ToJson());
+}
+
+// A new model from the scene's point cloud (or random points), within the budget asked for, its
+// log-HDR colours started at the HDR targets' level.
+GaussianModel TrainingRun::InitialModel() {
+  InitOptions init = options_.init;
+  init.seed = options_.seed;
+  init.temporal = temporal_;  // a static scene trains without the time axis
+  init.color_mode = options_.hdr.color_mode;
+  std::optional<PointCloud> cloud = std::move(initial_cloud_);  // read for the budget, or now
+  if (!cloud && dataset_->point_cloud_path) cloud = ReadPly(*dataset_->point_cloud_path);
+  // A budget asked for caps the initial cloud too (the default one leaves it whole) ...
+  const std::int64_t asked = options_.optimization.max_gaussians;
+  if (cloud && asked > 0 && cloud->size() > static_cast<std::size_t>(asked)) {
+    spdlog::info("train: {} points in {}, subsampled to --max-gaussians {}", cloud->size(),
+                 dataset_->point_cloud_path->string(), asked);
+    SubsamplePointCloud(&*cloud, static_cast<std::size_t>(asked));
+  }
+  // ... and the random points that replace a missing or too small cloud.
+  const bool random = !cloud || cloud->size() < static_cast<std::size_t>(kMinInitialPoints);
+  if (random && asked > 0 && init.num_random_points > asked) {
+    spdlog::info("train: {} random initial points, capped at --max-gaussians {}",
+                 init.num_random_points, asked);
+    init.num_random_points = static_cast<int>(asked);
+  }
+  GaussianModel model = InitialiseGaussians(cloud, init);
+  if (resolved_.hdr && model.color_mode == ColorMode::kLogHdr) {
+    if (const auto level =
+            MedianLogHdrTarget(train_views_, HdrTargetMu(options_.hdr.hdr_target))) {
+      const float shift = ShiftLogColoursToLevel(&model, *level);
+      spdlog::info("train: log-HDR colours start at the HDR targets' median {:.3g} (x{:.3g})",
+                   std::exp(*level), std::exp(shift));
+    }
+  }
+  return model;
 }
 
 void TrainingRun::LoadTrainingState(Checkpoint* c, const fs::path& file) {
