@@ -399,6 +399,29 @@ def capsule(head, tail, radius, segments=12, rings=6):
     return transformed(part, Matrix.Translation((head + tail) / 2) @ rotation)
 
 
+def vertex_normals(mesh):
+    """Unit vertex normals of `mesh` (its rest shape): each face's unit normal weighted by the
+    corner's angle, summed in face order, as Blender weights them. Blender 3.4 sums them over
+    threads in an order that changes from run to run, so `vertex.normal` can differ in its last
+    bits between two runs of the same script, and so would a shape key built on it."""
+    co = [v.co.copy() for v in mesh.vertices]
+    total = [Vector((0.0, 0.0, 0.0)) for _ in co]
+    for face in mesh.polygons:
+        ids = list(face.vertices)
+        normal = Vector((0.0, 0.0, 0.0))  # Newell's method
+        for a, b in zip(ids, ids[1:] + ids[:1]):
+            normal += co[a].cross(co[b])
+        if normal.length == 0.0:
+            continue
+        normal.normalize()
+        for k, v in enumerate(ids):
+            to_prev = co[ids[k - 1]] - co[v]
+            to_next = co[ids[(k + 1) % len(ids)]] - co[v]
+            if to_prev.length > 0.0 and to_next.length > 0.0:
+                total[v] += normal * to_prev.angle(to_next)
+    return [n.normalized() if n.length > 0.0 else Vector((0.0, 0.0, 1.0)) for n in total]
+
+
 def humanoid(name, material, location=(0, 0, 0), bulk=1.0):
     """Returns (armature object, body mesh object). `bulk` thickens every limb (the mutant)."""
     radius = {"hips": 0.15, "spine": 0.17, "upper_arm": 0.055, "forearm": 0.045,

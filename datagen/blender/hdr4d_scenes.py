@@ -411,10 +411,11 @@ def mutant(rng):
     rig, body = kit.humanoid("mutant", hide, bulk=1.45)
     body.shape_key_add(name="Basis")
     swell = body.shape_key_add(name="swell")
-    for vertex, key in zip(body.data.vertices, swell.data):
+    normals = kit.vertex_normals(body.data)  # not vertex.normal: its last bits vary by run
+    for vertex, normal, key in zip(body.data.vertices, normals, swell.data):
         p = vertex.co
         bump = 0.5 + 0.5 * math.sin(9 * p.x + 2) * math.sin(7 * p.z + 1) * math.cos(8 * p.y)
-        key.co = p + vertex.normal * 0.05 * bump
+        key.co = p + normal * 0.05 * bump
     eye_mat, eye_strength, _ = kit.emissive("eyes", (1.0, 0.3, 0.05), 50.0)
     for x in (0.045, -0.045):
         eye = kit.mesh_object("eye", kit.uv_sphere(0.022, 8, 6), eye_mat, parent=rig)

@@ -24,7 +24,7 @@ import bpy  # noqa: E402
 import hdr4d_kit as kit  # noqa: E402
 import hdr4d_scenes  # noqa: E402
 
-SCRIPT_VERSION = 2  # 2: points over time (x y z r g b t)
+SCRIPT_VERSION = 3  # 2: points over time (x y z r g b t); 3: mutant's swell reproducible
 
 
 def parse_args():
