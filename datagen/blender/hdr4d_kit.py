@@ -401,13 +401,18 @@ def capsule(head, tail, radius, segments=12, rings=6):
 
 def vertex_normals(mesh):
     """Unit vertex normals of `mesh` (its rest shape): each face's unit normal weighted by the
-    corner's angle, summed in face order, as Blender weights them. Blender 3.4 sums them over
-    threads in an order that changes from run to run, so `vertex.normal` can differ in its last
-    bits between two runs of the same script, and so would a shape key built on it."""
+    corner's angle, as Blender weights them, summed in an order that does not depend on how the
+    mesh is numbered. Blender 3.4 sums them over threads in an order that changes from run to
+    run, and bmesh numbers the faces of its primitives differently from run to run (see
+    sample_surface_points), so `vertex.normal` can differ in its last bits between two runs of
+    the same script, and so would a shape key built on it. Here each face starts at its
+    smallest corner, and each vertex's terms are summed sorted."""
     co = [v.co.copy() for v in mesh.vertices]
-    total = [Vector((0.0, 0.0, 0.0)) for _ in co]
+    terms = [[] for _ in co]
     for face in mesh.polygons:
         ids = list(face.vertices)
+        first = min(range(len(ids)), key=lambda k: tuple(co[ids[k]]))
+        ids = ids[first:] + ids[:first]
         normal = Vector((0.0, 0.0, 0.0))  # Newell's method
         for a, b in zip(ids, ids[1:] + ids[:1]):
             normal += co[a].cross(co[b])
@@ -418,8 +423,14 @@ def vertex_normals(mesh):
             to_prev = co[ids[k - 1]] - co[v]
             to_next = co[ids[(k + 1) % len(ids)]] - co[v]
             if to_prev.length > 0.0 and to_next.length > 0.0:
-                total[v] += normal * to_prev.angle(to_next)
-    return [n.normalized() if n.length > 0.0 else Vector((0.0, 0.0, 1.0)) for n in total]
+                terms[v].append(tuple(normal * to_prev.angle(to_next)))
+    normals = []
+    for vertex_terms in terms:
+        total = Vector((0.0, 0.0, 0.0))
+        for term in sorted(vertex_terms):
+            total += Vector(term)
+        normals.append(total.normalized() if total.length > 0.0 else Vector((0.0, 0.0, 1.0)))
+    return normals
 
 
 def humanoid(name, material, location=(0, 0, 0), bulk=1.0):
