@@ -153,6 +153,28 @@ inline std::int64_t StaticGaussianBudget(double view_pixels, double content_view
 // schedule on scenes it was not set on").
 inline constexpr int kReferenceShIncreaseInterval = 1000;
 
+// Checks of OptimizationOptions::Validate: "" when the value is usable, else the message.
+namespace option_checks {
+inline std::string PositiveInt(const char* name, int v) {
+  return v > 0 ? std::string() : fmt::format("{} must be positive, got {}", name, v);
+}
+inline std::string Rate(const char* name, double v) {
+  return v >= 0.0 && std::isfinite(v) ? std::string()
+                                      : fmt::format("{} must be finite and >= 0, got {}", name, v);
+}
+inline std::string Positive(const char* name, double v) {
+  return v > 0.0 && std::isfinite(v)
+             ? std::string()
+             : fmt::format("{} must be positive and finite, got {}", name, v);
+}
+// A negative schedule field follows the run length (Resolved); 0 is not a schedule.
+inline std::string Schedule(const char* name, int v) {
+  return v != 0 ? std::string()
+                : fmt::format("{} must be positive (or negative: follow the run length), got 0",
+                              name);
+}
+}  // namespace option_checks
+
 // Optimisation settings with the HDR-4DGS HDR-4D-Syn defaults (which are the 4DGS ones except for
 // iterations, the densification interval and the tone mapper). Learning rates of the 4D mean
 // (xyz and t) are in scene-extent units: the caller multiplies them by the extent (PositionLr,
@@ -323,55 +345,48 @@ struct OptimizationOptions {
 
   // "" when every field is usable, else a message that starts with the bad field's name.
   std::string Validate() const {
-    auto positive_int = [](const char* name, int v) {
-      return v > 0 ? std::string() : fmt::format("{} must be positive, got {}", name, v);
-    };
-    auto rate = [](const char* name, double v) {
-      return v >= 0.0 && std::isfinite(v)
-                 ? std::string()
-                 : fmt::format("{} must be finite and >= 0, got {}", name, v);
-    };
-    auto positive = [](const char* name, double v) {
-      return v > 0.0 && std::isfinite(v)
-                 ? std::string()
-                 : fmt::format("{} must be positive and finite, got {}", name, v);
-    };
+    if (std::string e = ValidateRunAndRates(); !e.empty()) return e;
+    return ValidateDensifyAndStop();
+  }
+  // The run length, the batch and every learning rate.
+  std::string ValidateRunAndRates() const {
+    using namespace option_checks;
     std::string e;
-    if (!(e = positive_int("iterations", iterations)).empty()) return e;
-    if (!(e = positive_int("batch_size", batch_size)).empty()) return e;
-    if (!(e = positive("position_lr_init", position_lr_init)).empty()) return e;
-    if (!(e = positive("position_lr_final", position_lr_final)).empty()) return e;
-    // A negative schedule field follows the run length (Resolved); 0 is not a schedule.
-    auto schedule = [](const char* name, int v) {
-      return v != 0 ? std::string()
-                    : fmt::format("{} must be positive (or negative: follow the run length), got 0",
-                                  name);
-    };
-    if (!(e = schedule("position_lr_max_steps", position_lr_max_steps)).empty()) return e;
+    if (!(e = PositiveInt("iterations", iterations)).empty()) return e;
+    if (!(e = PositiveInt("batch_size", batch_size)).empty()) return e;
+    if (!(e = Positive("position_lr_init", position_lr_init)).empty()) return e;
+    if (!(e = Positive("position_lr_final", position_lr_final)).empty()) return e;
+    if (!(e = Schedule("position_lr_max_steps", position_lr_max_steps)).empty()) return e;
     if (position_lr_delay_steps < 0) {
       return fmt::format("position_lr_delay_steps must be >= 0, got {}", position_lr_delay_steps);
     }
-    if (!(e = rate("position_lr_delay_mult", position_lr_delay_mult)).empty()) return e;
+    if (!(e = Rate("position_lr_delay_mult", position_lr_delay_mult)).empty()) return e;
     if (!std::isfinite(t_lr_init)) {
       return fmt::format("t_lr_init must be finite (< 0 means position_lr_init), got {}",
                          t_lr_init);
     }
-    if (!(e = rate("f_dc_lr", f_dc_lr)).empty()) return e;
-    if (!(e = rate("f_dc_lr_log_hdr", f_dc_lr_log_hdr)).empty()) return e;
-    if (!(e = rate("f_rest_lr", f_rest_lr)).empty()) return e;
-    if (!(e = rate("opacity_lr", opacity_lr)).empty()) return e;
-    if (!(e = rate("scaling_lr", scaling_lr)).empty()) return e;
-    if (!(e = rate("rotation_lr", rotation_lr)).empty()) return e;
-    if (!(e = rate("tone_mapper_lr", tone_mapper_lr)).empty()) return e;
-    if (!(e = positive("adam_eps", adam_eps)).empty()) return e;
+    if (!(e = Rate("f_dc_lr", f_dc_lr)).empty()) return e;
+    if (!(e = Rate("f_dc_lr_log_hdr", f_dc_lr_log_hdr)).empty()) return e;
+    if (!(e = Rate("f_rest_lr", f_rest_lr)).empty()) return e;
+    if (!(e = Rate("opacity_lr", opacity_lr)).empty()) return e;
+    if (!(e = Rate("scaling_lr", scaling_lr)).empty()) return e;
+    if (!(e = Rate("rotation_lr", rotation_lr)).empty()) return e;
+    if (!(e = Rate("tone_mapper_lr", tone_mapper_lr)).empty()) return e;
+    if (!(e = Positive("adam_eps", adam_eps)).empty()) return e;
     if (!(lambda_dssim >= 0.0 && lambda_dssim <= 1.0)) {
       return fmt::format("lambda_dssim must be in [0, 1], got {}", lambda_dssim);
     }
+    return "";
+  }
+  // Densification, pruning, the colour schedule and the stop.
+  std::string ValidateDensifyAndStop() const {
+    using namespace option_checks;
+    std::string e;
     if (densify_from >= 0 && densify_until >= 0 && densify_until < densify_from) {
       return fmt::format("densify_until ({}) must be >= densify_from ({})", densify_until,
                          densify_from);
     }
-    if (!(e = positive_int("densification_interval", densification_interval)).empty()) return e;
+    if (!(e = PositiveInt("densification_interval", densification_interval)).empty()) return e;
     if (densify_grad_threshold == 0.0 || !std::isfinite(densify_grad_threshold)) {
       return fmt::format(
           "densify_grad_threshold must be positive and finite (or negative: scaled to the image "
@@ -392,7 +407,7 @@ struct OptimizationOptions {
       return "prune_radiance_share: --prune-radiance-share changes what --prune-contribution "
              "measures; give --prune-contribution T (T > 0) as well";
     }
-    if (!(e = schedule("opacity_reset_interval", opacity_reset_interval)).empty()) return e;
+    if (!(e = Schedule("opacity_reset_interval", opacity_reset_interval)).empty()) return e;
     if (!(prune_opacity >= 0.0 && prune_opacity < 1.0)) {
       return fmt::format("prune_opacity must be in [0, 1), got {}", prune_opacity);
     }

@@ -581,8 +581,6 @@ TEST_P(RasterBlendCases, BackwardAccumulatesIntoGradients) {
   EXPECT_NE(once.features[1], 0.0f);
 }
 
-// The backward's largest blending weight per Gaussian (--prune-contribution): a max of alpha T
-// over the frame's pixels, raised into what the buffer holds, and nothing when it is empty.
 // The backward of `s` on a 32 x 32 image (3 channels, dL/dimage = 1), keeping the largest
 // weights from `start` on (none when empty), or with `share` the shares of its forward image.
 SplatGradients TrackedBackward(const SplatBuffers& s, RasterBackend backend, bool share,
@@ -599,6 +597,8 @@ SplatGradients TrackedBackward(const SplatBuffers& s, RasterBackend backend, boo
   return grads;
 }
 
+// The backward's largest blending weight per Gaussian (--prune-contribution): a max of alpha T
+// over the frame's pixels, raised into what the buffer holds, and nothing when it is empty.
 TEST_P(RasterBlendCases, MaxWeightIsTheLargestAlphaTimesTransmittance) {
   // Two wide Gaussians on one pixel centre (front 0.5, back 0.5: the back one's weight is
   // 0.5 x 0.5 at that centre and less elsewhere), one alone in another tile (0.3), one culled.
