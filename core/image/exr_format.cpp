@@ -5,8 +5,13 @@
 #include <OpenEXR/ImfInputFile.h>
 #include <OpenEXR/ImfOutputFile.h>
 #include <Imath/half.h>
+#include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
+#include <cctype>
+#include <map>
+#include <set>
 #include <exception>
 #include <string>
 #include <vector>
@@ -25,29 +30,75 @@ std::string ExrMessage(const std::exception& e) {
   return text.empty() ? "not a readable OpenEXR file" : text;
 }
 
-// The channels read, in the order they are stored in the image: R, G, B, A when the file has
-// them, else luminance Y (and A), else every channel in the file's (alphabetical) order.
-std::vector<std::string> ExrChannelOrder(const Imf::ChannelList& list) {
+// A channel's name without its layer ("ViewLayer.Combined.R" -> "R"), upper-cased: Blender's
+// multilayer files and some tools write layer-prefixed or lower-case colour channels.
+std::string BaseName(const std::string& name) {
+  std::string base = name.substr(name.find_last_of('.') + 1);
+  for (char& c : base) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return base;
+}
+
+// The layer a channel belongs to ("ViewLayer.Combined" for "ViewLayer.Combined.R"; "" for "R").
+std::string LayerOf(const std::string& name) {
+  const std::size_t dot = name.find_last_of('.');
+  return dot == std::string::npos ? "" : name.substr(0, dot);
+}
+
+// The file's channel names for R, G, B (and A) of one layer, or Y (and A); empty when the layer
+// has neither.
+std::vector<std::string> ColourChannels(const Imf::ChannelList& list, const std::string& layer) {
+  std::map<std::string, std::string> by_base;  // "R" -> the file's name for it
+  for (auto it = list.begin(); it != list.end(); ++it)
+    if (LayerOf(it.name()) == layer) by_base.emplace(BaseName(it.name()), it.name());
   std::vector<std::string> order;
-  for (const char* name : {"R", "G", "B"})
-    if (list.findChannel(name)) order.push_back(name);
-  if (order.empty() && list.findChannel("Y")) order.push_back("Y");
-  if (!order.empty()) {
-    if (list.findChannel("A")) order.push_back("A");
-    return order;
-  }
-  for (auto it = list.begin(); it != list.end(); ++it) order.push_back(it.name());
+  const bool rgb = by_base.count("R") && by_base.count("G") && by_base.count("B");
+  if (rgb) order = {by_base["R"], by_base["G"], by_base["B"]};
+  else if (by_base.count("Y") && !by_base.count("RY") && !by_base.count("BY"))
+    order = {by_base["Y"]};
+  if (!order.empty() && by_base.count("A")) order.push_back(by_base["A"]);
   return order;
 }
 
+// The channels read, in the order they are stored in the image: R, G, B, A when the file has
+// them, else luminance Y (and A). Names are matched without case and layer: the unprefixed
+// layer first, else the one layer that has them (a file with several, such as a Blender
+// multilayer file with passes, reads its "Combined" layer, else is refused). A file with one
+// channel of another name reads it as grey. Anything else is refused: reading other channels
+// in the file's (alphabetical) order would swap colours silently.
+std::vector<std::string> ExrChannelOrder(const Imf::ChannelList& list, const fs::path& path) {
+  std::set<std::string> layers;
+  std::vector<std::string> names;
+  for (auto it = list.begin(); it != list.end(); ++it) {
+    layers.insert(LayerOf(it.name()));
+    names.push_back(it.name());
+  }
+  if (std::vector<std::string> order = ColourChannels(list, ""); !order.empty()) return order;
+  std::vector<std::string> colour_layers;
+  for (const std::string& layer : layers)
+    if (!layer.empty() && !ColourChannels(list, layer).empty()) colour_layers.push_back(layer);
+  if (colour_layers.size() > 1) {
+    const auto combined = std::find_if(colour_layers.begin(), colour_layers.end(),
+                                       [](const std::string& l) { return BaseName(l) == "COMBINED"; });
+    if (combined == colour_layers.end())
+      Fail("{}: several layers hold colour channels ({}); save the one to use as R, G, B",
+           path.string(), fmt::join(colour_layers, ", "));
+    colour_layers = {*combined};
+  }
+  if (colour_layers.size() == 1) return ColourChannels(list, colour_layers[0]);
+  if (names.size() == 1) return names;
+  Fail("{}: no R, G, B or Y channels to read as an image (channels: {})", path.string(),
+       fmt::join(names, ", "));
+}
 }  // namespace
 
 Header ReadExrHeader(const fs::path& path) {
   try {
     Imf::InputFile file(path.c_str());
     const Imath::Box2i window = file.header().dataWindow();
-    const int channels = static_cast<int>(ExrChannelOrder(file.header().channels()).size());
+    const int channels = static_cast<int>(ExrChannelOrder(file.header().channels(), path).size());
     return {window.max.x - window.min.x + 1, window.max.y - window.min.y + 1, channels, true};
+  } catch (const Error&) {
+    throw;
   } catch (const std::exception& e) {
     Fail("{}: cannot read image: {}", path.string(), ExrMessage(e));
   }
@@ -59,7 +110,7 @@ Image ReadExr(const fs::path& path) {
     const Imath::Box2i window = file.header().dataWindow();
     const int width = window.max.x - window.min.x + 1;
     const int height = window.max.y - window.min.y + 1;
-    const std::vector<std::string> order = ExrChannelOrder(file.header().channels());
+    const std::vector<std::string> order = ExrChannelOrder(file.header().channels(), path);
     if (width <= 0 || height <= 0 || order.empty())
       Fail("{}: image has no pixels ({}x{}x{})", path.string(), width, height, order.size());
     const int channels = static_cast<int>(order.size());

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <string>
 #include <vector>
 
 #include "core/image/image_io.h"
@@ -107,6 +108,63 @@ TEST(ImageFormats, TiffSamplesOfEveryKindAndLayoutReadAsStored) {
         for (int c = 0; c < k.samples; ++c)
           ASSERT_FLOAT_EQ(image.at(x, y, c), ExpectedTiffValue(x, y, c, k.bits, k.is_float))
               << path << " " << x << "," << y << "," << c;
+  }
+}
+
+// A 2x1 float EXR whose channels are named `names`; channel k holds k + 1 everywhere.
+void WriteNamedExr(const fs::path& path, const std::vector<std::string>& names) {
+  Imf::Header header(2, 1);
+  std::vector<std::vector<float>> planes;
+  for (std::size_t k = 0; k < names.size(); ++k) planes.emplace_back(2, float(k + 1));
+  Imf::FrameBuffer buffer;
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    header.channels().insert(names[k], Imf::Channel(Imf::FLOAT));
+    buffer.insert(names[k], Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(planes[k].data()),
+                                       sizeof(float), 2 * sizeof(float)));
+  }
+  Imf::OutputFile file(path.c_str(), header);
+  file.setFrameBuffer(buffer);
+  file.writePixels(1);
+}
+
+// The value of each channel read at pixel (0, 0), in the image's order.
+std::vector<float> FirstPixel(const Image& image) {
+  std::vector<float> v;
+  for (int c = 0; c < image.channels(); ++c) v.push_back(image.at(0, 0, c));
+  return v;
+}
+
+// EXR stores channels sorted by name, so a layer prefix or lower case put B before G before R
+// (and A first): the reader matches R, G, B, A by their last name part, any case.
+TEST(ImageFormats, ExrColourChannelsAreFoundByNameWhateverTheirLayerOrCase) {
+  TempDir dir;
+  using V = std::vector<float>;
+  WriteNamedExr(dir / "plain.exr", {"R", "G", "B"});
+  EXPECT_EQ(FirstPixel(ReadImage(dir / "plain.exr")), (V{1, 2, 3}));
+  WriteNamedExr(dir / "layer.exr", {"L.R", "L.G", "L.B"});
+  EXPECT_EQ(FirstPixel(ReadImage(dir / "layer.exr")), (V{1, 2, 3}));
+  WriteNamedExr(dir / "lower.exr", {"r", "g", "b", "a"});
+  EXPECT_EQ(FirstPixel(ReadImage(dir / "lower.exr")), (V{1, 2, 3, 4}));
+  // Blender's multilayer file: the Combined pass, not the other passes.
+  WriteNamedExr(dir / "blender.exr", {"ViewLayer.Combined.R", "ViewLayer.Combined.G",
+                                      "ViewLayer.Combined.B", "ViewLayer.Combined.A",
+                                      "ViewLayer.Noisy.R", "ViewLayer.Noisy.G",
+                                      "ViewLayer.Noisy.B", "ViewLayer.Depth.Z"});
+  EXPECT_EQ(FirstPixel(ReadImage(dir / "blender.exr")), (V{1, 2, 3, 4}));
+  EXPECT_EQ(ReadImageSpec(dir / "blender.exr").channels, 4);
+  WriteNamedExr(dir / "grey.exr", {"depth"});
+  EXPECT_EQ(FirstPixel(ReadImage(dir / "grey.exr")), (V{1}));
+  // Refused, naming the file: two colour layers, neither Combined; channels of no colour.
+  WriteNamedExr(dir / "two.exr", {"a.R", "a.G", "a.B", "b.R", "b.G", "b.B"});
+  std::string e = testing::ErrorOf([&] { ReadImage(dir / "two.exr"); });
+  EXPECT_NE(e.find("two.exr"), std::string::npos) << e;
+  EXPECT_NE(e.find("several layers"), std::string::npos) << e;
+  WriteNamedExr(dir / "uv.exr", {"U", "V"});
+  for (const std::string& message : {testing::ErrorOf([&] { ReadImage(dir / "uv.exr"); }),
+                                     testing::ErrorOf([&] { ReadImageSpec(dir / "uv.exr"); })}) {
+    EXPECT_NE(message.find("uv.exr"), std::string::npos) << message;
+    EXPECT_NE(message.find("no R, G, B or Y"), std::string::npos) << message;
+    EXPECT_EQ(message.find("cannot read image"), std::string::npos) << message;  // said once
   }
 }
 
