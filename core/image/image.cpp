@@ -30,11 +30,21 @@ float Image::MaxValue() const {
 
 Image Image::Rgb() const {
   if (channels_ == 0) Fail("image has no channels");
-  if (channels_ <= 3) return *this;
-  Image rgb(width_, height_, 3, encoding_);
+  const int colour = ColourChannelCount();
+  if (colour == channels_) return *this;
+  Image rgb(width_, height_, colour, encoding_);
   for (std::size_t i = 0; i < num_pixels(); ++i) {
-    for (int c = 0; c < 3; ++c) rgb.data_[i * 3 + c] = data_[i * channels_ + c];
+    for (int c = 0; c < colour; ++c) rgb.data_[i * colour + c] = data_[i * channels_ + c];
   }
+  return rgb;
+}
+
+Image ExpandToRgb(const Image& image) {
+  const Image colour = image.Rgb();
+  if (colour.channels() == 3) return colour;
+  Image rgb(image.width(), image.height(), 3, image.encoding());
+  for (std::size_t i = 0; i < image.num_pixels(); ++i)
+    for (int c = 0; c < 3; ++c) rgb.values()[i * 3 + c] = colour.values()[i];
   return rgb;
 }
 
@@ -51,8 +61,8 @@ namespace {
 Image Convert(const Image& image, Encoding target, float (*fn)(float)) {
   Image out = image;
   if (image.encoding() == target) return out;
-  // Alpha (the 4th channel of RGBA) is not a colour and keeps its value.
-  const int colour_channels = image.channels() == 4 ? 3 : image.channels();
+  // Alpha (the last channel of grey + alpha and RGBA) is not a colour and keeps its value.
+  const int colour_channels = image.ColourChannelCount();
   for (std::size_t i = 0; i < image.num_pixels(); ++i) {
     for (int c = 0; c < colour_channels; ++c) {
       float& v = out.values()[i * image.channels() + c];

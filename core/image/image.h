@@ -48,8 +48,11 @@ class Image {
   std::string ShapeString() const;  // "WxHxC"
 
   float MaxValue() const;
-  // The first three channels (or all if fewer); throws if the image has no channels.
+  // The colour channels without alpha (ColourChannelCount): RGB of RGB / RGBA, grey of grey /
+  // grey + alpha; throws if the image has no channels.
   Image Rgb() const;
+  // Alpha is the last channel of grey + alpha (2) and RGBA (4): the others are colour.
+  int ColourChannelCount() const { return channels_ == 2 ? 1 : channels_ >= 4 ? 3 : channels_; }
 
  private:
   std::size_t Index(int x, int y, int c) const {
@@ -69,6 +72,9 @@ float LinearToSrgb(float linear);
 // Whole-image conversions; converting an image already in the target encoding is a no-op copy.
 Image ToLinear(const Image& image);
 Image ToSrgb(const Image& image);
+
+// Three colour channels whatever the image has: grey (and grey + alpha) repeated, alpha dropped.
+Image ExpandToRgb(const Image& image);
 
 // A rendered buffer (H x W x channels floats) as a display image: values clamped to [0,1],
 // tagged as display-encoded (what LDR renders are written and scored as).

@@ -248,6 +248,26 @@ TEST(Image, SrgbConversionsInvertEachOther) {
   EXPECT_EQ(encoded.encoding(), Encoding::kSrgb);
   EXPECT_NEAR(encoded.values()[0], 0.4613f, 1e-3);
   EXPECT_FLOAT_EQ(encoded.values()[3], 0.18f);  // alpha untouched
+  const Image grey_alpha = ToSrgb(Image(1, 1, 2, Encoding::kLinear, 0.18f));
+  EXPECT_NEAR(grey_alpha.values()[0], 0.4613f, 1e-3);
+  EXPECT_FLOAT_EQ(grey_alpha.values()[1], 0.18f);  // alpha untouched
+}
+
+// Alpha is the last channel of grey + alpha and of RGBA; Rgb() keeps the colour channels, and
+// ExpandToRgb repeats grey into three.
+TEST(Image, ColourChannelsLeaveAlphaOut) {
+  Image grey_alpha(2, 1, 2, Encoding::kSrgb);
+  grey_alpha.values() = {0.25f, 1.0f, 0.5f, 0.0f};
+  EXPECT_EQ(grey_alpha.ColourChannelCount(), 1);
+  EXPECT_EQ(grey_alpha.Rgb().values(), (std::vector<float>{0.25f, 0.5f}));
+  EXPECT_EQ(ExpandToRgb(grey_alpha).values(),
+            (std::vector<float>{0.25f, 0.25f, 0.25f, 0.5f, 0.5f, 0.5f}));
+  Image rgba(1, 1, 4, Encoding::kSrgb);
+  rgba.values() = {0.1f, 0.2f, 0.3f, 0.0f};
+  EXPECT_EQ(rgba.ColourChannelCount(), 3);
+  EXPECT_EQ(ExpandToRgb(rgba).values(), (std::vector<float>{0.1f, 0.2f, 0.3f}));
+  EXPECT_EQ(Image(1, 1, 1, Encoding::kSrgb, 0.5f).ColourChannelCount(), 1);
+  EXPECT_EQ(ExpandToRgb(Image(1, 1, 1, Encoding::kSrgb, 0.5f)).channels(), 3);
 }
 
 }  // namespace

@@ -113,9 +113,10 @@ PairResult EvaluateFiles(const fs::path& pred_path,
     Fail("{} ({}) vs {} ({}): images differ in size", pred_path.string(), pred.ShapeString(),
          gt_path.string(), gt.ShapeString());
   }
-  // Metrics use the colour channels only, so RGBA against RGB is fine; grey against RGB is not.
-  const int pred_colour = std::min(pred.channels(), 3);
-  const int gt_colour = std::min(gt.channels(), 3);
+  // Metrics use the colour channels only (alpha ignored), so RGBA against RGB is fine, and grey +
+  // alpha against grey; grey against RGB is not.
+  const int pred_colour = pred.ColourChannelCount();
+  const int gt_colour = gt.ColourChannelCount();
   if (pred_colour != gt_colour) {
     Fail("{} ({}) vs {} ({}): images differ in colour channels ({} vs {})", pred_path.string(),
          pred.ShapeString(), gt_path.string(), gt.ShapeString(), pred_colour, gt_colour);

@@ -367,6 +367,22 @@ TEST(EvaluateTest, ChannelMismatchIsAnErrorButAlphaIsIgnored) {
   const nlohmann::json pair = EvaluatePair(dir / "rgba.png", dir / "rgb.png");
   EXPECT_EQ(pair["name"], "rgb.png");
   EXPECT_EQ(KeysOf(pair), kLdrKeys);
+  // Grey + alpha is grey: the same grey under alpha 0 and alpha 1 is the same image (its alpha
+  // was scored as a second colour channel: PSNR 3 dB).
+  Image transparent = RandomImage(4, 4, 2, 30, 0, 1, Encoding::kSrgb);
+  Image opaque = transparent;
+  for (std::size_t p = 0; p < transparent.num_pixels(); ++p) {
+    transparent.values()[p * 2 + 1] = 0.0f;
+    opaque.values()[p * 2 + 1] = 1.0f;
+  }
+  WriteImage(dir / "ga0.png", transparent);
+  WriteImage(dir / "ga1.png", opaque);
+  const nlohmann::json grey_pair = EvaluatePair(dir / "ga0.png", dir / "ga1.png");
+  EXPECT_TRUE(grey_pair["psnr"].is_null()) << grey_pair;  // identical: +inf
+  EXPECT_NEAR(grey_pair["ssim"].get<double>(), 1.0, 1e-12);
+  EXPECT_EQ(ErrorOf([&] { EvaluatePair(dir / "ga0.png", dir / "grey.png"); }), "");
+  EXPECT_THAT(ErrorOf([&] { EvaluatePair(dir / "ga0.png", dir / "rgb.png"); }),
+              HasSubstr("colour channels (1 vs 3)"));
 }
 
 TEST(EvaluateTest, BlackHdrGroundTruthNamesTheFiles) {

@@ -19,7 +19,7 @@ double PixelLuminance(const Image& image, int x, int y) {
 void CheckHdrPair(const Image& pred, const Image& gt, const std::vector<std::uint8_t>* mask) {
   if (pred.empty() || gt.empty()) Fail("HDR alignment: an image is empty");
   if (pred.width() != gt.width() || pred.height() != gt.height() ||
-      std::min(pred.channels(), 3) != std::min(gt.channels(), 3)) {
+      pred.ColourChannelCount() != gt.ColourChannelCount()) {
     Fail("HDR alignment: prediction {} and ground truth {} differ in shape", pred.ShapeString(),
          gt.ShapeString());
   }
@@ -56,7 +56,7 @@ std::size_t KeptPixels(const Image& gt, const std::vector<std::uint8_t>& mask) {
 // Whether one bracket measures pixel (x, y): no colour channel clipped, one above black.
 bool BracketMeasures(const Image& ldr, int x, int y) {
   bool clipped = false, lit = false;
-  for (int c = 0; c < std::min(ldr.channels(), 3); ++c) {
+  for (int c = 0; c < ldr.ColourChannelCount(); ++c) {
     const float v = ldr.at(x, y, c);
     clipped = clipped || !(v < kBracketClipped);  // NaN counts as clipped
     lit = lit || v > kBracketBlack;

@@ -351,7 +351,7 @@ int MergeDatasetExposures(const fs::path& root, const fs::path& out, const Merge
     std::vector<Image> stack;
     std::vector<double> exposures;
     for (const Frame* f : groups[g].second) {
-      stack.push_back(ReadImage(f->image_path).Rgb());
+      stack.push_back(ExpandToRgb(ReadImage(f->image_path)));  // a grey frame among RGB ones
       exposures.push_back(f->exposure);
     }
     unmeasured[g] = !AnyMeasuredValue(stack);

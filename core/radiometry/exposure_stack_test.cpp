@@ -102,6 +102,22 @@ TEST(ExposureStack, MergeRecoversTheHdrBetterThanOneExposure) {
   }
 }
 
+// A dataset may mix grey LDR frames with RGB ones (training reads grey as RGB); the merge did
+// not, and refused the bracket without naming a file.
+TEST(ExposureStack, MergeReadsAGreyFrameAsRgb) {
+  testing::TempDir dir;
+  const Dataset dataset = SmallScene(dir.path());
+  SynthesizeDatasetLdr(dir.path(), {.crf = "filmic"});
+  const Frame& grey_frame = dataset.test[0];
+  const Image rgb = ReadImage(grey_frame.image_path);
+  Image grey(rgb.width(), rgb.height(), 1, Encoding::kSrgb);
+  for (std::size_t p = 0; p < grey.num_pixels(); ++p) grey.values()[p] = rgb.values()[p * 3 + 1];
+  WriteImage(grey_frame.image_path, grey);
+  EXPECT_EQ(MergeDatasetExposures(dir.path(), dir / "merged", {.split = "test"}), 2);
+  const Image merged = ReadImage(dir / "merged" / grey_frame.hdr_path->filename());
+  EXPECT_EQ(merged.channels(), 3);
+}
+
 TEST(ExposureStack, ErrorsNameTheProblem) {
   testing::TempDir dir;
   SmallScene(dir.path());

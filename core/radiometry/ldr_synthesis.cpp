@@ -57,7 +57,7 @@ class ValueRng {
   std::uint64_t key_;
 };
 
-int ColourChannels(const Image& image) { return image.channels() == 4 ? 3 : image.channels(); }
+int ColourChannels(const Image& image) { return image.ColourChannelCount(); }
 
 void CheckExposure(const char* what, double exposure) {
   if (!std::isfinite(exposure) || !(exposure > 0)) {
