@@ -121,7 +121,7 @@ void AddEvalCommand(CLI::App& app) {
     // known before any image is read.
     ProtectInput(options->pred, "the predictions eval scores");
     ProtectInput(options->gt, "the ground truth eval scores against");
-    if (!options->out.empty()) CheckOutput(options->out);
+    if (!options->out.empty()) CheckOutputFile(options->out);
     if (options->ldr_fit && options->data.empty())
       Fail("eval: --ldr-fit needs --data SCENE (the LDR brackets the renders are compared with)");
     EvalBrackets brackets;

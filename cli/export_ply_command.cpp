@@ -39,7 +39,7 @@ void Export(const ExportFlags& f) {
                                                         f.hdr ? "_hdr" : "");
   method::ProtectRunInputs(f.run);
   method::LoadedRun loaded = method::LoadRun(f.run);
-  CheckOutput(path);
+  CheckOutputFile(path);
   const bool log_hdr = loaded.model.color_mode == method::ColorMode::kLogHdr;
   if (f.exposure > 0 && !log_hdr) {
     Fail("export-ply: --exposure: run {} ({}) has LDR colours, which do not depend on an exposure",

@@ -72,7 +72,7 @@ void Run(const SynthLdrArgs& a) {
   const auto crf = ParseCrf(a.crf);
   // The input is never the output, whatever the spelling (a symlink, a hard link, ./x.exr).
   ProtectInputFile(a.input, "the input of synth-ldr");
-  CheckOutput(a.output);
+  CheckOutputFile(a.output);
   const Image hdr = ReadImage(a.input);
   if (hdr.encoding() != Encoding::kLinear) {
     Fail("{}: expected a linear HDR image (EXR); this one is display-encoded", a.input);

@@ -37,7 +37,7 @@ void AddViewCommand(CLI::App& app) {
         out->empty() ? std::filesystem::path(*run) / "view.html" : std::filesystem::path(*out);
     method::ProtectRunInputs(*run);
     method::LoadedRun loaded = method::LoadRun(*run);
-    CheckOutput(path);
+    CheckOutputFile(path);
     method::ViewerPageOptions o = *options;
     if (o.title.empty()) o.title = std::filesystem::path(*run).lexically_normal().filename().string();
     if (o.title.empty()) o.title = std::filesystem::absolute(*run).parent_path().filename().string();

@@ -123,6 +123,15 @@ void CheckOutput(const fs::path& path) {
   }
 }
 
+void CheckOutputFile(const fs::path& path) {
+  CheckOutput(path);
+  const std::string folder = FolderOf(ResolvedKey(ResolveWriteTarget(path)));
+  if (const std::string dataset = DatasetOfImageFolder(folder); !dataset.empty()) {
+    Fail("{}: refusing to write into {}: it holds the images of dataset {} (ground truth is "
+         "never overwritten)", path.string(), folder, dataset);
+  }
+}
+
 void CheckOutputFolder(const fs::path& folder) {
   const std::string key = ResolvedKey(ResolveWriteTarget(folder));
   Registry& r = TheRegistry();

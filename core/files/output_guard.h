@@ -33,6 +33,11 @@ void ProtectInput(const std::filesystem::path& path, const std::string& role);
 // Throws hdr4d::Error "<path>: refusing to write ..." when `path` is a protected file or lies
 // directly inside a protected folder. `path` may be a symlink (its target is what is checked).
 void CheckOutput(const std::filesystem::path& path);
+// CheckOutput for one file a command was told to write (`eval --out F`, `synth-ldr -o F`): also
+// refused when its folder holds a dataset's images found by looking (DatasetOfImageFolder), as
+// CheckOutputFolder does for folders; the writers of many files keep CheckOutput alone, which
+// costs no JSON reading per file.
+void CheckOutputFile(const std::filesystem::path& path);
 // The same for a folder a command is about to fill (call it before the work starts): refused when
 // the folder is a protected folder or a protected file, or (inside a command) a dataset's image
 // folder found by looking (DatasetOfImageFolder), also where the command read no dataset.

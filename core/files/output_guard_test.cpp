@@ -133,6 +133,27 @@ TEST(OutputGuard, ADatasetsImageFoldersAreRefusedAlsoWhenNoDatasetWasRead) {
   EXPECT_NO_THROW(CheckOutputFolder(dir / "T"));
 }
 
+// The sweep of session 94: `eval --out S/images/a.png` and `synth-ldr -o S/images/a.png` replaced
+// a ground-truth image; a single output file is checked against the folder it goes into.
+TEST(OutputGuard, AFileNamedForOutputIsRefusedInADatasetsImageFolder) {
+  testing::TempDir dir;
+  fs::create_directories(dir / "S" / "images");
+  fs::create_directories(dir / "S" / "hdr");
+  testing::WriteTextFile(dir / "S" / "transforms_test.json",
+                         R"({"frames": [{"file_path": "images/a", "exr_file_path": "hdr/a.exr"}]})");
+  testing::WriteTextFile(dir / "S" / "images" / "a.png", "truth");
+  const InputProtectionScope scope;
+  for (const fs::path& p : {dir / "S" / "images" / "a.png", dir / "S" / "hdr" / "res.json",
+                            dir / "S" / "images" / "new.png"}) {
+    EXPECT_NO_THROW(CheckOutput(p)) << p;  // what the writers of many files check
+    const std::string error = testing::ErrorOf([&] { CheckOutputFile(p); });
+    EXPECT_NE(error.find("it holds the images of dataset " + (dir / "S").string()), std::string::npos)
+        << p << ": " << error;
+  }
+  EXPECT_NO_THROW(CheckOutputFile(dir / "S" / "eval.json"));
+  EXPECT_NO_THROW(CheckOutputFile(dir / "T" / "eval.json"));
+}
+
 // Issue 51, case 11: only paths named on the command line are written through when they are
 // symlinks; one found inside an output folder is replaced and its target keeps its bytes.
 TEST(OutputGuard, OnlyNamedSymlinksAreWrittenThrough) {
