@@ -26,6 +26,9 @@ void AddMergeHdrCommand(CLI::App& app) {
   cmd->add_option("--split", options->split, "train, test, val or all")
       ->check(OneOf({"train", "test", "val", "all"}))
       ->capture_default_str();
+  cmd->add_flag("--overwrite", options->overwrite,
+                "Replace merged images already in --out (else a file there of an output's name is "
+                "an error, before anything is written)");
   AddExposureUnitOption(cmd, &options->exposure_unit);
   cmd->callback([options, data, out] {
     const int n = MergeDatasetExposures(*data, *out, *options);

@@ -321,7 +321,13 @@ int MergeDatasetExposures(const fs::path& root, const fs::path& out, const Merge
            "--crf to merge with one anyway",
            manifest.string(), j["pipeline"].value("name", "?"));
   }
-  const std::vector<std::unique_ptr<Crf>> crfs = ParseChannelCrfs(crf_spec);
+  std::vector<std::unique_ptr<Crf>> crfs;
+  try {
+    crfs = ParseChannelCrfs(crf_spec);
+  } catch (const Error& e) {
+    if (!options.crf.empty()) throw;  // given with --crf: the message names it
+    Fail("{}: crf_spec: {}", (root / kManifestName).string(), e.what());
+  }
   for (const auto& crf : crfs)
     if (!crf->Invertible()) Fail("merge-hdr: the camera response '{}' is not invertible", crf_spec);
   const Dataset dataset = LoadDataset(root, {.image_check = ImageCheck::kHeaders,
@@ -342,6 +348,11 @@ int MergeDatasetExposures(const fs::path& root, const fs::path& out, const Merge
       Fail("{}: two HDR files share the name {}; merged outputs would overwrite each other",
            root.string(), hdr.filename().string());
     }
+    // Outputs are named like the ground truth, as `render` names its HDR images: a folder of
+    // renders given as --out would lose them.
+    if (!options.overwrite && PathExists(out / hdr.filename()))
+      Fail("{}: exists; merge-hdr replaces no file unless told to (--overwrite), give another "
+           "--out", (out / hdr.filename()).string());
   }
   std::vector<std::pair<fs::path, std::vector<const Frame*>>> groups(by_hdr.begin(), by_hdr.end());
   FileBatch batch;  // all merged images or none

@@ -42,6 +42,7 @@ struct MergeOptions {
   std::string crf;  // empty: the one recorded in <root>/synthesis.json
   std::string split = "test";
   ExposureUnit exposure_unit = ExposureUnit::kSeconds;  // how the scene's exposures are read
+  bool overwrite = false;  // replace merged images already in the output folder
   void Validate() const;
 };
 

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <iterator>
+
 #include "core/dataset/dataset.h"
 #include "core/dataset/demo_scene.h"
 #include "core/util/error.h"
@@ -141,6 +143,33 @@ TEST(ExposureStack, ErrorsNameTheProblem) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("exr_file_path"), std::string::npos) << e.what();
   }
+}
+
+// The sweep of session 94: merge-hdr replaced files of an output's name already in --out (a folder
+// of renders, named alike, would lose them), and a bad crf_spec in synthesis.json was reported
+// without the file.
+TEST(ExposureStack, MergeReplacesNoFileUnlessToldAndNamesTheManifest) {
+  testing::TempDir dir;
+  const Dataset dataset = SmallScene(dir.path());
+  SynthesizeDatasetLdr(dir.path(), {.crf = "filmic"});
+  const fs::path kept = dir / "M" / dataset.test[0].hdr_path->filename();
+  testing::WriteTextFile(kept, "precious");
+  const std::string error =
+      testing::ErrorOf([&] { MergeDatasetExposures(dir.path(), dir / "M", {.split = "test"}); });
+  EXPECT_NE(error.find(kept.string() + ": exists"), std::string::npos) << error;
+  EXPECT_NE(error.find("--overwrite"), std::string::npos) << error;
+  EXPECT_EQ(testing::ReadTextFile(kept), "precious");
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir / "M"), fs::directory_iterator()), 1);
+  EXPECT_EQ(MergeDatasetExposures(dir.path(), dir / "M", {.split = "test", .overwrite = true}), 2);
+  EXPECT_EQ(ReadImage(kept).channels(), 3);
+
+  nlohmann::json manifest = ReadJsonFile(dir / "synthesis.json");
+  manifest["crf_spec"] = "gamma:-3";
+  WriteJsonFile(dir / "synthesis.json", manifest);
+  const std::string bad_crf =
+      testing::ErrorOf([&] { MergeDatasetExposures(dir.path(), dir / "N", {.split = "test"}); });
+  EXPECT_NE(bad_crf.find((dir / "synthesis.json").string() + ": crf_spec: "), std::string::npos)
+      << bad_crf;
 }
 
 }  // namespace
