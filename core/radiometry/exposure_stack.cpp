@@ -20,6 +20,7 @@
 #include "core/util/error.h"
 #include "core/files/file_access.h"
 #include "core/image/image_io.h"
+#include "core/files/dataset_folders.h"
 #include "core/files/json_util.h"
 #include "core/files/output_guard.h"
 #include "core/radiometry/channel_crf.h"
@@ -179,6 +180,24 @@ void RequireOwnLdrImages(const fs::path& root,
        root.string(), existing.size(), frames.size(), existing.front()->file_path, kManifestName);
 }
 
+// A folder of the scene that is a link into another scene (`dataset split-val` links its copy's
+// images to the original's) would have the images written there: refused, naming both. A link
+// to a folder of no scene (images kept on another disk) is written through.
+void RequireOwnFolders(const fs::path& root, const std::vector<fs::path>& outputs) {
+  std::error_code ec;
+  const fs::path scene = fs::weakly_canonical(fs::absolute(root, ec), ec);
+  std::set<fs::path> folders;
+  for (const fs::path& f : outputs) folders.insert(f.parent_path().empty() ? "." : f.parent_path());
+  for (const fs::path& folder : folders) {
+    const std::string owner = DatasetOfImageFolder(folder);
+    if (owner.empty() || fs::path(owner) == scene) continue;
+    Fail("{}: this folder of the scene {} is a link into the scene {} (as a `dataset split-val` "
+         "copy shares its original's images): synth-ldr would rewrite that scene's images; run it "
+         "on {} itself, or copy the folder instead of linking it",
+         folder.string(), root.string(), owner, owner);
+  }
+}
+
 // A folder the images go into that cannot be written is named with the cause before any work,
 // not as the temporary file the first write fails on (issue 51 §24).
 void RequireWritableFolders(const std::vector<fs::path>& outputs) {
@@ -209,6 +228,7 @@ int SynthesizeDatasetLdr(const fs::path& root, const DatasetSynthesisOptions& op
   // files through (core/files/output_guard.h), nothing else in the dataset's folders.
   const std::vector<fs::path> outputs = LdrOutputs(frames, root);
   RequireOwnLdrImages(root, frames, options);
+  RequireOwnFolders(root, outputs);
   RequireWritableFolders(outputs);
   const OutputPermit permit(outputs);
   const std::map<fs::path, std::vector<const Frame*>> by_hdr = FramesByHdr(frames);

@@ -6,6 +6,7 @@
 
 #include "core/dataset/dataset.h"
 #include "core/dataset/demo_scene.h"
+#include "core/dataset/val_split.h"
 #include "core/util/error.h"
 #include "core/image/image_io.h"
 #include "core/files/json_util.h"
@@ -143,6 +144,28 @@ TEST(ExposureStack, ErrorsNameTheProblem) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("exr_file_path"), std::string::npos) << e.what();
   }
+}
+
+// The sweep of session 94: synth-ldr --data on a `dataset split-val` copy, whose images/ links to
+// the original's, rewrote the original's LDR images (with another response than its manifest's).
+TEST(ExposureStack, SynthesisRefusesToWriteThroughALinkIntoAnotherScene) {
+  testing::TempDir dir;
+  SmallScene(dir / "S");
+  SynthesizeDatasetLdr(dir / "S", {.crf = "filmic"});
+  SplitOffVal(dir / "S", dir / "V", {.every_time = 2});
+  const Dataset original = LoadDataset(dir / "S");
+  const std::string before = testing::ReadTextFile(original.train[0].image_path);
+  const std::string error = testing::ErrorOf(
+      [&] { SynthesizeDatasetLdr(dir / "V", {.crf = "gamma:2.2", .replace_foreign = true}); });
+  EXPECT_NE(error.find("is a link into the scene " + (dir / "S").string()), std::string::npos)
+      << error;
+  EXPECT_EQ(testing::ReadTextFile(original.train[0].image_path), before);
+  // A link to a folder of no scene is written through.
+  SmallScene(dir / "T");
+  fs::create_directories(dir / "T" / "images");
+  fs::rename(dir / "T" / "images", dir / "elsewhere");
+  fs::create_directory_symlink(dir / "elsewhere", dir / "T" / "images");
+  EXPECT_GT(SynthesizeDatasetLdr(dir / "T", {.crf = "filmic"}), 0);
 }
 
 // The sweep of session 94: merge-hdr replaced files of an output's name already in --out (a folder
