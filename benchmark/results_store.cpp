@@ -169,6 +169,19 @@ void ResultsStore::InsertSubmission(const RunRecord& r, bool replace) {
       "SELECT l.run_id, r.source FROM run_labels l JOIN runs r ON r.id = l.run_id WHERE "
       "l.suite=?1 AND l.method=?2 AND l.scene=?3 AND l.supervision=?4 AND l.seed=?5 AND "
       "l.budget=?6 AND l.variant=?7");
+  // A submission under the name of a trained method would be that method's row in the tables
+  // (their index has no budget for a submission): the name must be its own.
+  Statement trained = db_.Prepare(
+      "SELECT l.run_id FROM run_labels l JOIN runs r ON r.id = l.run_id WHERE l.method = ?1 AND "
+      "r.source != 'submit' LIMIT 1");
+  for (const RunLabel& l : r.labels) {
+    if (trained.Bind(1, l.method).Step()) {
+      Fail("{}: method '{}' is trained by the harness in this store (run {}); a submission "
+           "never replaces a harness run: use another --method name",
+           path().string(), l.method, trained.Text(0));
+    }
+    trained.Reset();
+  }
   for (const RunLabel& l : r.labels) {
     find.Bind(1, l.suite).Bind(2, l.method).Bind(3, l.scene).Bind(4, l.supervision);
     find.Bind(5, l.seed).Bind(6, l.budget).Bind(7, l.variant);

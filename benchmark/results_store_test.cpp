@@ -97,6 +97,12 @@ TEST(ResultsStore, SubmissionsNeverTakeAnotherRunsLabel) {
   EXPECT_NE(e.find("never replaces a harness run"), std::string::npos) << e;
   EXPECT_FALSE(store.HasRun("sub-1"));
   EXPECT_EQ(store.Record("harness").ToJson(), Sample("harness").ToJson());
+  // Under the submission's own budget label, the trained method's name is still refused: the
+  // tables have no budget for a submission, which replaced the trained run's row.
+  sub.labels[0].budget = "external";
+  const std::string e2 = ErrorOf([&] { store.InsertSubmission(sub, /*replace=*/true); });
+  EXPECT_NE(e2.find("method 'm' is trained by the harness"), std::string::npos) << e2;
+  EXPECT_FALSE(store.HasRun("sub-1"));
   // Under its own name it is stored; a second submission there needs --replace.
   sub.labels[0].method = "external";
   store.InsertSubmission(sub, false);

@@ -40,6 +40,8 @@ nlohmann::json ReadSubmissionMeta(const fs::path& path) {
 
 RunRecord Submit(const SubmitOptions& o) {
   RequireName(o.method, "bench submit: --method");  // a name in tables and paths, never a path
+  if (o.method.starts_with("-"))  // `--method=--help`: an option, not a name
+    Fail("bench submit: --method {}: a method name may not start with '-'", o.method);
   const auto& modes = SupervisionModes();
   if (std::find(modes.begin(), modes.end(), o.supervision) == modes.end())
     Fail("bench submit: --supervision {} is not one of ldr, hdr, ldr+hdr", o.supervision);
@@ -52,6 +54,9 @@ RunRecord Submit(const SubmitOptions& o) {
   if (!o.suite.empty()) {
     const Suite suite = LoadSuite(o.suite);
     suite_name = suite.name;
+    if (suite.FindMethod(o.method))
+      Fail("bench submit: --method {}: a method of suite '{}' (trained by `bench run`); a "
+           "submission never replaces its runs: use another --method name", o.method, suite.name);
     if (const SceneSpec* s = suite.FindScene(o.scene)) {
       const PreparedScene p = PrepareScene(
           *s, {.cache_dir = o.cache_dir.empty() ? DefaultCacheDir() : o.cache_dir,
@@ -65,7 +70,8 @@ RunRecord Submit(const SubmitOptions& o) {
     if (!fs::exists(fs::path(o.scene) / "transforms_train.json"))
       Fail("bench submit: --scene {}: neither a dataset folder nor a scene of {}", o.scene,
            o.suite.empty() ? "a suite (give --suite)" : "suite '" + o.suite + "'");
-    scene_dir = fs::absolute(o.scene);
+    scene_dir = fs::absolute(o.scene).lexically_normal();
+    if (!scene_dir.has_filename()) scene_dir = scene_dir.parent_path();  // "scene/": its name
     scene_name = scene_dir.filename().string();
   }
   const Dataset dataset = LoadDataset(scene_dir, {.image_check = ImageCheck::kNone});

@@ -73,7 +73,14 @@ Index BuildIndex(const std::vector<RunSummary>& runs, const std::string& budget,
       ++ix.failed[{l.method, l.supervision}];
       continue;
     }
-    ix.ok[{l.method, l.supervision, l.scene, l.seed}] = &r;
+    const auto [it, added] = ix.ok.insert({{l.method, l.supervision, l.scene, l.seed}, &r});
+    if (!added && it->second->run_id != r.run_id) {  // one cell, two runs: never pick silently
+      const RunSummary& o = *it->second;
+      Fail("the store holds two runs of method '{}' ({}) on scene '{}', seed {}: {} ({}) and {} "
+           "({}); a submission must not take a trained method's name: export the store (`bench "
+           "export`), delete the submission's file and collect the rest into a new store",
+           l.method, l.supervision, l.scene, l.seed, o.run_id, o.source, r.run_id, r.source);
+    }
     ix.seeds_of_method[l.method].insert(l.seed);
   }
   return ix;

@@ -7,9 +7,11 @@
 #include <sstream>
 
 #include "core/util/error.h"
+#include "tests/testing.h"
 
 namespace hdr4d::bench {
 namespace {
+using testing::ErrorOf;
 
 Suite TableSuite() {
   return ParseSuite(nlohmann::json::parse(R"({
@@ -65,6 +67,21 @@ std::size_t Column(const Table& t, const std::string& key) {
     if (t.columns[c].key == key) return c;
   ADD_FAILURE() << "no column " << key;
   return 0;
+}
+
+// A submission under a trained method's name took that method's cell (the index kept the last
+// run of each method x supervision x scene x seed): two runs in one cell are an error now.
+TEST(Tables, TwoRunsInOneCellAreAnErrorNotAPick) {
+  const Suite s = TableSuite();
+  std::vector<RunSummary> runs = Runs();
+  RunSummary sub = bench::Run("b", "s1", 0, 40, 40);
+  sub.run_id = "sub-1";
+  sub.source = "submit";
+  sub.label.budget = "external";
+  runs.push_back(sub);
+  const std::string e = ErrorOf([&] { BuildTable(s.tables[0], s, runs, {}); });
+  EXPECT_NE(e.find("two runs of method 'b' (ldr) on scene 's1', seed 0: bs10 (harness) and "
+                   "sub-1 (submit)"), std::string::npos) << e;
 }
 
 TEST(Tables, MainLayoutMeansSpreadsBestAndTests) {
