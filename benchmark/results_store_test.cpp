@@ -142,6 +142,27 @@ TEST(ResultsStore, StressOutcomesKeepTheLatestPerCase) {
   EXPECT_TRUE(all[0].checks["no NaN"].is_null());
 }
 
+// 1e30 gaussians were stored as -9223372036854775808 and 2.5 as 2 (a plain get<int64_t>()).
+TEST(RunRecord, IntegerKeysMustBeIntegersInRange) {
+  for (const nlohmann::json& bad : {nlohmann::json(1e30), nlohmann::json(1e19),
+                                    nlohmann::json(2.5), nlohmann::json(18446744073709551615ull)}) {
+    nlohmann::json j = Sample("r").ToJson();
+    j["gaussians"] = bad;
+    const std::string e = ErrorOf([&] { RunRecord::FromJson(j, "results/r.json"); });
+    EXPECT_NE(e.find("results/r.json: key 'gaussians' must be an integer"), std::string::npos)
+        << bad.dump() << ": " << e;
+  }
+  nlohmann::json j = Sample("r").ToJson();
+  j["gaussians"] = 1e3;
+  j["labels"][0]["seed"] = 1e300;
+  EXPECT_NE(ErrorOf([&] { RunRecord::FromJson(j, "f.json"); }).find("key 'seed'"), std::string::npos);
+  j["labels"][0]["seed"] = 2;
+  EXPECT_EQ(RunRecord::FromJson(j, "f.json").gaussians, 1000);
+  EXPECT_EQ(JsonInteger(-0x1p63, "f", "k"), std::numeric_limits<std::int64_t>::min());
+  EXPECT_NE(ErrorOf([] { JsonInteger(0x1p63, "f", "k"); }).find("'k'"), std::string::npos);
+  EXPECT_NE(ErrorOf([] { JsonInteger(-1, "f", "k", 0); }).find("at least 0"), std::string::npos);
+}
+
 TEST(RunRecord, MalformedRecordsNameTheFileAndKey) {
   nlohmann::json j = Sample("r").ToJson();
   j.erase("labels");

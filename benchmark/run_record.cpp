@@ -3,6 +3,8 @@
 #include <cmath>
 #include <ctime>
 #include <limits>
+#include <optional>
+#include <type_traits>
 #include <tuple>
 
 #include "benchmark/names.h"
@@ -33,6 +35,7 @@ template <typename T>
 T Get(const nlohmann::json& j, const char* key, const std::string& source) {
   if (!j.is_object()) Fail("{}: expected a JSON object, got {}", source, JsonPreview(j));
   if (!j.contains(key)) Fail("{}: key '{}' missing", source, key);
+  if constexpr (std::is_same_v<T, std::int64_t>) return JsonInteger(j.at(key), source, key);
   try {
     return j.at(key).get<T>();
   } catch (const nlohmann::json::exception&) {
@@ -59,6 +62,26 @@ const nlohmann::json& Container(const nlohmann::json& j, bool object, const char
 }
 
 }  // namespace
+
+std::int64_t JsonInteger(const nlohmann::json& value, const std::string& source,
+                         const std::string& key, std::int64_t min) {
+  std::optional<std::int64_t> v;
+  if (value.is_number_unsigned()) {
+    if (value.get<std::uint64_t>() <= std::numeric_limits<std::int64_t>::max())
+      v = static_cast<std::int64_t>(value.get<std::uint64_t>());
+  } else if (value.is_number_integer()) {
+    v = value.get<std::int64_t>();
+  } else if (value.is_number_float()) {
+    const double d = value.get<double>();
+    // [-2^63, 2^63): the doubles that convert to an int64 exactly.
+    if (d == std::trunc(d) && d >= -0x1p63 && d < 0x1p63) v = static_cast<std::int64_t>(d);
+  }
+  if (!v)
+    Fail("{}: key '{}' must be an integer (at most {}), got {}", source, key,
+         std::numeric_limits<std::int64_t>::max(), JsonPreview(value));
+  if (*v < min) Fail("{}: key '{}' must be at least {}, got {}", source, key, min, *v);
+  return *v;
+}
 
 nlohmann::json RunLabel::ToJson() const {
   return {{"suite", suite}, {"method", method}, {"scene", scene}, {"supervision", supervision},

@@ -64,6 +64,12 @@ struct RunRecord {
   static RunRecord FromJson(const nlohmann::json& json, const std::string& source);
 };
 
+// A JSON integer that fits an int64 and is at least `min` (1e3 is 1000; 2.5, 1e30 and text are
+// errors naming `source` and `key`, where a plain get<int64_t>() truncated or wrapped them).
+std::int64_t JsonInteger(const nlohmann::json& value, const std::string& source,
+                         const std::string& key,
+                         std::int64_t min = std::numeric_limits<std::int64_t>::min());
+
 // Keeps at most `points` (>= 2) points of each series of `record`: evenly spaced by index, the
 // first and the last kept (`bench run --series-points`: a store small enough to commit, whose
 // tone curves held 88% of a mini run's rows at 256 points).

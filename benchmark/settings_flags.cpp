@@ -46,11 +46,14 @@ void ValidateSettings(const nlohmann::json& settings, const std::vector<std::str
         Fail("{}: flag '{}': a list must hold numbers or strings", where, key);
       continue;
     }
+    // A fraction from 0 to 1: more would name a step past the run's end (1e300 of it made
+    // every run's flag -9223372036854775808).
     if (value.is_object() && value.size() == 1 && value.contains("of_iterations") &&
-        value["of_iterations"].is_number() && value["of_iterations"].get<double>() >= 0)
+        value["of_iterations"].is_number() && value["of_iterations"].get<double>() >= 0 &&
+        value["of_iterations"].get<double>() <= 1)
       continue;
     Fail("{}: flag '{}': a value is a number, string, true/false, a list, or "
-         "{{\"of_iterations\": fraction}}, not {}", where, key, value.dump());
+         "{{\"of_iterations\": fraction from 0 to 1}}, not {}", where, key, value.dump());
   }
 }
 

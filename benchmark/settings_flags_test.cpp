@@ -26,6 +26,18 @@ TEST(SettingsFlags, FractionsNeedAnIterationBudget) {
             std::string::npos);
 }
 
+// {"of_iterations": 1e300} passed loading, then every run got --densify-until
+// -9223372036854775808.
+TEST(SettingsFlags, FractionsAreFromZeroToOne) {
+  for (double f : {1e300, 1.5, -0.1}) {
+    const nlohmann::json settings = {{"densify-until", {{"of_iterations", f}}}};
+    const std::string e = ErrorOf([&] { ValidateSettings(settings, {}, "w"); });
+    EXPECT_NE(e.find("flag 'densify-until'"), std::string::npos) << f << ": " << e;
+  }
+  ValidateSettings({{"densify-until", {{"of_iterations", 1}}}}, {}, "w");
+  ValidateSettings({{"densify-until", {{"of_iterations", 0}}}}, {}, "w");
+}
+
 TEST(SettingsFlags, ValidationNamesTheKey) {
   EXPECT_NE(ErrorOf([] { ValidateSettings({{"Bad Flag", 1}}, {}, "w"); }).find("'Bad Flag'"), std::string::npos);
   EXPECT_NE(ErrorOf([] { ValidateSettings({{"seed", 1}}, {"seed"}, "w"); }).find("set by the harness"),

@@ -20,14 +20,15 @@ namespace fs = std::filesystem;
 
 nlohmann::json ReadSubmissionMeta(const fs::path& path) {
   if (path.empty()) return nlohmann::json::object();
-  const nlohmann::json meta = ReadJsonFile(path);
+  nlohmann::json meta = ReadJsonFile(path);
   if (!meta.is_object()) Fail("{}: the meta file must be a JSON object", path.string());
-  static const std::set<std::string> kNumbers = {"train_seconds", "render_fps", "gaussians",
-                                                 "peak_rss_mb", "iterations"};
-  for (const auto& [key, value] : meta.items()) {
+  static const std::set<std::string> kNumbers = {"train_seconds", "render_fps", "peak_rss_mb"};
+  for (auto& [key, value] : meta.items()) {
     if (kNumbers.count(key)) {
       if (!value.is_number() || value.get<double>() < 0)
         Fail("{}: key '{}' must be a non-negative number, got {}", path.string(), key, value.dump());
+    } else if (key == "gaussians" || key == "iterations") {
+      value = JsonInteger(value, path.string(), key, 0);  // 1e3 is stored as 1000
     } else if (key == "code_version" || key == "notes") {
       if (!value.is_string()) Fail("{}: key '{}' must be a string", path.string(), key);
     } else if (key != "machine") {
