@@ -254,18 +254,52 @@ void SetIntrinsics(std::vector<PendingFrame*>& frames,
   }
 }
 
-// Duplicate images within a split.
-void CheckDuplicates(const std::array<SplitFile, 3>& files, ProblemSink& sink) {
+// Duplicate images within a split; an image of two splits read at two exposures (one of the
+// frames has the wrong image, and synth-ldr writes the file twice; at one exposure a split may
+// reuse another's image, to score a training view); one HDR image for frames of different
+// times or poses (merge-hdr would fuse them).
+void CheckDuplicates(const std::array<SplitFile, 3>& files, bool hdrnerf, ProblemSink& sink) {
+  std::map<fs::path, const PendingFrame*> first_use;  // over every split
+  std::map<fs::path, const PendingFrame*> first_hdr;
   for (const SplitFile& file : files) {
     std::map<fs::path, int> seen;
     for (const PendingFrame& p : file.frames) {
       if (p.frame.image_path.empty()) continue;
       const auto [it, inserted] = seen.emplace(p.frame.image_path, p.frame.index);
+      const auto [other, first] = first_use.emplace(p.frame.image_path, &p);
       if (!inserted) {
         sink.Add(p.rank, p.json_path, p.frame.index, "file_path",
                  fmt::format("{} is already used by frame {} of this file",
                              p.frame.image_path.string(), it->second));
+      } else if (!first && !hdrnerf && other->second->frame.exposure != p.frame.exposure) {
+        const Frame& o = other->second->frame;
+        sink.Add(p.rank, p.json_path, p.frame.index, "file_path",
+                 fmt::format("{} is also frame {} of {} at another exposure ({} s there, {} s "
+                             "here): one image cannot be both",
+                             p.frame.image_path.string(), o.index,
+                             other->second->json_path.filename().string(), o.exposure,
+                             p.frame.exposure));
       }
+    }
+  }
+  for (const SplitFile& file : files) {
+    for (const PendingFrame& p : file.frames) {
+      if (!p.frame.hdr_path) continue;
+      const auto [it, first] = first_hdr.emplace(*p.frame.hdr_path, &p);
+      if (first) continue;
+      const Frame& o = it->second->frame;
+      const bool same_pose =
+          (o.camera.world_from_cam_gl - p.frame.camera.world_from_cam_gl).cwiseAbs().maxCoeff() <=
+          1e-9;
+      if (o.time_raw == p.frame.time_raw && same_pose) continue;
+      sink.Add(p.rank, p.json_path, p.frame.index, "exr_file_path",
+               fmt::format("{} is also the HDR image of frame {} of {}, which shows {} (time {} "
+                           "there, {} here): frames sharing HDR ground truth must be one view at "
+                           "one time",
+                           p.frame.hdr_path->string(), o.index,
+                           it->second->json_path.filename().string(),
+                           same_pose ? "another time" : "another pose", o.time_raw,
+                           p.frame.time_raw));
     }
   }
 }
@@ -378,6 +412,7 @@ DatasetReport CheckDataset(const fs::path& root, const DatasetLoadOptions& optio
   }
   SceneFiles scene = ReadSceneFiles(root, options, sink);
   const bool stops_like = ReportStopsLikeExposures(scene, options, sink);
+  ReportMissingExposures(scene, sink);
   if (!scene.files[0].parsed) {
     report.problems = sink.Sorted();
     return report;
@@ -391,7 +426,7 @@ DatasetReport CheckDataset(const fs::path& root, const DatasetLoadOptions& optio
   FindReferenceSize(frames, sizes);
   CheckImageSizes(frames, sizes, sink);
   SetIntrinsics(frames, scene.files, sizes, options, sink);
-  CheckDuplicates(scene.files, sink);
+  CheckDuplicates(scene.files, scene.hdrnerf, sink);
   Dataset dataset = AssembleDataset(root, scene, frames, options);
   dataset.exposure_unit = options.exposure_unit;
   dataset.exposures_look_like_stops = stops_like;

@@ -98,6 +98,7 @@ PendingFrame ParseFrame(const fs::path& root,
   }
 
   if (const auto it = obj.find("exposures"); it != obj.end()) {
+    pending.exposure_key = true;
     // The reference reads a scalar; a one-element list is the same value.
     const json* value = &*it;
     if (it->is_array() && it->size() == 1) value = &(*it)[0];
@@ -311,6 +312,23 @@ bool ReportStopsLikeExposures(const SceneFiles& scene,
                         "{:g} -> {:g} s, {:g} -> {:g} s)",
                         count, lo, hi, non_positive, lo, std::exp2(lo), hi, std::exp2(hi)));
   return true;
+}
+
+void ReportMissingExposures(const SceneFiles& scene, ProblemSink& sink) {
+  if (scene.hdrnerf) return;  // exposures come from the exposure files, checked there
+  int with = 0, total = 0;
+  for (const SplitFile& file : scene.files)
+    for (const PendingFrame& p : file.frames) with += p.exposure_key, ++total;
+  if (with == 0 || with == total) return;
+  for (const SplitFile& file : scene.files) {
+    for (const PendingFrame& p : file.frames) {
+      if (p.exposure_key) continue;
+      const std::string problem = fmt::format(
+          "missing, while {} of the scene's {} frames give one (it would be read as 1 s)", with,
+          total);
+      Reader(sink, p.rank, p.json_path).Problem(p.frame.index, "exposures", problem);
+    }
+  }
 }
 
 }  // namespace hdr4d::dataset_detail

@@ -619,6 +619,60 @@ TEST(DatasetProblems, ZeroAndNegativeExposure) {
   EXPECT_PROBLEM(report, "transforms_train.json", 2, "exposures", "expected a number");
 }
 
+// The sweep of session 94: one frame without `exposures` among frames with it was read as 1 s,
+// and `dataset check` said "no problems". A scene where no frame has one is D-NeRF's layout.
+TEST(DatasetProblems, AFrameWithoutTheExposureOthersGiveIsAProblem) {
+  TempDir dir;
+  Scene scene(dir.path());
+  AddGoodFrames(scene);
+  scene.Frame("test", 1).erase("exposures");
+  scene.Frame("train", 2)["exposures"] = "long";  // present: its own problem, not "missing"
+  scene.Write();
+  const DatasetReport report = Check(scene);
+  EXPECT_EQ(report.problems.size(), 2u) << AllProblems(report);
+  EXPECT_PROBLEM(report, "transforms_test.json", 1, "exposures",
+                 "missing, while 4 of the scene's 5 frames give one (it would be read as 1 s)");
+  EXPECT_PROBLEM(report, "transforms_train.json", 2, "exposures", "expected a number");
+
+  TempDir none;
+  Scene dnerf(none.path());
+  AddGoodFrames(dnerf);
+  for (const char* split : {"train", "test"})
+    for (json& f : dnerf.File(split)["frames"]) f.erase("exposures");
+  dnerf.Write();
+  EXPECT_TRUE(Check(dnerf).problems.empty()) << AllProblems(Check(dnerf));
+}
+
+// The sweep of session 94: a test frame naming a training frame's image at another exposure
+// passed `dataset check` (synth-ldr wrote the file twice, the last write winning), and so did
+// one HDR image for frames of different times (merge-hdr fused them).
+TEST(DatasetProblems, AnImageOfTwoSplitsAndAnHdrImageOfTwoTimesAreProblems) {
+  TempDir dir;
+  Scene scene(dir.path());
+  AddGoodFrames(scene);
+  scene.Frame("test", 0)["file_path"] = scene.Frame("train", 1)["file_path"];
+  scene.Frame("train", 2)["exr_file_path"] = scene.Frame("train", 0)["exr_file_path"];
+  scene.Write();
+  const DatasetReport report = Check(scene);
+  EXPECT_EQ(report.problems.size(), 2u) << AllProblems(report);
+  EXPECT_PROBLEM(report, "transforms_test.json", 0, "file_path",
+                 "is also frame 1 of transforms_train.json at another exposure (1 s there, "
+                 "0.5 s here)");
+  EXPECT_PROBLEM(report, "transforms_train.json", 2, "exr_file_path",
+                 "is also the HDR image of frame 0 of transforms_train.json, which shows another "
+                 "pose (time 0 there, 2 here)");
+  // Frames of one view at one time (an exposure bracket) share their HDR image.
+  TempDir bracket_dir;
+  Scene bracket(bracket_dir.path());
+  AddGoodFrames(bracket);
+  json& second = bracket.Add("train");
+  second["transform_matrix"] = bracket.Frame("train", 0)["transform_matrix"];
+  second["time"] = bracket.Frame("train", 0)["time"];
+  second["exr_file_path"] = bracket.Frame("train", 0)["exr_file_path"];
+  bracket.Write();
+  EXPECT_TRUE(Check(bracket).problems.empty()) << AllProblems(Check(bracket));
+}
+
 // HDR-HexPlane's dataset/lego layout (its first commit): near/far,
 // integer frame times and `exposures` as log2 stops (-3, -1, 1) under HDR-4DGS's key. A fixture
 // in that layout, written here.
@@ -887,7 +941,8 @@ TEST(DatasetProblems, DuplicateFilePathsWithinASplit) {
   Scene scene(dir.path());
   AddGoodFrames(scene);
   scene.Frame("train", 2)["file_path"] = "images/train_0.png";  // same image as frame 0
-  scene.Frame("test", 0)["file_path"] = "images/train_1";       // across splits is allowed
+  scene.Frame("test", 0)["file_path"] = "images/train_0";       // across splits: allowed at
+  scene.Frame("test", 0)["exposures"] = 0.5;                     // the same exposure
   scene.Write();
   const DatasetReport report = Check(scene);
   EXPECT_EQ(report.problems.size(), 1u) << AllProblems(report);
@@ -1011,7 +1066,9 @@ TEST(DatasetWriter, RoundTripReferenceLayout) {
   Scene scene(dir / "a");
   AddGoodFrames(scene);
   scene.Add("val");
-  scene.Frame("train", 0).erase("exposures");
+  // A scene without exposures (D-NeRF's layout): the writer writes none either.
+  for (const char* split : {"train", "test", "val"})
+    for (json& f : scene.File(split)["frames"]) f.erase("exposures");
   scene.Frame("train", 1)["camera_id"] = 4;
   scene.Frame("train", 1)["exposure_index"] = 0;
   scene.Frame("test", 0)["fl_x"] = 7.5;  // per-frame intrinsics survive
