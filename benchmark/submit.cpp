@@ -31,7 +31,12 @@ nlohmann::json ReadSubmissionMeta(const fs::path& path) {
       value = JsonInteger(value, path.string(), key, 0);  // 1e3 is stored as 1000
     } else if (key == "code_version" || key == "notes") {
       if (!value.is_string()) Fail("{}: key '{}' must be a string", path.string(), key);
-    } else if (key != "machine") {
+    } else if (key == "machine") {
+      if (value.is_string()) value = {{"description", value}};  // text: kept as a description
+      if (!value.is_object())  // what `bench collect` requires of an exported record
+        Fail("{}: key 'machine' must be a JSON object or text, got {}", path.string(),
+             value.dump());
+    } else {
       Fail("{}: unknown key '{}' (known: train_seconds, render_fps, gaussians, peak_rss_mb, "
            "iterations, code_version, machine, notes)", path.string(), key);
     }
@@ -113,6 +118,9 @@ RunRecord Submit(const SubmitOptions& o) {
   r.gaussians = meta.contains("gaussians") ? meta["gaussians"].get<std::int64_t>() : -1;
   r.iterations = meta.contains("iterations") ? meta["iterations"].get<std::int64_t>() : -1;
   r.started_at = r.finished_at = UtcNow();
+  // `bench export` writes this record and `bench collect` reads it back: the same reader checks
+  // it here, so a submission the store takes is one collect takes too.
+  RunRecord::FromJson(r.ToJson(), o.meta.empty() ? "bench submit" : o.meta.string());
 
   ResultsStore store(o.store);
   store.InsertSubmission(r, o.replace);

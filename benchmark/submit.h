@@ -28,8 +28,8 @@ struct SubmitOptions {
 };
 
 // The meta file's keys: train_seconds, render_fps, gaussians, peak_rss_mb, iterations,
-// code_version (of the external code), machine (object or text), notes. Anything else is an
-// error naming the file and the key.
+// code_version (of the external code), machine (object, or text kept as {"description": text}),
+// notes. Anything else is an error naming the file and the key.
 nlohmann::json ReadSubmissionMeta(const std::filesystem::path& path);
 
 // Throws hdr4d::Error (naming the file) for missing or extra frames, wrong sizes, NaN/Inf
