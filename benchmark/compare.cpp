@@ -44,7 +44,8 @@ bool MatchesVersion(const RunRecord& r, const std::string& v) {
          (!r.git_describe.empty() && r.git_describe.find(v) != std::string::npos);
 }
 
-// A run's summary under one label: its metric means over the frames that have each key.
+// A run's summary under one label: its metric means over the frames with a finite value of each
+// key, as ResultsStore::Summaries.
 RunSummary SummaryOf(const RunRecord& r, const RunLabel& label) {
   RunSummary s;
   s.label = label;
@@ -56,6 +57,8 @@ RunSummary SummaryOf(const RunRecord& r, const RunLabel& label) {
   std::map<std::string, std::pair<double, int>> sums;
   for (const FrameResult& f : r.frames) {
     for (const auto& [k, v] : f.metrics) {
+      if (std::isinf(v)) ++s.identical_frames[k];
+      if (!std::isfinite(v)) continue;
       sums[k].first += v;
       ++sums[k].second;
     }

@@ -12,14 +12,14 @@ namespace {
 
 std::string Number(double v, const std::string& metric) {
   if (std::isnan(v)) return "";
-  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  if (std::isinf(v)) return "n/a";  // the means are over finite values: no inf reaches here
   const bool fine = metric.find("ssim") != std::string::npos || metric.find("flip") != std::string::npos;
   return fmt::format("{:.{}f}", v, fine ? 4 : 3);
 }
 
 std::string CsvNumber(double v) {
   if (std::isnan(v)) return "";
-  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  if (std::isinf(v)) return "n/a";  // the means are over finite values: no inf reaches here
   return fmt::format("{:.6f}", v);
 }
 

@@ -320,11 +320,20 @@ std::vector<RunSummary> ResultsStore::Summaries(const std::string& suite) const 
     out.push_back(std::move(r));
   }
   // Metric means per run, once per run.
+  // Over the finite values (RunSummary::metrics); 1.8e308 is above the largest double.
   Statement m = db_.Prepare(
-      "SELECT run_id, metric, avg(value) FROM frame_metrics GROUP BY run_id, metric");
+      "SELECT run_id, metric, avg(CASE WHEN abs(value) < 1.8e308 THEN value END), "
+      "sum(abs(value) >= 1.8e308) FROM frame_metrics GROUP BY run_id, metric");
   std::map<std::string, std::map<std::string, double>> means;
-  while (m.Step()) means[m.Text(0)][m.Text(1)] = m.Double(2);
-  for (RunSummary& r : out) r.metrics = means[r.run_id];
+  std::map<std::string, std::map<std::string, int>> identical;
+  while (m.Step()) {
+    if (!m.IsNull(2)) means[m.Text(0)][m.Text(1)] = m.Double(2);
+    if (m.Int(3) > 0) identical[m.Text(0)][m.Text(1)] = static_cast<int>(m.Int(3));
+  }
+  for (RunSummary& r : out) {
+    r.metrics = means[r.run_id];
+    r.identical_frames = identical[r.run_id];
+  }
   return out;
 }
 

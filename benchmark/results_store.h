@@ -38,7 +38,11 @@ struct RunSummary {
   std::string run_id, status, error, source, code_version, data_checksum, run_dir, scene_dir;
   double train_seconds = 0, render_fps = 0, peak_rss_mb = 0, wall_seconds = 0;
   std::int64_t iterations = -1, gaussians = -1;
-  std::map<std::string, double> metrics;  // mean over the frames that have the key
+  // Mean over the frames with a finite value of the key, as `hdr4d eval` means: a PSNR of
+  // identical images (+inf) would make every mean +inf. Those frames are counted in
+  // identical_frames; a key no frame has a finite value of is absent from metrics.
+  std::map<std::string, double> metrics;
+  std::map<std::string, int> identical_frames;
   nlohmann::json machine;
 };
 

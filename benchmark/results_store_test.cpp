@@ -50,10 +50,26 @@ TEST(ResultsStore, RoundTripsARunWithItsFramesSeriesAndInfinity) {
   const auto summaries = store.Summaries();
   ASSERT_EQ(summaries.size(), 1u);
   EXPECT_DOUBLE_EQ(summaries[0].metrics.at("psnr"), 21);  // mean over the LDR frames
-  EXPECT_TRUE(std::isinf(summaries[0].metrics.at("mu_psnr")));
+  // Identical images (+inf) are counted, not averaged: tables printed inf and marked it best.
+  EXPECT_FALSE(summaries[0].metrics.count("mu_psnr"));
+  EXPECT_EQ(summaries[0].identical_frames, (std::map<std::string, int>{{"mu_psnr", 1}}));
   EXPECT_EQ(store.RunIds("ok"), std::set<std::string>{"r1"});
   // Through JSON (a Slurm result file) and back.
   EXPECT_EQ(RunRecord::FromJson(back.ToJson(), "f").ToJson(), back.ToJson());
+}
+
+// As `hdr4d eval`: the mean over the finite values, the identical frames counted beside it.
+TEST(ResultsStore, MeansLeaveIdenticalFramesOut) {
+  TempDir dir;
+  ResultsStore store(dir / "s.db");
+  RunRecord r = Sample("r1");
+  r.frames[1].metrics["psnr"] = std::numeric_limits<double>::infinity();
+  r.frames[2].metrics["psnr"] = 30;
+  store.InsertRun(r);
+  const RunSummary s = store.Summaries().at(0);
+  EXPECT_DOUBLE_EQ(s.metrics.at("psnr"), 30);
+  EXPECT_EQ(s.identical_frames.at("psnr"), 1);
+  EXPECT_DOUBLE_EQ(s.metrics.at("ssim"), 0.85);
 }
 
 TEST(ResultsStore, AFailedInsertLeavesNoHalfRow) {

@@ -99,7 +99,7 @@ std::optional<double> ValueOf(const RunSummary& r, const Column& c) {
   } else if (auto it = r.metrics.find(c.key); it != r.metrics.end()) {
     v = it->second;
   }
-  if (std::isnan(v)) return std::nullopt;
+  if (!std::isfinite(v)) return std::nullopt;  // +inf: identical images, left out of means
   return v;
 }
 
@@ -175,6 +175,9 @@ RowResult BuildRow(const TableRow& row,
       for (std::size_t c = 0; c < t.columns.size(); ++c) {
         if (!t.columns[c].computable) continue;
         if (const auto v = ValueOf(*it->second, t.columns[c])) row_values[c][{scene, seed}] = *v;
+        const auto& identical = it->second->identical_frames;
+        if (auto n = identical.find(t.columns[c].key); n != identical.end())
+          rr.identical_frames += n->second;
       }
     }
     rr.scenes_with_runs += scene_seen;
@@ -251,7 +254,8 @@ void MarkBest(Table* t) {
     for (const RowResult& r : t->rows)
       if (r.cells[c].has_value) best = dir > 0 ? std::max(best, r.cells[c].mean) : std::min(best, r.cells[c].mean);
     for (RowResult& r : t->rows)
-      if (r.cells[c].has_value && r.cells[c].mean == best) r.cells[c].best = true;
+      if (r.cells[c].has_value && std::isfinite(best) && r.cells[c].mean == best)
+        r.cells[c].best = true;
   }
 }
 
@@ -328,6 +332,13 @@ void AddFootnotes(const TableSpec& spec, const Suite& suite, Table* t) {
         "scenes of this table and the seeds they have; where one seed per scene leaves the seed "
         "test undecided, the paired test is over scenes.",
         fmt::join(added, ", ")));
+  }
+  for (const RowResult& r : t->rows) {
+    if (r.identical_frames == 0) continue;
+    t->footnotes.push_back(fmt::format(
+        "{}: {} frame value(s) of images identical to the ground truth (PSNR +inf) left out of "
+        "its means, as `hdr4d eval` does; a cell with no other value is -.",
+        r.label, r.identical_frames));
   }
   for (const Column& c : t->columns) has_lpips |= !c.computable;
   if (any_incomplete)
@@ -428,7 +439,7 @@ std::string SupervisionLabel(const std::string& s) {
 std::string ArrowOf(const Column& c) { return c.direction > 0 ? "↑" : c.direction < 0 ? "↓" : ""; }
 
 std::string FormatValue(double v, int digits) {
-  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  if (!std::isfinite(v)) return "n/a";  // never "inf": the means are over finite values
   return fmt::format("{:.{}f}", v, digits);
 }
 

@@ -61,6 +61,7 @@ struct RowResult {
   bool added = false;     // not a row of the suite's table: a method of the store that fits it
   int scenes_with_runs = 0;
   std::vector<std::int64_t> seeds_with_runs;
+  int identical_frames = 0;  // frame values of identical images (+inf) left out of its cells
 };
 // "3/8 scenes, 1 seed": the scenes of the table a row has runs on, and the seeds it has.
 std::string CoverageText(const RowResult& row, std::size_t table_scenes);

@@ -84,6 +84,31 @@ TEST(Tables, TwoRunsInOneCellAreAnErrorNotAPick) {
                    "sub-1 (submit)"), std::string::npos) << e;
 }
 
+// Identical images (PSNR +inf) printed "inf" in the tables and were marked best.
+TEST(Tables, InfinityIsNeverAValueOrTheBest) {
+  const Suite s = TableSuite();
+  std::vector<RunSummary> runs = Runs();
+  for (RunSummary& r : runs) {
+    if (r.label.method != "d") continue;
+    r.metrics["psnr"] = INFINITY;  // a summary from before the means left +inf out
+    r.identical_frames["psnr"] = 4;
+  }
+  const Table t = BuildTable(s.tables[0], s, runs, {});
+  const std::size_t psnr = Column(t, "psnr");
+  const RowResult& d = t.rows[3];
+  ASSERT_EQ(d.label, "D");
+  EXPECT_FALSE(d.cells[psnr].has_value);
+  EXPECT_FALSE(d.cells[psnr].best);
+  EXPECT_TRUE(t.rows[0].cells[psnr].best);
+  EXPECT_EQ(d.identical_frames, 4);
+  std::ostringstream all;
+  for (const std::string& f : t.footnotes) all << f << "\n";
+  EXPECT_NE(all.str().find("D: 4 frame value(s) of images identical"), std::string::npos)
+      << all.str();
+  EXPECT_EQ(FormatValue(INFINITY, 2), "n/a");
+  EXPECT_EQ(FormatValue(-INFINITY, 2), "n/a");
+}
+
 TEST(Tables, MainLayoutMeansSpreadsBestAndTests) {
   const Suite s = TableSuite();
   const Table t = BuildTable(s.tables[0], s, Runs(), {});
