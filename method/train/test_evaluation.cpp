@@ -12,6 +12,7 @@
 
 #include "core/metrics/flip.h"
 #include "core/metrics/hdr_alignment.h"
+#include "core/dataset/dataset_image_rules.h"
 #include "core/image/image_io.h"
 #include "core/files/json_util.h"
 #include "core/metrics/metrics.h"
@@ -57,7 +58,7 @@ MetricList GroupHdrMetrics(const std::vector<TrainView>& views,
     brackets.push_back(DisplayImageFromBuffer(gt->data(), views[i].width(), views[i].height(), 3));
   }
   const std::vector<std::uint8_t> measured = MeasurableInBrackets(brackets);
-  Image truth = ReadImage(hdr_path);
+  Image truth = ReadHdrGroundTruth(hdr_path).Rgb();  // RGBA ground truth: its colour
   const int factor = truth.width() / std::max(1, prediction.width());
   if (factor > 1 && ResolutionProblem(truth.width(), truth.height(), factor).empty())
     truth = DownsampleBox(truth, factor);

@@ -82,6 +82,34 @@ TEST(TrainerHdr, LdrSupervisionTrainsAndReportsHdrMetrics) {
   EXPECT_EQ(results["warnings"], nlohmann::json::array());
 }
 
+// The sweep of session 94: an RGBA EXR as a test view's HDR ground truth passed `dataset check`,
+// then failed the run after its last step ("differ in shape: 16x16x3 vs 16x16x4", no file). Its
+// colour is the ground truth: the same metrics as the RGB file.
+TEST(TrainerHdr, RgbaHdrGroundTruthIsScoredOnItsColour) {
+  TempDir dir;
+  MakeHdrScene(dir / "scene", 16);
+  const Dataset dataset = LoadDataset(dir / "scene");
+  nlohmann::json metrics[2];
+  for (int rgba = 0; rgba < 2; ++rgba) {
+    if (rgba) {
+      for (const Frame& f : dataset.test) {
+        const Image rgb = ReadImage(*f.hdr_path).Rgb();  // frames of a bracket share one file
+        Image four(rgb.width(), rgb.height(), 4, Encoding::kLinear, 0.5f);
+        for (std::size_t p = 0; p < rgb.num_pixels(); ++p)
+          for (int c = 0; c < 3; ++c) four.values()[p * 4 + c] = rgb.values()[p * 3 + c];
+        WriteImage(*f.hdr_path, four, {.format = PixelFormat::kFloat});
+      }
+    }
+    TrainOptions o = HdrRun(dir / "scene", dir / ("run" + std::to_string(rgba)), 20);
+    o.hdr.supervision = Supervision::kLdr;
+    metrics[rgba] = Train(o).test_metrics;
+    ASSERT_TRUE(fs::exists(dir / ("run" + std::to_string(rgba)) / "results.json"));
+  }
+  EXPECT_TRUE(metrics[1]["mu_psnr"].is_number()) << metrics[1];
+  EXPECT_EQ(metrics[0]["mu_psnr"], metrics[1]["mu_psnr"]);
+  EXPECT_EQ(metrics[0]["hdr_log_slope"], metrics[1]["hdr_log_slope"]);
+}
+
 // LDR supervision has no HDR term, so it never reads the training views' HDR ground truth (a
 // paper-size scene's targets cost as much memory as its LDR images, issue 15): a training HDR
 // file with a NaN stops an LDR+HDR run with its name and not an LDR run.
