@@ -6,6 +6,7 @@
 #include <cmath>
 #include <map>
 
+#include "core/dataset/dataset_image_rules.h"
 #include "core/util/error.h"
 #include "core/image/image_io.h"
 #include "core/metrics/metrics.h"
@@ -46,10 +47,10 @@ Image TileImages(const std::vector<std::vector<Image>>& rows, int padding, float
 }
 
 Image DisplayHdr(const Image& hdr) {
-  const float max_value = hdr.MaxValue();
+  Image scaled = hdr.Rgb();  // the colour: alpha is no radiance
+  const float max_value = scaled.MaxValue();
   if (!(max_value > 0) || !std::isfinite(max_value))
     Fail("HDR display: the image has no positive finite maximum");
-  Image scaled = hdr.Rgb();
   for (float& v : scaled.values()) v = std::max(v, 0.0f) / max_value;
   Image shown = MuLaw(scaled);
   shown.set_encoding(Encoding::kSrgb);  // a display image now
@@ -102,9 +103,10 @@ Preview MakeDatasetPreview(const Dataset& dataset, const PreviewOptions& options
                                        std::vector<Image>(columns.size()));
   for (std::size_t c = 0; c < columns.size(); ++c) {
     for (const auto& [exposure, frame] : by_time[columns[c]]) {
-      grid[exposure_rows[exposure]][c] = ReadImage(frame->image_path).Rgb();
+      grid[exposure_rows[exposure]][c] = ExpandToRgb(ReadImage(frame->image_path));
+      // The dataset's rules for HDR ground truth, which name the file (an all-black image too).
       if (any_hdr && frame->hdr_path && grid.back()[c].empty())
-        grid.back()[c] = DisplayHdr(ReadImage(*frame->hdr_path));
+        grid.back()[c] = DisplayHdr(ReadHdrGroundTruth(*frame->hdr_path));
     }
   }
   for (const auto& [exposure, index] : exposure_rows)

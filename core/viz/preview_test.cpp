@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "core/dataset/demo_scene.h"
+#include "core/image/image_io.h"
 #include "core/util/error.h"
 #include "core/radiometry/exposure_stack.h"
 #include "tests/testing.h"
@@ -55,6 +56,18 @@ TEST(Preview, DatasetSheetHasARowPerExposurePlusHdr) {
   EXPECT_THROW(MakeDatasetPreview(dataset, {.split = "test", .camera_id = 7}), Error);
   EXPECT_THROW(MakeDatasetPreview(dataset, {.split = "val"}), Error);
   EXPECT_THROW(MakeDatasetPreview(dataset, {.split = "nope"}), Error);
+
+  // The sweep of session 94: a grey LDR image and an all-black HDR image. The grey one is shown;
+  // the black one is refused naming its file (it said "the image has no positive finite maximum").
+  const Frame& first = dataset.test.front();
+  WriteImage(first.image_path, Image(16, 16, 1, Encoding::kSrgb, 0.5f));
+  EXPECT_NO_THROW(MakeDatasetPreview(LoadDataset(dir.path()), {.split = "test"}));
+  WriteImage(*first.hdr_path, Image(16, 16, 3, Encoding::kLinear, 0.0f),
+             {.format = PixelFormat::kFloat});
+  const std::string error = testing::ErrorOf(
+      [&] { MakeDatasetPreview(dataset, {.split = "test", .camera_id = first.camera_id}); });
+  EXPECT_NE(error.find(first.hdr_path->string() + ": has no positive value"), std::string::npos)
+      << error;
 }
 
 }  // namespace
