@@ -160,6 +160,28 @@ TEST(ImageIo, BrokenPngsAreReportedWithoutLibraryChatter) {
   EXPECT_EQ(PngStructureProblem(dir / "full.png", true), "");
 }
 
+// The sweep of session 94: a small PNG whose header claims 30000x30000 RGBA16 (7.2 GB decoded)
+// made ReadImage ask for the buffer and end in "std::bad_alloc", naming no file.
+TEST(ImageIo, PngHeaderClaimingMorePixelsThanItsBytesCanHoldIsRefused) {
+  TempDir dir;
+  WriteImage(dir / "small.png", RandomImage(16, 16, 4, 5, 0, 1, Encoding::kSrgb),
+             {.format = PixelFormat::kUint16});
+  std::string bytes = testing::ReadTextFile(dir / "small.png");
+  ASSERT_EQ(bytes.substr(12, 4), "IHDR");
+  for (int k = 0; k < 2; ++k) {  // width and height, big-endian
+    const std::uint32_t v = 30000;
+    for (int b = 0; b < 4; ++b) bytes[16 + 4 * k + b] = static_cast<char>(v >> (24 - 8 * b));
+  }
+  const std::uint32_t crc = Crc32(bytes.data() + 12, 17);  // chunk type and data
+  for (int b = 0; b < 4; ++b) bytes[29 + b] = static_cast<char>(crc >> (24 - 8 * b));
+  testing::WriteTextFile(dir / "huge.png", bytes);
+  EXPECT_EQ(ReadImageSpec(dir / "huge.png").width, 30000);  // the header itself is well formed
+  const std::string error = testing::ErrorOf([&] { ReadImage(dir / "huge.png"); });
+  EXPECT_NE(error.find("huge.png: cannot read image: its header claims 30000x30000"),
+            std::string::npos) << error;
+  EXPECT_NE(error.find("the file is damaged"), std::string::npos) << error;
+}
+
 TEST(ImageIo, NonFinitePixelIsRejectedWithItsPosition) {
   TempDir dir;
   Image image(4, 3, 3, Encoding::kLinear, 1.0f);

@@ -5,8 +5,11 @@
 #include <png.h>
 
 #include <csetjmp>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <new>
+#include <system_error>
 #include <vector>
 
 #include "core/image/image_formats.h"
@@ -102,7 +105,24 @@ Image ReadPng(const fs::path& path) {
   if (h.width <= 0 || h.height <= 0 || h.channels <= 0)
     Fail("{}: image has no pixels ({}x{}x{})", path.string(), h.width, h.height, h.channels);
   const std::size_t row_bytes = static_cast<std::size_t>(h.width) * h.channels * (bits / 8);
-  std::vector<unsigned char> data(row_bytes * h.height);
+  const std::size_t bytes = row_bytes * h.height;
+  // Deflate packs at most about 1032:1, and expanding 1-bit palette indices to 8-bit RGBA is 32x
+  // more: a header claiming far more pixels than that is a damaged file, refused before its
+  // buffer is asked for (a 100-byte file claiming 30000x30000 RGBA16 ended in bad_alloc).
+  std::error_code ec;
+  const std::uintmax_t file_bytes = fs::file_size(path, ec);
+  constexpr std::uintmax_t kMaxExpansion = 1032 * 32, kAlwaysAllowed = std::uintmax_t(64) << 20;
+  if (!ec && bytes > kAlwaysAllowed && bytes / kMaxExpansion > file_bytes)
+    Fail("{}: cannot read image: its header claims {}x{} ({} channels, {} MB decoded), which {} "
+         "bytes cannot hold: the file is damaged", path.string(), h.width, h.height, h.channels,
+         bytes >> 20, file_bytes);
+  std::vector<unsigned char> data;
+  try {
+    data.resize(bytes);
+  } catch (const std::bad_alloc&) {
+    Fail("{}: cannot read image: not enough memory for {}x{} ({} MB)", path.string(), h.width,
+         h.height, bytes >> 20);
+  }
   std::vector<png_bytep> rows(h.height);
   for (int y = 0; y < h.height; ++y) rows[y] = data.data() + y * row_bytes;
   if (!PngFinishRead(s, rows.data())) Fail("{}: cannot decode image: {}", path.string(), s.error);
