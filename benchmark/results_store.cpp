@@ -1,5 +1,7 @@
 #include "benchmark/results_store.h"
 
+#include <fmt/ranges.h>
+
 #include "core/files/output_guard.h"
 #include "core/util/error.h"
 
@@ -118,24 +120,49 @@ ResultsStore::ResultsStore(const std::filesystem::path& path, bool create)
     }
   };
   check_version(user_version());
+  // Before anything is written: a store's schema and its version are made in one transaction,
+  // so a database with tables but no version (or our version with other columns) is not ours.
+  RequireOurs(user_version(), create);
   if (user_version() != 0) return;
   Transaction t(&db_);
   const std::int64_t v = user_version();  // again, under the write lock: another may have made it
   check_version(v);
+  RequireOurs(v, create);
   if (v != 0) return;
-  {
-    // A database with tables of its own is not ours: refuse rather than mix schemas.
-    Statement tables = db_.Prepare(
-        "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name NOT IN "
-        "('meta','runs','run_labels','frames','frame_metrics','frame_stats','series',"
-        "'stress_results','claims')");
-    tables.Step();
-    if (tables.Int(0) > 0)
-      Fail("{}: an SQLite database with other tables, not an hdr4d results store", path.string());
-  }
   db_.Exec(kSchema);
   db_.Exec("PRAGMA user_version = " + std::to_string(kSchemaVersion));
   t.Commit();
+}
+
+void ResultsStore::RequireOurs(std::int64_t version, bool create) {
+  std::vector<std::string> tables;
+  Statement list = db_.Prepare(
+      "SELECT name FROM sqlite_master WHERE type = 'table' AND name NOT LIKE 'sqlite_%' "
+      "ORDER BY name");
+  while (list.Step()) tables.push_back(list.Text(0));
+  if (version == 0 && !tables.empty())
+    Fail("{}: an SQLite database with tables of its own ({}), not an hdr4d results store",
+         path().string(), fmt::join(tables, ", "));
+  if (version == 0 && !create)  // reading commands never make a store's schema
+    Fail("{}: an empty SQLite database, not an hdr4d results store", path().string());
+  if (version == 0) return;
+  // Our version number alone could be another program's: the key tables' columns must match.
+  const std::vector<std::pair<std::string, std::string>> expected = {
+      {"runs", "id,source,status,error,config,code_version,git_describe,machine,data_checksum,"
+               "scene_dir,run_dir,train_seconds,render_fps,peak_rss_mb,wall_seconds,iterations,"
+               "gaussians,started_at,finished_at"},
+      {"run_labels", "suite,method,scene,supervision,seed,budget,variant,run_id"},
+      {"frame_metrics", "run_id,frame,metric,value"}};
+  for (const auto& [table, columns] : expected) {
+    std::string found;
+    Statement info = db_.Prepare("SELECT name FROM pragma_table_info(?1) ORDER BY cid");
+    for (info.Bind(1, table); info.Step();) found += (found.empty() ? "" : ",") + info.Text(0);
+    if (found.empty())
+      Fail("{}: no table '{}': not an hdr4d results store", path().string(), table);
+    if (found != columns)
+      Fail("{}: table '{}' has the columns ({}), not those of an hdr4d results store",
+           path().string(), table, found);
+  }
 }
 
 void ResultsStore::InsertLabels(const std::string& run_id, const std::vector<RunLabel>& labels,

@@ -118,6 +118,9 @@ class ResultsStore {
   RunRecord Record(const std::string& run_id) const;
 
  private:
+  // Throws unless the file is a store of ours (`version`: its user_version) or, when `create`,
+  // an empty database to make one in.
+  void RequireOurs(std::int64_t version, bool create);
   void InsertRunLocked(const RunRecord& record, bool replace, bool protect_labels);
   void InsertLabels(const std::string& run_id, const std::vector<RunLabel>& labels,
                     bool protect_labels);

@@ -147,6 +147,46 @@ TEST(ResultsStore, RefusesFilesThatAreNotAStore) {
             std::string::npos);
 }
 
+// A foreign database with a table named like ours was made a store (user_version 1 and seven
+// tables added) even by `bench table`, then failed with a raw SQL error.
+TEST(ResultsStore, NeverChangesAFileThatIsNotAStore) {
+  TempDir dir;
+  auto schema = [](const std::filesystem::path& p) {
+    Database db(p, false);
+    std::string s;
+    for (Statement q = db.Prepare("SELECT name FROM sqlite_master ORDER BY name"); q.Step();)
+      s += q.Text(0) + ",";
+    Statement v = db.Prepare("PRAGMA user_version");
+    v.Step();
+    return s + std::to_string(v.Int(0));
+  };
+  {
+    Database other(dir / "x.db", true);
+    other.Exec("CREATE TABLE runs (id TEXT PRIMARY KEY, status TEXT)");
+  }
+  const std::string before = schema(dir / "x.db");
+  for (bool create : {false, true}) {
+    const std::string e = ErrorOf([&] { ResultsStore s(dir / "x.db", create); });
+    EXPECT_NE(e.find("x.db: an SQLite database with tables of its own (runs)"), std::string::npos)
+        << e;
+    EXPECT_EQ(schema(dir / "x.db"), before);
+  }
+  // Our version number on other columns.
+  {
+    Database other(dir / "y.db", true);
+    other.Exec("CREATE TABLE runs (id TEXT PRIMARY KEY, status TEXT); PRAGMA user_version = 1");
+  }
+  const std::string e = ErrorOf([&] { ResultsStore s(dir / "y.db", false); });
+  EXPECT_NE(e.find("table 'runs' has the columns (id,status)"), std::string::npos) << e;
+  // An empty database: a reading command does not make it a store.
+  { Database empty(dir / "e.db", true); }
+  EXPECT_NE(ErrorOf([&] { ResultsStore s(dir / "e.db", false); }).find("an empty SQLite database"),
+            std::string::npos);
+  EXPECT_EQ(schema(dir / "e.db"), "0");
+  ResultsStore made(dir / "e.db", true);
+  EXPECT_NO_THROW(ResultsStore(dir / "e.db", false));
+}
+
 TEST(ResultsStore, StressOutcomesKeepTheLatestPerCase) {
   TempDir dir;
   ResultsStore store(dir / "s.db");
