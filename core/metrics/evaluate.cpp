@@ -369,13 +369,19 @@ nlohmann::json EvaluatePaths(const fs::path& pred,
   // Sums in pair order over the finite values: one identical pair (PSNR +inf) must not turn every
   // mean into +inf and hide the others; it is counted in "identical_pairs" instead.
   std::map<std::string, std::pair<double, int>> sums;
+  // Infinite values of pairs that are not identical (psnr_channel_mean where one channel is,
+  // as the reference code computes it): left out of the mean too, and counted per key.
+  std::map<std::string, int> left_out;
   int identical = 0;
   for (const auto& r : results) {
     out["pairs"].push_back(PairJson(*r));
     identical += r->identical ? 1 : 0;
     for (const auto& [key, value] : r->metrics) {
       auto& [sum, count] = sums[key];
-      if (!std::isfinite(value)) continue;
+      if (!std::isfinite(value)) {
+        if (!r->identical) ++left_out[key];
+        continue;
+      }
       sum += value;
       ++count;
     }
@@ -389,6 +395,7 @@ nlohmann::json EvaluatePaths(const fs::path& pred,
     if (r->fit_sums) fit_sums.push_back(*r->fit_sums);
   if (!fit_sums.empty()) SetPooledLdrFitShape(fit_sums, &out["mean"]);
   out["identical_pairs"] = identical;
+  if (!left_out.empty()) out["infinite_left_out"] = left_out;
   return out;
 }
 
@@ -440,6 +447,11 @@ std::string FormatEvalTable(const nlohmann::json& result) {
     out += fmt::format(
         "identical: {} of {} pairs (PSNR inf there); the means are over the finite values\n",
         identical, pairs.size());
+  }
+  const nlohmann::json left_out = result.value("infinite_left_out", nlohmann::json::object());
+  for (const auto& [key, count] : left_out.items()) {
+    out += fmt::format("{}: inf on {} pair{} not identical (a channel is), left out of its mean\n",
+                       key, count.get<int>(), count.get<int>() == 1 ? "" : "s");
   }
   return out;
 }

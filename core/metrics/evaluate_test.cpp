@@ -258,6 +258,32 @@ TEST(EvaluateTest, IdenticalImagesWriteNullAndParse) {
   EXPECT_EQ(all_same["identical_pairs"], 1);
 }
 
+// The sweep of session 94: one channel the same in both images makes psnr_channel_mean +inf (as
+// the reference's per-channel mean does) on a pair that is not identical; it was left out of the
+// mean without a word. The result and the table count it.
+TEST(EvaluateTest, AnInfiniteValueOfAPairThatDiffersIsCounted) {
+  TempDir dir;
+  Image pred = RandomImage(6, 6, 3, 40, 0, 1, Encoding::kSrgb);
+  Image gt = pred;
+  for (std::size_t p = 0; p < gt.num_pixels(); ++p) {  // red and green differ, blue does not
+    for (int c = 0; c < 2; ++c)
+      gt.values()[p * 3 + c] = std::round(gt.values()[p * 3 + c] * 100) / 255;
+  }
+  WriteImage(dir / "pred" / "a.png", pred);
+  WriteImage(dir / "gt" / "a.png", gt);
+  WriteLdr(dir / "gt" / "b.png", 6, 6, 41);
+  WriteLdr(dir / "pred" / "b.png", 6, 6, 42);
+  const nlohmann::json result = EvaluatePaths(dir / "pred", dir / "gt");
+  EXPECT_TRUE(result["pairs"][0]["psnr"].is_number());
+  EXPECT_TRUE(result["pairs"][0]["psnr_channel_mean"].is_null());
+  EXPECT_EQ(result["identical_pairs"], 0);
+  EXPECT_EQ(result["infinite_left_out"], (nlohmann::json{{"psnr_channel_mean", 1}}));
+  EXPECT_EQ(result["mean"]["psnr_channel_mean"], result["pairs"][1]["psnr_channel_mean"]);
+  EXPECT_THAT(FormatEvalTable(result),
+              HasSubstr("psnr_channel_mean: inf on 1 pair not identical (a channel is), left out "
+                        "of its mean"));
+}
+
 TEST(EvaluateTest, TableShowsValuesWithFourDecimals) {
   nlohmann::json result = {{"pairs", {{{"name", "x.png"}, {"psnr", 31.123456}, {"ssim", 0.9}}}},
                            {"mean", {{"psnr", 31.123456}, {"ssim", 0.9}}}};
