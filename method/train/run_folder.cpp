@@ -58,6 +58,15 @@ void RequireFreshRunFolder(const fs::path& run, bool overwrite) {
        run.string(), what, fmt::join(found, ", "));
 }
 
+void RequireRunFolderNotAScene(const fs::path& run) {
+  for (const char* name : {"transforms_train.json", "transforms_test.json", "transforms.json"}) {
+    if (!Present(run / name)) continue;
+    Fail("{}: is a scene folder (it holds {}): a run goes into a folder of its own, e.g. "
+         "--out {}",
+         run.string(), name, (run / "run").string());
+  }
+}
+
 void RemovePreviousRun(const fs::path& run) {
   for (const char* name : kTrainRunFiles) {
     std::error_code ec;

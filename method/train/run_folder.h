@@ -21,6 +21,11 @@ inline constexpr const char* kTrainRunFiles[] = {"checkpoint.bin", "config.json"
 // the lock then says so) and again once the lock is held.
 void RequireFreshRunFolder(const std::filesystem::path& run, bool overwrite);
 
+// Throws hdr4d::Error when RUN is a scene folder (it holds transforms_*.json or transforms.json,
+// --data's or another's): a run written there mixes its files and lock with the scene's, and a
+// later `--overwrite` deletes files among them. Checked first, for new runs and resumes alike.
+void RequireRunFolderNotAScene(const std::filesystem::path& run);
+
 // --overwrite, with the run's lock held: removes kTrainRunFiles from RUN (a symlink itself, never
 // its target). Other files (renders, exports, notes) stay.
 void RemovePreviousRun(const std::filesystem::path& run);

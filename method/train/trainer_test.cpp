@@ -308,6 +308,20 @@ TEST(Trainer, BadInputsAreErrors) {
   o = SmallRun(dir / "scene", dir / "run", 10);
   o.background = 2.0f;
   EXPECT_NE(testing::ErrorOf([&] { Train(o); }).find("background"), std::string::npos);
+  // The sweep of session 94: --out the scene itself (or another) wrote the run among its files.
+  MakeScene(dir / "other");
+  for (const fs::path& out : {dir / "scene", dir / "other"}) {
+    for (bool resume : {false, true}) {
+      o = SmallRun(dir / "scene", out, 10);
+      o.resume = resume;
+      o.overwrite = !resume;
+      const std::string error = testing::ErrorOf([&] { Train(o); });
+      EXPECT_NE(error.find(out.string() + ": is a scene folder (it holds transforms_"),
+                std::string::npos) << error;
+      EXPECT_FALSE(fs::exists(out / "checkpoint.bin"));
+      EXPECT_FALSE(fs::exists(out / "config.json"));
+    }
+  }
 }
 
 }  // namespace

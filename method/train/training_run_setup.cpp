@@ -65,6 +65,7 @@ double PixelsPerTime(const std::vector<TrainView>& views) {
 // The data, the schedules for this run's length and image size, the tone mapper and the
 // configuration to record (a resumed run must match the one it continues).
 void TrainingRun::SetUp() {
+  RequireRunFolderNotAScene(options_.out);
   if (options_.resume) CheckGivenAgainstSaved();
   else RequireFreshRunFolder(options_.out, options_.overwrite);  // before the scene is read
   dataset_.emplace(LoadDataset(
