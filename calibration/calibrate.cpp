@@ -67,6 +67,29 @@ void RemoveIfEmptyTree(const fs::path& folder) {
   fs::remove_all(folder, ec);
 }
 
+// Whether `inner` is `outer` or lies under it, both resolved (symlinks included).
+bool IsWithin(const fs::path& inner, const fs::path& outer) {
+  const fs::path a = fs::weakly_canonical(inner), b = fs::weakly_canonical(outer);
+  auto it = a.begin();
+  for (const fs::path& part : b) {
+    if (part.empty()) continue;  // the "" of a trailing '/'
+    if (it == a.end() || *it != part) return false;
+    ++it;
+  }
+  return true;
+}
+
+// The results replace same-named entries of --out (static/, sequence/ are a capture's own):
+// --out may be neither the capture, nor inside it, nor hold it.
+void CheckOutApartFromCapture(const fs::path& out, const fs::path& capture) {
+  if (IsWithin(out, capture))
+    Fail("--out {}: inside the capture {} (or the capture itself); calibrate writes beside a "
+         "capture, never into it", out.string(), capture.string());
+  if (IsWithin(capture, out))
+    Fail("--out {}: holds the capture {}; its results would replace the capture's files",
+         out.string(), capture.string());
+}
+
 // Moves what the run staged into `out`, replacing entries of the same name.
 void Publish(const fs::path& staging, const fs::path& out) {
   for (const auto& entry : fs::directory_iterator(staging)) {
@@ -256,6 +279,7 @@ CalibrateSummary Calibrate(const CalibrateOptions& options) {
   for (const std::string& w : capture.warnings) spdlog::warn("calibrate: {}", w);
   fs::path out = fs::absolute(options.out).lexically_normal();
   if (out.filename().empty()) out = out.parent_path();
+  CheckOutApartFromCapture(out, options.capture);
   const fs::path created = FirstMissingFolder(out);
   const fs::path staging = out.parent_path() / ("." + out.filename().string() + ".calibrate-partial");
   try {

@@ -1,6 +1,7 @@
 // End-to-end `hdr4d calibrate` on a small synthetic rig whose poses, intrinsics, response and
 // radiance are known, with its sparse model given (--colmap-model) so the test needs no COLMAP
 // run; plus the error paths, each of which must leave --out as it was.
+#include <algorithm>
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
@@ -442,6 +443,39 @@ TEST(Calibrate, BadCapturesAreClearErrorsAndWriteNothing) {
   // Missing images (a bracket that is not an image).
   testing::WriteTextFile(capture / "sequence/cam0/0_2.png", "not a png");
   ExpectFailure(capture, model, out, "0_2.png");
+}
+
+// --out equal to, inside or above --capture was accepted: the results replaced the capture's
+// same-named entries.
+TEST(Calibrate, OutputApartFromTheCapture) {
+  testing::TempDir dir;
+  const fs::path capture = dir / "capture", model = dir / "model";
+  WriteCapture(capture, model);
+  fs::create_symlink(capture, dir / "link");
+  auto listing = [&] {
+    std::vector<std::string> files;
+    for (const auto& e : fs::recursive_directory_iterator(capture)) {
+      const std::string size = e.is_regular_file() ? std::to_string(e.file_size()) : "";
+      files.push_back(e.path().string() + " " + size);
+    }
+    std::sort(files.begin(), files.end());
+    return files;
+  };
+  const std::vector<std::string> before = listing();
+  const std::vector<std::pair<fs::path, std::string>> cases = {
+      {capture, "inside the capture"},
+      {capture / "static", "inside the capture"},
+      {dir / "link" / "out", "inside the capture"},  // a symlink to the capture
+      {fs::path(dir.path()), "holds the capture"}};
+  for (const auto& [out, message] : cases) {
+    const auto result = testing::RunHdr4d("calibrate --capture '" + capture.string() +
+                                          "' --out '" + out.string() + "' --colmap-model '" +
+                                          model.string() + "'");
+    EXPECT_EQ(result.exit_code, 1) << out;
+    EXPECT_NE(result.err.find("--out " + out.string() + ": " + message), std::string::npos)
+        << result.err;
+    EXPECT_EQ(listing(), before) << out;
+  }
 }
 
 TEST(Calibrate, UnwritableOutputIsAnError) {
