@@ -433,6 +433,14 @@ TEST(Calibrate, BadCapturesAreClearErrorsAndWriteNothing) {
   testing::WriteTextFile(capture / "exposures.json", R"({"brackets": [1, 1, 4]})");
   ExpectFailure(capture, model, out, "same exposure time");
   testing::WriteTextFile(capture / "exposures.json", R"({"brackets": [0.25, 1.0, 4.0]})");
+  // Brackets all black, then all saturated: they calibrated to "dynamic range 0.00 stops".
+  for (const float level : {0.0f, 1.0f}) {
+    Image flat(kW, kH, 3, Encoding::kSrgb);
+    for (float& v : flat.values()) v = level;
+    for (int k = 0; k < 3; ++k) WriteImage(capture / fmt::format("sequence/cam1/1_{}.png", k), flat);
+    ExpectFailure(capture, model, out, "camera cam1, frame 1: no usable measurement in its 3 brackets");
+  }
+  WriteCapture(capture, model);
   // A camera COLMAP did not register.
   ColmapModel partial = ReadColmapModel(model);
   partial.images.erase(3);

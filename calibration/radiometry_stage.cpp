@@ -36,10 +36,33 @@ Bracket LoadBracket(const fs::path& path, double exposure, const std::string& ca
   return b;
 }
 
+// Codes clear of the black floor and of saturation (as the static images' gains use them).
+constexpr int kMeasuredLowCode = 16, kMeasuredHighCode = 240;
+
+// A frame whose brackets are all black or all saturated measures no radiance: its fusion gave
+// "dynamic range 0.00 stops" and a response fitted to nothing. At least 0.1% of its values must
+// lie between the black floor and saturation in some bracket.
+void RequireMeasurement(const std::vector<Bracket>& brackets, const std::string& camera, int frame) {
+  std::size_t measured = 0, values = 0;
+  for (const Bracket& b : brackets) {
+    values += b.image.size();
+    for (std::size_t i = 0; i < b.image.size(); ++i) {
+      const int code = CodeOf(b.image.data()[i]);
+      measured += code >= kMeasuredLowCode && code <= kMeasuredHighCode;
+    }
+  }
+  if (measured == 0 || measured * 1000 < values)
+    Fail("{}: camera {}, frame {}: no usable measurement in its {} brackets ({} of {} values "
+         "between codes {} and {}; the rest black or saturated): check the exposure times and "
+         "the lens cap", brackets.front().name, camera, frame, brackets.size(), measured, values,
+         kMeasuredLowCode, kMeasuredHighCode);
+}
+
 std::vector<Bracket> LoadFrame(const CaptureCamera& camera, const CaptureFrame& frame) {
   std::vector<Bracket> brackets;
   for (std::size_t k = 0; k < frame.brackets.size(); ++k)
     brackets.push_back(LoadBracket(frame.brackets[k], frame.exposures[k], camera.name, frame.index));
+  RequireMeasurement(brackets, camera.name, frame.index);
   return brackets;
 }
 
