@@ -486,6 +486,24 @@ TEST(Calibrate, OutputApartFromTheCapture) {
   }
 }
 
+// A 16x12 capture reached COLMAP, whose covariant SIFT aborted: "feature_extractor failed
+// (exit 134): @ 0x7f... (unknown)".
+TEST(Calibrate, TooSmallStaticImagesAreRefusedBeforeColmap) {
+  testing::TempDir dir;
+  const fs::path capture = dir / "capture";
+  WriteCapture(capture, dir / "model");
+  Image tiny(16, 12, 3, Encoding::kSrgb);
+  for (float& v : tiny.values()) v = 0.5f;
+  WriteImage(capture / "static/cam1/static.png", tiny);
+  const auto result = testing::RunHdr4d("calibrate --capture '" + capture.string() + "' --out '" +
+                                        (dir / "out").string() +
+                                        "' --colmap-binary /nonexistent/colmap");
+  EXPECT_EQ(result.exit_code, 1);
+  EXPECT_NE(result.err.find("static/cam1/static.png: camera cam1: 16x12 pixels; COLMAP's features "
+                            "need at least 32"), std::string::npos) << result.err;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
 TEST(Calibrate, UnwritableOutputIsAnError) {
   testing::TempDir dir;
   WriteCapture(dir / "capture", dir / "model");
