@@ -48,11 +48,15 @@ Dataset ReadHdrGsColmapLayout(const fs::path& root) {
   if (fs::exists(root / "point3d.ply", ec)) dataset.point_cloud_path = root / "point3d.ply";
   for (std::size_t v = 0; v < views.size(); ++v) {
     const ColmapCamera& colmap_camera = model.cameras.at(views[v].image->camera_id);
-    if (colmap_camera.Radial().norm() > 0)
+    Eigen::Vector2d tangential;
+    if (colmap_camera.Radial(&tangential).norm() > 0 || tangential.norm() > 0)
       Fail("{}: camera {} has lens distortion ({}); hdr4d renders pinhole cameras, undistort the "
            "images first", folder.string(), colmap_camera.id, colmap_camera.model);
-    const Camera camera = Camera::FromWorldFromCamCv(colmap_camera.Pinhole(),
-                                                     RigidInverse(views[v].image->CamFromWorldCv()));
+    const PinholeIntrinsics intrinsics = colmap_camera.Pinhole();
+    if (const std::string problem = intrinsics.Problem(); !problem.empty())
+      Fail("{}: camera {}: {}", folder.string(), colmap_camera.id, problem);
+    const Camera camera =
+        Camera::FromWorldFromCamCv(intrinsics, RigidInverse(views[v].image->CamFromWorldCv()));
     const std::string ext = fs::path(views[v].image->name).extension().string();
     const bool test = v % 2 == 1;
     for (int k = 0; k < 5; ++k) {

@@ -57,6 +57,21 @@ TEST(HdrGsColmapLayout, ProblemsNameTheFile) {
             std::string::npos);
   WriteHdrGsScene(dir / "b", "SIMPLE_RADIAL");
   EXPECT_NE(testing::ErrorOf([&] { LoadDataset(dir / "b"); }).find("lens distortion"), std::string::npos);
+  // The sweep of session 94: tangential distortion alone, and a focal length of zero, were read
+  // as a pinhole camera.
+  WriteHdrGsScene(dir / "c");
+  ColmapModel m = ReadColmapModel(dir / "c" / "sparse" / "0");
+  m.cameras[1] = {1, "OPENCV", 8, 6, {10, 10, 4, 3, 0, 0, 0.05, 0.05}};
+  WriteColmapModel(dir / "c" / "sparse" / "0", m, ColmapFormat::kText);
+  fs::remove(dir / "c" / "sparse" / "0" / "cameras.bin");
+  fs::remove(dir / "c" / "sparse" / "0" / "images.bin");
+  fs::remove(dir / "c" / "sparse" / "0" / "points3D.bin");
+  EXPECT_NE(testing::ErrorOf([&] { LoadDataset(dir / "c"); }).find("lens distortion (OPENCV)"),
+            std::string::npos);
+  m.cameras[1] = {1, "PINHOLE", 8, 6, {0, 10, 4, 3}};
+  WriteColmapModel(dir / "c" / "sparse" / "0", m, ColmapFormat::kText);
+  EXPECT_NE(testing::ErrorOf([&] { LoadDataset(dir / "c"); }).find("camera 1: focal length fx=0"),
+            std::string::npos);
 }
 
 }  // namespace

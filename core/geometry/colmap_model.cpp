@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -110,6 +111,21 @@ void CheckCamera(const ColmapCamera& camera, const fs::path& path) {
          camera.model, expected, camera.params.size());
   if (camera.width <= 0 || camera.height <= 0)
     Fail("{}: camera {}: bad size {}x{}", path.string(), camera.id, camera.width, camera.height);
+  for (std::size_t p = 0; p < camera.params.size(); ++p)
+    if (!std::isfinite(camera.params[p]))
+      Fail("{}: camera {}: parameter {} is {}", path.string(), camera.id, p, camera.params[p]);
+}
+
+// A pose COLMAP could have written: a finite rotation quaternion of non-zero length (it is
+// normalised when used; a zero one became the identity rotation) and a finite translation.
+// `where` is "line N" of a text model or "image ID" of a binary one.
+void CheckImagePose(const ColmapImage& im, const fs::path& path, const std::string& where) {
+  const Eigen::Vector4d q = im.cam_from_world_rotation.coeffs();
+  if (!q.allFinite() || !(q.norm() > 1e-9))
+    Fail("{}: {}: the rotation quaternion ({}, {}, {}, {}) is not a rotation", path.string(), where,
+         im.cam_from_world_rotation.w(), q.x(), q.y(), q.z());
+  if (!im.cam_from_world_translation.allFinite())
+    Fail("{}: {}: the translation is not finite", path.string(), where);
 }
 
 ColmapModel ReadBinary(const fs::path& folder) {
@@ -144,6 +160,7 @@ ColmapModel ReadBinary(const fs::path& folder) {
       for (double& v : t) v = r.Read<double>("translation");
       im.cam_from_world_rotation = Eigen::Quaterniond(q[0], q[1], q[2], q[3]);
       im.cam_from_world_translation = Eigen::Vector3d(t[0], t[1], t[2]);
+      CheckImagePose(im, path, fmt::format("image {}", im.id));
       im.camera_id = r.Read<std::int32_t>("camera id");
       im.name = r.ReadName();
       const auto np = r.ReadCount("2D point", kMaxCount);
@@ -211,6 +228,7 @@ ColmapModel ReadText(const fs::path& folder) {
       for (double& v : t) v = Parse<double>(in, path, number, "translation");
       im.cam_from_world_rotation = Eigen::Quaterniond(q[0], q[1], q[2], q[3]);
       im.cam_from_world_translation = Eigen::Vector3d(t[0], t[1], t[2]);
+      CheckImagePose(im, path, fmt::format("line {}", number));
       im.camera_id = Parse<int>(in, path, number, "camera id");
       std::getline(in >> std::ws, im.name);
       if (im.name.empty()) Fail("{}: line {}: missing image name", path.string(), number);

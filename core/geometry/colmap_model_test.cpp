@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <fstream>
 
 #include "tests/testing.h"
@@ -110,6 +112,46 @@ TEST(ColmapModel, ErrorsNameTheFile) {
   EXPECT_NE(testing::ErrorOf([&] { FindColmapModelFolder(dir.path()); }).find("no COLMAP sparse model"),
             std::string::npos);
   EXPECT_EQ(FindColmapModelFolder(dir / "t"), dir / "t");
+}
+
+// The sweep of session 94: a zero quaternion became the identity rotation, and NaN poses and
+// parameters were read without a word; both formats now refuse them, naming file and place.
+void ZeroQuaternion(ColmapModel* m) {
+  m->images.begin()->second.cam_from_world_rotation.coeffs().setZero();
+}
+void InfiniteQuaternion(ColmapModel* m) {
+  m->images.begin()->second.cam_from_world_rotation.x() = INFINITY;
+}
+void NanTranslation(ColmapModel* m) {
+  m->images.begin()->second.cam_from_world_translation.y() = NAN;
+}
+void NanFocalLength(ColmapModel* m) { m->cameras.begin()->second.params[0] = NAN; }
+
+TEST(ColmapModel, PosesAndParametersThatAreNoneAreRefused) {
+  testing::TempDir dir;
+  struct Case {
+    const char* name;
+    void (*change)(ColmapModel*);
+    const char* problem;
+    bool text;  // also as text (a text model cannot hold a NaN parameter: "cannot read")
+  };
+  const Case cases[] = {{"zero_q", ZeroQuaternion, "is not a rotation", true},
+                        {"inf_q", InfiniteQuaternion, "is not a rotation", false},
+                        {"nan_t", NanTranslation, "the translation is not finite", false},
+                        {"nan_f", NanFocalLength, "camera 1: parameter 0 is nan", false}};
+  for (const Case& c : cases) {
+    for (ColmapFormat format : {ColmapFormat::kBinary, ColmapFormat::kText}) {
+      if (format == ColmapFormat::kText && !c.text) continue;
+      ColmapModel m = SmallModel();
+      c.change(&m);
+      const std::filesystem::path folder =
+          dir / (std::string(c.name) + (format == ColmapFormat::kText ? "_txt" : "_bin"));
+      WriteColmapModel(folder, m, format);
+      const std::string error = testing::ErrorOf([&] { ReadColmapModel(folder); });
+      EXPECT_NE(error.find(c.problem), std::string::npos) << folder << ": " << error;
+      EXPECT_NE(error.find(folder.string()), std::string::npos) << error;
+    }
+  }
 }
 
 }  // namespace
