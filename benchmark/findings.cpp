@@ -34,10 +34,10 @@ SeedValues FindingRowValues(const std::vector<RunSummary>& runs, const TableRow&
 }
 
 std::string BudgetOf(const Suite& suite, const FindingsOptions& o) {
-  return o.budget.empty() ? suite.budgets.back().Label() : o.budget;
+  return TableBudget(suite, o.budget);
 }
 std::string VariantOf(const Suite& suite, const FindingsOptions& o) {
-  return o.variant.empty() ? suite.variants.front().name : o.variant;
+  return TableVariant(suite, o.variant);
 }
 
 std::string OutcomeOf(const PairedTest& t, int direction) {

@@ -192,8 +192,8 @@ ReportSummary WriteReport(const Suite& suite, const ResultsStore& store, const R
   ReportSummary summary;
   const std::vector<RunSummary> runs = SuiteRuns(store, suite);
   CheckRowNames(suite, runs, options.tables);
-  const std::string budget = options.tables.budget.empty() ? suite.budgets.back().Label() : options.tables.budget;
-  const std::string variant = options.tables.variant.empty() ? suite.variants.front().name : options.tables.variant;
+  const std::string budget = TableBudget(suite, options.tables.budget);
+  const std::string variant = TableVariant(suite, options.tables.variant);
   std::set<std::string> versions, machines;
   int ok = 0, failed = 0;
   for (const RunSummary& r : runs) {

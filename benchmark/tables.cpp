@@ -366,8 +366,8 @@ Table Build(const TableSpec& spec,
   t.columns = std::move(columns);
   t.scenes = GroupScenes(suite, spec.scene_group);
   t.seeds = suite.seeds;
-  t.budget = options.budget.empty() ? suite.budgets.back().Label() : options.budget;
-  t.variant = options.variant.empty() ? suite.variants.front().name : options.variant;
+  t.budget = TableBudget(suite, options.budget);
+  t.variant = TableVariant(suite, options.variant);
   t.protocol = options.hdr_psnr_key.empty()
                    ? HdrProtocolDescription(options.protocol)
                    : "the metric keys " + options.hdr_psnr_key + " and " + options.hdr_ssim_key;
@@ -441,6 +441,26 @@ std::string ArrowOf(const Column& c) { return c.direction > 0 ? "↑" : c.direct
 std::string FormatValue(double v, int digits) {
   if (!std::isfinite(v)) return "n/a";  // never "inf": the means are over finite values
   return fmt::format("{:.{}f}", v, digits);
+}
+
+std::string TableBudget(const Suite& suite, const std::string& budget) {
+  if (budget.empty()) return suite.budgets.back().Label();
+  std::vector<std::string> known;
+  for (const auto& b : suite.budgets) known.push_back(b.Label());
+  if (std::find(known.begin(), known.end(), budget) == known.end())
+    Fail("--budget {}: not a budget of suite '{}' (known: {})", budget, suite.name,
+         fmt::join(known, ", "));
+  return budget;
+}
+
+std::string TableVariant(const Suite& suite, const std::string& variant) {
+  if (variant.empty()) return suite.variants.front().name;
+  std::vector<std::string> known;
+  for (const auto& v : suite.variants) known.push_back(v.name.empty() ? "\"\"" : v.name);
+  for (const auto& v : suite.variants)
+    if (v.name == variant) return variant;
+  Fail("--variant {}: not a variant of suite '{}' (known: {})", variant, suite.name,
+       fmt::join(known, ", "));
 }
 
 HdrProtocol ParseHdrProtocol(const std::string& name) {
@@ -524,8 +544,8 @@ Table BuildAllMetricsTable(const TableSpec& spec, const Suite& suite,
 std::string PerSceneMarkdown(const TableSpec& spec, const Suite& suite,
                              const std::vector<RunSummary>& runs, const TableOptions& options,
                              const Column& column) {
-  const std::string budget = options.budget.empty() ? suite.budgets.back().Label() : options.budget;
-  const std::string variant = options.variant.empty() ? suite.variants.front().name : options.variant;
+  const std::string budget = TableBudget(suite, options.budget);
+  const std::string variant = TableVariant(suite, options.variant);
   const Index ix = BuildIndex(runs, budget, variant);
   const std::vector<std::string> scenes = GroupScenes(suite, spec.scene_group);
   std::vector<TableRow> rows;

@@ -31,6 +31,11 @@ enum class HdrProtocol {
   kGtMax,   // mu_psnr_gt_max, mu_ssim_gt_max: both over the ground truth's maximum (HDR-NeRF)
   kPu21,    // pu21_psnr, pu21_ssim: PU21 on absolute luminance
 };
+// The budget label (default: the suite's last) and variant name (default: its first) a reading
+// command shows; a name the suite does not have is an error listing those it has (it printed
+// empty tables).
+std::string TableBudget(const Suite& suite, const std::string& budget);
+std::string TableVariant(const Suite& suite, const std::string& variant);
 HdrProtocol ParseHdrProtocol(const std::string& name);  // own_max, gt_max, pu21
 std::string HdrProtocolDescription(HdrProtocol protocol);
 

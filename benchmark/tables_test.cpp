@@ -109,6 +109,21 @@ TEST(Tables, InfinityIsNeverAValueOrTheBest) {
   EXPECT_EQ(FormatValue(-INFINITY, 2), "n/a");
 }
 
+// `bench table/findings/report --budget nosuch` printed empty tables instead of an error.
+TEST(Tables, UnknownBudgetsAndVariantsAreListed) {
+  const Suite s = TableSuite();
+  TableOptions o;
+  o.budget = "nosuch";
+  std::string e = ErrorOf([&] { BuildTable(s.tables[0], s, Runs(), o); });
+  EXPECT_NE(e.find("--budget nosuch: not a budget of suite 't' (known: 10it)"), std::string::npos)
+      << e;
+  o.budget = "10it";
+  o.variant = "nosuch";
+  e = ErrorOf([&] { BuildTable(s.tables[0], s, Runs(), o); });
+  EXPECT_NE(e.find("--variant nosuch: not a variant of suite 't'"), std::string::npos) << e;
+  EXPECT_EQ(TableBudget(s, ""), "10it");
+}
+
 TEST(Tables, MainLayoutMeansSpreadsBestAndTests) {
   const Suite s = TableSuite();
   const Table t = BuildTable(s.tables[0], s, Runs(), {});
