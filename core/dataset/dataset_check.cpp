@@ -412,7 +412,7 @@ DatasetReport CheckDataset(const fs::path& root, const DatasetLoadOptions& optio
   }
   SceneFiles scene = ReadSceneFiles(root, options, sink);
   const bool stops_like = ReportStopsLikeExposures(scene, options, sink);
-  ReportMissingExposures(scene, sink);
+  ReportMissingPerFrameKeys(scene, sink);
   if (!scene.files[0].parsed) {
     report.problems = sink.Sorted();
     return report;

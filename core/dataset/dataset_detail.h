@@ -167,6 +167,7 @@ struct PendingFrame {
   IntrinsicsKeys keys;   // per frame over top level
   bool image_ok = true;  // false once an image problem was reported
   bool exposure_key = false;  // the frame's JSON has `exposures` (valid or not)
+  bool time_key = false;      // ... and `time`
 };
 
 struct SplitFile {
@@ -214,9 +215,10 @@ SceneFiles ReadSceneFiles(const fs::path& root,
 bool ReportStopsLikeExposures(const SceneFiles& scene,
                               const DatasetLoadOptions& options,
                               ProblemSink& sink);
-// A frame without `exposures` in a scene whose other frames give one: a problem per such frame
-// (it would be read as 1 s, silently). A scene where no frame gives one (D-NeRF) is fine.
-void ReportMissingExposures(const SceneFiles& scene, ProblemSink& sink);
+// A frame without `exposures` (or `time`, which nerfstudio's layout may leave out) in a scene
+// whose other frames give one: a problem per such frame (it would be read as 1 s, or time 0,
+// silently). A scene where no frame gives one (D-NeRF's exposures, a static capture) is fine.
+void ReportMissingPerFrameKeys(const SceneFiles& scene, ProblemSink& sink);
 
 // ---- dataset_layouts.cpp: which layout a folder is ----------------------------------------
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <map>
+#include <set>
 
 #include "core/dataset/colmap_layout.h"
 #include "core/dataset/dataset_detail.h"
@@ -61,15 +62,23 @@ void CheckNerfstudioCameraModel(const json& doc, const Reader& r) {
   const std::string model = it->get<std::string>();
   if (model == "PINHOLE" || model == "SIMPLE_PINHOLE") return;
   if (model == "OPENCV") {
-    for (const char* key : {"k1", "k2", "k3", "k4", "p1", "p2"}) {
-      const auto k = doc.find(key);
-      if (k != doc.end() && (!k->is_number() || k->get<double>() != 0.0)) {
-        r.Problem(-1, key,
+    // The coefficients may be given for the file or per frame (nerfstudio reads both).
+    const auto distorted = [&](const json& obj, int frame) {
+      for (const char* key : {"k1", "k2", "k3", "k4", "p1", "p2"}) {
+        const auto k = obj.find(key);
+        if (k == obj.end() || (k->is_number() && k->get<double>() == 0.0)) continue;
+        r.Problem(frame, key,
                   "lens distortion is not supported (hdr4d renders pinhole cameras); undistort "
                   "the images first");
-        return;
+        return true;
       }
-    }
+      return false;
+    };
+    if (distorted(doc, -1)) return;
+    const auto frames = doc.find("frames");
+    if (frames == doc.end() || !frames->is_array()) return;
+    for (std::size_t i = 0; i < frames->size(); ++i)
+      if ((*frames)[i].is_object() && distorted((*frames)[i], static_cast<int>(i))) return;
     return;
   }
   r.Problem(-1, "camera_model",
@@ -84,7 +93,12 @@ void SplitNerfstudio(const fs::path& root,
                      const json& doc,
                      const Reader& r,
                      std::array<SplitFile, 3>& files) {
-  std::map<fs::path, Split> listed;
+  struct ListedAs {
+    Split split;
+    const char* key;   // the list that names it
+    std::string name;  // as written there
+  };
+  std::map<fs::path, ListedAs> listed;
   bool any_list = false;
   for (const auto& [key, split] :
        {std::pair{"test_filenames", Split::kTest}, std::pair{"val_filenames", Split::kVal},
@@ -101,16 +115,27 @@ void SplitNerfstudio(const fs::path& root,
         r.Problem(-1, key, "expected file path strings, got " + Describe(name));
         continue;
       }
-      listed.emplace(ResolveImagePath(root, name.get<std::string>()), split);
+      const auto [at, added] = listed.emplace(ResolveImagePath(root, name.get<std::string>()),
+                                              ListedAs{split, key, name.get<std::string>()});
+      if (!added)
+        r.Problem(-1, key, fmt::format("'{}' is listed in {} too: a frame has one split",
+                                       name.get<std::string>(), at->second.key));
     }
   }
+  // A listed name that is no frame's image (nerfstudio itself refuses it): its frame would be
+  // trained on instead of held out.
+  std::set<fs::path> images;
+  for (const PendingFrame& p : files[0].frames) images.insert(p.frame.image_path);
+  for (const auto& [path, as] : listed)
+    if (!images.count(path))
+      r.Problem(-1, as.key, fmt::format("'{}' is no frame's file_path", as.name));
   std::vector<PendingFrame> all = std::move(files[0].frames);
   files[0].frames.clear();
   for (PendingFrame& p : all) {
     Split split = Split::kTrain;
     if (any_list) {
       const auto it = listed.find(p.frame.image_path);
-      if (it != listed.end()) split = it->second;
+      if (it != listed.end()) split = it->second.split;
     } else if (p.frame.index % 8 == 0) {
       split = Split::kTest;
     }

@@ -86,6 +86,7 @@ PendingFrame ParseFrame(const fs::path& root,
   f.camera.world_from_cam_gl = ParseMatrix(r, obj, index);
 
   if (obj.contains("time")) {
+    pending.time_key = true;
     if (std::optional<double> t = r.Number(obj, index, "time")) {
       if (*t < 0) {
         r.Problem(index, "time", fmt::format("must not be negative, got {}", *t));
@@ -314,21 +315,33 @@ bool ReportStopsLikeExposures(const SceneFiles& scene,
   return true;
 }
 
-void ReportMissingExposures(const SceneFiles& scene, ProblemSink& sink) {
-  if (scene.hdrnerf) return;  // exposures come from the exposure files, checked there
+namespace {
+
+// One key's check for ReportMissingPerFrameKeys: `has` tells whether a frame's JSON has it.
+void ReportMissingKey(const SceneFiles& scene, ProblemSink& sink, const char* key,
+                      bool (*has)(const PendingFrame&), const char* read_as) {
   int with = 0, total = 0;
   for (const SplitFile& file : scene.files)
-    for (const PendingFrame& p : file.frames) with += p.exposure_key, ++total;
+    for (const PendingFrame& p : file.frames) with += has(p), ++total;
   if (with == 0 || with == total) return;
-  for (const SplitFile& file : scene.files) {
-    for (const PendingFrame& p : file.frames) {
-      if (p.exposure_key) continue;
-      const std::string problem = fmt::format(
-          "missing, while {} of the scene's {} frames give one (it would be read as 1 s)", with,
-          total);
-      Reader(sink, p.rank, p.json_path).Problem(p.frame.index, "exposures", problem);
-    }
-  }
+  const std::string problem = fmt::format(
+      "missing, while {} of the scene's {} frames give one (it would be read as {})", with, total,
+      read_as);
+  for (const SplitFile& file : scene.files)
+    for (const PendingFrame& p : file.frames)
+      if (!has(p)) Reader(sink, p.rank, p.json_path).Problem(p.frame.index, key, problem);
+}
+
+}  // namespace
+
+void ReportMissingPerFrameKeys(const SceneFiles& scene, ProblemSink& sink) {
+  // HDR-NeRF's exposures come from its exposure files, checked there.
+  if (!scene.hdrnerf)
+    ReportMissingKey(scene, sink, "exposures", [](const PendingFrame& p) { return p.exposure_key; },
+                     "1 s");
+  // The native layout requires a time on every frame (its own problem); the others may go without.
+  if (scene.nerfstudio || scene.hdrnerf)
+    ReportMissingKey(scene, sink, "time", [](const PendingFrame& p) { return p.time_key; }, "time 0");
 }
 
 }  // namespace hdr4d::dataset_detail

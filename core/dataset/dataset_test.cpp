@@ -1365,5 +1365,28 @@ TEST(Nerfstudio, DistortionAndMissingPlyAreProblems) {
   EXPECT_PROBLEM(fisheye, "transforms.json", -1, "camera_model", "not supported");
 }
 
+// The sweep of session 94: split lists naming no frame (every test view then trained on), a
+// file in two lists, a frame's own distortion, and one frame without the time the others give
+// were all read without a word.
+TEST(Nerfstudio, SplitListsDistortionPerFrameAndAMissingTimeAreProblems) {
+  TempDir dir;
+  json doc = NerfstudioDoc(dir.path(), 4);
+  doc["test_filenames"] = {"imgs/frame_3.png", "images/frame_2.png"};
+  doc["train_filenames"] = {"images/frame_0.png", "images/frame_1.png", "images/frame_2.png"};
+  doc["frames"][1]["k1"] = 0.2;
+  for (int i = 0; i < 4; ++i) doc["frames"][i]["time"] = i;
+  doc["frames"][3].erase("time");
+  WriteJsonFile(dir / "transforms.json", doc);
+  const DatasetReport report = CheckDataset(dir.path());
+  EXPECT_EQ(report.problems.size(), 4u) << AllProblems(report);
+  EXPECT_PROBLEM(report, "transforms.json", -1, "test_filenames",
+                 "'imgs/frame_3.png' is no frame's file_path");
+  EXPECT_PROBLEM(report, "transforms.json", -1, "train_filenames",
+                 "'images/frame_2.png' is listed in test_filenames too");
+  EXPECT_PROBLEM(report, "transforms.json", 1, "k1", "distortion");
+  EXPECT_PROBLEM(report, "transforms.json", 3, "time",
+                 "missing, while 3 of the scene's 4 frames give one (it would be read as time 0)");
+}
+
 }  // namespace
 }  // namespace hdr4d
