@@ -43,17 +43,18 @@ Eigen::Matrix4d ParseMatrix(const Reader& r, const json& obj, int frame) {
 
 // A frame's `exposures` number in `unit`: seconds must be positive, stops (seconds = 2**value)
 // finite and within +-kMaxStops. The number is kept as written either way.
-void ReadExposure(const Reader& r, int index, double value, ExposureUnit unit, Frame& f) {
+void ReadExposure(const Reader& r, int index, double value, ExposureUnit unit, Frame& f,
+                  const std::string& key = "exposures") {
   f.exposure_written = value;
   if (unit == ExposureUnit::kStops) {
     if (!(std::isfinite(value) && std::abs(value) <= kMaxStops)) {
-      r.Problem(index, "exposures",
+      r.Problem(index, key,
                 fmt::format("{} stops is not a finite number within +-{:g}", value, kMaxStops));
       return;
     }
     f.exposure = std::exp2(value);
   } else if (!(std::isfinite(value) && value > 0)) {
-    r.Problem(index, "exposures", fmt::format("must be positive and finite, got {}", value));
+    r.Problem(index, key, fmt::format("must be positive and finite, got {}", value));
     return;
   } else {
     f.exposure = value;
@@ -130,10 +131,26 @@ PendingFrame ParseFrame(const fs::path& root,
 }
 
 // HDR-NeRF: one frame per exposure of this view, "<file_path>_<k>.png" for k = 0, 1, ...
+// The largest k of the exposure file's "<stem>_<k>.png" entries, or -1.
+int LastExposureIndex(const ExposureTable& hdrnerf, const std::string& stem) {
+  int last = -1;
+  const std::string prefix = stem + "_";
+  for (const auto& [name, value] : hdrnerf.values.items()) {
+    if (name.rfind(prefix, 0) != 0 || name.size() <= prefix.size() + 4) continue;
+    const std::string k = name.substr(prefix.size(), name.size() - prefix.size() - 4);
+    if (name.compare(name.size() - 4, 4, ".png") != 0 ||
+        k.find_first_not_of("0123456789") != std::string::npos || k.size() > 6)
+      continue;
+    last = std::max(last, std::stoi(k));
+  }
+  return last;
+}
+
 void AddHdrNerfViews(const fs::path& root,
                      const PendingFrame& pending,
                      int index,
                      const ExposureTable& hdrnerf,
+                     ExposureUnit unit,
                      SplitFile& file) {
   const Frame& f = pending.frame;
   if (f.file_path.empty()) return;
@@ -146,16 +163,21 @@ void AddHdrNerfViews(const fs::path& root,
     view.frame.file_path = name;
     view.frame.image_path = (root / name).lexically_normal();
     view.frame.exposure_index = k;
-    view.frame.exposure_given = true;
-    if (!it->is_number() || !(std::isfinite(it->get<double>()) && it->get<double>() > 0)) {
+    if (!it->is_number()) {
       hdrnerf.reader.Problem(index, name, "expected a positive exposure, got " + Describe(*it));
     } else {
-      view.frame.exposure = it->get<double>();
+      ReadExposure(hdrnerf.reader, index, it->get<double>(), unit, view.frame, name);
     }
     file.frames.push_back(std::move(view));
   }
   if (k == 0) {
     hdrnerf.reader.Problem(index, f.file_path + "_0.png", "missing: no exposure for this view");
+  } else if (const int last = LastExposureIndex(hdrnerf, f.file_path); last > k) {
+    // The views are read up to the first gap: the later ones would be dropped silently.
+    hdrnerf.reader.Problem(index, fmt::format("{}_{}.png", f.file_path, k),
+                           fmt::format("missing, while {}_{}.png is given: exposure indices "
+                                       "must run from 0 without a gap",
+                                       f.file_path, last));
   }
 }
 
@@ -213,7 +235,7 @@ void ParseSplitFile(const fs::path& root,
     PendingFrame pending =
         ParseFrame(root, file, obj, index, r, top, time_required, unit, &camera_angle_reported);
     if (hdrnerf != nullptr) {
-      AddHdrNerfViews(root, pending, index, *hdrnerf, file);
+      AddHdrNerfViews(root, pending, index, *hdrnerf, unit, file);
       continue;
     }
     Frame& f = pending.frame;

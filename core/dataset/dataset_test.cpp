@@ -420,7 +420,29 @@ TEST(Dataset, HdrNerfSyntheticLayoutExpandsExposures) {
   EXPECT_PROBLEM(report, "exposure_train.json", 1, "./train/r_1_0.png",
                  "no exposure for this view");
   EXPECT_PROBLEM(report, "exposure_train.json", 0, "./train/r_0_3.png",
-                 "expected a positive exposure");
+                 "must be positive and finite, got -1");
+
+  // The sweep of session 94: a gap in a view's exposure indices dropped the later exposures
+  // without a word, and --exposure-unit stops was not applied to the exposure files.
+  table["./train/r_0_3.png"] = 8.0;
+  table.erase("./train/r_0_1.png");
+  WriteJsonFile(dir / "exposure_train.json", table);
+  const DatasetReport gap = CheckDataset(dir.path());
+  EXPECT_PROBLEM(gap, "exposure_train.json", 0, "./train/r_0_1.png",
+                 "missing, while ./train/r_0_4.png is given");
+  for (const char* split : {"train", "test"}) {
+    json stops = ReadJsonFile(dir / (std::string("exposure_") + split + ".json"));
+    for (auto& [name, value] : stops.items()) value = std::log2(value.get<double>());
+    if (std::string(split) == "train") {
+      stops["./train/r_0_1.png"] = -1.0;
+      for (int k = 0; k < 5; ++k) stops["./train/r_1_" + std::to_string(k) + ".png"] = k - 3;
+    }
+    WriteJsonFile(dir / (std::string("exposure_") + split + ".json"), stops);
+  }
+  const Dataset in_stops = LoadDataset(dir.path(), {.exposure_unit = ExposureUnit::kStops});
+  EXPECT_EQ(in_stops.train[7].exposure, 0.5);  // view 1, k = 2: 2^-1 s
+  EXPECT_EQ(in_stops.train[1].exposure, 0.5);  // view 0, k = 1: 2^-1 s
+  EXPECT_EQ(in_stops.test[4].exposure, 32.0);
 }
 
 // ---------------------------------------------------------------------------------------------
