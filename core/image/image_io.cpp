@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <new>
 #include <string>
 #include <system_error>
 
@@ -93,13 +94,19 @@ ImageSpecInfo ReadImageSpec(const fs::path& path) {
 
 Image ReadImage(const fs::path& path, const ImageReadOptions& options) {
   Image image;
-  switch (OpenInput(path, /*whole_file=*/true)) {
-    case formats::FileFormat::kExr: image = formats::ReadExr(path); break;
-    case formats::FileFormat::kPng: image = formats::ReadPng(path); break;
-    case formats::FileFormat::kJpeg: image = formats::ReadJpeg(path); break;
-    case formats::FileFormat::kTiff: image = formats::ReadTiff(path); break;
-    case formats::FileFormat::kRgbe: image = formats::ReadRgbe(path); break;
-    case formats::FileFormat::kUnknown: break;
+  try {
+    switch (OpenInput(path, /*whole_file=*/true)) {
+      case formats::FileFormat::kExr: image = formats::ReadExr(path); break;
+      case formats::FileFormat::kPng: image = formats::ReadPng(path); break;
+      case formats::FileFormat::kJpeg: image = formats::ReadJpeg(path); break;
+      case formats::FileFormat::kTiff: image = formats::ReadTiff(path); break;
+      case formats::FileFormat::kRgbe: image = formats::ReadRgbe(path); break;
+      case formats::FileFormat::kUnknown: break;
+    }
+  } catch (const std::bad_alloc&) {  // a header's size beyond this machine's memory
+    const ImageSpecInfo spec = ReadImageSpec(path);
+    Fail("{}: cannot read image: not enough memory for {}x{}x{} values (is the file damaged?)",
+         path.string(), spec.width, spec.height, spec.channels);
   }
   if (image.empty()) Fail("{}: image has no pixels", path.string());
   if (options.require_finite) {

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 #include <sys/resource.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <csignal>
@@ -158,6 +159,42 @@ TEST(ImageIo, BrokenPngsAreReportedWithoutLibraryChatter) {
     EXPECT_EQ(header_error.empty(), std::string(c.name) != "head.png") << header_error;
   }
   EXPECT_EQ(PngStructureProblem(dir / "full.png", true), "");
+}
+
+// An image this process has no memory for is an error naming the file, not "std::bad_alloc":
+// read in a child whose address space is capped 64 MB above what it uses already.
+TEST(ImageIo, AnImageBeyondTheMemoryLeftNamesTheFile) {
+  TempDir dir;
+  WriteImage(dir / "big.png", Image(4096, 4096, 1, Encoding::kSrgb, 0.5f));  // 64 MB of floats
+  int fds[2];
+  ASSERT_EQ(pipe(fds), 0);
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    close(fds[0]);
+    long pages = 0;
+    if (FILE* statm = std::fopen("/proc/self/statm", "r")) {
+      if (std::fscanf(statm, "%ld", &pages) != 1) pages = 0;
+      std::fclose(statm);
+    }
+    const rlim_t cap = static_cast<rlim_t>(pages) * sysconf(_SC_PAGESIZE) + (64 << 20);
+    const rlimit limit{cap, cap};
+    std::string message = "no limit";
+    if (pages > 0 && setrlimit(RLIMIT_AS, &limit) == 0)
+      message = testing::ErrorOf([&] { ReadImage(dir / "big.png"); });
+    if (write(fds[1], message.data(), message.size()) < 0) _exit(2);
+    _exit(0);
+  }
+  close(fds[1]);
+  std::string message;
+  char buffer[512];
+  for (ssize_t n; (n = read(fds[0], buffer, sizeof buffer)) > 0;) message.append(buffer, n);
+  close(fds[0]);
+  int status = 0;
+  waitpid(child, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << status;
+  EXPECT_NE(message.find("big.png: cannot read image: not enough memory for 4096x4096"),
+            std::string::npos) << message;
 }
 
 // The sweep of session 94: a small PNG whose header claims 30000x30000 RGBA16 (7.2 GB decoded)
