@@ -190,7 +190,10 @@ void AddDatagenCommand(CLI::App& app) {
   cmd->add_option("--preset", options->preset, "ci, mini or paper")
       ->check(OneOf(datagen::PresetNames()))
       ->capture_default_str();
-  cmd->add_option("--out,-o", *out, "Output folder: one sub-folder per scene")
+  cmd->add_option("--out,-o", *out,
+                  "Output folder: one sub-folder per scene. A rerun replaces a scene folder "
+                  "datagen wrote, deleting only the files its manifest.json lists; one that "
+                  "holds anything else is refused, naming it")
       ->check(Text("an output folder"));
   cmd->add_option("--seed", options->seed,
                   "Seed of the render, camera wobble, point sampling and LDR noise (same seed, "

@@ -297,10 +297,69 @@ TEST(Generator, RerunReplacesItsOwnPreviousOutput) {
   const auto results = Generate(f.options, [&](const SceneResult& r) { done.push_back(r.scene); });
   ASSERT_EQ(results.size(), 1u);
   EXPECT_EQ(done, std::vector<std::string>{"airplane"});
-  testing::WriteTextFile(f.options.out / "airplane" / "stale.txt", "from before");
+  // A file of the previous run that this one does not write goes too (the val split).
+  const fs::path root = f.options.out / "airplane";
+  testing::WriteTextFile(root / "transforms_val.json", "{}");
+  json manifest = ReadJsonFile(root / "manifest.json");
+  manifest["files"]["transforms_val.json"] = Sha256File(root / "transforms_val.json");
+  WriteJsonFile(root / "manifest.json", manifest);
+  fs::create_directories(root / "empty");  // holds nothing to lose
   GenerateScene(f.options, "airplane");
-  EXPECT_FALSE(fs::exists(f.options.out / "airplane" / "stale.txt"));
-  EXPECT_TRUE(fs::exists(f.options.out / "airplane" / "manifest.json"));
+  EXPECT_FALSE(fs::exists(root / "transforms_val.json"));
+  EXPECT_FALSE(fs::exists(root / "empty"));
+  EXPECT_TRUE(fs::exists(root / "manifest.json"));
+}
+
+// A rerun deletes only what datagen wrote: a scene folder holding anything its manifest does not
+// list (notes, a training run) is refused, naming it, and nothing is touched.
+TEST(Generator, RerunRefusesAFolderHoldingFilesItDidNotWrite) {
+  Fixture f;
+  WriteFixture(f.dir / "fixture", f.preset);
+  f.options.blender = WriteFakeBlender(f.dir.path(), f.dir / "fixture", "").string();
+  GenerateScene(f.options, "airplane");
+  const fs::path root = f.options.out / "airplane";
+  const std::string manifest = testing::ReadTextFile(root / "manifest.json");
+  testing::WriteTextFile(root / "runs" / "r1" / "results.json", "{}");
+  testing::WriteTextFile(root / "my_notes.txt", "keep");
+  const std::string error = ErrorOf([&] { GenerateScene(f.options, "airplane"); });
+  EXPECT_TRUE(Contains(error, root.string() + ": holds my_notes.txt and 1 more")) << error;
+  EXPECT_TRUE(Contains(error, "did not write")) << error;
+  EXPECT_TRUE(Contains(error, "move it out of the folder, or choose another --out")) << error;
+  EXPECT_EQ(testing::ReadTextFile(root / "my_notes.txt"), "keep");
+  EXPECT_EQ(testing::ReadTextFile(root / "runs" / "r1" / "results.json"), "{}");
+  EXPECT_EQ(testing::ReadTextFile(root / "manifest.json"), manifest);
+  EXPECT_FALSE(fs::exists(f.options.out / "airplane.partial"));
+  // Inside one of datagen's own folders, and a link, too.
+  fs::remove(root / "my_notes.txt");
+  fs::remove_all(root / "runs");
+  testing::WriteTextFile(root / "images" / "mine.png", "x");
+  EXPECT_TRUE(Contains(ErrorOf([&] { GenerateScene(f.options, "airplane"); }),
+                       ": holds images/mine.png, which"));
+  fs::remove(root / "images" / "mine.png");
+  fs::create_symlink(f.dir / "fixture", root / "link");
+  const std::string link = ErrorOf([&] { GenerateScene(f.options, "airplane"); });
+  EXPECT_TRUE(Contains(link, ": holds link,")) << link;
+  EXPECT_TRUE(fs::exists(f.dir / "fixture" / "render_info.json"));
+  fs::remove(root / "link");
+  GenerateScene(f.options, "airplane");  // only its own files again
+  EXPECT_NE(testing::ReadTextFile(root / "manifest.json"), manifest);  // new timings
+}
+
+// A file that appears while Blender renders is kept: the move refuses and keeps the new scene.
+TEST(Generator, RerunKeepsAFileThatAppearedDuringTheRender) {
+  Fixture f;
+  WriteFixture(f.dir / "fixture", f.preset);
+  f.options.blender = WriteFakeBlender(f.dir.path(), f.dir / "fixture", "").string();
+  GenerateScene(f.options, "airplane");
+  const fs::path root = f.options.out / "airplane";
+  f.options.blender = WriteFakeBlender(f.dir.path(), f.dir / "fixture",
+                                       "echo late > '" + (root / "late.txt").string() + "'\n")
+                          .string();
+  const std::string error = ErrorOf([&] { GenerateScene(f.options, "airplane"); });
+  EXPECT_TRUE(Contains(error, ": holds late.txt, which")) << error;
+  EXPECT_EQ(testing::ReadTextFile(root / "late.txt"), "late\n");
+  EXPECT_TRUE(fs::exists(root / "manifest.json"));
+  EXPECT_TRUE(fs::exists(f.options.out / "airplane.partial" / "manifest.json"));
 }
 
 TEST(Generator, FailingBlenderNamesSceneFrameErrorAndLogAndKeepsThePreviousOutput) {

@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <optional>
+#include <set>
 #include <vector>
 
 #include "core/util/error.h"
@@ -21,19 +23,100 @@ bool IsEmptyDir(const fs::path& dir) {
   return fs::is_directory(dir, ec) && fs::directory_iterator(dir, ec) == fs::directory_iterator();
 }
 
-}  // namespace
-
-bool IsDatagenOutput(const fs::path& dir) {
+// The manifest of a previous datagen run in `dir`, or nothing.
+std::optional<json> DatagenManifest(const fs::path& dir) {
   const fs::path manifest = dir / kManifestFile;
   std::error_code ec;
-  if (!fs::is_regular_file(manifest, ec)) return false;
+  if (!fs::is_regular_file(manifest, ec)) return std::nullopt;
   try {
-    const json j = ReadJsonFile(manifest);
-    return j.is_object() && j.contains("generator") && j["generator"] == kGenerator;
+    json j = ReadJsonFile(manifest);
+    if (j.is_object() && j.contains("generator") && j["generator"] == kGenerator) return j;
   } catch (const Error&) {
-    return false;
+  }
+  return std::nullopt;
+}
+
+// What a previous run wrote, relative to its folder: the files its manifest lists, the manifest
+// and the log; `dirs` gets every folder above one of them.
+std::set<std::string> OwnFiles(const json& manifest, std::set<std::string>* dirs) {
+  std::set<std::string> files = {kManifestFile, kLogFile};
+  if (manifest.contains("files") && manifest["files"].is_object()) {
+    for (const auto& [name, sha] : manifest["files"].items()) files.insert(name);
+  }
+  for (const std::string& f : files) {
+    for (fs::path p = fs::path(f).parent_path(); !p.empty(); p = p.parent_path())
+      dirs->insert(p.generic_string());
+  }
+  return files;
+}
+
+// The entries of `dir` that the run its manifest describes did not write (sorted): files it
+// does not list, folders above none of them that are not empty, links and anything else
+// (datagen writes none).
+// The own files and folders found go to `own_files` and `own_dirs` when given.
+std::vector<std::string> ForeignEntries(const fs::path& dir, const json& manifest,
+                                        std::vector<fs::path>* own_files = nullptr,
+                                        std::vector<fs::path>* own_dirs = nullptr) {
+  std::set<std::string> dirs;
+  const std::set<std::string> files = OwnFiles(manifest, &dirs);
+  std::vector<std::string> foreign;
+  std::error_code ec;
+  for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != end(it);
+       it.increment(ec)) {
+    const std::string relative = it->path().lexically_relative(dir).generic_string();
+    const fs::file_status status = it->symlink_status(ec);
+    if (ec) break;
+    if (fs::is_regular_file(status) && files.count(relative)) {
+      if (own_files) own_files->push_back(it->path());
+    } else if (fs::is_directory(status) && (dirs.count(relative) || IsEmptyDir(it->path()))) {
+      // An empty folder holds nothing to lose (a run may leave one, the manifest lists files).
+      if (own_dirs) own_dirs->push_back(it->path());
+    } else {
+      foreign.push_back(relative + (fs::is_directory(status) ? "/" : ""));
+      if (fs::is_directory(status)) it.disable_recursion_pending();
+    }
+  }
+  if (ec) Fail("{}: cannot list the previous output: {}", dir.string(), ec.message());
+  std::sort(foreign.begin(), foreign.end());
+  return foreign;
+}
+
+// Refuses to replace `final_dir` when it holds anything its previous run did not write.
+void CheckOnlyOwnFiles(const fs::path& final_dir, const json& manifest) {
+  const std::vector<std::string> foreign = ForeignEntries(final_dir, manifest);
+  if (foreign.empty()) return;
+  Fail(
+      "{}: holds {}{}, which the previous `hdr4d datagen` run did not write (not in its "
+      "manifest.json); a rerun replaces only datagen's own files: move it out of the folder, or "
+      "choose another --out",
+      final_dir.string(), foreign.front(),
+      foreign.size() > 1 ? fmt::format(" and {} more entries", foreign.size() - 1) : "");
+}
+
+// Deletes the files and folders of the previous run in `final_dir` and the folder itself,
+// after checking again that nothing else is there (the render takes minutes).
+void RemoveOwnOutput(const fs::path& final_dir, const json& manifest) {
+  CheckOnlyOwnFiles(final_dir, manifest);
+  std::vector<fs::path> files, dirs;
+  ForeignEntries(final_dir, manifest, &files, &dirs);
+  std::error_code ec;
+  for (const fs::path& f : files) {
+    if (!fs::remove(f, ec) && ec)
+      Fail("{}: cannot remove the previous output's file: {}", f.string(), ec.message());
+  }
+  // Deepest first; fs::remove leaves a folder that is not empty (something new appeared).
+  std::sort(dirs.rbegin(), dirs.rend());
+  dirs.push_back(final_dir);
+  for (const fs::path& d : dirs) {
+    if (!fs::remove(d, ec) && ec)
+      Fail("{}: cannot replace the previous output: {} (anything new in it is kept)", d.string(),
+           ec.message());
   }
 }
+
+}  // namespace
+
+bool IsDatagenOutput(const fs::path& dir) { return DatagenManifest(dir).has_value(); }
 
 fs::path PrepareStaging(const fs::path& final_dir, const std::string& scene) {
   std::error_code ec;
@@ -44,6 +127,8 @@ fs::path PrepareStaging(const fs::path& final_dir, const std::string& scene) {
         "naming it); choose another --out or remove it",
         final_dir.string());
   }
+  const std::optional<json> manifest = DatagenManifest(final_dir);
+  if (manifest && !fs::is_symlink(final_dir, ec)) CheckOnlyOwnFiles(final_dir, *manifest);
   const fs::path staging = final_dir.string() + ".partial";
   if (fs::exists(staging, ec)) {
     if (!fs::is_directory(staging, ec) ||
@@ -79,9 +164,18 @@ json Checksums(const fs::path& root) {
 
 void MoveIntoPlace(const fs::path& staging, const fs::path& final_dir) {
   std::error_code ec;
-  if (fs::exists(final_dir, ec)) {
-    // Checked before rendering: empty, or a previous datagen output of this scene.
-    fs::remove_all(final_dir, ec);
+  if (fs::exists(final_dir, ec) || fs::is_symlink(final_dir, ec)) {
+    // Checked before rendering too: empty, or a previous datagen output of this scene. A link
+    // goes, not what it points to.
+    const std::optional<json> manifest = DatagenManifest(final_dir);
+    if (fs::is_symlink(final_dir, ec) || IsEmptyDir(final_dir)) {
+      fs::remove(final_dir, ec);
+    } else if (!manifest) {
+      Fail("{}: is no longer the output of a previous `hdr4d datagen` run; the finished scene "
+           "stays in {}", final_dir.string(), staging.string());
+    } else {
+      RemoveOwnOutput(final_dir, *manifest);
+    }
     if (ec) Fail("{}: cannot replace the previous output: {}", final_dir.string(), ec.message());
   }
   fs::rename(staging, final_dir, ec);

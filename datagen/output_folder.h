@@ -1,6 +1,8 @@
 // The output folder of one datagen scene (a dataset or a capture): built in OUT/<scene>.partial
 // and moved into place only when complete, so a failed run keeps the previous output; a folder
-// that holds anything but a previous datagen run is never replaced.
+// that holds anything but a previous datagen run is never replaced. A rerun deletes only what
+// the previous run wrote (the files its manifest lists, the manifest and blender.log): a scene
+// folder that holds anything else (notes, a training run) is refused, naming the first entry.
 #pragma once
 
 #include <chrono>
@@ -16,8 +18,9 @@ inline constexpr const char* kManifestFile = "manifest.json";
 // True when `dir` holds a previous datagen run (its manifest names this generator).
 bool IsDatagenOutput(const std::filesystem::path& dir);
 
-// Checks that `final_dir` may be written (absent, empty or a previous datagen run) and returns a
-// fresh staging folder next to it. Throws hdr4d::Error naming the folder otherwise.
+// Checks that `final_dir` may be written (absent, empty or a previous datagen run holding only
+// its own files) and returns a fresh staging folder next to it. Throws hdr4d::Error naming the
+// folder, or the first entry the previous run did not write, otherwise.
 std::filesystem::path PrepareStaging(const std::filesystem::path& final_dir,
                                      const std::string& scene);
 
@@ -25,7 +28,9 @@ std::filesystem::path PrepareStaging(const std::filesystem::path& final_dir,
 // (neither is reproducible).
 nlohmann::json Checksums(const std::filesystem::path& root);
 
-// Replaces `final_dir` (checked by PrepareStaging) with the finished `staging` folder.
+// Replaces `final_dir` (checked by PrepareStaging) with the finished `staging` folder, deleting
+// only the previous run's own files; anything else found there now is an error and `staging`
+// stays.
 void MoveIntoPlace(const std::filesystem::path& staging, const std::filesystem::path& final_dir);
 
 inline double SecondsSince(std::chrono::steady_clock::time_point start) {
