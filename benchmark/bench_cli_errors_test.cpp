@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "benchmark/bench_test_util.h"
+#include "benchmark/results_store.h"
 #include "core/files/json_util.h"
 #include "tests/testing.h"
 
@@ -25,6 +26,9 @@ TEST(BenchCliErrors, UserMistakesEndInOneLineAndCreateNothing) {
       {{"bench", "run", "no-such-suite", "--store", store}, "no suite 'no-such-suite'"},
       {{"bench", "run", (dir / "tiny.json").string(), "--store", store, "--jobs", "0"}, "--jobs"},
       {{"bench", "run", (dir / "tiny.json").string(), "--store", store, "--scenes", "nope"}, "no scene 'nope'"},
+      {{"bench", "run", (dir / "tiny.json").string(), "--store", store, "--seeds", "7",
+        "--dry-run"},
+       "--seeds 7: not a seed of suite 'tiny' (its seeds: 0)"},
       {{"bench", "run", (dir / "tiny.json").string(), "--store", (dir / "not_a_db.db").string(), "--dry-run"}, "not_a_db.db"},
       {{"bench", "report", "ci", "--store", (dir / "not_a_db.db").string(), "--out", (dir / "r.html").string()}, "not_a_db.db"},
       {{"bench", "collect", dir.path().string(), "--store", store}, "not a bench slurm folder"},
@@ -45,6 +49,35 @@ TEST(BenchCliErrors, UserMistakesEndInOneLineAndCreateNothing) {
     EXPECT_EQ(c.text.find("terminate"), std::string::npos) << c.text;
   }
   EXPECT_FALSE(fs::exists(dir / "store.db"));
+  EXPECT_FALSE(fs::exists(dir / "r.html"));
+}
+
+// A metric key the store's runs do not have: `bench report --metric` charted nothing and
+// `bench findings --metrics` said 'no runs', both with exit code 0.
+TEST(BenchCliErrors, UnknownMetricKeysAreNamedWithTheKnownOnes) {
+  testing::TempDir dir;
+  WriteTinySuite(dir / "tiny.json", "tiny", {{{"name", "m"}}}, {0}, 10);
+  {
+    ResultsStore store(dir / "runs.db");
+    RunRecord r;
+    r.id = "run0";
+    r.labels = {{"tiny", "m", "tiny", "ldr", 0, "10it", ""}};
+    r.frames.push_back({"f0", 0, 0, 1, {{"psnr", 20}, {"mu_psnr", 15}}, {}});
+    store.InsertRun(r);
+  }
+  const std::string suite = (dir / "tiny.json").string(), store = (dir / "runs.db").string();
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"bench", "report", suite, "--store", store, "--out", (dir / "r.html").string(),
+        "--metric", "nosuch"}, "--metric nosuch: unknown metric key; the runs of suite 'tiny' "
+                               "have: mu_psnr, psnr"},
+      {{"bench", "findings", suite, "--store", store, "--metrics", "psnr,nosuch"},
+       "--metrics nosuch: unknown metric key"},
+  };
+  for (const auto& [args, names] : cases) {
+    const Command c = RunHdr4dArgs(args, dir / "log.txt");
+    EXPECT_EQ(c.result.exit_code, 1) << args[1] << "\n" << c.text;
+    EXPECT_NE(c.result.error_line.find(names), std::string::npos) << c.result.error_line;
+  }
   EXPECT_FALSE(fs::exists(dir / "r.html"));
 }
 

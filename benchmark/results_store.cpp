@@ -93,6 +93,21 @@ nlohmann::json ParseJson(const std::string& text, const std::filesystem::path& d
 
 }  // namespace
 
+std::set<std::string> MetricKeys(const std::vector<RunSummary>& runs) {
+  std::set<std::string> keys;
+  for (const RunSummary& r : runs) {
+    for (const auto& [k, v] : r.metrics) keys.insert(k);
+    for (const auto& [k, n] : r.identical_frames) keys.insert(k);
+  }
+  return keys;
+}
+
+void RequireMetricKey(const std::string& flag, const std::string& key,
+                      const std::set<std::string>& known, const std::string& whose) {
+  if (known.empty() || known.count(key)) return;
+  Fail("{} {}: unknown metric key; the {} have: {}", flag, key, whose, fmt::join(known, ", "));
+}
+
 ResultsStore::ResultsStore(const std::filesystem::path& path, bool create)
     : db_([&] {
         if (create && path.has_parent_path()) {

@@ -46,6 +46,14 @@ struct RunSummary {
   nlohmann::json machine;
 };
 
+// Every metric key of these runs (a key whose frames are all +inf included).
+std::set<std::string> MetricKeys(const std::vector<RunSummary>& runs);
+// Throws hdr4d::Error "<flag> <key>: unknown metric key; the <whose> have: ..." when `key` is
+// not in `known` (a misspelt key printed empty columns, or a chart of nothing). With no key
+// at all (no finished run) there is nothing to check against, and it returns.
+void RequireMetricKey(const std::string& flag, const std::string& key,
+                      const std::set<std::string>& known, const std::string& whose);
+
 struct StressOutcome {
   std::string name, category, description;
   std::string outcome;  // "held" or "failed"

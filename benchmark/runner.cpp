@@ -1,6 +1,7 @@
 #include "benchmark/runner.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <signal.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
@@ -313,7 +314,15 @@ void ApplyFilter(const SuiteFilter& f, Suite* suite) {
     }
     suite->methods = kept;
   }
-  if (!f.seeds.empty()) suite->seeds = f.seeds;
+  if (!f.seeds.empty()) {
+    // As --scenes and --methods: a seed the suite does not list is a mistake (its runs were
+    // stored, then outside every table of the suite).
+    for (const std::int64_t seed : f.seeds)
+      if (std::find(suite->seeds.begin(), suite->seeds.end(), seed) == suite->seeds.end())
+        Fail("{}: --seeds {}: not a seed of suite '{}' (its seeds: {})", suite->file.string(),
+             seed, suite->name, fmt::join(suite->seeds, ", "));
+    suite->seeds = f.seeds;
+  }
   if (f.iterations > 0) suite->budgets = {Budget{.iterations = f.iterations}};
 }
 

@@ -504,6 +504,11 @@ Table BuildTable(const TableSpec& spec, const Suite& suite, const std::vector<Ru
                  const TableOptions& options) {
   if (options.hdr_psnr_key.empty() != options.hdr_ssim_key.empty())
     Fail("tables: give both HDR keys (PSNR and SSIM) or neither");
+  if (!options.hdr_psnr_key.empty()) {
+    const std::set<std::string> known = MetricKeys(runs);
+    for (const std::string& key : {options.hdr_psnr_key, options.hdr_ssim_key})
+      RequireMetricKey("--hdr-keys", key, known, "runs of suite '" + suite.name + "'");
+  }
   return Build(spec, suite, runs, options,
                spec.layout == "main" ? MainColumns(options) : HdrColumns(options, true));
 }

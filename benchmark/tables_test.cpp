@@ -124,6 +124,21 @@ TEST(Tables, UnknownBudgetsAndVariantsAreListed) {
   EXPECT_EQ(TableBudget(s, ""), "10it");
 }
 
+// `bench table --hdr-keys foo bar` printed HDR columns of '-' without a word.
+TEST(Tables, UnknownHdrKeysAreListed) {
+  const Suite s = TableSuite();
+  TableOptions o;
+  o.hdr_psnr_key = "aligned_mu_psnr";
+  o.hdr_ssim_key = "bar";
+  const std::string e = ErrorOf([&] { BuildTable(s.tables[1], s, Runs(), o); });
+  EXPECT_NE(e.find("--hdr-keys bar: unknown metric key; the runs of suite 't' have: "
+                   "aligned_mu_psnr, mu_psnr, mu_ssim, psnr, ssim"),
+            std::string::npos)
+      << e;
+  // No run, no key to check against: the table says it has no runs.
+  EXPECT_NO_THROW(BuildTable(s.tables[1], s, {}, o));
+}
+
 TEST(Tables, MainLayoutMeansSpreadsBestAndTests) {
   const Suite s = TableSuite();
   const Table t = BuildTable(s.tables[0], s, Runs(), {});

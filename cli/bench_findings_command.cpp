@@ -75,10 +75,15 @@ void AddBenchFindings(CLI::App& bench) {
       ->check(OneOf({"md", "csv"}));
   cmd->add_option("--out", a->out, "Write findings.md, findings.csv and the charts into this folder")
       ->check(Text("an output folder"));
-  cmd->callback([a] {
+  cmd->callback([a, cmd] {
     const bench::Suite suite = bench::LoadSuite(a->suite);
     const bench::ResultsStore store(a->store, /*create=*/false);
     const std::vector<bench::RunSummary> runs = bench::SuiteRuns(store, suite);
+    // A given key the runs lack was 'undecided: no runs' (rc 0); the defaults may be absent.
+    if (cmd->count("--metrics") > 0)
+      for (const std::string& m : a->options.metrics)
+        bench::RequireMetricKey("--metrics", m, bench::MetricKeys(runs),
+                                "runs of suite '" + suite.name + "'");
     const std::vector<bench::Finding> findings = bench::BuildFindings(suite, runs, a->options);
     if (!a->out.empty()) WriteFindingsFolder(a->out, suite, runs, findings, a->options);
     fmt::print("{}", a->format == "csv" ? bench::FindingsCsv(findings) : bench::FindingsMarkdown(findings));

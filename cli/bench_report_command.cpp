@@ -50,12 +50,17 @@ void AddBenchReport(CLI::App& bench) {
       ->delimiter(',')
       ->expected(2)
       ->check(Text("a metric key"));
-  cmd->callback([a, hdr_keys] {
+  cmd->callback([a, hdr_keys, cmd] {
     if (hdr_keys->size() == 2)
       a->options.tables.hdr_psnr_key = (*hdr_keys)[0], a->options.tables.hdr_ssim_key = (*hdr_keys)[1];
     const bench::Suite suite = bench::LoadSuite(a->suite);
     a->options.tables.protocol = bench::ParseHdrProtocol(a->protocol);
     const bench::ResultsStore store(a->store, /*create=*/false);
+    // A given key the runs lack charted nothing (rc 0); the default may be absent (LDR runs).
+    if (cmd->count("--metric") > 0)
+      bench::RequireMetricKey("--metric", a->options.pareto_metric,
+                              bench::MetricKeys(bench::SuiteRuns(store, suite)),
+                              "runs of suite '" + suite.name + "'");
     const bench::ReportSummary s = bench::WriteReport(suite, store, a->options);
     fmt::print("bench report: {} ({} tables, {} images, {} scenes, {} stress cases)\n",
                a->options.out.string(), s.tables, s.images, s.scenes, s.stress_cases);
