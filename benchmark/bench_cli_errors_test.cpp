@@ -72,6 +72,8 @@ TEST(BenchCliErrors, UnknownMetricKeysAreNamedWithTheKnownOnes) {
                                "have: mu_psnr, psnr"},
       {{"bench", "findings", suite, "--store", store, "--metrics", "psnr,nosuch"},
        "--metrics nosuch: unknown metric key"},
+      {{"bench", "compare", store, store, "--metrics", "nosuch"},
+       "--metrics nosuch: unknown metric key"},
   };
   for (const auto& [args, names] : cases) {
     const Command c = RunHdr4dArgs(args, dir / "log.txt");

@@ -141,6 +141,19 @@ std::vector<std::string> SharedMetrics(const SeedRuns& a, const SeedRuns& b,
   return out;
 }
 
+// A --metrics key neither side has was reported as no configuration in common.
+void CheckMetricNames(const CompareSide& a, const CompareSide& b, const CompareOptions& o) {
+  if (o.metrics == std::vector<std::string>{"all"}) return;
+  std::vector<RunSummary> runs;
+  for (const CompareSide* side : {&a, &b})
+    for (const RunSummary& r : side->runs)
+      if (o.suite.empty() || r.label.suite == o.suite) runs.push_back(r);
+  const std::set<std::string> known = MetricKeys(runs);
+  const std::string whose = fmt::format("runs of {} and {}{}", a.name, b.name,
+                                        o.suite.empty() ? "" : " in suite '" + o.suite + "'");
+  for (const std::string& m : o.metrics) RequireMetricKey("--metrics", m, known, whose);
+}
+
 // Pairs of one configuration and metric over the seeds both sides have: (scene, B, A).
 void AddPairs(const std::string& scene, const SeedRuns& a, const SeedRuns& b,
               const std::string& metric, std::vector<PairedValue>* pairs) {
@@ -201,6 +214,7 @@ std::string CompareLine::Verdict() const {
 Comparison Compare(const CompareSide& a, const CompareSide& b, const CompareOptions& o) {
   Comparison c{a.name, b.name, {}, {}, {}};
   const std::map<CompareKey, SeedRuns> ia = ByConfiguration(a, o), ib = ByConfiguration(b, o);
+  CheckMetricNames(a, b, o);
   std::vector<CompareKey> only_a, only_b;
   // Per method (scene left empty): the pairs of every scene.
   std::map<std::pair<CompareKey, std::string>, std::vector<PairedValue>> per_method;

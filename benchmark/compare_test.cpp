@@ -95,6 +95,20 @@ TEST(Compare, OneSeedIsUndecidedPerSceneAndTestedOverScenes) {
   EXPECT_EQ(m.Verdict(), "B better");  // +0.5 on both scenes, no spread
 }
 
+// `--metrics nosuch` said the stores had no configuration with a metric in common.
+TEST(Compare, AnUnknownMetricIsNamedWithTheKnownOnes) {
+  testing::TempDir dir;
+  ResultsStore a(dir / "a.db"), b(dir / "b.db");
+  Fill(&a, "v1", 0, 0, 1);
+  Fill(&b, "v2", 0.5, 1, 1);
+  const std::string e = testing::ErrorOf(
+      [&] { Compare(StoreSide(a), StoreSide(b), {.metrics = {"psnr", "nosuch"}}); });
+  EXPECT_NE(e.find("--metrics nosuch: unknown metric key; the runs of "), std::string::npos) << e;
+  EXPECT_NE(e.find(" have: psnr, ssim"), std::string::npos) << e;
+  EXPECT_EQ(Compare(StoreSide(a), StoreSide(b), {.metrics = {"all"}}).per_configuration.size(),
+            4u);
+}
+
 TEST(Compare, TwoCodeVersionsInOneStoreAndTheCommandLine) {
   testing::TempDir dir;
   const fs::path store_path = dir / "one.db";
