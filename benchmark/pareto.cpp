@@ -53,6 +53,26 @@ void AddFrontSeries(const std::vector<ParetoPoint>& points, std::vector<PlotSeri
   }
 }
 
+// Why no point: the metric is not a key of the runs, only submissions (which carry no
+// training time) have it, or no finished run has it with a time.
+[[noreturn]] void NothingToPlot(const std::vector<RunSummary>& runs, const Suite& suite,
+                                const std::string& metric) {
+  RequireMetricKey("--metric", metric, MetricKeys(runs), "runs of suite '" + suite.name + "'");
+  const auto has = [&](const RunSummary& r) { return r.status == "ok" && r.metrics.count(metric); };
+  const bool submitted = std::any_of(runs.begin(), runs.end(), [&](const RunSummary& r) {
+    return has(r) && r.source == "submit";
+  });
+  const bool trained = std::any_of(runs.begin(), runs.end(), [&](const RunSummary& r) {
+    return has(r) && r.source != "submit";
+  });
+  if (submitted && !trained)
+    Fail("bench pareto: the only runs of suite '{}' with '{}' are submissions (bench submit), "
+         "which carry no training time: run time against error needs runs trained by "
+         "`hdr4d bench run`; nothing to plot", suite.name, metric);
+  Fail("bench pareto: no finished run of suite '{}' has both '{}' and a time; nothing to plot",
+       suite.name, metric);
+}
+
 }  // namespace
 
 std::string ParetoPoint::Config() const {
@@ -206,10 +226,7 @@ std::vector<fs::path> WritePareto(const std::vector<RunSummary>& runs, const Sui
       charts.push_back(options.out / (stem + ".png"));
     }
   }
-  if (!any) {
-    Fail("bench pareto: no finished run of suite '{}' has both '{}' and a time; nothing to plot",
-         suite.name, options.metric);
-  }
+  if (!any) NothingToPlot(runs, suite, options.metric);
   WriteTextFileAtomic(options.out / "pareto.csv", csv);
   return charts;
 }

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/testing.h"
+
 namespace hdr4d::bench {
 namespace {
 
@@ -56,6 +58,33 @@ TEST(Pareto, PointsAverageSeedsAndOverallNeedsEveryScene) {
   for (const ParetoPoint& p : overall) EXPECT_EQ(p.method, "m");
   const auto render = ParetoPoints(runs, suite, "mu_psnr", ParetoTime::kRender, "s1");
   EXPECT_DOUBLE_EQ(render.front().seconds, 10);  // ms per frame at 100 fps
+}
+
+// A store of submissions alone said no run had both the metric and a time; an unknown
+// metric said the same. Each is named now.
+TEST(Pareto, NothingToPlotSaysWhy) {
+  const Suite suite = ParseSuite(nlohmann::json::parse(R"({"name": "t",
+      "scenes": [{"name": "s1", "path": "a"}], "methods": [{"name": "m"}],
+      "budgets": [{"iterations": 1}]})"), "/x/t.json");
+  RunSummary r;
+  r.label = {"t", "Ext", "s1", "ldr", 0, "", ""};
+  r.status = "ok";
+  r.source = "submit";
+  r.metrics = {{"mu_psnr", 20}, {"psnr", 25}};
+  testing::TempDir dir;
+  ParetoOptions o;
+  o.out = dir / "out";
+  std::string e = testing::ErrorOf([&] { WritePareto({r}, suite, o); });
+  EXPECT_NE(e.find("the only runs of suite 't' with 'mu_psnr' are submissions (bench submit), "
+                   "which carry no training time: run time against error needs runs trained"),
+            std::string::npos)
+      << e;
+  o.metric = "nosuch";
+  e = testing::ErrorOf([&] { WritePareto({r}, suite, o); });
+  EXPECT_NE(e.find("--metric nosuch: unknown metric key; the runs of suite 't' have: mu_psnr, "
+                   "psnr"),
+            std::string::npos)
+      << e;
 }
 
 // `bench report --methods` selects the runs of its charts (and the scenes' renders) as the
