@@ -1,6 +1,7 @@
 // Mistakes with `hdr4d bench` end in one line "hdr4d: error: ..." naming the file or option,
 // exit code 1, and create nothing.
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 
 #include "benchmark/bench_test_util.h"
 #include "benchmark/results_store.h"
@@ -81,6 +82,23 @@ TEST(BenchCliErrors, UnknownMetricKeysAreNamedWithTheKnownOnes) {
     EXPECT_NE(c.result.error_line.find(names), std::string::npos) << c.result.error_line;
   }
   EXPECT_FALSE(fs::exists(dir / "r.html"));
+}
+
+// `bench table` on another program's SQLite file set its journal to WAL before refusing it.
+TEST(BenchCliErrors, AReadingCommandLeavesAForeignDatabaseAsItWas) {
+  testing::TempDir dir;
+  const fs::path p = dir / "photos.db";
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(p.c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db, "CREATE TABLE photos (id INTEGER)", nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+  const std::string before = testing::ReadTextFile(p);
+  const Command c = RunHdr4dArgs({"bench", "table", "ci", "--store", p.string()}, dir / "log.txt");
+  EXPECT_EQ(c.result.exit_code, 1) << c.text;
+  EXPECT_NE(c.result.error_line.find("not an hdr4d results store"), std::string::npos) << c.text;
+  EXPECT_EQ(testing::ReadTextFile(p), before);
+  EXPECT_FALSE(fs::exists(dir / "photos.db-wal"));
 }
 
 // A dry run lists the plan without rendering: a Blender-made scene that is not in the cache is

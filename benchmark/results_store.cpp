@@ -138,6 +138,7 @@ ResultsStore::ResultsStore(const std::filesystem::path& path, bool create)
   // Before anything is written: a store's schema and its version are made in one transaction,
   // so a database with tables but no version (or our version with other columns) is not ours.
   RequireOurs(user_version(), create);
+  db_.UseWal();  // ours, or an empty file to make ours: its header may change now
   if (user_version() != 0) return;
   Transaction t(&db_);
   const std::int64_t v = user_version();  // again, under the write lock: another may have made it

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <signal.h>
+#include <sqlite3.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -185,6 +186,35 @@ TEST(ResultsStore, NeverChangesAFileThatIsNotAStore) {
   EXPECT_EQ(schema(dir / "e.db"), "0");
   ResultsStore made(dir / "e.db", true);
   EXPECT_NO_THROW(ResultsStore(dir / "e.db", false));
+}
+
+// The connection set the WAL journal on opening, before the check that the file is a store:
+// a reading command on another program's database rewrote its header.
+TEST(ResultsStore, LeavesAForeignDatabasesBytesAlone) {
+  TempDir dir;
+  const auto bytes = [](const std::filesystem::path& p) { return testing::ReadTextFile(p); };
+  // Made with SQLite itself (rollback journal, as most programs' files): Database's opening
+  // is what is tested.
+  for (const char* sql : {"CREATE TABLE photos (id INTEGER); INSERT INTO photos VALUES (1)",
+                          "PRAGMA user_version = 7"}) {
+    const std::filesystem::path p = dir / "foreign.db";
+    std::filesystem::remove(p);
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open(p.c_str(), &db), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sql;
+    sqlite3_close(db);
+    const std::string before = bytes(p);
+    ASSERT_FALSE(before.empty());
+    for (const bool create : {false, true}) {
+      EXPECT_NE(ErrorOf([&] { ResultsStore s(p, create); }), "") << sql;
+      EXPECT_EQ(bytes(p), before) << sql << " create=" << create;
+    }
+  }
+  { ResultsStore made(dir / "ours.db"); }  // a store of ours is in WAL mode
+  Database ours(dir / "ours.db", false);
+  Statement mode = ours.Prepare("PRAGMA journal_mode");
+  ASSERT_TRUE(mode.Step());
+  EXPECT_EQ(mode.Text(0), "wal");
 }
 
 TEST(ResultsStore, StressOutcomesKeepTheLatestPerCase) {

@@ -27,10 +27,12 @@ Database::Database(const std::filesystem::path& path, bool create) : path_(path)
   sqlite3_busy_timeout(db_, busy_timeout_ms_);  // another harness on the same store: wait
   sqlite3_extended_result_codes(db_, 1);
   Exec("PRAGMA foreign_keys = ON");
-  // A file that is not a database fails here, on its first read.
-  ExecWhenFree("PRAGMA journal_mode = WAL");
+  // A file that is not a database fails here, on its first read, which writes nothing.
+  ExecWhenFree("PRAGMA schema_version");
   Exec("PRAGMA synchronous = FULL");
 }
+
+void Database::UseWal() { ExecWhenFree("PRAGMA journal_mode = WAL"); }
 
 Database::~Database() { sqlite3_close_v2(db_); }
 

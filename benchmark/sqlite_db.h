@@ -26,14 +26,18 @@ class DatabaseBusy : public Error {
 
 class Database {
  public:
-  // Opens (creating when `create`) the file with foreign keys on, a busy timeout, WAL journal
-  // and synchronous=FULL: a committed transaction survives the process being killed at any
-  // moment, an uncommitted one leaves no trace.
+  // Opens (creating when `create`) the file with foreign keys on, a busy timeout and
+  // synchronous=FULL; with UseWal, a committed transaction survives the process being killed
+  // at any moment, an uncommitted one leaves no trace. Opening writes nothing to the file.
   Database(const std::filesystem::path& path, bool create);
   ~Database();
   Database(const Database&) = delete;
   Database& operator=(const Database&) = delete;
 
+  // Switches the file to the WAL journal (kept in its header): call it once the file is known
+  // to be ours, as it rewrites a foreign database's header (`bench table` on another
+  // program's database changed its bytes).
+  void UseWal();
   void Exec(const std::string& sql);
   // Exec, retrying while SQLite answers busy without calling the busy handler (in WAL mode it
   // does so when another connection is opening the file or switching its journal), up to the
