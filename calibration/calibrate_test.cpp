@@ -421,6 +421,12 @@ TEST(Calibrate, BadCapturesAreClearErrorsAndWriteNothing) {
   for (int k = 0; k < 3; ++k) fs::remove(capture / fmt::format("sequence/cam2/1_{}.png", k));
   ExpectFailure(capture, model, out, "camera cam2: frame 1 is missing");
   WriteCapture(capture, model);
+  // A camera's sequence gone, its static images there: it was calibrated without a word.
+  fs::rename(capture / "sequence/cam1", dir / "cam1");
+  ExpectFailure(capture, model, out,
+                (capture / "sequence/cam1").string() + ": no such folder, but " +
+                    (capture / "static/cam1").string() + " holds camera cam1's static images");
+  fs::rename(dir / "cam1", capture / "sequence/cam1");
   // No exposure times: no sidecar and PNGs carry no EXIF.
   fs::rename(capture / "exposures.json", dir / "exposures.json");
   ExpectFailure(capture, model, out, "no exposure time");

@@ -1,6 +1,7 @@
 #include "calibration/capture.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
@@ -195,6 +196,13 @@ Capture ScanCapture(const fs::path& root, bool need_sequence) {
   if (names.empty() && !need_sequence && !fs::exists(sequence, ec)) return StaticOnlyCapture(root);
   if (names.empty())
     Fail("{}: no camera folders (expected sequence/<camera>/<frame>_<k>.<ext>)", sequence.string());
+  // A camera with static images but no sequence was left out of the calibration without a word.
+  for (const std::string& name : SubfoldersOf(root / "static"))
+    if (name != "extra" && !std::binary_search(names.begin(), names.end(), name))
+      Fail("{}: no such folder, but {} holds camera {}'s static images; every rig camera needs "
+           "both (sequence cameras: {}; hand-held views go in static/extra/)",
+           (sequence / name).string(), (root / "static" / name).string(), name,
+           fmt::join(names, ", "));
   Capture capture;
   capture.root = root;
   const Sidecar sidecar = ReadSidecar(root / "exposures.json");

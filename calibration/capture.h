@@ -36,9 +36,10 @@ struct Capture {
 };
 
 // Scans and checks a capture. Throws hdr4d::Error (one line naming the camera, frame and file)
-// for: no sequence folder or cameras, a file name that is not <frame>_<k>, a frame with missing
-// or extra brackets, a frame missing for one camera, an image without an exposure time, and
-// brackets of one frame with equal exposure times. A bracket whose exposure differs from the
+// for: no sequence folder or cameras, a static/<camera> without sequence/<camera>, a file name
+// that is not <frame>_<k>, a frame with missing or extra brackets, a frame missing for one
+// camera, an image without an exposure time, and brackets of one frame with equal exposure
+// times. A bracket whose exposure differs from the
 // same bracket of other frames is a warning (auto-exposure may have moved).
 // With need_sequence = false (`--stage geometry`) a capture without sequence/ is accepted and its
 // cameras are the folders of static/ other than extra/.
