@@ -10,6 +10,7 @@
 #include "cli/commands.h"
 #include "cli/flags.h"
 #include "cli/pipeline_flags.h"
+#include "core/util/error.h"
 #include "datagen/generator.h"
 #include "datagen/scene_presets.h"
 
@@ -89,7 +90,7 @@ void AddCaptureVariantFlags(CLI::App* cmd, datagen::DatagenOptions* options) {
            options->height = static_cast<int>(h);
          },
          "With --capture: image size WIDTHxHEIGHT in pixels (64x48 to 8192x8192; the field of view "
-         "stays horizontal), instead of --width and the scene's aspect")
+         "stays horizontal), instead of --width (not with it) and the scene's aspect")
       ->type_name("WxH")
       ->check(Text("WIDTHxHEIGHT"));  // parsed and range-checked by the function above
   cmd->add_option("--dense-brackets", options->dense_brackets,
@@ -239,8 +240,12 @@ void AddDatagenCommand(CLI::App& app) {
   AddCaptureFlags(cmd, options.get());
   cmd->add_flag("--list", *list, "List the scenes and presets, render nothing");
   auto pipeline = std::make_shared<PipelineFlags>(cmd, options->pipeline);
-  cmd->callback([options, out, list, pipeline] {
+  cmd->callback([cmd, options, out, list, pipeline] {
     pipeline->Check();
+    // Both set the width; neither silently wins.
+    if (cmd->count("--size") > 0 && cmd->count("--width") > 0)
+      Fail("datagen: --size and --width both set the image width; give one (--size WxH for a "
+           "capture's exact size, --width for the scene's aspect)");
     if (*list) {
       PrintSceneList();
       return;

@@ -185,6 +185,13 @@ void ValidateCaptureVariant(const DatagenOptions& o) {
     Fail("datagen: --size {}x{}: give both sides, positive", o.width, o.height);
   if (o.height > 0 && (o.width < 64 || o.height < 48 || o.width > 8192 || o.height > 8192))
     Fail("datagen: --size {}x{}: use 64x48 to 8192x8192", o.width, o.height);
+  // --width alone: the same bounds on the size it gives (the height from the scene's aspect).
+  if (o.height == 0 && o.width > 0) {
+    const ScenePreset p = ResolvePreset(o.scene, o.preset, o.width);
+    if (p.width < 64 || p.height < 48 || p.width > 8192 || p.height > 8192)
+      Fail("datagen: --width {} gives {}x{} capture images (the scene's aspect): use 64x48 to "
+           "8192x8192, as --size", o.width, p.width, p.height);
+  }
   if (o.dense_brackets != 0 && (o.dense_brackets < 3 || o.dense_brackets > 20))
     Fail("datagen: --dense-brackets {}: use 3 to 20 brackets (one stop apart)", o.dense_brackets);
   if (o.dense_brackets != 0 && !o.brackets.empty())

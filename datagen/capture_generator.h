@@ -58,7 +58,8 @@ std::vector<PlannedRender> CaptureRenders(const ScenePreset& preset);
 // The capture-only flag `options` sets that a dataset cannot take (--size, --dense-brackets,
 // --black-level, --lenses), or nullptr.
 const char* CaptureVariantFlag(const DatagenOptions& options);
-// Throws hdr4d::Error for a capture variant out of range: --size below 64x48 or above 8192,
+// Throws hdr4d::Error for a capture variant out of range: --size (or the size --width gives)
+// below 64x48 or above 8192,
 // --dense-brackets outside 3..20 or with --brackets, a black level outside 0..64 codes or its
 // noise outside 0..16, an unknown --lenses mode.
 void ValidateCaptureVariant(const DatagenOptions& options);

@@ -787,6 +787,17 @@ TEST(Capture, VariantFlagsAreCheckedAndNeedACapture) {
   EXPECT_EQ(ErrorOf([&] { o.Validate(); }), "");
   EXPECT_EQ(CapturePreset(o, "room").exposures.size(), 12u);
   EXPECT_EQ(CapturePreset(o, "room").height, 240);
+  // --width alone has the same bounds on the size it gives (room: 3/4 of the width).
+  o.height = 0;
+  o.width = 2;
+  EXPECT_EQ(ErrorOf([&] { o.Validate(); }),
+            "datagen: --width 2 gives 2x2 capture images (the scene's aspect): use 64x48 to "
+            "8192x8192, as --size");
+  o.width = 8200;
+  EXPECT_TRUE(Contains(ErrorOf([&] { o.Validate(); }), "--width 8200 gives 8200x6150 capture"));
+  o.width = 64;
+  EXPECT_EQ(ErrorOf([&] { o.Validate(); }), "");
+  EXPECT_EQ(CapturePreset(o, "room").height, 48);
   // Through the command line: one line, exit 1, nothing written.
   TempDir dir;
   for (const std::string flags : {"--size 320", "--size 320x", "--black-level 16:x", "--lenses odd"}) {
@@ -796,6 +807,13 @@ TEST(Capture, VariantFlagsAreCheckedAndNeedACapture) {
     EXPECT_TRUE(Contains(cli.err, flags.substr(0, flags.find(' ')))) << flags << ": " << cli.err;
     EXPECT_FALSE(fs::exists(dir / "o"));
   }
+  // --size and --width both set the width: refused, not one silently kept.
+  const testing::CommandResult both = testing::RunHdr4d(
+      "datagen --capture --scene room --size 64x48 --width 100 --out '" + (dir / "o").string() +
+      "'");
+  EXPECT_EQ(both.exit_code, 1);
+  EXPECT_TRUE(Contains(both.err, "--size and --width both set the image width")) << both.err;
+  EXPECT_FALSE(fs::exists(dir / "o"));
   const testing::CommandResult help = testing::RunHdr4d("datagen --help");
   for (const char* flag : {"--size", "--dense-brackets", "--black-level", "--lenses"})
     EXPECT_TRUE(Contains(help.out, flag)) << flag;
