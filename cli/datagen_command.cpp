@@ -233,8 +233,11 @@ void AddDatagenCommand(CLI::App& app) {
          "(the mini and paper presets of airplane, deer, lego, tank), else 0")
       ->check(Integer(0, 1'000'000));
   cmd->add_option("--width", options->width,
-                  "Image width in pixels (0 = the preset's; the height follows the scene)")
-      ->check(Integer(0, 100000))
+                  "Image width in pixels (0 = the preset's; the height follows the scene): at "
+                  "most 8192, and a scene's renders at most 16 GiB of float RGB (12 bytes a "
+                  "pixel, e.g. 350 renders of 4096x4096 are 65.6 GiB); with --capture at "
+                  "least 64x48, as --size")
+      ->check(Integer(0, datagen::kMaxImageSide))
       ->capture_default_str();
   AddLdrSynthesisFlags(cmd, options.get());
   AddCaptureFlags(cmd, options.get());

@@ -183,12 +183,13 @@ const char* CaptureVariantFlag(const DatagenOptions& o) {
 void ValidateCaptureVariant(const DatagenOptions& o) {
   if (o.height < 0 || (o.height > 0 && o.width <= 0))
     Fail("datagen: --size {}x{}: give both sides, positive", o.width, o.height);
-  if (o.height > 0 && (o.width < 64 || o.height < 48 || o.width > 8192 || o.height > 8192))
+  constexpr int kMax = kMaxImageSide;
+  if (o.height > 0 && (o.width < 64 || o.height < 48 || o.width > kMax || o.height > kMax))
     Fail("datagen: --size {}x{}: use 64x48 to 8192x8192", o.width, o.height);
   // --width alone: the same bounds on the size it gives (the height from the scene's aspect).
   if (o.height == 0 && o.width > 0) {
     const ScenePreset p = ResolvePreset(o.scene, o.preset, o.width);
-    if (p.width < 64 || p.height < 48 || p.width > 8192 || p.height > 8192)
+    if (p.width < 64 || p.height < 48 || p.width > kMax || p.height > kMax)
       Fail("datagen: --width {} gives {}x{} capture images (the scene's aspect): use 64x48 to "
            "8192x8192, as --size", o.width, p.width, p.height);
   }

@@ -57,6 +57,10 @@ void DatagenOptions::Validate() const {
   if (threads < 0) Fail("datagen: --threads must be >= 0 (0 = every core), got {}", threads);
   if (samples < 0) Fail("datagen: --samples must be >= 0 (0 = the preset's), got {}", samples);
   if (width < 0) Fail("datagen: --width must be >= 0 (0 = the preset's), got {}", width);
+  if (!capture && height == 0 && width > kMaxImageSide)  // a capture says it as --size does
+    Fail("datagen: --width {}: at most {} pixels (a float RGB frame of {}x{} is 0.8 GB, held a "
+         "few times over by Cycles and datagen)", width, kMaxImageSide, kMaxImageSide,
+         kMaxImageSide);
   if (points < 0 || points > 10'000'000)
     Fail("datagen: --points must be in [0, 10^7] (0 = the preset's), got {}", points);
   if (points != 0 && capture)
@@ -110,8 +114,26 @@ void DatagenOptions::Validate() const {
   if (capture && !pipeline.IsIdentity())
     Fail("datagen: --pipeline and --vignetting make datasets, not captures: a capture's cameras "
          "differ through --unlike-cameras");
-  for (const std::string& name : scene == "all" ? DefaultSceneNames() : std::vector{scene})
+  for (const std::string& name : scene == "all" ? DefaultSceneNames() : std::vector{scene}) {
     LdrFor(name).Validate();
+    if (capture) {
+      const ScenePreset p = CapturePreset(*this, name);
+      CheckRenderBudget(p, CaptureRenders(p).size());
+    } else {
+      const ScenePreset p = ResolvePreset(name, preset, width);
+      CheckRenderBudget(p, PlanRenders(p).size());
+    }
+  }
+}
+
+void CheckRenderBudget(const ScenePreset& preset, std::size_t renders) {
+  const double gib = static_cast<double>(renders) * preset.width * preset.height * 12 /
+                     (1024.0 * 1024.0 * 1024.0);
+  if (gib <= kMaxRenderGiB) return;
+  Fail("datagen: scene '{}': {} renders of {}x{} are {:.1f} GiB of float RGB (12 bytes a pixel "
+       "before compression); a scene may have at most {:.0f} GiB: lower --width{}, or use a "
+       "smaller --preset", preset.scene, renders, preset.width, preset.height, gib,
+       kMaxRenderGiB, preset.layout == "capture" ? " or --size, --frames, --cameras" : "");
 }
 
 BlenderSettings DatagenOptions::FoundBlender() const {

@@ -91,7 +91,8 @@ struct DatagenOptions {
   // (its own radial fall-off) or both (datagen/capture_lens.h).
   std::string lenses = "none";
   // Throws hdr4d::Error for an unknown scene or preset, an empty output folder, negative
-  // threads, samples, width or points (or points above 10^7 or with --capture), bad LDR
+  // threads, samples, width or points (or points above 10^7 or with --capture), a width above
+  // kMaxImageSide, renders over kMaxRenderGiB (CheckRenderBudget), bad LDR
   // settings, capture flags without --capture, or a capture
   // of "all", of fewer than 2 or more than 12 cameras, fewer than 2 frames, more than 100
   // extra views, or brackets that are not at least two increasing positive times.
@@ -102,6 +103,19 @@ struct DatagenOptions {
   // fails here, before anything under --out is touched.
   BlenderSettings FoundBlender() const;
 };
+
+// The widest image datagen renders (--width, --size; every scene is at most as tall as wide): a
+// float RGB frame of 8192x8192 is 0.8 GB, which Cycles' render buffers and datagen's per-frame
+// passes hold a few times over.
+inline constexpr int kMaxImageSide = 8192;
+// The most one scene's renders may total as float RGB, 12 bytes a pixel before ZIP (which noisy
+// renders barely shrink): 16 GiB, over six times the paper preset's largest scene (airplane, 350
+// renders of 800x800: 2.5 GiB). Its 8-bit LDR views, which `hdr4d train` holds in memory, are
+// then at most 12 GiB (three exposures a render), within a 24 GB machine.
+inline constexpr double kMaxRenderGiB = 16;
+// Throws hdr4d::Error naming the scene, the count and size of its renders, and the flags that
+// shrink them, when `renders` of the preset's size pass kMaxRenderGiB.
+void CheckRenderBudget(const ScenePreset& preset, std::size_t renders);
 
 inline constexpr int kCaptureCameras = 6;
 inline constexpr int kCaptureMaxCameras = 12;  // 30 degrees apart: 12 fill the circle

@@ -913,5 +913,46 @@ TEST(Generator, OptionsAreValidated) {
   EXPECT_EQ(ErrorOf([&] { o.Validate(); }), "");
 }
 
+// Huge sizes are refused before Blender is asked: at most 8192 pixels a side, and a scene's
+// renders at most 16 GiB of float RGB (a dataset's or a capture's).
+TEST(Generator, HugeImagesAreRefused) {
+  DatagenOptions o;
+  o.out = "x";
+  o.preset = "ci";
+  o.width = 8192;
+  EXPECT_EQ(ErrorOf([&] { o.Validate(); }), "");  // every scene
+  o.width = 100000;
+  EXPECT_EQ(ErrorOf([&] { o.Validate(); }),
+            "datagen: --width 100000: at most 8192 pixels (a float RGB frame of 8192x8192 is 0.8 "
+            "GB, held a few times over by Cycles and datagen)");
+  o.scene = "airplane";
+  o.preset = "paper";
+  o.width = 0;
+  EXPECT_EQ(ErrorOf([&] { o.Validate(); }), "");  // 350 renders of 800x800
+  o.width = 4096;
+  EXPECT_TRUE(Contains(ErrorOf([&] { o.Validate(); }),
+                       "scene 'airplane': 350 renders of 4096x4096 are 65.6 GiB of float RGB"));
+  o = {};
+  o.out = "x";
+  o.scene = "room";
+  o.preset = "ci";
+  o.capture = true;
+  o.cameras = 12;
+  o.frames = 100000;
+  const std::string capture = ErrorOf([&] { o.Validate(); });
+  EXPECT_TRUE(Contains(capture, "renders of 48x36 are")) << capture;
+  EXPECT_TRUE(Contains(capture, "--frames")) << capture;
+  // Through the command line: one line, exit 1, nothing written, Blender never started.
+  TempDir dir;
+  const testing::CommandResult cli = testing::RunHdr4d(
+      "datagen --scene marker --preset ci --width 100000 --blender /bin/false --out '" +
+      (dir / "o").string() + "'");
+  EXPECT_EQ(cli.exit_code, 1);
+  EXPECT_TRUE(Contains(cli.err, "--width: expected an integer in [0, 8192], got '100000'"))
+      << cli.err;
+  EXPECT_TRUE(Contains(testing::RunHdr4d("datagen --help").out, "at most 8192, and a scene's"));
+  EXPECT_FALSE(fs::exists(dir / "o"));
+}
+
 }  // namespace
 }  // namespace hdr4d::datagen
