@@ -1,16 +1,21 @@
 #include "datagen/blender_process.h"
 
 #include <fcntl.h>
-#include <spawn.h>
+#include <fmt/format.h>
+#include <poll.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
+#include <chrono>
 #include <csignal>
 #include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <sstream>
+#include <thread>
 
 #include "core/util/error.h"
 
@@ -82,35 +87,119 @@ std::string ProcessResult::Describe() const {
   return signal > 0 ? "signal " + std::to_string(signal) : "exit code " + std::to_string(exit_code);
 }
 
+namespace {
+
+std::atomic<int> g_stop_signal{0};
+void RecordStop(int signal) { g_stop_signal.store(signal); }
+
+// While one child runs: SIGINT, SIGTERM and SIGHUP are recorded instead of ending hdr4d, so
+// that the child is stopped before hdr4d goes (as calibration/colmap_process.cpp does for
+// COLMAP; that code is calibration's own). The old handlers come back afterwards.
+class StopSignals {
+ public:
+  StopSignals() {
+    g_stop_signal.store(0);
+    struct sigaction action {};
+    action.sa_handler = RecordStop;
+    sigemptyset(&action.sa_mask);
+    for (int i = 0; i < 3; ++i) sigaction(kSignals[i], &action, &old_[i]);
+  }
+  ~StopSignals() {
+    for (int i = 0; i < 3; ++i) sigaction(kSignals[i], &old_[i], nullptr);
+  }
+  StopSignals(const StopSignals&) = delete;
+  StopSignals& operator=(const StopSignals&) = delete;
+
+ private:
+  static constexpr int kSignals[3] = {SIGINT, SIGTERM, SIGHUP};
+  struct sigaction old_[3];
+};
+
+// SIGTERM, then SIGKILL when it has not gone within 3 s; reaps it and returns its status.
+int StopChild(pid_t pid) {
+  kill(pid, SIGTERM);
+  int status = 0;
+  for (int i = 0; i < 30; ++i) {
+    if (waitpid(pid, &status, WNOHANG) == pid) return status;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  kill(pid, SIGKILL);
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  return status;
+}
+
+// Starts argv with stdin from /dev/null and stdout and stderr into `out_fd`. fork, not
+// posix_spawn, for PR_SET_PDEATHSIG: the child gets SIGKILL when hdr4d dies, even by SIGKILL
+// (the signal follows the thread that forks; Blender runs from the calling thread, which waits
+// for it). After fork only async-signal-safe calls; an exec failure comes back through a pipe.
+pid_t StartChild(const std::vector<std::string>& argv, int out_fd) {
+  std::vector<std::string> argv_copy = argv;
+  std::vector<char*> args;
+  for (std::string& a : argv_copy) args.push_back(a.data());
+  args.push_back(nullptr);
+  int exec_error[2];
+  if (pipe2(exec_error, O_CLOEXEC) != 0)
+    Fail("{}: cannot create a pipe: {}", argv[0], strerror(errno));
+  const pid_t parent = getpid();
+  const pid_t pid = fork();
+  if (pid == 0) {
+    prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (getppid() != parent) _exit(126);  // the parent died before prctl took effect
+    const int null_fd = open("/dev/null", O_RDONLY);
+    if (null_fd >= 0) dup2(null_fd, STDIN_FILENO);
+    dup2(out_fd, STDOUT_FILENO);
+    dup2(out_fd, STDERR_FILENO);
+    execve(args[0], args.data(), environ);
+    const int e = errno;
+    [[maybe_unused]] const ssize_t n = write(exec_error[1], &e, sizeof e);
+    _exit(127);
+  }
+  const int fork_error = errno;
+  close(exec_error[1]);
+  int child_errno = 0;
+  ssize_t n;
+  while ((n = read(exec_error[0], &child_errno, sizeof child_errno)) < 0 && errno == EINTR) {
+  }
+  close(exec_error[0]);
+  if (pid < 0) Fail("{}: cannot run: {}", argv[0], strerror(fork_error));
+  if (n > 0) {
+    int status = 0;
+    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+    Fail("{}: cannot run: {}", argv[0], strerror(child_errno));
+  }
+  return pid;
+}
+
+}  // namespace
+
 ProcessResult RunProcess(const std::vector<std::string>& argv,
                          const std::function<void(const std::string&)>& on_line) {
   HDR4D_CHECK(!argv.empty());
   int fds[2];
   if (pipe2(fds, O_CLOEXEC) != 0) Fail("{}: cannot create a pipe: {}", argv[0], strerror(errno));
-
-  // posix_spawn, not fork: safe in a process that already runs worker threads.
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_adddup2(&actions, fds[1], STDOUT_FILENO);
-  posix_spawn_file_actions_adddup2(&actions, fds[1], STDERR_FILENO);
-  std::vector<char*> args;
-  for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-  args.push_back(nullptr);
-  pid_t pid = 0;
-  const int spawn_error =
-      posix_spawn(&pid, argv[0].c_str(), &actions, nullptr, args.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  close(fds[1]);
-  if (spawn_error != 0) {
+  StopSignals stop;
+  pid_t pid = -1;
+  try {
+    pid = StartChild(argv, fds[1]);
+  } catch (...) {
     close(fds[0]);
-    Fail("{}: cannot run: {}", argv[0], strerror(spawn_error));
+    close(fds[1]);
+    throw;
   }
+  close(fds[1]);
 
   std::string pending;
   char buffer[4096];
   std::exception_ptr callback_error;
+  int stop_signal = 0;
   for (;;) {
+    // Polled, so that a stop signal is seen while the child prints nothing.
+    if ((stop_signal = g_stop_signal.load()) != 0) break;
+    pollfd ready{.fd = fds[0], .events = POLLIN, .revents = 0};
+    const int polled = poll(&ready, 1, 100);
+    if (polled == 0 || (polled < 0 && errno == EINTR)) continue;
     const ssize_t n = read(fds[0], buffer, sizeof(buffer));
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) break;
@@ -128,7 +217,7 @@ ProcessResult RunProcess(const std::vector<std::string>& argv,
     pending.erase(0, start);
   }
   close(fds[0]);
-  if (!callback_error && !pending.empty()) {
+  if (!callback_error && stop_signal == 0 && !pending.empty()) {
     try {
       on_line(pending);
     } catch (...) {
@@ -136,12 +225,28 @@ ProcessResult RunProcess(const std::vector<std::string>& argv,
     }
   }
 
-  if (callback_error) kill(pid, SIGTERM);  // the caller gave up on it; do not wait for a render
   int status = 0;
-  while (waitpid(pid, &status, 0) < 0) {
-    if (errno != EINTR) Fail("{}: waiting for the process failed: {}", argv[0], strerror(errno));
+  if (callback_error || stop_signal != 0) {
+    status = StopChild(pid);  // the caller gave up on it, or hdr4d is asked to stop
+  } else {
+    for (;;) {  // its output has ended; a stop signal still stops it
+      const pid_t done = waitpid(pid, &status, WNOHANG);
+      if (done == pid) break;
+      if (done < 0 && errno != EINTR)
+        Fail("{}: waiting for the process failed: {}", argv[0], strerror(errno));
+      if ((stop_signal = g_stop_signal.load()) != 0) {
+        status = StopChild(pid);
+        break;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
   }
   if (callback_error) std::rethrow_exception(callback_error);
+  if (stop_signal != 0) {
+    const char* name = sigabbrev_np(stop_signal);
+    Fail("interrupted by {} while {} ran; it was stopped",
+         name ? fmt::format("SIG{}", name) : std::to_string(stop_signal), argv[0]);
+  }
   ProcessResult result;
   if (WIFEXITED(status)) result.exit_code = WEXITSTATUS(status);
   if (WIFSIGNALED(status)) result.signal = WTERMSIG(status);

@@ -33,6 +33,8 @@ struct ProcessResult {
 // Runs argv (argv[0] is a path, not searched on PATH) with stdin from /dev/null and stdout and
 // stderr merged into one pipe; calls on_line for every line (without its newline, also for a
 // last unterminated one) as it arrives. Throws hdr4d::Error when the program cannot be started.
+// The child dies with hdr4d (PR_SET_PDEATHSIG); SIGINT, SIGTERM or SIGHUP to hdr4d while it runs
+// stop it (SIGTERM, SIGKILL after 3 s) and throw hdr4d::Error naming the signal.
 ProcessResult RunProcess(const std::vector<std::string>& argv,
                          const std::function<void(const std::string&)>& on_line);
 

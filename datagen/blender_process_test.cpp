@@ -1,9 +1,15 @@
 #include "datagen/blender_process.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 
+#include <chrono>
+#include <csignal>
 #include <cstdlib>
+#include <fstream>
+#include <thread>
 
 #include "tests/testing.h"
 
@@ -69,6 +75,71 @@ TEST(BlenderProcess, AThrowingCallbackStopsTheChildAndPropagates) {
   const auto chatty = WriteScript(dir / "chatty.sh", "echo first\nsleep 30\necho never\n");
   EXPECT_THROW(RunProcess({chatty.string()}, [](const std::string&) { throw Error("stop"); }),
                Error);
+}
+
+// The pid a script wrote to `file` (waiting up to 10 s for it), or -1.
+pid_t WaitForPid(const std::filesystem::path& file) {
+  for (int i = 0; i < 1000; ++i) {
+    std::ifstream in(file);
+    pid_t pid = -1;
+    if (in >> pid && pid > 0) return pid;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return -1;
+}
+
+// True once `pid` has gone (or is a zombie nobody reaped yet), waiting up to 10 s.
+bool Gone(pid_t pid) {
+  for (int i = 0; i < 1000; ++i) {
+    std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+    std::string skip, state;
+    if (!(stat >> skip >> skip >> state) || state == "Z") return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return false;
+}
+
+// SIGTERM or SIGINT to hdr4d alone (not its process group) stops a Blender that prints nothing,
+// and the run fails saying so instead of leaving Blender rendering.
+TEST(BlenderProcess, AStopSignalToHdr4dStopsTheChild) {
+  for (const int sig : {SIGTERM, SIGINT}) {
+    TempDir dir;
+    const auto quiet = WriteScript(dir / "quiet.sh", "echo $$ > '" + (dir / "pid").string() +
+                                                         "'\nexec sleep 60\n");
+    std::thread sender([&] {
+      if (WaitForPid(dir / "pid") > 0) kill(getpid(), sig);
+    });
+    const std::string error =
+        ErrorOf([&] { RunProcess({quiet.string()}, [](const std::string&) {}); });
+    sender.join();
+    EXPECT_NE(error.find(fmt::format("interrupted by SIG{} while", sigabbrev_np(sig))),
+              std::string::npos) << error;
+    EXPECT_NE(error.find("quiet.sh ran; it was stopped"), std::string::npos) << error;
+    EXPECT_TRUE(Gone(WaitForPid(dir / "pid")));
+  }
+}
+
+// hdr4d killed outright (no handler runs): the child gets SIGKILL through PR_SET_PDEATHSIG.
+TEST(BlenderProcess, TheChildDiesWithHdr4d) {
+  TempDir dir;
+  const auto quiet = WriteScript(dir / "quiet.sh", "echo $$ > '" + (dir / "pid").string() +
+                                                       "'\nexec sleep 60\n");
+  const pid_t hdr4d = fork();
+  ASSERT_GE(hdr4d, 0);
+  if (hdr4d == 0) {
+    try {
+      RunProcess({quiet.string()}, [](const std::string&) {});
+    } catch (...) {
+    }
+    _exit(0);
+  }
+  const pid_t blender = WaitForPid(dir / "pid");
+  ASSERT_GT(blender, 0);
+  kill(hdr4d, SIGKILL);
+  int status = 0;
+  waitpid(hdr4d, &status, 0);
+  EXPECT_TRUE(Gone(blender));
+  if (!Gone(blender)) kill(blender, SIGKILL);
 }
 
 TEST(BlenderProcess, UnstartableProgramIsAnError) {
