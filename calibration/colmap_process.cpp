@@ -6,59 +6,18 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <atomic>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
 #include <thread>
 
+#include "core/util/child_stop.h"
 #include "core/util/error.h"
 
 extern char** environ;
 
 namespace hdr4d {
 namespace fs = std::filesystem;
-
-namespace {
-
-std::atomic<int> g_stop_signal{0};
-void RecordStop(int signal) { g_stop_signal.store(signal); }
-
-// Installs the stop handlers for the lifetime of one child and puts the old ones back.
-class StopSignals {
- public:
-  StopSignals() {
-    g_stop_signal.store(0);
-    struct sigaction action {};
-    action.sa_handler = RecordStop;
-    sigemptyset(&action.sa_mask);
-    for (int i = 0; i < 3; ++i) sigaction(kSignals[i], &action, &old_[i]);
-  }
-  ~StopSignals() {
-    for (int i = 0; i < 3; ++i) sigaction(kSignals[i], &old_[i], nullptr);
-  }
-  StopSignals(const StopSignals&) = delete;
-  StopSignals& operator=(const StopSignals&) = delete;
-
- private:
-  static constexpr int kSignals[3] = {SIGINT, SIGTERM, SIGHUP};
-  struct sigaction old_[3];
-};
-
-// SIGTERM, then SIGKILL when it has not gone within 3 s; reaps it.
-void StopChild(pid_t pid) {
-  kill(pid, SIGTERM);
-  int status = 0;
-  for (int i = 0; i < 30; ++i) {
-    if (waitpid(pid, &status, WNOHANG) == pid) return;
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  }
-  kill(pid, SIGKILL);
-  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-}
-
-}  // namespace
 
 int RunLoggedChild(const std::vector<std::string>& argv, const std::vector<std::string>& extra_env,
                    const fs::path& log) {
@@ -99,11 +58,9 @@ int RunLoggedChild(const std::vector<std::string>& argv, const std::vector<std::
     const pid_t done = waitpid(pid, &status, WNOHANG);
     if (done == pid) break;
     if (done < 0 && errno != EINTR) Fail("{}: waiting for it failed ({})", argv[0], std::strerror(errno));
-    if (const int signal = g_stop_signal.load()) {
+    if (const int signal = StopSignals::StopSignal()) {
       StopChild(pid);
-      const char* name = sigabbrev_np(signal);
-      Fail("interrupted by {} while {} ran; it was stopped", name ? fmt::format("SIG{}", name) : std::to_string(signal),
-           argv[0]);
+      FailInterrupted(signal, argv[0]);
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }

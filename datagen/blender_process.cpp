@@ -7,7 +7,6 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <atomic>
 #include <cerrno>
 #include <chrono>
 #include <csignal>
@@ -17,6 +16,7 @@
 #include <sstream>
 #include <thread>
 
+#include "core/util/child_stop.h"
 #include "core/util/error.h"
 
 extern char** environ;
@@ -89,46 +89,6 @@ std::string ProcessResult::Describe() const {
 
 namespace {
 
-std::atomic<int> g_stop_signal{0};
-void RecordStop(int signal) { g_stop_signal.store(signal); }
-
-// While one child runs: SIGINT, SIGTERM and SIGHUP are recorded instead of ending hdr4d, so
-// that the child is stopped before hdr4d goes (as calibration/colmap_process.cpp does for
-// COLMAP; that code is calibration's own). The old handlers come back afterwards.
-class StopSignals {
- public:
-  StopSignals() {
-    g_stop_signal.store(0);
-    struct sigaction action {};
-    action.sa_handler = RecordStop;
-    sigemptyset(&action.sa_mask);
-    for (int i = 0; i < 3; ++i) sigaction(kSignals[i], &action, &old_[i]);
-  }
-  ~StopSignals() {
-    for (int i = 0; i < 3; ++i) sigaction(kSignals[i], &old_[i], nullptr);
-  }
-  StopSignals(const StopSignals&) = delete;
-  StopSignals& operator=(const StopSignals&) = delete;
-
- private:
-  static constexpr int kSignals[3] = {SIGINT, SIGTERM, SIGHUP};
-  struct sigaction old_[3];
-};
-
-// SIGTERM, then SIGKILL when it has not gone within 3 s; reaps it and returns its status.
-int StopChild(pid_t pid) {
-  kill(pid, SIGTERM);
-  int status = 0;
-  for (int i = 0; i < 30; ++i) {
-    if (waitpid(pid, &status, WNOHANG) == pid) return status;
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  }
-  kill(pid, SIGKILL);
-  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-  return status;
-}
-
 // Starts argv with stdin from /dev/null and stdout and stderr into `out_fd`. fork, not
 // posix_spawn, for PR_SET_PDEATHSIG: the child gets SIGKILL when hdr4d dies, even by SIGKILL
 // (the signal follows the thread that forks; Blender runs from the calling thread, which waits
@@ -196,7 +156,7 @@ ProcessResult RunProcess(const std::vector<std::string>& argv,
   int stop_signal = 0;
   for (;;) {
     // Polled, so that a stop signal is seen while the child prints nothing.
-    if ((stop_signal = g_stop_signal.load()) != 0) break;
+    if ((stop_signal = StopSignals::StopSignal()) != 0) break;
     pollfd ready{.fd = fds[0], .events = POLLIN, .revents = 0};
     const int polled = poll(&ready, 1, 100);
     if (polled == 0 || (polled < 0 && errno == EINTR)) continue;
@@ -234,7 +194,7 @@ ProcessResult RunProcess(const std::vector<std::string>& argv,
       if (done == pid) break;
       if (done < 0 && errno != EINTR)
         Fail("{}: waiting for the process failed: {}", argv[0], strerror(errno));
-      if ((stop_signal = g_stop_signal.load()) != 0) {
+      if ((stop_signal = StopSignals::StopSignal()) != 0) {
         status = StopChild(pid);
         break;
       }
@@ -242,11 +202,7 @@ ProcessResult RunProcess(const std::vector<std::string>& argv,
     }
   }
   if (callback_error) std::rethrow_exception(callback_error);
-  if (stop_signal != 0) {
-    const char* name = sigabbrev_np(stop_signal);
-    Fail("interrupted by {} while {} ran; it was stopped",
-         name ? fmt::format("SIG{}", name) : std::to_string(stop_signal), argv[0]);
-  }
+  if (stop_signal != 0) FailInterrupted(stop_signal, argv[0]);
   ProcessResult result;
   if (WIFEXITED(status)) result.exit_code = WEXITSTATUS(status);
   if (WIFSIGNALED(status)) result.signal = WTERMSIG(status);
