@@ -438,6 +438,9 @@ TEST(Calibrate, BadCapturesAreClearErrorsAndWriteNothing) {
   // Equal exposure times within a frame.
   testing::WriteTextFile(capture / "exposures.json", R"({"brackets": [1, 1, 4]})");
   ExpectFailure(capture, model, out, "same exposure time");
+  // The times in the reverse order of the files: they calibrated without a word.
+  testing::WriteTextFile(capture / "exposures.json", R"({"brackets": [4.0, 1.0, 0.25]})");
+  ExpectFailure(capture, model, out, "the exposure times do not follow the brackets");
   testing::WriteTextFile(capture / "exposures.json", R"({"brackets": [0.25, 1.0, 4.0]})");
   // Brackets all black, then all saturated: they calibrated to "dynamic range 0.00 stops".
   for (const float level : {0.0f, 1.0f}) {

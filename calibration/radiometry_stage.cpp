@@ -58,11 +58,36 @@ void RequireMeasurement(const std::vector<Bracket>& brackets, const std::string&
          kMeasuredLowCode, kMeasuredHighCode);
 }
 
+// The mean code of a bracket: it cannot fall as the exposure grows (saturation only holds it).
+double MeanCode(const Bracket& b) {
+  double sum = 0;
+  for (float v : b.image.values()) sum += CodeOf(v);
+  return sum / static_cast<double>(std::max<std::size_t>(1, b.image.size()));
+}
+
+// Exposure times given in another order than the files (exposures.json's `brackets` lists them
+// by bracket index: [32, 2, 0.125] for files darkest first) would fit the response to the wrong
+// times without a word: the longest exposure's bracket must not be darker than the shortest's.
+void RequireBrighterWithExposure(const std::vector<Bracket>& brackets, const std::string& camera,
+                                 int frame) {
+  const auto [shortest, longest] = std::minmax_element(
+      brackets.begin(), brackets.end(),
+      [](const Bracket& a, const Bracket& b) { return a.exposure < b.exposure; });
+  const double dark = MeanCode(*shortest), bright = MeanCode(*longest);
+  if (bright + 1.0 < dark)
+    Fail("{}: camera {}, frame {}: at {} s its mean code is {:.1f}, darker than {:.1f} at {} s in "
+         "{}: the exposure times do not follow the brackets (check the order of exposures.json's "
+         "\"brackets\": bracket k's time is entry k)",
+         longest->name, camera, frame, longest->exposure, bright, dark, shortest->exposure,
+         shortest->name);
+}
+
 std::vector<Bracket> LoadFrame(const CaptureCamera& camera, const CaptureFrame& frame) {
   std::vector<Bracket> brackets;
   for (std::size_t k = 0; k < frame.brackets.size(); ++k)
     brackets.push_back(LoadBracket(frame.brackets[k], frame.exposures[k], camera.name, frame.index));
   RequireMeasurement(brackets, camera.name, frame.index);
+  RequireBrighterWithExposure(brackets, camera.name, frame.index);
   return brackets;
 }
 
