@@ -241,7 +241,8 @@ TEST(RunRecord, IntegerKeysMustBeIntegersInRange) {
   nlohmann::json j = Sample("r").ToJson();
   j["gaussians"] = 1e3;
   j["labels"][0]["seed"] = 1e300;
-  EXPECT_NE(ErrorOf([&] { RunRecord::FromJson(j, "f.json"); }).find("key 'seed'"), std::string::npos);
+  EXPECT_NE(ErrorOf([&] { RunRecord::FromJson(j, "f.json"); }).find("key 'seed'"),
+            std::string::npos);
   j["labels"][0]["seed"] = 2;
   EXPECT_EQ(RunRecord::FromJson(j, "f.json").gaussians, 1000);
   EXPECT_EQ(JsonInteger(-0x1p63, "f", "k"), std::numeric_limits<std::int64_t>::min());

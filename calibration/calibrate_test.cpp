@@ -446,8 +446,10 @@ TEST(Calibrate, BadCapturesAreClearErrorsAndWriteNothing) {
   for (const float level : {0.0f, 1.0f}) {
     Image flat(kW, kH, 3, Encoding::kSrgb);
     for (float& v : flat.values()) v = level;
-    for (int k = 0; k < 3; ++k) WriteImage(capture / fmt::format("sequence/cam1/1_{}.png", k), flat);
-    ExpectFailure(capture, model, out, "camera cam1, frame 1: no usable measurement in its 3 brackets");
+    for (int k = 0; k < 3; ++k)
+      WriteImage(capture / fmt::format("sequence/cam1/1_{}.png", k), flat);
+    ExpectFailure(capture, model, out,
+                  "camera cam1, frame 1: no usable measurement in its 3 brackets");
   }
   WriteCapture(capture, model);
   // A camera COLMAP did not register.

@@ -42,7 +42,8 @@ constexpr int kMeasuredLowCode = 16, kMeasuredHighCode = 240;
 // A frame whose brackets are all black or all saturated measures no radiance: its fusion gave
 // "dynamic range 0.00 stops" and a response fitted to nothing. At least 0.1% of its values must
 // lie between the black floor and saturation in some bracket.
-void RequireMeasurement(const std::vector<Bracket>& brackets, const std::string& camera, int frame) {
+void RequireMeasurement(const std::vector<Bracket>& brackets, const std::string& camera,
+                        int frame) {
   std::size_t measured = 0, values = 0;
   for (const Bracket& b : brackets) {
     values += b.image.size();

@@ -363,7 +363,8 @@ void ReportMissingPerFrameKeys(const SceneFiles& scene, ProblemSink& sink) {
                      "1 s");
   // The native layout requires a time on every frame (its own problem); the others may go without.
   if (scene.nerfstudio || scene.hdrnerf)
-    ReportMissingKey(scene, sink, "time", [](const PendingFrame& p) { return p.time_key; }, "time 0");
+    ReportMissingKey(scene, sink, "time", [](const PendingFrame& p) { return p.time_key; },
+                     "time 0");
 }
 
 }  // namespace hdr4d::dataset_detail

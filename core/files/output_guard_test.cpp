@@ -139,16 +139,17 @@ TEST(OutputGuard, AFileNamedForOutputIsRefusedInADatasetsImageFolder) {
   testing::TempDir dir;
   fs::create_directories(dir / "S" / "images");
   fs::create_directories(dir / "S" / "hdr");
-  testing::WriteTextFile(dir / "S" / "transforms_test.json",
-                         R"({"frames": [{"file_path": "images/a", "exr_file_path": "hdr/a.exr"}]})");
+  testing::WriteTextFile(
+      dir / "S" / "transforms_test.json",
+      R"({"frames": [{"file_path": "images/a", "exr_file_path": "hdr/a.exr"}]})");
   testing::WriteTextFile(dir / "S" / "images" / "a.png", "truth");
   const InputProtectionScope scope;
   for (const fs::path& p : {dir / "S" / "images" / "a.png", dir / "S" / "hdr" / "res.json",
                             dir / "S" / "images" / "new.png"}) {
     EXPECT_NO_THROW(CheckOutput(p)) << p;  // what the writers of many files check
     const std::string error = testing::ErrorOf([&] { CheckOutputFile(p); });
-    EXPECT_NE(error.find("it holds the images of dataset " + (dir / "S").string()), std::string::npos)
-        << p << ": " << error;
+    EXPECT_NE(error.find("it holds the images of dataset " + (dir / "S").string()),
+              std::string::npos) << p << ": " << error;
   }
   EXPECT_NO_THROW(CheckOutputFile(dir / "S" / "eval.json"));
   EXPECT_NO_THROW(CheckOutputFile(dir / "T" / "eval.json"));

@@ -77,8 +77,8 @@ std::vector<std::string> ExrChannelOrder(const Imf::ChannelList& list, const fs:
   for (const std::string& layer : layers)
     if (!layer.empty() && !ColourChannels(list, layer).empty()) colour_layers.push_back(layer);
   if (colour_layers.size() > 1) {
-    const auto combined = std::find_if(colour_layers.begin(), colour_layers.end(),
-                                       [](const std::string& l) { return BaseName(l) == "COMBINED"; });
+    const auto is_combined = [](const std::string& l) { return BaseName(l) == "COMBINED"; };
+    const auto combined = std::find_if(colour_layers.begin(), colour_layers.end(), is_combined);
     if (combined == colour_layers.end())
       Fail("{}: several layers hold colour channels ({}); save the one to use as R, G, B",
            path.string(), fmt::join(colour_layers, ", "));
