@@ -2,7 +2,6 @@
 
 #include <fcntl.h>
 #include <signal.h>
-#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -43,12 +42,7 @@ int RunLoggedChild(const std::vector<std::string>& argv, const std::vector<std::
     Fail("{}: cannot start ({})", argv[0], std::strerror(errno));
   }
   if (pid == 0) {
-    prctl(PR_SET_PDEATHSIG, SIGKILL);
-    if (getppid() != parent) _exit(126);  // the parent died before prctl took effect
-    const int null_fd = open("/dev/null", O_RDONLY);
-    if (null_fd >= 0) dup2(null_fd, STDIN_FILENO);
-    dup2(log_fd, STDOUT_FILENO);
-    dup2(log_fd, STDERR_FILENO);
+    TieChildToParent(parent, log_fd);
     execvpe(args[0], args.data(), envp.data());
     _exit(127);
   }

@@ -1,7 +1,10 @@
 #include "core/util/child_stop.h"
 
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <cerrno>
@@ -32,6 +35,15 @@ StopSignals::~StopSignals() {
 }
 
 int StopSignals::StopSignal() { return g_stop_signal.load(); }
+
+void TieChildToParent(pid_t parent, int out_fd) {
+  prctl(PR_SET_PDEATHSIG, SIGKILL);
+  if (getppid() != parent) _exit(126);  // the parent died before prctl took effect
+  const int null_fd = open("/dev/null", O_RDONLY);
+  if (null_fd >= 0) dup2(null_fd, STDIN_FILENO);
+  dup2(out_fd, STDOUT_FILENO);
+  dup2(out_fd, STDERR_FILENO);
+}
 
 int StopChild(pid_t pid) {
   kill(pid, SIGTERM);

@@ -29,6 +29,11 @@ class StopSignals {
   struct sigaction old_[3];
 };
 
+// In a child just forked from `parent`, before it execs: it gets SIGKILL when the parent dies
+// (kill -9 included; it ends at once if the parent is already gone), reads /dev/null and writes
+// stdout and stderr into `out_fd`. Async-signal-safe calls only.
+void TieChildToParent(pid_t parent, int out_fd);
+
 // SIGTERM, then SIGKILL when the child has not gone within 3 s; reaps it and returns its status.
 int StopChild(pid_t pid);
 
