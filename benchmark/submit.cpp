@@ -44,6 +44,46 @@ nlohmann::json ReadSubmissionMeta(const fs::path& path) {
   return meta;
 }
 
+namespace {
+
+// The scene a submission is scored on: a scene of the suite (generated into the cache if needed)
+// or a dataset folder, with the suite's name ("external" without one) and its region.
+struct SubmittedScene {
+  fs::path dir;
+  std::string name, suite = "external";
+  std::optional<std::array<double, 4>> region;
+};
+
+SubmittedScene ResolveScene(const SubmitOptions& o) {
+  SubmittedScene scene;
+  if (!o.suite.empty()) {
+    const Suite suite = LoadSuite(o.suite);
+    scene.suite = suite.name;
+    if (suite.FindMethod(o.method))
+      Fail("bench submit: --method {}: a method of suite '{}' (trained by `bench run`); a "
+           "submission never replaces its runs: use another --method name", o.method, suite.name);
+    if (const SceneSpec* s = suite.FindScene(o.scene)) {
+      const PreparedScene p = PrepareScene(
+          *s, {.cache_dir = o.cache_dir.empty() ? DefaultCacheDir() : o.cache_dir,
+               .hdr4d = SelfExecutable()});
+      scene.dir = p.dir;
+      scene.name = s->name;
+      scene.region = s->region;
+    }
+  }
+  if (scene.dir.empty()) {
+    if (!fs::exists(fs::path(o.scene) / "transforms_train.json"))
+      Fail("bench submit: --scene {}: neither a dataset folder nor a scene of {}", o.scene,
+           o.suite.empty() ? "a suite (give --suite)" : "suite '" + o.suite + "'");
+    scene.dir = fs::absolute(o.scene).lexically_normal();
+    if (!scene.dir.has_filename()) scene.dir = scene.dir.parent_path();  // "scene/": its name
+    scene.name = scene.dir.filename().string();
+  }
+  return scene;
+}
+
+}  // namespace
+
 RunRecord Submit(const SubmitOptions& o) {
   RequireName(o.method, "bench submit: --method");  // a name in tables and paths, never a path
   if (o.method.starts_with("-"))  // `--method=--help`: an option, not a name
@@ -53,35 +93,11 @@ RunRecord Submit(const SubmitOptions& o) {
     Fail("bench submit: --supervision {} is not one of ldr, hdr, ldr+hdr", o.supervision);
   const nlohmann::json meta = ReadSubmissionMeta(o.meta);
 
-  // The scene: a dataset folder, or a scene of the suite (generated into the cache if needed).
-  fs::path scene_dir;
-  std::string scene_name, suite_name = "external";
-  std::optional<std::array<double, 4>> region;
-  if (!o.suite.empty()) {
-    const Suite suite = LoadSuite(o.suite);
-    suite_name = suite.name;
-    if (suite.FindMethod(o.method))
-      Fail("bench submit: --method {}: a method of suite '{}' (trained by `bench run`); a "
-           "submission never replaces its runs: use another --method name", o.method, suite.name);
-    if (const SceneSpec* s = suite.FindScene(o.scene)) {
-      const PreparedScene p = PrepareScene(
-          *s, {.cache_dir = o.cache_dir.empty() ? DefaultCacheDir() : o.cache_dir,
-               .hdr4d = SelfExecutable()});
-      scene_dir = p.dir;
-      scene_name = s->name;
-      region = s->region;
-    }
-  }
-  if (scene_dir.empty()) {
-    if (!fs::exists(fs::path(o.scene) / "transforms_train.json"))
-      Fail("bench submit: --scene {}: neither a dataset folder nor a scene of {}", o.scene,
-           o.suite.empty() ? "a suite (give --suite)" : "suite '" + o.suite + "'");
-    scene_dir = fs::absolute(o.scene).lexically_normal();
-    if (!scene_dir.has_filename()) scene_dir = scene_dir.parent_path();  // "scene/": its name
-    scene_name = scene_dir.filename().string();
-  }
+  const SubmittedScene scene = ResolveScene(o);
+  const fs::path& scene_dir = scene.dir;
   const Dataset dataset = LoadDataset(scene_dir, {.image_check = ImageCheck::kNone});
-  const ScoredRenders scored = ScoreRenders(dataset, o.renders, {.strict = true, .region = region});
+  const ScoredRenders scored =
+      ScoreRenders(dataset, o.renders, {.strict = true, .region = scene.region});
 
   // Identity: what was submitted (the render bytes), on which data, under which label.
   std::string renders_listing;
@@ -99,7 +115,7 @@ RunRecord Submit(const SubmitOptions& o) {
                                    {"renders", Sha256Hex(renders_listing)},
                                    {"meta", meta},            {"scoring_version", kScoringVersion}};
   r.id = "sub-" + Sha256Hex(identity.dump()).substr(0, 16);
-  r.labels = {{suite_name, o.method, scene_name, o.supervision, o.seed, "external", ""}};
+  r.labels = {{scene.suite, o.method, scene.name, o.supervision, o.seed, "external", ""}};
   r.frames = scored.frames;
   r.config = {{"identity", identity},
               {"submission", {{"renders", fs::absolute(o.renders).string()}, {"meta", meta}}},

@@ -169,6 +169,42 @@ void AddLdrSynthesisFlags(CLI::App* cmd, datagen::DatagenOptions* options) {
       ->check(Real(0, 1));
 }
 
+// What is rendered and how: Cycles threads and samples, the point cloud, reused renders, the
+// val split, the width.
+void AddRenderFlags(CLI::App* cmd, datagen::DatagenOptions* options) {
+  cmd->add_option("--threads", options->threads, "Cycles threads (0 = every core)")
+      ->check(Integer(0, 4096))
+      ->capture_default_str();
+  cmd->add_option("--samples", options->samples, "Cycles samples per pixel (0 = the preset's)")
+      ->check(Integer(0, 1'000'000))
+      ->capture_default_str();
+  cmd->add_option("--points", options->points,
+                  "Surface points in point3d.ply, sampled over the scene's time (0 = the "
+                  "preset's: 2000 ci, 20000 mini, 100000 paper)")
+      ->check(Integer(0, 10'000'000))
+      ->capture_default_str();
+  cmd->add_option("--reuse-renders", options->reuse_renders,
+                  "Take each scene's renders from DIR/<scene> (an earlier datagen --out DIR) "
+                  "when it was rendered from the same plan (scene, preset, seed, width, samples, "
+                  "points): only the LDR synthesis runs, e.g. for another --pipeline; otherwise "
+                  "render, saying why")
+      ->check(Text("a folder"));
+  cmd->add_option_function<int>(
+         "--val-every", [options](int k) { options->val_every = k; },
+         "Move every frame of one training time in K to transforms_val.json, so that `hdr4d "
+         "train` stops once those views stop improving (0: the paper's train and test splits "
+         "only). Default: 8 for a scene of one moving camera with 16 or more training times "
+         "(the mini and paper presets of airplane, deer, lego, tank), else 0")
+      ->check(Integer(0, 1'000'000));
+  cmd->add_option("--width", options->width,
+                  "Image width in pixels (0 = the preset's; the height follows the scene): at "
+                  "most 8192, and a scene's renders at most 16 GiB of float RGB (12 bytes a "
+                  "pixel, e.g. 350 renders of 4096x4096 are 65.6 GiB); with --capture at "
+                  "least 64x48, as --size")
+      ->check(Integer(0, datagen::kMaxImageSide))
+      ->capture_default_str();
+}
+
 }  // namespace
 
 void AddDatagenCommand(CLI::App& app) {
@@ -208,37 +244,7 @@ void AddDatagenCommand(CLI::App& app) {
                   "Folder of the bpy scripts (default: $HDR4D_DATAGEN_DIR, then datagen/blender "
                   "in the source tree)")
       ->check(Text("a folder"));
-  cmd->add_option("--threads", options->threads, "Cycles threads (0 = every core)")
-      ->check(Integer(0, 4096))
-      ->capture_default_str();
-  cmd->add_option("--samples", options->samples, "Cycles samples per pixel (0 = the preset's)")
-      ->check(Integer(0, 1'000'000))
-      ->capture_default_str();
-  cmd->add_option("--points", options->points,
-                  "Surface points in point3d.ply, sampled over the scene's time (0 = the "
-                  "preset's: 2000 ci, 20000 mini, 100000 paper)")
-      ->check(Integer(0, 10'000'000))
-      ->capture_default_str();
-  cmd->add_option("--reuse-renders", options->reuse_renders,
-                  "Take each scene's renders from DIR/<scene> (an earlier datagen --out DIR) "
-                  "when it was rendered from the same plan (scene, preset, seed, width, samples, "
-                  "points): only the LDR synthesis runs, e.g. for another --pipeline; otherwise "
-                  "render, saying why")
-      ->check(Text("a folder"));
-  cmd->add_option_function<int>(
-         "--val-every", [options](int k) { options->val_every = k; },
-         "Move every frame of one training time in K to transforms_val.json, so that `hdr4d "
-         "train` stops once those views stop improving (0: the paper's train and test splits "
-         "only). Default: 8 for a scene of one moving camera with 16 or more training times "
-         "(the mini and paper presets of airplane, deer, lego, tank), else 0")
-      ->check(Integer(0, 1'000'000));
-  cmd->add_option("--width", options->width,
-                  "Image width in pixels (0 = the preset's; the height follows the scene): at "
-                  "most 8192, and a scene's renders at most 16 GiB of float RGB (12 bytes a "
-                  "pixel, e.g. 350 renders of 4096x4096 are 65.6 GiB); with --capture at "
-                  "least 64x48, as --size")
-      ->check(Integer(0, datagen::kMaxImageSide))
-      ->capture_default_str();
+  AddRenderFlags(cmd, options.get());
   AddLdrSynthesisFlags(cmd, options.get());
   AddCaptureFlags(cmd, options.get());
   cmd->add_flag("--list", *list, "List the scenes and presets, render nothing");

@@ -109,10 +109,10 @@ Image ReadPng(const fs::path& path) {
   // Deflate packs at most about 1032:1, and expanding 1-bit palette indices to 8-bit RGBA is 32x
   // more: a header claiming far more pixels than that is a damaged file, refused before its
   // buffer is asked for (a 100-byte file claiming 30000x30000 RGBA16 ended in bad_alloc).
-  std::error_code ec;
-  const std::uintmax_t file_bytes = fs::file_size(path, ec);
   constexpr std::uintmax_t kMaxExpansion = 1032 * 32, kAlwaysAllowed = std::uintmax_t(64) << 20;
-  if (!ec && bytes > kAlwaysAllowed && bytes / kMaxExpansion > file_bytes)
+  std::error_code ec;
+  const std::uintmax_t file_bytes = bytes > kAlwaysAllowed ? fs::file_size(path, ec) : 0;
+  if (bytes > kAlwaysAllowed && !ec && bytes / kMaxExpansion > file_bytes)
     Fail("{}: cannot read image: its header claims {}x{} ({} channels, {} MB decoded), which {} "
          "bytes cannot hold: the file is damaged", path.string(), h.width, h.height, h.channels,
          bytes >> 20, file_bytes);

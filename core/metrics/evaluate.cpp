@@ -311,6 +311,47 @@ nlohmann::json EvaluatePair(const fs::path& pred,
   return PairJson(EvaluateFiles(pred, gt, brackets, gt_resolution, false));
 }
 
+namespace {
+
+// The pairs and their means as `eval` writes them.
+nlohmann::json ResultsJson(const std::vector<std::optional<PairResult>>& results) {
+  nlohmann::json out;
+  out["pairs"] = nlohmann::json::array();
+  // Sums in pair order over the finite values: one identical pair (PSNR +inf) must not turn every
+  // mean into +inf and hide the others; it is counted in "identical_pairs" instead.
+  std::map<std::string, std::pair<double, int>> sums;
+  // Infinite values of pairs that are not identical (psnr_channel_mean where one channel is,
+  // as the reference code computes it): left out of the mean too, and counted per key.
+  std::map<std::string, int> left_out;
+  int identical = 0;
+  for (const auto& r : results) {
+    out["pairs"].push_back(PairJson(*r));
+    identical += r->identical ? 1 : 0;
+    for (const auto& [key, value] : r->metrics) {
+      auto& [sum, count] = sums[key];
+      if (!std::isfinite(value)) {
+        if (!r->identical) ++left_out[key];
+        continue;
+      }
+      sum += value;
+      ++count;
+    }
+  }
+  out["mean"] = nlohmann::json::object();
+  for (const auto& [key, sc] : sums)
+    out["mean"][key] = sc.second > 0 ? FiniteOrNull(sc.first / sc.second) : nlohmann::json(nullptr);
+  // The shape where the LDR fits: pooled within images, not the mean of per-pair slopes.
+  std::vector<LogShapeSums> fit_sums;
+  for (const auto& r : results)
+    if (r->fit_sums) fit_sums.push_back(*r->fit_sums);
+  if (!fit_sums.empty()) SetPooledLdrFitShape(fit_sums, &out["mean"]);
+  out["identical_pairs"] = identical;
+  if (!left_out.empty()) out["infinite_left_out"] = left_out;
+  return out;
+}
+
+}  // namespace
+
 nlohmann::json EvaluatePaths(const fs::path& pred,
                              const fs::path& gt,
                              const EvalBrackets* brackets,
@@ -364,39 +405,7 @@ nlohmann::json EvaluatePaths(const fs::path& pred,
     Fail("{} (and {} more pairs failed)", e, failed - 1);
   }
 
-  nlohmann::json out;
-  out["pairs"] = nlohmann::json::array();
-  // Sums in pair order over the finite values: one identical pair (PSNR +inf) must not turn every
-  // mean into +inf and hide the others; it is counted in "identical_pairs" instead.
-  std::map<std::string, std::pair<double, int>> sums;
-  // Infinite values of pairs that are not identical (psnr_channel_mean where one channel is,
-  // as the reference code computes it): left out of the mean too, and counted per key.
-  std::map<std::string, int> left_out;
-  int identical = 0;
-  for (const auto& r : results) {
-    out["pairs"].push_back(PairJson(*r));
-    identical += r->identical ? 1 : 0;
-    for (const auto& [key, value] : r->metrics) {
-      auto& [sum, count] = sums[key];
-      if (!std::isfinite(value)) {
-        if (!r->identical) ++left_out[key];
-        continue;
-      }
-      sum += value;
-      ++count;
-    }
-  }
-  out["mean"] = nlohmann::json::object();
-  for (const auto& [key, sc] : sums)
-    out["mean"][key] = sc.second > 0 ? FiniteOrNull(sc.first / sc.second) : nlohmann::json(nullptr);
-  // The shape where the LDR fits: pooled within images, not the mean of per-pair slopes.
-  std::vector<LogShapeSums> fit_sums;
-  for (const auto& r : results)
-    if (r->fit_sums) fit_sums.push_back(*r->fit_sums);
-  if (!fit_sums.empty()) SetPooledLdrFitShape(fit_sums, &out["mean"]);
-  out["identical_pairs"] = identical;
-  if (!left_out.empty()) out["infinite_left_out"] = left_out;
-  return out;
+  return ResultsJson(results);
 }
 
 std::string FormatEvalTable(const nlohmann::json& result) {

@@ -183,12 +183,17 @@ void RequireOwnLdrImages(const fs::path& root,
 // A folder of the scene that is a link into another scene (`dataset split-val` links its copy's
 // images to the original's) would have the images written there: refused, naming both. A link
 // to a folder of no scene (images kept on another disk) is written through.
+// The folders `outputs` go into, each once.
+std::set<fs::path> FoldersOf(const std::vector<fs::path>& outputs) {
+  std::set<fs::path> folders;
+  for (const fs::path& f : outputs) folders.insert(f.parent_path().empty() ? "." : f.parent_path());
+  return folders;
+}
+
 void RequireOwnFolders(const fs::path& root, const std::vector<fs::path>& outputs) {
   std::error_code ec;
   const fs::path scene = fs::weakly_canonical(fs::absolute(root, ec), ec);
-  std::set<fs::path> folders;
-  for (const fs::path& f : outputs) folders.insert(f.parent_path().empty() ? "." : f.parent_path());
-  for (const fs::path& folder : folders) {
+  for (const fs::path& folder : FoldersOf(outputs)) {
     const std::string owner = DatasetOfImageFolder(folder);
     if (owner.empty() || fs::path(owner) == scene) continue;
     Fail("{}: this folder of the scene {} is a link into the scene {} (as a `dataset split-val` "
@@ -201,9 +206,7 @@ void RequireOwnFolders(const fs::path& root, const std::vector<fs::path>& output
 // A folder the images go into that cannot be written is named with the cause before any work,
 // not as the temporary file the first write fails on (issue 51 §24).
 void RequireWritableFolders(const std::vector<fs::path>& outputs) {
-  std::set<fs::path> folders;
-  for (const fs::path& f : outputs) folders.insert(f.parent_path().empty() ? "." : f.parent_path());
-  for (const fs::path& folder : folders) {
+  for (const fs::path& folder : FoldersOf(outputs)) {
     std::error_code ec;
     if (!fs::is_directory(folder, ec)) continue;  // made by the writer, which names its problem
     if (::access(folder.c_str(), W_OK) == 0) continue;
