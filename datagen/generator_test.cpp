@@ -341,6 +341,15 @@ TEST(Generator, RerunRefusesAFolderHoldingFilesItDidNotWrite) {
   EXPECT_TRUE(Contains(link, ": holds link,")) << link;
   EXPECT_TRUE(fs::exists(f.dir / "fixture" / "render_info.json"));
   fs::remove(root / "link");
+  // One of datagen's own files, edited since: no longer its to delete.
+  const fs::path transforms = root / "transforms_train.json";
+  const std::string original = testing::ReadTextFile(transforms);
+  testing::WriteTextFile(transforms, original + " ");
+  const std::string edited = ErrorOf([&] { GenerateScene(f.options, "airplane"); });
+  EXPECT_TRUE(Contains(edited, ": holds transforms_train.json (changed since datagen wrote it),"))
+      << edited;
+  EXPECT_EQ(testing::ReadTextFile(transforms), original + " ");
+  testing::WriteTextFile(transforms, original);
   GenerateScene(f.options, "airplane");  // only its own files again
   EXPECT_NE(testing::ReadTextFile(root / "manifest.json"), manifest);  // new timings
 }

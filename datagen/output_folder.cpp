@@ -50,9 +50,19 @@ std::set<std::string> OwnFiles(const json& manifest, std::set<std::string>* dirs
   return files;
 }
 
+// True when `file`, listed in the manifest as `relative`, no longer has the SHA-256 the manifest
+// gives it: someone edited or replaced it, so it is not datagen's to delete any more.
+bool ChangedSinceWritten(const fs::path& file, const std::string& relative, const json& manifest) {
+  const auto files = manifest.find("files");
+  // The manifest and the log carry no checksum.
+  if (files == manifest.end() || !files->is_object() || !files->contains(relative)) return false;
+  const json& sha = files->at(relative);
+  return !sha.is_string() || Sha256File(file) != sha.get<std::string>();
+}
+
 // The entries of `dir` that the run its manifest describes did not write (sorted): files it
-// does not list, folders above none of them that are not empty, links and anything else
-// (datagen writes none).
+// does not list or that changed since (their SHA-256 differs), folders above none of them that
+// are not empty, links and anything else (datagen writes none).
 // The own files and folders found go to `own_files` and `own_dirs` when given.
 std::vector<std::string> ForeignEntries(const fs::path& dir, const json& manifest,
                                         std::vector<fs::path>* own_files = nullptr,
@@ -67,7 +77,11 @@ std::vector<std::string> ForeignEntries(const fs::path& dir, const json& manifes
     const fs::file_status status = it->symlink_status(ec);
     if (ec) break;
     if (fs::is_regular_file(status) && files.count(relative)) {
-      if (own_files) own_files->push_back(it->path());
+      if (ChangedSinceWritten(it->path(), relative, manifest)) {
+        foreign.push_back(relative + " (changed since datagen wrote it)");
+      } else if (own_files) {
+        own_files->push_back(it->path());
+      }
     } else if (fs::is_directory(status) && (dirs.count(relative) || IsEmptyDir(it->path()))) {
       // An empty folder holds nothing to lose (a run may leave one, the manifest lists files).
       if (own_dirs) own_dirs->push_back(it->path());
@@ -87,8 +101,8 @@ void CheckOnlyOwnFiles(const fs::path& final_dir, const json& manifest) {
   if (foreign.empty()) return;
   Fail(
       "{}: holds {}{}, which the previous `hdr4d datagen` run did not write (not in its "
-      "manifest.json); a rerun replaces only datagen's own files: move it out of the folder, or "
-      "choose another --out",
+      "manifest.json, or not with the SHA-256 it lists); a rerun replaces only datagen's own "
+      "files: move it out of the folder, or choose another --out",
       final_dir.string(), foreign.front(),
       foreign.size() > 1 ? fmt::format(" and {} more entries", foreign.size() - 1) : "");
 }

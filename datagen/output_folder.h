@@ -1,8 +1,9 @@
 // The output folder of one datagen scene (a dataset or a capture): built in OUT/<scene>.partial
 // and moved into place only when complete, so a failed run keeps the previous output; a folder
 // that holds anything but a previous datagen run is never replaced. A rerun deletes only what
-// the previous run wrote (the files its manifest lists, the manifest and blender.log): a scene
-// folder that holds anything else (notes, a training run) is refused, naming the first entry.
+// the previous run wrote (the files its manifest lists, still with the SHA-256 it lists, the
+// manifest and blender.log): a scene folder that holds anything else (notes, a training run, an
+// edited image) is refused, naming the first entry.
 #pragma once
 
 #include <chrono>
