@@ -5,7 +5,7 @@
 #include <fstream>
 #include <vector>
 
-#include "calibration/colmap_process.h"
+#include "core/util/child_process.h"
 #include "core/geometry/colmap_model.h"
 #include "core/files/atomic_file.h"
 #include "core/util/error.h"

@@ -1,4 +1,4 @@
-#include "calibration/colmap_process.h"
+#include "core/util/child_process.h"
 
 #include <fcntl.h>
 #include <signal.h>

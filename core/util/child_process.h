@@ -1,7 +1,7 @@
-// Running one COLMAP step as a child process that cannot outlive calibrate: its own argv (no
-// shell), output to a log file, killed with calibrate (PR_SET_PDEATHSIG on kill -9) and
-// stopped when calibrate gets SIGTERM, SIGINT or SIGHUP (issue 51 §21), after which the
-// caller's error path removes what the run staged.
+// Running a program (a COLMAP step, ffmpeg) as a child process that cannot outlive hdr4d: its own
+// argv (no shell), output to a log file, killed with hdr4d (PR_SET_PDEATHSIG on kill -9) and
+// stopped when hdr4d gets SIGTERM, SIGINT or SIGHUP (issue 51 §21), after which the caller's
+// error path removes what it staged.
 #pragma once
 
 #include <filesystem>
