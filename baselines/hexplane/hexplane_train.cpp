@@ -408,6 +408,7 @@ HexPlaneTrainSummary HexPlaneTraining::Finish(int iterations, double seconds) {
 HexPlaneTrainSummary HexPlaneTraining::Run() {
   SetUp();
   std::filesystem::create_directories(o_.out);
+  const RunFolderWriter writer(o_.out);  // its config, checkpoint and results are ours to write
   if (o_.resume) {
     Restore();
   } else {

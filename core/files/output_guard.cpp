@@ -2,6 +2,8 @@
 
 #include <sys/stat.h>
 
+#include <algorithm>
+#include <iterator>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -56,6 +58,7 @@ struct Registry {
   std::multiset<std::string> permits;
   std::unordered_map<std::string, std::string> folder_keys;  // folder as given -> its key
   std::set<std::string> named;  // command-line arguments, absolute and normalised
+  std::multiset<std::string> own_runs;  // run folders this process trains (RunFolderWriter)
 };
 
 Registry& TheRegistry() {
@@ -109,6 +112,23 @@ void ProtectInput(const fs::path& path, const std::string& role) {
   }
 }
 
+namespace {
+
+// True when `key` (resolved) names one of a training run's own files in a run folder found by
+// looking (kRunFolderFiles).
+bool IsFileOfARun(const std::string& key) {
+  const std::string name = fs::path(key).filename().string();
+  if (std::find(std::begin(kRunFolderFiles), std::end(kRunFolderFiles), name) ==
+      std::end(kRunFolderFiles))
+    return false;
+  const fs::path folder = FolderOf(key);
+  std::error_code ec;
+  return fs::exists(folder / ".hdr4d-lock", ec) ||
+         (fs::exists(folder / "config.json", ec) && fs::exists(folder / "checkpoint.bin", ec));
+}
+
+}  // namespace
+
 void CheckOutput(const fs::path& path) {
   const std::string key = ResolvedKey(ResolveWriteTarget(path));
   const std::string folder = FolderOf(key);
@@ -120,6 +140,10 @@ void CheckOutput(const fs::path& path) {
   }
   if (const std::string* role = r.folders.Match(folder, IdOf(folder))) {
     Fail("{}: refusing to write into {}: it holds {}", path.string(), folder, *role);
+  }
+  if (r.scopes > 0 && r.own_runs.count(folder) == 0 && IsFileOfARun(key)) {
+    Fail("{}: refusing to write: it is a file of training run {} (only `hdr4d train` of that run "
+         "writes it)", path.string(), folder);
   }
 }
 
@@ -199,6 +223,18 @@ OutputPermit::~OutputPermit() {
   Registry& r = TheRegistry();
   const std::lock_guard<std::mutex> lock(r.mutex);
   for (const std::string& k : keys_) r.permits.erase(r.permits.find(k));
+}
+
+RunFolderWriter::RunFolderWriter(const fs::path& run) : key_(ResolvedKey(run)) {
+  Registry& r = TheRegistry();
+  const std::lock_guard<std::mutex> lock(r.mutex);
+  r.own_runs.insert(key_);
+}
+
+RunFolderWriter::~RunFolderWriter() {
+  Registry& r = TheRegistry();
+  const std::lock_guard<std::mutex> lock(r.mutex);
+  r.own_runs.erase(r.own_runs.find(key_));
 }
 
 InputProtectionScope::InputProtectionScope() {

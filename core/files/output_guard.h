@@ -68,6 +68,25 @@ class OutputPermit {
   std::vector<std::string> keys_;
 };
 
+// The files a training run keeps in its folder. Inside a command, a folder holding `.hdr4d-lock`,
+// or `config.json` and `checkpoint.bin`, is a run found by looking, and CheckOutput refuses these
+// files there (`eval --out RUN/checkpoint.bin` would replace the trained model) unless this
+// process trains that run and says so with a RunFolderWriter.
+inline constexpr const char* kRunFolderFiles[] = {"config.json", "checkpoint.bin", "results.json",
+                                                  "data_checksums.json", ".hdr4d-lock"};
+
+// While alive, this process may write the run files (kRunFolderFiles) of `run`: the trainer's.
+class RunFolderWriter {
+ public:
+  explicit RunFolderWriter(const std::filesystem::path& run);
+  ~RunFolderWriter();
+  RunFolderWriter(const RunFolderWriter&) = delete;
+  RunFolderWriter& operator=(const RunFolderWriter&) = delete;
+
+ private:
+  std::string key_;
+};
+
 // The lifetime of one command's registrations (nested scopes share the outermost one's).
 class InputProtectionScope {
  public:

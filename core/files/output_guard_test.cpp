@@ -34,6 +34,35 @@ TEST(OutputGuard, AProtectedFileIsRefusedUnderEverySpelling) {
   EXPECT_NO_THROW(CheckOutput(dir / "b.exr"));
 }
 
+// A run folder found by looking: its own files are written only by the trainer that says it owns
+// the folder (eval --out RUN/checkpoint.bin replaced a trained model, sweep of stop 94).
+TEST(OutputGuard, ATrainingRunsFilesAreWrittenOnlyByItsTrainer) {
+  TempDir dir;
+  const InputProtectionScope scope;
+  testing::WriteTextFile(dir / "run" / "config.json", "{}");
+  testing::WriteTextFile(dir / "run" / "checkpoint.bin", "model");
+  testing::WriteTextFile(dir / "locked" / ".hdr4d-lock", "");
+  for (const fs::path& p : {dir / "run" / "checkpoint.bin", dir / "run" / "config.json",
+                            dir / "run" / "results.json", dir / "run" / "data_checksums.json",
+                            dir / "run" / ".hdr4d-lock", dir / "locked" / "results.json"}) {
+    const std::string error = ErrorOf([&] { CheckOutput(p); });
+    EXPECT_NE(error.find(p.string() + ": refusing to write: it is a file of training run "),
+              std::string::npos) << error;
+    EXPECT_THROW(WriteTextFileAtomic(p, "eval's JSON"), Error);
+  }
+  EXPECT_EQ(testing::ReadTextFile(dir / "run" / "checkpoint.bin"), "model");
+  // Other files of a run, and the same names in a folder that is no run, are any command's.
+  EXPECT_NO_THROW(CheckOutput(dir / "run" / "eval.json"));
+  testing::WriteTextFile(dir / "other" / "config.json", "{}");
+  EXPECT_NO_THROW(CheckOutput(dir / "other" / "config.json"));
+  {
+    const RunFolderWriter trainer(dir / "run");
+    EXPECT_NO_THROW(WriteTextFileAtomic(dir / "run" / "checkpoint.bin", "trained further"));
+    EXPECT_THROW(CheckOutput(dir / "locked" / "results.json"), Error);  // another run
+  }
+  EXPECT_THROW(CheckOutput(dir / "run" / "checkpoint.bin"), Error);
+}
+
 TEST(OutputGuard, AFileThatDoesNotExistYetIsProtectedByItsPath) {
   TempDir dir;
   const InputProtectionScope scope;

@@ -186,6 +186,7 @@ class TrainingRun {
   // The folder guard is declared before the lock: the lock goes first when a failure unwinds.
   std::optional<CleanUpFailedStart> cleanup_;
   std::optional<FolderLock> lock_;
+  std::optional<RunFolderWriter> writer_;  // this run's files are ours to write (output_guard.h)
   fs::path checkpoint_path_;
   GaussianModel model_;
   GaussianGradients grads_;

@@ -26,6 +26,7 @@ void TrainingRun::OpenRunFolder() {
   if (ec) Fail("{}: cannot create the run folder: {}", options_.out.string(), ec.message());
   // The clean-up is armed once the lock is ours: a writer that holds it owns what is there.
   lock_.emplace(options_.out, "hdr4d train --out " + options_.out.string());
+  writer_.emplace(options_.out);
   cleanup_.emplace(options_.out, made_folder, /*fresh_run=*/!options_.resume);
   if (!options_.resume) {
     RequireFreshRunFolder(options_.out, options_.overwrite);  // again, now that the lock is held
