@@ -23,25 +23,56 @@ fs::path Canonical(const std::string& path) {
   return ec ? fs::path(path).lexically_normal() : p;
 }
 
+// What is compared: a resume's options (all, or only those given) with the run's record, or the
+// record in config.json with the one its checkpoint was trained with (`checkpoint` is then set).
+struct Comparison {
+  const fs::path& config_file;
+  bool given_only = false;
+  const fs::path* checkpoint = nullptr;
+};
+
+[[noreturn]] void FailDropped(const Comparison& c, const std::string& key,
+                              const nlohmann::json& value) {
+  if (c.checkpoint) {
+    Fail("{}: has no {}, but {} was trained with {} = {}: the run's files do not belong together "
+         "(config.json edited, or another run's checkpoint); put back the run's own",
+         c.config_file.string(), key, c.checkpoint->string(), key, Short(value));
+  }
+  Fail("{}: --resume would drop the run's {} = {} (start a new run folder to change the "
+       "configuration)",
+       c.config_file.string(), key, Short(value));
+}
+
+[[noreturn]] void FailDiffers(const Comparison& c, const std::string& key,
+                              const nlohmann::json& saved, const nlohmann::json& requested) {
+  if (c.checkpoint) {
+    Fail("{}: {} = {}, but {} was trained with {}: the run's files do not belong together "
+         "(config.json edited, or another run's checkpoint); put back the run's own",
+         c.config_file.string(), key, Short(requested), c.checkpoint->string(), Short(saved));
+  }
+  Fail("{}: --resume with {} = {}, but the run was started with {}; a resumed run keeps its "
+       "configuration (start a new run folder to change it)",
+       c.config_file.string(), key, Short(requested), Short(saved));
+}
+
 // Depth is bounded by the configuration's own shape (a few levels): it is our file.
 // given_only: compare the keys `requested` holds, never asking for the others.
 void Compare(const nlohmann::json& saved,
              const nlohmann::json& requested,
              const std::string& key,
-             const fs::path& config_file,
-             bool given_only) {
+             const Comparison& c) {
   if (MayChangeOnResume(key)) return;  // the option table says which (train_options_table.h)
+  // The scene may move after training; data_checksums.json says whether it is the same one.
+  if (c.checkpoint && key == "data") return;
   if (saved.is_object() && requested.is_object()) {
     for (const auto& [name, value] : saved.items()) {
       const std::string sub = key.empty() ? name : key + "." + name;
       const auto it = requested.find(name);
       if (it == requested.end()) {
-        if (MayChangeOnResume(sub) || given_only) continue;
-        Fail("{}: --resume would drop the run's {} = {} (start a new run folder to change the "
-             "configuration)",
-             config_file.string(), sub, Short(value));
+        if (MayChangeOnResume(sub) || c.given_only || (c.checkpoint && sub == "data")) continue;
+        FailDropped(c, sub, value);
       }
-      Compare(value, *it, sub, config_file, given_only);
+      Compare(value, *it, sub, c);
     }
     return;
   }
@@ -50,9 +81,7 @@ void Compare(const nlohmann::json& saved,
   } else if (saved == requested) {
     return;
   }
-  Fail("{}: --resume with {} = {}, but the run was started with {}; a resumed run keeps its "
-       "configuration (start a new run folder to change it)",
-       config_file.string(), key, Short(requested), Short(saved));
+  FailDiffers(c, key, saved, requested);
 }
 
 }  // namespace
@@ -120,13 +149,30 @@ bool AcceptAddedHdrHead(nlohmann::json* saved, const nlohmann::json& requested_h
 void RequireSameConfig(const nlohmann::json& saved,
                        const nlohmann::json& requested,
                        const fs::path& config_file) {
-  Compare(saved, requested, "", config_file, /*given_only=*/false);
+  Compare(saved, requested, "", {.config_file = config_file});
 }
 
 void RequireSameGivenConfig(const nlohmann::json& saved,
                             const nlohmann::json& requested,
                             const fs::path& config_file) {
-  Compare(saved, requested, "", config_file, /*given_only=*/true);
+  Compare(saved, requested, "", {.config_file = config_file, .given_only = true});
+}
+
+void RequireCheckpointOfThisConfig(const nlohmann::json& trainer,
+                                   const nlohmann::json& config,
+                                   const fs::path& config_file,
+                                   const fs::path& checkpoint_file) {
+  const auto it = trainer.find(kRunConfigKey);
+  if (it == trainer.end()) return;  // a run from before the record
+  if (!it->is_object())
+    Fail("{}: corrupt checkpoint: its {} is not an object", checkpoint_file.string(), kRunConfigKey);
+  if (!config.is_object())
+    Fail("{}: not a run configuration (expected a JSON object)", config_file.string());
+  nlohmann::json trained = *it;
+  // A resume that added --hdr-head rewrote config.json before its first checkpoint.
+  if (const auto hdr = config.find("hdr"); hdr != config.end() && hdr->is_object())
+    AcceptAddedHdrHead(&trained, *hdr);
+  Compare(trained, config, "", {.config_file = config_file, .checkpoint = &checkpoint_file});
 }
 
 }  // namespace hdr4d::method

@@ -42,4 +42,19 @@ void RequireSameGivenConfig(const nlohmann::json& saved,
                             const nlohmann::json& requested,
                             const std::filesystem::path& config_file);
 
+// The checkpoint's trainer state holds the record of the run that wrote it (runs since stop 94),
+// under this key.
+inline constexpr const char* kRunConfigKey = "run_config";
+
+// Throws hdr4d::Error naming both files and the first key whose value in `config` (RUN/config.json
+// as read now) differs from the record in `trainer` (the checkpoint's trainer state): an edited
+// config.json, or another run's checkpoint.bin, would otherwise resume or render a model under
+// settings it was not trained with (a crash, or wrong images). Not compared: what may change on
+// resume (as above), and `data` (a scene may move; data_checksums.json tells whether it is the
+// same). A checkpoint without the record (runs from before it) is not checked.
+void RequireCheckpointOfThisConfig(const nlohmann::json& trainer,
+                                   const nlohmann::json& config,
+                                   const std::filesystem::path& config_file,
+                                   const std::filesystem::path& checkpoint_file);
+
 }  // namespace hdr4d::method

@@ -57,6 +57,7 @@ void TrainingRun::FitHdrHeadIfAsked() {
 void TrainingRun::Save(const fs::path& file) {
   // The live model and optimiser are streamed into the file, not copied (checkpoint.h).
   nlohmann::json trainer = loop_.ToJson();
+  trainer[kRunConfigKey] = config_;  // what a reader checks config.json against (resume_check.h)
   if (background_) trainer[kLearnedBackgroundKey] = background_->params();
   if (correction_) trainer[kCameraCorrectionKey] = correction_->ToJson();
   if (head_current_) trainer[kHdrHeadScaleKey] = head_.log_scale;

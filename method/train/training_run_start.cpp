@@ -1,5 +1,6 @@
 // TrainingRun's start: the run folder, a checkpoint resumed or a model initialised, the
 // optimiser bound to it, and what rendering the steps needs.
+#include "method/train/resume_check.h"
 #include "method/train/training_run.h"
 
 #include <algorithm>
@@ -78,6 +79,8 @@ void TrainingRun::ResumeOrInitialise() {
   loop_.rng.seed(options_.seed);
   if (options_.resume) {
     Checkpoint c = LoadCheckpoint(checkpoint_path_);
+    RequireCheckpointOfThisConfig(c.trainer, config_, options_.out / "config.json",
+                                  checkpoint_path_);
     loop_.FromJson(c.trainer, checkpoint_path_, train_views_.size());
     LoadTrainingState(&c, checkpoint_path_);
     spdlog::info("train: resuming {} at iteration {}", checkpoint_path_.string(), loop_.iteration);
