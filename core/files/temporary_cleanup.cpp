@@ -23,10 +23,44 @@ struct Slot {
 Slot g_slots[kSlots];
 std::atomic<bool> g_stopping{false};
 
+// Beyond the fixed slots (a video's thousands of frames wait for one commit): nodes allocated
+// outside the handler, pushed onto a list that only grows and is never freed, so the handler
+// can walk it without allocating; a released node is reused by a later path that fits it.
+struct OverflowNode {
+  std::atomic<int> state{kFilling};
+  std::size_t capacity = 0;
+  char* path = nullptr;
+  OverflowNode* next = nullptr;
+};
+std::atomic<OverflowNode*> g_overflow{nullptr};
+
+OverflowNode* TakeOverflowNode(const std::string& text) {
+  for (OverflowNode* n = g_overflow.load(); n != nullptr; n = n->next) {
+    int expected = kFree;
+    if (n->capacity > text.size() && n->state.compare_exchange_strong(expected, kFilling)) {
+      std::memcpy(n->path, text.c_str(), text.size() + 1);
+      n->state.store(kSet);
+      return n;
+    }
+  }
+  auto* n = new OverflowNode;
+  n->capacity = text.size() + 1;
+  n->path = new char[n->capacity];
+  std::memcpy(n->path, text.c_str(), text.size() + 1);
+  n->state.store(kSet);
+  n->next = g_overflow.load();
+  while (!g_overflow.compare_exchange_weak(n->next, n)) {
+  }
+  return n;
+}
+
 void UnlinkTemporariesAndStop(int sig) {
   g_stopping.store(true);
   for (Slot& s : g_slots) {
     if (s.state.load() == kSet) ::unlink(s.path);  // async-signal-safe
+  }
+  for (OverflowNode* n = g_overflow.load(); n != nullptr; n = n->next) {
+    if (n->state.load() == kSet) ::unlink(n->path);
   }
   ::signal(sig, SIG_DFL);
   ::raise(sig);
@@ -56,10 +90,12 @@ TrackedTemporary::TrackedTemporary(const std::filesystem::path& path) {
     slot_ = i;
     return;
   }
+  overflow_ = TakeOverflowNode(text);
 }
 
 TrackedTemporary::~TrackedTemporary() {
   if (slot_ >= 0) g_slots[slot_].state.store(kFree);
+  if (overflow_) static_cast<OverflowNode*>(overflow_)->state.store(kFree);
 }
 
 }  // namespace hdr4d

@@ -12,9 +12,9 @@ namespace hdr4d {
 // Installs the handlers (once; the CLI does it for every command, cli/app.cpp).
 void RemoveTemporariesOnStopSignals();
 
-// A temporary file to unlink if a stop signal comes before Forget(). Up to a fixed number are
-// tracked at once (signal handlers cannot allocate); beyond that a file is not tracked and only
-// the next lock of its folder removes it.
+// A temporary file to unlink if a stop signal comes before it is released. A fixed number of
+// slots, then nodes of a list made before any signal (signal handlers cannot allocate), so every
+// temporary is tracked however many are pending (a video's frames wait for one commit).
 class TrackedTemporary {
  public:
   explicit TrackedTemporary(const std::filesystem::path& path);
@@ -24,6 +24,7 @@ class TrackedTemporary {
 
  private:
   int slot_ = -1;
+  void* overflow_ = nullptr;  // a node of the list beyond the slots (temporary_cleanup.cpp)
 };
 
 }  // namespace hdr4d
