@@ -18,6 +18,7 @@
 #include "calibration/rig_time_points.h"
 #include "core/geometry/colmap_model.h"
 #include "core/dataset/dataset.h"
+#include "core/files/made_folders.h"
 #include "core/util/error.h"
 #include "core/image/image_io.h"
 
@@ -44,28 +45,6 @@ void CheckWritable(const fs::path& out) {
     std::fclose(f);
   }
   fs::remove(probe, ec);
-}
-
-// The outermost folder of `out` that does not exist yet (empty when `out` exists): what this
-// run creates, and so what a failure takes away again (issue 51 §20: no empty --out left).
-fs::path FirstMissingFolder(const fs::path& out) {
-  std::error_code ec;
-  fs::path missing;
-  for (fs::path p = out; !fs::exists(p, ec); p = p.parent_path()) {
-    missing = p;
-    if (p == p.parent_path()) break;
-  }
-  return missing;
-}
-
-// Removes `folder` when it holds nothing but empty folders (never a file someone put there).
-void RemoveIfEmptyTree(const fs::path& folder) {
-  std::error_code ec;
-  if (folder.empty() || !fs::is_directory(fs::symlink_status(folder, ec))) return;
-  for (auto it = fs::recursive_directory_iterator(folder, ec); !ec && it != fs::recursive_directory_iterator();
-       it.increment(ec))
-    if (!it->is_directory(ec) || it->is_symlink(ec)) return;
-  fs::remove_all(folder, ec);
 }
 
 // Whether `inner` is `outer` or lies under it, both resolved (symlinks included).
