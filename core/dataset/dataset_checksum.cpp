@@ -27,6 +27,18 @@ std::vector<std::pair<fs::path, std::string>> HashDatasetFiles(const Dataset& da
   return hashes;
 }
 
+namespace {
+
+// "train images/x.png", split by split, in the JSON's order.
+std::vector<std::string> FrameNames(const Dataset& dataset) {
+  std::vector<std::string> frames;
+  for (const Frame* f : dataset.AllFrames())
+    frames.push_back(fmt::format("{} {}", SplitName(f->split), f->file_path));
+  return frames;
+}
+
+}  // namespace
+
 nlohmann::json DatasetRecord::ToJson() const {
   nlohmann::json j_files = nlohmann::json::object();
   for (const auto& [path, hash] : files) j_files[path] = hash;
@@ -51,11 +63,23 @@ DatasetRecord DatasetRecord::FromJson(const nlohmann::json& json, const std::str
 
 DatasetRecord RecordDataset(const Dataset& dataset) {
   DatasetRecord r;
-  for (const Frame* f : dataset.AllFrames())
-    r.frames.push_back(fmt::format("{} {}", SplitName(f->split), f->file_path));
+  r.frames = FrameNames(dataset);
   for (const auto& [path, hash] : HashDatasetFiles(dataset))
     r.files.emplace_back(path.lexically_relative(dataset.root).generic_string(), hash);
   return r;
+}
+
+std::string DescribeCameraChange(const DatasetRecord& before, const Dataset& now) {
+  DatasetRecord json_before, json_now;
+  json_before.frames = before.frames;
+  json_now.frames = FrameNames(now);
+  for (const auto& [path, hash] : before.files) {
+    if (fs::path(path).extension() != ".json") continue;
+    json_before.files.emplace_back(path, hash);
+    const fs::path file = now.root / path;
+    json_now.files.emplace_back(path, fs::exists(file) ? Sha256File(file) : "absent");
+  }
+  return DescribeDatasetChange(json_before, json_now);
 }
 
 std::string DescribeDatasetChange(const DatasetRecord& before, const DatasetRecord& now) {

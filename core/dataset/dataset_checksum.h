@@ -34,4 +34,9 @@ DatasetRecord RecordDataset(const Dataset& dataset);
 // differs)".
 std::string DescribeDatasetChange(const DatasetRecord& before, const DatasetRecord& now);
 
+// What a render reads of a dataset, against `before`: the frames of each split and the JSON files
+// the record holds (cameras, times, exposures); "" when they are the same, else the first change
+// as above. Images and the point cloud are neither hashed nor compared (a render reads neither).
+std::string DescribeCameraChange(const DatasetRecord& before, const Dataset& now);
+
 }  // namespace hdr4d

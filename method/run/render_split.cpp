@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <fstream>
 #include <future>
 #include <iterator>
 #include <map>
@@ -17,10 +18,13 @@
 
 #include "core/files/atomic_file.h"
 #include "core/dataset/dataset.h"
+#include "core/dataset/dataset_checksum.h"
 #include "core/util/error.h"
 #include "core/image/image_io.h"
 #include "core/files/json_util.h"
+#include "core/files/made_folders.h"
 #include "core/files/output_guard.h"
+#include "core/util/child_process.h"
 #include "core/util/parallel.h"
 #include "method/gaussian/sh4d.h"
 #include "core/util/progress.h"
@@ -34,12 +38,28 @@
 #include "method/tonemap/tone_mapper_registry.h"
 #include "method/train/checkpoint.h"
 #include "method/train/hdr_head_fit.h"  // ReadHdrHead
+#include "method/train/resume_check.h"  // RequireCheckpointOfThisConfig
+#include "method/train/run_folder.h"    // kDataRecordName
 #include "method/train/train_views.h"   // DownscaledIntrinsics
 
 namespace hdr4d::method {
 namespace fs = std::filesystem;
 
 namespace {
+
+// A run shows the views it was trained on: the scene's frames and its JSON files (cameras, times,
+// exposures) as RUN/data_checksums.json records them (runs from before the record: unchecked).
+void RequireCamerasOfTheRun(const fs::path& run, const Dataset& dataset) {
+  const fs::path file = run / kDataRecordName;
+  std::error_code ec;
+  if (!fs::exists(file, ec)) return;
+  const DatasetRecord before = DatasetRecord::FromJson(ReadJsonFile(file), file.string());
+  if (const std::string change = DescribeCameraChange(before, dataset); !change.empty()) {
+    Fail("{}: the scene changed since run {} was trained ({} records it): {}; its views are "
+         "shown on the cameras it was trained with (put the scene back, or train a new run on it)",
+         dataset.root.string(), run.string(), file.string(), change);
+  }
+}
 
 // --camera-correction runs: the tone mapper wrapped in the learned gains, and each frame's row.
 // The camera count the run recorded must be the dataset's (the data checks guard the images;
@@ -69,10 +89,20 @@ LoadedRun LoadRun(const fs::path& run, int resolution_override) {
   r.config = ReadJsonFile(config_path);
   // Typed reads name the file and the key of a value that is missing or of the wrong type.
   const JsonField config(r.config, config_path.string());
-  r.dataset = LoadDataset(config["data"].String(),
+  if (r.config.is_object() && r.config.contains("hexplane"))
+    Fail("{}: a HexPlane run (a grid, not Gaussians): `hdr4d render` renders it; export-ply, "
+         "view and tone-curves read runs of Gaussians", run.string());
+  const std::string data = config["data"].String();
+  std::error_code ec;
+  if (!fs::is_directory(data, ec))
+    config["data"].Fail(fmt::format("the scene {} is not there (moved or deleted since the run "
+                                    "was trained?): put it back, or set the key to where it is",
+                                    data));
+  r.dataset = LoadDataset(data,
                           {.image_check = ImageCheck::kNone,
                            .exposure_unit = RecordedExposureUnit(r.config, config_path.string()),
                            .require_test = false});
+  RequireCamerasOfTheRun(run, r.dataset);
   // A run trained at --resolution R renders every split at it (runs from before: 1), unless
   // the caller asks for another.
   const int run_resolution = static_cast<int>(config.IntOr("resolution", 1, 1, 1 << 16));
@@ -92,6 +122,7 @@ LoadedRun LoadRun(const fs::path& run, int resolution_override) {
   }
   const fs::path checkpoint_path = run / "checkpoint.bin";
   Checkpoint c = LoadCheckpoint(checkpoint_path, {.optimizer_state = false});  // looked at only
+  RequireCheckpointOfThisConfig(c.trainer, r.config, config_path, checkpoint_path);
   r.model = std::move(c.model);
   r.hdr_head = ReadHdrHead(c, r.model.size(), checkpoint_path.string());
   r.background = static_cast<float>(config.NumberOr("background", 0.0));
@@ -108,6 +139,11 @@ LoadedRun LoadRun(const fs::path& run, int resolution_override) {
   }
   const JsonField resolved = config["resolved"].Object();
   r.resolved.hdr_colors = resolved["hdr_colors"].Bool();
+  // Also for runs whose checkpoint holds no record of their configuration.
+  if (r.resolved.hdr_colors != (r.model.color_mode == ColorMode::kLogHdr))
+    resolved["hdr_colors"].Fail(fmt::format("is {}, but {} holds {} colours", r.resolved.hdr_colors,
+                                            checkpoint_path.string(),
+                                            r.resolved.hdr_colors ? "LDR" : "log-HDR"));
   r.resolved.ldr_gaussian = resolved["ldr_gaussian"].Bool();
   r.resolved.ldr_pixel = resolved["ldr_pixel"].Bool();
   r.resolved.hdr = resolved["hdr"].Bool();
@@ -179,11 +215,13 @@ namespace {
 
 bool HaveFfmpeg() { return std::system("command -v ffmpeg >/dev/null 2>&1") == 0; }
 
-// A path as one shell word, whatever quotes or spaces it holds.
-std::string ShellQuote(const std::string& text) {
-  std::string quoted = "'";
-  for (char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return quoted + "'";
+// The last line of a child's log that says something (for an error message), at most 300 bytes.
+std::string LastLogLine(const fs::path& log) {
+  std::ifstream in(log);
+  std::string line, last;
+  while (std::getline(in, line))
+    if (line.find_first_not_of(" \t\r") != std::string::npos) last = line;
+  return last.size() > 300 ? last.substr(0, 297) + "..." : last;
 }
 
 // `text` as literal text inside an ffmpeg image-sequence pattern: its own '%' doubled (a folder
@@ -276,6 +314,9 @@ void CheckRenderOptions(const RenderRunOptions& options) {
   if (options.camera_index < 0) Fail("render: camera {} must be >= 0", options.camera_index);
   if (options.exposure && !(*options.exposure > 0 && std::isfinite(*options.exposure)))
     Fail("render: --exposure {} must be a positive number of seconds", *options.exposure);
+  if (!options.timing.empty() && (options.time || options.video_frames > 0))
+    Fail("render: --timing times the views of a split render; it does not apply to {}",
+         options.time ? "--time" : "--video");
   if (!options.timing.empty()) CheckOutput(options.timing);  // before the renders, not after
 }
 
@@ -391,17 +432,31 @@ int RenderAtTime(const RenderRunOptions& options,
 // Encodes the video's PNG frames in `dir` as dir/video.mp4, through the atomic writer like every
 // output (a killed ffmpeg leaves no half video); -frames:v: exactly this video's frames, even if
 // a longer earlier one left more.
+// ffmpeg is a child that dies with hdr4d and is stopped by a stop signal before the temporary
+// MP4 is removed (core/util/child_process.h); its messages go to a private log, quoted on failure.
 fs::path EncodeVideo(const fs::path& dir, int frames, int fps) {
   const fs::path mp4 = dir / "video.mp4";
-  WriteFileAtomicAt(mp4, [&](const fs::path& tmp) {
-    const std::string command = fmt::format(
-        "ffmpeg -loglevel error -y -framerate {} -i {} -frames:v {} -vf "
-        "'pad=ceil(iw/2)*2:ceil(ih/2)*2' -pix_fmt yuv420p -c:v libx264 -f mp4 {}",
-        fps, ShellQuote(FfmpegPatternLiteral(dir.string()) + "/frame_%04d.png"), frames,
-        ShellQuote(tmp.string()));
-    if (std::system(command.c_str()) != 0)
-      Fail("{}: ffmpeg failed to encode the frames in {}", mp4.string(), dir.string());
-  });
+  const fs::path logs = MakePrivateTempFolder("hdr4d-ffmpeg-");
+  const auto remove_logs = [&] {
+    std::error_code ec;
+    fs::remove_all(logs, ec);
+  };
+  try {
+    WriteFileAtomicAt(mp4, [&](const fs::path& tmp) {
+      const std::vector<std::string> argv = {
+          "ffmpeg", "-nostdin", "-loglevel", "error", "-y", "-framerate", std::to_string(fps),
+          "-i", FfmpegPatternLiteral(dir.string()) + "/frame_%04d.png", "-frames:v",
+          std::to_string(frames), "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-pix_fmt", "yuv420p",
+          "-c:v", "libx264", "-f", "mp4", tmp.string()};
+      if (const int code = RunLoggedChild(argv, {}, logs / "ffmpeg.log"); code != 0)
+        Fail("{}: ffmpeg failed to encode the frames in {} (exit {}): {}", mp4.string(),
+             dir.string(), code, LastLogLine(logs / "ffmpeg.log"));
+    });
+  } catch (...) {
+    remove_logs();
+    throw;
+  }
+  remove_logs();
   return mp4;
 }
 
@@ -524,17 +579,25 @@ int RenderRun(const RenderRunOptions& options) {
   CheckRenderOptions(options);
   const ThreadLimit limit(options.threads);
   const Split split = ParseSplit(options.split, "render");
-  LoadedRun run = LoadRun(options.run, options.resolution);
-  OrderForRendering(&run);
-  const std::unique_ptr<ViewRenderer> renderer = MakeRunRenderer(run);
-  const std::vector<Frame>& frames = run.dataset.FramesOf(split);
-  if (frames.empty())
-    Fail("{}: the {} split has no frames", run.dataset.root.string(), options.split);
-  ViewFileWriter writer(run, renderer.get(), options);
-  if (options.time)
-    return RenderAtTime(options, frames, run.correction_cameras.Of(split), &writer);
-  if (options.video_frames > 0) return RenderVideo(options, run, *renderer, &writer);
-  return RenderSplitViews(options, run.dataset, frames, run.correction_cameras.Of(split), &writer);
+  // A failed render takes away the output folders it made (when nothing but folders is there).
+  const fs::path made = FirstMissingFolder(RenderOutputFolder(options));
+  try {
+    LoadedRun run = LoadRun(options.run, options.resolution);
+    OrderForRendering(&run);
+    const std::unique_ptr<ViewRenderer> renderer = MakeRunRenderer(run);
+    const std::vector<Frame>& frames = run.dataset.FramesOf(split);
+    if (frames.empty())
+      Fail("{}: the {} split has no frames", run.dataset.root.string(), options.split);
+    ViewFileWriter writer(run, renderer.get(), options);
+    if (options.time)
+      return RenderAtTime(options, frames, run.correction_cameras.Of(split), &writer);
+    if (options.video_frames > 0) return RenderVideo(options, run, *renderer, &writer);
+    return RenderSplitViews(options, run.dataset, frames, run.correction_cameras.Of(split),
+                            &writer);
+  } catch (...) {
+    RemoveIfEmptyTree(made);
+    throw;
+  }
 }
 
 }  // namespace hdr4d::method

@@ -64,8 +64,22 @@ std::pair<float, float> LogHdrRange(const LoadedRun& run) {
   return {std::max(lo - 2.0f, -40.0f), std::min(hi + 2.0f, 40.0f)};
 }
 
+// The baked tables travel in the page as base64 (4/3 of their bytes): refused before baking past
+// 256 MiB of floats, a page no browser opens comfortably (the defaults: under 7 MiB).
+void CheckToneTableSize(const LoadedRun& run, const ViewerPageOptions& o, std::size_t exposures) {
+  constexpr double kMaxBytes = 256.0 * (1 << 20);
+  const int rows = std::min(run.num_times, std::max(o.max_time_rows, 1));
+  const double bytes = 4.0 * 3 * rows * static_cast<double>(exposures) * o.tone_nodes;
+  if (bytes > kMaxBytes)
+    Fail("view: the baked tone tables would take {:.0f} MiB ({} time rows x {} exposures x {} "
+         "nodes x 3 channels), over the page's {:.0f} MiB: lower --tone-nodes or "
+         "--exposure-steps",
+         bytes / (1 << 20), rows, exposures, o.tone_nodes, kMaxBytes / (1 << 20));
+}
+
 nlohmann::json ToneJson(const LoadedRun& run, const ViewerPageOptions& o,
                         const std::vector<float>& log_exposures) {
+  CheckToneTableSize(run, o, log_exposures.size());
   const auto [x0, x1] = LogHdrRange(run);
   const ToneTables t = BakeToneTables(run.tone_mapper.get(), x0, x1, o.tone_nodes, run.num_times,
                                       o.max_time_rows, log_exposures);
