@@ -131,6 +131,7 @@ class TrainingRun {
   void CheckDataUnchanged();
   void LoadTrainingViews();
   void ResolveSchedules();
+  std::string WhatIsKept() const;  // for the errors that stop a run: its last checkpoint, or none
   std::optional<double> StaticContentViews();  // a static scene's views of content, for its budget
   void ResolveLearnedBackground();
   void StartCameraCorrection();

@@ -25,13 +25,26 @@ namespace hdr4d::method::training_run {
 namespace {
 
 // NeRF++ normalisation: 1.1 x the largest distance of a training camera from their centroid.
-double SceneExtent(const std::vector<TrainView>& views) {
+// The reference's scene extent: 1.1 x the largest distance of a camera centre from their mean.
+// Cameras that share one centre (one fixed camera, a tripod turning) have none, and an extent of
+// 1e-3 made densification prune every Gaussian as world-large (stop 94 sweep: 0 Gaussians, exit
+// 0); their extent is then the content's, the median distance of the cloud's points from the
+// centre (`points` may be null: no cloud, the old floor).
+double SceneExtent(const std::vector<TrainView>& views, const std::vector<Eigen::Vector3f>* points) {
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (const TrainView& v : views) mean += v.camera.Center();
   mean /= static_cast<double>(views.size());
   double radius = 0;
   for (const TrainView& v : views) radius = std::max(radius, (v.camera.Center() - mean).norm());
-  return 1.1 * std::max(radius, 1e-3);  // one camera: a tiny extent instead of zero
+  if (points && !points->empty()) {
+    std::vector<double> depth;
+    depth.reserve(points->size());
+    for (const Eigen::Vector3f& p : *points) depth.push_back((p.cast<double>() - mean).norm());
+    std::nth_element(depth.begin(), depth.begin() + depth.size() / 2, depth.end());
+    const double content = depth[depth.size() / 2];
+    if (std::isfinite(content) && radius < 1e-4 * content) radius = content;
+  }
+  return 1.1 * std::max(radius, 1e-3);
 }
 
 // The training images' size for the densification threshold: the geometric mean of width and
@@ -190,7 +203,11 @@ void TrainingRun::LoadTrainingViews() {
     for (TrainView& v : *views) v.time_index = RadianceBank::TimeIndex(v.time, num_times_);
   }
   ReturnFreedMemory();  // the checked test images and the decoding buffers (core/util/free_memory.h)
-  extent_ = SceneExtent(train_views_);
+  extent_ = SceneExtent(train_views_, nullptr);
+  if (extent_ <= 1.1e-3 && dataset_->point_cloud_path) {  // the cameras share a centre
+    if (!initial_cloud_) initial_cloud_ = ReadPly(*dataset_->point_cloud_path);
+    extent_ = SceneExtent(train_views_, &initial_cloud_->positions);
+  }
 }
 
 // Schedules for this run's length and image size (an explicit value stays as it is; a resumed
@@ -245,7 +262,7 @@ void TrainingRun::ResolveSchedules() {
 // random points of a cloudless scene are not the scene).
 std::optional<double> TrainingRun::StaticContentViews() {
   if (!dataset_->point_cloud_path) return std::nullopt;
-  initial_cloud_ = ReadPly(*dataset_->point_cloud_path);
+  if (!initial_cloud_) initial_cloud_ = ReadPly(*dataset_->point_cloud_path);
   std::vector<Camera> cameras;
   cameras.reserve(train_views_.size());
   for (const TrainView& v : train_views_) cameras.push_back(v.camera);

@@ -26,8 +26,8 @@ void TrainingRun::OpenRunFolder() {
   fs::create_directories(options_.out, ec);
   if (ec) Fail("{}: cannot create the run folder: {}", options_.out.string(), ec.message());
   // The clean-up is armed once the lock is ours: a writer that holds it owns what is there.
+  writer_.emplace(options_.out);  // first: taking the lock writes the lock file's holder line
   lock_.emplace(options_.out, "hdr4d train --out " + options_.out.string());
-  writer_.emplace(options_.out);
   cleanup_.emplace(options_.out, made_folder, /*fresh_run=*/!options_.resume);
   if (!options_.resume) {
     RequireFreshRunFolder(options_.out, options_.overwrite);  // again, now that the lock is held
@@ -120,6 +120,12 @@ GaussianModel TrainingRun::InitialModel() {
     spdlog::info("train: {} random initial points, capped at --max-gaussians {}",
                  init.num_random_points, asked);
     init.num_random_points = static_cast<int>(asked);
+  }
+  if (random && cloud) {  // the user gave a cloud: say why it is not used (stop 94 sweep)
+    spdlog::warn("train: {} has {} point{}, fewer than the {} a cloud needs to start from: the "
+                 "model starts from {} random points instead (--random-points)",
+                 dataset_->point_cloud_path->string(), cloud->size(),
+                 cloud->size() == 1 ? "" : "s", kMinInitialPoints, init.num_random_points);
   }
   GaussianModel model = InitialiseGaussians(cloud, init);
   if (resolved_.hdr && model.color_mode == ColorMode::kLogHdr) {

@@ -76,8 +76,8 @@ double TrainingRun::ViewLoss(const TrainView& view, int it, const float** ldr_ou
   BoxReduceInPlace(&gt_, view.width(), view.height(), 3, coarse_);
   const double loss_value = ForwardAndLoss(view, ldr_out);
   if (!std::isfinite(loss_value)) {
-    Fail("train: iteration {}: the loss is {} (view {}); stopped, the last good checkpoint is {}",
-         it, loss_value, view.name, checkpoint_path_.string());
+    Fail("train: iteration {}: the loss is {} (view {}); stopped, {}", it, loss_value, view.name,
+         WhatIsKept());
   }
   return loss_value;
 }
@@ -259,16 +259,23 @@ double TrainingRun::BatchBackwardAndUpdate(int it, const float** ldr_out, std::s
   return loss_value;
 }
 
+// What a run stopped by a non-finite value keeps: its last checkpoint, or nothing (a new run's
+// folder is then removed, run_folder.h), which --checkpoint-every would have changed.
+std::string TrainingRun::WhatIsKept() const {
+  std::error_code ec;
+  if (fs::exists(checkpoint_path_, ec))
+    return fmt::format("the last good checkpoint is {}", checkpoint_path_.string());
+  return "and no checkpoint was written yet (--checkpoint-every N keeps one every N iterations)";
+}
+
 // After the backward: the finite check, the steps the backward did not take, the held-out
 // evaluations due, then densification and the opacity reset on their schedule.
 void TrainingRun::FinishUpdate(int it, double loss_value) {
   // A non-finite gradient stops training: the state in memory is partly stepped and dropped,
   // the last checkpoint kept.
   if (const std::string bad = optimizer_->FirstNonFinite(); !bad.empty()) {
-    Fail(
-        "train: iteration {}: non-finite gradient in parameter group '{}'; stopped, the last "
-        "good checkpoint is {}",
-        it, bad, checkpoint_path_.string());
+    Fail("train: iteration {}: non-finite gradient in parameter group '{}'; stopped, {}", it, bad,
+         WhatIsKept());
   }
   loop_.loss_curve.push_back(loss_value);
   // On a densifying iteration this steps only the tone mapper and the background, which
