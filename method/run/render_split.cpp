@@ -278,6 +278,10 @@ std::vector<Camera> OrbitCameras(const std::vector<Camera>& train, int frames) {
   up = up.norm() > 1e-9 ? up.normalized() : Eigen::Vector3d::UnitZ();
   const Eigen::Vector3d start = train.front().Center() - target;
   std::vector<Camera> path;
+  // Cameras that share one centre (a fixed camera, a tripod) have no orbit about what they look
+  // at: the video keeps the first camera while time runs (LookAt from a point to itself aborted).
+  if (!(start.norm() > 1e-9 * std::max(1.0, target.norm())))
+    return std::vector<Camera>(frames, train.front());
   for (int k = 0; k < frames; ++k) {
     const double angle = 2 * std::numbers::pi * k / frames;
     const Eigen::Vector3d eye = target + Eigen::AngleAxisd(angle, up) * start;

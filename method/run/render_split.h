@@ -57,7 +57,8 @@ int RenderRun(const RenderRunOptions& options);
 
 // The orbit of the video: around the point the training cameras look at (least squares
 // intersection of their optical axes), at their mean distance, about their mean up axis,
-// starting at the first training camera. Frame k of n is at angle 2 pi k / n.
+// starting at the first training camera. Frame k of n is at angle 2 pi k / n. Cameras that share
+// one centre have no orbit: every frame is the first training camera (time still runs).
 std::vector<Camera> OrbitCameras(const std::vector<Camera>& train_cameras, int frames);
 
 // A video's frames DIR/frame_%04d.png (0 .. frames - 1) encoded as DIR/video.mp4 when ffmpeg is
