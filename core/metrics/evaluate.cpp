@@ -114,10 +114,12 @@ PairResult EvaluateFiles(const fs::path& pred_path,
          gt_path.string(), gt.ShapeString());
   }
   // Metrics use the colour channels only (alpha ignored), so RGBA against RGB is fine, and grey +
-  // alpha against grey; grey against RGB is not.
+  // alpha against grey. A grey truth is read as RGB against an RGB prediction, as training reads
+  // it (a grey scene's renders are RGB); a grey prediction of an RGB truth is an error.
   const int pred_colour = pred.ColourChannelCount();
   const int gt_colour = gt.ColourChannelCount();
-  if (pred_colour != gt_colour) {
+  const bool grey_truth = gt_colour == 1 && pred_colour == 3;
+  if (pred_colour != gt_colour && !grey_truth) {
     Fail("{} ({}) vs {} ({}): images differ in colour channels ({} vs {})", pred_path.string(),
          pred.ShapeString(), gt_path.string(), gt.ShapeString(), pred_colour, gt_colour);
   }
@@ -132,7 +134,7 @@ PairResult EvaluateFiles(const fs::path& pred_path,
          gt.ShapeString());
   }
   try {
-    const Image pred_rgb = pred.Rgb(), gt_rgb = gt.Rgb();
+    const Image pred_rgb = pred.Rgb(), gt_rgb = grey_truth ? ExpandToRgb(gt) : gt.Rgb();
     if (hdr) {
       result.metrics = HdrMetrics(pred_rgb, gt_rgb);
       result.metrics.emplace_back("hdr_flip", HdrFlip(pred_rgb, gt_rgb));

@@ -390,6 +390,10 @@ TEST(EvaluateTest, ChannelMismatchIsAnErrorButAlphaIsIgnored) {
   WriteLdr(dir / "rgb.png", 4, 4, 29);
   EXPECT_THAT(ErrorOf([&] { EvaluatePair(dir / "grey.png", dir / "rgb.png"); }),
               HasSubstr("colour channels (1 vs 3)"));
+  // A grey truth against an RGB render (a grey scene trains as RGB): the truth read as RGB.
+  WriteImage(dir / "grey_as_rgb.png", ExpandToRgb(ReadImage(dir / "grey.png")));
+  EXPECT_EQ(EvaluatePair(dir / "rgb.png", dir / "grey.png")["psnr"],
+            EvaluatePair(dir / "rgb.png", dir / "grey_as_rgb.png")["psnr"]);
   const nlohmann::json pair = EvaluatePair(dir / "rgba.png", dir / "rgb.png");
   EXPECT_EQ(pair["name"], "rgb.png");
   EXPECT_EQ(KeysOf(pair), kLdrKeys);

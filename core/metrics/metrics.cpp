@@ -260,14 +260,21 @@ double MaxForNormalising(const Image& image, const char* role) {
   return m;
 }
 
+// A prediction's own maximum, to normalise it by. One that is all black (or nowhere positive)
+// has none: it is scored as black, every mu-law value 0, a low score rather than an error that
+// took a run's final evaluation with it (a model that lost its Gaussians, stop 94 sweep).
+double PredictionMax(const Image& pred_rgb) {
+  const double m = pred_rgb.MaxValue();
+  return m <= 0.0 ? 1.0 : MaxForNormalising(pred_rgb, "prediction");
+}
+
 // The mu-law images that MuPsnr / MuSsim compare.
 std::pair<Values, Values> MuLawPair(const Image& pred_rgb,
                                     const Image& gt_rgb,
                                     HdrNormalisation normalisation) {
   const double gt_max = MaxForNormalising(gt_rgb, "ground-truth");
-  const double pred_max = normalisation == HdrNormalisation::kOwnMax
-                              ? MaxForNormalising(pred_rgb, "prediction")
-                              : gt_max;
+  const double pred_max =
+      normalisation == HdrNormalisation::kOwnMax ? PredictionMax(pred_rgb) : gt_max;
   const double inv_log = 1.0 / std::log1p(kMuLawMu);
   auto encode = [inv_log](double x, double max) {
     return std::log1p(kMuLawMu * std::clamp(x / max, 0.0, 1.0)) * inv_log;
