@@ -11,8 +11,9 @@ std::string LdrImageHeaderProblem(const ImageSpecInfo& spec) {
     return "is a linear HDR image (float pixels); file_path is the frame's LDR image (PNG/JPEG), "
            "HDR ground truth belongs in exr_file_path";
   }
-  if (spec.channels != 1 && spec.channels != 3 && spec.channels != 4)
-    return fmt::format("has {} channels; an LDR image must be grey, RGB or RGBA", spec.channels);
+  if (spec.channels < 1 || spec.channels > 4)
+    return fmt::format("has {} channels; an LDR image must be grey, grey + alpha, RGB or RGBA",
+                       spec.channels);
   return "";
 }
 

@@ -39,9 +39,9 @@ std::vector<std::uint8_t> ReadViewPixels(const std::filesystem::path& path,
   const int c = image.channels();
   for (std::size_t p = 0; p < image.num_pixels(); ++p) {
     const float* px = image.data() + p * c;
-    const float alpha = c == 4 ? px[3] : 1.0f;
+    const float alpha = c == 4 || c == 2 ? px[c - 1] : 1.0f;  // RGBA, grey + alpha
     for (int k = 0; k < 3; ++k)
-      rgb.data()[p * 3 + k] = (c == 1 ? px[0] : px[k]) * alpha + background[k] * (1.0f - alpha);
+      rgb.data()[p * 3 + k] = (c <= 2 ? px[0] : px[k]) * alpha + background[k] * (1.0f - alpha);
   }
   const Image reduced = DownsampleBox(rgb, resolution);
   std::vector<std::uint8_t> out(reduced.size());
