@@ -122,7 +122,6 @@ LoadedRun LoadRun(const fs::path& run, int resolution_override) {
   }
   const fs::path checkpoint_path = run / "checkpoint.bin";
   Checkpoint c = LoadCheckpoint(checkpoint_path, {.optimizer_state = false});  // looked at only
-  RequireCheckpointOfThisConfig(c.trainer, r.config, config_path, checkpoint_path);
   r.model = std::move(c.model);
   r.hdr_head = ReadHdrHead(c, r.model.size(), checkpoint_path.string());
   r.background = static_cast<float>(config.NumberOr("background", 0.0));
@@ -133,8 +132,14 @@ LoadedRun LoadRun(const fs::path& run, int resolution_override) {
     r.learned_background = ReadLearnedBackground(c.trainer, LearnedBackgroundChannels(r.model),
                                                  checkpoint_path.string());
   }
+  // Last, after the typed reads, which name a bad value more precisely: what they cannot see, a
+  // config.json that is not the one the checkpoint was trained with.
+  const auto trained_with = [&] {
+    RequireCheckpointOfThisConfig(c.trainer, r.config, config_path, checkpoint_path);
+  };
   if (!config.Has("resolved")) {  // runs of plain 4DGS from before HDR training existed
     r.resolved.hdr_colors = r.model.color_mode == ColorMode::kLogHdr;
+    trained_with();
     return r;
   }
   const JsonField resolved = config["resolved"].Object();
@@ -162,6 +167,7 @@ LoadedRun LoadRun(const fs::path& run, int resolution_override) {
   }
   if (config.Has("camera_correction") && config["camera_correction"].Bool())
     WrapCameraCorrection(config, c.trainer, checkpoint_path.string(), &r);
+  trained_with();
   return r;
 }
 

@@ -79,10 +79,14 @@ void TrainingRun::ResumeOrInitialise() {
   loop_.rng.seed(options_.seed);
   if (options_.resume) {
     Checkpoint c = LoadCheckpoint(checkpoint_path_);
-    RequireCheckpointOfThisConfig(c.trainer, config_, options_.out / "config.json",
-                                  checkpoint_path_);
+    nlohmann::json recorded = nlohmann::json::object();  // the state below takes parts of c
+    if (const auto it = c.trainer.find(kRunConfigKey); it != c.trainer.end())
+      recorded[kRunConfigKey] = *it;
     loop_.FromJson(c.trainer, checkpoint_path_, train_views_.size());
     LoadTrainingState(&c, checkpoint_path_);
+    // After the checks of each part, which say more; before the optimiser binds the state.
+    RequireCheckpointOfThisConfig(recorded, config_, options_.out / "config.json",
+                                  checkpoint_path_);
     spdlog::info("train: resuming {} at iteration {}", checkpoint_path_.string(), loop_.iteration);
   } else {
     model_ = InitialModel();
