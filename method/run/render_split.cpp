@@ -61,6 +61,25 @@ void RequireCamerasOfTheRun(const fs::path& run, const Dataset& dataset) {
   }
 }
 
+// The run's scene, named by config.json's `data`: there, and with the cameras it was trained on.
+Dataset LoadRunScene(const fs::path& run, const nlohmann::json& json, const JsonField& config) {
+  if (json.is_object() && json.contains("hexplane"))
+    Fail("{}: a HexPlane run (a grid, not Gaussians): `hdr4d render` renders it; export-ply, "
+         "view and tone-curves read runs of Gaussians", run.string());
+  const std::string data = config["data"].String();
+  std::error_code ec;
+  if (!fs::is_directory(data, ec))
+    config["data"].Fail(fmt::format("the scene {} is not there (moved or deleted since the run "
+                                    "was trained?): put it back, or set the key to where it is",
+                                    data));
+  Dataset dataset = LoadDataset(
+      data, {.image_check = ImageCheck::kNone,
+             .exposure_unit = RecordedExposureUnit(json, (run / "config.json").string()),
+             .require_test = false});
+  RequireCamerasOfTheRun(run, dataset);
+  return dataset;
+}
+
 // --camera-correction runs: the tone mapper wrapped in the learned gains, and each frame's row.
 // The camera count the run recorded must be the dataset's (the data checks guard the images;
 // this guards the frames' cameras).
@@ -89,20 +108,7 @@ LoadedRun LoadRun(const fs::path& run, int resolution_override) {
   r.config = ReadJsonFile(config_path);
   // Typed reads name the file and the key of a value that is missing or of the wrong type.
   const JsonField config(r.config, config_path.string());
-  if (r.config.is_object() && r.config.contains("hexplane"))
-    Fail("{}: a HexPlane run (a grid, not Gaussians): `hdr4d render` renders it; export-ply, "
-         "view and tone-curves read runs of Gaussians", run.string());
-  const std::string data = config["data"].String();
-  std::error_code ec;
-  if (!fs::is_directory(data, ec))
-    config["data"].Fail(fmt::format("the scene {} is not there (moved or deleted since the run "
-                                    "was trained?): put it back, or set the key to where it is",
-                                    data));
-  r.dataset = LoadDataset(data,
-                          {.image_check = ImageCheck::kNone,
-                           .exposure_unit = RecordedExposureUnit(r.config, config_path.string()),
-                           .require_test = false});
-  RequireCamerasOfTheRun(run, r.dataset);
+  r.dataset = LoadRunScene(run, r.config, config);
   // A run trained at --resolution R renders every split at it (runs from before: 1), unless
   // the caller asks for another.
   const int run_resolution = static_cast<int>(config.IntOr("resolution", 1, 1, 1 << 16));
