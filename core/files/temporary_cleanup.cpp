@@ -33,11 +33,14 @@ struct OverflowNode {
   OverflowNode* next = nullptr;
 };
 std::atomic<OverflowNode*> g_overflow{nullptr};
+std::atomic<int> g_free_nodes{0};  // released nodes: the list is searched only when some are
 
 OverflowNode* TakeOverflowNode(const std::string& text) {
-  for (OverflowNode* n = g_overflow.load(); n != nullptr; n = n->next) {
+  for (OverflowNode* n = g_free_nodes.load() > 0 ? g_overflow.load() : nullptr; n != nullptr;
+       n = n->next) {
     int expected = kFree;
     if (n->capacity > text.size() && n->state.compare_exchange_strong(expected, kFilling)) {
+      g_free_nodes.fetch_sub(1);
       std::memcpy(n->path, text.c_str(), text.size() + 1);
       n->state.store(kSet);
       return n;
@@ -95,7 +98,10 @@ TrackedTemporary::TrackedTemporary(const std::filesystem::path& path) {
 
 TrackedTemporary::~TrackedTemporary() {
   if (slot_ >= 0) g_slots[slot_].state.store(kFree);
-  if (overflow_) static_cast<OverflowNode*>(overflow_)->state.store(kFree);
+  if (overflow_) {
+    static_cast<OverflowNode*>(overflow_)->state.store(kFree);
+    g_free_nodes.fetch_add(1);
+  }
 }
 
 }  // namespace hdr4d
