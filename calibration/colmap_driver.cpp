@@ -2,7 +2,6 @@
 
 #include <fmt/format.h>
 
-#include <fstream>
 #include <vector>
 
 #include "core/util/child_process.h"
@@ -15,14 +14,6 @@ namespace hdr4d {
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string LastLine(const fs::path& log) {
-  std::ifstream in(log);
-  std::string line, last;
-  while (std::getline(in, line))
-    if (line.find_first_not_of(" \t\r") != std::string::npos) last = line;
-  return last;
-}
 
 // A failed step's log, kept where nobody else can plant or read anything: the workspace is
 // inside calibrate's staging folder, which the failure removes.
@@ -47,9 +38,9 @@ void RunStep(const ColmapRunOptions& options, const std::string& step,
          options.binary);
   if (code != 0 && step == "mapper")
     throw ColmapNoModel(fmt::format("COLMAP mapper failed (exit {}, too few matches between the static images?): {}; "
-                                    "log in {}", code, LastLine(log), KeepLog(log, step).string()));
+                                    "log in {}", code, LastLogLine(log), KeepLog(log, step).string()));
   if (code != 0) {
-    Fail("COLMAP {} failed (exit {}): {}; log in {}", step, code, LastLine(log), KeepLog(log, step).string());
+    Fail("COLMAP {} failed (exit {}): {}; log in {}", step, code, LastLogLine(log), KeepLog(log, step).string());
   }
 }
 

@@ -13,6 +13,7 @@
 
 #include "core/util/error.h"
 #include "core/files/dataset_folders.h"
+#include "core/files/folder_lock.h"
 #include "core/files/file_access.h"
 
 namespace hdr4d {
@@ -114,16 +115,17 @@ void ProtectInput(const fs::path& path, const std::string& role) {
 
 namespace {
 
-// True when `key` (resolved) names one of a training run's own files in a run folder found by
-// looking (kRunFolderFiles).
+// True when `key` (resolved) names one of a training run's own files (kRunFolderFiles, the lock)
+// in a run folder found by looking.
 bool IsFileOfARun(const std::string& key) {
   const std::string name = fs::path(key).filename().string();
-  if (std::find(std::begin(kRunFolderFiles), std::end(kRunFolderFiles), name) ==
-      std::end(kRunFolderFiles))
+  if (name != FolderLock::kFileName &&
+      std::find(std::begin(kRunFolderFiles), std::end(kRunFolderFiles), name) ==
+          std::end(kRunFolderFiles))
     return false;
   const fs::path folder = FolderOf(key);
   std::error_code ec;
-  return fs::exists(folder / ".hdr4d-lock", ec) ||
+  return fs::exists(folder / FolderLock::kFileName, ec) ||
          (fs::exists(folder / "config.json", ec) && fs::exists(folder / "checkpoint.bin", ec));
 }
 

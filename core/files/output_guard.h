@@ -68,14 +68,16 @@ class OutputPermit {
   std::vector<std::string> keys_;
 };
 
-// The files a training run keeps in its folder. Inside a command, a folder holding `.hdr4d-lock`,
+// The files a training run writes into its folder (`train --overwrite` deletes exactly these;
+// best_val.bin is --keep-best-val's best model). Inside a command, a folder holding `.hdr4d-lock`,
 // or `config.json` and `checkpoint.bin`, is a run found by looking, and CheckOutput refuses these
-// files there (`eval --out RUN/checkpoint.bin` would replace the trained model) unless this
-// process trains that run and says so with a RunFolderWriter.
-inline constexpr const char* kRunFolderFiles[] = {"config.json", "checkpoint.bin", "results.json",
-                                                  "data_checksums.json", ".hdr4d-lock"};
+// files and the lock there (`eval --out RUN/checkpoint.bin` would replace the trained model)
+// unless this process trains that run and says so with a RunFolderWriter.
+inline constexpr const char* kRunFolderFiles[] = {"checkpoint.bin", "config.json", "results.json",
+                                                  "data_checksums.json", "best_val.bin"};
 
-// While alive, this process may write the run files (kRunFolderFiles) of `run`: the trainer's.
+// While alive, this process may write the run files (kRunFolderFiles and the lock) of `run`: the
+// trainer's.
 class RunFolderWriter {
  public:
   explicit RunFolderWriter(const std::filesystem::path& run);

@@ -17,6 +17,10 @@ namespace hdr4d {
 int RunLoggedChild(const std::vector<std::string>& argv, const std::vector<std::string>& extra_env,
                    const std::filesystem::path& log);
 
+// The last line of a child's log that holds more than blanks ("" when none): what a failure
+// message quotes.
+std::string LastLogLine(const std::filesystem::path& log);
+
 // A folder only this user can enter, newly made under the temporary directory (mkdtemp: no
 // name to predict, no link to follow); where a failed step's log is kept (issue 51 §8).
 std::filesystem::path MakePrivateTempFolder(const std::string& prefix);

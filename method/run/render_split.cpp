@@ -7,7 +7,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
-#include <fstream>
 #include <future>
 #include <iterator>
 #include <map>
@@ -186,7 +185,7 @@ std::string LoadedRun::MethodName() const {
 
 void ProtectRunInputs(const fs::path& run, const fs::path& own_output) {
   const std::string role = fmt::format("a file of run {} that this command reads", run.string());
-  for (const char* name : kRunFileNames) ProtectInputFile(run / name, role);
+  for (const char* name : kRunFolderFiles) ProtectInputFile(run / name, role);
   // Renders are what `hdr4d eval` scores: no other output may land among them. The folder this
   // command renders into (and what lies below it) is its own to rewrite.
   std::error_code ec;
@@ -226,15 +225,6 @@ double MedianExposure(const Dataset& dataset) {
 namespace {
 
 bool HaveFfmpeg() { return std::system("command -v ffmpeg >/dev/null 2>&1") == 0; }
-
-// The last line of a child's log that says something (for an error message), at most 300 bytes.
-std::string LastLogLine(const fs::path& log) {
-  std::ifstream in(log);
-  std::string line, last;
-  while (std::getline(in, line))
-    if (line.find_first_not_of(" \t\r") != std::string::npos) last = line;
-  return last.size() > 300 ? last.substr(0, 297) + "..." : last;
-}
 
 // `text` as literal text inside an ffmpeg image-sequence pattern: its own '%' doubled (a folder
 // named 'V%02d' would otherwise be read as a frame number, issue 51 §24).

@@ -110,11 +110,7 @@ void ReorderRun(const std::vector<std::uint32_t>& order, LoadedRun* run);
 std::unique_ptr<ViewRenderer> MakeRunRenderer(const LoadedRun& run);
 ToneFrame RunToneFrame(const LoadedRun& run, float time, double exposure, int camera_index = -1);
 
-// The files of a run folder that commands reading the run take as inputs (issue 51 §2).
-inline constexpr const char* kRunFileNames[] = {"config.json", "checkpoint.bin", "results.json",
-                                                "data_checksums.json"};
-
-// For commands that only read a run (render, export-ply, tone-curves): its files (kRunFileNames)
+// For commands that only read a run (render, export-ply, tone-curves): its files (kRunFolderFiles)
 // and its renders (every folder under RUN/renders but `own_output`, the folder the command itself
 // renders into, and those below it) become protected inputs (core/files/output_guard.h), so no
 // output of theirs replaces them.

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/files/folder_lock.h"
+#include "core/files/output_guard.h"
 #include "core/util/error.h"
 
 namespace hdr4d::method {
@@ -44,7 +45,7 @@ std::string OverwriteHelp() {
 void RequireFreshRunFolder(const fs::path& run, bool overwrite) {
   if (overwrite || LockHeldByAnother(run)) return;
   std::vector<std::string> found;
-  for (const char* name : kTrainRunFiles)
+  for (const char* name : kRunFolderFiles)
     if (Present(run / name)) found.push_back(name);
   if (found.empty()) return;
   const bool finished = Present(run / "results.json") && Present(run / "checkpoint.bin");
@@ -68,7 +69,7 @@ void RequireRunFolderNotAScene(const fs::path& run) {
 }
 
 void RemovePreviousRun(const fs::path& run) {
-  for (const char* name : kTrainRunFiles) {
+  for (const char* name : kRunFolderFiles) {
     std::error_code ec;
     fs::remove(run / name, ec);  // a symlink is removed itself
     if (ec) Fail("{}: cannot delete it for --overwrite: {}", (run / name).string(), ec.message());
@@ -85,7 +86,7 @@ CleanUpFailedStart::~CleanUpFailedStart() {
   if (std::uncaught_exceptions() == exceptions_) return;
   std::error_code ec;
   if (fresh_run_ && !Present(run_ / "checkpoint.bin")) {
-    for (const char* name : kTrainRunFiles) fs::remove(run_ / name, ec);
+    for (const char* name : kRunFolderFiles) fs::remove(run_ / name, ec);
   }
   if (!made_folder_) return;
   for (const auto& entry : fs::directory_iterator(run_, ec)) {

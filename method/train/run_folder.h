@@ -10,10 +10,6 @@ namespace hdr4d::method {
 
 // The record of the run's data (core/dataset/dataset_checksum.h), compared on --resume.
 inline constexpr const char* kDataRecordName = "data_checksums.json";
-// The files a training run writes into its folder; --overwrite deletes exactly these.
-// (best_val.bin: --keep-best-val's best model, kept while a run may still take it back.)
-inline constexpr const char* kTrainRunFiles[] = {"checkpoint.bin", "config.json", "results.json",
-                                                 "data_checksums.json", "best_val.bin"};
 
 // For a new run (no --resume): throws hdr4d::Error when RUN holds a run's files (a finished run,
 // a checkpoint, a configuration) and `overwrite` is false, naming what is there, --resume and
@@ -26,16 +22,17 @@ void RequireFreshRunFolder(const std::filesystem::path& run, bool overwrite);
 // later `--overwrite` deletes files among them. Checked first, for new runs and resumes alike.
 void RequireRunFolderNotAScene(const std::filesystem::path& run);
 
-// --overwrite, with the run's lock held: removes kTrainRunFiles from RUN (a symlink itself, never
-// its target). Other files (renders, exports, notes) stay.
+// --overwrite, with the run's lock held: removes a run's files (kRunFolderFiles,
+// core/files/output_guard.h) from RUN (a symlink itself, never its target). Other files (renders,
+// exports, notes) stay.
 void RemovePreviousRun(const std::filesystem::path& run);
 
 // The help of --overwrite, naming what it deletes.
 std::string OverwriteHelp();
 
 // Removes what a new run wrote when it fails before its first checkpoint (a full disk, a bad
-// image found late, an exception of any kind): kTrainRunFiles, and RUN itself when this run made
-// it and nothing but the lock is left; a run with a checkpoint is kept (it resumes).
+// image found late, an exception of any kind): the run's files (kRunFolderFiles), and RUN itself
+// when this run made it and nothing but the lock is left; a run with a checkpoint is kept.
 class CleanUpFailedStart {
  public:
   CleanUpFailedStart(std::filesystem::path run, bool made_folder, bool fresh_run);
